@@ -1,0 +1,1 @@
+"""The shadowgeo command line (installed as the import package ``shadowgeo_cli``)."""

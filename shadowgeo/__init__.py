@@ -1,0 +1,26 @@
+"""shadowgeo: exact shadow geometry.
+
+The public API is re-exported here and nowhere else.
+"""
+
+from __future__ import annotations
+
+from .errors import GeometryError, SceneError
+from .lights import DirectionalLight, PointLight, SpotLight
+from .plane import Plane
+from .tolerance import Tolerance
+from .topology import Caster, as_caster
+
+__all__ = [
+    "Caster",
+    "DirectionalLight",
+    "GeometryError",
+    "Plane",
+    "PointLight",
+    "SceneError",
+    "SpotLight",
+    "Tolerance",
+    "as_caster",
+]
+
+__version__ = "0.1.0"

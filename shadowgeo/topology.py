@@ -1,0 +1,189 @@
+"""Caster meshes: validated arrays and the topology every light reuses.
+
+Per-mesh work (edge table, adjacency, closedness) is done once and cached:
+on a ``trimesh.Trimesh`` in its own cache (dropped when the mesh changes),
+otherwise on the :class:`Caster` object the caller keeps. A second light then
+costs only the per-light work.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+
+from .errors import GeometryError
+
+_CACHE_KEY = "shadowgeo_caster"
+
+
+class Caster:
+    """A triangle mesh checked for use as a shadow caster.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (m, 3) int
+        Indices into ``vertices``; the winding gives the outward side.
+
+    Raises
+    ------
+    GeometryError
+        NaN or infinite coordinates, faces that are not triangles, or faces
+        that index missing vertices.
+    """
+
+    def __init__(self, vertices, faces) -> None:
+        vertices = np.array(vertices, dtype=np.float64, copy=True)
+        faces = np.array(faces, copy=True)
+        if vertices.size == 0:
+            vertices = vertices.reshape(0, 3)
+        if faces.size == 0:
+            faces = faces.reshape(0, 3)
+        if vertices.ndim != 2 or vertices.shape[1] != 3:
+            raise GeometryError(f"caster vertices must be (n, 3), got shape {vertices.shape}")
+        if faces.ndim != 2 or faces.shape[1] != 3:
+            raise GeometryError(f"caster faces must be (m, 3) triangles, got shape {faces.shape}")
+        if not np.issubdtype(faces.dtype, np.integer):
+            if faces.size and not np.all(np.equal(np.mod(faces, 1), 0)):
+                raise GeometryError("caster faces must hold integer vertex indices")
+            faces = faces.astype(np.int64)
+        faces = faces.astype(np.int64, copy=False)
+        bad_vertex = ~np.all(np.isfinite(vertices), axis=1)
+        if np.any(bad_vertex):
+            index = int(np.flatnonzero(bad_vertex)[0])
+            raise GeometryError(
+                f"caster vertex {index} is not finite: {vertices[index].tolist()} "
+                f"({int(bad_vertex.sum())} such vertices)"
+            )
+        if faces.size:
+            bad_face = np.any((faces < 0) | (faces >= len(vertices)), axis=1)
+            if np.any(bad_face):
+                index = int(np.flatnonzero(bad_face)[0])
+                raise GeometryError(
+                    f"caster face {index} {faces[index].tolist()} indexes a missing vertex "
+                    f"(the mesh has {len(vertices)} vertices)"
+                )
+        vertices.setflags(write=False)
+        faces.setflags(write=False)
+        self.vertices = vertices
+        self.faces = faces
+
+    @property
+    def n_faces(self) -> int:
+        return len(self.faces)
+
+    @cached_property
+    def triangles(self) -> np.ndarray:
+        """(m, 3, 3) corner coordinates of every face."""
+        return self.vertices[self.faces]
+
+    @cached_property
+    def face_normals(self) -> np.ndarray:
+        """(m, 3) unnormalised face normals (twice the area, by the winding)."""
+        tri = self.triangles
+        return np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+
+    @cached_property
+    def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        faces = self.faces
+        starts = faces.reshape(-1)
+        ends = faces[:, [1, 2, 0]].reshape(-1)
+        low = np.minimum(starts, ends)
+        high = np.maximum(starts, ends)
+        keys = low * np.int64(max(len(self.vertices), 1)) + high
+        unique_keys, inverse = np.unique(keys, return_inverse=True)
+        n = np.int64(max(len(self.vertices), 1))
+        edges = np.column_stack([unique_keys // n, unique_keys % n])
+        sign = np.where(starts < ends, 1, -1).astype(np.int64)
+        return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3)
+
+    @property
+    def edges(self) -> np.ndarray:
+        """(e, 2) unique undirected edges, lower vertex index first."""
+        return self._edge_table[0]
+
+    @property
+    def face_edges(self) -> np.ndarray:
+        """(m, 3) index into :attr:`edges` of the edge from corner k to corner k+1."""
+        return self._edge_table[1]
+
+    @property
+    def face_edge_signs(self) -> np.ndarray:
+        """(m, 3) +1 where that face edge runs from the lower vertex index to
+        the higher one, -1 otherwise."""
+        return self._edge_table[2]
+
+    @cached_property
+    def edge_face_count(self) -> np.ndarray:
+        """(e,) number of faces that use each edge."""
+        return np.bincount(self.face_edges.reshape(-1), minlength=len(self.edges))
+
+    @cached_property
+    def edge_net_direction(self) -> np.ndarray:
+        """(e,) sum of the face edge signs: 0 on every edge of a closed,
+        consistently wound mesh."""
+        return np.bincount(
+            self.face_edges.reshape(-1),
+            weights=self.face_edge_signs.reshape(-1),
+            minlength=len(self.edges),
+        ).astype(np.int64)
+
+    @cached_property
+    def is_closed(self) -> bool:
+        """True when every edge has exactly two faces that use it in opposite
+        directions: a watertight, consistently wound 2-manifold edge set."""
+        if self.n_faces == 0:
+            return False
+        return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+
+    @cached_property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) lower and upper corner of the used vertices' bounding box."""
+        if self.n_faces == 0:
+            return np.zeros((2, 3))
+        used = self.vertices[np.unique(self.faces)]
+        return np.array([used.min(axis=0), used.max(axis=0)])
+
+    def winding_number(self, point) -> float:
+        """Generalised winding number of the mesh around ``point`` (1 inside a
+        closed outward-wound mesh, 0 outside), by the solid angle of every face
+        (Van Oosterom and Strackee)."""
+        rel = self.triangles - np.asarray(point, dtype=np.float64)
+        a, b, c = rel[:, 0], rel[:, 1], rel[:, 2]
+        la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+        numerator = np.einsum("ij,ij->i", a, np.cross(b, c))
+        denominator = (
+            la * lb * lc
+            + np.einsum("ij,ij->i", a, b) * lc
+            + np.einsum("ij,ij->i", b, c) * la
+            + np.einsum("ij,ij->i", c, a) * lb
+        )
+        return float(np.sum(2.0 * np.arctan2(numerator, denominator)) / (4.0 * np.pi))
+
+
+def as_caster(caster) -> Caster:
+    """A :class:`Caster` from a ``Caster``, a ``trimesh.Trimesh`` (cached on the
+    mesh) or a ``(vertices, faces)`` pair."""
+    if isinstance(caster, Caster):
+        return caster
+    cache = getattr(caster, "_cache", None)
+    if cache is not None and hasattr(caster, "vertices") and hasattr(caster, "faces"):
+        try:
+            cached = cache[_CACHE_KEY]
+        except (KeyError, TypeError):
+            cached = None
+        if isinstance(cached, Caster):
+            return cached
+        result = Caster(caster.vertices, caster.faces)
+        try:
+            cache[_CACHE_KEY] = result
+        except (KeyError, TypeError):
+            pass
+        return result
+    if isinstance(caster, tuple | list) and len(caster) == 2:
+        return Caster(caster[0], caster[1])
+    raise GeometryError(
+        "caster must be a trimesh.Trimesh, a shadowgeo Caster or a (vertices, faces) pair, "
+        f"got {type(caster).__name__}"
+    )
