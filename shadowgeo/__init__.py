@@ -8,6 +8,7 @@ from __future__ import annotations
 from .errors import GeometryError, SceneError
 from .lights import DirectionalLight, PointLight, SpotLight
 from .plane import Plane
+from .scene import Material, Scene, SceneLight, Shape
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 
@@ -15,9 +16,13 @@ __all__ = [
     "Caster",
     "DirectionalLight",
     "GeometryError",
+    "Material",
     "Plane",
     "PointLight",
+    "Scene",
     "SceneError",
+    "SceneLight",
+    "Shape",
     "SpotLight",
     "Tolerance",
     "as_caster",

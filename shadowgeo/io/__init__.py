@@ -1,0 +1,2 @@
+"""Readers and writers, one module per format. They know the scene model,
+not the shadow algorithms."""

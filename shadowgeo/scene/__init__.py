@@ -1,0 +1,5 @@
+"""Scene model: shapes with world transforms, materials, lights and names."""
+
+from .model import Material, Scene, SceneLight, Shape
+
+__all__ = ["Material", "Scene", "SceneLight", "Shape"]
