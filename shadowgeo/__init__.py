@@ -8,6 +8,7 @@ from __future__ import annotations
 from .errors import GeometryError, SceneError
 from .lights import DirectionalLight, PointLight, SpotLight
 from .plane import Plane
+from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
@@ -22,10 +23,14 @@ __all__ = [
     "Scene",
     "SceneError",
     "SceneLight",
+    "Shadow",
+    "ShadowDiagnostics",
     "Shape",
     "SpotLight",
     "Tolerance",
     "as_caster",
+    "project_shadow",
+    "shadow_matrix",
 ]
 
 __version__ = "0.1.0"

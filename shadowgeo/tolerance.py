@@ -22,6 +22,8 @@ name               meaning                                                defaul
                    a light this close to a plane or caster touches it     x scale
 ``angle``          a direction whose cosine with a plane's normal is      1e-12
                    below this is parallel to the plane
+``coplanar``       a receiver point this far from its plane is still on   1e-6
+                   it (receivers often come from float32 files)           x scale
 ``chord``          largest deviation of a tessellated curve (spot cone,   1e-3
                    light range, primitives) from the true curve           x scale
 ``bound``          half-width of the square that bounds a shadow which     100
@@ -59,6 +61,8 @@ class Tolerance:
         Length tolerance relative to ``scale``.
     angle : float
         Cosine below which a direction counts as parallel to a plane.
+    coplanar : float
+        Largest distance, relative to ``scale``, of a point that is on a plane.
     chord : float
         Tessellation tolerance relative to ``scale``.
     bound : float
@@ -75,11 +79,12 @@ class Tolerance:
     magnitude: float = 0.0
     relative: float = 1e-9
     angle: float = 1e-12
+    coplanar: float = 1e-6
     chord: float = 1e-3
     bound: float = 100.0
 
     def __post_init__(self) -> None:
-        for name in ("scale", "magnitude", "relative", "angle", "chord", "bound"):
+        for name in ("scale", "magnitude", "relative", "angle", "coplanar", "chord", "bound"):
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0:
                 raise GeometryError(f"tolerance {name}={value!r} must be finite and >= 0")
@@ -115,6 +120,11 @@ class Tolerance:
         """Absolute length below which two points are the same."""
         resolution = _ULPS * np.finfo(np.float64).eps * self.magnitude
         return max(self.relative * self.scale, resolution)
+
+    @property
+    def coplanar_length(self) -> float:
+        """Absolute largest distance of a point that counts as on a plane."""
+        return max(self.coplanar * self.scale, self.length)
 
     @property
     def chord_length(self) -> float:

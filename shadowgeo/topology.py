@@ -85,6 +85,15 @@ class Caster:
         return np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
 
     @cached_property
+    def _face_offsets(self) -> np.ndarray:
+        return np.einsum("ij,ij->i", self.face_normals, self.vertices[self.faces[:, 0]])
+
+    def face_offsets_at(self, origin) -> np.ndarray:
+        """(m,) ``face_normals . (corner - origin)``: with :attr:`face_normals`,
+        each face's plane relative to ``origin``."""
+        return self._face_offsets - self.face_normals @ np.asarray(origin, dtype=np.float64)
+
+    @cached_property
     def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         faces = self.faces
         starts = faces.reshape(-1)

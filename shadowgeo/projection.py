@@ -1,0 +1,678 @@
+"""Planar shadows: the shadow matrix and exact, robust projection onto a plane.
+
+The classic planar shadow multiplies every caster vertex by one 4x4 matrix
+(Blinn 1988) and divides by ``w``. That goes wrong where ``w <= 0``: vertices
+at the light's height divide by zero and vertices above it land on the wrong
+side of the light as "anti-shadows". :func:`project_shadow` instead clips every
+triangle, *before* the divide, against
+
+* the receiving plane itself (parts of a caster below the receiver cast
+  nothing), and
+* the four planes that join the light to a rectangle on the receiver (the
+  receiver's bounding box, or a default bound when there is no receiver).
+
+Because that rectangle is bounded, the pyramid over it contains no point with
+``w <= 0`` except the light: clipping removes anti-shadows and the division by
+zero in one mechanism. What survives is projected and united exactly by
+winding number: triangles that need no clipping contribute only the boundary
+of their patch (for a closed caster, its silhouette), so the cost grows with
+the outline, not with the triangle count. Concave receivers, spot cones and a
+light's range are then applied as exact 2-D intersections.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+from . import polygons as poly
+from .errors import GeometryError
+from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional
+from .plane import Plane
+from .tolerance import Tolerance
+from .topology import Caster, as_caster
+
+
+def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
+    """The planar shadow matrix ``M = (P . L) I - L P^T``.
+
+    For column vectors, ``x' = M @ [x, y, z, 1]`` is the shadow of ``x`` on
+    ``plane`` in homogeneous coordinates (divide by ``x'[3]``). Points on the
+    plane stay where they are; the light maps to zero.
+
+    Parameters
+    ----------
+    plane : Plane
+        ``P = (a, b, c, d)`` with a unit normal.
+    light : PointLight, SpotLight or DirectionalLight
+        ``L = (x, y, z, 1)`` or ``(-direction, 0)``.
+
+    Returns
+    -------
+    (4, 4) float64
+
+    Notes
+    -----
+    With row vectors (``x'^T = x^T M^T``, the form used by X3D authors and the
+    DirectX literature) the matrix is the transpose. This matrix is only the
+    textbook method: it gives anti-shadows for points beyond the light and
+    divides by zero at the light's height; :func:`project_shadow` does not.
+
+    Examples
+    --------
+    The ground y = 0 and a light at (8, 9, 10), in row-vector form:
+
+    >>> M = shadow_matrix(Plane([0, 1, 0], 0), PointLight([8, 9, 10]))
+    >>> M.T
+    array([[  9.,   0.,   0.,   0.],
+           [ -8.,   0., -10.,  -1.],
+           [  0.,   0.,   9.,   0.],
+           [  0.,   0.,   0.,   9.]])
+    >>> p = M @ [-2, 3, -1, 1]
+    >>> (p[:3] / p[3]).tolist()
+    [-7.0, 0.0, -6.5]
+    """
+    P = plane.vector
+    L = light.homogeneous
+    return float(P @ L) * np.eye(4) - np.outer(L, P)
+
+
+@dataclass(frozen=True)
+class ShadowDiagnostics:
+    """What :func:`project_shadow` did to get its result.
+
+    Attributes
+    ----------
+    n_triangles : int
+        Caster triangles considered.
+    clipped : dict[str, int]
+        Triangles cut (partly or wholly) for each reason: ``"below_plane"``
+        (the caster pierces the receiver), ``"at_or_above_light"`` (the
+        anti-shadow and divide-by-zero region), ``"outside_receiver"`` or
+        ``"outside_bound"`` (the shadow leaves the receiver's bounding box or
+        the default bound).
+    culled : int
+        Triangles that cast nothing at all.
+    limits : tuple[str, ...]
+        2-D limits applied after projection: ``"receiver"``, ``"spot_cone"``,
+        ``"range"``.
+    bounded_artificially : bool
+        The shadow runs past the default bound (it is truly unbounded, or
+        larger than ``bound``): no receiver limited it.
+    bound : float or None
+        Half-width of the default bound square used, in scene units.
+    empty_reason : str or None
+        Why the shadow is empty, when it is empty for a reason other than
+        geometry (light behind or parallel to the plane, out of range, ...).
+    n_loops : int
+        Loops handed to the 2-D union (outline edges chained, plus clipped
+        triangles): a measure of the work done.
+    """
+
+    n_triangles: int = 0
+    clipped: dict[str, int] = field(default_factory=dict)
+    culled: int = 0
+    limits: tuple[str, ...] = ()
+    bounded_artificially: bool = False
+    bound: float | None = None
+    empty_reason: str | None = None
+    n_loops: int = 0
+
+
+@dataclass(frozen=True)
+class Shadow:
+    """A planar shadow.
+
+    Attributes
+    ----------
+    plane : Plane
+        The receiving plane.
+    light : Light
+        The light that casts it.
+    mesh : trimesh.Trimesh
+        The shadow region triangulated on the plane (lifted by ``offset``
+        towards the light), with no overlapping triangles, wound
+        counter-clockwise seen from the light's side.
+    polygons : list of list of (k, 2) float64
+        The region in ``plane.to_2d`` coordinates: one ``[outer, hole, ...]``
+        list per connected part, outer loops counter-clockwise.
+    area : float
+        Exact area of the region (scene units squared).
+    diagnostics : ShadowDiagnostics
+    """
+
+    plane: Plane
+    light: Light
+    mesh: trimesh.Trimesh
+    polygons: list[list[np.ndarray]]
+    area: float
+    diagnostics: ShadowDiagnostics
+
+    @property
+    def is_empty(self) -> bool:
+        return self.area == 0.0
+
+    def to_shapely(self):
+        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates."""
+        import shapely
+
+        parts = [shapely.Polygon(loops[0], loops[1:]) for loops in self.polygons]
+        return shapely.MultiPolygon(parts)
+
+
+def project_shadow(
+    caster,
+    light: Light,
+    plane: Plane,
+    *,
+    receiver=None,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+) -> Shadow:
+    """The exact shadow of ``caster`` cast by ``light`` on ``plane``.
+
+    Parameters
+    ----------
+    caster : trimesh.Trimesh, Caster or (vertices, faces)
+        Any triangle mesh: closed or open, concave, with degenerate faces or
+        duplicate vertices. Open meshes cast from both sides.
+    light : PointLight, SpotLight or DirectionalLight
+    plane : Plane
+        The receiving plane. Its normal gives the lit side: a light behind it
+        casts no shadow on it.
+    receiver : (n, 3) array_like, optional
+        A polygon on the plane (convex or not) that bounds the shadow.
+    offset : float
+        Lift of the result along the plane normal, towards the light, so that
+        it does not z-fight the receiver.
+    tolerance : Tolerance, optional
+        Defaults to ``Tolerance.for_points`` of the caster, light and receiver.
+
+    Returns
+    -------
+    Shadow
+        Guaranteed finite (no NaN or inf), non-overlapping, within the
+        receiver if one is given, else within the default bound (a square of
+        half-width ``tolerance.bound_length`` centred on the foot of a
+        positional light, or on the caster's shadow for a directional light);
+        ``diagnostics.bounded_artificially`` says when that bound cut it.
+
+    Raises
+    ------
+    GeometryError
+        Invalid input (NaN, zero normal, faces indexing missing vertices), a
+        positional light on the plane, touching the caster, or inside a
+        closed caster, a receiver point off the plane.
+
+    Examples
+    --------
+    The X3D pyramid example: the light at (8, 9, 10) above the ground y = 0.
+
+    >>> vertices = [[-2, 3, -1], [2, 3, -1], [0, 3, 2], [0, 5, 0]]
+    >>> faces = [[1, 0, 3], [2, 1, 3], [0, 2, 3], [0, 1, 2]]
+    >>> shadow = project_shadow((vertices, faces), PointLight([8, 9, 10]), Plane([0, 1, 0], 0))
+    >>> round(shadow.area, 9)
+    31.5
+    """
+    caster = as_caster(caster)
+    _check_types(light, plane)
+    receiver_points = _receiver_points(receiver)
+    light_points = [light.position] if is_positional(light) else []
+    if tolerance is None:
+        scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
+        tolerance = Tolerance.for_points(*scene, *light_points, receiver_points)
+    offset = float(offset)
+    if not math.isfinite(offset):
+        raise GeometryError(f"offset must be finite, got {offset!r}")
+    return _Projector(caster, light, plane, receiver_points, offset, tolerance).run()
+
+
+def _check_types(light, plane) -> None:
+    if not isinstance(light, PointLight | DirectionalLight | SpotLight):
+        raise GeometryError(
+            f"light must be a PointLight, SpotLight or DirectionalLight, got {light!r}"
+        )
+    if not isinstance(plane, Plane):
+        raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
+
+
+def _receiver_points(receiver) -> np.ndarray:
+    if receiver is None:
+        return np.zeros((0, 3))
+    points = np.asarray(receiver, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3 or len(points) < 3:
+        raise GeometryError(f"receiver must be (n >= 3, 3) points, got shape {points.shape}")
+    if not np.all(np.isfinite(points)):
+        raise GeometryError("receiver has NaN or infinite coordinates")
+    return points
+
+
+class _Projector:
+    """One call of :func:`project_shadow`; holds the per-call frame."""
+
+    def __init__(self, caster: Caster, light, plane: Plane, receiver, offset, tol) -> None:
+        self.caster = caster
+        self.light = light
+        self.plane = plane
+        self.receiver = receiver
+        self.offset = offset
+        self.tol = tol
+        self.clipped: dict[str, int] = {}
+        self.limits: list[str] = []
+
+    # -- result helpers -------------------------------------------------------------------
+
+    def empty(self, reason: str | None, **diagnostics) -> Shadow:
+        mesh = trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)
+        info = ShadowDiagnostics(
+            n_triangles=self.caster.n_faces,
+            clipped=dict(self.clipped),
+            limits=tuple(self.limits),
+            empty_reason=reason,
+            **diagnostics,
+        )
+        return Shadow(self.plane, self.light, mesh, [], 0.0, info)
+
+    # -- the computation ------------------------------------------------------------------
+
+    def run(self) -> Shadow:
+        caster, tol = self.caster, self.tol
+        if caster.n_faces == 0:
+            return self.empty("the caster has no faces")
+        # Work relative to the caster's centre: differences of nearby large
+        # coordinates are exact, so a scene far from the origin loses nothing.
+        self.center = 0.5 * (caster.bounds[0] + caster.bounds[1])
+        normal = self.plane.normal
+        self.d = self.plane.offset + float(normal @ self.center)
+
+        if is_positional(self.light):
+            self.light_position = self.light.position - self.center
+            height = float(normal @ self.light_position) + self.d
+            if abs(height) <= tol.length:
+                raise GeometryError(
+                    f"the light at {self.light.position.tolist()} lies on the receiving plane "
+                    f"(distance {height:.3g}, tolerance {tol.length:.3g})"
+                )
+            if height < 0:
+                return self.empty("the light is behind the plane (its normal points away)")
+            if self.light.radius <= height:
+                return self.empty("the light's radius does not reach the plane")
+            self.height = height
+            self._check_light_outside_caster()
+            homogeneous = np.append(self.light_position, 1.0)
+            self.origin = self.light_position - height * normal  # the light's foot
+        else:
+            cosine = -float(normal @ self.light.direction)
+            if abs(cosine) <= tol.angle:
+                return self.empty("the light travels parallel to the plane")
+            if cosine < 0:
+                return self.empty("the light shines on the back of the plane")
+            homogeneous = np.append(-self.light.direction, 0.0)
+            # The caster centre's shadow: the shadow lies around it.
+            self.origin = -self.d / cosine * self.light.direction
+
+        self._light_h = homogeneous
+        u, v = self.plane.basis
+        plane4 = np.append(normal, self.d)
+        matrix = float(plane4 @ homogeneous) * np.eye(4) - np.outer(homogeneous, plane4)
+        to_plane2d = np.array(
+            [np.append(u, -u @ self.origin), np.append(v, -v @ self.origin), [0, 0, 0, 1.0]]
+        )
+        self.raw = to_plane2d @ matrix  # (U, V, W) in scene units, before scaling
+
+        receiver2d = None
+        if len(self.receiver):
+            receiver2d = self._receiver_2d()
+            low, high = receiver2d.min(axis=0), receiver2d.max(axis=0)
+            self.bound = None
+        else:
+            self.bound = tol.bound_length
+            low, high = np.full(2, -self.bound), np.full(2, self.bound)
+        extent = float(np.max(np.abs([low, high])))
+        self.scale = poly.local_scale(tol.scale, extent)
+        self.H = np.diag([self.scale, self.scale, 1.0]) @ self.raw
+        low, high = low * self.scale, high * self.scale
+
+        limit_regions = []
+        if receiver2d is not None:
+            limit_regions.append(poly.fill([receiver2d * self.scale], "evenodd"))
+            self.limits.append("receiver")
+        if is_positional(self.light) and math.isfinite(self.light.radius):
+            disc = self._range_disc()
+            low, high = np.maximum(low, disc.min(axis=0)), np.minimum(high, disc.max(axis=0))
+            limit_regions.append(poly.fill([disc]))
+            self.limits.append("range")
+        if isinstance(self.light, SpotLight):
+            cone = self._spot_polygon(low, high)
+            if cone is None:
+                return self.empty("the spot light's cone misses the receiver")
+            low, high = np.maximum(low, cone.min(axis=0)), np.minimum(high, cone.max(axis=0))
+            limit_regions.append(poly.fill([cone]))
+            self.limits.append("spot_cone")
+        if np.any(high <= low):
+            return self.empty("the lit part of the plane misses the receiver")
+
+        loops = self._shadow_loops(low, high)
+        region = poly.fill(loops)
+        for limit in limit_regions:
+            region = poly.intersect(region, limit)
+        return self._result(region, len(loops))
+
+    def _check_light_outside_caster(self) -> None:
+        """A light touching the caster has no meaningful shadow; nor does one
+        inside a closed caster (everything would be dark)."""
+        caster, tol = self.caster, self.tol
+        position = self.light.position
+        lower, upper = caster.bounds
+        if np.any(position < lower - tol.length) or np.any(position > upper + tol.length):
+            return
+        triangles = caster.triangles
+        near = np.all(triangles.min(axis=1) <= position + tol.length, axis=1) & np.all(
+            triangles.max(axis=1) >= position - tol.length, axis=1
+        )
+        if np.any(near):
+            distances = _point_triangle_distance(position, triangles[near])
+            if distances.min() <= tol.length:
+                face = int(np.flatnonzero(near)[int(np.argmin(distances))])
+                raise GeometryError(
+                    f"the light at {position.tolist()} touches the caster (face {face}, "
+                    f"distance {distances.min():.3g}, tolerance {tol.length:.3g})"
+                )
+        if caster.is_closed and abs(caster.winding_number(position)) > 0.5:
+            raise GeometryError(
+                f"the light at {position.tolist()} is inside the closed caster: "
+                "everything around it is in shadow"
+            )
+
+    def _receiver_2d(self) -> np.ndarray:
+        points = self.receiver - self.center
+        distance = points @ self.plane.normal + self.d
+        worst = int(np.argmax(np.abs(distance)))
+        limit = self.tol.coplanar_length
+        if abs(distance[worst]) > limit:
+            raise GeometryError(
+                f"receiver point {worst} {self.receiver[worst].tolist()} is "
+                f"{abs(distance[worst]):.3g} off the plane (tolerance {limit:.3g})"
+            )
+        u, v = self.plane.basis
+        relative = points - self.origin
+        return np.column_stack([relative @ u, relative @ v])
+
+    def _range_disc(self) -> np.ndarray:
+        """The lit disc of a light with a finite radius, inscribed polygon, local units."""
+        radius = math.sqrt(self.light.radius**2 - self.height**2)
+        n = self.tol.segments(radius)
+        angles = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        return radius * self.scale * np.column_stack([np.cos(angles), np.sin(angles)])
+
+    def _spot_polygon(self, low, high) -> np.ndarray | None:
+        """The spot light's cone on the plane (an inscribed pyramid), clipped to
+        the rectangle [low, high] in local units; None when they miss."""
+        light = self.light
+        axis = light.direction
+        helper = np.zeros(3)
+        helper[int(np.argmin(np.abs(axis)))] = 1.0
+        side = np.cross(axis, helper)
+        side /= np.linalg.norm(side)
+        up = np.cross(axis, side)
+        rectangle_planes = _rectangle_planes(low, high)
+        if light.cut_off_angle >= math.pi / 2 - 1e-6:
+            # A hemisphere: the half-plane of points in front of the light.
+            u, v = self.plane.basis
+            # Points p = origin + (x u + y v) / scale with axis . (p - light) >= 0.
+            line = np.array(
+                [
+                    axis @ u / self.scale,
+                    axis @ v / self.scale,
+                    axis @ (self.origin - self.light_position),
+                ]
+            )
+            corners = np.array(
+                [[low[0], low[1]], [high[0], low[1]], [high[0], high[1]], [low[0], high[1]]]
+            )
+            clipped = _clip_convex(np.column_stack([corners, np.ones(4)]), line[None, :])
+        else:
+            spread = self.tol.segments(float(np.max(np.abs([low, high]))) / self.scale)
+            angles = np.linspace(0.0, 2 * np.pi, spread, endpoint=False)
+            radius = math.tan(light.cut_off_angle)
+            rim = axis + radius * (np.outer(np.cos(angles), side) + np.outer(np.sin(angles), up))
+            homogeneous = np.column_stack([rim, np.zeros(len(rim))]) @ self.H.T
+            clipped = _clip_convex(homogeneous, rectangle_planes)
+        if len(clipped) < 3:
+            return None
+        points = clipped[:, :2] / clipped[:, 2:3]
+        if poly.signed_areas([points])[0] < 0:
+            points = points[::-1]
+        return points
+
+    def _shadow_loops(self, low, high) -> list[np.ndarray]:
+        """Closed 2-D loops (local units) whose positive-winding region is the
+        shadow within the rectangle [low, high]."""
+        caster = self.caster
+        faces = caster.faces
+        vertices = caster.vertices - self.center
+        homogeneous = np.column_stack([vertices, np.ones(len(vertices))])
+        planes = np.vstack(
+            [np.append(self.plane.normal, self.d), _rectangle_planes(low, high) @ self.H]
+        )
+        planes /= np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+        side = homogeneous @ planes.T  # (n, 5): >= 0 inside each half-space
+        vertex_out = side < 0
+        whole = ~np.any(np.any(vertex_out, axis=1)[faces], axis=1)
+        # Only the few faces that are not whole need the per-plane test.
+        others = np.flatnonzero(~whole)
+        outside = vertex_out[faces[others]]  # (k, 3, 5)
+        culled = np.all(outside, axis=1).any(axis=1)
+        cut = np.zeros(len(faces), dtype=bool)
+        cut[others[~culled]] = True
+        self.culled = int(culled.sum())
+        self._count_clipped(homogeneous, faces[others], outside)
+
+        # facing > 0: the face turns its front to the light. For a face whose
+        # corners all project (w > 0) this is also the sign of its image's area.
+        light = self._light_h
+        facing = caster.face_normals @ light[:3] - caster.face_offsets_at(self.center) * light[3]
+        if caster.is_closed:
+            # With the light outside a closed caster every shadow ray first
+            # meets a face turned to the light: the others add nothing.
+            whole &= facing > 0
+            cut &= facing > 0
+
+        loops, loop_vertices = _boundary_loops(caster, whole, np.sign(facing).astype(np.int64))
+        if loop_vertices.size:
+            image = homogeneous[loop_vertices] @ self.H.T
+            if np.any(image[:, 2] <= 0):
+                raise GeometryError("the light touches the caster (a vertex projects to infinity)")
+            points = np.zeros((len(vertices), 2))
+            points[loop_vertices] = image[:, :2] / image[:, 2:3]
+            loops = [points[loop] for loop in loops]
+        for index in np.flatnonzero(cut):
+            polygon = _clip_convex(homogeneous[faces[index]], planes)
+            if len(polygon) < 3:
+                continue
+            image = polygon @ self.H.T
+            if np.any(image[:, 2] <= 0):
+                raise GeometryError(
+                    "the light touches the caster (a clipped point projects to infinity)"
+                )
+            loop = image[:, :2] / image[:, 2:3]
+            area = poly.signed_areas([loop])[0]
+            if area == 0:
+                continue
+            loops.append(loop if area > 0 else loop[::-1])
+        return loops
+
+    def _count_clipped(self, homogeneous, faces, outside) -> None:
+        """Per-reason counts over the faces that are not whole."""
+        self.clipped["below_plane"] = int(np.any(outside[:, :, 0], axis=1).sum())
+        outside_key = "outside_receiver" if len(self.receiver) else "outside_bound"
+        beyond_bound = outside[:, :, 1:].any(axis=2)
+        if is_positional(self.light):
+            weight = (homogeneous @ self.raw[2])[faces]  # w of each corner, scene units
+            self.clipped["at_or_above_light"] = int(np.any(weight <= 0, axis=1).sum())
+            beyond_bound &= weight > 0
+        self.clipped[outside_key] = int(np.any(beyond_bound, axis=1).sum())
+
+    def _result(self, region, n_loops: int) -> Shadow:
+        parts = poly.components(region)
+        area = float(region.area()) / self.scale**2
+        bounded = False
+        if self.bound is not None and parts:
+            reach = max(float(np.abs(np.concatenate([p[0] for p in parts])).max()), 0.0)
+            bounded = reach >= (self.bound - self.tol.length) * self.scale
+        info = ShadowDiagnostics(
+            n_triangles=self.caster.n_faces,
+            clipped=dict(self.clipped),
+            culled=self.culled,
+            limits=tuple(self.limits),
+            bounded_artificially=bounded,
+            bound=self.bound,
+            n_loops=n_loops,
+        )
+        if not parts:
+            return Shadow(self.plane, self.light, self.empty(None).mesh, [], 0.0, info)
+        u, v = self.plane.basis
+        origin2d = self.plane.to_2d(self.origin + self.center)[0]
+        polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
+        flat, faces = poly.triangulate_parts(parts)
+        flat = flat / self.scale
+        lift = self.origin + self.offset * self.plane.normal
+        points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v) + self.center
+        mesh = trimesh.Trimesh(points, faces, process=False)
+        return Shadow(self.plane, self.light, mesh, polygons, area, info)
+
+
+def _rectangle_planes(low, high) -> np.ndarray:
+    """(4, 3) homogeneous 2-D half-planes ``l . (U, V, W) >= 0`` of the
+    rectangle [low, high] (points (U / W, V / W) with W > 0)."""
+    return np.array(
+        [
+            [1.0, 0.0, -low[0]],
+            [-1.0, 0.0, high[0]],
+            [0.0, 1.0, -low[1]],
+            [0.0, -1.0, high[1]],
+        ]
+    )
+
+
+def _clip_convex(polygon: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """Sutherland-Hodgman: the part of a convex polygon (k, d) in the half-spaces
+    ``planes @ x >= 0`` (p, d). Works in homogeneous coordinates of any size."""
+    for plane in planes:
+        if len(polygon) == 0:
+            break
+        side = polygon @ plane
+        inside = side >= 0
+        if np.all(inside):
+            continue
+        if not np.any(inside):
+            return polygon[:0]
+        out = []
+        count = len(polygon)
+        for i in range(count):
+            j = (i + 1) % count
+            if inside[i]:
+                out.append(polygon[i])
+            if inside[i] != inside[j]:
+                t = side[i] / (side[i] - side[j])
+                out.append(polygon[i] + t * (polygon[j] - polygon[i]))
+        polygon = np.array(out)
+    return polygon
+
+
+def _boundary_loops(
+    caster: Caster, whole: np.ndarray, orientation: np.ndarray
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """Loops of vertex indices whose winding number is the number of ``whole``
+    triangles that cover a point, once projected.
+
+    ``orientation`` (m,) is the sign of each face's projected area. Each
+    triangle counts +1 whatever its orientation: negative ones are reversed.
+    Edges shared by two triangles of the same orientation cancel, so for a
+    closed caster only the silhouette remains. Also returns the vertices used.
+    """
+    weights = (caster.face_edge_signs[whole] * orientation[whole, None]).reshape(-1)
+    net = np.bincount(
+        caster.face_edges[whole].reshape(-1), weights=weights, minlength=len(caster.edges)
+    )
+    boundary = np.flatnonzero(np.rint(net))
+    if len(boundary) == 0:
+        return [], np.zeros(0, dtype=np.int64)
+    net = np.rint(net[boundary]).astype(np.int64)
+    edges = caster.edges[boundary]
+    count = np.abs(net)
+    forward = net > 0
+    starts = np.where(forward, edges[:, 0], edges[:, 1]).repeat(count)
+    ends = np.where(forward, edges[:, 1], edges[:, 0]).repeat(count)
+    return _chain(starts, ends), np.unique(edges)
+
+
+def _chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
+    """Split directed edges with in-degree = out-degree at every vertex into
+    closed loops of vertex indices."""
+    order = np.argsort(starts, kind="stable")
+    sorted_starts = starts[order]
+    vertex_ids, first = np.unique(sorted_starts, return_index=True)
+    next_out = dict(zip(vertex_ids.tolist(), first.tolist(), strict=True))
+    order_list = order.tolist()
+    sorted_list = sorted_starts.tolist()
+    ends_list = ends.tolist()
+    starts_list = starts.tolist()
+    used = [False] * len(starts_list)
+    loops = []
+    for edge in order_list:
+        if used[edge]:
+            continue
+        used[edge] = True
+        start = starts_list[edge]
+        loop = [start]
+        vertex = ends_list[edge]
+        while vertex != start:
+            loop.append(vertex)
+            position = next_out[vertex]
+            while used[order_list[position]]:
+                position += 1
+            next_out[vertex] = position + 1
+            step = order_list[position]
+            if sorted_list[position] != vertex:
+                raise GeometryError("internal error: unbalanced shadow outline")
+            used[step] = True
+            vertex = ends_list[step]
+        if len(loop) >= 3:
+            loops.append(np.array(loop))
+    return loops
+
+
+def _point_triangle_distance(point: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Distance from ``point`` to each of (m, 3, 3) triangles, degenerate ones
+    included: the nearer of the three edges and, where the point projects
+    inside, the face."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    nearest = np.minimum.reduce(
+        [_point_segment_distance(point, p, q) for p, q in ((a, b), (b, c), (c, a))]
+    )
+    normal = np.cross(b - a, c - a)
+    length = np.linalg.norm(normal, axis=1)
+    proper = length > 0
+    if np.any(proper):
+        unit = normal[proper] / length[proper, None]
+        inside = np.ones(int(proper.sum()), dtype=bool)
+        for p, q in ((a, b), (b, c), (c, a)):
+            edge_normal = np.cross(unit, q[proper] - p[proper])
+            inside &= np.einsum("ij,ij->i", edge_normal, point - p[proper]) >= 0
+        plane_distance = np.abs(np.einsum("ij,ij->i", unit, point - a[proper]))
+        face = np.where(inside, plane_distance, np.inf)
+        nearest[proper] = np.minimum(nearest[proper], face)
+    return nearest
+
+
+def _point_segment_distance(point, start, end) -> np.ndarray:
+    direction = end - start
+    length2 = np.einsum("ij,ij->i", direction, direction)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(length2 > 0, np.einsum("ij,ij->i", point - start, direction) / length2, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    return np.linalg.norm(start + t[:, None] * direction - point, axis=1)
