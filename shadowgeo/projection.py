@@ -312,7 +312,7 @@ class _Projector:
                 return self.empty("the light shines on the back of the plane")
             homogeneous = np.append(-self.light.direction, 0.0)
             # The caster centre's shadow: the shadow lies around it.
-            self.origin = -self.d / cosine * self.light.direction
+            self.origin = self.d / cosine * self.light.direction
 
         self._light_h = homogeneous
         u, v = self.plane.basis
