@@ -284,7 +284,7 @@ class _Projector:
             return self.empty("the caster has no faces")
         # Work relative to the caster's centre: differences of nearby large
         # coordinates are exact, so a scene far from the origin loses nothing.
-        self.center = 0.5 * (caster.bounds[0] + caster.bounds[1])
+        self.center = caster.center
         normal = self.plane.normal
         self.d = self.plane.offset + float(normal @ self.center)
 
@@ -453,40 +453,48 @@ class _Projector:
         shadow within the rectangle [low, high]."""
         caster = self.caster
         faces = caster.faces
-        vertices = caster.vertices - self.center
-        homogeneous = np.column_stack([vertices, np.ones(len(vertices))])
+        homogeneous = caster.centered
         planes = np.vstack(
             [np.append(self.plane.normal, self.d), _rectangle_planes(low, high) @ self.H]
         )
         planes /= np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
-        side = homogeneous @ planes.T  # (n, 5): >= 0 inside each half-space
-        vertex_out = side < 0
-        whole = ~np.any(np.any(vertex_out, axis=1)[faces], axis=1)
-        # Only the few faces that are not whole need the per-plane test.
-        others = np.flatnonzero(~whole)
-        outside = vertex_out[faces[others]]  # (k, 3, 5)
-        culled = np.all(outside, axis=1).any(axis=1)
-        cut = np.zeros(len(faces), dtype=bool)
-        cut[others[~culled]] = True
-        self.culled = int(culled.sum())
-        self._count_clipped(homogeneous, faces[others], outside)
-
+        vertex_out = np.any((homogeneous @ planes.T) < 0, axis=1)
         # facing > 0: the face turns its front to the light. For a face whose
         # corners all project (w > 0) this is also the sign of its image's area.
-        light = self._light_h
-        facing = caster.face_normals @ light[:3] - caster.face_offsets_at(self.center) * light[3]
+        facing = caster.facing(self._light_h)
+        self.culled = 0
+        if not vertex_out.any():
+            whole = np.ones(len(faces), dtype=bool)
+            cut = np.zeros(len(faces), dtype=bool)
+        else:
+            whole = ~np.any(vertex_out[faces], axis=1)
+            # Only the few faces that are not whole need the per-plane test.
+            others = np.flatnonzero(~whole)
+            outside = (homogeneous[faces[others]] @ planes.T) < 0  # (k, 3, 5)
+            culled = np.all(outside, axis=1).any(axis=1)
+            cut = np.zeros(len(faces), dtype=bool)
+            cut[others[~culled]] = True
+            self.culled = int(culled.sum())
+            self._count_clipped(homogeneous, faces[others], outside)
         if caster.is_closed:
             # With the light outside a closed caster every shadow ray first
             # meets a face turned to the light: the others add nothing.
-            whole &= facing > 0
-            cut &= facing > 0
-
-        loops, loop_vertices = _boundary_loops(caster, whole, np.sign(facing).astype(np.int64))
+            front = facing > 0
+            cut &= front
+            if whole.all():
+                loops, loop_vertices = _silhouette_loops(caster, front)
+            else:
+                loops, loop_vertices = _boundary_loops(
+                    caster, whole & front, front.astype(np.int64)
+                )
+        else:
+            orientation = np.sign(facing).astype(np.int64)
+            loops, loop_vertices = _boundary_loops(caster, whole, orientation)
         if loop_vertices.size:
             image = homogeneous[loop_vertices] @ self.H.T
             if np.any(image[:, 2] <= 0):
                 raise GeometryError("the light touches the caster (a vertex projects to infinity)")
-            points = np.zeros((len(vertices), 2))
+            points = np.zeros((len(homogeneous), 2))
             points[loop_vertices] = image[:, :2] / image[:, 2:3]
             loops = [points[loop] for loop in loops]
         for index in np.flatnonzero(cut):
@@ -607,6 +615,22 @@ def _boundary_loops(
     forward = net > 0
     starts = np.where(forward, edges[:, 0], edges[:, 1]).repeat(count)
     ends = np.where(forward, edges[:, 1], edges[:, 0]).repeat(count)
+    return _chain(starts, ends), np.unique(edges)
+
+
+def _silhouette_loops(caster: Caster, front: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """Loops of a closed caster's silhouette: the edges between a face turned
+    to the light and one that is not, directed as in the front face."""
+    slots = caster.edge_face_slots
+    slot_front = front[slots // 3]
+    silhouette = np.flatnonzero(slot_front[:, 0] != slot_front[:, 1])
+    if len(silhouette) == 0:
+        return [], np.zeros(0, dtype=np.int64)
+    front_slot = np.where(slot_front[silhouette, 0], slots[silhouette, 0], slots[silhouette, 1])
+    forward = caster.face_edge_signs.reshape(-1)[front_slot] > 0
+    edges = caster.edges[silhouette]
+    starts = np.where(forward, edges[:, 0], edges[:, 1])
+    ends = np.where(forward, edges[:, 1], edges[:, 0])
     return _chain(starts, ends), np.unique(edges)
 
 

@@ -85,13 +85,38 @@ class Caster:
         return np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
 
     @cached_property
-    def _face_offsets(self) -> np.ndarray:
-        return np.einsum("ij,ij->i", self.face_normals, self.vertices[self.faces[:, 0]])
+    def center(self) -> np.ndarray:
+        """(3,) centre of :attr:`bounds`: the origin of :attr:`centered`."""
+        return 0.5 * (self.bounds[0] + self.bounds[1])
 
-    def face_offsets_at(self, origin) -> np.ndarray:
-        """(m,) ``face_normals . (corner - origin)``: with :attr:`face_normals`,
-        each face's plane relative to ``origin``."""
-        return self._face_offsets - self.face_normals @ np.asarray(origin, dtype=np.float64)
+    @cached_property
+    def centered(self) -> np.ndarray:
+        """(n, 4) homogeneous vertices relative to :attr:`center`. Differences
+        of nearby coordinates are exact, so a scene far from the origin loses
+        nothing when its geometry is computed in this frame."""
+        relative = self.vertices - self.center
+        return np.column_stack([relative, np.ones(len(relative))])
+
+    @cached_property
+    def face_offsets(self) -> np.ndarray:
+        """(m,) ``face_normals . (first corner - center)``: with
+        :attr:`face_normals`, each face's plane in the :attr:`centered` frame."""
+        return np.einsum("ij,ij->i", self.face_normals, self.centered[self.faces[:, 0], :3])
+
+    def facing(self, light_homogeneous) -> np.ndarray:
+        """(m,) positive where a face turns its front to the light given as a
+        homogeneous 4-vector in the :attr:`centered` frame (zero edge-on)."""
+        light = np.asarray(light_homogeneous, dtype=np.float64)
+        return self.face_normals @ light[:3] - self.face_offsets * light[3]
+
+    @cached_property
+    def edge_face_slots(self) -> np.ndarray:
+        """(e, 2) for a closed mesh: the two face corners ``3 * face + k`` whose
+        edge (corner k to k + 1) is each edge."""
+        if not self.is_closed:
+            raise ValueError("edge_face_slots needs a closed mesh")
+        order = np.argsort(self.face_edges.reshape(-1), kind="stable")
+        return order.reshape(-1, 2)
 
     @cached_property
     def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
