@@ -171,6 +171,7 @@ def project_shadow(
     receiver=None,
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
+    method: str = "auto",
 ) -> Shadow:
     """The exact shadow of ``caster`` cast by ``light`` on ``plane``.
 
@@ -190,6 +191,12 @@ def project_shadow(
         it does not z-fight the receiver.
     tolerance : Tolerance, optional
         Defaults to ``Tolerance.for_points`` of the caster, light and receiver.
+    method : {"auto", "triangles"}
+        ``"auto"`` unites outlines: the silhouette of a closed caster, the
+        boundary of each same-facing patch of an open one, and only the
+        triangles that need clipping one by one. ``"triangles"`` unites every
+        projected triangle separately (the textbook union, made robust); it
+        gives the same region, more slowly, and is there to compare against.
 
     Returns
     -------
@@ -227,7 +234,11 @@ def project_shadow(
     offset = float(offset)
     if not math.isfinite(offset):
         raise GeometryError(f"offset must be finite, got {offset!r}")
-    return _Projector(caster, light, plane, receiver_points, offset, tolerance).run()
+    if method not in ("auto", "triangles"):
+        raise GeometryError(f"method must be 'auto' or 'triangles', got {method!r}")
+    projector = _Projector(caster, light, plane, receiver_points, offset, tolerance)
+    projector.per_triangle = method == "triangles"
+    return projector.run()
 
 
 def _check_types(light, plane) -> None:
@@ -262,6 +273,7 @@ class _Projector:
         self.tol = tol
         self.clipped: dict[str, int] = {}
         self.limits: list[str] = []
+        self.per_triangle = False
 
     # -- result helpers -------------------------------------------------------------------
 
@@ -481,12 +493,16 @@ class _Projector:
             # meets a face turned to the light: the others add nothing.
             front = facing > 0
             cut &= front
-            if whole.all():
+            if self.per_triangle:
+                loops, loop_vertices = _triangle_loops(caster, whole & front, facing)
+            elif whole.all():
                 loops, loop_vertices = _silhouette_loops(caster, front)
             else:
                 loops, loop_vertices = _boundary_loops(
                     caster, whole & front, front.astype(np.int64)
                 )
+        elif self.per_triangle:
+            loops, loop_vertices = _triangle_loops(caster, whole, facing)
         else:
             orientation = np.sign(facing).astype(np.int64)
             loops, loop_vertices = _boundary_loops(caster, whole, orientation)
@@ -616,6 +632,16 @@ def _boundary_loops(
     starts = np.where(forward, edges[:, 0], edges[:, 1]).repeat(count)
     ends = np.where(forward, edges[:, 1], edges[:, 0]).repeat(count)
     return _chain(starts, ends), np.unique(edges)
+
+
+def _triangle_loops(
+    caster: Caster, selected: np.ndarray, facing: np.ndarray
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """Every selected triangle as its own loop, turned to project counter-clockwise."""
+    faces = caster.faces[selected & (facing != 0)]
+    back = facing[selected & (facing != 0)] < 0
+    faces = np.where(back[:, None], faces[:, ::-1], faces)
+    return list(faces), np.unique(faces)
 
 
 def _silhouette_loops(caster: Caster, front: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:

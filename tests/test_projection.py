@@ -484,3 +484,42 @@ def test_flat_torus_under_a_central_light_has_a_hole_of_the_right_size():
     radial = np.linalg.norm(hits[:, [0, 2]], axis=1)
     assert np.linalg.norm(outer, axis=1).max() == pytest.approx(radial.max(), rel=1e-9)
     assert np.linalg.norm(hole, axis=1).min() == pytest.approx(radial.min(), rel=1e-9)
+
+
+# -- the outline fast path against the triangle union --------------------------------------
+
+
+def bumpy_sphere(subdivisions=3):
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions)
+    direction = mesh.vertices / np.linalg.norm(mesh.vertices, axis=1, keepdims=True)
+    wave = 1 + 0.2 * np.sin(5 * direction[:, 0]) * np.cos(6 * direction[:, 2])
+    mesh.vertices = direction * wave[:, None]
+    return mesh
+
+
+@pytest.mark.parametrize("closed", [True, False], ids=["closed", "open"])
+@pytest.mark.parametrize(
+    ("light", "height"),
+    [
+        (PointLight([0.4, 5, 0.3]), 2.0),  # nothing clipped: silhouette only
+        (PointLight([1.8, 2.2, 0.3]), 2.0),  # light beside the caster: anti-shadow clipping
+        (DirectionalLight([0.3, -1, 0.1]), 0.5),  # caster pierces the plane
+    ],
+    ids=["silhouette", "anti-shadow", "pierced"],
+)
+def test_outline_path_matches_the_triangle_union(closed, light, height):
+    mesh = bumpy_sphere()
+    mesh.apply_translation([0, height, 0])
+    faces = mesh.faces if closed else mesh.faces[5:]
+    caster = trimesh.Trimesh(mesh.vertices, faces, process=False)
+    assert caster.is_watertight == closed
+    square = np.array([[-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]], dtype=float)
+    fast = project_shadow(caster, light, GROUND, receiver=square)
+    union = project_shadow(caster, light, GROUND, receiver=square, method="triangles")
+    assert fast.area == pytest.approx(union.area, rel=1e-9)
+    assert fast.to_shapely().symmetric_difference(union.to_shapely()).area <= 1e-9 * union.area
+    # The fast path never hands more loops to the union; with nothing to
+    # clip it hands over just the outline.
+    assert fast.diagnostics.n_loops <= union.diagnostics.n_loops
+    if not any(fast.diagnostics.clipped.values()):
+        assert fast.diagnostics.n_loops < union.diagnostics.n_loops / 20
