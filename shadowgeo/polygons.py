@@ -2,8 +2,8 @@
 
 One thin wrapper over manifold3d's ``CrossSection`` (Clipper2 in C++). Clipper2
 rounds coordinates to 1e-8, so callers work in a *local frame* whose units make
-the region large (about 1e6 units across) but keep every coordinate below
-``MAX_COORDINATE``; rounding then costs about 1e-14 of the region's size.
+the region as large as Clipper2 handles safely (``MAX_COORDINATE``); rounding
+then costs about 1e-16 of the region's size.
 """
 
 from __future__ import annotations
@@ -14,14 +14,13 @@ from manifold3d import CrossSection, FillRule, triangulate
 # Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
 # its 1e8 fixed-point scaling overflows int64's safe range).
 MAX_COORDINATE = 1e8
-# The size a region is scaled to in the local frame.
-LOCAL_SIZE = 1e6
 
 
-def local_scale(size: float, extent: float) -> float:
-    """Units per length that make ``size`` about ``LOCAL_SIZE`` while keeping
-    ``extent`` (the largest coordinate that will occur) below ``MAX_COORDINATE``."""
-    return min(LOCAL_SIZE / size, MAX_COORDINATE / max(extent, size))
+def local_scale(extent: float) -> float:
+    """Units per length that put the largest coordinate that will occur,
+    ``extent``, at ``MAX_COORDINATE``: Clipper2's fixed 1e-8 grid is then
+    about 1e-16 of the region's size."""
+    return MAX_COORDINATE / extent
 
 
 def signed_areas(loops: list[np.ndarray]) -> np.ndarray:

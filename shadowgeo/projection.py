@@ -328,6 +328,15 @@ class _Projector:
 
         self._light_h = homogeneous
         u, v = self.plane.basis
+        self.foot2d = np.zeros(2)
+        if len(self.receiver):
+            # Coordinates relative to the receiver keep their precision however
+            # far the light's foot or the caster's shadow centre lies.
+            points = self.receiver - self.center
+            middle = 0.5 * (points.min(axis=0) + points.max(axis=0))
+            middle -= (normal @ middle + self.d) * normal
+            self.foot2d = np.array([u @ (self.origin - middle), v @ (self.origin - middle)])
+            self.origin = middle
         plane4 = np.append(normal, self.d)
         matrix = float(plane4 @ homogeneous) * np.eye(4) - np.outer(homogeneous, plane4)
         to_plane2d = np.array(
@@ -344,7 +353,7 @@ class _Projector:
             self.bound = tol.bound_length
             low, high = np.full(2, -self.bound), np.full(2, self.bound)
         extent = float(np.max(np.abs([low, high])))
-        self.scale = poly.local_scale(tol.scale, extent)
+        self.scale = poly.local_scale(extent)
         self.H = np.diag([self.scale, self.scale, 1.0]) @ self.raw
         low, high = low * self.scale, high * self.scale
 
@@ -418,7 +427,8 @@ class _Projector:
         radius = math.sqrt(self.light.radius**2 - self.height**2)
         n = self.tol.segments(radius)
         angles = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-        return radius * self.scale * np.column_stack([np.cos(angles), np.sin(angles)])
+        circle = radius * np.column_stack([np.cos(angles), np.sin(angles)])
+        return (circle + self.foot2d) * self.scale
 
     def _spot_polygon(self, low, high) -> np.ndarray | None:
         """The spot light's cone on the plane (an inscribed pyramid), clipped to
