@@ -1,14 +1,22 @@
 """``shadowgeo`` command: parse arguments, call the public API, print, exit.
 
+Each command lives in its own module of this package and provides
+``register(subparsers)``, which adds its parser and sets ``func`` to a function
+``run(args) -> int``.
+
 Exit codes: 0 done, 1 bad input, 2 bad usage.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 
 import shadowgeo
+
+# Command modules, in the order --help lists them.
+COMMANDS = ("convert", "info", "render", "view")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -17,7 +25,10 @@ def build_parser() -> argparse.ArgumentParser:
         description="Exact shadow geometry for 3-D scenes.",
     )
     parser.add_argument("--version", action="version", version=shadowgeo.__version__)
-    parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMANDS:
+        module = importlib.import_module(f"{__package__}.{name}")
+        module.register(subparsers)
     return parser
 
 
@@ -27,4 +38,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help(sys.stderr)
         return 2
-    return 0
+    try:
+        return int(args.func(args) or 0)
+    except (shadowgeo.SceneError, shadowgeo.GeometryError) as error:
+        print(f"shadowgeo {args.command}: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("shadowgeo: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,15 @@
+"""``shadowgeo render``: not built yet."""
+
+from __future__ import annotations
+
+import sys
+
+
+def register(subparsers) -> None:
+    parser = subparsers.add_parser("render", help="(not built yet)")
+    parser.set_defaults(func=run)
+
+
+def run(args) -> int:
+    print("shadowgeo render: not built yet", file=sys.stderr)
+    return 2
