@@ -6,6 +6,7 @@ The public API is re-exported here and nowhere else.
 from __future__ import annotations
 
 from .errors import GeometryError, SceneError
+from .io import load, save
 from .lights import DirectionalLight, PointLight, SpotLight
 from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
@@ -29,7 +30,9 @@ __all__ = [
     "SpotLight",
     "Tolerance",
     "as_caster",
+    "load",
     "project_shadow",
+    "save",
     "shadow_matrix",
 ]
 

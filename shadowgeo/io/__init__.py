@@ -1,2 +1,87 @@
 """Readers and writers, one module per format. They know the scene model,
-not the shadow algorithms."""
+not the shadow algorithms.
+
+:func:`load` and :func:`save` pick the module from the file's extension:
+
+============================  ===========================  =======================
+extension                     read                         write
+============================  ===========================  =======================
+``.x3d``, ``.x3dz``           :mod:`.x3d_read`             :mod:`.x3d_write`
+``.glb``, ``.gltf``           :mod:`.meshes` (trimesh)     :mod:`.gltf`
+``.usda``, ``.usdc``, ``.usd``  :mod:`.usd`                 :mod:`.usd`
+``.obj``, ``.stl``, ``.ply``,  :mod:`.meshes` (trimesh)     --
+``.off``
+============================  ===========================  =======================
+
+Each module provides ``read(path, **options) -> Scene`` and/or
+``write(scene, path, **options) -> None``; writers go through
+:func:`shadowgeo.io.atomic.atomic_path`, so a failure leaves no partial file.
+"""
+
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+from ..errors import SceneError
+from ..scene import Scene
+
+READERS = {
+    ".x3d": "x3d_read",
+    ".x3dz": "x3d_read",
+    ".glb": "meshes",
+    ".gltf": "meshes",
+    ".obj": "meshes",
+    ".stl": "meshes",
+    ".ply": "meshes",
+    ".off": "meshes",
+    ".usda": "usd",
+    ".usdc": "usd",
+    ".usd": "usd",
+}
+
+WRITERS = {
+    ".x3d": "x3d_write",
+    ".x3dz": "x3d_write",
+    ".glb": "gltf",
+    ".gltf": "gltf",
+    ".usda": "usd",
+    ".usdc": "usd",
+    ".usd": "usd",
+}
+
+
+def _suffix(path) -> str:
+    return Path(path).suffix.lower()
+
+
+def _module(table: dict[str, str], path, verb: str):
+    suffix = _suffix(path)
+    if suffix not in table:
+        known = ", ".join(sorted(table))
+        raise SceneError(
+            f"cannot {verb} '{suffix or 'no extension'}' files (known: {known})", path=str(path)
+        )
+    return importlib.import_module(f"{__name__}.{table[suffix]}")
+
+
+def load(path, **options) -> Scene:
+    """Read a scene from ``path``; the format comes from the extension.
+
+    Raises
+    ------
+    SceneError
+        The file is missing, unreadable or malformed; the message names the
+        file and, where known, the line and node.
+    """
+    path = Path(path)
+    module = _module(READERS, path, "read")
+    if not path.is_file():
+        raise SceneError("no such file", path=str(path))
+    return module.read(path, **options)
+
+
+def save(scene: Scene, path, **options) -> None:
+    """Write ``scene`` to ``path`` atomically; the format comes from the extension."""
+    module = _module(WRITERS, path, "write")
+    module.write(scene, Path(path), **options)
