@@ -1,0 +1,127 @@
+"""Independent validators the tests run on written files.
+
+Import from any test::
+
+    from validators import gltf_problems, gltf_report, usd_errors
+
+``gltf_report(path)`` runs the Khronos glTF validator (npm ``gltf-validator``,
+through node and ``tests/node/validate_gltf.mjs``) and returns its report;
+``gltf_problems(report)`` lists its errors (and warnings, if asked) as lines.
+``usd_errors(path)`` runs every validator usd-core registers
+(``pxr.UsdValidation``; ``UsdUtils.ComplianceChecker`` on usd-core older than
+24.11) and returns the errors as lines. Each skips the calling test (via
+``pytest.skip``) when its tool is not installed, never passes silently.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+NODE_DIR = Path(__file__).resolve().parent / "node"
+GLTF_SCRIPT = NODE_DIR / "validate_gltf.mjs"
+
+# Severities in the Khronos validator's report.
+GLTF_ERROR, GLTF_WARNING, GLTF_INFO, GLTF_HINT = 0, 1, 2, 3
+
+
+def _require_gltf_validator() -> str:
+    node = shutil.which("node")
+    if node is None:
+        pytest.skip("node is not installed")
+    if not (NODE_DIR / "node_modules" / "gltf-validator").is_dir():
+        pytest.skip("gltf-validator is not installed: run npm ci --prefix tests/node")
+    return node
+
+
+def gltf_report(path) -> dict:
+    """The Khronos glTF validator's report on a .gltf or .glb file.
+
+    External buffers of a .gltf are loaded from the file's folder.
+
+    Parameters
+    ----------
+    path : str or Path
+
+    Returns
+    -------
+    dict
+        The validator's JSON report: ``report["issues"]`` has ``numErrors``,
+        ``numWarnings``, ``numInfos``, ``numHints`` and ``messages`` (each with
+        ``code``, ``message``, ``severity`` 0-3 and ``pointer``);
+        ``report["info"]`` summarises the asset.
+
+    Raises
+    ------
+    RuntimeError
+        The validator could not run at all (the file is not glTF or GLB).
+    """
+    node = _require_gltf_validator()
+    completed = subprocess.run(
+        [node, str(GLTF_SCRIPT), str(Path(path).resolve())],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=NODE_DIR,
+    )
+    if completed.returncode != 0:
+        raise RuntimeError(f"gltf-validator failed on {path}: {completed.stderr.strip()}")
+    return json.loads(completed.stdout)
+
+
+def gltf_problems(report: dict, *, warnings: bool = True) -> list[str]:
+    """The report's errors (and warnings unless ``warnings=False``) as
+    ``"CODE at /pointer: message"`` lines; empty for a clean file."""
+    worst = GLTF_WARNING if warnings else GLTF_ERROR
+    return [
+        f"{message['code']} at {message.get('pointer', '')}: {message['message']}"
+        for message in report["issues"]["messages"]
+        if message["severity"] <= worst
+    ]
+
+
+def usd_errors(path, *, warnings: bool = False) -> list[str]:
+    """Errors (and warnings if asked) that usd-core's own validators find in a
+    USD file, as ``"Name at </prim>: message"`` lines; empty for a clean file.
+
+    Uses ``pxr.UsdValidation`` (a ``ValidationContext`` over every validator in
+    the registry); on usd-core without it, ``UsdUtils.ComplianceChecker``.
+    """
+    pytest.importorskip("pxr", reason="usd-core is not installed")
+    from pxr import Usd
+
+    try:
+        from pxr import UsdValidation
+    except ImportError:
+        return _compliance_errors(path, warnings=warnings)
+
+    stage = Usd.Stage.Open(str(path))
+    if stage is None:
+        return [f"usd-core cannot open {path}"]
+    registry = UsdValidation.ValidationRegistry()
+    context = UsdValidation.ValidationContext(registry.GetOrLoadAllValidators())
+    kinds = {UsdValidation.ValidationErrorType.Error}
+    if warnings:
+        kinds.add(UsdValidation.ValidationErrorType.Warn)
+    lines = []
+    for error in context.Validate(stage):
+        if error.GetType() not in kinds:
+            continue
+        sites = ", ".join(str(site.GetPrim().GetPath()) for site in error.GetSites())
+        lines.append(f"{error.GetName()} at <{sites}>: {error.GetMessage()}")
+    return lines
+
+
+def _compliance_errors(path, *, warnings: bool) -> list[str]:
+    from pxr import UsdUtils
+
+    checker = UsdUtils.ComplianceChecker()
+    checker.CheckCompliance(str(path))
+    lines = list(checker.GetErrors()) + list(checker.GetFailedChecks())
+    if warnings:
+        lines += list(checker.GetWarnings())
+    return [str(line) for line in lines]
