@@ -81,8 +81,17 @@ class Caster:
     @cached_property
     def face_normals(self) -> np.ndarray:
         """(m, 3) unnormalised face normals (twice the area, by the winding)."""
-        tri = self.triangles
-        return np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        # Component-wise cross product of corner columns: several times faster
+        # than np.cross on an (m, 3, 3) gather, and the same numbers.
+        vertices, faces = self.vertices, self.faces
+        first = vertices[faces[:, 0]]
+        u = vertices[faces[:, 1]] - first
+        v = vertices[faces[:, 2]] - first
+        normals = np.empty_like(u)
+        normals[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
+        normals[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
+        normals[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+        return normals
 
     @cached_property
     def center(self) -> np.ndarray:
@@ -112,25 +121,47 @@ class Caster:
     @cached_property
     def edge_face_slots(self) -> np.ndarray:
         """(e, 2) for a closed mesh: the two face corners ``3 * face + k`` whose
-        edge (corner k to k + 1) is each edge."""
+        edge (corner k to k + 1) is each edge, lower slot first."""
         if not self.is_closed:
             raise ValueError("edge_face_slots needs a closed mesh")
-        order = np.argsort(self.face_edges.reshape(-1), kind="stable")
-        return order.reshape(-1, 2)
+        pairs = self.edge_slots.reshape(-1, 2)
+        return np.column_stack([pairs.min(axis=1), pairs.max(axis=1)])
+
+    @property
+    def edge_slots(self) -> np.ndarray:
+        """(3 m,) every face corner ``3 * face + k`` grouped by the edge it
+        starts (corner k to k + 1): the slots of edge ``i`` are
+        ``edge_slots[edge_slot_starts[i]:edge_slot_starts[i + 1]]``."""
+        return self._edge_table[3]
 
     @cached_property
-    def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def edge_slot_starts(self) -> np.ndarray:
+        """(e + 1,) offsets of each edge's group in :attr:`edge_slots`."""
+        return np.concatenate([[0], np.cumsum(self.edge_face_count)]).astype(np.int64)
+
+    @cached_property
+    def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        # One argsort of a single int64 key per face edge gives the unique
+        # edges, each face edge's index and the slots grouped by edge at once
+        # (np.unique with return_inverse would sort, and edge_face_slots sort
+        # again).
         faces = self.faces
+        n = np.int64(max(len(self.vertices), 1))
         starts = faces.reshape(-1)
         ends = faces[:, [1, 2, 0]].reshape(-1)
         low = np.minimum(starts, ends)
-        high = np.maximum(starts, ends)
-        keys = low * np.int64(max(len(self.vertices), 1)) + high
-        unique_keys, inverse = np.unique(keys, return_inverse=True)
-        n = np.int64(max(len(self.vertices), 1))
+        keys = low * n + np.maximum(starts, ends)
+        order = np.argsort(keys)
+        sorted_keys = keys[order]
+        first = np.empty(len(sorted_keys), dtype=bool)
+        first[:1] = True
+        np.not_equal(sorted_keys[1:], sorted_keys[:-1], out=first[1:])
+        unique_keys = sorted_keys[first]
+        inverse = np.empty(len(keys), dtype=np.int64)
+        inverse[order] = np.cumsum(first) - 1
         edges = np.column_stack([unique_keys // n, unique_keys % n])
         sign = np.where(starts < ends, 1, -1).astype(np.int64)
-        return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3)
+        return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3), order
 
     @property
     def edges(self) -> np.ndarray:
@@ -176,8 +207,10 @@ class Caster:
         """(2, 3) lower and upper corner of the used vertices' bounding box."""
         if self.n_faces == 0:
             return np.zeros((2, 3))
-        used = self.vertices[np.unique(self.faces)]
-        return np.array([used.min(axis=0), used.max(axis=0)])
+        used = np.zeros(len(self.vertices), dtype=bool)
+        used[self.faces.reshape(-1)] = True
+        points = self.vertices if used.all() else self.vertices[used]
+        return np.array([points.min(axis=0), points.max(axis=0)])
 
     def winding_number(self, point) -> float:
         """Generalised winding number of the mesh around ``point`` (1 inside a

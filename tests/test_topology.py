@@ -41,3 +41,51 @@ def test_winding_number_inside_and_outside():
 def test_bad_casters_are_refused(vertices, faces, message):
     with pytest.raises(GeometryError, match=message):
         as_caster((vertices, faces))
+
+
+def _brute_force_edges(faces):
+    """Edge -> list of (face, corner) slots, by a Python dictionary."""
+    table: dict[tuple[int, int], list[int]] = {}
+    for face_index, face in enumerate(np.asarray(faces).tolist()):
+        for corner in range(3):
+            start, end = face[corner], face[(corner + 1) % 3]
+            table.setdefault((min(start, end), max(start, end)), []).append(3 * face_index + corner)
+    return table
+
+
+@pytest.mark.parametrize("closed", [True, False], ids=["closed", "open"])
+def test_edge_table_matches_a_brute_force_dictionary(closed):
+    mesh = trimesh.creation.torus(
+        major_radius=1.0, minor_radius=0.3, major_sections=9, minor_sections=7
+    )
+    faces = mesh.faces if closed else mesh.faces[::2]
+    rng = np.random.default_rng(0)
+    faces = faces[rng.permutation(len(faces))]
+    caster = as_caster((mesh.vertices, faces))
+    table = _brute_force_edges(faces)
+    assert caster.is_closed == closed
+    assert sorted(map(tuple, caster.edges.tolist())) == sorted(table)
+    assert caster.edges.tolist() == sorted(caster.edges.tolist())
+    for edge_index, edge in enumerate(map(tuple, caster.edges.tolist())):
+        begin, end = caster.edge_slot_starts[edge_index : edge_index + 2]
+        assert sorted(caster.edge_slots[begin:end].tolist()) == table[edge]
+        assert caster.edge_face_count[edge_index] == len(table[edge])
+    for slot in range(3 * len(faces)):
+        face_index, corner = divmod(slot, 3)
+        start, end = faces[face_index, corner], faces[face_index, (corner + 1) % 3]
+        edge = tuple(caster.edges[caster.face_edges[face_index, corner]])
+        assert edge == (min(start, end), max(start, end))
+        assert caster.face_edge_signs[face_index, corner] == (1 if start < end else -1)
+    if closed:
+        assert caster.edge_face_slots.tolist() == [table[tuple(e)] for e in caster.edges.tolist()]
+
+
+def test_face_normals_and_bounds_against_direct_formulas():
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    # An unused far vertex must not enter the bounds.
+    vertices = np.vstack([mesh.vertices, [[50.0, 50.0, 50.0]]])
+    caster = as_caster((vertices, mesh.faces))
+    triangles = vertices[mesh.faces]
+    expected = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    assert np.allclose(caster.face_normals, expected, rtol=0, atol=1e-15)
+    assert np.allclose(caster.bounds, [mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)])
