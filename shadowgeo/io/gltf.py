@@ -1,0 +1,389 @@
+"""glTF 2.0 writer (``.glb`` binary, ``.gltf`` JSON with an embedded buffer).
+
+What is written
+---------------
+- One node per shape, named after it, holding the shape's transform as a
+  column-major ``matrix`` and a mesh of one triangle primitive. A transform
+  that is not translation x rotation x scale (a shear, which X3D's
+  ``scaleOrientation`` can make and glTF forbids) is baked into the vertices
+  instead, and the node gets none.
+- Materials: ``pbrMetallicRoughness`` with ``baseColorFactor`` = diffuse
+  colour and alpha = 1 - transparency, ``alphaMode`` ``BLEND`` when
+  transparent, ``doubleSided`` when the shape is not solid, emissive colour.
+- Shadows and shadow volumes (shapes with role ``"shadow"`` / ``"volume"``) as
+  their own meshes under one node per light group, named after the group.
+- Lights through ``KHR_lights_punctual``: each on a node whose translation is
+  the light's position and whose rotation turns the node's -Z onto the
+  light's direction. Point and spot lights get ``range`` from a finite radius;
+  a spot's ``outerConeAngle`` is its cut-off angle and ``innerConeAngle`` its
+  beam width, kept just below the outer angle as glTF requires.
+- glTF is Y-up in metres: a scene that is Z-up, or not in metres, goes under
+  one root node that rotates and scales it there.
+- What glTF has no field for (roles, groups, X3D's ``shadows``,
+  ``shadowIntensity``, ``on``, attenuation, ambient intensity) goes in the
+  node's ``extras["shadowgeo"]``, which :mod:`.meshes` reads back.
+
+Precision
+---------
+glTF stores positions as float32. Node transforms are JSON numbers (float64),
+so a shape keeps its own frame and only its *local* coordinates are rounded:
+a round trip is exact to about ``6e-8`` times the shape's local extent, not
+to float64.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from ..lights import DirectionalLight, PointLight, SpotLight
+from ..scene import Scene, SceneLight, Shape
+from .atomic import atomic_path
+
+_ARRAY_BUFFER = 34962
+_ELEMENT_ARRAY_BUFFER = 34963
+_FLOAT = 5126
+_UNSIGNED_INT = 5125
+_LIGHTS = "KHR_lights_punctual"
+_GLB_MAGIC, _JSON_CHUNK, _BIN_CHUNK = 0x46546C67, 0x4E4F534A, 0x004E4942
+
+# Matrices whose TRS decomposition misses them by more than this (relative)
+# are not TRS: glTF's validator rejects them, so they are baked into vertices.
+_TRS_RELATIVE = 1e-9
+
+
+def look_rotation(direction) -> np.ndarray:
+    """(3, 3) rotation turning -Z onto ``direction`` (the convention of glTF
+    and USD lights), by the shortest arc.
+
+    Examples
+    --------
+    >>> look_rotation([1.0, 0.0, 0.0]) @ [0.0, 0.0, -1.0]
+    array([1., 0., 0.])
+    """
+    target = np.asarray(direction, dtype=np.float64)
+    target = target / np.linalg.norm(target)
+    source = np.array([0.0, 0.0, -1.0])
+    cosine = float(source @ target)
+    axis = np.cross(source, target)
+    if cosine < -1.0 + 1e-12:
+        # Pointing along +Z: half a turn about X.
+        return np.diag([1.0, -1.0, -1.0])
+    # Rodrigues' formula for the rotation by the angle between source and target.
+    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + cross + cross @ cross / (1.0 + cosine)
+
+
+def quaternion_xyzw(rotation: np.ndarray) -> list[float]:
+    """Unit quaternion ``[x, y, z, w]`` of a (3, 3) rotation matrix."""
+    m = np.asarray(rotation, dtype=np.float64)
+    trace = np.trace(m)
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    else:
+        i = int(np.argmax(np.diag(m)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * math.sqrt(max(1.0 + m[i, i] - m[j, j] - m[k, k], 0.0))
+        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / s]
+        q[i] = s / 4
+        q[j] = (m[j, i] + m[i, j]) / s
+        q[k] = (m[k, i] + m[i, k]) / s
+    q = np.array(q) / np.linalg.norm(q)
+    return [float(v) for v in q]
+
+
+def is_trs(matrix: np.ndarray) -> bool:
+    """True when a (4, 4) affine matrix is translation x rotation x scale
+    (its linear part has orthogonal columns), as glTF requires of ``matrix``."""
+    linear = matrix[:3, :3]
+    if not np.allclose(matrix[3], [0, 0, 0, 1], rtol=0, atol=_TRS_RELATIVE):
+        return False
+    gram = linear.T @ linear
+    size = max(float(np.abs(gram).max()), np.finfo(float).tiny)
+    off_diagonal = gram - np.diag(np.diag(gram))
+    return bool(np.abs(off_diagonal).max() <= _TRS_RELATIVE * size and np.diag(gram).min() > 0)
+
+
+def _root_matrix(scene: Scene) -> np.ndarray | None:
+    """Column-vector matrix taking the scene to glTF's Y-up metres, or None."""
+    up = (scene.up_axis or "Y").upper()
+    if up not in ("Y", "Z"):
+        raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}", path=scene.path)
+    if up == "Y" and scene.meters_per_unit == 1.0:
+        return None
+    matrix = np.eye(4)
+    if up == "Z":
+        # Z-up to Y-up: (x, y, z) -> (x, z, -y).
+        matrix[:3, :3] = [[1, 0, 0], [0, 0, 1], [0, -1, 0]]
+    matrix[:3, :3] *= scene.meters_per_unit
+    return matrix
+
+
+class _Builder:
+    """Accumulates the glTF JSON and its one binary buffer."""
+
+    def __init__(self) -> None:
+        self.gltf: dict = {
+            "asset": {"version": "2.0", "generator": "shadowgeo"},
+            "scene": 0,
+            "scenes": [{"nodes": []}],
+            "nodes": [],
+        }
+        self.binary = bytearray()
+        self.materials: dict[tuple, int] = {}
+
+    def _view(self, data: bytes, target: int) -> int:
+        self.binary.extend(b"\0" * (-len(self.binary) % 4))
+        views = self.gltf.setdefault("bufferViews", [])
+        views.append(
+            {"buffer": 0, "byteOffset": len(self.binary), "byteLength": len(data), "target": target}
+        )
+        self.binary.extend(data)
+        return len(views) - 1
+
+    def _accessor(self, **accessor) -> int:
+        accessors = self.gltf.setdefault("accessors", [])
+        accessors.append(accessor)
+        return len(accessors) - 1
+
+    def node(self, node: dict) -> int:
+        self.gltf["nodes"].append(node)
+        return len(self.gltf["nodes"]) - 1
+
+    def material(self, shape: Shape) -> int:
+        look = shape.material
+        alpha = 1.0 - float(look.transparency)
+        key = (tuple(look.diffuse_color), tuple(look.emissive_color), alpha, shape.solid, look.name)
+        if key not in self.materials:
+            material = {
+                "pbrMetallicRoughness": {
+                    "baseColorFactor": [*(_unit_float(c) for c in look.diffuse_color), alpha],
+                    "metallicFactor": 0.0,
+                    "roughnessFactor": _unit_float(1.0 - look.shininess),
+                },
+                "doubleSided": not shape.solid,
+            }
+            if any(look.emissive_color):
+                material["emissiveFactor"] = [_unit_float(c) for c in look.emissive_color]
+            if alpha < 1.0:
+                material["alphaMode"] = "BLEND"
+            if look.name:
+                material["name"] = look.name
+            materials = self.gltf.setdefault("materials", [])
+            materials.append(material)
+            self.materials[key] = len(materials) - 1
+        return self.materials[key]
+
+    def mesh(self, shape: Shape, vertices: np.ndarray) -> int | None:
+        """A one-primitive mesh for ``vertices`` (n, 3) and the shape's faces;
+        None when there is nothing to draw (glTF forbids empty accessors)."""
+        if len(shape.faces) == 0 or len(vertices) == 0:
+            return None
+        used = np.unique(shape.faces)
+        if used[0] < 0 or used[-1] >= len(vertices):
+            raise SceneError(
+                f"faces index vertex {int(used[-1])} of {len(vertices)}",
+                node=f"shape {shape.name!r}",
+            )
+        # Only the vertices the faces use: glTF's validator flags unused ones.
+        remap = np.zeros(len(vertices), dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        positions = np.ascontiguousarray(vertices[used], dtype="<f4")
+        if not np.all(np.isfinite(positions)):
+            raise SceneError("non-finite vertex after float32 conversion", node=shape.name)
+        indices = np.ascontiguousarray(remap[shape.faces], dtype="<u4")
+        position = self._accessor(
+            bufferView=self._view(positions.tobytes(), _ARRAY_BUFFER),
+            componentType=_FLOAT,
+            count=len(positions),
+            type="VEC3",
+            min=[float(v) for v in positions.min(axis=0)],
+            max=[float(v) for v in positions.max(axis=0)],
+        )
+        index = self._accessor(
+            bufferView=self._view(indices.tobytes(), _ELEMENT_ARRAY_BUFFER),
+            componentType=_UNSIGNED_INT,
+            count=int(indices.size),
+            type="SCALAR",
+        )
+        meshes = self.gltf.setdefault("meshes", [])
+        primitive = {"attributes": {"POSITION": position}, "indices": index, "mode": 4}
+        primitive["material"] = self.material(shape)
+        meshes.append({"primitives": [primitive], **({"name": shape.name} if shape.name else {})})
+        return len(meshes) - 1
+
+    def light(self, light: SceneLight) -> dict:
+        """The KHR_lights_punctual entry and the node that places it."""
+        geometry = light.light
+        entry: dict = {
+            "color": [_unit_float(c) for c in light.color],
+            "intensity": float(light.intensity) if light.on else 0.0,
+        }
+        node: dict = {}
+        if isinstance(geometry, DirectionalLight):
+            entry["type"] = "directional"
+        else:
+            entry["type"] = "spot" if isinstance(geometry, SpotLight) else "point"
+            node["translation"] = [float(v) for v in geometry.position]
+            if math.isfinite(geometry.radius):
+                entry["range"] = float(geometry.radius)
+        if isinstance(geometry, SpotLight):
+            outer = float(geometry.cut_off_angle)
+            inner = min(max(float(light.beam_width), 0.0), float(np.nextafter(outer, 0.0)))
+            entry["spot"] = {"innerConeAngle": inner, "outerConeAngle": outer}
+        if not isinstance(geometry, PointLight):
+            node["rotation"] = quaternion_xyzw(look_rotation(geometry.direction))
+        if light.name:
+            entry["name"] = light.name
+            node["name"] = light.name
+        lights = self.gltf.setdefault("extensions", {}).setdefault(_LIGHTS, {"lights": []})
+        lights["lights"].append(entry)
+        node["extensions"] = {_LIGHTS: {"light": len(lights["lights"]) - 1}}
+        node["extras"] = {
+            "shadowgeo": {
+                "on": bool(light.on),
+                "intensity": float(light.intensity),
+                "shadows": bool(light.shadows),
+                "shadowIntensity": float(light.shadow_intensity),
+                "ambientIntensity": float(light.ambient_intensity),
+                "attenuation": [float(a) for a in light.attenuation],
+                "beamWidth": float(light.beam_width),
+                "global": bool(light.global_),
+            }
+        }
+        self.gltf.setdefault("extensionsUsed", [])
+        if _LIGHTS not in self.gltf["extensionsUsed"]:
+            self.gltf["extensionsUsed"].append(_LIGHTS)
+        return node
+
+
+def _unit_float(value: float) -> float:
+    """A colour or factor clamped to glTF's [0, 1]."""
+    return min(max(float(value), 0.0), 1.0)
+
+
+def _shape_node(builder: _Builder, shape: Shape) -> dict:
+    node: dict = {}
+    if shape.name:
+        node["name"] = shape.name
+    transform = shape.transform
+    vertices = shape.vertices
+    if not np.array_equal(transform, np.eye(4)):
+        if is_trs(transform) and np.all(np.isfinite(transform)):
+            node["matrix"] = [float(v) for v in transform.T.reshape(-1)]
+        else:
+            vertices = shape.world_vertices
+    mesh = builder.mesh(shape, vertices)
+    if mesh is not None:
+        node["mesh"] = mesh
+    extras = {"role": shape.role}
+    if shape.group:
+        extras["group"] = shape.group
+    if not shape.casts_shadow or shape.receives_shadow:
+        extras["castsShadow"] = bool(shape.casts_shadow)
+        extras["receivesShadow"] = bool(shape.receives_shadow)
+    node["extras"] = {"shadowgeo": extras}
+    return node
+
+
+def build(scene: Scene) -> tuple[dict, bytes]:
+    """The glTF JSON document and its binary buffer for ``scene``.
+
+    Returns
+    -------
+    gltf : dict
+        The JSON document, without ``buffers`` (the caller adds the one buffer
+        in the form its container needs).
+    binary : bytes
+        The buffer: positions (float32) and indices (uint32), 4-byte aligned.
+    """
+    builder = _Builder()
+    top: list[int] = []
+    groups: dict[str, int] = {}
+    for shape in scene.shapes:
+        index = builder.node(_shape_node(builder, shape))
+        if shape.role == "geometry" and not shape.group:
+            top.append(index)
+            continue
+        group = shape.group or f"shadowgeo {shape.role}s"
+        if group not in groups:
+            groups[group] = builder.node(
+                {"name": group, "children": [], "extras": {"shadowgeo": {"role": "group"}}}
+            )
+            top.append(groups[group])
+        builder.gltf["nodes"][groups[group]]["children"].append(index)
+    for light in scene.lights:
+        top.append(builder.node(builder.light(light)))
+    root = _root_matrix(scene)
+    if root is not None and top:
+        top = [
+            builder.node(
+                {
+                    "name": "shadowgeo root",
+                    "matrix": [float(v) for v in root.T.reshape(-1)],
+                    "children": top,
+                    "extras": {"shadowgeo": {"role": "root"}},
+                }
+            )
+        ]
+    builder.gltf["scenes"][0]["nodes"] = top
+    builder.binary.extend(b"\0" * (-len(builder.binary) % 4))
+    return builder.gltf, bytes(builder.binary)
+
+
+def _glb(gltf: dict, binary: bytes) -> bytes:
+    if binary:
+        gltf["buffers"] = [{"byteLength": len(binary)}]
+    text = json.dumps(gltf, separators=(",", ":"), allow_nan=False).encode()
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<II", len(text), _JSON_CHUNK) + text
+    if binary:
+        chunks += struct.pack("<II", len(binary), _BIN_CHUNK) + binary
+    return struct.pack("<III", _GLB_MAGIC, 2, 12 + len(chunks)) + chunks
+
+
+def _embedded(gltf: dict, binary: bytes) -> bytes:
+    if binary:
+        uri = "data:application/octet-stream;base64," + base64.b64encode(binary).decode()
+        gltf["buffers"] = [{"byteLength": len(binary), "uri": uri}]
+    return json.dumps(gltf, indent=1, allow_nan=False).encode()
+
+
+def write(scene: Scene, path, **options) -> None:
+    """Write ``scene`` as glTF 2.0: ``.glb`` binary or ``.gltf`` JSON with the
+    buffer embedded as a data URI (one file, so the write stays atomic).
+
+    Parameters
+    ----------
+    scene : Scene
+    path : str or Path
+        Ends in ``.glb`` or ``.gltf``.
+
+    Raises
+    ------
+    SceneError
+        Options not understood, an up axis other than Y or Z, non-finite
+        numbers, or faces indexing missing vertices.
+    """
+    path = Path(path)
+    if options:
+        raise SceneError(f"glTF writer takes no options, got {sorted(options)}", path=str(path))
+    suffix = path.suffix.lower()
+    if suffix not in (".glb", ".gltf"):
+        raise SceneError(f"glTF files end in .glb or .gltf, not {suffix!r}", path=str(path))
+    try:
+        gltf, binary = build(scene)
+        data = _glb(gltf, binary) if suffix == ".glb" else _embedded(gltf, binary)
+    except SceneError as error:
+        raise SceneError(error.message, path=str(path), node=error.node) from None
+    except ValueError as error:
+        raise SceneError(f"cannot write glTF: {error}", path=str(path)) from error
+    with atomic_path(path) as temporary:
+        temporary.write_bytes(data)
