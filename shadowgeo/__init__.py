@@ -11,8 +11,10 @@ from .lights import DirectionalLight, PointLight, SpotLight
 from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape
+from .scene.shadows import add_shadows
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
+from .viz import plot
 
 __all__ = [
     "Caster",
@@ -29,8 +31,10 @@ __all__ = [
     "Shape",
     "SpotLight",
     "Tolerance",
+    "add_shadows",
     "as_caster",
     "load",
+    "plot",
     "project_shadow",
     "save",
     "shadow_matrix",

@@ -1,0 +1,476 @@
+"""Adding shadows to a scene: which lights cast, which shapes receive, what casts.
+
+:func:`add_shadows` turns a :class:`~shadowgeo.scene.Scene` into the same scene
+with its shadows added as shapes (role ``"shadow"``, one group per light), ready
+for any writer.
+
+Selection rules
+---------------
+Lights
+    The lights with ``shadows=True`` (X3D 4's ``shadows="true"``) cast. When no
+    light has it, every light that is on casts, and a note in
+    ``scene.warnings`` says so. ``lights=`` names the lights (DEF names) to use
+    instead.
+Receivers
+    ``plane=`` gives one unbounded receiving plane; ``receivers=`` names shapes;
+    otherwise they are found: a shape is a receiver when all its vertices lie
+    within ``Tolerance.coplanar_length`` of one plane, its area is at least a
+    quarter of the largest such shape's, and its bounding box diagonal is at
+    least a quarter of the scene's (a ground, a floor, a wall; not a sign or a
+    window pane). A receiver takes shadows on whichever side a light is on.
+Casters
+    Every shape that is not a receiver. Only what can shadow a receiver is
+    modelled: a caster wholly behind the receiver's plane, wholly at or beyond a
+    positional light's height, out of a light's radius, outside a spot light's
+    cone, or whose shadow misses the receiver's bounding box is skipped. A caster
+    the light touches or sits inside (a lamp's own bulb) is skipped with a note.
+
+The shadows of all casters of one light on one receiver are united into one
+region (so overlaps do not darken twice), cut to the receiver's outline (the
+union of its triangles), triangulated and lifted towards the light by
+``offset`` (default ``1e-3`` of the diagonal of the geometry and the lights;
+the i-th of n lights is lifted ``offset * (1 + i / n)`` so that shadows of
+different lights do not z-fight).
+Each becomes a shape with a black material whose transparency is
+``1 - shadow_intensity``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from .. import polygons as poly
+from ..errors import GeometryError, SceneError
+from ..lights import SpotLight, is_positional
+from ..plane import Plane
+from ..projection import project_shadow
+from ..tolerance import Tolerance
+from ..topology import Caster
+from .model import Material, Scene, SceneLight, Shape
+
+# Receivers found automatically: at least this fraction of the largest planar
+# shape's area and of the scene's bounding-box diagonal.
+_RECEIVER_AREA_FRACTION = 0.25
+_RECEIVER_SIZE_FRACTION = 0.25
+# Default lift of shadows off their receiver, relative to the scene's size.
+_DEFAULT_OFFSET = 1e-3
+
+Progress = Callable[[int, int], None]
+
+
+def add_shadows(
+    scene: Scene,
+    *,
+    method: str = "planar",
+    lights: Sequence[str] | None = None,
+    receivers: Sequence[str] | None = None,
+    plane=None,
+    tolerance: Tolerance | None = None,
+    offset: float | None = None,
+    progress: Progress | None = None,
+) -> Scene:
+    """The scene with the shadows of its lights added as shapes.
+
+    Parameters
+    ----------
+    scene : Scene
+        Not modified.
+    method : {"planar", "volume"}
+        ``"planar"``: shadows on the receivers (role ``"shadow"``).
+        ``"volume"``: closed shadow volumes (role ``"volume"``).
+    lights : sequence of str, optional
+        Names (DEF) of the lights that cast; default: see the module notes.
+    receivers : sequence of str, optional
+        Names (DEF) of the receiving shapes; they must be planar.
+    plane : Plane or (4,) array_like, optional
+        One receiving plane ``a x + b y + c z + d = 0`` instead of shapes.
+    tolerance : Tolerance, optional
+        Defaults to ``Tolerance.for_points`` of the geometry and the lights.
+    offset : float, optional
+        Lift of the shadows off their receiver (scene units).
+    progress : callable, optional
+        Called as ``progress(done, total)`` as casters are processed.
+
+    Returns
+    -------
+    Scene
+        A new scene: the input's shapes, then the added ones (group
+        ``"shadows_<light>"``, unique DEF-safe names), and ``warnings`` with
+        notes on what was chosen and skipped. ``document`` is shared.
+
+    Raises
+    ------
+    SceneError
+        A named light or receiver does not exist, no light is on, or no
+        receiver is found.
+    GeometryError
+        A named receiver is not planar, or ``method="volume"`` is not available.
+
+    Examples
+    --------
+    >>> import numpy as np, shadowgeo as sg
+    >>> ground = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]],
+    ...                   [[0, 2, 1], [0, 3, 2]], name="ground")
+    >>> box = sg.Shape([[0, 1, 0], [1, 1, 0], [1, 1, 1]], [[0, 1, 2]], name="roof")
+    >>> light = sg.SceneLight(sg.DirectionalLight([0, -1, 0]), name="sun", shadows=True)
+    >>> result = sg.add_shadows(sg.Scene([ground, box], [light]))
+    >>> shadow = result.shapes_with_role("shadow")[0]
+    >>> shadow.name, shadow.group, round(float(shadow.vertices[:, 1].max()), 4)
+    ('shadow_sun_ground', 'shadows_sun', 0.0142)
+    """
+    if method not in ("planar", "volume"):
+        raise GeometryError(f"method must be 'planar' or 'volume', got {method!r}")
+    if receivers is not None and plane is not None:
+        raise GeometryError("give receivers or plane, not both")
+    notes: list[str] = []
+    geometry = [s for s in scene.shapes if s.role == "geometry" and s.n_faces]
+    chosen = _select_lights(scene, lights, notes)
+    positions = [light.light.position for light in chosen if is_positional(light.light)]
+    if tolerance is None:
+        bounds = scene.bounds if geometry else np.zeros((0, 3))
+        tolerance = Tolerance.for_points(bounds, *positions)
+    lift = _DEFAULT_OFFSET * tolerance.scale if offset is None else float(offset)
+    if not math.isfinite(lift) or lift < 0:
+        raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")
+    names = _Names(scene)
+
+    if method == "volume":
+        added = _volumes(geometry, chosen, tolerance, names, notes, progress)
+    else:
+        found = _select_receivers(scene, geometry, receivers, plane, tolerance, notes)
+        receiver_ids = {id(receiver.shape) for receiver in found}
+        casters = [_Caster(shape) for shape in geometry if id(shape) not in receiver_ids]
+        added = []
+        total, done = len(chosen) * len(found) * len(casters), 0
+        for index, light in enumerate(chosen):
+            light_name = names.light(light, index)
+            group = names.unique(f"shadows_{light_name}")
+            height = lift * (1 + index / len(chosen))
+            for receiver in found:
+                shape = _shadow_on(receiver, light, casters, tolerance, height, notes, light_name)
+                done += len(casters)
+                if progress is not None:
+                    progress(done, total)
+                if shape is None:
+                    continue
+                shape.name = names.unique(f"shadow_{light_name}_{receiver.name}")
+                shape.group = group
+                added.append(shape)
+    return dataclasses.replace(
+        scene, shapes=[*scene.shapes, *added], warnings=[*scene.warnings, *notes]
+    )
+
+
+def safe_name(text: str) -> str:
+    """``text`` made a valid X3D DEF name (an XML NCName): other characters
+    become ``_`` and a leading digit, ``-`` or ``.`` gets a ``_`` before it.
+
+    >>> safe_name("1st lamp:a")
+    '_1st_lamp_a'
+    """
+    name = re.sub(r"[^A-Za-z0-9_.\-]", "_", text) or "_"
+    return name if re.match(r"[A-Za-z_]", name) else "_" + name
+
+
+class _Names:
+    """Unique DEF-safe names, avoiding every name the scene already uses."""
+
+    def __init__(self, scene: Scene) -> None:
+        self.used = {s.name for s in scene.shapes if s.name} | {
+            light.name for light in scene.lights if light.name
+        }
+        self.used |= set(s.group for s in scene.shapes if s.group)
+
+    def unique(self, text: str) -> str:
+        base = name = safe_name(text)
+        count = 1
+        while name in self.used:
+            count += 1
+            name = f"{base}_{count}"
+        self.used.add(name)
+        return name
+
+    @staticmethod
+    def light(light: SceneLight, index: int) -> str:
+        return safe_name(light.name) if light.name else f"light{index}"
+
+
+def _select_lights(scene: Scene, names, notes: list[str]) -> list[SceneLight]:
+    if names is not None:
+        by_name = {light.name: light for light in scene.lights if light.name}
+        chosen = []
+        for name in names:
+            if name not in by_name:
+                known = ", ".join(sorted(by_name)) or "none has a DEF name"
+                raise SceneError(f"no light named '{name}' (lights: {known})", path=scene.path)
+            if not by_name[name].on:
+                raise SceneError(f"light '{name}' is off (on=\"false\")", path=scene.path)
+            chosen.append(by_name[name])
+        return chosen
+    lit = [light for light in scene.lights if light.on]
+    if not lit:
+        what = "no lights" if not scene.lights else "no light that is on"
+        raise SceneError(
+            f"the scene has {what}, so nothing casts a shadow "
+            "(X3D's headlight follows the viewer and casts none)",
+            path=scene.path,
+        )
+    chosen = [light for light in lit if light.shadows]
+    if not chosen:
+        listed = ", ".join(_Names.light(light, i) for i, light in enumerate(lit))
+        notes.append(
+            f'shadows: no light has shadows="true"; all {len(lit)} lights that are on cast '
+            f"shadows ({listed})"
+        )
+        chosen = lit
+    return chosen
+
+
+@dataclasses.dataclass
+class _Receiver:
+    """A receiving plane and, for a shape, the triangles that bound it."""
+
+    plane: Plane
+    name: str
+    shape: Shape | None = None
+    triangles: np.ndarray | None = None  # (m, 3, 3) world coordinates
+
+
+def _planarity(shape: Shape, tolerance: Tolerance) -> tuple[Plane | None, float, float]:
+    """The best plane of a shape's world vertices (None when they are not
+    within the coplanar tolerance of one), its triangle area and worst distance."""
+    points = shape.world_vertices
+    triangles = points[shape.faces]
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    area = 0.5 * float(np.linalg.norm(normals, axis=1).sum())
+    if area <= tolerance.length**2:
+        return None, 0.0, 0.0
+    center = points.mean(axis=0)
+    normal = np.linalg.svd(points - center, full_matrices=False)[2][2]
+    if normal @ normals.sum(axis=0) < 0:
+        normal = -normal
+    worst = float(np.abs((points - center) @ normal).max())
+    if worst > tolerance.coplanar_length:
+        return None, area, worst
+    return Plane.from_point_normal(center, normal), area, worst
+
+
+def _select_receivers(scene, geometry, names, plane, tolerance, notes) -> list[_Receiver]:
+    if plane is not None:
+        if not isinstance(plane, Plane):
+            plane = Plane.from_coefficients(plane)
+        return [_Receiver(plane, "plane")]
+    if names is not None:
+        by_name = {shape.name: shape for shape in geometry if shape.name}
+        found = []
+        for name in names:
+            if name not in by_name:
+                raise SceneError(f"no shape named '{name}' to receive shadows", path=scene.path)
+            fitted, _, worst = _planarity(by_name[name], tolerance)
+            if fitted is None:
+                raise GeometryError(
+                    f"receiver '{name}' is not planar (a vertex is {worst:.3g} off its best "
+                    f"plane, tolerance {tolerance.coplanar_length:.3g}); give a plane instead"
+                )
+            found.append(_receiver(by_name[name], fitted))
+        return found
+    planar = []
+    for shape in geometry:
+        fitted, area, _ = _planarity(shape, tolerance)
+        if fitted is not None:
+            planar.append((shape, fitted, area))
+    largest = max((area for _, _, area in planar), default=0.0)
+    bounds = scene.bounds
+    scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
+    found = []
+    for shape, fitted, area in planar:
+        corners = shape.world_vertices
+        size = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
+        if area >= _RECEIVER_AREA_FRACTION * largest and size >= (
+            _RECEIVER_SIZE_FRACTION * scene_size
+        ):
+            found.append(_receiver(shape, fitted))
+    if not found:
+        raise SceneError(
+            "no receiver found: no large planar shape (ground, floor, wall); "
+            "name one (--receiver DEF) or give a plane (--plane a,b,c,d)",
+            path=scene.path,
+        )
+    notes.append("shadows: receivers found: " + ", ".join(r.name for r in found))
+    return found
+
+
+def _receiver(shape: Shape, plane: Plane) -> _Receiver:
+    name = safe_name(shape.name) if shape.name else "shape"
+    return _Receiver(plane, name, shape, shape.world_vertices[shape.faces])
+
+
+class _Caster:
+    """A caster shape in world coordinates, its topology reused across lights."""
+
+    def __init__(self, shape: Shape) -> None:
+        self.shape = shape
+        self.vertices = shape.world_vertices
+        self.caster = Caster(self.vertices, shape.faces)
+        self.low, self.high = self.vertices.min(axis=0), self.vertices.max(axis=0)
+        self.name = shape.name or shape.source or "unnamed shape"
+
+
+def _facing(plane: Plane, light, tolerance: Tolerance) -> Plane | None:
+    """The plane turned towards the light; None when the light is on it."""
+    if is_positional(light):
+        side = float(plane.signed_distance(light.position[None])[0])
+        if abs(side) <= tolerance.length:
+            return None
+    else:
+        side = -float(plane.normal @ light.direction)
+        if abs(side) <= tolerance.angle:
+            return None
+    return plane if side > 0 else plane.flipped()
+
+
+def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Tolerance) -> bool:
+    """False when the caster certainly casts nothing on the receiver's box."""
+    distance = plane.signed_distance(caster.vertices)
+    if distance.max() <= tolerance.length:
+        return False  # wholly behind the receiver
+    if is_positional(light):
+        position = light.position
+        height = float(plane.signed_distance(position[None])[0])
+        if distance.min() >= height - tolerance.length:
+            return False  # wholly at or beyond the light's height
+        nearest = np.clip(position, caster.low, caster.high)
+        if float(np.linalg.norm(nearest - position)) > light.radius:
+            return False
+        if isinstance(light, SpotLight):
+            center = 0.5 * (caster.low + caster.high)
+            radius = 0.5 * float(np.linalg.norm(caster.high - caster.low))
+            to_center = center - position
+            reach = float(np.linalg.norm(to_center))
+            if reach > radius:
+                angle = math.acos(np.clip(to_center @ light.direction / reach, -1.0, 1.0))
+                if angle - math.asin(radius / reach) > light.cut_off_angle:
+                    return False
+        if box2d is None or distance.min() <= tolerance.length:
+            return True
+        # Every vertex lies strictly between the plane and the light: the
+        # shadow is inside the hull of the vertices' images.
+        scale = height / (height - distance)
+        images = position + (caster.vertices - position) * scale[:, None]
+    else:
+        if box2d is None or distance.min() <= tolerance.length:
+            return True
+        cosine = -float(plane.normal @ light.direction)
+        images = caster.vertices + np.outer(distance / cosine, light.direction)
+    image2d = plane.to_2d(images)
+    low, high = box2d
+    return bool(np.all(image2d.max(axis=0) >= low) and np.all(image2d.min(axis=0) <= high))
+
+
+def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_name):
+    """The united shadow of the casters on one receiver as a shape, or None."""
+    light = scene_light.light
+    plane = _facing(receiver.plane, light, tolerance)
+    if plane is None:
+        notes.append(f"shadows: light {light_name} lies in the plane of {receiver.name}: skipped")
+        return None
+    region2d = box2d = rectangle = None
+    if receiver.triangles is not None:
+        flat = plane.to_2d(receiver.triangles.reshape(-1, 3)).reshape(-1, 3, 2)
+        box2d = (flat.reshape(-1, 2).min(axis=0), flat.reshape(-1, 2).max(axis=0))
+        low, high = box2d
+        rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
+        region2d = flat
+    loops = []
+    for caster in casters:
+        if not _may_shadow(caster, light, plane, box2d, tolerance):
+            continue
+        try:
+            shadow = project_shadow(
+                caster.caster, light, plane, receiver=rectangle, tolerance=tolerance
+            )
+        except GeometryError as error:
+            notes.append(f"shadows: {caster.name} does not cast for light {light_name}: {error}")
+            continue
+        for part in shadow.polygons:
+            loops.extend(part)
+    if not loops:
+        return None
+    points = np.concatenate(loops)
+    center = 0.5 * (points.min(axis=0) + points.max(axis=0))
+    extent = float(np.abs(points - center).max())
+    if region2d is not None:
+        extent = max(extent, float(np.abs(region2d.reshape(-1, 2) - center).max()))
+    scale = poly.local_scale(max(extent, tolerance.length))
+    region = poly.fill([(loop - center) * scale for loop in loops])
+    if region2d is not None:
+        triangles = (region2d - center) * scale
+        areas = poly.signed_areas(list(triangles))
+        keep = areas != 0
+        oriented = [
+            t if a > 0 else t[::-1] for t, a in zip(triangles[keep], areas[keep], strict=True)
+        ]
+        region = poly.intersect(region, poly.fill(oriented))
+    parts = poly.components(region)
+    if not parts:
+        return None
+    flat_points, faces = poly.triangulate_parts(parts)
+    vertices = plane.to_3d(flat_points / scale + center) + lift * plane.normal
+    transparency = float(np.clip(1.0 - scene_light.shadow_intensity, 0.0, 1.0))
+    return Shape(
+        vertices,
+        faces,
+        material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=transparency),
+        solid=False,
+        role="shadow",
+        source=f"shadow of light {light_name} on {receiver.name}",
+        casts_shadow=False,
+    )
+
+
+def _volumes(geometry, chosen, tolerance, names, notes, progress) -> list[Shape]:
+    try:
+        from ..volume import shadow_volume
+    except ImportError as error:
+        raise GeometryError(
+            "method 'volume' is not available in this version of shadowgeo "
+            "(shadowgeo.shadow_volume is not built yet); use method 'planar'"
+        ) from error
+    added = []
+    total, done = len(chosen) * len(geometry), 0
+    for index, scene_light in enumerate(chosen):
+        light_name = names.light(scene_light, index)
+        group = names.unique(f"shadows_{light_name}")
+        for shape in geometry:
+            done += 1
+            caster = _Caster(shape)
+            try:
+                volume = shadow_volume(
+                    (caster.vertices, shape.faces), scene_light.light, extent=None
+                )
+            except GeometryError as error:
+                notes.append(f"shadows: {caster.name} has no volume for {light_name}: {error}")
+                continue
+            if progress is not None:
+                progress(done, total)
+            if len(volume.faces) == 0:
+                continue
+            added.append(
+                Shape(
+                    np.asarray(volume.vertices, dtype=np.float64),
+                    np.asarray(volume.faces, dtype=np.int64),
+                    material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=0.8),
+                    name=names.unique(f"volume_{light_name}_{safe_name(caster.name)}"),
+                    solid=False,
+                    role="volume",
+                    group=group,
+                    source=f"shadow volume of {caster.name} for light {light_name}",
+                    casts_shadow=False,
+                )
+            )
+    return added

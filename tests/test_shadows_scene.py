@@ -1,0 +1,268 @@
+"""add_shadows: lights, receivers and casters chosen, shadows checked against
+hand-derived regions and shapely references built in the test."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from reference import along_direction, ray_plane
+
+import shadowgeo as sg
+from shadowgeo import GeometryError, SceneError
+
+QUAD = [[0, 2, 1], [0, 3, 2]]  # counter-clockwise seen from +y for the corners below
+
+
+def ground(half=5.0, name="ground", y=0.0):
+    corners = [[-half, y, -half], [half, y, -half], [half, y, half], [-half, y, half]]
+    return sg.Shape(corners, QUAD, name=name)
+
+
+def box(low, high, name):
+    mesh = trimesh.creation.box(bounds=[low, high])
+    return sg.Shape(mesh.vertices, mesh.faces, name=name)
+
+
+def light(position, name="lamp", **fields):
+    return sg.SceneLight(sg.PointLight(position), name=name, **fields)
+
+
+def shadows(scene):
+    return scene.shapes_with_role("shadow")
+
+
+def xz_union(shape):
+    """The shadow's triangles as a shapely region in the (x, z) plane, and the
+    sum of the triangle areas (equal to the union's area iff they do not overlap)."""
+    triangles = shape.world_vertices[shape.faces][:, :, [0, 2]]
+    polygons = [shapely.Polygon(t) for t in triangles]
+    return shapely.union_all(polygons), sum(p.area for p in polygons)
+
+
+def hull_xz(points):
+    return shapely.MultiPoint(np.asarray(points)[:, [0, 2]]).convex_hull
+
+
+def box_corners(low, high):
+    return np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                     for z in (low[2], high[2])], dtype=float)  # fmt: skip
+
+
+def test_cube_under_point_light_hand_computed():
+    # Cube [-0.5, 0.5] x [1, 2] x [-0.5, 0.5], light at (0, 4, 0): the top face
+    # (y = 2) projects with scale 4 / (4 - 2) = 2, a square of half-width 1.
+    scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
+    result = sg.add_shadows(scene)
+    (shadow,) = shadows(result)
+    region, triangle_sum = xz_union(shadow)
+    assert region.area == pytest.approx(4.0, rel=1e-9)
+    assert triangle_sum == pytest.approx(4.0, rel=1e-9)  # no overlapping triangles
+    assert region.symmetric_difference(shapely.box(-1, -1, 1, 1)).area < 1e-9
+    lift = 1e-3 * math.sqrt(10**2 + 4**2 + 10**2)  # the diagonal of geometry and light
+    assert np.allclose(shadow.world_vertices[:, 1], lift, rtol=1e-12)
+    assert shadow.material.diffuse_color == (0.0, 0.0, 0.0)
+    assert shadow.material.transparency == 0.0  # shadow_intensity defaults to 1
+    assert not shadow.solid and shadow.group == "shadows_lamp" and shadow.name
+    assert len(scene.shapes) == 2  # the input scene is not modified
+    assert len(result.shapes) == 3 and result.shapes[:2] == scene.shapes
+
+
+def test_directional_light_shifts_the_shadow():
+    direction = np.array([1.0, -2.0, 0.5])
+    cube = ([1, 1, 1], [2, 2, 2])
+    sun = sg.SceneLight(sg.DirectionalLight(direction), name="sun", shadows=True)
+    result = sg.add_shadows(sg.Scene([ground(10), box(*cube, "cube")], [sun]))
+    (shadow,) = shadows(result)
+    expected = hull_xz(along_direction(box_corners(*cube), direction, np.array([0, 1, 0]), 0.0))
+    region, triangle_sum = xz_union(shadow)
+    assert region.symmetric_difference(expected).area < 1e-9 * expected.area
+    assert triangle_sum == pytest.approx(expected.area, rel=1e-9)
+
+
+def test_overlapping_casters_are_united_and_cut_to_a_concave_receiver():
+    # An L-shaped floor: [0, 4] x [0, 2] plus [0, 2] x [2, 4] (x, z), 4 triangles.
+    points = [[0, 0, 0], [4, 0, 0], [4, 0, 2], [0, 0, 2], [2, 0, 2], [2, 0, 4], [0, 0, 4]]
+    floor = sg.Shape(points, [[0, 3, 1], [1, 3, 2], [3, 6, 4], [4, 6, 5]], name="floor")
+    cubes = [([1, 1, 1], [2, 2, 2]), ([1.5, 0.5, 1.5], [3, 1.5, 3])]
+    lamp = [1.0, 5.0, 1.0]
+    scene = sg.Scene([floor, *(box(*c, f"c{i}") for i, c in enumerate(cubes))], [light(lamp)])
+    result = sg.add_shadows(scene, receivers=["floor"], offset=0.0)
+    (shadow,) = shadows(result)
+    hulls = [
+        hull_xz(ray_plane(box_corners(*c), np.array(lamp), np.array([0, 1, 0]), 0.0)) for c in cubes
+    ]
+    l_shape = shapely.Polygon([(0, 0), (4, 0), (4, 2), (2, 2), (2, 4), (0, 4)])
+    expected = shapely.union_all(hulls).intersection(l_shape)
+    region, triangle_sum = xz_union(shadow)
+    assert region.symmetric_difference(expected).area < 1e-9 * expected.area
+    assert triangle_sum == pytest.approx(expected.area, rel=1e-9)
+    assert np.all(shadow.world_vertices[:, 1] == 0.0)
+
+
+def test_lights_with_shadows_true_cast_and_the_others_do_not():
+    lights = [light([0, 4, 0], "a", shadows=True), light([1, 5, 0], "b"), light([0, 6, 1], "c")]
+    scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], lights)
+    result = sg.add_shadows(scene)
+    assert [s.group for s in shadows(result)] == ["shadows_a"]
+    assert not any("no light has shadows" in w for w in result.warnings)
+
+
+def test_no_light_with_shadows_uses_every_light_that_is_on_and_says_so():
+    lights = [light([0, 4, 0], "a"), light([1, 5, 0], "b", on=False), light([0, 6, 1], "c")]
+    scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], lights)
+    result = sg.add_shadows(scene, offset=0.01)
+    assert [s.group for s in shadows(result)] == ["shadows_a", "shadows_c"]
+    assert any('no light has shadows="true"' in w and "a, c" in w for w in result.warnings)
+    # The second light's shadows sit higher, so the two never z-fight.
+    heights = [float(s.world_vertices[0, 1]) for s in shadows(result)]
+    assert heights == pytest.approx([0.01, 0.015])
+
+
+def test_lights_picked_by_name():
+    lights = [light([0, 4, 0], "a", shadows=True), light([1, 5, 0], "b")]
+    scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], lights)
+    assert [s.group for s in shadows(sg.add_shadows(scene, lights=["b"]))] == ["shadows_b"]
+    with pytest.raises(SceneError, match="no light named 'x'.*a, b"):
+        sg.add_shadows(scene, lights=["x"])
+
+
+def test_a_scene_without_lights_is_a_clear_error():
+    with pytest.raises(SceneError, match="no lights"):
+        sg.add_shadows(sg.Scene([ground(), box([0, 1, 0], [1, 2, 1], "cube")], []))
+    off = [light([0, 4, 0], on=False)]
+    with pytest.raises(SceneError, match="no light that is on"):
+        sg.add_shadows(sg.Scene([ground(), box([0, 1, 0], [1, 2, 1], "cube")], off))
+
+
+def test_receivers_found_automatically_skip_small_planar_shapes():
+    sign = sg.Shape([[3, 1, 3], [3.5, 1, 3], [3.5, 1, 3.5], [3, 1, 3.5]], QUAD, name="sign")
+    cube = box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")
+    result = sg.add_shadows(sg.Scene([ground(), sign, cube], [light([0, 4, 0])]))
+    assert [s.name for s in shadows(result)] == ["shadow_lamp_ground"]
+    # The small planar sign is a caster: its shadow is in the ground's.
+    region, _ = xz_union(shadows(result)[0])
+    sign_shadow = hull_xz(ray_plane(sign.vertices, np.array([0, 4, 0]), np.array([0, 1, 0]), 0))
+    assert region.intersection(sign_shadow).area == pytest.approx(sign_shadow.area, rel=1e-9)
+    assert "receivers found: ground" in " ".join(result.warnings)
+
+
+def test_named_receiver_must_exist_and_be_planar():
+    scene = sg.Scene([ground(), box([0, 1, 0], [1, 2, 1], "cube")], [light([0, 4, 0])])
+    with pytest.raises(GeometryError, match="'cube' is not planar"):
+        sg.add_shadows(scene, receivers=["cube"])
+    with pytest.raises(SceneError, match="no shape named 'floor'"):
+        sg.add_shadows(scene, receivers=["floor"])
+    with pytest.raises(GeometryError, match="not both"):
+        sg.add_shadows(scene, receivers=["ground"], plane=(0, 1, 0, 0))
+
+
+def test_no_receiver_is_a_clear_error_and_a_plane_fixes_it():
+    scene = sg.Scene([box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
+    with pytest.raises(SceneError, match="no receiver found"):
+        sg.add_shadows(scene)
+    (shadow,) = shadows(sg.add_shadows(scene, plane=(0, 2, 0, 0), offset=0.0))
+    region, _ = xz_union(shadow)
+    assert region.area == pytest.approx(4.0, rel=1e-9)  # unbounded plane: the whole shadow
+
+
+def test_a_wall_receives_on_the_lit_side():
+    # The wall x = 0 (normal -x as wound); the light at x = 4 is on its back.
+    wall = sg.Shape([[0, 0, -3], [0, 3, -3], [0, 3, 3], [0, 0, 3]], QUAD, name="wall")
+    cube = box([1, 1, -0.5], [2, 2, 0.5], "cube")
+    lamp = np.array([4.0, 1.5, 0.0])
+    result = sg.add_shadows(sg.Scene([wall, cube], [light(lamp)]), offset=0.0)
+    (shadow,) = shadows(result)
+    assert np.all(shadow.world_vertices[:, 0] == 0.0)
+    corners = ray_plane(box_corners([1, 1, -0.5], [2, 2, 0.5]), lamp, np.array([1, 0, 0]), 0.0)
+    expected = shapely.MultiPoint(corners[:, 1:]).convex_hull.intersection(shapely.box(0, -3, 3, 3))
+    triangles = shadow.world_vertices[shadow.faces][:, :, 1:]
+    region = shapely.union_all([shapely.Polygon(t) for t in triangles])
+    assert region.symmetric_difference(expected).area < 1e-9 * expected.area
+    # Wound counter-clockwise seen from the light (+x).
+    a, b, c = (shadow.world_vertices[shadow.faces[:, i]] for i in range(3))
+    assert np.all(np.cross(b - a, c - a)[:, 0] > 0)
+
+
+def test_casters_that_cannot_shadow_are_skipped():
+    below = box([-0.5, -3, -0.5], [0.5, -1, 0.5], "below")
+    above = box([-0.5, 5, -0.5], [0.5, 6, 0.5], "above")  # beyond the light's height
+    far = box([20, 1, 20], [21, 2, 21], "far")  # its shadow misses the ground
+    scene = sg.Scene([ground(), below, above, far], [light([0, 4, 0])])
+    assert shadows(sg.add_shadows(scene)) == []
+
+
+def test_spot_cone_and_radius_limit_the_shadow():
+    cube = box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")
+    aside = box([3, 1, 3], [4, 2, 4], "aside")
+    spot = sg.SceneLight(sg.SpotLight([0, 4, 0], [0, -1, 0], math.radians(10)), name="spot")
+    (shadow,) = shadows(sg.add_shadows(sg.Scene([ground(), cube, aside], [spot]), offset=0))
+    region, _ = xz_union(shadow)
+    # Only the lit disc of radius 4 tan(10 deg) < 1 around the foot is shadowed:
+    # the cube's shadow (half-width 1) covers it, the aside cube is out of the cone.
+    disc_radius = 4 * math.tan(math.radians(10))
+    assert region.area < math.pi * disc_radius**2
+    assert region.area > 0.99 * math.pi * disc_radius**2
+    # An inscribed polygon within the chord tolerance (1e-3 of the scene's size).
+    bounds = [-disc_radius, -disc_radius, disc_radius, disc_radius]
+    assert region.bounds == pytest.approx(bounds, abs=0.02)
+    short = sg.SceneLight(sg.PointLight([0, 4, 0], radius=1.5), name="short")
+    assert shadows(sg.add_shadows(sg.Scene([ground(), cube], [short]))) == []
+
+
+def test_a_light_inside_a_caster_skips_that_caster_with_a_note():
+    bulb = box([-0.2, 3.8, -0.2], [0.2, 4.2, 0.2], "bulb")
+    cube = box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")
+    result = sg.add_shadows(sg.Scene([ground(), bulb, cube], [light([0, 4, 0])]))
+    region, _ = xz_union(shadows(result)[0])
+    assert region.area == pytest.approx(4.0, rel=1e-9)
+    assert any("bulb does not cast" in w and "inside" in w for w in result.warnings)
+
+
+def test_shadow_intensity_sets_transparency_and_names_are_unique_and_def_safe():
+    lamp = light([0, 4, 0], "my lamp", shadows=True, shadow_intensity=0.3)
+    taken = ground(name="shadow_my_lamp_ground")  # collides with the natural name
+    floor = ground(name="ground", y=0.0)
+    scene = sg.Scene([taken, floor, box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [lamp])
+    result = sg.add_shadows(scene, receivers=["ground"])
+    (shadow,) = shadows(result)
+    assert shadow.material.transparency == pytest.approx(0.7)
+    assert shadow.group == "shadows_my_lamp"
+    assert shadow.name == "shadow_my_lamp_ground_2"
+
+
+def test_volume_method_is_a_clear_error_until_it_exists():
+    scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
+    if not hasattr(sg, "shadow_volume"):
+        with pytest.raises(GeometryError, match="not available"):
+            sg.add_shadows(scene, method="volume")
+        return
+    result = sg.add_shadows(scene, method="volume")
+    volumes = result.shapes_with_role("volume")
+    assert volumes and all(v.group == "shadows_lamp" for v in volumes)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.tuples(*(st.floats(-2, 2) for _ in range(2))),
+    st.floats(0.2, 2),
+    st.tuples(st.floats(-3, 3), st.floats(3.5, 8), st.floats(-3, 3)),
+)
+def test_random_cube_and_light_match_the_hull_of_projected_corners(corner, height, lamp):
+    low = [corner[0], 0.5, corner[1]]
+    high = [corner[0] + 1, 0.5 + height, corner[1] + 1]
+    scene = sg.Scene([ground(4), box(low, high, "cube")], [light(lamp)])
+    expected = hull_xz(ray_plane(box_corners(low, high), np.array(lamp), np.array([0, 1, 0]), 0))
+    expected = expected.intersection(shapely.box(-4, -4, 4, 4))
+    found = shadows(sg.add_shadows(scene))
+    if expected.area < 1e-9:
+        assert not found
+        return
+    region, triangle_sum = xz_union(found[0])
+    assert region.symmetric_difference(expected).area < 1e-7 * expected.area
+    assert triangle_sum == pytest.approx(expected.area, rel=1e-7)
