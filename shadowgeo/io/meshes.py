@@ -1,0 +1,281 @@
+"""Mesh-format input through trimesh: ``.glb``, ``.gltf``, ``.obj``, ``.stl``,
+``.ply``, ``.off``.
+
+trimesh decodes the triangles and the node graph. For glTF this module also
+reads the JSON itself, for what trimesh drops or changes: the nodes' own
+names (trimesh renames duplicates), materials as float factors (trimesh keeps
+8-bit colours), ``KHR_lights_punctual`` lights and the ``extras["shadowgeo"]``
+that :mod:`.gltf` writes (roles, light groups, X3D light fields).
+
+Safety: a glTF's buffers and images may only be data URIs or relative paths
+that stay in the file's folder; anything else (``http:``, ``/etc/...``,
+``../``) is refused before trimesh sees the file, and trimesh never fetches
+remote resources.
+
+glTF is Y-up in metres, so a glTF scene reads as ``up_axis="Y"``,
+``meters_per_unit=1``. Other mesh formats carry no units: they read as Y-up
+with ``meters_per_unit=1`` too, which is what they mean in practice.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from pathlib import Path
+from urllib.parse import unquote
+
+import numpy as np
+import trimesh
+
+from ..errors import SceneError
+from ..lights import DirectionalLight, PointLight, SpotLight
+from ..scene import Material, Scene, SceneLight, Shape
+
+_GLB_MAGIC = b"glTF"
+_LIGHTS = "KHR_lights_punctual"
+
+
+def _gltf_document(path: Path) -> dict:
+    """The JSON part of a .gltf or .glb file, checked to be a JSON object."""
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise SceneError(f"cannot read: {error.strerror}", path=str(path)) from error
+    if data[:4] == _GLB_MAGIC:
+        if len(data) < 20:
+            raise SceneError("truncated GLB header", path=str(path))
+        length, kind = struct.unpack_from("<II", data, 12)
+        if kind != 0x4E4F534A or 20 + length > len(data):
+            raise SceneError("GLB's first chunk is not a complete JSON chunk", path=str(path))
+        data = data[20 : 20 + length]
+    try:
+        document = json.loads(data)
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise SceneError(f"not glTF: invalid JSON ({error})", path=str(path)) from None
+    if not isinstance(document, dict) or not isinstance(document.get("asset"), dict):
+        raise SceneError("not glTF: no 'asset' object", path=str(path))
+    version = str(document["asset"].get("version", ""))
+    if not version.startswith("2."):
+        raise SceneError(f"glTF version {version!r} is not supported (2.x)", path=str(path))
+    _check_uris(document, path)
+    return document
+
+
+def _check_uris(document: dict, path: Path) -> None:
+    """Refuse resources that are remote or outside the file's folder."""
+    folder = path.resolve().parent
+    for kind in ("buffers", "images"):
+        for index, resource in enumerate(document.get(kind) or []):
+            uri = resource.get("uri") if isinstance(resource, dict) else None
+            if uri is None or uri.startswith("data:"):
+                continue
+            where = f"{kind}[{index}] uri {uri!r}"
+            if ":" in uri.split("/")[0] or uri.startswith(("/", "\\")):
+                raise SceneError("refused: not a relative path", path=str(path), node=where)
+            target = (folder / unquote(uri)).resolve()
+            if not target.is_relative_to(folder):
+                raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
+            if not target.is_file():
+                raise SceneError("missing external file", path=str(path), node=where)
+
+
+def _frame_names(document: dict) -> dict[str, int]:
+    """trimesh's graph frame name -> glTF node index (it names frames as
+    ``trimesh.util.unique_name`` does, in node order)."""
+    names: dict[str, int] = {}
+    counts: dict = {}
+    for index, node in enumerate(document.get("nodes") or []):
+        name = node.get("name", str(index)) if isinstance(node, dict) else str(index)
+        names[trimesh.util.unique_name(name, names, counts=counts)] = index
+    return names
+
+
+def _material_from_gltf(entry: dict) -> tuple[Material, bool]:
+    """(Material, solid) from a glTF material object."""
+    pbr = entry.get("pbrMetallicRoughness") or {}
+    red, green, blue, alpha = (list(pbr.get("baseColorFactor", [1, 1, 1, 1])) + [1.0] * 4)[:4]
+    alpha = float(alpha) if entry.get("alphaMode", "OPAQUE") == "BLEND" else 1.0
+    material = Material(
+        diffuse_color=(float(red), float(green), float(blue)),
+        emissive_color=tuple(float(c) for c in (entry.get("emissiveFactor") or [0, 0, 0])[:3]),
+        shininess=1.0 - float(pbr.get("roughnessFactor", 1.0)),
+        transparency=1.0 - alpha,
+        name=entry.get("name"),
+    )
+    return material, not entry.get("doubleSided", False)
+
+
+def _material_from_trimesh(geometry) -> tuple[Material, bool]:
+    """(Material, solid) from a trimesh visual (8-bit colours)."""
+    visual = getattr(geometry, "visual", None)
+    material = getattr(visual, "material", None)
+    color = None
+    solid = True
+    if material is not None:
+        color = getattr(material, "baseColorFactor", None)
+        if color is None:
+            color = getattr(material, "main_color", None)
+        solid = not getattr(material, "doubleSided", False)
+    elif visual is not None and getattr(visual, "kind", None) in ("face", "vertex"):
+        color = visual.main_color
+    if color is None:
+        return Material(), solid
+    rgba = np.asarray(color, dtype=np.float64).reshape(-1)[:4] / 255.0
+    alpha = rgba[3] if len(rgba) == 4 else 1.0
+    name = getattr(material, "name", None)
+    return Material(diffuse_color=tuple(rgba[:3]), transparency=1.0 - alpha, name=name), solid
+
+
+def _light(entry: dict, world: np.ndarray, name: str | None, extras: dict) -> SceneLight:
+    """A SceneLight from a KHR_lights_punctual entry placed by ``world`` (4, 4)."""
+    kind = entry.get("type")
+    position = world[:3, 3]
+    direction = world[:3, :3] @ [0.0, 0.0, -1.0]
+    radius = float(entry.get("range", math.inf))
+    if kind == "directional":
+        light = DirectionalLight(direction)
+    elif kind == "point":
+        light = PointLight(position, radius)
+    elif kind == "spot":
+        cone = entry.get("spot") or {}
+        light = SpotLight(
+            position, direction, float(cone.get("outerConeAngle", math.pi / 4)), radius
+        )
+    else:
+        raise ValueError(f"unknown light type {kind!r}")
+    beam = extras.get("beamWidth")
+    if beam is None:
+        beam = (entry.get("spot") or {}).get("innerConeAngle", math.pi / 4)
+    return SceneLight(
+        light,
+        name=name if name is not None else entry.get("name"),
+        color=tuple(float(c) for c in entry.get("color", [1, 1, 1])[:3]),
+        intensity=float(extras.get("intensity", entry.get("intensity", 1.0))),
+        ambient_intensity=float(extras.get("ambientIntensity", 0.0)),
+        attenuation=tuple(float(a) for a in extras.get("attenuation", (1.0, 0.0, 0.0))),
+        beam_width=float(beam),
+        on=bool(extras.get("on", True)),
+        global_=bool(extras.get("global", True)),
+        shadows=bool(extras.get("shadows", False)),
+        shadow_intensity=float(extras.get("shadowIntensity", 1.0)),
+    )
+
+
+def _load(path: Path) -> trimesh.Scene:
+    try:
+        loaded = trimesh.load_scene(path, allow_remote=False)
+    except SceneError:
+        raise
+    except Exception as error:  # trimesh raises many kinds on corrupt files
+        kind = path.suffix.lower().lstrip(".").upper()
+        message = f"{type(error).__name__}: {error}" if str(error) else type(error).__name__
+        raise SceneError(f"cannot read as {kind}: {message}", path=str(path)) from error
+    return loaded
+
+
+def read(path, **options) -> Scene:
+    """Read a mesh file into a :class:`Scene`.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.glb``, ``.gltf``, ``.obj``, ``.stl``, ``.ply`` or ``.off``.
+
+    Returns
+    -------
+    Scene
+        One shape per mesh instance (glTF node, OBJ object, ...), with its
+        world transform, material, name and, for glTF written by shadowgeo,
+        its role and light group; glTF lights. Points and lines are skipped
+        with a warning.
+
+    Raises
+    ------
+    SceneError
+        Missing, unreadable or corrupt file; a glTF resource outside its folder.
+    """
+    path = Path(path)
+    if options:
+        raise SceneError(f"mesh reader takes no options, got {sorted(options)}", path=str(path))
+    if not path.is_file():
+        raise SceneError("no such file", path=str(path))
+    is_gltf = path.suffix.lower() in (".glb", ".gltf")
+    document = _gltf_document(path) if is_gltf else {}
+    loaded = _load(path)
+    scene = Scene(path=str(path))
+    frames = _frame_names(document) if is_gltf else {}
+    nodes = document.get("nodes") or []
+    graph = loaded.graph
+    try:
+        _read_shapes(scene, loaded, path, frames, nodes, document)
+        if is_gltf:
+            _read_lights(scene, graph, frames, nodes, document)
+    except (TypeError, ValueError, KeyError, IndexError) as error:
+        if isinstance(error, SceneError):
+            raise
+        raise SceneError(f"malformed glTF: {error}", path=str(path)) from error
+    if not is_gltf and not any(shape.n_faces for shape in scene.shapes):
+        # A glTF may hold only lights; a plain mesh file without triangles is broken.
+        raise SceneError("no triangles in the file", path=str(path))
+    return scene
+
+
+def _node_index(graph, frame: str, frames: dict[str, int]) -> int | None:
+    """The glTF node of a frame (a primitive's frame hangs under its node's)."""
+    while frame is not None and frame not in frames:
+        frame = graph.transforms.parents.get(frame)
+    return frames.get(frame)
+
+
+def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
+    graph = loaded.graph
+    # In the file's node order (trimesh's graph order is not).
+    order = sorted(graph.nodes_geometry, key=lambda f: (_node_index(graph, f, frames) or 0, f))
+    for frame in order:
+        transform, geometry_name = graph[frame]
+        geometry = loaded.geometry[geometry_name]
+        if not isinstance(geometry, trimesh.Trimesh):
+            scene.warnings.append(f"{path.name}: skipped {frame!r}: {type(geometry).__name__}")
+            continue
+        index = _node_index(graph, frame, frames)
+        node = nodes[index] if index is not None else {}
+        extras = (node.get("extras") or {}).get("shadowgeo") or {}
+        material, solid = _material_from_trimesh(geometry)
+        primitives = (document.get("meshes") or [{}])[node["mesh"]] if "mesh" in node else {}
+        primitives = primitives.get("primitives") or []
+        if len(primitives) == 1 and "material" in primitives[0]:
+            material, solid = _material_from_gltf(document["materials"][primitives[0]["material"]])
+        if document:
+            name = node.get("name")
+        else:
+            name = geometry_name if len(loaded.geometry) > 1 else path.stem
+        scene.shapes.append(
+            Shape(
+                np.array(geometry.vertices, dtype=np.float64),
+                np.array(geometry.faces, dtype=np.int64),
+                np.array(transform, dtype=np.float64),
+                material=material,
+                name=name,
+                solid=solid,
+                role=extras.get("role", "geometry"),
+                group=extras.get("group"),
+                source=f"{path.name}, node {name!r}" if name else path.name,
+                casts_shadow=bool(extras.get("castsShadow", True)),
+                receives_shadow=bool(extras.get("receivesShadow", False)),
+            )
+        )
+
+
+def _read_lights(scene, graph, frames, nodes, document) -> None:
+    entries = ((document.get("extensions") or {}).get(_LIGHTS) or {}).get("lights") or []
+    for frame, index in frames.items():
+        node = nodes[index]
+        reference = (node.get("extensions") or {}).get(_LIGHTS)
+        if reference is None or frame not in graph.nodes:
+            continue
+        world, _ = graph.get(frame)
+        extras = (node.get("extras") or {}).get("shadowgeo") or {}
+        scene.lights.append(
+            _light(entries[reference["light"]], np.asarray(world), node.get("name"), extras)
+        )

@@ -1,0 +1,227 @@
+"""Mesh-format input (glTF, OBJ, STL, PLY, OFF) and the glTF round trip."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+import shadowgeo as sg
+
+# glTF positions are float32: a local coordinate x comes back within |x| * 2**-24.
+FLOAT32 = 2.0**-24
+
+
+def _triangles(shape: sg.Shape) -> np.ndarray:
+    """(m, 3, 3) world-space triangles, in the shape's face order."""
+    return shape.world_vertices[shape.faces]
+
+
+def _local_bound(shape: sg.Shape) -> float:
+    """Largest world error float32 local coordinates can cause in ``shape``."""
+    linear = np.linalg.norm(shape.transform[:3, :3], 2)
+    return 2 * FLOAT32 * float(np.abs(shape.vertices).max()) * linear * math.sqrt(3)
+
+
+def _scene() -> sg.Scene:
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=1.5)
+    box = trimesh.creation.box(extents=[2.0, 1.0, 0.5])
+    far = np.eye(4)
+    far[:3, :3] = trimesh.transformations.rotation_matrix(0.7, [1, 2, 3])[:3, :3] * 3.0
+    far[:3, 3] = [1.0e5, -2.5, 3.0e4]  # far from the origin: the transform keeps float64
+    mirrored = np.diag([-1.0, 1.0, 1.0, 1.0])
+    return sg.Scene(
+        shapes=[
+            sg.Shape(sphere.vertices, sphere.faces, far, name="ball"),
+            sg.Shape(
+                box.vertices,
+                box.faces,
+                mirrored,
+                name="crate",
+                material=sg.Material((0.25, 0.5, 0.75), (0.1, 0, 0), transparency=0.4),
+                solid=False,
+            ),
+            sg.Shape(box.vertices, box.faces, name="crate"),  # a duplicate name
+            sg.Shape(box.vertices, box.faces),  # no name
+            sg.Shape(
+                [[0, 0, 0], [1, 0, 0], [0, 0, -1]], [[0, 1, 2]], role="shadow", group="sun group"
+            ),
+            sg.Shape(
+                [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], role="volume", group="sun group"
+            ),
+        ],
+        lights=[
+            sg.SceneLight(sg.PointLight([1, 5, 2], radius=12.5), name="bulb", color=(1, 0.5, 0.25)),
+            sg.SceneLight(sg.DirectionalLight([1, -2, 0.5]), name="sun", shadows=True),
+            sg.SceneLight(
+                sg.SpotLight([0, 4, 0], [0, -1, 0.2], cut_off_angle=0.6, radius=30),
+                name="spot",
+                beam_width=0.25,
+                intensity=0.8,
+                on=False,
+                shadow_intensity=0.5,
+                attenuation=(1.0, 0.5, 0.0),
+            ),
+        ],
+    )
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf"])
+def test_gltf_round_trip_keeps_triangles_transforms_names_and_roles(tmp_path, suffix):
+    scene = _scene()
+    path = tmp_path / f"scene{suffix}"
+    sg.save(scene, path)
+    back = sg.load(path)
+
+    assert [s.name for s in back.shapes] == [s.name for s in scene.shapes]
+    assert [s.role for s in back.shapes] == [s.role for s in scene.shapes]
+    assert [s.group for s in back.shapes] == [s.group for s in scene.shapes]
+    assert [s.solid for s in back.shapes] == [s.solid for s in scene.shapes]
+    for original, read in zip(scene.shapes, back.shapes, strict=True):
+        # Transforms are JSON float64: exact.
+        np.testing.assert_array_equal(read.transform, original.transform)
+        np.testing.assert_allclose(
+            _triangles(read), _triangles(original), rtol=0, atol=_local_bound(original)
+        )
+    # Float32 in world coordinates would be ~8e-3 off at 1e5; local keeps it ~1e-6.
+    assert _local_bound(scene.shapes[0]) < 1e-5
+
+    crate = back.shapes[1].material
+    np.testing.assert_allclose(crate.diffuse_color, (0.25, 0.5, 0.75))
+    np.testing.assert_allclose(crate.emissive_color, (0.1, 0, 0))
+    assert crate.transparency == pytest.approx(0.4)
+    assert back.shapes[0].material.transparency == 0.0
+
+
+def test_gltf_round_trip_keeps_lights(tmp_path):
+    scene = _scene()
+    path = tmp_path / "lights.glb"
+    sg.save(scene, path)
+    lights = {light.name: light for light in sg.load(path).lights}
+    assert sorted(lights) == ["bulb", "spot", "sun"]
+
+    bulb = lights["bulb"]
+    assert isinstance(bulb.light, sg.PointLight)
+    np.testing.assert_allclose(bulb.light.position, [1, 5, 2], atol=1e-12)
+    assert bulb.light.radius == 12.5 and bulb.color == (1, 0.5, 0.25)
+
+    sun = lights["sun"]
+    assert isinstance(sun.light, sg.DirectionalLight) and sun.shadows
+    np.testing.assert_allclose(
+        sun.light.direction, np.array([1, -2, 0.5]) / math.sqrt(5.25), atol=1e-12
+    )
+
+    spot = lights["spot"]
+    assert isinstance(spot.light, sg.SpotLight)
+    np.testing.assert_allclose(spot.light.position, [0, 4, 0], atol=1e-12)
+    np.testing.assert_allclose(
+        spot.light.direction, np.array([0, -1, 0.2]) / math.sqrt(1.04), atol=1e-12
+    )
+    assert spot.light.cut_off_angle == 0.6 and spot.light.radius == 30
+    assert spot.beam_width == 0.25 and spot.intensity == 0.8 and not spot.on
+    assert spot.shadow_intensity == 0.5 and spot.attenuation == (1.0, 0.5, 0.0)
+
+
+def test_z_up_centimetre_scene_reads_back_in_y_up_metres(tmp_path):
+    triangle = sg.Shape([[0, 0, 0], [100, 0, 0], [0, 0, 200]], [[0, 1, 2]], name="t")
+    light = sg.SceneLight(sg.DirectionalLight([0, 0, -1]), name="down")
+    path = tmp_path / "z.glb"
+    sg.save(sg.Scene(shapes=[triangle], lights=[light], up_axis="Z", meters_per_unit=0.01), path)
+    back = sg.load(path)
+    assert back.up_axis == "Y" and back.meters_per_unit == 1.0
+    # (x, y, z) cm Z-up -> (x, z, -y) m Y-up, worked by hand.
+    np.testing.assert_allclose(
+        _triangles(back.shapes[0])[0], [[0, 0, 0], [1, 0, 0], [0, 2, 0]], atol=1e-7
+    )
+    np.testing.assert_allclose(back.lights[0].light.direction, [0, -1, 0], atol=1e-12)
+
+
+def test_reads_a_gltf_written_by_trimesh(tmp_path):
+    # An independent writer: trimesh's exporter, with a node hierarchy.
+    box = trimesh.creation.box()
+    cone = trimesh.creation.cone(radius=1, height=2)
+    shifted = trimesh.transformations.translation_matrix([3, 0, 0])
+    turned = trimesh.transformations.rotation_matrix(math.pi / 2, [0, 0, 1])
+    exported = trimesh.Scene()
+    exported.add_geometry(box, node_name="boxnode", geom_name="box", transform=shifted)
+    exported.add_geometry(cone, node_name="conenode", geom_name="cone", transform=turned)
+    path = tmp_path / "trimesh.glb"
+    exported.export(path)
+
+    back = {shape.name: shape for shape in sg.load(path).shapes}
+    assert sorted(back) == ["boxnode", "conenode"]
+    np.testing.assert_allclose(
+        _triangles(back["boxnode"]), (box.vertices + [3, 0, 0])[box.faces], atol=1e-6
+    )
+    expected = trimesh.transformations.transform_points(cone.vertices, turned)[cone.faces]
+    np.testing.assert_allclose(_triangles(back["conenode"]), expected, atol=1e-6)
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".stl", ".ply", ".off"])
+def test_reads_plain_mesh_formats(tmp_path, suffix):
+    mesh = trimesh.creation.icosphere(subdivisions=1)
+    mesh.apply_translation([1, 2, 3])
+    path = tmp_path / f"ball{suffix}"
+    mesh.export(path)
+    scene = sg.load(path)
+    assert len(scene.shapes) == 1
+    shape = scene.shapes[0]
+    assert shape.name == "ball" and shape.role == "geometry"
+    # Same triangles as the mesh we wrote (text formats round to ~1e-8).
+    expected = {tuple(np.round(t, 6).ravel()) for t in mesh.vertices[mesh.faces]}
+    got = {tuple(np.round(t, 6).ravel()) for t in _triangles(shape)}
+    assert got == expected
+    # Outward orientation survives: the closed mesh has positive volume.
+    assert trimesh.Trimesh(shape.world_vertices, shape.faces, process=False).volume > 0
+
+
+def test_missing_and_corrupt_files_name_the_file(tmp_path):
+    with pytest.raises(sg.SceneError, match=r"nowhere\.glb.*no such file"):
+        sg.load(tmp_path / "nowhere.glb")
+    cases = {
+        "junk.glb": b"glTF\x02\x00\x00\x00",
+        "junk.gltf": b"{ this is not json",
+        "array.gltf": b"[1, 2, 3]",
+        "old.gltf": json.dumps({"asset": {"version": "1.0"}}).encode(),
+        "junk.stl": b"solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 nonsense\n",
+        "junk.ply": b"ply\nformat ascii 1.0\nelement vertex 3\nend_header\n0 0\n",
+        "junk.obj": b"\x00\xff\x00" * 10,
+    }
+    for name, data in cases.items():
+        path = tmp_path / name
+        path.write_bytes(data)
+        with pytest.raises(sg.SceneError) as caught:
+            sg.load(path)
+        assert name in str(caught.value), str(caught.value)
+
+
+def _gltf_with_buffer_uri(uri: str) -> dict:
+    return {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36, "uri": uri}],
+        "scenes": [{"nodes": []}],
+    }
+
+
+@pytest.mark.parametrize(
+    "uri, reason",
+    [
+        ("../secret.bin", "leaves the file's folder"),
+        ("/etc/passwd", "not a relative path"),
+        ("http://example.com/buffer.bin", "not a relative path"),
+        ("file:///etc/passwd", "not a relative path"),
+        ("missing.bin", "missing external file"),
+    ],
+)
+def test_gltf_resources_outside_the_folder_are_refused(tmp_path, uri, reason):
+    folder = tmp_path / "scene"
+    folder.mkdir()
+    (tmp_path / "secret.bin").write_bytes(b"\0" * 36)
+    path = folder / "scene.gltf"
+    path.write_text(json.dumps(_gltf_with_buffer_uri(uri)))
+    with pytest.raises(sg.SceneError, match=reason) as caught:
+        sg.load(path)
+    assert "scene.gltf" in str(caught.value) and "buffers[0]" in str(caught.value)
