@@ -1,0 +1,349 @@
+"""Pictures of scenes and their shadows with pyvista (VTK).
+
+pyvista is imported inside the functions, so ``import shadowgeo`` stays cheap
+and works where VTK cannot load. Off-screen rendering needs no display: VTK
+uses EGL (Mesa's software renderer on a machine without a GPU) when there is
+no X server.
+
+What is drawn:
+
+* the scene's own shapes with their diffuse colour, Phong-shaded (smooth
+  normals, sharp edges kept) or physically based (``pbr=True``);
+* planar shadows dark and unlit, so they read as shadow whatever the lighting;
+* shadow volumes semi-transparent blue;
+* the lights: a small sphere at a point light, a cone opening along a spot
+  light's axis, an arrow along a directional light's rays.
+
+VTK's own lighting casts no shadows here: every dark region in the picture is
+shadow geometry that shadowgeo computed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+import trimesh
+
+from .errors import GeometryError
+from .io.atomic import atomic_path
+from .lights import DirectionalLight, PointLight, SpotLight
+from .projection import Shadow
+from .scene.model import Scene, SceneLight, Shape
+
+SHADOW_COLOR = (0.06, 0.06, 0.08)
+VOLUME_COLOR = (0.25, 0.45, 0.95)
+VOLUME_OPACITY = 0.3
+LIGHT_COLOR = (1.0, 0.85, 0.1)
+BACKGROUND = (1.0, 1.0, 1.0)
+
+# Directions from the scene's centre to the camera, for a Y-up scene.
+VIEWS = {"iso": (1.0, 0.8, 1.2), "top": (0.0, 1.0, 0.0), "front": (0.0, 0.0, 1.0)}
+
+
+class _Item:
+    """One mesh to draw: world vertices, faces, role and look."""
+
+    def __init__(self, vertices, faces, role: str, color=(0.8, 0.8, 0.8), opacity=1.0) -> None:
+        self.vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+        self.faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+        self.role = role
+        self.color = tuple(float(c) for c in color)
+        self.opacity = float(opacity)
+
+
+def _collect(things, role: str, items: list[_Item], lights: list) -> None:
+    """Flatten scenes, shapes, meshes and shadows into ``items`` and ``lights``."""
+    if things is None:
+        return
+    if isinstance(things, Scene):
+        for shape in things.shapes:
+            _collect(shape, role, items, lights)
+        lights.extend(things.lights)
+    elif isinstance(things, Shape):
+        shape_role = things.role if role == "geometry" else role
+        material = things.material
+        color = SHADOW_COLOR if shape_role == "shadow" else material.diffuse_color
+        opacity = VOLUME_OPACITY if shape_role == "volume" else 1.0 - material.transparency
+        items.append(_Item(things.world_vertices, things.faces, shape_role, color, opacity))
+    elif isinstance(things, Shadow):
+        items.append(_Item(things.mesh.vertices, things.mesh.faces, "shadow", SHADOW_COLOR))
+        lights.append(things.light)
+    elif isinstance(things, trimesh.Trimesh):
+        color = {"shadow": SHADOW_COLOR, "volume": VOLUME_COLOR}.get(role, (0.8, 0.8, 0.8))
+        opacity = VOLUME_OPACITY if role == "volume" else 1.0
+        items.append(_Item(things.vertices, things.faces, role, color, opacity))
+    elif isinstance(things, Iterable) and not isinstance(things, str | bytes | np.ndarray):
+        for thing in things:
+            _collect(thing, role, items, lights)
+    else:
+        raise GeometryError(
+            f"cannot plot {type(things).__name__}: expected a Scene, Shape, Shadow, "
+            "trimesh.Trimesh or a list of them"
+        )
+
+
+def _polydata(item: _Item):
+    import pyvista as pv
+
+    cells = np.column_stack([np.full(len(item.faces), 3), item.faces]).ravel()
+    return pv.PolyData(item.vertices, cells)
+
+
+def _bounds(items: list[_Item], lights: list) -> tuple[np.ndarray, float]:
+    """Centre and diagonal of the drawn geometry (lights excluded unless alone)."""
+    points = [item.vertices for item in items if len(item.vertices)]
+    if not points:
+        points = [np.array([light.position]) for light in lights if hasattr(light, "position")]
+    if not points:
+        return np.zeros(3), 1.0
+    stacked = np.concatenate(points)
+    low, high = stacked.min(axis=0), stacked.max(axis=0)
+    return (low + high) / 2, max(float(np.linalg.norm(high - low)), 1e-12)
+
+
+def _light_glyph(light, center: np.ndarray, size: float):
+    """A mesh marking ``light``: sphere (point), cone (spot) or arrow (directional)."""
+    import pyvista as pv
+
+    if isinstance(light, SpotLight):
+        height = 2.5 * size
+        # vtkConeSource's tip points along ``direction``: point it back at the light.
+        return pv.Cone(
+            center=light.position + light.direction * height / 2,
+            direction=-light.direction,
+            height=height,
+            radius=height * np.tan(min(light.cut_off_angle, 1.2)),
+            resolution=24,
+        )
+    if isinstance(light, PointLight):
+        return pv.Sphere(radius=size, center=light.position)
+    length = 12 * size
+    start = center - light.direction * length * 1.5
+    return pv.Arrow(start=start, direction=light.direction, scale=length)
+
+
+def _vtk_light(scene_light, center: np.ndarray, scale: float):
+    """A pyvista light matching a shadowgeo light (or a scene light)."""
+    import pyvista as pv
+
+    light = scene_light.light if isinstance(scene_light, SceneLight) else scene_light
+    intensity = scene_light.intensity if isinstance(scene_light, SceneLight) else 1.0
+    color = scene_light.color if isinstance(scene_light, SceneLight) else (1.0, 1.0, 1.0)
+    if isinstance(light, DirectionalLight):
+        result = pv.Light(
+            position=tuple(center - light.direction * scale),
+            focal_point=tuple(center),
+            light_type="scene light",
+        )
+        result.positional = False
+    else:
+        aim = light.direction if isinstance(light, SpotLight) else center - light.position
+        result = pv.Light(
+            position=tuple(light.position),
+            focal_point=tuple(light.position + aim),
+            light_type="scene light",
+        )
+        result.positional = True
+        result.cone_angle = np.degrees(light.cut_off_angle) if isinstance(light, SpotLight) else 90
+    result.intensity = float(min(intensity, 1.0))
+    result.diffuse_color = tuple(color)
+    return result
+
+
+def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str) -> None:
+    """Point the camera at ``center`` from the direction ``view`` names."""
+    if view is None:
+        view = "iso"
+    if isinstance(view, str):
+        if view not in VIEWS:
+            raise GeometryError(f"view must be one of {sorted(VIEWS)} or (x, y, z), got {view!r}")
+        direction = np.array(VIEWS[view])
+        if up_axis.upper() == "Z":  # Y-up directions rotated to Z-up: (x, y, z) -> (x, -z, y)
+            direction = np.array([direction[0], -direction[2], direction[1]])
+    else:
+        direction = np.asarray(view, dtype=np.float64).reshape(3)
+    norm = np.linalg.norm(direction)
+    if not np.isfinite(norm) or norm == 0:
+        raise GeometryError(f"view direction must be finite and non-zero, got {view!r}")
+    direction = direction / norm
+    up = np.eye(3)["XYZ".index(up_axis.upper())] if up_axis.upper() in "XYZ" else np.eye(3)[1]
+    if abs(direction @ up) > 0.999:  # looking along the up axis: screen-up is -z (or +y)
+        up = np.array([0.0, 0.0, -1.0]) if up[1] else np.array([0.0, 1.0, 0.0])
+    plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
+    plotter.reset_camera()
+
+
+def scene_plotter(
+    scene_or_meshes,
+    *,
+    shadows=None,
+    volumes=None,
+    lights=True,
+    off_screen: bool = False,
+    window_size: Sequence[int] = (1024, 768),
+    view=None,
+    pbr: bool = False,
+):
+    """A ``pyvista.Plotter`` holding the picture :func:`plot` draws, not yet shown.
+
+    Parameters are those of :func:`plot`. Use it to add to the picture or to
+    read the camera (``plotter.renderer``) before ``plotter.show()`` or
+    ``plotter.screenshot()``.
+    """
+    import pyvista as pv
+
+    items: list[_Item] = []
+    scene_lights: list = []
+    _collect(scene_or_meshes, "geometry", items, scene_lights)
+    _collect(shadows, "shadow", items, scene_lights)
+    _collect(volumes, "volume", items, scene_lights)
+    if lights is not True and lights is not False:
+        scene_lights = list(lights)
+    up_axis = scene_or_meshes.up_axis if isinstance(scene_or_meshes, Scene) else "Y"
+
+    width, height = (int(v) for v in window_size)
+    plotter = pv.Plotter(off_screen=off_screen, window_size=(width, height), lighting="none")
+    plotter.set_background(BACKGROUND)
+    center, scale = _bounds(items, scene_lights)
+    for scene_light in scene_lights:
+        plotter.add_light(_vtk_light(scene_light, center, scale))
+    # A dim headlight keeps faces turned from every light readable; alone, it is
+    # kept below full so a face seen head-on does not saturate to the white background.
+    headlight = pv.Light(light_type="headlight", intensity=0.35 if scene_lights else 0.75)
+    plotter.add_light(headlight)
+
+    for item in items:
+        if not len(item.faces):
+            continue
+        mesh = _polydata(item)
+        if item.role == "shadow":
+            plotter.add_mesh(mesh, color=item.color, opacity=item.opacity, lighting=False)
+        elif item.role == "volume":
+            plotter.add_mesh(mesh, color=item.color, opacity=item.opacity, smooth_shading=False)
+        elif pbr:
+            plotter.add_mesh(
+                mesh, color=item.color, opacity=item.opacity, pbr=True, metallic=0.0, roughness=0.6
+            )
+        else:
+            plotter.add_mesh(
+                mesh,
+                color=item.color,
+                opacity=item.opacity,
+                smooth_shading=True,
+                split_sharp_edges=True,
+                specular=0.3,
+                specular_power=20,
+            )
+    if lights is not False:
+        for light in scene_lights:
+            light = light.light if isinstance(light, SceneLight) else light
+            glyph = _light_glyph(light, center, 0.02 * scale)
+            plotter.add_mesh(glyph, color=LIGHT_COLOR, lighting=False)
+    # No depth peeling: with EGL off-screen it renders a blank picture, and a few
+    # convex translucent volumes sort well enough without it.
+    _camera(plotter, view, center, scale, up_axis)
+    return plotter
+
+
+def plot(
+    scene_or_meshes,
+    *,
+    shadows=None,
+    volumes=None,
+    lights=True,
+    off_screen: bool = False,
+    screenshot=None,
+    window_size: Sequence[int] = (1024, 768),
+    view=None,
+    pbr: bool = False,
+):
+    """Draw a scene, its shadows and shadow volumes with pyvista.
+
+    Parameters
+    ----------
+    scene_or_meshes : Scene, Shape, Shadow, trimesh.Trimesh or a list of them
+        What to draw. A scene's shapes keep their roles: ``"shadow"`` shapes
+        are drawn dark, ``"volume"`` shapes semi-transparent. A
+        :class:`~shadowgeo.Shadow` is drawn dark and its light marked.
+    shadows : Shadow, trimesh.Trimesh or a list of them, optional
+        More planar shadows, drawn dark and unlit.
+    volumes : trimesh.Trimesh or a list of them, optional
+        Shadow volumes, drawn semi-transparent.
+    lights : bool or list of lights
+        Mark (and light the picture with) the scene's lights; ``False`` for
+        neither, or a list of ``PointLight`` / ``SpotLight`` /
+        ``DirectionalLight`` / ``SceneLight`` to use instead.
+    off_screen : bool
+        Render without a window and return the image.
+    screenshot : path, optional
+        Also write the image to this PNG file (atomically); implies off-screen.
+    window_size : (width, height)
+        In pixels.
+    view : {"iso", "top", "front"} or (3,) array_like, optional
+        Where the camera looks from: a named view (relative to the scene's
+        up axis) or a direction from the scene's centre. Default ``"iso"``.
+    pbr : bool
+        Physically based shading instead of Phong.
+
+    Returns
+    -------
+    (height, width, 3) uint8 array
+        The picture, when rendered off-screen.
+    pyvista.Plotter
+        Otherwise, after its interactive window is closed.
+
+    Raises
+    ------
+    GeometryError
+        Something that cannot be drawn, or a bad view.
+
+    Examples
+    --------
+    >>> import shadowgeo as sg, trimesh
+    >>> box = trimesh.creation.box(extents=[1, 1, 1])
+    >>> _ = box.apply_translation([0, 2, 0])
+    >>> shadow = sg.project_shadow(box, sg.PointLight([1, 5, 1]), sg.Plane([0, 1, 0], 0))
+    >>> image = sg.plot([box, shadow], off_screen=True, window_size=(160, 120))
+    >>> image.shape
+    (120, 160, 3)
+    """
+    off_screen = bool(off_screen or screenshot is not None)
+    plotter = scene_plotter(
+        scene_or_meshes,
+        shadows=shadows,
+        volumes=volumes,
+        lights=lights,
+        off_screen=off_screen,
+        window_size=window_size,
+        view=view,
+        pbr=pbr,
+    )
+    if not off_screen:
+        plotter.show()
+        return plotter
+    try:
+        image = np.asarray(plotter.screenshot(return_img=True))
+    finally:
+        plotter.close()
+    if screenshot is not None:
+        _write_png(image, screenshot)
+    return image
+
+
+def _write_png(image: np.ndarray, path) -> None:
+    import vtk
+    from vtk.util.numpy_support import numpy_to_vtk
+
+    height, width, channels = image.shape
+    data = vtk.vtkImageData()
+    data.SetDimensions(width, height, 1)
+    # PNG rows run top to bottom, VTK image rows bottom to top.
+    flat = np.ascontiguousarray(image[::-1].reshape(-1, channels))
+    data.GetPointData().SetScalars(numpy_to_vtk(flat, deep=True))
+    with atomic_path(path, suffix=".png") as temporary:
+        writer = vtk.vtkPNGWriter()
+        writer.SetFileName(str(temporary))
+        writer.SetInputData(data)
+        writer.SetCompressionLevel(9)
+        writer.Write()

@@ -1,0 +1,226 @@
+"""Pictures: rendered off-screen, checked pixel by pixel against the geometry.
+
+The shadow's expected place comes from an independent reference (the convex
+hull of the box corners projected from the light by similar triangles), and
+world points are taken to pixels with VTK's own world-to-display transform of
+the renderer that drew the picture.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial import ConvexHull
+
+import shadowgeo as sg
+from shadowgeo import viz
+
+pytest.importorskip("pyvista")
+
+SIZE = (320, 240)
+LIGHT = np.array([3.0, 6.0, 2.0])
+BOX_LOW, BOX_HIGH = np.array([-0.5, 1.5, -0.5]), np.array([0.5, 2.5, 0.5])
+
+
+def ground_shape(half=10.0, y=0.0):
+    vertices = [[-half, y, -half], [half, y, -half], [half, y, half], [-half, y, half]]
+    return sg.Shape(vertices, [[0, 2, 1], [0, 3, 2]], name="ground", receives_shadow=True)
+
+
+def box_mesh():
+    box = trimesh.creation.box(bounds=[BOX_LOW, BOX_HIGH])
+    return box
+
+
+def reference_shadow_xz():
+    """(k, 2) hull of the box corners projected from LIGHT onto y = 0, in (x, z)."""
+    corners = np.array(
+        [[x, y, z] for x in (-0.5, 0.5) for y in (1.5, 2.5) for z in (-0.5, 0.5)], dtype=float
+    )
+    # A corner at height y lands where the ray from the light reaches y = 0:
+    # t = Ly / (Ly - y) along light -> corner.
+    t = LIGHT[1] / (LIGHT[1] - corners[:, 1])
+    landed = LIGHT + t[:, None] * (corners - LIGHT)
+    xz = landed[:, [0, 2]]
+    return xz[ConvexHull(xz).vertices]
+
+
+def to_pixels(plotter, points):
+    """World points -> (row, column) of the screenshot, via VTK's renderer."""
+    renderer = plotter.renderer
+    height = plotter.window_size[1]
+    pixels = []
+    for point in points:
+        renderer.SetWorldPoint(*point, 1.0)
+        renderer.WorldToDisplay()
+        x, y, _ = renderer.GetDisplayPoint()
+        pixels.append((int(round(height - 1 - y)), int(round(x))))
+    return pixels
+
+
+def brightness(image, pixel, radius=1):
+    row, column = pixel
+    patch = image[row - radius : row + radius + 1, column - radius : column + radius + 1]
+    return float(patch[..., :3].astype(float).mean())
+
+
+def render(*args, **kwargs):
+    """Plotter and screenshot; the plotter keeps the camera used."""
+    plotter = viz.scene_plotter(*args, off_screen=True, window_size=SIZE, **kwargs)
+    image = np.asarray(plotter.screenshot(return_img=True))
+    return plotter, image
+
+
+def test_image_is_not_blank():
+    scene = sg.Scene([ground_shape(), sg.Shape(box_mesh().vertices, box_mesh().faces)])
+    shadow = sg.project_shadow(box_mesh(), sg.PointLight(LIGHT), sg.Plane([0, 1, 0], 0))
+    image = sg.plot(scene, shadows=shadow, off_screen=True, window_size=SIZE)
+    assert image.shape == (SIZE[1], SIZE[0], 3) and image.dtype == np.uint8
+    colours = np.unique(image.reshape(-1, 3), axis=0)
+    assert len(colours) > 20
+    covered = np.any(image != 255, axis=2).mean()  # the background is white
+    assert 0.05 < covered < 0.95
+
+
+@pytest.mark.parametrize("view", ["top", (0.3, 1.0, 0.2)])
+def test_shadow_is_darker_where_the_geometry_says(view):
+    light = sg.PointLight(LIGHT)
+    shadow = sg.project_shadow(box_mesh(), light, sg.Plane([0, 1, 0], 0), offset=1e-3)
+    scene = sg.Scene([ground_shape(), sg.Shape(box_mesh().vertices, box_mesh().faces)])
+    plotter, image = render(scene, shadows=shadow, view=view)
+    try:
+        outline = reference_shadow_xz()
+        pairs = []
+        for start, end in zip(outline, np.roll(outline, -1, axis=0), strict=True):
+            middle, along = (start + end) / 2, end - start
+            if np.linalg.norm(along) < 0.6:
+                continue
+            normal = np.array([along[1], -along[0]]) / np.linalg.norm(along)
+            if np.dot(normal, middle - outline.mean(axis=0)) < 0:
+                normal = -normal  # outward
+            inside, outside = middle - 0.2 * normal, middle + 0.2 * normal
+            # Keep points the box cannot hide from a camera above: far from its footprint.
+            if min(np.abs(inside).max(), np.abs(outside).max()) < 1.3:
+                continue
+            pairs.append((inside, outside))
+        assert len(pairs) >= 2
+        points = [[p[0], 0.0, p[1]] for pair in pairs for p in pair]
+        pixels = to_pixels(plotter, points)
+        for index in range(len(pairs)):
+            dark = brightness(image, pixels[2 * index])
+            lit = brightness(image, pixels[2 * index + 1])
+            assert dark < 0.5 * lit, (pairs[index], dark, lit)
+        # And far from the shadow the ground is lit everywhere.
+        far = to_pixels(plotter, [[8.0, 0.0, 8.0], [-8.0, 0.0, 8.0]])
+        assert all(brightness(image, pixel) > 60 for pixel in far)
+    finally:
+        plotter.close()
+
+
+def test_shadow_shapes_in_a_scene_are_drawn_dark():
+    shadow = sg.project_shadow(
+        box_mesh(), sg.PointLight(LIGHT), sg.Plane([0, 1, 0], 0), offset=0.01
+    )
+    baked = sg.Shape(shadow.mesh.vertices, shadow.mesh.faces, role="shadow")
+    scene = sg.Scene([ground_shape(), baked], [sg.SceneLight(sg.PointLight(LIGHT))])
+    plotter, image = render(scene, view="top")
+    try:
+        centre = reference_shadow_xz().mean(axis=0)  # inside: the hull is convex
+        inside, outside = to_pixels(plotter, [[centre[0], 0, centre[1]], [6.0, 0.0, 6.0]])
+        assert brightness(image, inside) < 0.5 * brightness(image, outside)
+    finally:
+        plotter.close()
+
+
+@pytest.mark.parametrize(
+    "light",
+    [
+        sg.PointLight([2.0, 4.0, 1.0]),
+        sg.SpotLight([2.0, 4.0, 1.0], [-0.3, -1.0, -0.2], 0.6),
+    ],
+)
+def test_positional_lights_are_marked_where_they_are(light):
+    plotter, image = render([ground_shape()], lights=[light], view="top")
+    try:
+        (pixel,) = to_pixels(plotter, [light.position])
+        red, green, blue = image[pixel].astype(int)
+        assert red > 180 and green > 140 and blue < 90, image[pixel]
+        # The ground's colour is grey: no yellow there.
+        (ground,) = to_pixels(plotter, [[-7.0, 0.0, -7.0]])
+        assert abs(int(image[ground][0]) - int(image[ground][2])) < 20
+    finally:
+        plotter.close()
+
+
+def test_directional_light_is_an_arrow_along_its_rays():
+    light = sg.DirectionalLight([0.0, -1.0, 0.0])
+    # Seen from the front, an arrow pointing down: a vertical yellow stroke above the ground.
+    plotter, image = render([ground_shape()], lights=[light], view="front")
+    try:
+        yellow = (image[..., 0] > 180) & (image[..., 1] > 140) & (image[..., 2] < 90)
+        rows, columns = np.nonzero(yellow)
+        assert len(rows) > 20
+        assert np.ptp(rows) > 2 * np.ptp(columns)
+        (ground,) = to_pixels(plotter, [[0.0, 0.0, 0.0]])
+        assert rows.max() < ground[0]  # above the ground
+    finally:
+        plotter.close()
+
+
+def test_volumes_are_semi_transparent():
+    volume = trimesh.creation.box(
+        bounds=[[5.0, 0.5, -2.0], [15.0, 1.5, 2.0]]
+    )  # half off the ground
+    plotter, image = render([ground_shape()], volumes=[volume], lights=False, view="top")
+    try:
+        over_ground, over_background, bare_ground = to_pixels(
+            plotter, [[7.5, 1.5, 0.0], [12.5, 1.5, 0.0], [7.5, 0.0, 6.0]]
+        )
+        tinted = image[over_ground].astype(int)
+        # The volume shows (the ground is tinted blue) ...
+        assert tinted[2] - tinted[0] > 15
+        assert np.abs(tinted - image[bare_ground].astype(int)).max() > 15
+        # ... and the ground shows through it: what is behind changes the colour.
+        assert np.abs(tinted - image[over_background].astype(int)).max() > 20
+    finally:
+        plotter.close()
+
+
+def test_pbr_and_screenshot_file(tmp_path):
+    from PIL import Image
+
+    target = tmp_path / "picture.png"
+    image = sg.plot(
+        [ground_shape(), box_mesh()],
+        lights=[sg.PointLight(LIGHT)],
+        screenshot=target,
+        window_size=SIZE,
+        pbr=True,
+    )
+    assert len(np.unique(image.reshape(-1, 3), axis=0)) > 20
+    written = np.asarray(Image.open(target).convert("RGB"))
+    np.testing.assert_array_equal(written, image)
+    assert [p.name for p in tmp_path.iterdir()] == ["picture.png"]  # no temporary left
+
+
+def test_z_up_scene_top_view_looks_down_z():
+    vertices = [[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]]
+    ground = sg.Shape(vertices, [[0, 1, 2], [0, 2, 3]])
+    marker = trimesh.creation.box(bounds=[[2, 2, 0], [4, 4, 0.5]])
+    scene = sg.Scene([ground, sg.Shape(marker.vertices, marker.faces)], up_axis="Z")
+    plotter, image = render(scene, view="top")
+    try:
+        camera = np.array(plotter.camera.position) - np.array(plotter.camera.focal_point)
+        assert camera[2] > 0 and np.allclose(camera[:2], 0, atol=1e-9 * np.linalg.norm(camera))
+    finally:
+        plotter.close()
+
+
+def test_bad_input_is_named():
+    with pytest.raises(sg.GeometryError, match="cannot plot str"):
+        sg.plot("scene.x3d", off_screen=True)
+    with pytest.raises(sg.GeometryError, match="view must be one of"):
+        sg.plot([box_mesh()], off_screen=True, view="sideways")
+    with pytest.raises(sg.GeometryError, match="non-zero"):
+        sg.plot([box_mesh()], off_screen=True, view=(0, 0, 0))
