@@ -1,15 +1,40 @@
-"""``shadowgeo view``: not built yet."""
+"""``shadowgeo view IN``: an interactive window with the scene and its shadows.
+
+Needs a display; where there is none it says so and exits 1 (use
+``shadowgeo render`` there).
+"""
 
 from __future__ import annotations
 
 import sys
+from pathlib import Path
+
+import shadowgeo as sg
+from shadowgeo import viz
+
+from .render import add_picture_options, scene_to_draw
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser("view", help="(not built yet)")
+    parser = subparsers.add_parser(
+        "view",
+        help="open a scene and its shadows in an interactive window",
+        description=__doc__.splitlines()[0].replace("``", ""),
+    )
+    parser.add_argument("input", type=Path, help="scene file (.x3d, .glb, .gltf, .obj, ...)")
+    add_picture_options(parser)
     parser.set_defaults(func=run)
 
 
 def run(args) -> int:
-    print("shadowgeo view: not built yet", file=sys.stderr)
-    return 2
+    reason = viz.no_display_reason()
+    if reason is not None:
+        print(
+            f"shadowgeo view: no display to open a window on ({reason}); "
+            f"render a picture instead: shadowgeo render {args.input} picture.png",
+            file=sys.stderr,
+        )
+        return 1
+    scene = scene_to_draw(args)
+    sg.plot(scene, view=args.view, pbr=args.pbr)
+    return 0

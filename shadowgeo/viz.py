@@ -20,6 +20,8 @@ shadow geometry that shadowgeo computed.
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Iterable, Sequence
 
 import numpy as np
@@ -202,6 +204,10 @@ def scene_plotter(
         scene_lights = list(lights)
     up_axis = scene_or_meshes.up_axis if isinstance(scene_or_meshes, Scene) else "Y"
 
+    if off_screen and no_display_reason() is not None:
+        # VTK would try X first and print "bad X server connection" before
+        # falling back to EGL; go to EGL directly (a user's own choice stands).
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     width, height = (int(v) for v in window_size)
     plotter = pv.Plotter(off_screen=off_screen, window_size=(width, height), lighting="none")
     plotter.set_background(BACKGROUND)
@@ -297,6 +303,8 @@ def plot(
     ------
     GeometryError
         Something that cannot be drawn, or a bad view.
+    RuntimeError
+        An interactive window was asked for where there is no display.
 
     Examples
     --------
@@ -320,6 +328,13 @@ def plot(
         pbr=pbr,
     )
     if not off_screen:
+        reason = no_display_reason()
+        if reason is not None:
+            plotter.close()
+            raise RuntimeError(
+                f"no display for an interactive window ({reason}); "
+                "pass off_screen=True or screenshot=..."
+            )
         plotter.show()
         return plotter
     try:
@@ -329,6 +344,19 @@ def plot(
     if screenshot is not None:
         _write_png(image, screenshot)
     return image
+
+
+def no_display_reason() -> str | None:
+    """Why no interactive window can open here, or ``None`` if one can.
+
+    On Linux and the BSDs a window needs an X server (``DISPLAY``) or a
+    Wayland compositor (``WAYLAND_DISPLAY``); macOS and Windows always have one.
+    """
+    if not sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd")):
+        return None
+    if os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"):
+        return None
+    return "neither DISPLAY nor WAYLAND_DISPLAY is set"
 
 
 def _write_png(image: np.ndarray, path) -> None:

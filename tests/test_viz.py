@@ -8,6 +8,8 @@ the renderer that drew the picture.
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 import trimesh
@@ -224,3 +226,71 @@ def test_bad_input_is_named():
         sg.plot([box_mesh()], off_screen=True, view="sideways")
     with pytest.raises(sg.GeometryError, match="non-zero"):
         sg.plot([box_mesh()], off_screen=True, view=(0, 0, 0))
+
+
+# -- the render and view commands -------------------------------------------------------------
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    """A glTF scene: ground, box and a point light that casts shadows."""
+    box = box_mesh()
+    scene = sg.Scene(
+        [ground_shape(), sg.Shape(box.vertices, box.faces, name="box")],
+        [sg.SceneLight(sg.PointLight(LIGHT), name="lamp", shadows=True)],
+    )
+    path = tmp_path / "scene.glb"
+    sg.save(scene, path)
+    return path
+
+
+def dark_fraction(image):
+    return float((image.astype(float).mean(axis=2) < 50).mean())
+
+
+def test_render_writes_a_png_with_the_shadow(scene_file, tmp_path, capsys):
+    from PIL import Image
+
+    from cli.main import main
+
+    with_shadows, without = tmp_path / "with.png", tmp_path / "without.png"
+    size = ["--size", "320x240", "--view", "top"]
+    assert main(["render", str(scene_file), str(with_shadows), *size]) == 0
+    assert "1 shadows" in capsys.readouterr().out
+    assert main(["render", str(scene_file), str(without), *size, "--no-shadows"]) == 0
+    shadowed = np.asarray(Image.open(with_shadows).convert("RGB"))
+    plain = np.asarray(Image.open(without).convert("RGB"))
+    assert shadowed.shape == plain.shape == (240, 320, 3)
+    # Seen from above, the dark pixels added are the shadow: its area (hull of the
+    # projected corners) over the ground's 20 x 20, times the ground's share of the image.
+    hull = reference_shadow_xz()
+    expected = ConvexHull(hull).volume / 400.0 * np.any(plain != 255, axis=2).mean()
+    added = dark_fraction(shadowed) - dark_fraction(plain)
+    assert 0.5 * expected < added < 1.5 * expected, (added, expected)
+
+
+def test_render_usage_and_input_errors(scene_file, tmp_path, capsys):
+    from cli.main import main
+
+    assert main(["render", str(scene_file), str(tmp_path / "out.jpg")]) == 2
+    assert ".png" in capsys.readouterr().err
+    assert main(["render", str(tmp_path / "missing.glb"), str(tmp_path / "out.png")]) == 1
+    assert "missing.glb" in capsys.readouterr().err
+    for bad in (["--view", "sideways"], ["--view", "0,0,0"], ["--size", "big"]):
+        with pytest.raises(SystemExit) as exit_:
+            main(["render", str(scene_file), str(tmp_path / "out.png"), *bad])
+        assert exit_.value.code == 2
+    assert not list(tmp_path.glob("out*"))
+
+
+def test_view_without_a_display_says_so(scene_file, monkeypatch, capsys):
+    from cli.main import main
+
+    monkeypatch.setattr(sys, "platform", "linux")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["view", str(scene_file)]) == 1
+    error = capsys.readouterr().err
+    assert "no display" in error and "shadowgeo render" in error
+    with pytest.raises(RuntimeError, match="no display"):
+        sg.plot([box_mesh()])
