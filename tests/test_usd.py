@@ -1,12 +1,19 @@
-"""USD reader and writer: validated by usd-core's own validators."""
+"""USD reader and writer: validated by usd-core's own validators, checked
+against the stage as usd-core reads it, and round-tripped."""
 
 from __future__ import annotations
 
+import math
+
+import numpy as np
 import pytest
+import trimesh
 from validators import usd_errors
 
+import shadowgeo as sg
+
 pxr = pytest.importorskip("pxr")
-from pxr import Usd, UsdGeom  # noqa: E402
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux  # noqa: E402
 
 
 def test_validator_flags_missing_stage_metadata(tmp_path):
@@ -24,3 +31,304 @@ def test_validator_flags_missing_stage_metadata(tmp_path):
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)
     stage.Save()
     assert usd_errors(path) == []
+
+
+def _scene() -> sg.Scene:
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=1.5)
+    box = trimesh.creation.box(extents=[2.0, 1.0, 0.5])
+    far = np.eye(4)
+    far[:3, :3] = trimesh.transformations.rotation_matrix(0.7, [1, 2, 3])[:3, :3] * 3.0
+    far[:3, 3] = [1.0e7, -2.5, 3.0e4]  # far from the origin: float32 would be off by ~1
+    sheared = np.eye(4)
+    sheared[0, 1] = 0.5
+    return sg.Scene(
+        shapes=[
+            sg.Shape(sphere.vertices, sphere.faces, far, name="ball"),
+            sg.Shape(
+                box.vertices,
+                box.faces,
+                sheared,
+                name="3 crates!",
+                material=sg.Material((0.25, 0.5, 0.75), (0.5, 0, 0), transparency=0.5),
+                solid=False,
+            ),
+            sg.Shape(box.vertices + 0.1, box.faces, name="3 crates!"),
+            sg.Shape(box.vertices * 2, box.faces, name="Looks"),
+            sg.Shape([[0, 0, 0], [1, 0, 0], [0, 0, -1]], [[0, 1, 2]], role="shadow", group="sun"),
+            sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], role="volume", group="sun"),
+        ],
+        lights=[
+            sg.SceneLight(sg.PointLight([1, 5, 2], radius=12.5), name="bulb", color=(1, 0.5, 0.25)),
+            sg.SceneLight(sg.PointLight([0, 9, 0]), name="sky lamp"),
+            sg.SceneLight(sg.DirectionalLight([1, -2, 0.5]), name="sun", shadows=True),
+            sg.SceneLight(
+                sg.SpotLight([0, 4, 0], [0, -1, 0.2], cut_off_angle=0.6, radius=30),
+                name="spot",
+                beam_width=0.25,
+                on=False,
+                shadow_intensity=0.5,
+                attenuation=(1.0, 0.5, 0.0),
+            ),
+        ],
+        up_axis="Z",
+        meters_per_unit=0.01,
+    )
+
+
+@pytest.mark.parametrize("suffix", [".usda", ".usdc", ".usd"])
+def test_written_file_passes_every_usd_validator(tmp_path, suffix):
+    path = tmp_path / f"scene{suffix}"
+    sg.save(_scene(), path)
+    assert usd_errors(path, warnings=True) == []
+    header = path.read_bytes()[:8]
+    assert header == (b"#usda 1." if suffix == ".usda" else b"PXR-USDC")
+
+
+def test_stage_layout_as_usd_core_reads_it(tmp_path):
+    scene = _scene()
+    path = tmp_path / "scene.usda"
+    sg.save(scene, path)
+    stage = Usd.Stage.Open(str(path))
+    assert stage.GetDefaultPrim().GetPath() == Sdf.Path("/World")
+    assert UsdGeom.GetStageUpAxis(stage) == "Z"
+    assert UsdGeom.GetStageMetersPerUnit(stage) == 0.01
+
+    meshes = [p for p in stage.Traverse() if p.IsA(UsdGeom.Mesh)]
+    assert [p.GetDisplayName() for p in meshes] == [s.name or "" for s in scene.shapes]
+    names = [str(p.GetPath()) for p in meshes]
+    assert len(set(names)) == len(names)
+    # Tf.MakeValidIdentifier replaces each invalid character (a leading digit too).
+    assert names[1] == "/World/__crates_" and names[2] == "/World/__crates__1"
+    assert names[3] != "/World/Looks"  # the materials' scope keeps its name
+    assert names[4].startswith("/World/sun/") and names[5].startswith("/World/sun/")
+
+    ball = UsdGeom.Mesh(meshes[0])
+    points = np.array(ball.GetPointsAttr().Get())
+    assert set(ball.GetFaceVertexCountsAttr().Get()) == {3}
+    assert ball.GetOrientationAttr().Get() == "rightHanded"
+    assert ball.GetSubdivisionSchemeAttr().Get() == "none"
+    assert ball.GetDoubleSidedAttr().Get() is False
+    assert UsdGeom.Mesh(meshes[1]).GetDoubleSidedAttr().Get() is True
+    np.testing.assert_array_equal(ball.GetExtentAttr().Get(), [points.min(0), points.max(0)])
+    world = np.array(ball.ComputeLocalToWorldTransform(Usd.TimeCode.Default())).T
+    np.testing.assert_array_equal(world, scene.shapes[0].transform)
+
+    crate = UsdGeom.Mesh(meshes[1])
+    assert crate.GetDisplayOpacityPrimvar().Get()[0] == 0.5
+    assert tuple(crate.GetDisplayColorPrimvar().Get()[0]) == (0.25, 0.5, 0.75)
+
+    spot = stage.GetPrimAtPath("/World/spot")
+    assert spot.IsA(UsdLux.SphereLight) and spot.HasAPI(UsdLux.ShapingAPI)
+    angle = UsdLux.ShapingAPI(spot).GetShapingConeAngleAttr().Get()
+    assert angle == pytest.approx(math.degrees(0.6), rel=1e-7)
+    placed = np.array(UsdGeom.Xformable(spot).ComputeLocalToWorldTransform(0)).T
+    direction = placed[:3, :3] @ [0, 0, -1]  # UsdLux lights shine down their -Z
+    np.testing.assert_allclose(direction, np.array([0, -1, 0.2]) / math.sqrt(1.04), atol=1e-15)
+    np.testing.assert_allclose(placed[:3, 3], [0, 4, 0], atol=0)
+    assert UsdGeom.Imageable(spot).ComputeVisibility() == "invisible"
+    sun = stage.GetPrimAtPath("/World/sun_1")
+    assert sun.IsA(UsdLux.DistantLight)
+    assert UsdLux.ShadowAPI(sun).GetShadowEnableAttr().Get() is True
+    bulb = UsdLux.SphereLight(stage.GetPrimAtPath("/World/bulb"))
+    assert bulb.GetTreatAsPointAttr().Get() is True
+
+
+@pytest.mark.parametrize("suffix", [".usda", ".usdc"])
+def test_round_trip_is_exact(tmp_path, suffix):
+    scene = _scene()
+    path = tmp_path / f"scene{suffix}"
+    sg.save(scene, path)
+    back = sg.load(path)
+    assert (back.up_axis, back.meters_per_unit) == ("Z", 0.01)
+    assert [s.name for s in back.shapes] == [s.name for s in scene.shapes]
+    assert [s.role for s in back.shapes] == [s.role for s in scene.shapes]
+    assert [s.group for s in back.shapes] == [s.group for s in scene.shapes]
+    assert [s.solid for s in back.shapes] == [s.solid for s in scene.shapes]
+    for original, read in zip(scene.shapes, back.shapes, strict=True):
+        np.testing.assert_array_equal(read.transform, original.transform)
+        triangles = read.world_vertices[read.faces]
+        expected = original.world_vertices[original.faces]
+        assert np.abs(triangles - expected).max() <= 1e-9
+    crate = back.shapes[1].material
+    np.testing.assert_allclose(crate.diffuse_color, (0.25, 0.5, 0.75))
+    np.testing.assert_allclose(crate.emissive_color, (0.5, 0, 0))
+    assert crate.transparency == 0.5
+
+    lights = {light.name: light for light in back.lights}
+    assert sorted(lights) == ["bulb", "sky lamp", "spot", "sun"]
+    assert isinstance(lights["bulb"].light, sg.PointLight)
+    np.testing.assert_array_equal(lights["bulb"].light.position, [1, 5, 2])
+    assert lights["bulb"].light.radius == 12.5 and lights["bulb"].color == (1, 0.5, 0.25)
+    assert lights["sky lamp"].light.radius == math.inf
+    sun = lights["sun"]
+    assert isinstance(sun.light, sg.DirectionalLight) and sun.shadows
+    np.testing.assert_allclose(
+        sun.light.direction, np.array([1, -2, 0.5]) / math.sqrt(5.25), atol=1e-15
+    )
+    spot = lights["spot"]
+    assert isinstance(spot.light, sg.SpotLight)
+    assert spot.light.cut_off_angle == 0.6 and spot.light.radius == 30
+    np.testing.assert_allclose(
+        spot.light.direction, np.array([0, -1, 0.2]) / math.sqrt(1.04), atol=1e-15
+    )
+    assert spot.beam_width == 0.25 and not spot.on and spot.shadow_intensity == 0.5
+    assert spot.attenuation == (1.0, 0.5, 0.0)
+
+
+def _author(path, build) -> None:
+    """A USD file written directly with pxr: an independent author."""
+    stage = Usd.Stage.CreateNew(str(path))
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    build(stage)
+    stage.Save()
+
+
+def test_reads_polygons_orientation_and_nesting_from_another_author(tmp_path):
+    def build(stage):
+        parent = UsdGeom.Xform.Define(stage, "/Root")
+        parent.AddTranslateOp().Set(Gf.Vec3d(10, 0, 0))
+        quad = UsdGeom.Mesh.Define(stage, "/Root/Quad")
+        quad.AddScaleOp().Set(Gf.Vec3f(2, 2, 2))
+        quad.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (5, 5, 5)])
+        quad.CreateFaceVertexCountsAttr([4, 2])  # a quad and a degenerate "face"
+        quad.CreateFaceVertexIndicesAttr([0, 1, 2, 3, 0, 4])
+        left = UsdGeom.Mesh.Define(stage, "/Root/Left")
+        left.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+        left.CreateFaceVertexCountsAttr([3])
+        left.CreateFaceVertexIndicesAttr([0, 1, 2])
+        left.CreateOrientationAttr("leftHanded")
+        hidden = UsdGeom.Mesh.Define(stage, "/Root/Hidden")
+        hidden.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+        hidden.CreateFaceVertexCountsAttr([3])
+        hidden.CreateFaceVertexIndicesAttr([0, 1, 2])
+        hidden.MakeInvisible()
+        UsdGeom.Cube.Define(stage, "/Root/Cube")
+        UsdLux.RectLight.Define(stage, "/Root/Panel")
+
+    path = tmp_path / "other.usda"
+    _author(path, build)
+    scene = sg.load(path)
+    assert scene.up_axis == "Z"
+    assert [s.name for s in scene.shapes] == ["Quad", "Left"]
+    quad, left = scene.shapes
+    triangles = quad.world_vertices[quad.faces]
+    # The unit square scaled by 2 and moved 10 along x: area 4, normal +z.
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    assert len(triangles) == 2 and np.allclose(normals[:, :2], 0) and np.all(normals[:, 2] > 0)
+    assert 0.5 * normals[:, 2].sum() == pytest.approx(4.0)
+    assert triangles[..., 0].min() == 10 and triangles[..., 0].max() == 12
+    # leftHanded: clockwise seen from +z is the front, so the normal flips to -z.
+    triangle = left.world_vertices[left.faces[0]]
+    assert np.cross(triangle[1] - triangle[0], triangle[2] - triangle[0])[2] < 0
+    warnings = " ".join(scene.warnings)
+    assert "Cube </Root/Cube>" in warnings and "RectLight </Root/Panel>" in warnings
+    assert "skipped 1" in warnings
+
+
+def test_edited_points_win_over_a_stale_float64_copy(tmp_path):
+    path = tmp_path / "scene.usda"
+    triangle = sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="t")
+    sg.save(sg.Scene(shapes=[triangle]), path)
+    stage = Usd.Stage.Open(str(path))
+    UsdGeom.Mesh(stage.GetPrimAtPath("/World/t")).GetPointsAttr().Set(
+        [(0, 0, 0), (3, 0, 0), (0, 3, 0)]
+    )
+    stage.Save()
+    np.testing.assert_array_equal(sg.load(path).shapes[0].vertices[1], [3, 0, 0])
+
+
+def test_bad_files_name_the_file_and_the_prim(tmp_path):
+    with pytest.raises(sg.SceneError, match=r"nowhere\.usda.*no such file"):
+        sg.load(tmp_path / "nowhere.usda")
+    for name, data in {
+        "broken.usda": b'#usda 1.0\ndef Mesh "x" {\n  int[] faceVertexCounts = [3\n',
+        "garbage.usdc": b"PXR-USDC" + b"\xff" * 64,
+        "empty.usd": b"",
+    }.items():
+        path = tmp_path / name
+        path.write_bytes(data)
+        with pytest.raises(sg.SceneError, match=name.replace(".", r"\.")):
+            sg.load(path)
+
+    def out_of_range(stage):
+        mesh = UsdGeom.Mesh.Define(stage, "/Bad")
+        mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+        mesh.CreateFaceVertexCountsAttr([3])
+        mesh.CreateFaceVertexIndicesAttr([0, 1, 9])
+
+    path = tmp_path / "range.usda"
+    _author(path, out_of_range)
+    with pytest.raises(sg.SceneError, match=r"range\.usda.*Mesh </Bad>.*point 9 of 3"):
+        sg.load(path)
+
+
+@pytest.mark.parametrize(
+    "asset, reason",
+    [
+        ("../outside.usda", "leaves the file's folder"),
+        ("/etc/hosts", "not a relative path"),
+        ("http://example.com/x.usda", "not a relative path"),
+        ("missing.usda", "missing layer"),
+    ],
+)
+def test_references_outside_the_folder_are_refused(tmp_path, asset, reason):
+    folder = tmp_path / "scene"
+    folder.mkdir()
+    outside = tmp_path / "outside.usda"
+    _author(
+        outside, lambda stage: stage.SetDefaultPrim(UsdGeom.Xform.Define(stage, "/O").GetPrim())
+    )
+
+    def referencing(stage):
+        UsdGeom.Xform.Define(stage, "/World").GetPrim().GetReferences().AddReference(asset)
+
+    path = folder / "main.usda"
+    _author(path, referencing)
+    with pytest.raises(sg.SceneError, match=reason) as caught:
+        sg.load(path)
+    assert "main.usda" in str(caught.value) and asset in str(caught.value)
+
+
+def test_a_reference_inside_the_folder_is_followed(tmp_path):
+    def part(stage):
+        mesh = UsdGeom.Mesh.Define(stage, "/Part")
+        mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+        mesh.CreateFaceVertexCountsAttr([3])
+        mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
+        stage.SetDefaultPrim(mesh.GetPrim())
+
+    (tmp_path / "parts").mkdir()
+    _author(tmp_path / "parts" / "part.usda", part)
+    _author(
+        tmp_path / "main.usda",
+        lambda stage: (
+            UsdGeom.Mesh.Define(stage, "/Placed")
+            .GetPrim()
+            .GetReferences()
+            .AddReference("parts/part.usda")
+        ),
+    )
+    scene = sg.load(tmp_path / "main.usda")
+    assert [s.name for s in scene.shapes] == ["Placed"] and scene.shapes[0].n_faces == 1
+
+
+def test_failed_write_leaves_the_existing_file_untouched(tmp_path, monkeypatch):
+    path = tmp_path / "scene.usda"
+    path.write_text("previous contents")
+    real_export = Sdf.Layer.Export
+
+    def export_half_then_fail(layer, filename, *args, **kwargs):
+        real_export(layer, filename, *args, **kwargs)
+        with open(filename, "r+b") as handle:
+            handle.truncate(10)
+        return False
+
+    monkeypatch.setattr(Sdf.Layer, "Export", export_half_then_fail)
+    with pytest.raises(sg.SceneError, match=r"scene\.usda.*could not save"):
+        sg.save(_scene(), path)
+    with pytest.raises(sg.SceneError, match="could not save"):
+        sg.save(_scene(), tmp_path / "new.usdc")
+    monkeypatch.undo()
+    assert path.read_text() == "previous contents"
+    assert [p.name for p in tmp_path.iterdir()] == ["scene.usda"]
