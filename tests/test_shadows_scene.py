@@ -3,6 +3,7 @@ hand-derived regions and shapely references built in the test."""
 
 from __future__ import annotations
 
+import importlib.util
 import math
 
 import numpy as np
@@ -238,13 +239,38 @@ def test_shadow_intensity_sets_transparency_and_names_are_unique_and_def_safe():
 
 def test_volume_method_is_a_clear_error_until_it_exists():
     scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
-    if not hasattr(sg, "shadow_volume"):
+    if importlib.util.find_spec("shadowgeo.volume") is None:
         with pytest.raises(GeometryError, match="not available"):
             sg.add_shadows(scene, method="volume")
         return
     result = sg.add_shadows(scene, method="volume")
     volumes = result.shapes_with_role("volume")
-    assert volumes and all(v.group == "shadows_lamp" for v in volumes)
+    assert [v.group for v in volumes] == ["shadows_lamp", "shadows_lamp"]
+    # The cube's volume holds the points the cube hides from the light: the
+    # segment from the point to the light crosses the cube (tested by hand).
+    cube = next(v for v in volumes if "cube" in v.name)
+    mesh = trimesh.Trimesh(cube.vertices, cube.faces, process=False)
+    assert mesh.is_watertight and mesh.volume > 0
+    triangles = mesh.vertices[mesh.faces]
+    assert ray_crossings([0.0, 0.5, 0.0], triangles) % 2 == 1  # hidden
+    assert ray_crossings([3.0, 0.5, 0.0], triangles) % 2 == 0  # lit
+
+
+def ray_crossings(point, triangles, direction=(0.3141, 0.2718, 0.9127)):
+    """How many triangles the ray from ``point`` crosses (Moller-Trumbore, brute force)."""
+    direction = np.asarray(direction) / np.linalg.norm(direction)
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    e1, e2 = b - a, c - a
+    p = np.cross(direction, e2)
+    det = np.einsum("ij,ij->i", e1, p)
+    ok = np.abs(det) > 1e-12
+    inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+    s = np.asarray(point) - a
+    u = np.einsum("ij,ij->i", s, p) * inv
+    q = np.cross(s, e1)
+    v = (q @ direction) * inv
+    t = np.einsum("ij,ij->i", e2, q) * inv
+    return int(np.sum(ok & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)))
 
 
 @settings(max_examples=25, deadline=None)

@@ -140,7 +140,7 @@ def add_shadows(
     names = _Names(scene)
 
     if method == "volume":
-        added = _volumes(geometry, chosen, tolerance, names, notes, progress)
+        added = _volumes(scene, geometry, chosen, tolerance, names, notes, progress)
     else:
         found = _select_receivers(scene, geometry, receivers, plane, tolerance, notes)
         receiver_ids = {id(receiver.shape) for receiver in found}
@@ -433,7 +433,9 @@ def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_nam
     )
 
 
-def _volumes(geometry, chosen, tolerance, names, notes, progress) -> list[Shape]:
+def _volumes(scene, geometry, chosen, tolerance, names, notes, progress) -> list[Shape]:
+    """Shadow volumes of every shape for every light, ending one scene size past
+    the farthest corner of the scene (a sweep of twice its size for a sun)."""
     try:
         from ..volume import shadow_volume
     except ImportError as error:
@@ -441,23 +443,31 @@ def _volumes(geometry, chosen, tolerance, names, notes, progress) -> list[Shape]
             "method 'volume' is not available in this version of shadowgeo "
             "(shadowgeo.shadow_volume is not built yet); use method 'planar'"
         ) from error
+    bounds = scene.bounds
+    corners = np.array(
+        [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
+    )
     added = []
     total, done = len(chosen) * len(geometry), 0
     for index, scene_light in enumerate(chosen):
+        light = scene_light.light
+        if is_positional(light):
+            extent = float(np.linalg.norm(corners - light.position, axis=1).max()) + tolerance.scale
+        else:
+            extent = 2 * tolerance.scale
         light_name = names.light(scene_light, index)
         group = names.unique(f"shadows_{light_name}")
         for shape in geometry:
             done += 1
             caster = _Caster(shape)
             try:
-                volume = shadow_volume(
-                    (caster.vertices, shape.faces), scene_light.light, extent=None
-                )
+                volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)
             except GeometryError as error:
                 notes.append(f"shadows: {caster.name} has no volume for {light_name}: {error}")
                 continue
-            if progress is not None:
-                progress(done, total)
+            finally:
+                if progress is not None:
+                    progress(done, total)
             if len(volume.faces) == 0:
                 continue
             added.append(

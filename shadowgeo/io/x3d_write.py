@@ -1,0 +1,278 @@
+"""X3D XML writer (``.x3d``, and ``.x3dz``: the same, gzip-compressed).
+
+Two cases:
+
+* The scene came from X3D (``scene.document`` is the reader's lxml tree): the
+  output is that document, unchanged, with one ``<Group DEF="shadows_<light>">``
+  per group of added shapes (role ``"shadow"`` or ``"volume"``) appended to
+  ``<Scene>``. Scripts, routes, viewpoints, metadata, comments, the DOCTYPE and
+  the ``version`` attribute stay as they were; the added nodes (Group, Shape,
+  Appearance, Material, IndexedTriangleSet, Coordinate) exist in every X3D
+  version from 3.0, so the version stays valid.
+* Otherwise (glTF, USD, mesh input, or a scene built in code): a fresh X3D 4.0
+  document with the lights, one ``Transform`` (translation, rotation, scale,
+  scaleOrientation: any affine transform exactly) around each shape that is
+  not in world coordinates, and the added shapes in their groups.
+
+Added shapes are ``IndexedTriangleSet`` in world coordinates with
+``solid="false"``; coordinates are written with Python's shortest round-trip
+float format, so reading back gives the same float64 values.
+"""
+
+from __future__ import annotations
+
+import copy
+import gzip
+import math
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+
+from ..errors import SceneError
+from ..lights import DirectionalLight, SpotLight
+from ..scene import Scene, SceneLight, Shape
+from ..scene.shadows import safe_name
+from .atomic import atomic_path
+
+ADDED_ROLES = ("shadow", "volume")
+# X3D's SFFloat has no infinity: an unlimited light radius is written as this.
+_UNLIMITED_RADIUS = 1e30
+
+
+def write(scene: Scene, path) -> None:
+    """Write ``scene`` as X3D XML to ``path`` (gzip when it ends in ``.x3dz``).
+
+    Parameters
+    ----------
+    scene : Scene
+        Not modified (the document is copied before shapes are added).
+    path : str or Path
+        Written atomically: a failure leaves no partial file.
+
+    Raises
+    ------
+    SceneError
+        The scene's document has no ``<Scene>`` element.
+    """
+    path = Path(path)
+    tree = _with_added(scene) if scene.document is not None else _fresh(scene)
+    declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
+    data = declaration + etree.tostring(tree, xml_declaration=False, encoding="UTF-8")
+    if not data.endswith(b"\n"):
+        data += b"\n"
+    if path.suffix.lower() == ".x3dz":
+        data = gzip.compress(data, mtime=0)
+    with atomic_path(path) as temporary:
+        temporary.write_bytes(data)
+
+
+def _with_added(scene: Scene):
+    tree = copy.deepcopy(scene.document)
+    if not isinstance(tree, etree._ElementTree):
+        tree = etree.ElementTree(tree)
+    root = tree.getroot()
+    namespace = root.tag[: root.tag.index("}") + 1] if root.tag.startswith("{") else ""
+    body = root.find(f"{namespace}Scene")
+    if body is None:
+        raise SceneError("the X3D document has no <Scene> element", path=scene.path)
+    used = set(tree.xpath("//@DEF"))
+    groups = _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used, namespace)
+    if groups:
+        _indent(body, groups)
+    return tree
+
+
+def _add_groups(parent, shapes: list[Shape], used: set[str], namespace: str = "") -> list:
+    """Append one Group per ``shape.group`` holding those shapes; returns them."""
+    groups: dict[str, etree._Element] = {}
+    for shape in shapes:
+        key = shape.group or f"shadows_{shape.role}"
+        if key not in groups:
+            groups[key] = etree.SubElement(parent, f"{namespace}Group", DEF=_unique(key, used))
+        groups[key].append(_shape_element(shape, used, namespace, world=True))
+    return list(groups.values())
+
+
+def _indent(body, groups) -> None:
+    """Indent the added groups like ``<Scene>``'s other children, and leave the
+    whitespace of everything else as it was."""
+    children = list(body)
+    first = children.index(groups[0])
+    previous = children[first - 1] if first else None
+    closing = previous.tail if previous is not None else body.text
+    closing = closing if closing and "\n" in closing and not closing.strip() else "\n"
+    lead = body.text or ""
+    indent = lead.rsplit("\n", 1)[1] if "\n" in lead and not lead.strip() else ""
+    outer = closing.rsplit("\n", 1)[1]  # the indentation of </Scene>
+    step = indent[len(outer) :] if indent.startswith(outer) and len(indent) > len(outer) else ""
+    level = len(indent) // len(step) if step and len(indent) % len(step) == 0 else 1
+    if previous is not None:
+        previous.tail = "\n" + indent
+    else:
+        body.text = "\n" + indent
+    for group in groups:
+        etree.indent(group, space=step or "  ", level=level)
+        group.tail = "\n" + indent
+    groups[-1].tail = closing
+
+
+def _unique(text: str, used: set[str]) -> str:
+    base = name = safe_name(text)
+    count = 1
+    while name in used:
+        count += 1
+        name = f"{base}_{count}"
+    used.add(name)
+    return name
+
+
+def _numbers(values) -> str:
+    return " ".join(map(repr, np.asarray(values, dtype=np.float64).ravel().tolist()))
+
+
+def _bool(value: bool) -> str:
+    return "true" if value else "false"
+
+
+def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: bool):
+    """A ``<Shape>``: vertices in world coordinates when ``world``, else local."""
+    element = etree.Element(f"{namespace}Shape")
+    if shape.name:
+        element.set("DEF", _unique(shape.name, used))
+    appearance = etree.SubElement(element, f"{namespace}Appearance")
+    material = shape.material
+    attributes = {"diffuseColor": _numbers(material.diffuse_color)}
+    if any(material.emissive_color):
+        attributes["emissiveColor"] = _numbers(material.emissive_color)
+    if any(material.specular_color):
+        attributes["specularColor"] = _numbers(material.specular_color)
+        attributes["shininess"] = repr(float(material.shininess))
+    attributes["transparency"] = repr(float(material.transparency))
+    etree.SubElement(appearance, f"{namespace}Material", attributes)
+    vertices = shape.world_vertices if world else shape.vertices
+    geometry = etree.SubElement(
+        element,
+        f"{namespace}IndexedTriangleSet",
+        index=" ".join(map(str, shape.faces.ravel().tolist())),
+        solid=_bool(shape.solid),
+    )
+    points = ", ".join(map(_numbers, vertices))
+    etree.SubElement(geometry, f"{namespace}Coordinate", point=points)
+    return element
+
+
+# -- a fresh X3D 4.0 document ----------------------------------------------------------------
+
+
+def _fresh(scene: Scene):
+    xsd = "http://www.w3.org/2001/XMLSchema-instance"
+    root = etree.Element("X3D", profile="Immersive", version="4.0", nsmap={"xsd": xsd})
+    root.set(
+        f"{{{xsd}}}noNamespaceSchemaLocation", "https://www.web3d.org/specifications/x3d-4.0.xsd"
+    )
+    head = etree.SubElement(root, "head")
+    from .. import __version__
+
+    etree.SubElement(head, "meta", name="generator", content=f"shadowgeo {__version__}")
+    if scene.path:
+        etree.SubElement(head, "meta", name="source", content=Path(scene.path).name)
+    if scene.meters_per_unit != 1.0:
+        etree.SubElement(
+            head,
+            "unit",
+            category="length",
+            name="metres_per_unit",
+            conversionFactor=repr(float(scene.meters_per_unit)),
+        )
+    body = etree.SubElement(root, "Scene")
+    used: set[str] = set()
+    for light in scene.lights:
+        body.append(_light_element(light, used))
+    for shape in scene.shapes:
+        if shape.role in ADDED_ROLES:
+            continue
+        node = _shape_element(shape, used, world=False)
+        if not np.allclose(shape.transform, np.eye(4), rtol=0, atol=0):
+            transform = etree.SubElement(body, "Transform", _transform_fields(shape.transform))
+            transform.append(node)
+        else:
+            body.append(node)
+    _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used)
+    etree.indent(root, space="  ")
+    return etree.ElementTree(root)
+
+
+def _light_element(scene_light: SceneLight, used: set[str]):
+    light = scene_light.light
+    if isinstance(light, DirectionalLight):
+        element = etree.Element("DirectionalLight", direction=_numbers(light.direction))
+    else:
+        kind = "SpotLight" if isinstance(light, SpotLight) else "PointLight"
+        element = etree.Element(kind, location=_numbers(light.position))
+        if isinstance(light, SpotLight):
+            element.set("direction", _numbers(light.direction))
+            element.set("cutOffAngle", repr(float(light.cut_off_angle)))
+            element.set("beamWidth", repr(float(min(scene_light.beam_width, math.pi / 2))))
+        radius = light.radius if math.isfinite(light.radius) else _UNLIMITED_RADIUS
+        element.set("radius", repr(float(radius)))
+        element.set("attenuation", _numbers(scene_light.attenuation))
+    if scene_light.name:
+        element.set("DEF", _unique(scene_light.name, used))
+    element.set("color", _numbers(scene_light.color))
+    element.set("intensity", repr(float(scene_light.intensity)))
+    element.set("ambientIntensity", repr(float(scene_light.ambient_intensity)))
+    element.set("on", _bool(scene_light.on))
+    element.set("global", _bool(scene_light.global_))
+    element.set("shadows", _bool(scene_light.shadows))
+    element.set("shadowIntensity", repr(float(scene_light.shadow_intensity)))
+    return element
+
+
+def _transform_fields(matrix: np.ndarray) -> dict[str, str]:
+    """X3D Transform fields that give exactly ``matrix`` (4, 4): the linear part
+    ``A = R (SR S SR^-1)`` from the singular value decomposition
+    ``A = U diag(s) V^T`` with ``R = U V^T``, ``SR = V``, scale ``s``."""
+    if not np.allclose(matrix[3], [0, 0, 0, 1], rtol=0, atol=1e-12):
+        raise SceneError(f"cannot write a projective transform in X3D: {matrix.tolist()}")
+    linear = matrix[:3, :3]
+    u, s, vt = np.linalg.svd(linear)
+    if np.linalg.det(u) < 0:
+        u[:, 2] *= -1
+        s[2] *= -1
+    if np.linalg.det(vt) < 0:
+        vt[2] *= -1
+        s[2] *= -1
+    fields = {"translation": _numbers(matrix[:3, 3])}
+    rotation = u @ vt
+    if not np.allclose(rotation, np.eye(3), rtol=0, atol=1e-15):
+        fields["rotation"] = _numbers(_axis_angle(rotation))
+    if not np.allclose(s, 1.0, rtol=0, atol=1e-15):
+        fields["scale"] = _numbers(s)
+        if not np.allclose(vt, np.eye(3), rtol=0, atol=1e-15):
+            fields["scaleOrientation"] = _numbers(_axis_angle(vt.T))
+    return fields
+
+
+def _axis_angle(rotation: np.ndarray) -> np.ndarray:
+    """(4,) axis x, y, z and angle of a 3x3 rotation matrix, via its unit
+    quaternion (Shepperd's method: divide by the largest of its four terms)."""
+    m = rotation
+    trace = float(np.trace(m))
+    largest = int(np.argmax([trace, m[0, 0], m[1, 1], m[2, 2]]))
+    vector = np.zeros(3)
+    if largest == 0:
+        w = math.sqrt(max(1.0 + trace, 0.0)) / 2
+        vector[:] = [m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1]]
+        vector /= 4 * w
+    else:
+        a = largest - 1
+        b, c = (a + 1) % 3, (a + 2) % 3
+        vector[a] = math.sqrt(max(1.0 + m[a, a] - m[b, b] - m[c, c], 0.0)) / 2
+        vector[b] = (m[b, a] + m[a, b]) / (4 * vector[a])
+        vector[c] = (m[c, a] + m[a, c]) / (4 * vector[a])
+        w = (m[c, b] - m[b, c]) / (4 * vector[a])
+    length = float(np.linalg.norm(vector))
+    if length == 0.0:
+        return np.array([0.0, 0.0, 1.0, 0.0])
+    return np.append(vector / length, 2 * math.atan2(length, w))

@@ -1,0 +1,198 @@
+"""The X3D writer: the input document kept, shadows added, valid against the
+X3D 4.0 schema; fresh documents for scenes that did not come from X3D."""
+
+from __future__ import annotations
+
+import gzip
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from lxml import etree
+from x3d_schema import new_schema_errors, x3d_schema_errors
+
+import shadowgeo as sg
+from shadowgeo.io import x3d_write
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "scenes" / "courtyard.x3d"
+SAFE = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
+
+
+def parse(path):
+    data = Path(path).read_bytes()
+    if data[:2] == b"\x1f\x8b":
+        data = gzip.decompress(data)
+    return etree.fromstring(data, SAFE).getroottree()
+
+
+def shadow_shape(name="shadow_lamp_ground", group="shadows_lamp", transparency=0.3):
+    # Coordinates that need all 17 digits to round-trip.
+    vertices = np.array([[0.1, 1e-3, 0.2], [1 / 3, 1e-3, 0.2], [0.1, 1e-3, 2 / 7]])
+    return sg.Shape(
+        vertices,
+        [[0, 2, 1]],
+        material=sg.Material((0.0, 0.0, 0.0), transparency=transparency),
+        name=name,
+        solid=False,
+        role="shadow",
+        group=group,
+    )
+
+
+def document_scene(path=EXAMPLE, shapes=()):
+    return sg.Scene(list(shapes), [], path=str(path), document=parse(path))
+
+
+def floats(text):
+    return np.array(text.replace(",", " ").split(), dtype=np.float64)
+
+
+def test_document_is_kept_and_one_group_per_light_is_added(tmp_path, x3d_schema):
+    scene = document_scene(shapes=[shadow_shape(), shadow_shape("other", transparency=0.5)])
+    original = etree.tostring(scene.document)
+    out = tmp_path / "out.x3d"
+    x3d_write.write(scene, out)
+    assert etree.tostring(scene.document) == original  # the scene is not modified
+    text = out.read_text()
+    assert text.startswith("<?xml")
+    assert '<!DOCTYPE X3D PUBLIC "ISO//Web3D//DTD X3D 4.0//EN"' in text
+    assert "<!-- shadowgeo convert keeps this comment" in text
+    written = parse(out)
+    body = written.getroot().find("Scene")
+    (group,) = body.findall("Group")
+    assert group.get("DEF") == "shadows_lamp"
+    assert [s.get("DEF") for s in group.findall("Shape")] == ["shadow_lamp_ground", "other"]
+    # Every original node of <Scene> is still there, in order, unchanged.
+    before = [etree.tostring(e) for e in scene.document.getroot().find("Scene")]
+    after = [etree.tostring(e) for e in body if e is not group]
+    assert [b.strip() for b in before] == [a.strip() for a in after]
+    assert written.getroot().get("version") == "4.0"
+    assert x3d_schema_errors(out, x3d_schema) == []
+
+
+def test_added_shape_fields_and_exact_coordinates(tmp_path):
+    shape = shadow_shape()
+    out = tmp_path / "out.x3d"
+    x3d_write.write(document_scene(shapes=[shape]), out)
+    node = parse(out).getroot().find("Scene/Group/Shape")
+    material = node.find("Appearance/Material")
+    assert floats(material.get("diffuseColor")).tolist() == [0, 0, 0]
+    assert float(material.get("transparency")) == 0.3
+    geometry = node.find("IndexedTriangleSet")
+    assert geometry.get("solid") == "false"
+    assert floats(geometry.get("index")).tolist() == [0, 2, 1]
+    points = floats(geometry.find("Coordinate").get("point")).reshape(-1, 3)
+    assert np.array_equal(points, shape.vertices)  # bit for bit
+
+
+def test_added_shapes_are_in_world_coordinates(tmp_path):
+    shape = shadow_shape()
+    shape.transform = np.array([[2, 0, 0, 1], [0, 2, 0, 0], [0, 0, 2, 0], [0, 0, 0, 1.0]])
+    out = tmp_path / "out.x3d"
+    x3d_write.write(document_scene(shapes=[shape]), out)
+    point = parse(out).getroot().find("Scene/Group/Shape/IndexedTriangleSet/Coordinate")
+    assert np.allclose(floats(point.get("point"))[:3], [1.2, 2e-3, 0.4], rtol=1e-15)
+
+
+def test_def_names_never_collide_with_the_document(tmp_path, x3d_schema):
+    # The example already has DEF="lamp" and DEF="ground": the group and the shape
+    # named like them get new names, and the schema (xs:ID) sees no duplicate.
+    scene = document_scene(shapes=[shadow_shape(name="ground", group="lamp")])
+    out = tmp_path / "out.x3d"
+    x3d_write.write(scene, out)
+    defs = parse(out).xpath("//@DEF")
+    assert len(defs) == len(set(defs))
+    assert {"lamp_2", "ground_2"} <= set(defs)
+    assert x3d_schema_errors(out, x3d_schema) == []
+
+
+def test_x3dz_is_gzip_of_the_same_document(tmp_path):
+    scene = document_scene(shapes=[shadow_shape()])
+    x3d_write.write(scene, tmp_path / "a.x3d")
+    x3d_write.write(scene, tmp_path / "a.x3dz")
+    packed = (tmp_path / "a.x3dz").read_bytes()
+    assert packed[:2] == b"\x1f\x8b"
+    assert gzip.decompress(packed) == (tmp_path / "a.x3d").read_bytes()
+
+
+def test_failed_write_leaves_the_old_file_and_no_partial_one(tmp_path):
+    out = tmp_path / "out.x3d"
+    out.write_text("old")
+    broken = sg.Scene([shadow_shape()], document=etree.ElementTree(etree.Element("X3D")))
+    with pytest.raises(sg.SceneError, match="no <Scene>"):
+        x3d_write.write(broken, out)
+    assert out.read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.x3d"]
+
+
+def test_x3d_3_input_gets_no_new_schema_errors(tmp_path, corpus_dir, x3d_schema):
+    source = corpus_dir / "lights_materials" / "light_street_lights_radius.x3d"
+    before = x3d_schema_errors(source, x3d_schema)
+    assert before  # this 3.0 file has its own errors (Shape shading="...")
+    out = tmp_path / "out.x3d"
+    x3d_write.write(document_scene(source, [shadow_shape()]), out)
+    assert new_schema_errors(before, x3d_schema_errors(out, x3d_schema)) == []
+    assert parse(out).getroot().get("version") == "3.0"
+
+
+# -- fresh documents ---------------------------------------------------------------------
+
+
+def rotation_matrix(axis_angle):
+    """Rodrigues' formula, written out here independently of the writer."""
+    x, y, z, angle = axis_angle
+    axis = np.array([x, y, z]) / np.linalg.norm([x, y, z])
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+
+
+def x3d_transform_matrix(node):
+    """X3D's Transform: P' = T R SR S SR^-1 P (center 0), from the written fields."""
+    translation = floats(node.get("translation", "0 0 0"))
+    rotation = rotation_matrix(floats(node.get("rotation", "0 0 1 0")))
+    scale = np.diag(floats(node.get("scale", "1 1 1")))
+    orientation = rotation_matrix(floats(node.get("scaleOrientation", "0 0 1 0")))
+    matrix = np.eye(4)
+    matrix[:3, :3] = rotation @ orientation @ scale @ orientation.T
+    matrix[:3, 3] = translation
+    return matrix
+
+
+def test_fresh_document_is_valid_x3d_4_with_exact_transforms(tmp_path, x3d_schema):
+    rng = np.random.default_rng(7)
+    transforms = [np.eye(4)]
+    for determinant_sign in (1, -1):
+        matrix = np.eye(4)
+        matrix[:3, :3] = rng.normal(size=(3, 3))  # rotation, scale and shear
+        if np.sign(np.linalg.det(matrix[:3, :3])) != determinant_sign:
+            matrix[:3, 0] *= -1
+        matrix[:3, 3] = rng.normal(size=3) * 10
+        transforms.append(matrix)
+    transforms.append(np.diag([1.0, 1.0, -1.0, 1.0]))  # a mirror
+    shapes = [
+        sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], transform=t, name=f"s{i}")
+        for i, t in enumerate(transforms)
+    ]
+    lights = [
+        sg.SceneLight(sg.PointLight([1, 2, 3]), name="bulb", shadows=True),
+        sg.SceneLight(sg.DirectionalLight([0, -1, 0]), name="sun", intensity=0.5),
+        sg.SceneLight(sg.SpotLight([0, 5, 0], [0, -1, 0], 0.5, radius=20), name="spot"),
+    ]
+    out = tmp_path / "fresh.x3d"
+    x3d_write.write(sg.Scene([*shapes, shadow_shape()], lights), out)
+    assert x3d_schema_errors(out, x3d_schema) == []
+    root = parse(out).getroot()
+    assert root.get("version") == "4.0"
+    for shape, transform in zip(shapes, transforms, strict=True):
+        node = root.find(f".//Shape[@DEF='{shape.name}']")
+        parent = node.getparent()
+        written = x3d_transform_matrix(parent) if parent.tag == "Transform" else np.eye(4)
+        assert np.allclose(written, transform, rtol=0, atol=1e-12)
+    bulb = root.find(".//PointLight[@DEF='bulb']")
+    assert floats(bulb.get("location")).tolist() == [1, 2, 3] and bulb.get("shadows") == "true"
+    assert floats(root.find(".//DirectionalLight").get("direction")).tolist() == [0, -1, 0]
+    spot = root.find(".//SpotLight")
+    assert float(spot.get("cutOffAngle")) == 0.5 and float(spot.get("radius")) == 20
+    assert root.find("Scene/Group[@DEF='shadows_lamp']/Shape") is not None
