@@ -1,0 +1,211 @@
+"""X3D XML field values: parsing attribute text by field type, with defaults.
+
+Field types and defaults come from :mod:`.x3d_defaults` (generated from the X3D
+4.0 XML Schema by ``tools/x3d_defaults.py``). X3D 3.x files differ in a few
+defaults; :data:`X3D3_DEFAULTS` holds those, chosen by the ``<X3D version>``.
+
+Every parse error is a :class:`~shadowgeo.SceneError` naming the file, line,
+node and field: ``scene.x3d line 12, Transform DEF='arm': field translation:
+'abc' is not a number (SFVec3f needs 3)``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+from lxml import etree
+
+from ..errors import SceneError
+from .x3d_defaults import DEFAULTS
+
+# VRML 97 / X3D 3.3 SpotLight defaults; X3D 4.0 changed both (the schema's
+# 0.589049 = 3 pi / 16 and 1.570796 = pi / 2).
+X3D3_DEFAULTS = {
+    ("SpotLight", "beamWidth"): "1.570796",
+    ("SpotLight", "cutOffAngle"): "0.785398",
+}
+
+# Number of components per value of each vector type.
+WIDTH = {
+    "SFVec2f": 2, "SFVec2d": 2, "SFVec3f": 3, "SFVec3d": 3, "SFColor": 3, "SFColorRGBA": 4,
+    "SFVec4f": 4, "SFVec4d": 4, "SFRotation": 4, "SFMatrix3f": 9, "SFMatrix4f": 16,
+    "SFMatrix4d": 16, "SFMatrix3d": 9,
+    "MFVec2f": 2, "MFVec2d": 2, "MFVec3f": 3, "MFVec3d": 3, "MFColor": 3, "MFColorRGBA": 4,
+    "MFVec4f": 4, "MFRotation": 4, "MFFloat": 1, "MFDouble": 1, "MFTime": 1, "MFInt32": 1,
+}  # fmt: skip
+# Fields holding angles, scaled by an X3D ``<unit category="angle">``.
+ANGLE_FIELDS = {"cutOffAngle", "beamWidth", "creaseAngle"}
+_SEPARATORS = re.compile(r"[\s,]+")
+_STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
+
+
+def local_name(element) -> str:
+    """Tag without namespace; '' for comments and processing instructions."""
+    if not isinstance(element.tag, str):
+        return ""
+    return etree.QName(element).localname
+
+
+@dataclass
+class Context:
+    """Where the reader is, for messages and unit conversion."""
+
+    path: str
+    version: tuple[int, int] = (4, 0)
+    angle_factor: float = 1.0
+    warnings: list[str] = field(default_factory=list)
+    defs: dict = field(default_factory=dict)
+
+    def resolve(self, element):
+        """The node a ``USE`` names (the same element, not a copy), or ``element``."""
+        name = element.get("USE")
+        if name is None:
+            return element
+        target = self.defs.get(name)
+        if target is None:
+            raise self.error(element, f"USE='{name}' names no DEF in this file")
+        return target
+
+    def children(self, element, tags=None):
+        """Child nodes (USE resolved), optionally only those whose tag is in ``tags``."""
+        out = []
+        for child in element:
+            tag = local_name(child)
+            if tag and (tags is None or tag in tags):
+                out.append(self.resolve(child))
+        return out
+
+    def describe(self, element) -> str:
+        name = local_name(element)
+        for attribute in ("DEF", "USE"):
+            if element.get(attribute):
+                return f"{name} {attribute}='{element.get(attribute)}'"
+        return name
+
+    def where(self, element) -> str:
+        return f"{self.path} line {element.sourceline}, {self.describe(element)}"
+
+    def error(self, element, message: str) -> SceneError:
+        return SceneError(
+            message, path=self.path, line=element.sourceline, node=self.describe(element)
+        )
+
+    def warn(self, element, message: str) -> None:
+        self.warnings.append(f"{self.where(element)}: {message}")
+
+    def field(self, element, name: str, kind: str | None = None):
+        """The value of field ``name`` of ``element``, or its default.
+
+        Returns a bool, int, float, str, list[str] (MFString) or float64 /
+        int64 numpy array ((k,) for SF vectors, (n, k) for MF vectors).
+        """
+        tag = local_name(element)
+        spec = DEFAULTS.get(tag, {}).get(name)
+        if kind is None:
+            if spec is None:
+                raise KeyError(f"{tag}.{name} is not in the defaults table")
+            kind = spec[0]
+        text = element.get(name)
+        if text is None:
+            text = spec[1] if spec else ""
+            if self.version < (4, 0):
+                text = X3D3_DEFAULTS.get((tag, name), text)
+            value = parse(text, kind)
+        else:
+            try:
+                value = parse(text, kind)
+            except ValueError as problem:
+                shown = text if len(text) <= 40 else text[:37] + "..."
+                raise self.error(element, f"field {name}: '{shown}' {problem}") from None
+            if name in ANGLE_FIELDS:
+                value = value * self.angle_factor
+            elif kind == "SFRotation":
+                value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
+        return value
+
+
+def parse(text: str, kind: str):
+    """Parse ``text`` as X3D field type ``kind``; ValueError says why not."""
+    if kind == "SFBool":
+        word = text.strip().lower()
+        if word not in ("true", "false"):
+            raise ValueError("is not a boolean (true or false)")
+        return word == "true"
+    if kind == "SFString":
+        return text
+    if kind == "MFString":
+        return _strings(text)
+    if kind == "SFInt32":
+        numbers = _numbers(text, kind)
+        if len(numbers) != 1 or numbers[0] != int(numbers[0]):
+            raise ValueError("is not an integer (SFInt32)")
+        return int(numbers[0])
+    if kind in ("SFFloat", "SFDouble", "SFTime"):
+        numbers = _numbers(text, kind)
+        if len(numbers) != 1:
+            raise ValueError(f"is not one number ({kind})")
+        return float(numbers[0])
+    numbers = _numbers(text, kind)
+    width = WIDTH.get(kind)
+    if width is None:
+        raise ValueError(f"has a field type the reader does not parse ({kind})")
+    if kind.startswith("SF"):
+        if len(numbers) != width:
+            raise ValueError(f"is not {width} numbers ({kind})")
+        return numbers
+    if kind == "MFInt32":
+        if np.any(numbers != np.round(numbers)):
+            raise ValueError("has a value that is not an integer (MFInt32)")
+        return numbers.astype(np.int64)
+    if len(numbers) % width:
+        raise ValueError(f"has {len(numbers)} numbers, not a multiple of {width} ({kind})")
+    return numbers.reshape(-1, width) if width > 1 else numbers
+
+
+def _numbers(text: str, kind: str) -> np.ndarray:
+    words = [word for word in _SEPARATORS.split(text.strip()) if word]
+    try:
+        numbers = np.array([float(word) for word in words], dtype=np.float64)
+    except ValueError:
+        bad = next(word for word in words if not _is_number(word))
+        raise ValueError(f"is not numbers ({kind}: '{bad[:20]}' is not a number)") from None
+    if not np.all(np.isfinite(numbers)):
+        raise ValueError(f"has a value that is not finite ({kind})")
+    return numbers
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word)
+    except ValueError:
+        return False
+    return True
+
+
+def _strings(text: str) -> list[str]:
+    """MFString: ``"a" "b"``; a bare unquoted value counts as one string."""
+    found = _STRING.findall(text)
+    if not found:
+        return [text.strip()] if text.strip() else []
+    return [re.sub(r"\\(.)", r"\1", item) for item in found]
+
+
+def rotation_matrix(rotation: np.ndarray) -> np.ndarray:
+    """3x3 matrix of an X3D rotation ``(x, y, z, angle)`` (right-hand rule
+    about the axis); a zero axis means no rotation."""
+    axis, angle = np.asarray(rotation[:3], dtype=np.float64), float(rotation[3])
+    length = float(np.linalg.norm(axis))
+    if length == 0.0 or angle == 0.0:
+        return np.eye(3)
+    x, y, z = axis / length
+    c, s, t = math.cos(angle), math.sin(angle), 1.0 - math.cos(angle)
+    return np.array(
+        [
+            [t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+            [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+            [t * x * z - s * y, t * y * z + s * x, t * z * z + c],
+        ]
+    )

@@ -1,0 +1,308 @@
+"""X3D geometry nodes to triangles in the node's own frame.
+
+:func:`geometry` turns one geometry element into a :class:`Mesh` (explicit
+vertices: IndexedFaceSet, the triangle and quad sets, ElevationGrid) or a
+:class:`Primitive` (Box, Sphere, Cone, Cylinder), which the reader tessellates
+once it knows the scene's size and hence the chord tolerance. Faces are
+counter-clockwise (``ccw="false"`` is flipped here).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from manifold3d import triangulate
+
+from ..scene import primitives
+from .x3d_fields import Context, local_name
+
+PRIMITIVES = {"Box", "Sphere", "Cone", "Cylinder"}
+MESHES = {
+    "IndexedFaceSet", "IndexedTriangleSet", "TriangleSet", "IndexedQuadSet", "QuadSet",
+    "ElevationGrid", "IndexedTriangleFanSet", "IndexedTriangleStripSet", "TriangleFanSet",
+    "TriangleStripSet",
+}  # fmt: skip
+GEOMETRY = PRIMITIVES | MESHES
+# Geometry that has no area to cast a shadow with, or that shadowgeo does not model.
+UNMODELLED_GEOMETRY = {
+    "Text", "IndexedLineSet", "LineSet", "PointSet", "Extrusion", "Arc2D", "ArcClose2D",
+    "Circle2D", "Disk2D", "Polyline2D", "Polypoint2D", "Rectangle2D", "TriangleSet2D",
+    "NurbsPatchSurface", "NurbsTrimmedSurface", "GeoElevationGrid", "ParticleSystem",
+}  # fmt: skip
+
+
+@dataclass
+class Mesh:
+    """Explicit triangles: (n, 3) float64 vertices, (m, 3) int64 faces."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    solid: bool = True
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass
+class Instance:
+    """One rendered Shape: its geometry under a world transform (4x4)."""
+
+    geometry: Mesh | Primitive
+    transform: np.ndarray
+    material: object
+    name: str | None
+    source: str
+
+
+@dataclass
+class Primitive:
+    """A primitive to tessellate later: ``kind`` and the keyword arguments of
+    :mod:`shadowgeo.scene.primitives`; ``radius`` bounds it around the origin."""
+
+    kind: str
+    parameters: dict
+    radius: float
+    solid: bool = True
+
+    def tessellate(self, chord: float) -> Mesh:
+        if self.kind == "Box":
+            vertices, faces = primitives.box(**self.parameters)
+        else:
+            make = {"Sphere": primitives.sphere, "Cone": primitives.cone}
+            vertices, faces = make.get(self.kind, primitives.cylinder)(
+                chord=chord, **self.parameters
+            )
+        return Mesh(vertices, faces, self.solid)
+
+
+def geometry(context: Context, element) -> Mesh | Primitive:
+    """Geometry of one X3D geometry element (USE already resolved)."""
+    tag = local_name(element)
+    solid = context.field(element, "solid")
+    if tag in PRIMITIVES:
+        return _primitive(context, element, tag, solid)
+    mesh = _MESH_BUILDERS[tag](context, element)
+    if context.field(element, "ccw") is False:
+        mesh.faces = mesh.faces[:, ::-1].copy()
+    mesh.solid = solid
+    return mesh
+
+
+def _primitive(context: Context, element, tag: str, solid: bool) -> Primitive:
+    def positive(name: str) -> float:
+        value = context.field(element, name)
+        if not value > 0:
+            raise context.error(element, f"field {name}: {value!r} must be > 0")
+        return value
+
+    if tag == "Box":
+        size = context.field(element, "size")
+        if not np.all(size > 0):
+            raise context.error(element, f"field size: {size.tolist()} must be > 0")
+        return Primitive(tag, {"size": tuple(size)}, float(np.linalg.norm(size)) / 2, solid)
+    if tag == "Sphere":
+        radius = positive("radius")
+        return Primitive(tag, {"radius": radius}, radius, solid)
+    height = positive("height")
+    if tag == "Cone":
+        radius = positive("bottomRadius")
+        flags = {key: context.field(element, key) for key in ("side", "bottom")}
+        parameters = {"bottom_radius": radius, "height": height, **flags}
+    else:
+        radius = positive("radius")
+        flags = {key: context.field(element, key) for key in ("side", "top", "bottom")}
+        parameters = {"radius": radius, "height": height, **flags}
+    return Primitive(tag, parameters, float(np.hypot(radius, height / 2)), solid)
+
+
+def coordinates(context: Context, element) -> np.ndarray:
+    """(n, 3) points of the element's Coordinate or CoordinateDouble child."""
+    nodes = context.children(element, {"Coordinate", "CoordinateDouble", "GeoCoordinate"})
+    if not nodes:
+        return np.zeros((0, 3))
+    node = nodes[0]
+    if local_name(node) == "GeoCoordinate":
+        raise context.error(node, "GeoCoordinate is not supported (no geospatial frames)")
+    return context.field(node, "point").reshape(-1, 3)
+
+
+def _checked(context: Context, element, name: str, indices: np.ndarray, n_points: int):
+    bad = (indices >= n_points) | (indices < -1)
+    if np.any(bad):
+        first = int(indices[np.argmax(bad)])
+        raise context.error(element, f"{name} {first} is out of range ({n_points} points)")
+    return indices
+
+
+def _polygons(indices: np.ndarray) -> list[np.ndarray]:
+    """Split an index list at -1 separators; empty pieces dropped."""
+    cuts = np.flatnonzero(indices == -1)
+    pieces = np.split(indices, cuts)
+    return [piece[piece != -1] for piece in pieces if np.count_nonzero(piece != -1)]
+
+
+def polygon_triangles(points: np.ndarray) -> np.ndarray:
+    """Triangulate one simple polygon (k, 3), convex or not, in its own plane.
+
+    Returns (m, 3) indices into ``points``, wound as the polygon is (its Newell
+    normal). A polygon with no area gives no triangles.
+    """
+    shifted = np.roll(points, -1, axis=0)
+    normal = np.array(
+        [
+            np.sum((points[:, 1] - shifted[:, 1]) * (points[:, 2] + shifted[:, 2])),
+            np.sum((points[:, 2] - shifted[:, 2]) * (points[:, 0] + shifted[:, 0])),
+            np.sum((points[:, 0] - shifted[:, 0]) * (points[:, 1] + shifted[:, 1])),
+        ]
+    )
+    length = float(np.linalg.norm(normal))
+    if length == 0.0 or not np.isfinite(length):
+        return np.zeros((0, 3), dtype=np.int64)
+    normal /= length
+    helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
+    u = np.cross(helper, normal)
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)  # (u, v, normal) right-handed: the polygon runs CCW in (u, v)
+    centred = points - points.mean(axis=0)
+    flat = np.column_stack([centred @ u, centred @ v])
+    return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)
+
+
+def _indexed_face_set(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    indices = _checked(
+        context, element, "coordIndex", context.field(element, "coordIndex"), len(points)
+    )
+    convex = context.field(element, "convex")
+    faces, notes, short = [], [], 0
+    polygons = _polygons(indices)
+    by_size: dict[int, list[np.ndarray]] = {}
+    for polygon in polygons:
+        by_size.setdefault(len(polygon), []).append(polygon)
+    for size, group in by_size.items():
+        block = np.array(group, dtype=np.int64)
+        if size < 3:
+            short += len(group)
+        elif size == 3 or convex:
+            fan = np.arange(1, size - 1)
+            first = np.repeat(block[:, :1], size - 2, axis=1)
+            faces.append(np.stack([first, block[:, fan], block[:, fan + 1]], -1).reshape(-1, 3))
+        else:
+            for polygon in block:
+                faces.append(polygon[polygon_triangles(points[polygon])])
+    if short:
+        notes.append(f"{short} polygon(s) with fewer than 3 points skipped")
+    return Mesh(points, _stack(faces), notes=notes)
+
+
+def _stack(faces: list[np.ndarray]) -> np.ndarray:
+    return np.concatenate(faces).astype(np.int64) if faces else np.zeros((0, 3), np.int64)
+
+
+def _indexed_triangle_set(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    index = _checked(context, element, "index", context.field(element, "index"), len(points))
+    notes = [f"{len(index) % 3} trailing index value(s) ignored"] if len(index) % 3 else []
+    return Mesh(points, index[: len(index) // 3 * 3].reshape(-1, 3), notes=notes)
+
+
+def _triangle_set(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    count = len(points) // 3 * 3
+    notes = [f"{len(points) - count} trailing point(s) ignored"] if len(points) - count else []
+    return Mesh(points, np.arange(count, dtype=np.int64).reshape(-1, 3), notes=notes)
+
+
+def _quads_to_triangles(quads: np.ndarray) -> np.ndarray:
+    return np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]) if len(quads) else quads
+
+
+def _indexed_quad_set(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    index = _checked(context, element, "index", context.field(element, "index"), len(points))
+    notes = [f"{len(index) % 4} trailing index value(s) ignored"] if len(index) % 4 else []
+    quads = index[: len(index) // 4 * 4].reshape(-1, 4)
+    return Mesh(points, _quads_to_triangles(quads).reshape(-1, 3), notes=notes)
+
+
+def _quad_set(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    count = len(points) // 4 * 4
+    notes = [f"{len(points) - count} trailing point(s) ignored"] if len(points) - count else []
+    quads = np.arange(count, dtype=np.int64).reshape(-1, 4)
+    return Mesh(points, _quads_to_triangles(quads).reshape(-1, 3), notes=notes)
+
+
+def _fans(runs: list[np.ndarray]) -> np.ndarray:
+    return _stack([np.column_stack([run[0].repeat(len(run) - 2), run[1:-1], run[2:]])
+                   for run in runs if len(run) >= 3])  # fmt: skip
+
+
+def _strips(runs: list[np.ndarray]) -> np.ndarray:
+    out = []
+    for run in runs:
+        if len(run) < 3:
+            continue
+        tri = np.column_stack([run[:-2], run[1:-1], run[2:]])
+        tri[1::2] = tri[1::2][:, [1, 0, 2]]  # every other triangle of a strip is reversed
+        out.append(tri)
+    return _stack(out)
+
+
+def _runs_from_counts(context: Context, element, name: str, n_points: int) -> list[np.ndarray]:
+    counts = context.field(element, name)
+    if np.any(counts < 3) or counts.sum() > n_points:
+        raise context.error(
+            element, f"{name} {counts.tolist()[:8]} needs counts >= 3 summing to <= {n_points}"
+        )
+    return np.split(np.arange(int(counts.sum())), np.cumsum(counts)[:-1])
+
+
+def _indexed_fan_or_strip(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    index = _checked(context, element, "index", context.field(element, "index"), len(points))
+    runs = _polygons(index)
+    fan = local_name(element) == "IndexedTriangleFanSet"
+    return Mesh(points, _fans(runs) if fan else _strips(runs))
+
+
+def _fan_set(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    return Mesh(points, _fans(_runs_from_counts(context, element, "fanCount", len(points))))
+
+
+def _strip_set(context: Context, element) -> Mesh:
+    points = coordinates(context, element)
+    return Mesh(points, _strips(_runs_from_counts(context, element, "stripCount", len(points))))
+
+
+def _elevation_grid(context: Context, element) -> Mesh:
+    nx, nz = context.field(element, "xDimension"), context.field(element, "zDimension")
+    heights = context.field(element, "height")
+    if nx < 0 or nz < 0 or len(heights) < nx * nz:
+        raise context.error(
+            element, f"height has {len(heights)} values; xDimension {nx} x zDimension {nz} needs"
+            f" {max(nx, 0) * max(nz, 0)}"
+        )  # fmt: skip
+    if nx < 2 or nz < 2:
+        return Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64))
+    dx, dz = context.field(element, "xSpacing"), context.field(element, "zSpacing")
+    j, i = np.meshgrid(np.arange(nz), np.arange(nx), indexing="ij")  # height[i + j * nx]
+    vertices = np.column_stack([i.ravel() * dx, heights[: nx * nz], j.ravel() * dz])
+    corner = (i[:-1, :-1] + j[:-1, :-1] * nx).ravel()
+    # (i, j) -> (i, j+1) -> (i+1, j+1) -> (i+1, j): Z x X = +Y, CCW seen from above
+    quads = np.column_stack([corner, corner + nx, corner + nx + 1, corner + 1])
+    return Mesh(vertices, _quads_to_triangles(quads).astype(np.int64))
+
+
+_MESH_BUILDERS = {
+    "IndexedFaceSet": _indexed_face_set,
+    "IndexedTriangleSet": _indexed_triangle_set,
+    "TriangleSet": _triangle_set,
+    "IndexedQuadSet": _indexed_quad_set,
+    "QuadSet": _quad_set,
+    "ElevationGrid": _elevation_grid,
+    "IndexedTriangleFanSet": _indexed_fan_or_strip,
+    "IndexedTriangleStripSet": _indexed_fan_or_strip,
+    "TriangleFanSet": _fan_set,
+    "TriangleStripSet": _strip_set,
+}

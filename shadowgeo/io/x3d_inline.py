@@ -1,0 +1,98 @@
+"""X3D Inline: local X3D or glTF files only, inside the scene's folder.
+
+Each ``url`` is tried in order. Remote URLs (any ``scheme:``) are never
+fetched; a relative path is taken from the inlining file's folder and must
+stay inside the top scene's folder (else SceneError); the first that exists is
+read. X3D is read with the same rules as the scene (its own DEF names); glTF
+and GLB go through trimesh. An Inline that includes itself, directly or not,
+is a SceneError.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..scene import Material
+from . import x3d_parse
+from .x3d_fields import Context
+from .x3d_geometry import Instance, Mesh
+
+_URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
+X3D_SUFFIXES = {".x3d", ".x3dz"}
+GLTF_SUFFIXES = {".gltf", ".glb"}
+
+
+def resolve_url(reader, context: Context, element, url: str) -> Path | str:
+    """The local file ``url`` names, or a string saying why there is none."""
+    if _URL_SCHEME.match(url) and not re.match(r"^[A-Za-z]:[\\/]", url):
+        return f"'{url}' is remote (never fetched)"
+    folder = Path(context.path).resolve().parent
+    candidate = (folder / url).resolve()
+    if not candidate.is_relative_to(reader.root_folder):
+        raise context.error(
+            element, f"Inline url '{url}' leaves the scene's folder {reader.root_folder}; refused"
+        )
+    if not candidate.is_file():
+        return f"'{url}' not found"
+    return candidate
+
+
+def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> None:
+    if not context.field(element, "load"):
+        return
+    urls = [u for u in context.field(element, "url") if u.strip()]
+    reasons = []
+    for url in urls:
+        found = resolve_url(reader, context, element, url.strip())
+        if isinstance(found, str):
+            reasons.append(found)
+            continue
+        suffix = found.suffix.lower()
+        if suffix in X3D_SUFFIXES:
+            _x3d(reader, context, element, found, matrix, name)
+            return
+        if suffix in GLTF_SUFFIXES:
+            _gltf(reader, context, element, found, matrix, name)
+            return
+        reasons.append(f"'{url}' is not X3D XML or glTF")
+    context.warn(element, "Inline skipped: " + ("; ".join(reasons) or "no url"))
+
+
+def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
+    if path in reader.inline_stack:
+        raise context.error(element, f"Inline cycle: {path.name} includes itself")
+    if len(reader.inline_stack) > 16:
+        raise context.error(element, "Inlines nested more than 16 deep")
+    tree = x3d_parse.parse(path)
+    reader.document(tree, path, str(path), matrix, name=name)
+
+
+def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
+    import trimesh
+
+    try:
+        loaded = trimesh.load(str(path), force="scene")
+    except Exception as problem:  # trimesh raises many types on bad files
+        raise context.error(element, f"cannot read glTF '{path.name}': {problem}") from None
+    for node_name in loaded.graph.nodes_geometry:
+        transform, geometry_name = loaded.graph[node_name]
+        mesh = loaded.geometry[geometry_name]
+        if not hasattr(mesh, "faces") or len(mesh.faces) == 0:
+            continue
+        color = (0.8, 0.8, 0.8)
+        visual_material = getattr(getattr(mesh, "visual", None), "material", None)
+        base = getattr(visual_material, "baseColorFactor", None)
+        if base is not None:
+            color = tuple(float(c) / (255.0 if np.max(base) > 1 else 1.0) for c in base[:3])
+        reader.instances.append(
+            Instance(
+                Mesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)),
+                matrix @ np.asarray(transform, float),
+                Material(diffuse_color=color),
+                str(node_name) or name,
+                f"{path.name}, glTF node '{node_name}'",
+            )
+        )

@@ -1,0 +1,116 @@
+"""X3D lights and materials to the scene model.
+
+Lights go to world coordinates: a light's location is transformed as a
+point, its direction as a vector (then normalised), and its ``radius`` by
+the transform's mean scale ``|det M|^(1/3)`` (exact for uniform scaling).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import GeometryError
+from ..lights import DirectionalLight, PointLight, SpotLight
+from ..scene import Material, SceneLight
+from .x3d_fields import Context, local_name
+
+LIGHTS = {"PointLight", "SpotLight", "DirectionalLight"}
+MATERIALS = {"Material", "PhysicalMaterial", "UnlitMaterial", "TwoSidedMaterial"}
+
+
+def _color(value) -> tuple[float, float, float]:
+    return tuple(float(c) for c in np.clip(value, 0.0, 1.0))
+
+
+def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | None:
+    """The light of ``element`` under the world ``matrix`` (4x4, column
+    vectors); None, with a warning, for a light that lights nothing."""
+    tag = local_name(element)
+
+    def field(name):
+        return context.field(element, name)
+
+    linear = matrix[:3, :3]
+    scale = abs(float(np.linalg.det(linear))) ** (1.0 / 3.0)
+    try:
+        if tag == "DirectionalLight":
+            light = DirectionalLight(linear @ field("direction"))
+        else:
+            location = linear @ field("location") + matrix[:3, 3]
+            radius = field("radius") * scale
+            if not radius > 0:
+                context.warn(element, f"radius {field('radius')!r} lights nothing; skipped")
+                return None
+            if tag == "PointLight":
+                light = PointLight(location, radius)
+            else:
+                cut_off = field("cutOffAngle")
+                if not cut_off > 0:
+                    context.warn(element, f"cutOffAngle {cut_off!r} lights nothing; skipped")
+                    return None
+                if cut_off > math.pi / 2:
+                    context.warn(element, f"cutOffAngle {cut_off!r} > pi/2 taken as pi/2")
+                    cut_off = math.pi / 2
+                light = SpotLight(location, linear @ field("direction"), cut_off, radius)
+    except GeometryError as problem:
+        context.warn(element, f"light skipped: {problem}")
+        return None
+    extra = {}
+    if tag != "DirectionalLight":
+        extra["attenuation"] = tuple(float(a) for a in field("attenuation"))
+    if tag == "SpotLight":
+        extra["beam_width"] = float(field("beamWidth"))
+    return SceneLight(
+        light=light,
+        name=element.get("DEF"),
+        color=_color(field("color")),
+        intensity=float(field("intensity")),
+        ambient_intensity=float(field("ambientIntensity")),
+        on=bool(field("on")),
+        global_=bool(field("global")),
+        shadows=bool(field("shadows")),
+        shadow_intensity=float(field("shadowIntensity")),
+        **extra,
+    )
+
+
+def material(context: Context, appearance) -> Material:
+    """The Material of an Appearance element (USE resolved), or X3D's rule
+    for a Shape without one: unlit white (emissive 1 1 1, diffuse 0 0 0)."""
+    unlit = Material(diffuse_color=(0.0, 0.0, 0.0), emissive_color=(1.0, 1.0, 1.0))
+    if appearance is None:
+        return unlit
+    nodes = context.children(appearance, MATERIALS)
+    if not nodes:
+        return unlit
+    node = nodes[0]
+    tag = local_name(node)
+
+    def field(name):
+        return context.field(node, name)
+
+    name = node.get("DEF")
+    if tag in ("Material", "TwoSidedMaterial"):
+        return Material(
+            diffuse_color=_color(field("diffuseColor")),
+            emissive_color=_color(field("emissiveColor")),
+            specular_color=_color(field("specularColor")),
+            shininess=float(field("shininess")),
+            transparency=float(field("transparency")),
+            name=name,
+        )
+    if tag == "PhysicalMaterial":
+        return Material(
+            diffuse_color=_color(field("baseColor")),
+            emissive_color=_color(field("emissiveColor")),
+            transparency=float(field("transparency")),
+            name=name,
+        )
+    return Material(
+        diffuse_color=(0.0, 0.0, 0.0),
+        emissive_color=_color(field("emissiveColor")),
+        transparency=float(field("transparency")),
+        name=name,
+    )

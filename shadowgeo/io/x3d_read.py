@@ -1,0 +1,326 @@
+"""Read X3D XML (``.x3d``, gzip ``.x3dz``) into a :class:`~shadowgeo.Scene`.
+
+Rules the reader follows, where X3D leaves a choice:
+
+- **One Shape per rendered instance.** A Shape reached twice through USE
+  gives two :class:`~shadowgeo.Shape` objects (sharing their vertex and face
+  arrays: do not modify those in place).
+- **Names.** ``Shape.name`` is the Shape's DEF, else its geometry's DEF, else
+  the DEF of the nearest named ancestor (Transform, Group, Inline, ...).
+- **Transforms.** ``T C R SR S -SR -C`` (the spec's order); MatrixTransform's
+  16 numbers are row-major with the translation in the last row (Castle Game
+  Engine and VRML 97 convention), so the column-vector matrix is their transpose.
+- **Choices.** Switch shows child ``whichChoice`` (none for -1); LOD shows
+  level 0, the most detailed; Billboard keeps its children unrotated (it faces
+  the viewer, and there is none); Collision's ``proxy`` is not rendered. A USE
+  goes to its node type's default containerField unless it names one (as X3D
+  browsers do), not to the DEF's.
+- **Defaults** are X3D 4.0's (from the schema), except that files declaring
+  version 3.x get 3.x SpotLight defaults (beamWidth pi/2, cutOffAngle pi/4).
+- **Units.** ``<unit category="length">`` sets ``Scene.meters_per_unit``;
+  ``category="angle"`` scales every angle field.
+- **Skipped, with a warning in** ``Scene.warnings``: nodes shadowgeo does not
+  model (scripts, sensors, interpolators, routes, viewpoints, prototypes,
+  text, lines, points, textures), missing textures, empty geometry, Inline
+  files that are missing, remote (never fetched) or not X3D/glTF. Metadata
+  and WorldInfo are skipped silently.
+- **Refused with a SceneError:** malformed XML, DOCTYPE entity declarations,
+  field values of the wrong type, indices out of range, DEF/USE and Inline
+  cycles, Inline paths that leave the scene's folder.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from ..scene import Scene, Shape
+from ..tolerance import Tolerance
+from . import x3d_parse
+from .x3d_fields import Context, local_name, rotation_matrix
+from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
+from .x3d_inline import load_inline
+from .x3d_lights import LIGHTS, material, scene_light
+
+GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
+GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}
+GROUPS |= {"Switch", "LOD"}
+RENDERED_FIELDS = {"children", "choice", "level", "layers", "shape"}
+SILENT = {"WorldInfo", "ProtoDeclare", "ExternProtoDeclare", "IS", "connect", "field"}
+TEXTURES = {"ImageTexture", "MovieTexture", "ImageCubeMapTexture", "ImageTexture3D"}
+MAX_INLINE_DEPTH = 16
+_URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
+
+
+class _Reader:
+    def __init__(self, root_folder: Path, warnings: list[str]):
+        self.root_folder = root_folder
+        self.warnings = warnings
+        self.instances: list[Instance] = []
+        self.lights = []
+        self.skipped: dict[str, list] = {}  # tag -> [first place, count]
+        self.geometry_cache: dict = {}
+        self.material_cache: dict = {}
+        self.inline_stack: list[Path] = []
+
+    # -- documents ---------------------------------------------------------------
+    def document(self, tree, path: Path, display: str, matrix, scene=None, name=None):
+        root = tree.getroot()
+        context = Context(display, _version(root, display, self.warnings), warnings=self.warnings)
+        self._units(context, root, scene)
+        context.defs = _definitions(context, root)
+        scenes = [child for child in root if local_name(child) == "Scene"]
+        if not scenes:
+            raise SceneError("no <Scene> element", path=display, line=root.sourceline)
+        self.inline_stack.append(path.resolve())
+        try:
+            self.children(context, scenes[0], matrix, [], name)
+        finally:
+            self.inline_stack.pop()
+
+    def _units(self, context: Context, root, scene) -> None:
+        for unit in root.iter("unit"):
+            category, factor = unit.get("category"), unit.get("conversionFactor", "")
+            try:
+                value = float(factor)
+            except ValueError:
+                value = float("nan")
+            if not value > 0 or category not in ("angle", "length", "force", "mass"):
+                context.warn(
+                    unit, f"unit category={category!r} conversionFactor={factor!r} ignored"
+                )
+            elif category == "angle":
+                context.angle_factor = value
+            elif category == "length" and scene is not None:
+                scene.meters_per_unit = value
+
+    # -- traversal ---------------------------------------------------------------
+    def children(self, context: Context, element, matrix, stack, name):
+        tag = local_name(element)
+        nodes = [child for child in element if local_name(child)]
+        rendered = [
+            child for child in nodes if child.get("containerField", "children") in RENDERED_FIELDS
+        ]
+        if tag == "Switch":
+            choice = context.field(element, "whichChoice")
+            rendered = [rendered[choice]] if 0 <= choice < len(rendered) else []
+        elif tag == "LOD":
+            if len(rendered) > 1:
+                context.warn(element, f"LOD: level 0 of {len(rendered)} used")
+            rendered = rendered[:1]
+        for child in rendered:
+            self.node(context, child, matrix, stack, name)
+
+    def node(self, context: Context, written, matrix, stack, name):
+        element = context.resolve(written)
+        if any(element is ancestor for ancestor in stack):
+            raise context.error(
+                written, f"DEF/USE cycle: '{written.get('USE')}' is used inside itself"
+            )
+        tag = local_name(element)
+        name = element.get("DEF") or name
+        if tag in GROUPS:
+            if tag == "Billboard":
+                context.warn(element, "Billboard: children kept unrotated (no viewer)")
+            local = _local_matrix(context, element, tag)
+            self.children(context, element, matrix @ local, [*stack, element], name)
+        elif tag == "Shape":
+            self.shape(context, element, matrix, name)
+        elif tag in LIGHTS:
+            light = scene_light(context, element, matrix)
+            if light is not None:
+                self.lights.append(light)
+        elif tag == "Inline":
+            self.inline(context, element, matrix, name)
+        elif tag in SILENT or tag.startswith("Metadata"):
+            pass
+        else:
+            self._skip(context, element, tag)
+
+    def _skip(self, context: Context, element, tag: str, why: str = "not modelled") -> None:
+        entry = self.skipped.setdefault((tag, why), [context.where(element), 0])
+        entry[1] += 1
+
+    def shape(self, context: Context, element, matrix, name):
+        geometry_nodes = context.children(element, GEOMETRY | UNMODELLED_GEOMETRY)
+        if not geometry_nodes:
+            context.warn(element, "Shape without geometry; skipped")
+            return
+        node = geometry_nodes[0]
+        tag = local_name(node)
+        if tag in UNMODELLED_GEOMETRY:
+            self._skip(context, node, tag, "geometry not modelled (no area or not supported)")
+            return
+        if node not in self.geometry_cache:
+            built = geometry(context, node)
+            empty = isinstance(built, Mesh) and (len(built.faces) == 0 or len(built.vertices) == 0)
+            for note in getattr(built, "notes", []):
+                context.warn(node, note)
+            if empty:
+                context.warn(node, "empty geometry (no triangles); skipped")
+            self.geometry_cache[node] = None if empty else built
+        built = self.geometry_cache[node]
+        if built is None:
+            return
+        appearances = context.children(element, {"Appearance"})
+        appearance = appearances[0] if appearances else None
+        if appearance not in self.material_cache:
+            self.material_cache[appearance] = material(context, appearance)
+            if appearance is not None:
+                self._textures(context, appearance)
+                if context.children(appearance, {"ProtoInstance"}):
+                    context.warn(appearance, "prototype instance in Appearance not modelled")
+        self.instances.append(
+            Instance(
+                built,
+                matrix,
+                self.material_cache[appearance],
+                element.get("DEF") or node.get("DEF") or name,
+                f"{Path(context.path).name} line {node.sourceline}, {context.describe(node)}",
+            )
+        )
+
+    def _textures(self, context: Context, appearance) -> None:
+        for texture in appearance.iter(*TEXTURES):
+            texture = context.resolve(texture)
+            if texture in self.material_cache:
+                continue
+            self.material_cache[texture] = None
+            urls = [u for u in context.field(texture, "url", "MFString") if u]
+            folder = Path(context.path).parent
+            local = [u for u in urls if not _URL_SCHEME.match(u)]
+            found = [u for u in local if (folder / u).is_file()]
+            if urls and not found:
+                context.warn(texture, f"texture not found: {', '.join(urls[:3])}")
+            else:
+                self._skip(context, texture, local_name(texture), "textures not modelled")
+
+    def inline(self, context: Context, element, matrix, name):
+        load_inline(self, context, element, matrix, name)
+
+    # -- result ------------------------------------------------------------------
+    def finish(self, scene: Scene, tolerance: Tolerance | None, chord: float | None) -> None:
+        for (_, why), (where, count) in self.skipped.items():
+            more = f" ({count} such nodes)" if count > 1 else ""
+            self.warnings.append(f"{where}: skipped, {why}{more}")
+        tolerance = self._tolerance(tolerance, chord)
+        tessellated: dict = {}
+        for instance in self.instances:
+            built = instance.geometry
+            if isinstance(built, Primitive):
+                stretch = float(np.linalg.norm(instance.transform[:3, :3], 2)) or 1.0
+                local_chord = tolerance.chord_length / stretch
+                key = (id(built), None if built.kind == "Box" else local_chord)
+                if key not in tessellated:
+                    tessellated[key] = built.tessellate(local_chord)
+                built = tessellated[key]
+            scene.shapes.append(
+                Shape(
+                    built.vertices,
+                    built.faces,
+                    transform=instance.transform,
+                    material=instance.material,
+                    name=instance.name,
+                    solid=built.solid,
+                    source=instance.source,
+                )
+            )
+        scene.lights.extend(self.lights)
+
+    def _tolerance(self, tolerance: Tolerance | None, chord: float | None) -> Tolerance:
+        settings = {} if chord is None else {"chord": float(chord)}
+        if tolerance is not None:
+            return tolerance.with_settings(**settings)
+        points = []
+        for instance in self.instances:
+            built, transform = instance.geometry, instance.transform
+            if isinstance(built, Primitive):
+                corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * 3)).reshape(3, -1).T
+                local = corners * built.radius
+            else:
+                local = built.vertices
+            points.append(local @ transform[:3, :3].T + transform[:3, 3])
+        return Tolerance.for_points(*points, **settings)
+
+
+def _version(root, display: str, warnings: list[str]) -> tuple[int, int]:
+    text = root.get("version", "4.0")
+    match = re.fullmatch(r"\s*(\d+)\.(\d+)\s*", text)
+    if not match:
+        warnings.append(f"{display} line {root.sourceline}, X3D: version {text!r}; 4.0 assumed")
+        return (4, 0)
+    return int(match.group(1)), int(match.group(2))
+
+
+def _definitions(context: Context, root) -> dict:
+    """DEF name -> element, outside prototype declarations (their names are local)."""
+    defs: dict = {}
+    for element in root.iter():
+        if not isinstance(element.tag, str) or element.get("DEF") is None:
+            continue
+        if any(
+            local_name(a) in ("ProtoDeclare", "ExternProtoDeclare") for a in element.iterancestors()
+        ):
+            continue
+        name = element.get("DEF")
+        if name in defs:
+            context.warn(element, f"DEF '{name}' is defined again; USE refers to the first")
+            continue
+        defs[name] = element
+    return defs
+
+
+def _local_matrix(context: Context, element, tag: str) -> np.ndarray:
+    """4x4 local-to-parent matrix of a grouping node (identity for plain groups)."""
+    local = np.eye(4)
+    if tag == "MatrixTransform":
+        local = context.field(element, "matrix").reshape(4, 4).T.copy()
+    elif tag in ("Transform", "CADPart"):
+        names = ("translation", "rotation", "scale", "scaleOrientation", "center")
+        field = {name: context.field(element, name) for name in names}
+        orientation = rotation_matrix(field["scaleOrientation"])
+        linear = rotation_matrix(field["rotation"]) @ orientation
+        linear = linear @ np.diag(field["scale"]) @ orientation.T
+        local[:3, :3] = linear
+        center = field["center"]
+        local[:3, 3] = field["translation"] + center - linear @ center
+    return local
+
+
+def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None) -> Scene:
+    """Read an X3D XML file (``.x3d``, or gzip ``.x3dz``).
+
+    Parameters
+    ----------
+    path : str or Path
+    tolerance : Tolerance, optional
+        Scene tolerance; by default :meth:`Tolerance.for_points` over the
+        scene's geometry in world coordinates.
+    chord : float, optional
+        Tessellation tolerance relative to the scene size (overrides
+        ``tolerance.chord``): Box, Sphere, Cone and Cylinder deviate from
+        their true surface by at most ``Tolerance.chord_length``.
+
+    Returns
+    -------
+    Scene
+        ``shapes`` (one per rendered Shape instance), ``lights`` (world
+        coordinates), ``warnings``, ``document`` (the parsed lxml tree,
+        comments kept) and ``path``.
+
+    Raises
+    ------
+    SceneError
+        The file cannot be read safely or correctly; the message names the
+        file, line and node.
+    """
+    path = Path(path)
+    tree = x3d_parse.parse(path)
+    scene = Scene(path=str(path), document=tree)
+    reader = _Reader(path.resolve().parent, scene.warnings)
+    reader.document(tree, path, str(path), np.eye(4), scene)
+    reader.finish(scene, tolerance, chord)
+    return scene
