@@ -1,0 +1,253 @@
+"""Bad and hostile X3D: a SceneError naming file, line and node, or a warning;
+never a traceback, never an entity expanded, never the network."""
+
+from __future__ import annotations
+
+import gzip
+import socket
+
+import pytest
+
+import shadowgeo as sg
+from shadowgeo.io import x3d_parse, x3d_read
+
+TRIANGLE = '<Coordinate point="0 0 0 1 0 0 0 1 0"/>'
+
+
+def write(tmp_path, text: str, name: str = "scene.x3d"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def scene(tmp_path, body: str, name: str = "scene.x3d"):
+    return write(tmp_path, f'<X3D version="4.0"><Scene>\n{body}\n</Scene></X3D>', name)
+
+
+@pytest.fixture
+def no_network(monkeypatch):
+    """Any attempt to open a socket fails the test."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the reader tried to use the network")
+
+    monkeypatch.setattr(socket, "socket", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+
+
+def test_malformed_xml_gives_the_line(tmp_path):
+    path = write(tmp_path, '<X3D version="4.0"><Scene>\n<Group>\n<Shape>\n</Group></Scene></X3D>')
+    with pytest.raises(sg.SceneError, match=r"scene.x3d line 4: malformed XML") as error:
+        sg.load(path)
+    assert error.value.line == 4
+
+
+def test_not_x3d(tmp_path):
+    path = write(tmp_path, "<html><body/></html>")
+    with pytest.raises(sg.SceneError, match=r"root element is <html>, not <X3D>"):
+        sg.load(path)
+    path = write(tmp_path, '<X3D version="4.0"><head/></X3D>')
+    with pytest.raises(sg.SceneError, match=r"no <Scene> element"):
+        sg.load(path)
+
+
+def test_text_in_a_vector_field(tmp_path):
+    path = scene(tmp_path, '<Transform DEF="arm" translation="1 abc 3"/>')
+    with pytest.raises(sg.SceneError) as error:
+        sg.load(path)
+    message = str(error.value)
+    assert "line 2" in message and "Transform DEF='arm'" in message
+    assert "field translation" in message and "'abc' is not a number" in message
+    assert error.value.line == 2 and error.value.node == "Transform DEF='arm'"
+
+
+@pytest.mark.parametrize(
+    "body, expected",
+    [
+        ('<Transform scale="1 2"/>', "field scale: '1 2' is not 3 numbers"),
+        ('<Shape><Sphere solid="maybe"/></Shape>', "field solid: 'maybe' is not a boolean"),
+        ('<Shape><Box size="1 nan 1"/></Shape>', "field size: '1 nan 1' has a value that is not"),
+        ('<Switch whichChoice="1.5"/>', "field whichChoice: '1.5' is not an integer"),
+        (f'<Shape><IndexedFaceSet coordIndex="0 1 2.5">{TRIANGLE}</IndexedFaceSet></Shape>',
+         "field coordIndex: '0 1 2.5' has a value that is not an integer"),
+        ('<Shape><IndexedFaceSet coordIndex="0 1 2"><Coordinate point="0 0 0 1 0"/>'
+         "</IndexedFaceSet></Shape>", "field point: '0 0 0 1 0' has 5 numbers, not a multiple"),
+    ],
+)  # fmt: skip
+def test_wrong_field_types(tmp_path, body, expected):
+    with pytest.raises(sg.SceneError, match="line 2") as error:
+        sg.load(scene(tmp_path, body))
+    assert expected in str(error.value)
+
+
+def test_coord_index_out_of_range(tmp_path):
+    body = f'<Shape><IndexedFaceSet DEF="roof" coordIndex="0 1 17 -1">{TRIANGLE}</IndexedFaceSet>'
+    body += "</Shape>"
+    with pytest.raises(sg.SceneError) as error:
+        sg.load(scene(tmp_path, body))
+    assert str(error.value) == (
+        f"{tmp_path / 'scene.x3d'} line 2, IndexedFaceSet DEF='roof': "
+        "coordIndex 17 is out of range (3 points)"
+    )
+
+
+def test_index_out_of_range_in_triangle_sets(tmp_path):
+    body = f'<Shape><IndexedTriangleSet index="0 1 3">{TRIANGLE}</IndexedTriangleSet></Shape>'
+    with pytest.raises(sg.SceneError, match="index 3 is out of range"):
+        sg.load(scene(tmp_path, body))
+    body = f'<Shape><IndexedFaceSet coordIndex="0 1 -2">{TRIANGLE}</IndexedFaceSet></Shape>'
+    with pytest.raises(sg.SceneError, match="coordIndex -2 is out of range"):
+        sg.load(scene(tmp_path, body))
+
+
+def test_empty_geometry_is_skipped_with_a_warning(tmp_path):
+    body = (
+        '<Shape><IndexedFaceSet coordIndex=""><Coordinate/></IndexedFaceSet></Shape>\n'
+        '<Shape><IndexedFaceSet coordIndex="0 1 -1">' + TRIANGLE + "</IndexedFaceSet></Shape>\n"
+        '<Shape><ElevationGrid xDimension="1" zDimension="1" height="0"/></Shape>\n'
+        "<Shape/>\n"
+        '<Shape><Box size="1 1 1"/></Shape>'
+    )
+    result = sg.load(scene(tmp_path, body))
+    assert len(result.shapes) == 1 and result.shapes[0].n_faces == 12
+    text = "\n".join(result.warnings)
+    assert "line 2, IndexedFaceSet: empty geometry" in text
+    assert "line 3, IndexedFaceSet: 1 polygon(s) with fewer than 3 points skipped" in text
+    assert "line 3, IndexedFaceSet: empty geometry" in text
+    assert "line 4, ElevationGrid: empty geometry" in text
+    assert "line 5, Shape: Shape without geometry" in text
+
+
+def test_def_cycle_is_refused(tmp_path):
+    body = '<Transform DEF="loop"><Group><Transform USE="loop"/></Group></Transform>'
+    with pytest.raises(sg.SceneError, match=r"line 2, Transform USE='loop': DEF/USE cycle"):
+        sg.load(scene(tmp_path, body))
+
+
+def test_use_of_an_unknown_def(tmp_path):
+    with pytest.raises(sg.SceneError, match=r"USE='ghost' names no DEF"):
+        sg.load(scene(tmp_path, '<Group USE="ghost"/>'))
+
+
+def test_external_entity_is_refused_and_never_read(tmp_path, no_network):
+    secret = write(tmp_path, "TOP-SECRET", "secret.txt")
+    text = (
+        f'<?xml version="1.0"?>\n<!DOCTYPE X3D [ <!ENTITY leak SYSTEM "file://{secret}"> ]>\n'
+        '<X3D version="4.0"><Scene><WorldInfo title="&leak;"/></Scene></X3D>'
+    )
+    with pytest.raises(sg.SceneError, match="entit") as error:
+        sg.load(write(tmp_path, text))
+    assert "TOP-SECRET" not in str(error.value)
+
+
+def test_remote_external_entity_never_fetched(tmp_path, no_network):
+    text = (
+        '<?xml version="1.0"?>\n<!DOCTYPE X3D [ <!ENTITY remote SYSTEM "http://example.com/x"> ]>\n'
+        '<X3D version="4.0"><Scene><WorldInfo title="&remote;"/></Scene></X3D>'
+    )
+    with pytest.raises(sg.SceneError, match="entit"):
+        sg.load(write(tmp_path, text))
+
+
+def test_billion_laughs_is_refused(tmp_path):
+    levels = ['<!ENTITY lol0 "lol">'] + [
+        f'<!ENTITY lol{i} "{("&lol" + str(i - 1) + ";") * 10}">' for i in range(1, 10)
+    ]
+    text = (
+        f'<?xml version="1.0"?>\n<!DOCTYPE X3D [ {" ".join(levels)} ]>\n'
+        '<X3D version="4.0"><Scene><WorldInfo title="&lol9;"/></Scene></X3D>'
+    )
+    with pytest.raises(sg.SceneError, match="entit"):
+        sg.load(write(tmp_path, text))
+
+
+def test_public_doctype_without_entities_is_fine(tmp_path, no_network):
+    text = (
+        '<?xml version="1.0"?>\n<!DOCTYPE X3D PUBLIC "ISO//Web3D//DTD X3D 3.0//EN" '
+        '"https://www.web3d.org/specifications/x3d-3.0.dtd">\n'
+        '<X3D version="3.0"><Scene><Shape><Box/></Shape></Scene></X3D>'
+    )
+    assert len(sg.load(write(tmp_path, text)).shapes) == 1
+
+
+def test_deep_nesting_is_an_error_not_a_crash(tmp_path):
+    body = "<Group>" * 5000 + "</Group>" * 5000
+    with pytest.raises(sg.SceneError, match="malformed XML"):
+        sg.load(scene(tmp_path, body))
+
+
+def test_x3dz_reads_and_inflation_is_bounded(tmp_path, monkeypatch):
+    text = '<X3D version="4.0"><Scene><Shape><Box/></Shape></Scene></X3D>'
+    path = tmp_path / "scene.x3dz"
+    path.write_bytes(gzip.compress(text.encode()))
+    assert sg.load(path).shapes[0].n_faces == 12
+    monkeypatch.setattr(x3d_parse, "MAX_BYTES", 40)
+    with pytest.raises(sg.SceneError, match="larger than 40 bytes; refused"):
+        sg.load(path)
+    path.write_bytes(b"\x1f\x8bnot gzip at all")
+    with pytest.raises(sg.SceneError, match="cannot read"):
+        sg.load(path)
+
+
+# -- Inline ---------------------------------------------------------------------------
+
+
+def test_inline_outside_the_scene_folder_is_refused(tmp_path):
+    folder = tmp_path / "scene"
+    folder.mkdir()
+    scene(tmp_path, "<Shape><Box/></Shape>", "outside.x3d")
+    path = scene(folder, "<Inline url='\"../outside.x3d\"'/>")
+    with pytest.raises(
+        sg.SceneError, match=r"Inline url '../outside.x3d' leaves the scene's folder"
+    ):
+        sg.load(path)
+    path = scene(folder, "<Inline url='\"/etc/passwd\"'/>")
+    with pytest.raises(sg.SceneError, match="leaves the scene's folder"):
+        sg.load(path)
+
+
+def test_remote_and_missing_inlines_warn_and_never_fetch(tmp_path, no_network):
+    path = scene(tmp_path, '<Inline url=\'"https://example.com/a.x3d" "missing.x3d"\'/>')
+    result = sg.load(path)
+    assert result.shapes == []
+    (warning,) = result.warnings
+    assert "line 2, Inline: Inline skipped" in warning
+    assert "'https://example.com/a.x3d' is remote (never fetched)" in warning
+    assert "'missing.x3d' not found" in warning
+
+
+def test_inline_cycle_is_refused(tmp_path):
+    scene(tmp_path, "<Inline url='\"b.x3d\"'/>", "a.x3d")
+    scene(tmp_path, "<Inline url='\"a.x3d\"'/>", "b.x3d")
+    with pytest.raises(sg.SceneError, match="Inline cycle: a.x3d includes itself"):
+        sg.load(tmp_path / "a.x3d")
+
+
+def test_inline_of_a_malformed_file_names_that_file(tmp_path):
+    write(tmp_path, "<X3D><Scene><Shape>", "broken.x3d")
+    with pytest.raises(sg.SceneError, match=r"broken.x3d line 1: malformed XML"):
+        sg.load(scene(tmp_path, "<Inline url='\"broken.x3d\"'/>"))
+
+
+def test_unknown_and_unmodelled_nodes_warn(tmp_path):
+    body = (
+        '<Script DEF="s"/><TimeSensor/><TimeSensor/><Viewpoint/><FancyNode/>'
+        '<ProtoInstance name="P"/><Shape><Text string=\'"hi"\'/></Shape>'
+    )
+    result = sg.load(scene(tmp_path, body))
+    text = "\n".join(result.warnings)
+    for name in ["Script DEF='s'", "TimeSensor", "Viewpoint", "FancyNode", "ProtoInstance", "Text"]:
+        assert f"line 2, {name}" in text
+    assert "(2 such nodes)" in text
+
+
+def test_read_never_mutates_the_file(tmp_path):
+    path = scene(
+        tmp_path,
+        '<Shape><IndexedFaceSet coordIndex="0 1 2" ccw="false">'
+        + TRIANGLE
+        + "</IndexedFaceSet></Shape>",
+    )
+    before = path.read_bytes()
+    x3d_read.read(path)
+    assert path.read_bytes() == before
