@@ -1,15 +1,114 @@
-"""``shadowgeo info``: not built yet."""
+"""``shadowgeo info IN``: what shadowgeo reads from a scene, as tables.
+
+Shapes (triangles, world bounds, where they come from), lights, the scene's
+bounds, and what the reader skipped and why.
+"""
 
 from __future__ import annotations
 
-import sys
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+import shadowgeo
+
+EPILOG = """\
+examples:
+  shadowgeo info examples/scenes/courtyard.x3d
+  shadowgeo info model.glb
+"""
 
 
 def register(subparsers) -> None:
-    parser = subparsers.add_parser("info", help="(not built yet)")
+    parser = subparsers.add_parser(
+        "info",
+        help="list a scene's shapes, lights, bounds and what was skipped",
+        description="Print the shapes (triangle counts, bounds), lights and bounds shadowgeo "
+        "reads from IN, and every node it skipped with the reason.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("input", metavar="IN", type=Path, help="the scene to read")
     parser.set_defaults(func=run)
 
 
+def table(headers: list[str], rows: list[list[str]]) -> str:
+    """Columns padded to their widest cell, two spaces apart."""
+    widths = [max(len(str(c)) for c in column) for column in zip(headers, *rows, strict=True)]
+    lines = [headers, ["-" * w for w in widths], *rows]
+    return "\n".join(
+        "  " + "  ".join(str(c).ljust(w) for c, w in zip(line, widths, strict=True)).rstrip()
+        for line in lines
+    )
+
+
+def number(value: float) -> str:
+    return f"{value:.6g}" if math.isfinite(value) else str(value)
+
+
+def vector(values) -> str:
+    return " ".join(number(float(v)) for v in values)
+
+
+def light_where(light) -> str:
+    if isinstance(light, shadowgeo.DirectionalLight):
+        return f"direction {vector(light.direction)}"
+    where = f"at {vector(light.position)}"
+    if isinstance(light, shadowgeo.SpotLight):
+        where += (
+            f", direction {vector(light.direction)}, "
+            f"cut-off {number(math.degrees(light.cut_off_angle))} deg"
+        )
+    if math.isfinite(light.radius):
+        where += f", radius {number(light.radius)}"
+    return where
+
+
 def run(args) -> int:
-    print("shadowgeo info: not built yet", file=sys.stderr)
-    return 2
+    scene = shadowgeo.load(args.input)
+    triangles = sum(s.n_faces for s in scene.shapes)
+    print(
+        f"{args.input}: {len(scene.shapes)} shapes, {triangles} triangles, "
+        f"{len(scene.lights)} lights, {len(scene.warnings)} notes"
+    )
+    low, high = scene.bounds
+    print(f"bounds: min {vector(low)}  max {vector(high)}  size {vector(high - low)}")
+    if scene.shapes:
+        rows = []
+        for index, shape in enumerate(scene.shapes):
+            points = shape.world_vertices if len(shape.faces) else np.zeros((1, 3))
+            rows.append(
+                [
+                    shape.name or f"#{index}",
+                    str(shape.n_faces),
+                    vector(points.min(axis=0)),
+                    vector(points.max(axis=0)),
+                    shape.role,
+                    shape.source or "",
+                ]
+            )
+        print("\nshapes")
+        print(table(["name", "triangles", "min", "max", "role", "source"], rows))
+    if scene.lights:
+        rows = [
+            [
+                light.name or f"#{index}",
+                type(light.light).__name__,
+                "on" if light.on else "off",
+                f"yes ({number(light.shadow_intensity)})" if light.shadows else "no",
+                number(light.intensity),
+                light_where(light.light),
+            ]
+            for index, light in enumerate(scene.lights)
+        ]
+        print("\nlights")
+        print(table(["name", "type", "on", "shadows", "intensity", "where"], rows))
+    else:
+        print("\nlights: none (convert needs at least one light that is on)")
+    if scene.warnings:
+        print(f"\nskipped or noted ({len(scene.warnings)})")
+        for warning in scene.warnings:
+            print(f"  - {warning}")
+    return 0

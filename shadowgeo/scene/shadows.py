@@ -70,7 +70,7 @@ def add_shadows(
     lights: Sequence[str] | None = None,
     receivers: Sequence[str] | None = None,
     plane=None,
-    tolerance: Tolerance | None = None,
+    tolerance: Tolerance | float | None = None,
     offset: float | None = None,
     progress: Progress | None = None,
 ) -> Scene:
@@ -89,8 +89,9 @@ def add_shadows(
         Names (DEF) of the receiving shapes; they must be planar.
     plane : Plane or (4,) array_like, optional
         One receiving plane ``a x + b y + c z + d = 0`` instead of shapes.
-    tolerance : Tolerance, optional
-        Defaults to ``Tolerance.for_points`` of the geometry and the lights.
+    tolerance : Tolerance or float, optional
+        Defaults to ``Tolerance.for_points`` of the geometry and the lights; a
+        float sets that tolerance's ``chord`` (spot cones, light ranges).
     offset : float, optional
         Lift of the shadows off their receiver (scene units).
     progress : callable, optional
@@ -131,9 +132,10 @@ def add_shadows(
     geometry = [s for s in scene.shapes if s.role == "geometry" and s.n_faces]
     chosen = _select_lights(scene, lights, notes)
     positions = [light.light.position for light in chosen if is_positional(light.light)]
-    if tolerance is None:
+    if not isinstance(tolerance, Tolerance):
         bounds = scene.bounds if geometry else np.zeros((0, 3))
-        tolerance = Tolerance.for_points(bounds, *positions)
+        settings = {} if tolerance is None else {"chord": float(tolerance)}
+        tolerance = Tolerance.for_points(bounds, *positions, **settings)
     lift = _DEFAULT_OFFSET * tolerance.scale if offset is None else float(offset)
     if not math.isfinite(lift) or lift < 0:
         raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")

@@ -1,0 +1,207 @@
+"""The command line, run as a user runs it (a subprocess): the bundled example
+converted to X3D, glTF and USD and checked by independent validators; the
+added shadow against a shapely reference; bad input gives one line, no traceback."""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from lxml import etree
+from reference import ray_plane
+from validators import gltf_problems, gltf_report, usd_errors
+from x3d_schema import x3d_schema_errors
+
+import shadowgeo as sg
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "scenes" / "courtyard.x3d"
+LAMP = np.array([3.0, 8.0, 4.0])  # the example's PointLight DEF="lamp"
+SAFE = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
+
+
+def shadowgeo_cli(*args, cwd=ROOT):
+    return subprocess.run(
+        [sys.executable, "-m", "cli", *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def digest(path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+@pytest.fixture(scope="module")
+def converted(tmp_path_factory):
+    """The example converted once to each format through the command line."""
+    folder = tmp_path_factory.mktemp("converted")
+    before = digest(EXAMPLE)
+    outputs = {}
+    for suffix in (".x3d", ".glb", ".usda"):
+        out = folder / f"courtyard{suffix}"
+        done = shadowgeo_cli("convert", EXAMPLE, out)
+        assert done.returncode == 0, done.stderr
+        assert "wrote" in done.stdout and "Traceback" not in done.stderr
+        outputs[suffix] = out
+    assert digest(EXAMPLE) == before  # the input is never modified
+    return outputs
+
+
+def test_help_lists_examples():
+    done = shadowgeo_cli("convert", "--help")
+    assert done.returncode == 0
+    assert "examples:" in done.stdout and "--plane" in done.stdout and "--receiver" in done.stdout
+    assert shadowgeo_cli("info", "--help").returncode == 0
+
+
+def test_example_to_x3d_is_schema_valid_and_keeps_the_document(converted, x3d_schema):
+    out = converted[".x3d"]
+    assert x3d_schema_errors(out, x3d_schema) == []
+    text = out.read_text()
+    for kept in (
+        "<!-- shadowgeo convert keeps this comment",
+        'DEF="overview"',
+        "<ROUTE",
+        "TimeSensor",
+    ):
+        assert kept in text
+    assert 'DEF="shadows_lamp"' in text and 'DEF="shadows_fill"' not in text
+
+
+def test_example_to_glb_passes_the_khronos_validator(converted, node_tools):
+    assert gltf_problems(gltf_report(converted[".glb"]), warnings=False) == []
+
+
+def test_example_to_usda_passes_usd_validators(converted):
+    assert usd_errors(converted[".usda"]) == []
+
+
+def test_the_shadow_matches_a_union_of_projected_triangles(converted):
+    """Reference: every caster triangle projected from the lamp onto y = 0 (all
+    caster vertices lie below the lamp), united by shapely, cut to the ground."""
+    scene = sg.load(EXAMPLE)
+    triangles = []
+    for shape in scene.shapes:
+        if shape.name == "ground":
+            continue
+        world = shape.world_vertices
+        assert world[:, 1].max() < LAMP[1]
+        flat = ray_plane(world, LAMP, np.array([0.0, 1.0, 0.0]), 0.0)[:, [0, 2]]
+        triangles += [shapely.Polygon(flat[f]) for f in shape.faces]
+    triangles = [t for t in triangles if t.area > 0]
+    expected = shapely.union_all(triangles).intersection(shapely.box(-6, -6, 6, 6))
+
+    root = etree.parse(str(converted[".x3d"]), SAFE).getroot()
+    (group,) = root.findall("Scene/Group[@DEF='shadows_lamp']")
+    (shape,) = group.findall("Shape")
+    geometry = shape.find("IndexedTriangleSet")
+    points = np.array(geometry.find("Coordinate").get("point").replace(",", " ").split(), float)
+    points = points.reshape(-1, 3)
+    faces = np.array(geometry.get("index").split(), int).reshape(-1, 3)
+    written = [shapely.Polygon(points[f][:, [0, 2]]) for f in faces]
+    region = shapely.union_all(written)
+    assert region.symmetric_difference(expected).area < 1e-9 * expected.area
+    assert sum(p.area for p in written) == pytest.approx(expected.area, rel=1e-9)  # no overlaps
+    # Lifted off the ground by 1e-3 of the scene's size, towards the lamp.
+    assert np.ptp(points[:, 1]) == 0 and 0 < points[0, 1] < 0.1
+    assert float(shape.find("Appearance/Material").get("transparency")) == pytest.approx(0.3)
+
+
+def test_info_prints_shapes_lights_and_what_was_skipped():
+    done = shadowgeo_cli("info", EXAMPLE)
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    row = {
+        line.split()[0]: line.split() for line in lines if line.startswith("  ") and line.split()
+    }
+    # Triangle counts: a quad is 2, the square pyramid 2 + 4, a box 12.
+    assert row["ground"][1] == "2" and row["tent"][1] == "6" and row["crate"][1] == "12"
+    assert row["lamp"][1:4] == ["PointLight", "on", "yes"] and row["fill"][3] == "no"
+    assert "bounds: min -6 0 -6  max 6 3 6" in done.stdout
+    assert any("Viewpoint" in line and "skipped" in line for line in lines)
+    assert any("ROUTE" in line for line in lines)
+
+
+def one_line_error(done, *fragments):
+    assert done.returncode == 1, (done.returncode, done.stdout, done.stderr)
+    assert "Traceback" not in done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1, done.stderr
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+
+
+def test_malformed_xml_is_one_line_with_the_line_number(tmp_path):
+    bad = tmp_path / "bad.x3d"
+    bad.write_text('<?xml version="1.0"?>\n<X3D version="4.0">\n<Scene>\n<Shape>\n</Scene>\n')
+    before = digest(bad)
+    done = shadowgeo_cli("convert", bad, tmp_path / "out.x3d")
+    one_line_error(done, "bad.x3d", "line")
+    assert digest(bad) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.x3d"]  # nothing written
+
+
+def test_missing_file_and_unknown_format(tmp_path):
+    one_line_error(shadowgeo_cli("convert", tmp_path / "nope.x3d", tmp_path / "o.x3d"), "nope.x3d")
+    one_line_error(shadowgeo_cli("info", tmp_path / "nope.x3d"), "nope.x3d")
+    one_line_error(shadowgeo_cli("convert", EXAMPLE, tmp_path / "out.xyz"), "out.xyz", ".xyz")
+
+
+@pytest.mark.parametrize("plane", ["1,2", "0,0,0,0", "a,b,c,d", "0,1,0,nan"])
+def test_bad_plane_is_bad_usage(tmp_path, plane):
+    done = shadowgeo_cli("convert", EXAMPLE, tmp_path / "out.x3d", f"--plane={plane}")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "--plane" in done.stderr
+
+
+def test_receiver_and_plane_together_are_bad_usage(tmp_path):
+    done = shadowgeo_cli(
+        "convert", EXAMPLE, tmp_path / "o.x3d", "--receiver", "ground", "--plane", "0,1,0,0"
+    )
+    assert done.returncode == 2 and "not allowed with" in done.stderr
+
+
+def test_scene_without_lights_is_one_line_and_writes_nothing(tmp_path):
+    dark = tmp_path / "dark.x3d"
+    dark.write_text(
+        '<?xml version="1.0"?>\n<X3D version="4.0" profile="Interchange"><Scene>'
+        "<Shape><Box/></Shape></Scene></X3D>\n"
+    )
+    done = shadowgeo_cli("convert", dark, tmp_path / "out.x3d", "--plane", "0,1,0,1")
+    one_line_error(done, "dark.x3d", "no lights")
+    assert not (tmp_path / "out.x3d").exists()
+
+
+def test_unknown_light_or_receiver_names_the_known_ones(tmp_path):
+    done = shadowgeo_cli("convert", EXAMPLE, tmp_path / "o.x3d", "--light", "sun")
+    one_line_error(done, "no light named 'sun'", "fill, lamp")
+    done = shadowgeo_cli("convert", EXAMPLE, tmp_path / "o.x3d", "--receiver", "crate")
+    one_line_error(done, "'crate' is not planar")
+
+
+def test_output_onto_the_input_is_refused(tmp_path):
+    copy = tmp_path / "scene.x3d"
+    copy.write_bytes(EXAMPLE.read_bytes())
+    one_line_error(shadowgeo_cli("convert", copy, copy), "never overwritten")
+    assert copy.read_bytes() == EXAMPLE.read_bytes()
+
+
+def test_options_reach_the_library(tmp_path):
+    out = tmp_path / "o.x3d"
+    done = shadowgeo_cli(
+        "convert", EXAMPLE, out, "--light", "fill", "--plane", "0,1,0,0", "--progress"
+    )
+    assert done.returncode == 0, done.stderr
+    assert "100%" in done.stderr  # the bar, forced on although stderr is a pipe
+    root = etree.parse(str(out), SAFE).getroot()
+    assert [g.get("DEF") for g in root.findall("Scene/Group")] == ["shadows_fill"]
+    quiet = shadowgeo_cli("convert", EXAMPLE, tmp_path / "q.x3d")
+    assert "%" not in quiet.stderr  # no bar when stderr is not a terminal
