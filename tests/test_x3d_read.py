@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+import trimesh
 from lxml import etree
 
 import shadowgeo as sg
@@ -139,6 +140,245 @@ def test_matrix_transform_row_major_translation_in_last_row(tmp_path):
     np.testing.assert_allclose(shape.world_vertices[0], [2, 0, 0])
 
 
+# -- geometry nodes -------------------------------------------------------------------
+
+STAR = [(0, 0), (4, 0), (4, 3), (2, 1), (0, 3), (-1, 2)]  # concave at (2, 1)
+
+
+def shoelace(points) -> float:
+    x, y = np.asarray(points, float).T
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def plane_frame():
+    """An oblique plane: origin and two orthonormal in-plane axes."""
+    u = np.array([1.0, 2.0, 2.0]) / 3.0
+    v = np.cross(u, [0.0, 0.0, 1.0])
+    v /= np.linalg.norm(v)
+    return np.array([3.0, -1.0, 2.0]), u, v
+
+
+def test_concave_polygon_triangulated_in_its_own_plane(tmp_path):
+    origin, u, v = plane_frame()
+    points = [origin + x * u + y * v for x, y in STAR]
+    index = " ".join(str(i) for i in range(len(STAR)))
+    body = (
+        f'<Shape><IndexedFaceSet convex="false" coordIndex="{index} -1">'
+        f'<Coordinate point="{" ".join(repr(float(c)) for p in points for c in p)}"/>'
+        "</IndexedFaceSet></Shape>"
+    )
+    (shape,) = scene_of(tmp_path, body).shapes
+    assert shape.n_faces == len(STAR) - 2
+    corners = shape.vertices[shape.faces]
+    flat = np.stack([(corners - origin) @ u, (corners - origin) @ v], axis=-1)
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    # every triangle is wound like the polygon (counter-clockwise in (u, v))
+    assert np.all(normals @ np.cross(u, v) > 0)
+    areas = [shoelace(triangle) for triangle in flat]
+    assert sum(areas) == pytest.approx(shoelace(STAR), rel=1e-12)
+    polygon = shapely.Polygon(STAR)
+    union = shapely.union_all([shapely.Polygon(triangle) for triangle in flat])
+    assert union.symmetric_difference(polygon).area < 1e-9
+    for triangle in flat:
+        assert polygon.buffer(1e-9).contains(shapely.Polygon(triangle))
+
+
+def test_convex_polygons_are_fanned_and_ccw_false_is_flipped(tmp_path):
+    square = '<Coordinate point="0 0 0  1 0 0  1 0 -1  0 0 -1"/>'
+    body = (
+        f'<Shape><IndexedFaceSet coordIndex="0 1 2 3">{square}</IndexedFaceSet></Shape>'
+        f'<Shape><IndexedFaceSet ccw="false" coordIndex="0 1 2 3">{square}</IndexedFaceSet></Shape>'
+    )
+    upward, downward = scene_of(tmp_path, body).shapes
+    for shape, sign in [(upward, 1), (downward, -1)]:
+        corners = shape.vertices[shape.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        # (1, 0, 0) x (1, 0, -1) = (0, 1, 0): the square as written faces +y
+        np.testing.assert_allclose(normals / np.linalg.norm(normals, axis=1)[:, None],
+                                   [[0, sign, 0]] * 2, atol=1e-15)  # fmt: skip
+        assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(1.0)
+
+
+def _area(shape) -> float:
+    corners = shape.world_vertices[shape.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    return 0.5 * float(np.linalg.norm(normals, axis=1).sum())
+
+
+def test_triangle_and_quad_sets(tmp_path):
+    quad = "0 0 0  2 0 0  2 3 0  0 3 0"
+    body = (
+        f'<Shape><IndexedTriangleSet index="0 1 2 0 2 3"><Coordinate point="{quad}"/>'
+        "</IndexedTriangleSet></Shape>"
+        '<Shape><TriangleSet><Coordinate point="0 0 0 1 0 0 0 1 0  5 5 5 6 5 5 5 7 5"/>'
+        "</TriangleSet></Shape>"
+        f'<Shape><IndexedQuadSet index="0 1 2 3"><Coordinate point="{quad}"/></IndexedQuadSet>'
+        "</Shape>"
+        f'<Shape><QuadSet><CoordinateDouble point="{quad}"/></QuadSet></Shape>'
+        f'<Shape><IndexedTriangleFanSet index="0 1 2 3 -1"><Coordinate point="{quad}"/>'
+        "</IndexedTriangleFanSet></Shape>"
+        f'<Shape><TriangleStripSet stripCount="4"><Coordinate point="0 0 0 2 0 0 0 3 0 2 3 0"/>'
+        "</TriangleStripSet></Shape>"
+    )
+    shapes = scene_of(tmp_path, body).shapes
+    assert [s.n_faces for s in shapes] == [2, 2, 2, 2, 2, 2]
+    assert [_area(s) for s in shapes] == pytest.approx([6, 0.5 + 1.0, 6, 6, 6, 6])
+    for shape in shapes:  # all written counter-clockwise seen from +z
+        corners = shape.vertices[shape.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        assert np.all(normals[:, 2] > 0)
+
+
+def test_elevation_grid(tmp_path):
+    heights = [0, 1, 2, 3, 4, 5]  # xDimension 3, zDimension 2: height[i + j * 3]
+    body = (
+        '<Shape><ElevationGrid xDimension="3" zDimension="2" xSpacing="2" zSpacing="5" '
+        f'height="{" ".join(map(str, heights))}"/></Shape>'
+    )
+    (grid,) = scene_of(tmp_path, body).shapes
+    assert grid.n_faces == 2 * 2 * 1
+    expected = {(2.0 * i, float(heights[i + 3 * j]), 5.0 * j) for j in range(2) for i in range(3)}
+    assert {tuple(v) for v in grid.vertices.tolist()} == expected
+    corners = grid.vertices[grid.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(normals[:, 1] > 0)  # ccw: the surface faces up
+    flat = scene_of(tmp_path, body.replace(" ".join(map(str, heights)), "0 0 0 0 0 0")).shapes[0]
+    assert _area(flat) == pytest.approx(4 * 5)
+
+
+# -- grouping nodes ---------------------------------------------------------------------
+
+
+def _x_positions(scene):
+    return sorted(round(float(s.world_vertices.mean(axis=0)[0]), 9) for s in scene.shapes)
+
+
+def place(x):
+    return f'<Transform translation="{x} 0 0"><Shape><Box/></Shape></Transform>'
+
+
+def test_switch_lod_collision_anchor_billboard(tmp_path):
+    body = (
+        f'<Switch whichChoice="1">{place(1)}{place(2)}{place(3)}</Switch>'
+        f"<Switch>{place(4)}</Switch>"
+        f'<Switch whichChoice="7">{place(5)}</Switch>'
+        f'<LOD range="10">{place(6)}{place(7)}</LOD>'
+        f'<Collision><Shape containerField="proxy"><Box/></Shape>{place(8)}</Collision>'
+        f"<Anchor url='\"http://example.com\"'>{place(9)}</Anchor>"
+        f"<Billboard>{place(10)}</Billboard><StaticGroup>{place(11)}</StaticGroup>"
+    )
+    scene = scene_of(tmp_path, body)
+    assert _x_positions(scene) == [2, 6, 8, 9, 10, 11]
+    text = "\n".join(scene.warnings)
+    assert "LOD: level 0 of 2 used" in text and "Billboard" in text
+
+
+def test_names_come_from_shape_geometry_or_ancestor(tmp_path):
+    body = (
+        '<Transform DEF="Outer"><Group DEF="Inner"><Shape><Box/></Shape></Group>'
+        '<Shape><Box DEF="TheBox"/></Shape><Shape DEF="TheShape"><Box DEF="Ignored"/></Shape>'
+        "</Transform><Shape><Sphere/></Shape>"
+    )
+    names = [shape.name for shape in scene_of(tmp_path, body).shapes]
+    assert names == ["Inner", "TheBox", "TheShape", None]
+
+
+def test_materials(tmp_path):
+    body = (
+        '<Shape><Appearance><PhysicalMaterial baseColor="0 1 0" transparency="0.5"/></Appearance>'
+        "<Box/></Shape>"
+        '<Shape><Appearance><UnlitMaterial emissiveColor="0 0 1"/></Appearance><Box/></Shape>'
+        "<Shape><Box/></Shape>"
+        '<Shape><Appearance><Material emissiveColor="1 0 0" specularColor="0.5 0.5 0.5" '
+        'shininess="0.7"/></Appearance><Box/></Shape>'
+    )
+    physical, unlit, bare, classic = (s.material for s in scene_of(tmp_path, body).shapes)
+    assert physical.diffuse_color == (0, 1, 0) and physical.transparency == 0.5
+    assert unlit.emissive_color == (0, 0, 1)
+    # X3D: a Shape without a Material is unlit white
+    assert bare.emissive_color == (1, 1, 1) and bare.diffuse_color == (0, 0, 0)
+    assert classic.diffuse_color == (0.8, 0.8, 0.8)  # the X3D default
+    assert classic.emissive_color == (1, 0, 0) and classic.specular_color == (0.5, 0.5, 0.5)
+    assert classic.shininess == 0.7
+
+
+# -- lights -----------------------------------------------------------------------------
+
+
+def test_spot_light_defaults_follow_the_file_version(tmp_path):
+    (x3d4,) = scene_of(tmp_path, "<SpotLight/>").lights
+    (x3d3,) = scene_of(tmp_path, "<SpotLight/>", version="3.3").lights
+    # X3D 4.0: beamWidth 3 pi / 16, cutOffAngle pi / 2; X3D 3.3: pi / 2 and pi / 4
+    assert x3d4.beam_width == pytest.approx(3 * math.pi / 16, abs=1e-6)
+    assert x3d4.light.cut_off_angle == pytest.approx(math.pi / 2, abs=1e-6)
+    assert x3d3.beam_width == pytest.approx(math.pi / 2, abs=1e-6)
+    assert x3d3.light.cut_off_angle == pytest.approx(math.pi / 4, abs=1e-6)
+    for light in (x3d4, x3d3):
+        np.testing.assert_array_equal(light.light.position, [0, 0, 0])
+        np.testing.assert_array_equal(light.light.direction, [0, 0, -1])
+        assert light.light.radius == 100 and light.attenuation == (1, 0, 0)
+        assert light.on and light.global_ and not light.shadows and light.shadow_intensity == 1
+
+
+def test_light_fields_and_scaled_radius(tmp_path):
+    body = (
+        '<Transform scale="2 2 2" translation="0 1 0"><PointLight location="1 1 1" radius="5" '
+        'on="false" global="false" attenuation="0 1 0" ambientIntensity="0.3" shadows="true"/>'
+        '</Transform><DirectionalLight/><Transform rotation="1 0 0 1.5707963267948966">'
+        '<DirectionalLight direction="0 0 -2"/></Transform>'
+    )
+    point, default, turned = scene_of(tmp_path, body).lights
+    np.testing.assert_allclose(point.light.position, [2, 3, 2])
+    assert (
+        point.light.radius == pytest.approx(10)
+        and not point.on
+        and not point.global_
+        and point.shadows
+    )
+    assert point.attenuation == (0, 1, 0) and point.ambient_intensity == 0.3
+    np.testing.assert_allclose(default.light.direction, [0, 0, -1])
+    # (0, 0, -1) turned 90 degrees about +x is (0, 1, 0)
+    np.testing.assert_allclose(turned.light.direction, [0, 1, 0], atol=1e-15)
+
+
+def test_lights_that_light_nothing_warn(tmp_path):
+    scene = scene_of(tmp_path, '<PointLight radius="0"/><SpotLight cutOffAngle="2"/>')
+    assert len(scene.lights) == 1 and scene.lights[0].light.cut_off_angle == math.pi / 2
+    text = "\n".join(scene.warnings)
+    assert "line 3, PointLight: radius 0.0 lights nothing; skipped" in text
+    assert "cutOffAngle 2.0 > pi/2 taken as pi/2" in text
+
+
+# -- Inline -----------------------------------------------------------------------------
+
+
+def test_inline_x3d_and_gltf(tmp_path):
+    parts = tmp_path / "parts"
+    parts.mkdir()
+    (parts / "crate.x3d").write_text(
+        '<X3D version="4.0"><Scene><Transform DEF="Lid" translation="0 1 0">'
+        '<Shape><Box size="2 2 2"/></Shape></Transform><PointLight DEF="Inside"/></Scene></X3D>'
+    )
+    box = trimesh.creation.box(extents=[1, 1, 1])
+    trimesh.Scene({"cube": box}).export(parts / "cube.glb")
+    body = (
+        '<Transform DEF="Here" translation="10 0 0"><Inline url=\'"parts/crate.x3d"\'/></Transform>'
+        '<Transform translation="0 0 -5"><Inline DEF="Glb" url=\'"missing.glb" "parts/cube.glb"\'/>'
+        "</Transform>"
+    )
+    scene = scene_of(tmp_path, body)
+    crate, cube = scene.shapes
+    assert crate.name == "Lid"
+    np.testing.assert_allclose(crate.world_vertices.min(axis=0), [9, 0, -1])
+    np.testing.assert_allclose(cube.world_vertices.mean(axis=0), [0, 0, -5], atol=1e-12)
+    assert cube.n_faces == 12
+    assert trimesh.Trimesh(cube.world_vertices, cube.faces).volume == pytest.approx(1.0)
+    (light,) = scene.lights
+    assert light.name == "Inside"
+    np.testing.assert_allclose(light.light.position, [10, 0, 0])
+    assert not scene.warnings
+
+
 # -- the corpus -----------------------------------------------------------------------
 
 
@@ -245,7 +485,3 @@ def test_corpus_missing_textures_are_named(corpus_dir):
     assert any("car_wheel.png" in warning for warning in missing)
     assert any("car_shell.png" in warning for warning in missing)
     assert len(scene.shapes) == 3
-
-
-# keep the imports honest for later tests
-_ = (pytest, shapely)
