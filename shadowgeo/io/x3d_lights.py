@@ -33,7 +33,7 @@ def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | N
         return context.field(element, name)
 
     linear = matrix[:3, :3]
-    scale = abs(float(np.linalg.det(linear))) ** (1.0 / 3.0)
+    scale = float(np.cbrt(abs(np.linalg.det(linear))))
     try:
         if tag == "DirectionalLight":
             light = DirectionalLight(linear @ field("direction"))
