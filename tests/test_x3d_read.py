@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 import shapely
 import trimesh
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from lxml import etree
 
 import shadowgeo as sg
@@ -180,6 +182,45 @@ def test_concave_polygon_triangulated_in_its_own_plane(tmp_path):
     union = shapely.union_all([shapely.Polygon(triangle) for triangle in flat])
     assert union.symmetric_difference(polygon).area < 1e-9
     for triangle in flat:
+        assert polygon.buffer(1e-9).contains(shapely.Polygon(triangle))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    angles=st.lists(
+        st.floats(0, 2 * math.pi, exclude_max=True), min_size=3, max_size=14, unique=True
+    ),
+    radii=st.lists(st.floats(0.2, 1.0), min_size=14, max_size=14),
+    tilt=st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(0.1, 1)),
+)
+def test_random_star_polygons_triangulate_exactly(tmp_path_factory, angles, radii, tilt):
+    """Star-shaped (hence simple) polygons, concave or not, on random planes."""
+    angles = np.sort(angles)
+    assume(np.min(np.diff(np.append(angles, angles[0] + 2 * math.pi))) > 0.05)
+    flat = (
+        np.column_stack([np.cos(angles), np.sin(angles)]) * np.array(radii[: len(angles)])[:, None]
+    )
+    assume(abs(shoelace(flat)) > 1e-3)
+    normal = np.array(tilt) / np.linalg.norm(tilt)
+    u = np.cross(normal, [0.0, 1.0, 0.0] if abs(normal[1]) < 0.9 else [1.0, 0.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    points = flat[:, :1] * u + flat[:, 1:] * v + [1.0, 2.0, 3.0]
+    index = " ".join(map(str, range(len(points))))
+    body = (
+        f'<Shape><IndexedFaceSet convex="false" coordIndex="{index}">'
+        f'<Coordinate point="{" ".join(repr(float(c)) for c in points.ravel())}"/>'
+        "</IndexedFaceSet></Shape>"
+    )
+    (shape,) = scene_of(tmp_path_factory.mktemp("star"), body).shapes
+    corners = shape.vertices[shape.faces] - [1.0, 2.0, 3.0]
+    in_plane = np.stack([corners @ u, corners @ v], axis=-1)
+    areas = np.array([shoelace(triangle) for triangle in in_plane])
+    assert len(areas) == len(points) - 2
+    assert np.all(areas > -1e-12)  # all wound like the polygon
+    assert areas.sum() == pytest.approx(shoelace(flat), rel=1e-9)
+    polygon = shapely.Polygon(flat)
+    for triangle in in_plane:
         assert polygon.buffer(1e-9).contains(shapely.Polygon(triangle))
 
 

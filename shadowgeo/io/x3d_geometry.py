@@ -140,6 +140,41 @@ def _polygons(indices: np.ndarray) -> list[np.ndarray]:
     return [piece[piece != -1] for piece in pieces if np.count_nonzero(piece != -1)]
 
 
+def _polygon_blocks(indices: np.ndarray) -> dict[int, np.ndarray]:
+    """Polygons of a -1 separated index list grouped by size: size -> (m, size)."""
+    separator = indices == -1
+    polygon = np.cumsum(separator)[~separator]
+    kept = indices[~separator]
+    if not len(kept):
+        return {}
+    _, starts, sizes = np.unique(polygon, return_index=True, return_counts=True)
+    return {
+        int(size): kept[starts[sizes == size][:, None] + np.arange(size)]
+        for size in np.unique(sizes)
+    }
+
+
+def _fan(block: np.ndarray) -> np.ndarray:
+    """(m, k) convex polygons to (m * (k - 2), 3) triangles."""
+    size = block.shape[1]
+    fan = np.arange(1, size - 1)
+    first = np.repeat(block[:, :1], size - 2, axis=1)
+    return np.stack([first, block[:, fan], block[:, fan + 1]], -1).reshape(-1, 3)
+
+
+def _is_convex(corners: np.ndarray) -> np.ndarray:
+    """(m, k, 3) polygons -> (m,) bool: every turn the same way, turning once."""
+    following = np.roll(corners, -1, axis=1)
+    normal = np.cross(corners, following).sum(axis=1)  # Newell's normal, times 2
+    edges = following - corners
+    turns = np.cross(edges, np.roll(edges, -1, axis=1))
+    sine = np.einsum("mkd,md->mk", turns, normal)
+    cosine = np.einsum("mkd,mkd->mk", edges, np.roll(edges, -1, axis=1))
+    scale = np.linalg.norm(normal, axis=1)[:, None]
+    angles = np.arctan2(sine, cosine * scale)
+    return np.all(angles >= -1e-12, axis=1) & np.isclose(angles.sum(axis=1), 2 * np.pi)
+
+
 def polygon_triangles(points: np.ndarray) -> np.ndarray:
     """Triangulate one simple polygon (k, 3), convex or not, in its own plane.
 
@@ -174,21 +209,17 @@ def _indexed_face_set(context: Context, element) -> Mesh:
     )
     convex = context.field(element, "convex")
     faces, notes, short = [], [], 0
-    polygons = _polygons(indices)
-    by_size: dict[int, list[np.ndarray]] = {}
-    for polygon in polygons:
-        by_size.setdefault(len(polygon), []).append(polygon)
-    for size, group in by_size.items():
-        block = np.array(group, dtype=np.int64)
+    for size, block in _polygon_blocks(indices).items():
         if size < 3:
-            short += len(group)
-        elif size == 3 or convex:
-            fan = np.arange(1, size - 1)
-            first = np.repeat(block[:, :1], size - 2, axis=1)
-            faces.append(np.stack([first, block[:, fan], block[:, fan + 1]], -1).reshape(-1, 3))
-        else:
-            for polygon in block:
+            short += len(block)
+            continue
+        if size > 3 and not convex:
+            # convex="false" says only that some may not be: fan those that are
+            fits = _is_convex(points[block])
+            for polygon in block[~fits]:
                 faces.append(polygon[polygon_triangles(points[polygon])])
+            block = block[fits]
+        faces.append(_fan(block))
     if short:
         notes.append(f"{short} polygon(s) with fewer than 3 points skipped")
     return Mesh(points, _stack(faces), notes=notes)
