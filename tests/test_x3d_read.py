@@ -196,7 +196,9 @@ def test_concave_polygon_triangulated_in_its_own_plane(tmp_path):
 def test_random_star_polygons_triangulate_exactly(tmp_path_factory, angles, radii, tilt):
     """Star-shaped (hence simple) polygons, concave or not, on random planes."""
     angles = np.sort(angles)
-    assume(np.min(np.diff(np.append(angles, angles[0] + 2 * math.pi))) > 0.05)
+    gaps = np.diff(np.append(angles, angles[0] + 2 * math.pi))
+    # the origin inside (no gap of pi or more): star-shaped about it, counter-clockwise
+    assume(gaps.min() > 0.05 and gaps.max() < math.pi - 0.05)
     flat = (
         np.column_stack([np.cos(angles), np.sin(angles)]) * np.array(radii[: len(angles)])[:, None]
     )
