@@ -121,7 +121,12 @@ def _light_glyph(light, center: np.ndarray, size: float):
     if isinstance(light, PointLight):
         return pv.Sphere(radius=size, center=light.position)
     length = 12 * size
-    start = center - light.direction * length * 1.5
+    # Up-light of the scene and off to one side, clear of point lights above the centre.
+    side = np.cross(light.direction, [0.0, 1.0, 0.0])
+    if np.linalg.norm(side) < 1e-6:
+        side = np.array([1.0, 0.0, 0.0])
+    side = side / np.linalg.norm(side)
+    start = center - light.direction * length * 1.5 + side * length
     return pv.Arrow(start=start, direction=light.direction, scale=length)
 
 
@@ -153,7 +158,7 @@ def _vtk_light(scene_light, center: np.ndarray, scale: float):
     return result
 
 
-def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str) -> None:
+def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, frame) -> None:
     """Point the camera at ``center`` from the direction ``view`` names."""
     if view is None:
         view = "iso"
@@ -173,7 +178,8 @@ def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str) -> No
     if abs(direction @ up) > 0.999:  # looking along the up axis: screen-up is -z (or +y)
         up = np.array([0.0, 0.0, -1.0]) if up[1] else np.array([0.0, 1.0, 0.0])
     plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
-    plotter.reset_camera()
+    # Frame the geometry and the positional lights (not the arrows of directional ones).
+    plotter.reset_camera(bounds=frame)
 
 
 def scene_plotter(
@@ -241,14 +247,23 @@ def scene_plotter(
                 specular=0.3,
                 specular_power=20,
             )
+    glyph_lights = []
     if lights is not False:
-        for light in scene_lights:
-            light = light.light if isinstance(light, SceneLight) else light
+        glyph_lights = [
+            light.light if isinstance(light, SceneLight) else light for light in scene_lights
+        ]
+        for light in glyph_lights:
             glyph = _light_glyph(light, center, 0.02 * scale)
             plotter.add_mesh(glyph, color=LIGHT_COLOR, lighting=False)
     # No depth peeling: with EGL off-screen it renders a blank picture, and a few
     # convex translucent volumes sort well enough without it.
-    _camera(plotter, view, center, scale, up_axis)
+    framed = [item.vertices for item in items if len(item.faces)]
+    framed += [
+        np.reshape(light.position, (1, 3)) for light in glyph_lights if hasattr(light, "position")
+    ]
+    framed = np.concatenate(framed) if framed else np.zeros((1, 3))
+    frame = np.column_stack([framed.min(axis=0), framed.max(axis=0)]).ravel()
+    _camera(plotter, view, center, scale, up_axis, frame)
     return plotter
 
 
