@@ -183,8 +183,8 @@ def test_scene_without_lights_is_one_line_and_writes_nothing(tmp_path):
 def test_unknown_light_or_receiver_names_the_known_ones(tmp_path):
     done = shadowgeo_cli("convert", EXAMPLE, tmp_path / "o.x3d", "--light", "sun")
     one_line_error(done, "no light named 'sun'", "fill, lamp")
-    done = shadowgeo_cli("convert", EXAMPLE, tmp_path / "o.x3d", "--receiver", "crate")
-    one_line_error(done, "'crate' is not planar")
+    done = shadowgeo_cli("convert", EXAMPLE, tmp_path / "o.x3d", "--receiver", "column")
+    one_line_error(done, "'column' is not planar")
 
 
 def test_output_onto_the_input_is_refused(tmp_path):

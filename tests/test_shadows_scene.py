@@ -154,9 +154,18 @@ def test_receivers_found_automatically_skip_small_planar_shapes():
 
 
 def test_named_receiver_must_exist_and_be_planar():
-    scene = sg.Scene([ground(), box([0, 1, 0], [1, 2, 1], "cube")], [light([0, 4, 0])])
-    with pytest.raises(GeometryError, match="'cube' is not planar"):
-        sg.add_shadows(scene, receivers=["cube"])
+    ball = trimesh.creation.icosphere(subdivisions=2)
+    ball.apply_translation([3, 1.5, 3])
+    scene = sg.Scene(
+        [
+            ground(),
+            box([0, 1, 0], [1, 2, 1], "cube"),
+            sg.Shape(ball.vertices, ball.faces, name="ball"),
+        ],
+        [light([0, 4, 0])],
+    )
+    with pytest.raises(GeometryError, match="'ball' is not planar"):
+        sg.add_shadows(scene, receivers=["ball"])
     with pytest.raises(SceneError, match="no shape named 'floor'"):
         sg.add_shadows(scene, receivers=["floor"])
     with pytest.raises(GeometryError, match="not both"):
@@ -172,11 +181,14 @@ def test_no_receiver_is_a_clear_error_and_a_plane_fixes_it():
     assert region.area == pytest.approx(4.0, rel=1e-9)  # unbounded plane: the whole shadow
 
 
-def test_a_wall_receives_on_the_lit_side():
+def test_a_two_sided_wall_receives_on_the_lit_side_and_a_solid_one_only_in_front():
     # The wall x = 0 (normal -x as wound); the light at x = 4 is on its back.
-    wall = sg.Shape([[0, 0, -3], [0, 3, -3], [0, 3, 3], [0, 0, 3]], QUAD, name="wall")
+    corners = [[0, 0, -3], [0, 3, -3], [0, 3, 3], [0, 0, 3]]
     cube = box([1, 1, -0.5], [2, 2, 0.5], "cube")
     lamp = np.array([4.0, 1.5, 0.0])
+    solid = sg.Shape(corners, QUAD, name="wall", solid=True)
+    assert shadows(sg.add_shadows(sg.Scene([solid, cube], [light(lamp)]), receivers=["wall"])) == []
+    wall = sg.Shape(corners, QUAD, name="wall", solid=False)
     result = sg.add_shadows(sg.Scene([wall, cube], [light(lamp)]), offset=0.0)
     (shadow,) = shadows(result)
     assert np.all(shadow.world_vertices[:, 0] == 0.0)
@@ -292,3 +304,18 @@ def test_random_cube_and_light_match_the_hull_of_projected_corners(corner, heigh
     region, triangle_sum = xz_union(found[0])
     assert region.symmetric_difference(expected).area < 1e-7 * expected.area
     assert triangle_sum == pytest.approx(expected.area, rel=1e-7)
+
+
+def test_a_ground_slab_receives_on_its_top_and_a_rug_on_it_casts_nothing():
+    # Real grounds are boxes: its top patch receives, its bottom (facing down,
+    # lit from behind) does not, and a rug lying in the top's plane casts nothing.
+    slab = box([-5, -0.2, -5], [5, 0, 5], "slab")
+    rug = sg.Shape([[1, 0, 1], [3, 0, 1], [3, 0, 3], [1, 0, 3]], QUAD, name="rug")
+    cube = box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")
+    result = sg.add_shadows(sg.Scene([slab, rug, cube], [light([0, 4, 0])]), offset=0.0)
+    (shadow,) = shadows(result)
+    assert shadow.name == "shadow_lamp_slab"
+    assert np.all(shadow.world_vertices[:, 1] == 0.0)
+    region, triangle_sum = xz_union(shadow)
+    assert region.symmetric_difference(shapely.box(-1, -1, 1, 1)).area < 1e-9
+    assert triangle_sum == pytest.approx(4.0, rel=1e-9)

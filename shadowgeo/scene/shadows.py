@@ -12,18 +12,17 @@ Lights
     ``scene.warnings`` says so. ``lights=`` names the lights (DEF names) to use
     instead.
 Receivers
-    ``plane=`` gives one unbounded receiving plane; ``receivers=`` names shapes;
-    otherwise they are found: a shape is a receiver when all its vertices lie
-    within ``Tolerance.coplanar_length`` of one plane, its area is at least a
-    quarter of the largest such shape's, and its bounding box diagonal is at
-    least a quarter of the scene's (a ground, a floor, a wall; not a sign or a
-    window pane). A receiver takes shadows on whichever side a light is on.
+    Flat patches of the shapes (a ground, a floor, a slab's top, a wall),
+    found automatically or from the shapes named in ``receivers=``, or one
+    unbounded ``plane=``; the rules are in :mod:`shadowgeo.scene.receivers`.
 Casters
-    Every shape that is not a receiver. Only what can shadow a receiver is
-    modelled: a caster wholly behind the receiver's plane, wholly at or beyond a
+    Every shape; a receiver's own triangles (and any others lying in its
+    plane) do not shadow it. Only what can shadow a receiver is modelled: a
+    caster wholly behind the receiver's plane, wholly at or beyond a
     positional light's height, out of a light's radius, outside a spot light's
-    cone, or whose shadow misses the receiver's bounding box is skipped. A caster
-    the light touches or sits inside (a lamp's own bulb) is skipped with a note.
+    cone, or whose shadow misses the receiver's bounding box is skipped. A
+    caster the light touches or sits inside (a lamp's own bulb) is skipped with
+    a note.
 
 The shadows of all casters of one light on one receiver are united into one
 region (so overlaps do not darken twice), cut to the receiver's outline (the
@@ -52,6 +51,8 @@ from ..projection import project_shadow
 from ..tolerance import Tolerance
 from ..topology import Caster
 from .model import Material, Scene, SceneLight, Shape
+from .receivers import Receiver
+from .receivers import select as select_receivers
 
 # Receivers found automatically: at least this fraction of the largest planar
 # shape's area and of the scene's bounding-box diagonal.
@@ -144,9 +145,8 @@ def add_shadows(
     if method == "volume":
         added = _volumes(scene, geometry, chosen, tolerance, names, notes, progress)
     else:
-        found = _select_receivers(scene, geometry, receivers, plane, tolerance, notes)
-        receiver_ids = {id(receiver.shape) for receiver in found}
-        casters = [_Caster(shape) for shape in geometry if id(shape) not in receiver_ids]
+        found = select_receivers(scene, geometry, receivers, plane, tolerance, notes)
+        casters = [_Caster(shape) for shape in geometry]
         added = []
         total, done = len(chosen) * len(found) * len(casters), 0
         for index, light in enumerate(chosen):
@@ -233,85 +233,6 @@ def _select_lights(scene: Scene, names, notes: list[str]) -> list[SceneLight]:
     return chosen
 
 
-@dataclasses.dataclass
-class _Receiver:
-    """A receiving plane and, for a shape, the triangles that bound it."""
-
-    plane: Plane
-    name: str
-    shape: Shape | None = None
-    triangles: np.ndarray | None = None  # (m, 3, 3) world coordinates
-
-
-def _planarity(shape: Shape, tolerance: Tolerance) -> tuple[Plane | None, float, float]:
-    """The best plane of a shape's world vertices (None when they are not
-    within the coplanar tolerance of one), its triangle area and worst distance."""
-    points = shape.world_vertices
-    triangles = points[shape.faces]
-    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
-    area = 0.5 * float(np.linalg.norm(normals, axis=1).sum())
-    if area <= tolerance.length**2:
-        return None, 0.0, 0.0
-    center = points.mean(axis=0)
-    normal = np.linalg.svd(points - center, full_matrices=False)[2][2]
-    if normal @ normals.sum(axis=0) < 0:
-        normal = -normal
-    worst = float(np.abs((points - center) @ normal).max())
-    if worst > tolerance.coplanar_length:
-        return None, area, worst
-    return Plane.from_point_normal(center, normal), area, worst
-
-
-def _select_receivers(scene, geometry, names, plane, tolerance, notes) -> list[_Receiver]:
-    if plane is not None:
-        if not isinstance(plane, Plane):
-            plane = Plane.from_coefficients(plane)
-        return [_Receiver(plane, "plane")]
-    if names is not None:
-        by_name = {shape.name: shape for shape in geometry if shape.name}
-        found = []
-        for name in names:
-            if name not in by_name:
-                raise SceneError(f"no shape named '{name}' to receive shadows", path=scene.path)
-            fitted, _, worst = _planarity(by_name[name], tolerance)
-            if fitted is None:
-                raise GeometryError(
-                    f"receiver '{name}' is not planar (a vertex is {worst:.3g} off its best "
-                    f"plane, tolerance {tolerance.coplanar_length:.3g}); give a plane instead"
-                )
-            found.append(_receiver(by_name[name], fitted))
-        return found
-    planar = []
-    for shape in geometry:
-        fitted, area, _ = _planarity(shape, tolerance)
-        if fitted is not None:
-            planar.append((shape, fitted, area))
-    largest = max((area for _, _, area in planar), default=0.0)
-    bounds = scene.bounds
-    scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
-    found = []
-    for shape, fitted, area in planar:
-        corners = shape.world_vertices
-        size = float(np.linalg.norm(corners.max(axis=0) - corners.min(axis=0)))
-        if area >= _RECEIVER_AREA_FRACTION * largest and size >= (
-            _RECEIVER_SIZE_FRACTION * scene_size
-        ):
-            found.append(_receiver(shape, fitted))
-    if not found:
-        raise SceneError(
-            "no receiver found: no large planar shape (ground, floor, wall); "
-            "name one (--receiver DEF) or give a plane (--plane a,b,c,d)",
-            path=scene.path,
-        )
-    notes.append("shadows: receivers found: " + ", ".join(r.name for r in found))
-    return found
-
-
-def _receiver(shape: Shape, plane: Plane) -> _Receiver:
-    name = safe_name(shape.name) if shape.name else "shape"
-    return _Receiver(plane, name, shape, shape.world_vertices[shape.faces])
-
-
 class _Caster:
     """A caster shape in world coordinates, its topology reused across lights."""
 
@@ -321,19 +242,22 @@ class _Caster:
         self.caster = Caster(self.vertices, shape.faces)
         self.low, self.high = self.vertices.min(axis=0), self.vertices.max(axis=0)
         self.name = shape.name or shape.source or "unnamed shape"
+        self._cut: dict[int, Caster | None] = {}
 
-
-def _facing(plane: Plane, light, tolerance: Tolerance) -> Plane | None:
-    """The plane turned towards the light; None when the light is on it."""
-    if is_positional(light):
-        side = float(plane.signed_distance(light.position[None])[0])
-        if abs(side) <= tolerance.length:
-            return None
-    else:
-        side = -float(plane.normal @ light.direction)
-        if abs(side) <= tolerance.angle:
-            return None
-    return plane if side > 0 else plane.flipped()
+    def off_plane(self, receiver: Receiver, tolerance: Tolerance) -> Caster | None:
+        """The caster without its triangles that lie in the receiver's plane
+        (a patch does not shadow itself, nor does a rug lying on the floor)."""
+        key = id(receiver)
+        if key not in self._cut:
+            distance = np.abs(receiver.plane.signed_distance(self.vertices))
+            on_plane = np.all(distance[self.shape.faces] <= tolerance.coplanar_length, axis=1)
+            if not on_plane.any():
+                self._cut[key] = self.caster
+            elif on_plane.all():
+                self._cut[key] = None
+            else:
+                self._cut[key] = Caster(self.vertices, self.shape.faces[~on_plane])
+        return self._cut[key]
 
 
 def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Tolerance) -> bool:
@@ -377,10 +301,9 @@ def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Toleranc
 def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_name):
     """The united shadow of the casters on one receiver as a shape, or None."""
     light = scene_light.light
-    plane = _facing(receiver.plane, light, tolerance)
+    plane = receiver.facing(light, tolerance)
     if plane is None:
-        notes.append(f"shadows: light {light_name} lies in the plane of {receiver.name}: skipped")
-        return None
+        return None  # the light is behind a one-sided receiver, or in its plane
     region2d = box2d = rectangle = None
     if receiver.triangles is not None:
         flat = plane.to_2d(receiver.triangles.reshape(-1, 3)).reshape(-1, 3, 2)
@@ -392,10 +315,11 @@ def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_nam
     for caster in casters:
         if not _may_shadow(caster, light, plane, box2d, tolerance):
             continue
+        mesh = caster.off_plane(receiver, tolerance)
+        if mesh is None:
+            continue
         try:
-            shadow = project_shadow(
-                caster.caster, light, plane, receiver=rectangle, tolerance=tolerance
-            )
+            shadow = project_shadow(mesh, light, plane, receiver=rectangle, tolerance=tolerance)
         except GeometryError as error:
             notes.append(f"shadows: {caster.name} does not cast for light {light_name}: {error}")
             continue

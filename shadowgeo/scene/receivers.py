@@ -1,0 +1,185 @@
+"""Which surfaces receive shadows: flat patches of a scene's shapes, or a plane.
+
+A *patch* is the set of a shape's triangles that lie within
+``Tolerance.coplanar_length`` of one plane (the top of a ground slab, a floor,
+a wall). Real scenes rarely model a ground as a lone quad: it is a box, a
+plane with a kerb, a room with walls. So receivers are patches, not whole
+shapes:
+
+* found automatically: every patch whose bounding-box diagonal is at least a
+  quarter of the scene's and whose area is at least a quarter of the largest
+  such patch's (a ground, a floor, a large wall; not a box's face, a sign or a
+  step), and with some geometry in front of it (a lone box's faces do not
+  receive: nothing can shadow them);
+* named (``--receiver DEF``): the named shape's patches of at least a quarter
+  of its largest patch's area; its largest patch must cover at least a tenth
+  of the shape's area, else it is not planar;
+* a plane ``a x + b y + c z + d = 0``: unbounded, lit from either side.
+
+A patch of a ``solid`` shape receives only on its front (the side its
+triangles face, as a renderer culls the back); a patch of a ``solid="false"``
+shape receives on whichever side a light is on.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import GeometryError, SceneError
+from ..plane import Plane
+from ..tolerance import Tolerance
+from .model import Scene, Shape
+
+# A found receiver: at least these fractions of the largest patch's area and of
+# the scene's bounding-box diagonal.
+AREA_FRACTION = 0.25
+SIZE_FRACTION = 0.25
+# A named receiver's largest patch covers at least this fraction of its area.
+NAMED_FRACTION = 0.1
+# Patches looked for per shape (largest triangles first).
+_MAX_PATCHES = 64
+
+
+@dataclasses.dataclass
+class Receiver:
+    """A receiving plane and, for a patch, the triangles that bound it.
+
+    Attributes
+    ----------
+    plane : Plane
+        Its normal points to the patch's front.
+    name : str
+        DEF-safe, for the added shape's name.
+    triangles : (m, 3, 3) float64 or None
+        The patch in world coordinates; None for an unbounded plane.
+    two_sided : bool
+        Receives on either side (else only in front of ``plane``).
+    """
+
+    plane: Plane
+    name: str
+    triangles: np.ndarray | None = None
+    two_sided: bool = True
+    area: float = float("inf")
+
+    def facing(self, light, tolerance: Tolerance) -> Plane | None:
+        """The plane turned towards ``light``; None when the light lies in it,
+        or behind a one-sided patch."""
+        plane = self.plane
+        if hasattr(light, "position"):
+            side = float(plane.signed_distance(light.position[None])[0])
+            if abs(side) <= tolerance.length:
+                return None
+        else:
+            side = -float(plane.normal @ light.direction)
+            if abs(side) <= tolerance.angle:
+                return None
+        if side > 0:
+            return plane
+        return plane.flipped() if self.two_sided else None
+
+
+def patches(shape: Shape, tolerance: Tolerance) -> list[tuple[Plane, np.ndarray, float]]:
+    """The flat patches of a shape: ``(plane, faces mask (m,) bool, area)``,
+    largest first. Triangles facing either way join a patch; its plane faces
+    the way most of its area does."""
+    triangles = shape.world_vertices[shape.faces]
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    doubled = np.linalg.norm(normals, axis=1)
+    valid = doubled > 2 * tolerance.length**2
+    unit = np.zeros_like(normals)
+    unit[valid] = normals[valid] / doubled[valid, None]
+    assigned = ~valid
+    found = []
+    limit = tolerance.coplanar_length
+    for seed in np.argsort(-doubled, kind="stable"):
+        if len(found) >= _MAX_PATCHES or assigned.all():
+            break
+        if assigned[seed]:
+            continue
+        normal = unit[seed]
+        offset = -float(normal @ triangles[seed, 0])
+        distance = triangles @ normal + offset
+        member = ~assigned & np.all(np.abs(distance) <= limit, axis=1)
+        member[seed] = True
+        assigned |= member
+        if normals[member].sum(axis=0) @ normal < 0:
+            normal, offset = -normal, -offset
+        found.append((Plane(normal, offset), member, 0.5 * float(doubled[member].sum())))
+    found.sort(key=lambda item: -item[2])
+    return found
+
+
+def select(
+    scene: Scene, geometry: list[Shape], names, plane, tolerance: Tolerance, notes: list[str]
+) -> list[Receiver]:
+    """The receivers for :func:`shadowgeo.add_shadows` (see the module notes)."""
+    from .shadows import safe_name
+
+    if plane is not None:
+        if not isinstance(plane, Plane):
+            plane = Plane.from_coefficients(plane)
+        return [Receiver(plane, "plane")]
+
+    def receiver(shape, fitted, member, area, count) -> Receiver:
+        name = safe_name(shape.name) if shape.name else "shape"
+        return Receiver(
+            fitted,
+            name if count == 0 else f"{name}_{count + 1}",
+            shape.world_vertices[shape.faces[member]],
+            two_sided=not shape.solid,
+            area=area,
+        )
+
+    found = []
+    if names is not None:
+        by_name = {shape.name: shape for shape in geometry if shape.name}
+        for name in names:
+            if name not in by_name:
+                raise SceneError(f"no shape named '{name}' to receive shadows", path=scene.path)
+            shape = by_name[name]
+            flat = patches(shape, tolerance)
+            total = sum(area for _, _, area in flat)
+            if not flat or flat[0][2] < NAMED_FRACTION * total:
+                share = flat[0][2] / total if flat and total else 0.0
+                raise GeometryError(
+                    f"receiver '{name}' is not planar: its largest flat part is "
+                    f"{100 * share:.3g}% of its area (tolerance "
+                    f"{tolerance.coplanar_length:.3g}); give a plane instead"
+                )
+            kept = [p for p in flat if p[2] >= AREA_FRACTION * flat[0][2]]
+            found += [receiver(shape, *p, count) for count, p in enumerate(kept)]
+        return found
+
+    bounds = scene.bounds
+    scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
+    everything = np.concatenate([shape.world_vertices for shape in geometry] or [np.zeros((0, 3))])
+    candidates = []
+    for shape in geometry:
+        for fitted, member, area in patches(shape, tolerance):
+            points = shape.world_vertices[np.unique(shape.faces[member])]
+            size = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+            if size < SIZE_FRACTION * scene_size:
+                continue
+            height = fitted.signed_distance(everything)
+            if not shape.solid:
+                height = np.abs(height)
+            if np.any(height > tolerance.coplanar_length):
+                candidates.append((shape, fitted, member, area))
+    largest = max((area for *_, area in candidates), default=0.0)
+    counts: dict[int, int] = {}
+    for shape, fitted, member, area in candidates:
+        if area >= AREA_FRACTION * largest:
+            count = counts.get(id(shape), 0)
+            counts[id(shape)] = count + 1
+            found.append(receiver(shape, fitted, member, area, count))
+    if not found:
+        raise SceneError(
+            "no receiver found: no large flat surface (ground, floor, wall); "
+            "name one (--receiver DEF) or give a plane (--plane a,b,c,d)",
+            path=scene.path,
+        )
+    notes.append("shadows: receivers found: " + ", ".join(r.name for r in found))
+    return found
