@@ -12,9 +12,11 @@ from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape
 from .scene.shadows import add_shadows
+from .silhouette import Silhouette, silhouette
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 from .viz import plot
+from .volume import shadow_volume
 
 __all__ = [
     "Caster",
@@ -29,6 +31,7 @@ __all__ = [
     "Shadow",
     "ShadowDiagnostics",
     "Shape",
+    "Silhouette",
     "SpotLight",
     "Tolerance",
     "add_shadows",
@@ -38,6 +41,8 @@ __all__ = [
     "project_shadow",
     "save",
     "shadow_matrix",
+    "shadow_volume",
+    "silhouette",
 ]
 
 __version__ = "0.1.0"

@@ -32,6 +32,7 @@ from . import polygons as poly
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional
 from .plane import Plane
+from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 
@@ -385,28 +386,7 @@ class _Projector:
     def _check_light_outside_caster(self) -> None:
         """A light touching the caster has no meaningful shadow; nor does one
         inside a closed caster (everything would be dark)."""
-        caster, tol = self.caster, self.tol
-        position = self.light.position
-        lower, upper = caster.bounds
-        if np.any(position < lower - tol.length) or np.any(position > upper + tol.length):
-            return
-        triangles = caster.triangles
-        near = np.all(triangles.min(axis=1) <= position + tol.length, axis=1) & np.all(
-            triangles.max(axis=1) >= position - tol.length, axis=1
-        )
-        if np.any(near):
-            distances = _point_triangle_distance(position, triangles[near])
-            if distances.min() <= tol.length:
-                face = int(np.flatnonzero(near)[int(np.argmin(distances))])
-                raise GeometryError(
-                    f"the light at {position.tolist()} touches the caster (face {face}, "
-                    f"distance {distances.min():.3g}, tolerance {tol.length:.3g})"
-                )
-        if caster.is_closed and abs(caster.winding_number(position)) > 0.5:
-            raise GeometryError(
-                f"the light at {position.tolist()} is inside the closed caster: "
-                "everything around it is in shadow"
-            )
+        check_light_outside(self.caster, self.light.position, self.tol)
 
     def _receiver_2d(self) -> np.ndarray:
         points = self.receiver - self.center
@@ -506,16 +486,14 @@ class _Projector:
             if self.per_triangle:
                 loops, loop_vertices = _triangle_loops(caster, whole & front, facing)
             elif whole.all():
-                loops, loop_vertices = _silhouette_loops(caster, front)
+                loops, loop_vertices = silhouette_loops(caster, front)
             else:
-                loops, loop_vertices = _boundary_loops(
-                    caster, whole & front, front.astype(np.int64)
-                )
+                loops, loop_vertices = boundary_loops(caster, whole & front, front.astype(np.int64))
         elif self.per_triangle:
             loops, loop_vertices = _triangle_loops(caster, whole, facing)
         else:
             orientation = np.sign(facing).astype(np.int64)
-            loops, loop_vertices = _boundary_loops(caster, whole, orientation)
+            loops, loop_vertices = boundary_loops(caster, whole, orientation)
         if loop_vertices.size:
             image = homogeneous[loop_vertices] @ self.H.T
             if np.any(image[:, 2] <= 0):
@@ -617,33 +595,6 @@ def _clip_convex(polygon: np.ndarray, planes: np.ndarray) -> np.ndarray:
     return polygon
 
 
-def _boundary_loops(
-    caster: Caster, whole: np.ndarray, orientation: np.ndarray
-) -> tuple[list[np.ndarray], np.ndarray]:
-    """Loops of vertex indices whose winding number is the number of ``whole``
-    triangles that cover a point, once projected.
-
-    ``orientation`` (m,) is the sign of each face's projected area. Each
-    triangle counts +1 whatever its orientation: negative ones are reversed.
-    Edges shared by two triangles of the same orientation cancel, so for a
-    closed caster only the silhouette remains. Also returns the vertices used.
-    """
-    weights = (caster.face_edge_signs[whole] * orientation[whole, None]).reshape(-1)
-    net = np.bincount(
-        caster.face_edges[whole].reshape(-1), weights=weights, minlength=len(caster.edges)
-    )
-    boundary = np.flatnonzero(np.rint(net))
-    if len(boundary) == 0:
-        return [], np.zeros(0, dtype=np.int64)
-    net = np.rint(net[boundary]).astype(np.int64)
-    edges = caster.edges[boundary]
-    count = np.abs(net)
-    forward = net > 0
-    starts = np.where(forward, edges[:, 0], edges[:, 1]).repeat(count)
-    ends = np.where(forward, edges[:, 1], edges[:, 0]).repeat(count)
-    return _chain(starts, ends), np.unique(edges)
-
-
 def _triangle_loops(
     caster: Caster, selected: np.ndarray, facing: np.ndarray
 ) -> tuple[list[np.ndarray], np.ndarray]:
@@ -652,87 +603,3 @@ def _triangle_loops(
     back = facing[selected & (facing != 0)] < 0
     faces = np.where(back[:, None], faces[:, ::-1], faces)
     return list(faces), np.unique(faces)
-
-
-def _silhouette_loops(caster: Caster, front: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
-    """Loops of a closed caster's silhouette: the edges between a face turned
-    to the light and one that is not, directed as in the front face."""
-    slots = caster.edge_face_slots
-    slot_front = front[slots // 3]
-    silhouette = np.flatnonzero(slot_front[:, 0] != slot_front[:, 1])
-    if len(silhouette) == 0:
-        return [], np.zeros(0, dtype=np.int64)
-    front_slot = np.where(slot_front[silhouette, 0], slots[silhouette, 0], slots[silhouette, 1])
-    forward = caster.face_edge_signs.reshape(-1)[front_slot] > 0
-    edges = caster.edges[silhouette]
-    starts = np.where(forward, edges[:, 0], edges[:, 1])
-    ends = np.where(forward, edges[:, 1], edges[:, 0])
-    return _chain(starts, ends), np.unique(edges)
-
-
-def _chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
-    """Split directed edges with in-degree = out-degree at every vertex into
-    closed loops of vertex indices."""
-    order = np.argsort(starts, kind="stable")
-    sorted_starts = starts[order]
-    vertex_ids, first = np.unique(sorted_starts, return_index=True)
-    next_out = dict(zip(vertex_ids.tolist(), first.tolist(), strict=True))
-    order_list = order.tolist()
-    sorted_list = sorted_starts.tolist()
-    ends_list = ends.tolist()
-    starts_list = starts.tolist()
-    used = [False] * len(starts_list)
-    loops = []
-    for edge in order_list:
-        if used[edge]:
-            continue
-        used[edge] = True
-        start = starts_list[edge]
-        loop = [start]
-        vertex = ends_list[edge]
-        while vertex != start:
-            loop.append(vertex)
-            position = next_out[vertex]
-            while used[order_list[position]]:
-                position += 1
-            next_out[vertex] = position + 1
-            step = order_list[position]
-            if sorted_list[position] != vertex:
-                raise GeometryError("internal error: unbalanced shadow outline")
-            used[step] = True
-            vertex = ends_list[step]
-        if len(loop) >= 3:
-            loops.append(np.array(loop))
-    return loops
-
-
-def _point_triangle_distance(point: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Distance from ``point`` to each of (m, 3, 3) triangles, degenerate ones
-    included: the nearer of the three edges and, where the point projects
-    inside, the face."""
-    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
-    nearest = np.minimum.reduce(
-        [_point_segment_distance(point, p, q) for p, q in ((a, b), (b, c), (c, a))]
-    )
-    normal = np.cross(b - a, c - a)
-    length = np.linalg.norm(normal, axis=1)
-    proper = length > 0
-    if np.any(proper):
-        unit = normal[proper] / length[proper, None]
-        inside = np.ones(int(proper.sum()), dtype=bool)
-        for p, q in ((a, b), (b, c), (c, a)):
-            edge_normal = np.cross(unit, q[proper] - p[proper])
-            inside &= np.einsum("ij,ij->i", edge_normal, point - p[proper]) >= 0
-        plane_distance = np.abs(np.einsum("ij,ij->i", unit, point - a[proper]))
-        face = np.where(inside, plane_distance, np.inf)
-        nearest[proper] = np.minimum(nearest[proper], face)
-    return nearest
-
-
-def _point_segment_distance(point, start, end) -> np.ndarray:
-    direction = end - start
-    length2 = np.einsum("ij,ij->i", direction, direction)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(length2 > 0, np.einsum("ij,ij->i", point - start, direction) / length2, 0.0)
-    t = np.clip(t, 0.0, 1.0)
-    return np.linalg.norm(start + t[:, None] * direction - point, axis=1)

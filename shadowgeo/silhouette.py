@@ -1,0 +1,292 @@
+"""Silhouettes: which faces a light sees, and the outline between them.
+
+Every face gets one bit, *front* (``facing > 0``: it turns its front to the
+light) or not. A face exactly edge-on to the light (``facing == 0``) is not
+front. Because each face has exactly one bit, the edges where the bit changes
+always form closed loops on a closed mesh, whatever the rounding: there is no
+per-edge decision that two neighbouring faces could make differently, so a
+shadow volume built from these edges cannot crack.
+
+The same outline code serves :func:`shadowgeo.project_shadow` (its fast path
+projects the loops alone) and :func:`shadowgeo.shadow_volume` (it extrudes
+them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import GeometryError
+from .lights import DirectionalLight, Light, PointLight, SpotLight
+from .tolerance import Tolerance
+from .topology import Caster, as_caster
+
+
+@dataclass(frozen=True, eq=False)
+class Silhouette:
+    """The outline of a mesh as seen from a light.
+
+    Attributes
+    ----------
+    front : (m,) bool
+        One bit per face: True where the face turns its front (the side its
+        winding makes outward) to the light. Edge-on faces are False.
+    edges : (k, 2) int64
+        Silhouette edges: edges between a front face and a face that is not,
+        directed as they run in the front face. Mesh border edges are not
+        included (see ``border``).
+    loops : list of (n_i,) int64
+        The boundary of the front region chained into closed loops of vertex
+        indices, each running as its front faces do (counter-clockwise seen
+        from the light). For a closed mesh these are the silhouette edges;
+        for an open mesh they also use the border edges of front faces.
+    border : (b, 2) int64
+        Edges used by one face only (empty for a closed mesh), directed as
+        they run in that face.
+    non_manifold : (q, 2) int64
+        Edges used by more than two faces (lower vertex index first).
+    is_closed : bool
+        The mesh is closed, 2-manifold and consistently wound
+        (:attr:`Caster.is_closed`).
+    """
+
+    front: np.ndarray
+    edges: np.ndarray
+    loops: list[np.ndarray]
+    border: np.ndarray
+    non_manifold: np.ndarray
+    is_closed: bool
+
+
+def silhouette(mesh, light: Light) -> Silhouette:
+    """Front faces, silhouette edges, their loops and the border of ``mesh``
+    seen from ``light``.
+
+    Parameters
+    ----------
+    mesh : trimesh.Trimesh, Caster or (vertices, faces)
+        The topology is cached on the mesh (see :func:`shadowgeo.as_caster`),
+        so a second light costs only the per-light work.
+    light : PointLight, SpotLight or DirectionalLight
+        A spot light counts as a point light at its position (its cone does
+        not change which faces turn to it).
+
+    Returns
+    -------
+    Silhouette
+        ``loops`` are closed: every loop vertex has as many outline edges in
+        as out.
+
+    Examples
+    --------
+    A cube lit from straight above: the top face (two triangles) is front,
+    the side faces are edge-on, and the silhouette is the top square.
+
+    >>> import trimesh
+    >>> cube = trimesh.creation.box()
+    >>> outline = silhouette(cube, DirectionalLight([0, 0, -1]))
+    >>> int(outline.front.sum()), len(outline.edges), [len(loop) for loop in outline.loops]
+    (2, 4, [4])
+    """
+    caster = as_caster(mesh)
+    front = caster.facing(light_homogeneous(caster, light)) > 0
+    counts = caster.edge_face_count
+    border = _directed_edges(caster, caster.edge_slots[caster.edge_slot_starts[:-1][counts == 1]])
+    non_manifold = caster.edges[counts > 2]
+    starts, ends = front_boundary(caster, front)
+    loops = chain(starts, ends)
+    if caster.is_closed:
+        edges = np.column_stack([starts, ends])
+    else:
+        # Drop the front faces' own border edges: those are in ``border``.
+        low, high = np.minimum(starts, ends), np.maximum(starts, ends)
+        keys = low * np.int64(len(caster.vertices)) + high
+        border_edges = caster.edges[counts == 1]
+        border_keys = border_edges[:, 0] * np.int64(len(caster.vertices)) + border_edges[:, 1]
+        keep = ~np.isin(keys, border_keys)
+        edges = np.column_stack([starts[keep], ends[keep]])
+    return Silhouette(
+        front=front,
+        edges=edges.reshape(-1, 2),
+        loops=loops,
+        border=border.reshape(-1, 2),
+        non_manifold=non_manifold.reshape(-1, 2),
+        is_closed=caster.is_closed,
+    )
+
+
+def light_homogeneous(caster: Caster, light: Light) -> np.ndarray:
+    """(4,) the light as a homogeneous vector in the caster's centred frame
+    (:attr:`Caster.centered`)."""
+    if isinstance(light, PointLight | SpotLight):
+        return np.append(light.position - caster.center, 1.0)
+    if isinstance(light, DirectionalLight):
+        return np.append(-light.direction, 0.0)
+    raise GeometryError(f"light must be a PointLight, SpotLight or DirectionalLight, got {light!r}")
+
+
+def front_boundary(caster: Caster, front: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(k,) starts and (k,) ends of the directed edges that bound the
+    ``front`` faces, as they run in those faces.
+
+    On a closed mesh each silhouette edge has exactly one front face, found
+    from :attr:`Caster.edge_face_slots`; otherwise an edge appears once for
+    each front face use it does not cancel (see :func:`boundary_loops`).
+    """
+    if not caster.is_closed:
+        return _net_boundary(caster, front, np.ones(caster.n_faces, dtype=np.int64))
+    slots = caster.edge_face_slots
+    slot_front = front[slots // 3]
+    outline = np.flatnonzero(slot_front[:, 0] != slot_front[:, 1])
+    front_slot = np.where(slot_front[outline, 0], slots[outline, 0], slots[outline, 1])
+    directed = _directed_edges(caster, front_slot)
+    return directed[:, 0], directed[:, 1]
+
+
+def boundary_loops(
+    caster: Caster, selected: np.ndarray, orientation: np.ndarray
+) -> tuple[list[np.ndarray], np.ndarray]:
+    """Loops of vertex indices whose winding number is the number of
+    ``selected`` triangles that cover a point, once projected.
+
+    ``orientation`` (m,) is the sign of each face's projected area. Each
+    triangle counts +1 whatever its orientation: negative ones are reversed.
+    Edges shared by two triangles of the same orientation cancel, so for a
+    closed caster only the silhouette remains. Also returns the vertices used.
+    """
+    starts, ends = _net_boundary(caster, selected, orientation)
+    if len(starts) == 0:
+        return [], np.zeros(0, dtype=np.int64)
+    return chain(starts, ends), np.unique(np.concatenate([starts, ends]))
+
+
+def silhouette_loops(caster: Caster, front: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """Loops of a closed caster's silhouette (see :func:`front_boundary`),
+    and the vertices they use."""
+    starts, ends = front_boundary(caster, front)
+    if len(starts) == 0:
+        return [], np.zeros(0, dtype=np.int64)
+    return chain(starts, ends), np.unique(np.concatenate([starts, ends]))
+
+
+def _net_boundary(
+    caster: Caster, selected: np.ndarray, orientation: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    weights = (caster.face_edge_signs[selected] * orientation[selected, None]).reshape(-1)
+    net = np.bincount(
+        caster.face_edges[selected].reshape(-1), weights=weights, minlength=len(caster.edges)
+    )
+    boundary = np.flatnonzero(np.rint(net))
+    net = np.rint(net[boundary]).astype(np.int64)
+    edges = caster.edges[boundary]
+    count = np.abs(net)
+    forward = net > 0
+    starts = np.where(forward, edges[:, 0], edges[:, 1]).repeat(count)
+    ends = np.where(forward, edges[:, 1], edges[:, 0]).repeat(count)
+    return starts, ends
+
+
+def _directed_edges(caster: Caster, slots: np.ndarray) -> np.ndarray:
+    """(k, 2) the edge of each face slot ``3 * face + corner``, from that
+    corner to the next, as the face runs."""
+    faces = caster.faces.reshape(-1)
+    next_corner = slots - slots % 3 + (slots % 3 + 1) % 3
+    return np.column_stack([faces[slots], faces[next_corner]]).reshape(-1, 2)
+
+
+def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
+    """Split directed edges with in-degree = out-degree at every vertex into
+    closed loops of vertex indices."""
+    if len(starts) == 0:
+        return []
+    order = np.argsort(starts, kind="stable")
+    sorted_starts = starts[order]
+    vertex_ids, first = np.unique(sorted_starts, return_index=True)
+    next_out = dict(zip(vertex_ids.tolist(), first.tolist(), strict=True))
+    order_list = order.tolist()
+    sorted_list = sorted_starts.tolist()
+    ends_list = ends.tolist()
+    starts_list = starts.tolist()
+    used = [False] * len(starts_list)
+    loops = []
+    for edge in order_list:
+        if used[edge]:
+            continue
+        used[edge] = True
+        start = starts_list[edge]
+        loop = [start]
+        vertex = ends_list[edge]
+        while vertex != start:
+            loop.append(vertex)
+            position = next_out.get(vertex, len(order_list))
+            while position < len(order_list) and used[order_list[position]]:
+                position += 1
+            if position == len(order_list) or sorted_list[position] != vertex:
+                raise GeometryError(f"internal error: the outline is not closed at vertex {vertex}")
+            next_out[vertex] = position + 1
+            step = order_list[position]
+            used[step] = True
+            vertex = ends_list[step]
+        if len(loop) >= 3:
+            loops.append(np.array(loop))
+    return loops
+
+
+def check_light_outside(caster: Caster, position: np.ndarray, tolerance: Tolerance) -> None:
+    """Raise :class:`GeometryError` if a light at ``position`` touches the
+    caster (within ``tolerance.length``) or lies inside a closed caster."""
+    lower, upper = caster.bounds
+    reach = tolerance.length
+    if np.any(position < lower - reach) or np.any(position > upper + reach):
+        return
+    triangles = caster.triangles
+    near = np.all(triangles.min(axis=1) <= position + reach, axis=1) & np.all(
+        triangles.max(axis=1) >= position - reach, axis=1
+    )
+    if np.any(near):
+        distances = point_triangle_distance(position, triangles[near])
+        if distances.min() <= reach:
+            face = int(np.flatnonzero(near)[int(np.argmin(distances))])
+            raise GeometryError(
+                f"the light at {position.tolist()} touches the caster (face {face}, "
+                f"distance {distances.min():.3g}, tolerance {reach:.3g})"
+            )
+    if caster.is_closed and abs(caster.winding_number(position)) > 0.5:
+        raise GeometryError(
+            f"the light at {position.tolist()} is inside the closed caster: "
+            "everything around it is in shadow"
+        )
+
+
+def point_triangle_distance(point: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(m,) distance from ``point`` (3,) to each of (m, 3, 3) triangles,
+    degenerate ones included: the nearer of the three edges and, where the
+    point projects inside, the face."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    nearest = np.minimum.reduce(
+        [_point_segment_distance(point, p, q) for p, q in ((a, b), (b, c), (c, a))]
+    )
+    normal = np.cross(b - a, c - a)
+    length = np.linalg.norm(normal, axis=1)
+    proper = length > 0
+    if np.any(proper):
+        unit = normal[proper] / length[proper, None]
+        inside = np.ones(int(proper.sum()), dtype=bool)
+        for p, q in ((a, b), (b, c), (c, a)):
+            edge_normal = np.cross(unit, q[proper] - p[proper])
+            inside &= np.einsum("ij,ij->i", edge_normal, point - p[proper]) >= 0
+        plane_distance = np.abs(np.einsum("ij,ij->i", unit, point - a[proper]))
+        face = np.where(inside, plane_distance, np.inf)
+        nearest[proper] = np.minimum(nearest[proper], face)
+    return nearest
+
+
+def _point_segment_distance(point, start, end) -> np.ndarray:
+    direction = end - start
+    length2 = np.einsum("ij,ij->i", direction, direction)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(length2 > 0, np.einsum("ij,ij->i", point - start, direction) / length2, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    return np.linalg.norm(start + t[:, None] * direction - point, axis=1)
