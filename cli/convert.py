@@ -102,8 +102,9 @@ def tolerance_argument(text: str) -> float:
 class ProgressBar:
     """A one-line bar on stderr, redrawn in place."""
 
-    def __init__(self, label: str, stream=sys.stderr, width: int = 30) -> None:
-        self.label, self.stream, self.width = label, stream, width
+    def __init__(self, label: str, stream=None, width: int = 30) -> None:
+        self.label, self.width = label, width
+        self.stream = sys.stderr if stream is None else stream
         self.shown = -1
 
     def __call__(self, done: int, total: int) -> None:
