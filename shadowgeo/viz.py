@@ -180,6 +180,37 @@ def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, frame
     plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
     # Frame the geometry and the positional lights (not the arrows of directional ones).
     plotter.reset_camera(bounds=frame)
+    _fit(plotter, frame)
+
+
+def _fit(plotter, frame, fill: float = 0.9) -> None:
+    """Pan and zoom so the corners of ``frame`` fill ``fill`` of the picture
+    (reset_camera fits their bounding sphere, which leaves wide margins)."""
+    camera = plotter.camera
+    position, focal = np.array(camera.position), np.array(camera.focal_point)
+    forward = (focal - position) / np.linalg.norm(focal - position)
+    up = np.array(camera.up) - forward * (np.array(camera.up) @ forward)
+    up /= np.linalg.norm(up)
+    right = np.cross(forward, up)
+    width, height = plotter.window_size
+    tangent = np.tan(np.radians(camera.view_angle) / 2)
+    corners = np.array(np.meshgrid(*np.reshape(frame, (3, 2)), indexing="ij")).reshape(3, -1).T
+    relative = corners - position
+    depth = relative @ forward
+    if np.any(depth <= 0):
+        return
+    screen_x = (relative @ right) / depth / (tangent * width / height)
+    screen_y = (relative @ up) / depth / tangent
+    distance = np.linalg.norm(focal - position)
+    middle_x, middle_y = (
+        (screen_x.max() + screen_x.min()) / 2,
+        (screen_y.max() + screen_y.min()) / 2,
+    )
+    shift = distance * tangent * (right * middle_x * width / height + up * middle_y)
+    camera.position, camera.focal_point = tuple(position + shift), tuple(focal + shift)
+    half = max(np.ptp(screen_x), np.ptp(screen_y)) / 2
+    if half > 0:
+        camera.zoom(fill / half)
 
 
 def scene_plotter(
