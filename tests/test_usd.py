@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from validators import usd_errors
 
 import shadowgeo as sg
@@ -332,3 +334,52 @@ def test_failed_write_leaves_the_existing_file_untouched(tmp_path, monkeypatch):
     monkeypatch.undo()
     assert path.read_text() == "previous contents"
     assert [p.name for p in tmp_path.iterdir()] == ["scene.usda"]
+
+
+_coordinates = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
+# USD strings end at a NUL character (C strings underneath), so names have none.
+_names = st.one_of(st.none(), st.text(st.characters(exclude_characters="\x00"), max_size=12))
+
+
+@st.composite
+def _shapes(draw):
+    n_vertices = draw(st.integers(3, 8))
+    vertices = draw(
+        st.lists(
+            st.tuples(_coordinates, _coordinates, _coordinates),
+            min_size=n_vertices,
+            max_size=n_vertices,
+        )
+    )
+    faces = draw(st.lists(st.tuples(*[st.integers(0, n_vertices - 1)] * 3), min_size=1, max_size=6))
+    transform = np.eye(4)
+    transform[:3, :] = np.array(
+        draw(st.lists(st.floats(-1e3, 1e3, allow_nan=False), min_size=12, max_size=12))
+    ).reshape(3, 4)
+    role = draw(st.sampled_from(["geometry", "shadow", "volume"]))
+    group = draw(_names) if role != "geometry" else None
+    return sg.Shape(
+        vertices,
+        faces,
+        transform,
+        name=draw(_names),
+        role=role,
+        group=group,
+        solid=draw(st.booleans()),
+    )
+
+
+@settings(max_examples=30, deadline=None)
+@given(shapes=st.lists(_shapes(), min_size=1, max_size=4), binary=st.booleans())
+def test_any_scene_round_trips_exactly(tmp_path_factory, shapes, binary):
+    # Any affine transform (shears, mirrors, singular ones), any names.
+    path = tmp_path_factory.mktemp("usd") / ("scene.usdc" if binary else "scene.usda")
+    sg.save(sg.Scene(shapes=shapes), path)
+    back = sg.load(path)
+    assert [(s.name or None) for s in back.shapes] == [(s.name or None) for s in shapes]
+    assert [s.role for s in back.shapes] == [s.role for s in shapes]
+    assert [(s.group or None) for s in back.shapes] == [(s.group or None) for s in shapes]
+    for original, read in zip(shapes, back.shapes, strict=True):
+        np.testing.assert_array_equal(read.transform, original.transform)
+        np.testing.assert_array_equal(read.vertices[read.faces], original.vertices[original.faces])
+        assert read.solid == original.solid

@@ -105,26 +105,34 @@ class _Writer:
         self.names = _Names()
         self.names.taken["/World"] = {"Looks"}
         self.looks: dict[tuple, object] = {}
-        self.groups: dict[str, str] = {}
+        self.groups: dict[object, str] = {}
 
     def write_shapes(self) -> None:
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
         for index, shape in enumerate(self.scene.shapes):
             parent = "/World"
             if shape.role != "geometry" or shape.group:
-                parent = self._group(shape.group or f"shadowgeo {shape.role}s")
+                parent = self._group(shape)
             path = self.names.child(parent, shape.name, f"Shape_{index}")
             self._mesh(shape, path)
+            # Group Xforms change the traversal order; keep the scene's.
+            prim = self.stage.GetPrimAtPath(path)
+            _custom(prim, "index", Sdf.ValueTypeNames.Int, index)
 
-    def _group(self, group: str) -> str:
+    def _group(self, shape: Shape) -> str:
+        """The Xform holding a light group's shadows; unnamed groups (one per
+        role) get a display name but no ``shadowgeo:group``, so read back as None."""
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
-        if group not in self.groups:
-            path = self.names.child("/World", group, "Group")
+        key = shape.group or (None, shape.role)
+        if key not in self.groups:
+            label = shape.group or f"shadowgeo {shape.role}s"
+            path = self.names.child("/World", label, "Group")
             prim = UsdGeom.Xform.Define(self.stage, path).GetPrim()
-            prim.SetDisplayName(group)
-            _custom(prim, "group", Sdf.ValueTypeNames.String, group)
-            self.groups[group] = path
-        return self.groups[group]
+            prim.SetDisplayName(label)
+            if shape.group:
+                _custom(prim, "group", Sdf.ValueTypeNames.String, shape.group)
+            self.groups[key] = path
+        return self.groups[key]
 
     def _mesh(self, shape: Shape, path: str) -> None:
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
@@ -519,6 +527,7 @@ def read(path, **options) -> Scene:
         meters_per_unit=float(UsdGeom.GetStageMetersPerUnit(stage)),
     )
     time = Usd.TimeCode.Default()
+    indices: list[int | None] = []
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
         where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
         if prim.IsA(UsdGeom.Mesh):
@@ -528,9 +537,14 @@ def read(path, **options) -> Scene:
             if imageable.ComputePurpose() == UsdGeom.Tokens.guide:
                 continue
             _read_mesh(scene, prim, path, time)
+            indices.append(_shadowgeo(prim, "index"))
         elif prim.IsA(UsdGeom.Gprim):
             scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
         elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
             if not _read_light(scene, prim, time):
                 scene.warnings.append(f"{path.name}: skipped {where}: not a point, spot or sun")
+    # Shapes shadowgeo wrote carry their place in the scene; others follow in file order.
+    keys = [(0, index) if index is not None else (1, 0) for index in indices]
+    order = sorted(range(len(keys)), key=keys.__getitem__)
+    scene.shapes = [scene.shapes[i] for i in order]
     return scene
