@@ -1,0 +1,234 @@
+"""silhouette: front faces, oriented silhouette edges, loops, border edges.
+
+References: face orientation by trimesh's own normals and face centres,
+edges by a Python dictionary over the faces, outlines by shapely hulls of
+ray/plane intersections (tests/reference.py).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+import trimesh
+from reference import hull_area_2d, ray_plane
+
+from shadowgeo import (
+    DirectionalLight,
+    Plane,
+    PointLight,
+    SpotLight,
+    as_caster,
+    project_shadow,
+    silhouette,
+)
+
+
+def brute_force_front(mesh, light):
+    normals = np.cross(
+        mesh.triangles[:, 1] - mesh.triangles[:, 0], mesh.triangles[:, 2] - mesh.triangles[:, 0]
+    )
+    if isinstance(light, DirectionalLight):
+        towards = np.broadcast_to(-light.direction, normals.shape)
+    else:
+        towards = light.position - mesh.triangles_center
+    return np.einsum("ij,ij->i", normals, towards) > 0
+
+
+def brute_force_silhouette(faces, front):
+    """Directed edges between a front face and a non-front one, as the front
+    face runs them; edges used once, directed as their face."""
+    uses: dict[tuple[int, int], list[tuple[int, int, int]]] = {}
+    for index, face in enumerate(np.asarray(faces).tolist()):
+        for k in range(3):
+            a, b = face[k], face[(k + 1) % 3]
+            uses.setdefault((min(a, b), max(a, b)), []).append((index, a, b))
+    outline, border = set(), set()
+    for users in uses.values():
+        if len(users) == 1:
+            border.add(users[0][1:])
+        elif len(users) == 2:
+            (f, a, b), (g, c, d) = users
+            if front[f] != front[g]:
+                outline.add((a, b) if front[f] else (c, d))
+    return outline, border
+
+
+def loop_edges(loops):
+    return [
+        (int(loop[i]), int(loop[(i + 1) % len(loop)])) for loop in loops for i in range(len(loop))
+    ]
+
+
+@pytest.mark.parametrize(
+    "light",
+    [
+        PointLight([0.4, 3.0, 0.3]),
+        DirectionalLight([0.3, -1.0, 0.2]),
+        SpotLight([3, 1, 0.5], [-1, 0, 0]),
+    ],
+    ids=["point", "directional", "spot"],
+)
+def test_convex_silhouette_is_the_hull_of_the_projected_vertices(light):
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    outline = silhouette(sphere, light)
+    front = brute_force_front(sphere, light)
+    assert np.array_equal(outline.front, front)
+    expected, border = brute_force_silhouette(sphere.faces, front)
+    assert set(map(tuple, outline.edges.tolist())) == expected and len(outline.edges) == len(
+        expected
+    )
+    assert border == set() and len(outline.border) == 0 and outline.is_closed
+    # One closed loop, using every silhouette edge once.
+    assert len(outline.loops) == 1
+    assert sorted(loop_edges(outline.loops)) == sorted(expected)
+    # Projected from the light onto a plane behind the sphere, the loop is
+    # the convex hull of all projected vertices, counter-clockwise seen from
+    # the light.
+    if isinstance(light, DirectionalLight):
+        normal = -light.direction
+        points = sphere.vertices - np.outer(sphere.vertices @ normal + 5.0, normal)
+    else:
+        normal = light.position / np.linalg.norm(light.position)
+        points = ray_plane(sphere.vertices, light.position, normal, 5.0)
+    plane = Plane(normal, 5.0)
+    uv = plane.to_2d(points)
+    loop = uv[outline.loops[0]]
+    polygon = shapely.Polygon(loop)
+    assert polygon.is_valid
+    assert polygon.area == pytest.approx(hull_area_2d(uv), rel=1e-12)
+    assert shapely.Polygon(loop).exterior.is_ccw
+
+
+def test_torus_lit_along_its_axis_has_the_two_equators_as_loops():
+    sections = 20
+    torus = trimesh.creation.torus(
+        major_radius=1.0, minor_radius=0.3, major_sections=sections, minor_sections=12
+    )
+    outline = silhouette(torus, DirectionalLight([0, 0, -1]))
+    radii = sorted(
+        float(np.linalg.norm(torus.vertices[loop][:, :2], axis=1).mean()) for loop in outline.loops
+    )
+    assert [len(loop) for loop in outline.loops] == [sections, sections]
+    assert radii == pytest.approx([0.7, 1.3], rel=1e-12)
+    for loop in outline.loops:
+        ring = torus.vertices[loop]
+        assert np.allclose(ring[:, 2], 0.0, atol=1e-12)
+        area = shapely.Polygon(ring[:, :2]).area * (
+            1 if shapely.Polygon(ring[:, :2]).exterior.is_ccw else -1
+        )
+        outer = np.linalg.norm(ring[0, :2]) > 1.0
+        # Seen from the light (above): the outer loop counter-clockwise, the hole clockwise.
+        assert (area > 0) == outer
+
+
+def test_silhouette_of_a_self_shadowing_mesh_matches_brute_force():
+    mesh = trimesh.creation.icosphere(subdivisions=3)
+    direction = mesh.vertices / np.linalg.norm(mesh.vertices, axis=1, keepdims=True)
+    mesh.vertices = (
+        direction * (1 + 0.3 * np.sin(5 * direction[:, 0]) * np.cos(6 * direction[:, 2]))[:, None]
+    )
+    light = PointLight([2.5, 0.1, 0.3])
+    outline = silhouette(mesh, light)
+    front = brute_force_front(mesh, light)
+    assert np.array_equal(outline.front, front)
+    expected, _ = brute_force_silhouette(mesh.faces, front)
+    assert sorted(map(tuple, outline.edges.tolist())) == sorted(expected)
+    assert sorted(loop_edges(outline.loops)) == sorted(expected)
+    assert len(outline.loops) > 1  # the bumps cast their own outlines
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_edge_on_faces_never_break_the_loops(seed):
+    # A cube rotated at random, lit exactly along one of its faces' planes:
+    # those faces' n . l are rounding noise of either sign. Whatever the bits,
+    # the loops close and run along exactly the front/non-front edges.
+    rng = np.random.default_rng(seed)
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    rotation = q @ np.diag(np.sign(np.diag(r)))
+    cube = trimesh.creation.box()
+    cube.vertices = cube.vertices @ rotation.T
+    for light in (
+        DirectionalLight(rotation @ [0.0, 0.0, -1.0]),
+        PointLight(rotation @ [2.0, 0.3, 0.5]),  # in the plane of the top face
+    ):
+        outline = silhouette(cube, light)
+        expected, _ = brute_force_silhouette(cube.faces, outline.front)
+        assert sorted(loop_edges(outline.loops)) == sorted(expected)
+        assert sorted(map(tuple, outline.edges.tolist())) == sorted(expected)
+        # (It may pinch into two loops where one triangle of an edge-on face
+        # rounds to front and its sibling does not.)
+        # The faces truly turned to the light are front, the ones turned away are not.
+        facing = brute_force_front(cube, light)
+        normals = cube.face_normals
+        towards = (
+            -light.direction
+            if isinstance(light, DirectionalLight)
+            else light.position - cube.triangles_center
+        )
+        cosine = np.einsum("ij,ij->i", normals, np.broadcast_to(towards, normals.shape))
+        clear = np.abs(cosine) > 1e-9
+        assert np.array_equal(outline.front[clear], (cosine > 0)[clear])
+        assert np.array_equal(facing[clear], outline.front[clear])
+
+
+def test_open_meshes_report_their_border():
+    quad = trimesh.Trimesh(
+        [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]], process=False
+    )
+    seen = silhouette(quad, PointLight([0.5, 0.5, 2.0]))
+    assert not seen.is_closed
+    assert sorted(map(tuple, seen.border.tolist())) == [(0, 1), (1, 2), (2, 3), (3, 0)]
+    assert len(seen.edges) == 0
+    assert len(seen.loops) == 1 and sorted(loop_edges(seen.loops)) == [
+        (0, 1),
+        (1, 2),
+        (2, 3),
+        (3, 0),
+    ]
+    behind = silhouette(quad, PointLight([0.5, 0.5, -2.0]))
+    assert not behind.front.any() and behind.loops == [] and len(behind.border) == 4
+
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    faces = np.delete(sphere.faces, [0, 1, 2, 40, 41], axis=0)
+    light = PointLight([0.3, 2.5, 0.4])
+    holes = silhouette((sphere.vertices, faces), light)
+    front = brute_force_front(trimesh.Trimesh(sphere.vertices, faces, process=False), light)
+    expected, border = brute_force_silhouette(faces, front)
+    assert set(map(tuple, holes.border.tolist())) == border and len(holes.border) == len(border)
+    assert sorted(map(tuple, holes.edges.tolist())) == sorted(expected)
+    assert holes.non_manifold.shape == (0, 2)
+
+
+def test_non_manifold_edges_are_listed():
+    vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]]
+    outline = silhouette((vertices, [[0, 1, 2], [0, 1, 3], [0, 1, 4]]), PointLight([0.3, 0.3, 3]))
+    assert outline.non_manifold.tolist() == [[0, 1]]
+
+
+def test_planar_fast_path_projects_the_same_loops():
+    # A closed caster with nothing to clip: project_shadow hands the union
+    # exactly the silhouette's loops, and is chosen without being asked.
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    sphere.apply_translation([0, 2, 0])
+    light = PointLight([0.4, 5.0, 0.3])
+    ground = Plane([0, 1, 0], 0)
+    outline = silhouette(sphere, light)
+    shadow = project_shadow(sphere, light, ground)
+    union = project_shadow(sphere, light, ground, method="triangles")
+    assert not any(shadow.diagnostics.clipped.values())
+    assert shadow.diagnostics.n_loops == len(outline.loops) == 1
+    assert union.diagnostics.n_loops == int(outline.front.sum())
+    assert shadow.area == pytest.approx(union.area, rel=1e-9)
+    # The same area as the hull of the ray/plane intersections.
+    hits = ray_plane(sphere.vertices, light.position, ground.normal, 0.0)
+    assert shadow.area == pytest.approx(hull_area_2d(hits[:, [0, 2]]), rel=1e-9)
+
+
+def test_topology_is_computed_once_for_many_lights():
+    torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.3)
+    first = silhouette(torus, PointLight([0, 0, 3]))
+    caster = as_caster(torus)
+    second = silhouette(torus, PointLight([3, 0, 0]))
+    assert as_caster(torus) is caster
+    assert not np.array_equal(first.front, second.front)
