@@ -288,3 +288,27 @@ def test_failed_write_leaves_the_existing_file_untouched(tmp_path, monkeypatch):
         sg.save(_scene(), tmp_path / "new.glb")
     monkeypatch.undo()
     assert [p.name for p in tmp_path.iterdir()] == ["scene.glb"]
+
+
+def test_random_trs_mirrored_and_far_transforms_validate(tmp_path, node_tools):
+    # Non-uniform scales, mirrors (negative determinant), translations of 1e7,
+    # repeated and degenerate faces: glTF takes all of them as node matrices.
+    rng = np.random.default_rng(1)
+    shapes = []
+    for index in range(40):
+        rotation = trimesh.transformations.random_rotation_matrix(rng.random(3))
+        scale = rng.uniform(0.01, 100, 3) * rng.choice([-1, 1], 3)
+        transform = rotation @ np.diag([*scale, 1.0])
+        transform[:3, 3] = rng.uniform(-1e7, 1e7, 3)
+        vertices = rng.uniform(-1e4, 1e4, (6, 3))
+        faces = rng.integers(0, 6, (5, 3))
+        shapes.append(sg.Shape(vertices, faces, transform, name=f"s{index}"))
+    path = tmp_path / "random.glb"
+    sg.save(sg.Scene(shapes=shapes), path)
+    document, _ = _read_glb(path)
+    assert sum("matrix" in node for node in document["nodes"]) == 40
+    report = gltf_report(path)
+    assert gltf_problems(report) == []
+    # Degenerate triangles are only informational for the validator.
+    codes = {m["code"] for m in report["issues"]["messages"]}
+    assert codes <= {"ACCESSOR_INDEX_TRIANGLE_DEGENERATE"}

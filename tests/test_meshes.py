@@ -8,6 +8,8 @@ import math
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import shadowgeo as sg
 
@@ -225,3 +227,44 @@ def test_gltf_resources_outside_the_folder_are_refused(tmp_path, uri, reason):
     with pytest.raises(sg.SceneError, match=reason) as caught:
         sg.load(path)
     assert "scene.gltf" in str(caught.value) and "buffers[0]" in str(caught.value)
+
+
+_coordinates = st.floats(-1e4, 1e4, allow_nan=False, allow_infinity=False)
+
+
+@st.composite
+def _trs_shapes(draw):
+    """Shapes with translation x rotation x scale transforms, as glTF stores
+    them, far from the origin or not, and any names."""
+    n_vertices = draw(st.integers(3, 8))
+    vertices = draw(
+        st.lists(
+            st.tuples(_coordinates, _coordinates, _coordinates),
+            min_size=n_vertices,
+            max_size=n_vertices,
+        )
+    )
+    faces = draw(st.lists(st.tuples(*[st.integers(0, n_vertices - 1)] * 3), min_size=1, max_size=6))
+    angle = draw(st.floats(-math.pi, math.pi))
+    axis = draw(st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda a: np.linalg.norm(a) > 0.1))
+    magnitudes = draw(st.tuples(*[st.floats(0.01, 100)] * 3))
+    signs = draw(st.tuples(*[st.sampled_from([-1.0, 1.0])] * 3))  # mirrors too
+    scale = np.multiply(magnitudes, signs)
+    transform = trimesh.transformations.rotation_matrix(angle, axis) @ np.diag([*scale, 1.0])
+    transform[:3, 3] = draw(st.tuples(*[st.floats(-1e7, 1e7)] * 3))
+    name = draw(st.one_of(st.none(), st.text(max_size=12)))
+    return sg.Shape(vertices, faces, transform, name=name, solid=draw(st.booleans()))
+
+
+@settings(max_examples=30, deadline=None)
+@given(shapes=st.lists(_trs_shapes(), min_size=1, max_size=4))
+def test_any_trs_scene_round_trips_through_glb(tmp_path_factory, shapes):
+    path = tmp_path_factory.mktemp("gltf") / "scene.glb"
+    sg.save(sg.Scene(shapes=shapes), path)
+    back = sg.load(path)
+    assert [s.name or None for s in back.shapes] == [s.name or None for s in shapes]
+    assert [s.solid for s in back.shapes] == [s.solid for s in shapes]
+    for original, read in zip(shapes, back.shapes, strict=True):
+        np.testing.assert_array_equal(read.transform, original.transform)
+        error = np.abs(_triangles(read) - _triangles(original)).max()
+        assert error <= _local_bound(original)
