@@ -158,7 +158,7 @@ def _vtk_light(scene_light, center: np.ndarray, scale: float):
     return result
 
 
-def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, frame) -> None:
+def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, framed) -> None:
     """Point the camera at ``center`` from the direction ``view`` names."""
     if view is None:
         view = "iso"
@@ -179,13 +179,14 @@ def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, frame
         up = np.array([0.0, 0.0, -1.0]) if up[1] else np.array([0.0, 1.0, 0.0])
     plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
     # Frame the geometry and the positional lights (not the arrows of directional ones).
+    frame = np.column_stack([framed.min(axis=0), framed.max(axis=0)]).ravel()
     plotter.reset_camera(bounds=frame)
-    _fit(plotter, frame)
+    _fit(plotter, framed)
 
 
-def _fit(plotter, frame, fill: float = 0.9) -> None:
-    """Pan and zoom so the corners of ``frame`` fill ``fill`` of the picture
-    (reset_camera fits their bounding sphere, which leaves wide margins)."""
+def _fit(plotter, points: np.ndarray, fill: float = 0.9) -> None:
+    """Pan and zoom so ``points`` (n, 3) fill ``fill`` of the picture
+    (reset_camera fits a bounding sphere, which leaves wide margins)."""
     camera = plotter.camera
     position, focal = np.array(camera.position), np.array(camera.focal_point)
     forward = (focal - position) / np.linalg.norm(focal - position)
@@ -194,8 +195,7 @@ def _fit(plotter, frame, fill: float = 0.9) -> None:
     right = np.cross(forward, up)
     width, height = plotter.window_size
     tangent = np.tan(np.radians(camera.view_angle) / 2)
-    corners = np.array(np.meshgrid(*np.reshape(frame, (3, 2)), indexing="ij")).reshape(3, -1).T
-    relative = corners - position
+    relative = points - position
     depth = relative @ forward
     if np.any(depth <= 0):
         return
@@ -293,8 +293,7 @@ def scene_plotter(
         np.reshape(light.position, (1, 3)) for light in glyph_lights if hasattr(light, "position")
     ]
     framed = np.concatenate(framed) if framed else np.zeros((1, 3))
-    frame = np.column_stack([framed.min(axis=0), framed.max(axis=0)]).ravel()
-    _camera(plotter, view, center, scale, up_axis, frame)
+    _camera(plotter, view, center, scale, up_axis, framed)
     return plotter
 
 
