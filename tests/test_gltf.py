@@ -312,3 +312,13 @@ def test_random_trs_mirrored_and_far_transforms_validate(tmp_path, node_tools):
     # Degenerate triangles are only informational for the validator.
     codes = {m["code"] for m in report["issues"]["messages"]}
     assert codes <= {"ACCESSOR_INDEX_TRIANGLE_DEGENERATE"}
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf"])
+def test_an_empty_scene_is_a_valid_file(tmp_path, node_tools, suffix):
+    # Real X3D files with no geometry (metadata only) convert to this.
+    path = tmp_path / f"empty{suffix}"
+    sg.save(sg.Scene(), path)
+    assert gltf_problems(gltf_report(path)) == []
+    back = sg.load(path)
+    assert back.shapes == [] and back.lights == []

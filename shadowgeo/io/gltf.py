@@ -333,7 +333,11 @@ def build(scene: Scene) -> tuple[dict, bytes]:
                 }
             )
         ]
-    builder.gltf["scenes"][0]["nodes"] = top
+    if top:
+        builder.gltf["scenes"][0]["nodes"] = top
+    else:
+        # glTF forbids empty arrays: an empty scene has no "nodes" at all.
+        del builder.gltf["scenes"][0]["nodes"], builder.gltf["nodes"]
     builder.binary.extend(b"\0" * (-len(builder.binary) % 4))
     return builder.gltf, bytes(builder.binary)
 
