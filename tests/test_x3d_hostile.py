@@ -251,3 +251,29 @@ def test_read_never_mutates_the_file(tmp_path):
     before = path.read_bytes()
     x3d_read.read(path)
     assert path.read_bytes() == before
+
+
+def test_def_use_expansion_bomb_is_refused(tmp_path):
+    # each level uses the previous one ten times: 10 ** 7 boxes from a few lines
+    levels = ['<Group DEF="g0"><Shape><Box/></Shape></Group>']
+    for level in range(1, 8):
+        levels.append(f'<Group DEF="g{level}">' + f'<Group USE="g{level - 1}"/>' * 10 + "</Group>")
+    with pytest.raises(sg.SceneError, match="expands .* to more than 2000000 nodes"):
+        sg.load(scene(tmp_path, "\n".join(levels)))
+
+
+def test_invisible_nodes_are_skipped_with_a_warning(tmp_path):
+    body = (
+        '<Transform visible="false"><Shape><Box/></Shape></Transform>'
+        '<Shape visible="false"><Box/></Shape><Shape><Box/></Shape>'
+    )
+    result = sg.load(scene(tmp_path, body))
+    assert len(result.shapes) == 1
+    assert sum("visible='false': skipped" in warning for warning in result.warnings) == 2
+
+
+def test_deep_def_use_chain_is_an_error_not_a_crash(tmp_path):
+    levels = ['<Group DEF="g0"><Shape><Box/></Shape></Group>']
+    levels += [f'<Group DEF="g{i}"><Group USE="g{i - 1}"/></Group>' for i in range(1, 1500)]
+    with pytest.raises(sg.SceneError, match="nested too deeply"):
+        sg.load(scene(tmp_path, "\n".join(levels)))

@@ -40,6 +40,7 @@ from ..errors import SceneError
 from ..scene import Scene, Shape
 from ..tolerance import Tolerance
 from . import x3d_parse
+from .x3d_defaults import DEFAULTS
 from .x3d_fields import Context, local_name, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
 from .x3d_inline import load_inline
@@ -52,6 +53,17 @@ RENDERED_FIELDS = {"children", "choice", "level", "layers", "shape"}
 SILENT = {"WorldInfo", "ProtoDeclare", "ExternProtoDeclare", "IS", "connect", "field"}
 TEXTURES = {"ImageTexture", "MovieTexture", "ImageCubeMapTexture", "ImageTexture3D"}
 MAX_INLINE_DEPTH = 16
+# Node instances visited at most: DEF/USE nesting can expand exponentially.
+MAX_NODES = 2_000_000
+# Why nodes of a kind are skipped, for the warnings.
+REASONS = [
+    (("Sensor", "Interpolator", "Script", "ROUTE", "Trigger", "Sequencer", "Filter", "Follower",
+      "Chaser", "Damper", "HAnim", "Proto", "IMPORT", "EXPORT"),
+     "animation and behaviour are not modelled (the scene is taken as it is at load time)"),
+    (("Viewpoint", "NavigationInfo", "Background", "Fog", "Sound", "AudioClip", "Environment",
+      "OrthoViewpoint", "ViewpointGroup", "TextureBackground"),
+     "view, sound and environment settings cast no shadow"),
+]  # fmt: skip
 _URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 
 
@@ -65,6 +77,7 @@ class _Reader:
         self.geometry_cache: dict = {}
         self.material_cache: dict = {}
         self.inline_stack: list[Path] = []
+        self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
 
     # -- documents ---------------------------------------------------------------
     def document(self, tree, path: Path, display: str, matrix, scene=None, name=None):
@@ -75,9 +88,13 @@ class _Reader:
         scenes = [child for child in root if local_name(child) == "Scene"]
         if not scenes:
             raise SceneError("no <Scene> element", path=display, line=root.sourceline)
+        if _expanded_size(context, scenes[0], {}) > MAX_NODES:
+            raise context.error(
+                scenes[0], f"the scene expands (through DEF/USE) to more than {MAX_NODES} nodes"
+            )
         self.inline_stack.append(path.resolve())
         try:
-            self.children(context, scenes[0], matrix, [], name)
+            self.children(context, scenes[0], matrix, name)
         finally:
             self.inline_stack.pop()
 
@@ -98,7 +115,7 @@ class _Reader:
                 scene.meters_per_unit = value
 
     # -- traversal ---------------------------------------------------------------
-    def children(self, context: Context, element, matrix, stack, name):
+    def children(self, context: Context, element, matrix, name):
         tag = local_name(element)
         nodes = [child for child in element if local_name(child)]
         rendered = [
@@ -112,21 +129,28 @@ class _Reader:
                 context.warn(element, f"LOD: level 0 of {len(rendered)} used")
             rendered = rendered[:1]
         for child in rendered:
-            self.node(context, child, matrix, stack, name)
+            self.node(context, child, matrix, name)
 
-    def node(self, context: Context, written, matrix, stack, name):
+    def node(self, context: Context, written, matrix, name):
         element = context.resolve(written)
-        if any(element is ancestor for ancestor in stack):
+        if id(element) in self.open_groups:
             raise context.error(
                 written, f"DEF/USE cycle: '{written.get('USE')}' is used inside itself"
             )
         tag = local_name(element)
         name = element.get("DEF") or name
+        if "visible" in DEFAULTS.get(tag, {}) and not context.field(element, "visible"):
+            context.warn(element, "visible='false': skipped")
+            return
         if tag in GROUPS:
             if tag == "Billboard":
                 context.warn(element, "Billboard: children kept unrotated (no viewer)")
             local = _local_matrix(context, element, tag)
-            self.children(context, element, matrix @ local, [*stack, element], name)
+            self.open_groups.add(id(element))  # the element stays alive meanwhile
+            try:
+                self.children(context, element, matrix @ local, name)
+            finally:
+                self.open_groups.discard(id(element))
         elif tag == "Shape":
             self.shape(context, element, matrix, name)
         elif tag in LIGHTS:
@@ -138,7 +162,7 @@ class _Reader:
         elif tag in SILENT or tag.startswith("Metadata"):
             pass
         else:
-            self._skip(context, element, tag)
+            self._skip(context, element, tag, _why(tag))
 
     def _skip(self, context: Context, element, tag: str, why: str = "not modelled") -> None:
         entry = self.skipped.setdefault((tag, why), [context.where(element), 0])
@@ -246,6 +270,28 @@ class _Reader:
         return Tolerance.for_points(*points, **settings)
 
 
+def _why(tag: str) -> str:
+    for words, reason in REASONS:
+        if any(word in tag for word in words):
+            return reason
+    return "not modelled"
+
+
+def _expanded_size(context: Context, element, sizes: dict) -> int:
+    """Number of nodes the subtree stands for once every USE is expanded,
+    counted in linear time (each DEF'd node once); a cycle counts 0 here and
+    is reported by the traversal."""
+    target = context.defs.get(element.get("USE")) if element.get("USE") else element
+    if target is None:
+        return 1
+    if target in sizes:
+        return sizes[target]
+    sizes[target] = 0
+    size = 1 + sum(_expanded_size(context, child, sizes) for child in target if local_name(child))
+    sizes[target] = min(size, MAX_NODES + 1)
+    return sizes[target]
+
+
 def _version(root, display: str, warnings: list[str]) -> tuple[int, int]:
     text = root.get("version", "4.0")
     match = re.fullmatch(r"\s*(\d+)\.(\d+)\s*", text)
@@ -321,6 +367,10 @@ def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None
     tree = x3d_parse.parse(path)
     scene = Scene(path=str(path), document=tree)
     reader = _Reader(path.resolve().parent, scene.warnings)
-    reader.document(tree, path, str(path), np.eye(4), scene)
+    try:
+        reader.document(tree, path, str(path), np.eye(4), scene)
+    except RecursionError:
+        message = "nodes nested too deeply (through DEF/USE or Inline)"
+        raise SceneError(message, path=str(path)) from None
     reader.finish(scene, tolerance, chord)
     return scene
