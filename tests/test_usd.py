@@ -383,3 +383,29 @@ def test_any_scene_round_trips_exactly(tmp_path_factory, shapes, binary):
         np.testing.assert_array_equal(read.transform, original.transform)
         np.testing.assert_array_equal(read.vertices[read.faces], original.vertices[original.faces])
         assert read.solid == original.solid
+
+
+def test_corpus_scenes_write_valid_gltf_and_usd(tmp_path, corpus_dir, node_tools):
+    """Every real X3D scene the reader accepts writes a .glb and a .usdc that
+    their validators pass and that read back with the same triangles and lights."""
+    from validators import gltf_problems, gltf_reports
+
+    pytest.importorskip("shadowgeo.io.x3d_read")
+    written = []
+    for source in sorted(corpus_dir.rglob("*.x3d")):
+        try:
+            scene = sg.load(source)
+        except sg.SceneError:
+            continue  # the X3D reader's own tests judge these
+        n_faces = sum(s.n_faces for s in scene.shapes)
+        for suffix in (".glb", ".usdc"):
+            path = tmp_path / f"{source.stem}{suffix}"
+            sg.save(scene, path)
+            back = sg.load(path)
+            assert sum(s.n_faces for s in back.shapes) == n_faces, path.name
+            assert len(back.lights) == len(scene.lights), path.name
+        assert usd_errors(tmp_path / f"{source.stem}.usdc", warnings=True) == [], source.name
+        written.append(tmp_path / f"{source.stem}.glb")
+    assert len(written) >= 10
+    for path, report in zip(written, gltf_reports(written), strict=True):
+        assert gltf_problems(report) == [], path.name
