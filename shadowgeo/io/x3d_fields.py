@@ -38,7 +38,6 @@ WIDTH = {
 }  # fmt: skip
 # Fields holding angles, scaled by an X3D ``<unit category="angle">``.
 ANGLE_FIELDS = {"cutOffAngle", "beamWidth", "creaseAngle"}
-_SEPARATORS = re.compile(r"[\s,]+")
 _STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
 
 
@@ -166,9 +165,9 @@ def parse(text: str, kind: str):
 
 
 def _numbers(text: str, kind: str) -> np.ndarray:
-    words = [word for word in _SEPARATORS.split(text.strip()) if word]
+    words = text.replace(",", " ").split()  # X3D separates by white space or commas
     try:
-        numbers = np.array([float(word) for word in words], dtype=np.float64)
+        numbers = np.array(words, dtype=np.float64)
     except ValueError:
         bad = next(word for word in words if not _is_number(word))
         raise ValueError(f"is not numbers ({kind}: '{bad[:20]}' is not a number)") from None

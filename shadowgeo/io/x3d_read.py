@@ -237,7 +237,9 @@ class _Reader:
             if isinstance(built, Primitive):
                 stretch = float(np.linalg.norm(instance.transform[:3, :3], 2)) or 1.0
                 local_chord = tolerance.chord_length / stretch
-                key = (id(built), None if built.kind == "Box" else local_chord)
+                # equal primitives share one tessellation (and its arrays)
+                parameters = tuple(sorted(built.parameters.items()))
+                key = (built.kind, parameters, None if built.kind == "Box" else local_chord)
                 if key not in tessellated:
                     tessellated[key] = built.tessellate(local_chord)
                 built = tessellated[key]
