@@ -277,3 +277,10 @@ def test_deep_def_use_chain_is_an_error_not_a_crash(tmp_path):
     levels += [f'<Group DEF="g{i}"><Group USE="g{i - 1}"/></Group>' for i in range(1, 1500)]
     with pytest.raises(sg.SceneError, match="nested too deeply"):
         sg.load(scene(tmp_path, "\n".join(levels)))
+
+
+def test_over_long_attribute_is_refused_clearly(tmp_path):
+    points = " ".join(["1.25 2.5 3.75"] * 800_000)  # 11 MB in one attribute
+    body = f'<Shape><TriangleSet><Coordinate point="{points}"/></TriangleSet></Shape>'
+    with pytest.raises(sg.SceneError, match="longer than libxml2's 10 MB limit"):
+        sg.load(scene(tmp_path, body))

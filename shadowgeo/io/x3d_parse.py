@@ -63,8 +63,15 @@ def parse(path: Path) -> etree._ElementTree:
     try:
         tree = etree.parse(io.BytesIO(data), _parser())
     except etree.XMLSyntaxError as problem:
-        message = problem.msg or str(problem)
-        raise SceneError(f"malformed XML: {message}", path=str(path), line=problem.lineno) from None
+        message = (problem.msg or str(problem)).strip()
+        if "limit" in message.lower() and "amplification" not in message.lower():
+            message = (
+                "a text or attribute value is longer than libxml2's 10 MB limit for untrusted "
+                f"input ({message.splitlines()[0]})"
+            )
+        else:
+            message = f"malformed XML: {message}"
+        raise SceneError(message, path=str(path), line=problem.lineno) from None
     dtd = tree.docinfo.internalDTD
     if dtd is not None:
         entities = [entity.name for entity in dtd.entities()]
