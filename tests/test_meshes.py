@@ -268,3 +268,38 @@ def test_any_trs_scene_round_trips_through_glb(tmp_path_factory, shapes):
         np.testing.assert_array_equal(read.transform, original.transform)
         error = np.abs(_triangles(read) - _triangles(original)).max()
         assert error <= _local_bound(original)
+
+
+def test_foreign_gltf_lights_take_the_spec_defaults(tmp_path):
+    # KHR_lights_punctual: innerConeAngle defaults to 0, outerConeAngle to pi/4,
+    # no range means unlimited; the node's -Z is the direction.
+    document = {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "spot", "spot": {}}]}},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {
+                "name": "lamp",
+                "translation": [1, 2, 3],
+                "rotation": [-math.sqrt(0.5), 0, 0, math.sqrt(0.5)],  # -90 deg about x
+                "extensions": {"KHR_lights_punctual": {"light": 0}},
+            }
+        ],
+    }
+    path = tmp_path / "lamp.gltf"
+    path.write_text(json.dumps(document))
+    (lamp,) = sg.load(path).lights
+    assert lamp.name == "lamp" and isinstance(lamp.light, sg.SpotLight)
+    assert lamp.light.cut_off_angle == pytest.approx(math.pi / 4) and lamp.beam_width == 0
+    assert lamp.light.radius == math.inf
+    np.testing.assert_allclose(lamp.light.position, [1, 2, 3])
+    # -90 degrees about x turns -Z into -Y: the lamp points down.
+    np.testing.assert_allclose(lamp.light.direction, [0, -1, 0], atol=1e-12)
+
+
+def test_gltf_writer_refuses_a_scale_that_is_not_positive(tmp_path):
+    with pytest.raises(sg.SceneError, match=r"metersPerUnit must be > 0"):
+        sg.save(sg.Scene(meters_per_unit=0.0), tmp_path / "zero.glb")
+    assert list(tmp_path.iterdir()) == []

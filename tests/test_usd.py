@@ -409,3 +409,23 @@ def test_corpus_scenes_write_valid_gltf_and_usd(tmp_path, corpus_dir, node_tools
     assert len(written) >= 10
     for path, report in zip(written, gltf_reports(written), strict=True):
         assert gltf_problems(report) == [], path.name
+
+
+def test_an_animated_stage_reads_at_its_first_time_sample(tmp_path):
+    def build(stage):
+        mesh = UsdGeom.Mesh.Define(stage, "/Moving")
+        mesh.CreateFaceVertexCountsAttr([3])
+        mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
+        points = mesh.CreatePointsAttr()
+        points.Set([(0, 0, 0), (1, 0, 0), (0, 1, 0)], 10.0)
+        points.Set([(0, 0, 0), (5, 0, 0), (0, 5, 0)], 20.0)
+        move = mesh.AddTranslateOp()
+        move.Set(Gf.Vec3d(1, 2, 3), 10.0)
+        move.Set(Gf.Vec3d(9, 9, 9), 20.0)
+
+    path = tmp_path / "moving.usda"
+    _author(path, build)
+    (shape,) = sg.load(path).shapes
+    np.testing.assert_array_equal(
+        shape.world_vertices[shape.faces[0]], [[1, 2, 3], [2, 2, 3], [1, 3, 3]]
+    )

@@ -116,6 +116,8 @@ def _root_matrix(scene: Scene) -> np.ndarray | None:
     up = (scene.up_axis or "Y").upper()
     if up not in ("Y", "Z"):
         raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}", path=scene.path)
+    if not (math.isfinite(scene.meters_per_unit) and scene.meters_per_unit > 0):
+        raise SceneError(f"metersPerUnit must be > 0, got {scene.meters_per_unit!r}")
     if up == "Y" and scene.meters_per_unit == 1.0:
         return None
     matrix = np.eye(4)

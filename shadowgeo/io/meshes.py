@@ -146,7 +146,7 @@ def _light(entry: dict, world: np.ndarray, name: str | None, extras: dict) -> Sc
         raise ValueError(f"unknown light type {kind!r}")
     beam = extras.get("beamWidth")
     if beam is None:
-        beam = (entry.get("spot") or {}).get("innerConeAngle", math.pi / 4)
+        beam = (entry.get("spot") or {}).get("innerConeAngle", 0.0)  # the spec's default
     return SceneLight(
         light,
         name=name if name is not None else entry.get("name"),

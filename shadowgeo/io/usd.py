@@ -495,7 +495,7 @@ def read(path, **options) -> Scene:
     Returns
     -------
     Scene
-        One shape per ``UsdGeom.Mesh`` (world transform at the default time,
+        One shape per ``UsdGeom.Mesh`` (world transform at the first time,
         polygons fanned into triangles, left-handed ones flipped), the sphere,
         spot and distant lights, the stage's ``upAxis`` and ``metersPerUnit``.
         Other geometry and lights are skipped with a warning; invisible and
@@ -526,7 +526,8 @@ def read(path, **options) -> Scene:
         up_axis="Z" if up == UsdGeom.Tokens.z else "Y",
         meters_per_unit=float(UsdGeom.GetStageMetersPerUnit(stage)),
     )
-    time = Usd.TimeCode.Default()
+    # An animated stage reads at its first time sample; a static one at its defaults.
+    time = Usd.TimeCode.EarliestTime()
     indices: list[int | None] = []
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
         where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
