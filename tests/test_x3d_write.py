@@ -196,3 +196,54 @@ def test_fresh_document_is_valid_x3d_4_with_exact_transforms(tmp_path, x3d_schem
     spot = root.find(".//SpotLight")
     assert float(spot.get("cutOffAngle")) == 0.5 and float(spot.get("radius")) == 20
     assert root.find("Scene/Group[@DEF='shadows_lamp']/Shape") is not None
+
+
+# -- through the reader ------------------------------------------------------------------
+
+
+def test_converting_a_converted_file_again_changes_nothing(tmp_path):
+    first, second = tmp_path / "first.x3d", tmp_path / "second.x3d"
+    sg.save(sg.add_shadows(sg.load(EXAMPLE)), first)
+    group = parse(first).getroot().find("Scene/Group")
+    assert group.get("class") == "shadowgeo-shadows"
+    again = sg.add_shadows(sg.load(first))
+    assert any("baked by an earlier run" in w for w in again.warnings)
+    sg.save(again, second)
+    assert second.read_bytes() == first.read_bytes()
+
+
+def test_fresh_document_reads_back_the_same(tmp_path):
+    rng = np.random.default_rng(3)
+    matrix = np.eye(4)
+    matrix[:3, :3] = rng.normal(size=(3, 3))
+    matrix[:3, 3] = [5.0, -2.0, 1.0]
+    vertices = rng.normal(size=(6, 3))
+    faces = np.array([[0, 1, 2], [3, 4, 5], [0, 2, 4]])
+    shape = sg.Shape(vertices, faces, transform=matrix, name="thing", solid=False)
+    shape.material = sg.Material((0.2, 0.4, 0.6), transparency=0.25)
+    lights = [
+        sg.SceneLight(sg.PointLight([1, 2, 3], radius=50), name="bulb", shadows=True),
+        sg.SceneLight(sg.DirectionalLight([0.0, -1.0, 0.0]), name="sun", shadow_intensity=0.4),
+    ]
+    out = tmp_path / "fresh.x3d"
+    x3d_write.write(sg.Scene([shape], lights), out)
+    back = sg.load(out)
+    (read,) = back.shapes
+    assert read.name == "thing" and not read.solid
+    assert np.allclose(read.world_vertices[read.faces], shape.world_vertices[faces], atol=1e-9)
+    assert read.material.diffuse_color == pytest.approx((0.2, 0.4, 0.6))
+    assert read.material.transparency == pytest.approx(0.25)
+    by_name = {light.name: light for light in back.lights}
+    assert by_name["bulb"].shadows and by_name["bulb"].light.radius == 50
+    assert np.allclose(by_name["bulb"].light.position, [1, 2, 3])
+    assert by_name["sun"].shadow_intensity == pytest.approx(0.4)
+    assert np.allclose(by_name["sun"].light.direction, [0, -1, 0])
+
+
+def test_added_shadows_read_back_in_world_coordinates(tmp_path):
+    result = sg.add_shadows(sg.load(EXAMPLE))
+    (shadow,) = result.shapes_with_role("shadow")
+    out = tmp_path / "out.x3d"
+    sg.save(result, out)
+    read = {s.name: s for s in sg.load(out).shapes}["shadow_lamp_ground"]
+    assert np.array_equal(read.world_vertices[read.faces], shadow.world_vertices[shadow.faces])

@@ -8,7 +8,10 @@ Two cases:
   ``<Scene>``. Scripts, routes, viewpoints, metadata, comments, the DOCTYPE and
   the ``version`` attribute stay as they were; the added nodes (Group, Shape,
   Appearance, Material, IndexedTriangleSet, Coordinate) exist in every X3D
-  version from 3.0, so the version stays valid.
+  version from 3.0, so the version stays valid. The added groups have
+  ``class="shadowgeo-shadows"``: writing added shapes over a document that
+  already has such groups (a converted file converted again) replaces them
+  rather than stacking a second set.
 * Otherwise (glTF, USD, mesh input, or a scene built in code): a fresh X3D 4.0
   document with the lights, one ``Transform`` (translation, rotation, scale,
   scaleOrientation: any affine transform exactly) around each shape that is
@@ -32,7 +35,7 @@ from lxml import etree
 from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
-from ..scene.shadows import safe_name
+from ..scene.shadows import MARK, safe_name
 from .atomic import atomic_path
 
 ADDED_ROLES = ("shadow", "volume")
@@ -76,11 +79,29 @@ def _with_added(scene: Scene):
     body = root.find(f"{namespace}Scene")
     if body is None:
         raise SceneError("the X3D document has no <Scene> element", path=scene.path)
+    added = [s for s in scene.shapes if s.role in ADDED_ROLES]
+    if added:
+        _remove_marked(tree)
     used = set(tree.xpath("//@DEF"))
-    groups = _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used, namespace)
+    groups = _add_groups(body, added, used, namespace)
     if groups:
         _indent(body, groups)
     return tree
+
+
+def _remove_marked(tree) -> None:
+    """Drop the groups an earlier run added (they are being replaced), keeping
+    the whitespace around them as it was."""
+    for group in tree.xpath(
+        f"//*[contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')]"
+    ):
+        parent = group.getparent()
+        previous = group.getprevious()
+        if previous is not None:
+            previous.tail = group.tail
+        else:
+            parent.text = group.tail
+        parent.remove(group)
 
 
 def _add_groups(parent, shapes: list[Shape], used: set[str], namespace: str = "") -> list:
@@ -89,7 +110,9 @@ def _add_groups(parent, shapes: list[Shape], used: set[str], namespace: str = ""
     for shape in shapes:
         key = shape.group or f"shadows_{shape.role}"
         if key not in groups:
-            groups[key] = etree.SubElement(parent, f"{namespace}Group", DEF=_unique(key, used))
+            groups[key] = etree.SubElement(
+                parent, f"{namespace}Group", DEF=_unique(key, used), attrib={"class": MARK}
+            )
         groups[key].append(_shape_element(shape, used, namespace, world=True))
     return list(groups.values())
 

@@ -58,6 +58,8 @@ from .receivers import select as select_receivers
 # shape's area and of the scene's bounding-box diagonal.
 _RECEIVER_AREA_FRACTION = 0.25
 _RECEIVER_SIZE_FRACTION = 0.25
+# The X3D ``class`` of the groups of added shapes (see shadowgeo.io.x3d_write).
+MARK = "shadowgeo-shadows"
 # Default lift of shadows off their receiver, relative to the scene's size.
 _DEFAULT_OFFSET = 1e-3
 
@@ -130,7 +132,8 @@ def add_shadows(
     if receivers is not None and plane is not None:
         raise GeometryError("give receivers or plane, not both")
     notes: list[str] = []
-    geometry = [s for s in scene.shapes if s.role == "geometry" and s.n_faces]
+    kept = _without_baked(scene, notes)
+    geometry = [s for s in kept if s.role == "geometry" and s.n_faces]
     chosen = _select_lights(scene, lights, notes)
     positions = [light.light.position for light in chosen if is_positional(light.light)]
     if not isinstance(tolerance, Tolerance):
@@ -140,7 +143,7 @@ def add_shadows(
     lift = _DEFAULT_OFFSET * tolerance.scale if offset is None else float(offset)
     if not math.isfinite(lift) or lift < 0:
         raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")
-    names = _Names(scene)
+    names = _Names(kept, scene.lights)
 
     if method == "volume":
         added = _volumes(scene, geometry, chosen, tolerance, names, notes, progress)
@@ -163,9 +166,23 @@ def add_shadows(
                 shape.name = names.unique(f"shadow_{light_name}_{receiver.name}")
                 shape.group = group
                 added.append(shape)
-    return dataclasses.replace(
-        scene, shapes=[*scene.shapes, *added], warnings=[*scene.warnings, *notes]
-    )
+    return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
+
+
+def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
+    """The scene's shapes less those an earlier run baked into its X3D document
+    (Shapes inside a Group of class ``MARK``): they are replaced, not shadowed."""
+    if not hasattr(scene.document, "xpath"):
+        return list(scene.shapes)
+    marked = f"contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')"
+    baked = set(scene.document.xpath(f"//*[{marked}]//*[local-name()='Shape']/@DEF"))
+    kept = [s for s in scene.shapes if not (s.name in baked and s.role == "geometry")]
+    if len(kept) < len(scene.shapes):
+        notes.append(
+            f"shadows: {len(scene.shapes) - len(kept)} shadow shapes baked by an earlier run "
+            "are replaced"
+        )
+    return kept
 
 
 def safe_name(text: str) -> str:
@@ -182,11 +199,11 @@ def safe_name(text: str) -> str:
 class _Names:
     """Unique DEF-safe names, avoiding every name the scene already uses."""
 
-    def __init__(self, scene: Scene) -> None:
-        self.used = {s.name for s in scene.shapes if s.name} | {
-            light.name for light in scene.lights if light.name
+    def __init__(self, shapes: list[Shape], lights: list[SceneLight]) -> None:
+        self.used = {s.name for s in shapes if s.name} | {
+            light.name for light in lights if light.name
         }
-        self.used |= set(s.group for s in scene.shapes if s.group)
+        self.used |= set(s.group for s in shapes if s.group)
 
     def unique(self, text: str) -> str:
         base = name = safe_name(text)
