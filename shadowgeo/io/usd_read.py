@@ -1,0 +1,302 @@
+"""USD reader: ``UsdGeom.Mesh`` prims and UsdLux lights into a :class:`Scene`.
+
+:mod:`.usd` (the writer) describes the layout shadowgeo writes; this reads it
+back exactly (``shadowgeo:`` attributes restore the float64 points, roles,
+groups and X3D light fields) and reads USD from other tools too: polygons are
+fanned into triangles (right for convex polygons), ``leftHanded`` meshes are
+flipped, an animated stage is read at its first time sample, invisible and
+guide meshes are skipped, other geometry (Cube, Sphere, ...) and lights (Rect,
+Dome, ...) are skipped with a warning.
+
+Before usd-core composes a file, every layer it would pull in (sublayers,
+references, payloads) must be a file inside the scene's folder; anything else
+is refused.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from ..lights import DirectionalLight, PointLight, SpotLight
+from ..scene import Material, Scene, SceneLight, Shape
+
+
+def _pxr():
+    """usd-core's modules, imported when first needed (it is slow to load)."""
+    from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
+
+    return Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
+
+
+def _check_layers(path: Path) -> None:
+    """Refuse a file whose sublayers, references or payloads are remote or
+    outside its folder, before usd-core composes (and so opens) them."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+    folder = path.resolve().parent
+    pending, seen = [path.resolve()], set()
+    while pending:
+        current = pending.pop()
+        if current in seen:
+            continue
+        seen.add(current)
+        try:
+            # Anonymous: read afresh, never a stale copy from the layer registry.
+            layer = Sdf.Layer.OpenAsAnonymous(str(current))
+        except Tf.ErrorException as error:
+            raise SceneError(f"not a USD file: {_first_line(error)}", path=str(current)) from None
+        if layer is None:
+            raise SceneError("not a USD file", path=str(current))
+        for asset in layer.GetCompositionAssetDependencies():
+            where = f"layer dependency {asset!r}"
+            if not asset:
+                continue
+            if ":" in asset.split("/")[0] or asset.startswith(("/", "\\")):
+                raise SceneError("refused: not a relative path", path=str(path), node=where)
+            target = (current.parent / asset).resolve()
+            if not target.is_relative_to(folder):
+                raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
+            if not target.is_file():
+                raise SceneError("missing layer", path=str(path), node=where)
+            pending.append(target)
+
+
+def _first_line(error: Exception) -> str:
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    return lines[-1] if lines else type(error).__name__
+
+
+def _world(xformable, time) -> np.ndarray:
+    """(4, 4) column-vector local-to-world transform of a prim."""
+    return np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
+
+
+def _shadowgeo(prim, name: str, default=None):
+    attribute = prim.GetAttribute(f"shadowgeo:{name}")
+    if attribute and attribute.HasAuthoredValue():
+        return attribute.Get()
+    return default
+
+
+def _name(prim, marker: str) -> str | None:
+    """The original name: the displayName; for an unnamed shape or light that
+    shadowgeo wrote (it has the ``shadowgeo:`` ``marker`` attribute), None;
+    otherwise the prim's name."""
+    if prim.GetDisplayName():
+        return prim.GetDisplayName()
+    return None if prim.GetAttribute(f"shadowgeo:{marker}") else prim.GetName()
+
+
+def _triangles(counts: np.ndarray, indices: np.ndarray, holes) -> tuple[np.ndarray, int]:
+    """(m, 3) triangles fanned from polygons, and how many polygons were dropped
+    (fewer than 3 vertices, or holes). Fans are right for convex polygons."""
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    keep = counts >= 3
+    if len(holes):
+        keep[np.asarray(holes, dtype=np.int64)] = False
+    triangles = []
+    for fan in range(3, int(counts.max(initial=3)) + 1):
+        polygons = np.flatnonzero(keep & (counts >= fan))
+        if len(polygons):
+            first = starts[polygons]
+            triangles.append(
+                (
+                    polygons,
+                    np.stack(
+                        [indices[first], indices[first + fan - 2], indices[first + fan - 1]],
+                        axis=1,
+                    ),
+                )
+            )
+    if not triangles:
+        return np.zeros((0, 3), dtype=np.int64), int((~keep).sum())
+    # Keep each polygon's triangles together, in the file's polygon order.
+    order = np.concatenate([polygons for polygons, _ in triangles])
+    faces = np.concatenate([faces for _, faces in triangles])
+    return faces[np.argsort(order, kind="stable")], int((~keep).sum())
+
+
+def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+    mesh = UsdGeom.Mesh(prim)
+    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+    points = np.array(mesh.GetPointsAttr().Get(time) or [], dtype=np.float64).reshape(-1, 3)
+    exact = _shadowgeo(prim, "points")
+    if exact is not None:
+        exact = np.array(exact, dtype=np.float64).reshape(-1, 3)
+        # The float64 copy counts only while it still matches what tools see.
+        if exact.shape == points.shape and np.array_equal(exact.astype(np.float32), points):
+            points = exact
+    counts = np.array(mesh.GetFaceVertexCountsAttr().Get(time) or [], dtype=np.int64)
+    indices = np.array(mesh.GetFaceVertexIndicesAttr().Get(time) or [], dtype=np.int64)
+    if counts.sum() != len(indices):
+        raise SceneError(
+            f"faceVertexCounts add up to {int(counts.sum())} but there are "
+            f"{len(indices)} faceVertexIndices",
+            path=str(path),
+            node=where,
+        )
+    if len(indices) and (indices.min() < 0 or indices.max() >= len(points)):
+        raise SceneError(
+            f"faceVertexIndices refer to point {int(indices.max())} of {len(points)}",
+            path=str(path),
+            node=where,
+        )
+    faces, dropped = _triangles(counts, indices, mesh.GetHoleIndicesAttr().Get(time) or [])
+    if dropped:
+        scene.warnings.append(f"{path.name}: {where}: skipped {dropped} holes or degenerate faces")
+    if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
+        faces = faces[:, ::-1]
+    opacity = mesh.GetDisplayOpacityPrimvar().Get(time)
+    color = mesh.GetDisplayColorPrimvar().Get(time)
+    material = Material(
+        diffuse_color=tuple(float(c) for c in color[0]) if color else Material().diffuse_color,
+        transparency=1.0 - float(opacity[0]) if opacity else 0.0,
+    )
+    bound, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+    if bound:
+        shader = bound.ComputeSurfaceSource()[0]
+        emissive = shader.GetInput("emissiveColor") if shader else None
+        if emissive and emissive.Get() is not None:
+            material.emissive_color = tuple(float(c) for c in emissive.Get())
+        roughness = shader.GetInput("roughness") if shader else None
+        if roughness and roughness.Get() is not None:
+            material.shininess = 1.0 - float(roughness.Get())
+        material.name = bound.GetPrim().GetDisplayName() or None
+    parent = prim.GetParent()
+    scene.shapes.append(
+        Shape(
+            points,
+            faces,
+            _world(mesh, time),
+            material=material,
+            name=_name(prim, "role"),
+            solid=not mesh.GetDoubleSidedAttr().Get(time),
+            role=_shadowgeo(prim, "role", "geometry"),
+            group=_shadowgeo(parent, "group") if parent else None,
+            source=f"{path.name}, {where}",
+            casts_shadow=bool(_shadowgeo(prim, "castsShadow", True)),
+            receives_shadow=bool(_shadowgeo(prim, "receivesShadow", False)),
+        )
+    )
+
+
+def _read_light(scene: Scene, prim, time) -> bool:
+    """Append the light at ``prim``; False when it is no light shadowgeo models."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+    if prim.IsA(UsdLux.DistantLight):
+        usd_light = UsdLux.DistantLight(prim)
+    elif prim.IsA(UsdLux.SphereLight):
+        usd_light = UsdLux.SphereLight(prim)
+    else:
+        return False
+    world = _world(usd_light, time)
+    direction = world[:3, :3] @ [0.0, 0.0, -1.0]
+    radius = float(_shadowgeo(prim, "range", math.inf))
+    beam = _shadowgeo(prim, "beamWidth")
+    if isinstance(usd_light, UsdLux.DistantLight):
+        light = DirectionalLight(direction)
+    else:
+        shaping = UsdLux.ShapingAPI(prim)
+        cone = (
+            shaping.GetShapingConeAngleAttr().Get(time) if prim.HasAPI(UsdLux.ShapingAPI) else None
+        )
+        if cone is not None and 0 < cone <= 90:
+            cut_off = math.radians(cone)
+            exact = _shadowgeo(prim, "cutOffAngle")
+            if exact is not None and abs(exact - cut_off) <= 1e-6 * cut_off:
+                cut_off = float(exact)
+            light = SpotLight(world[:3, 3], direction, min(cut_off, math.pi / 2), radius)
+            if beam is None:
+                softness = shaping.GetShapingConeSoftnessAttr().Get(time) or 0.0
+                beam = (1.0 - softness) * light.cut_off_angle
+        else:
+            light = PointLight(world[:3, 3], radius)
+    shadow = UsdLux.ShadowAPI(prim).GetShadowEnableAttr().Get(time)
+    visibility = usd_light.ComputeVisibility(time)
+    scene.lights.append(
+        SceneLight(
+            light,
+            name=_name(prim, "global"),
+            color=tuple(float(c) for c in (usd_light.GetColorAttr().Get(time) or (1, 1, 1))),
+            intensity=float(usd_light.GetIntensityAttr().Get(time) or 0.0),
+            ambient_intensity=float(_shadowgeo(prim, "ambientIntensity", 0.0)),
+            attenuation=tuple(float(a) for a in _shadowgeo(prim, "attenuation", (1.0, 0.0, 0.0))),
+            beam_width=float(beam if beam is not None else math.pi / 4),
+            on=visibility != UsdGeom.Tokens.invisible,
+            global_=bool(_shadowgeo(prim, "global", True)),
+            shadows=bool(shadow),
+            shadow_intensity=float(_shadowgeo(prim, "shadowIntensity", 1.0)),
+        )
+    )
+    return True
+
+
+def read(path, **options) -> Scene:
+    """Read a USD file into a :class:`Scene`.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.usda``, ``.usdc`` or ``.usd``.
+
+    Returns
+    -------
+    Scene
+        One shape per ``UsdGeom.Mesh`` (world transform at the first time,
+        polygons fanned into triangles, left-handed ones flipped), the sphere,
+        spot and distant lights, the stage's ``upAxis`` and ``metersPerUnit``.
+        Other geometry and lights are skipped with a warning; invisible and
+        guide-purpose meshes are skipped.
+
+    Raises
+    ------
+    SceneError
+        Missing or corrupt file, a layer outside the file's folder, or a mesh
+        whose indices do not match its points.
+    """
+    path = Path(path)
+    if options:
+        raise SceneError(f"USD reader takes no options, got {sorted(options)}", path=str(path))
+    if not path.is_file():
+        raise SceneError("no such file", path=str(path))
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+    _check_layers(path)
+    try:
+        stage = Usd.Stage.Open(str(path))
+    except Tf.ErrorException as error:
+        raise SceneError(f"cannot open: {_first_line(error)}", path=str(path)) from None
+    if stage is None:
+        raise SceneError("cannot open", path=str(path))
+    up = UsdGeom.GetStageUpAxis(stage)
+    scene = Scene(
+        path=str(path),
+        up_axis="Z" if up == UsdGeom.Tokens.z else "Y",
+        meters_per_unit=float(UsdGeom.GetStageMetersPerUnit(stage)),
+    )
+    # An animated stage reads at its first time sample; a static one at its defaults.
+    time = Usd.TimeCode.EarliestTime()
+    indices: list[int | None] = []
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
+        where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+        if prim.IsA(UsdGeom.Mesh):
+            imageable = UsdGeom.Imageable(prim)
+            if imageable.ComputeVisibility(time) == UsdGeom.Tokens.invisible:
+                continue
+            if imageable.ComputePurpose() == UsdGeom.Tokens.guide:
+                continue
+            _read_mesh(scene, prim, path, time)
+            indices.append(_shadowgeo(prim, "index"))
+        elif prim.IsA(UsdGeom.Gprim):
+            scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
+        elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
+            if not _read_light(scene, prim, time):
+                scene.warnings.append(f"{path.name}: skipped {where}: not a point, spot or sun")
+    # Shapes shadowgeo wrote carry their place in the scene; others follow in file order.
+    keys = [(0, index) if index is not None else (1, 0) for index in indices]
+    order = sorted(range(len(keys)), key=keys.__getitem__)
+    scene.shapes = [scene.shapes[i] for i in order]
+    return scene
