@@ -441,8 +441,21 @@ def test_corpus_matrix_transform_spheres(corpus_dir):
     scene = sg.load(corpus_dir / "x3d" / "matrix_transform.x3d")
     centres = sorted(shape.world_vertices.mean(axis=0)[0] for shape in scene.shapes)
     np.testing.assert_allclose(centres, [0, 2, 4], atol=1e-9)
+    # three unit spheres, inscribed within the chord of the scene's size
+    chord = sg.Tolerance.for_points(*[s.world_vertices for s in scene.shapes]).chord_length
+    np.testing.assert_allclose(scene.bounds, [[-1, -1, -1], [5, 1, 1]], atol=chord)
     (light,) = scene.lights
     np.testing.assert_allclose(light.light.position, [0, 3, 0])
+
+
+def test_corpus_blender_cube_bounds_by_hand(corpus_dir):
+    # points span x, y in [-1, 1], z in [-1, 4]; scale (5, 5, 1); a half turn about
+    # (0, 1, 1) / sqrt 2 is (x, y, z) -> (-x, z, y); then up by 1:
+    # (x, y, z) -> (-5 x, z + 1, 5 y), so the box is [-5, 5] x [0, 5] x [-5, 5]
+    scene = sg.load(corpus_dir / "x3d" / "test_world.x3d")
+    np.testing.assert_allclose(scene.bounds, [[-5, 0, -5], [5, 5, 5]], atol=1e-5)
+    assert scene.shapes[0].name == "group_ME_Cube" and scene.shapes[0].n_faces == 12
+    assert scene.shapes[0].material.diffuse_color == (0.5, 0.5, 1.0)
 
 
 def test_corpus_use_goes_to_its_default_container_field(corpus_dir):
