@@ -319,3 +319,13 @@ def test_a_ground_slab_receives_on_its_top_and_a_rug_on_it_casts_nothing():
     region, triangle_sum = xz_union(shadow)
     assert region.symmetric_difference(shapely.box(-1, -1, 1, 1)).area < 1e-9
     assert triangle_sum == pytest.approx(4.0, rel=1e-9)
+
+
+def test_progress_counts_up_to_the_total():
+    cubes = [box([x, 1, -0.5], [x + 0.5, 2, 0.5], f"c{x}") for x in (-2, 0, 2)]
+    lights = [light([0, 4, 0], "a", shadows=True), light([1, 5, 0], "b", shadows=True)]
+    calls = []
+    sg.add_shadows(sg.Scene([ground(), *cubes], lights), progress=lambda *a: calls.append(a))
+    done = [d for d, _ in calls]
+    assert done == sorted(done) and len(set(done)) > 2  # per caster, not per light
+    assert calls[-1][0] == calls[-1][1] == 2 * 1 * 4  # lights x receivers x shapes

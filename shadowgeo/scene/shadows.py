@@ -157,15 +157,22 @@ def add_shadows(
             group = names.unique(f"shadows_{light_name}")
             height = lift * (1 + index / len(chosen))
             for receiver in found:
-                shape = _shadow_on(receiver, light, casters, tolerance, height, notes, light_name)
+
+                def step(count: int, start: int = done) -> None:
+                    if progress is not None:
+                        progress(start + count, total)
+
+                shape = _shadow_on(
+                    receiver, light, casters, tolerance, height, notes, light_name, step
+                )
                 done += len(casters)
-                if progress is not None:
-                    progress(done, total)
                 if shape is None:
                     continue
                 shape.name = names.unique(f"shadow_{light_name}_{receiver.name}")
                 shape.group = group
                 added.append(shape)
+        if progress is not None:
+            progress(total, total)
     return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
 
 
@@ -315,7 +322,7 @@ def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Toleranc
     return bool(np.all(image2d.max(axis=0) >= low) and np.all(image2d.min(axis=0) <= high))
 
 
-def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_name):
+def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_name, step):
     """The united shadow of the casters on one receiver as a shape, or None."""
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
@@ -329,7 +336,8 @@ def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_nam
         rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
         region2d = flat
     loops = []
-    for caster in casters:
+    for count, caster in enumerate(casters, start=1):
+        step(count)
         if not _may_shadow(caster, light, plane, box2d, tolerance):
             continue
         mesh = caster.off_plane(receiver, tolerance)
