@@ -4,6 +4,8 @@ never a traceback, never an entity expanded, never the network."""
 from __future__ import annotations
 
 import gzip
+import json
+import re
 import socket
 
 import pytest
@@ -284,3 +286,24 @@ def test_over_long_attribute_is_refused_clearly(tmp_path):
     body = f'<Shape><TriangleSet><Coordinate point="{points}"/></TriangleSet></Shape>'
     with pytest.raises(sg.SceneError, match="longer than libxml2's 10 MB limit"):
         sg.load(scene(tmp_path, body))
+
+
+@pytest.mark.parametrize("uri", ["../secret.bin", "https://example.com/buffer.bin"])
+def test_inlined_gltf_may_not_reach_outside_the_folder(tmp_path, no_network, uri):
+    folder = tmp_path / "scene"
+    folder.mkdir()
+    (tmp_path / "secret.bin").write_bytes(bytes(36))
+    gltf = {
+        "asset": {"version": "2.0"},
+        "buffers": [{"uri": uri, "byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [0, 0, 0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+    }  # fmt: skip
+    (folder / "part.gltf").write_text(json.dumps(gltf))
+    path = scene(folder, "<Inline url='\"part.gltf\"'/>")
+    with pytest.raises(sg.SceneError, match=f"refers to '{re.escape(uri)}', outside the scene"):
+        sg.load(path)

@@ -10,6 +10,7 @@ is a SceneError.
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -70,9 +71,31 @@ def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name
     reader.document(tree, path, str(path), matrix, name=name)
 
 
+def _gltf_uris(path: Path) -> list[str]:
+    """The external ``uri`` of a glTF's buffers and images (JSON or GLB)."""
+    data = path.read_bytes()
+    if data[:4] == b"glTF":
+        length = int.from_bytes(data[12:16], "little")
+        data = data[20 : 20 + length]
+    try:
+        document = json.loads(data)
+    except ValueError:
+        return []  # trimesh will say what is wrong with it
+    items = [*document.get("buffers", []), *document.get("images", [])]
+    uris = [item.get("uri") for item in items if isinstance(item, dict)]
+    return [uri for uri in uris if isinstance(uri, str) and not uri.startswith("data:")]
+
+
 def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
     import trimesh
 
+    for uri in _gltf_uris(path):
+        target = (path.parent / uri).resolve()
+        if _URL_SCHEME.match(uri) or not target.is_relative_to(reader.root_folder):
+            raise context.error(
+                element,
+                f"glTF '{path.name}' refers to '{uri}', outside the scene's folder; refused",
+            )
     try:
         loaded = trimesh.load(str(path), force="scene")
     except Exception as problem:  # trimesh raises many types on bad files
