@@ -5,7 +5,8 @@ The same as ``shadowgeo convert examples/scenes/courtyard.x3d out.x3d`` (once
 per format), written out in Python.
 
 Run: python examples/converted_scene.py [output folder]
-(default: a temporary folder; the picture goes to docs/images/converted_scene.png)
+(default: the files go to a temporary folder and the picture to
+docs/images/converted_scene.png; given a folder, everything goes there)
 """
 
 from __future__ import annotations
@@ -17,7 +18,12 @@ from pathlib import Path
 import shadowgeo as sg
 
 HERE = Path(__file__).resolve().parent
-folder = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(tempfile.mkdtemp(prefix="shadowgeo-"))
+if len(sys.argv) > 1:
+    folder = Path(sys.argv[1])
+    picture = folder / "converted_scene.png"
+else:
+    folder = Path(tempfile.mkdtemp(prefix="shadowgeo-"))
+    picture = HERE.parent / "docs" / "images" / "converted_scene.png"
 folder.mkdir(parents=True, exist_ok=True)
 
 scene = sg.load(HERE / "scenes" / "courtyard.x3d")
@@ -34,6 +40,5 @@ for name in ("courtyard_shadows.x3d", "courtyard_shadows.glb", "courtyard_shadow
 
 # Draw the glTF file read back: the shadows travel with the scene.
 written = sg.load(folder / "courtyard_shadows.glb")
-picture = HERE.parent / "docs" / "images" / "converted_scene.png"
 sg.plot(written, screenshot=picture, window_size=(640, 480))
 print(f"wrote {picture}")

@@ -8,7 +8,10 @@ the renderer that drew the picture.
 
 from __future__ import annotations
 
+import re
+import runpy
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,6 +23,7 @@ from shadowgeo import viz
 
 pytest.importorskip("pyvista")
 
+ROOT = Path(__file__).resolve().parents[1]
 SIZE = (320, 240)
 LIGHT = np.array([3.0, 6.0, 2.0])
 BOX_LOW, BOX_HIGH = np.array([-0.5, 1.5, -0.5]), np.array([0.5, 2.5, 0.5])
@@ -294,3 +298,37 @@ def test_view_without_a_display_says_so(scene_file, monkeypatch, capsys):
     assert "no display" in error and "shadowgeo render" in error
     with pytest.raises(RuntimeError, match="no display"):
         sg.plot([box_mesh()])
+
+
+# -- the examples -----------------------------------------------------------------------------
+
+EXAMPLES = ROOT / "examples"
+
+
+@pytest.mark.parametrize(
+    "script, picture",
+    [
+        ("tilted_plane.py", "picture.png"),
+        ("shadow_volume.py", "picture.png"),
+        ("converted_scene.py", "converted_scene.png"),
+    ],
+)
+def test_examples_draw_their_pictures(script, picture, tmp_path, monkeypatch, capsys):
+    from PIL import Image
+
+    argument = tmp_path if script == "converted_scene.py" else tmp_path / picture
+    monkeypatch.setattr(sys, "argv", [script, str(argument)])
+    runpy.run_path(str(EXAMPLES / script), run_name="__main__")
+    image = np.asarray(Image.open(tmp_path / picture).convert("RGB"))
+    assert len(np.unique(image.reshape(-1, 3), axis=0)) > 20
+    assert (image.mean(axis=2) < 90).mean() > 0.005  # a shadow is in the picture
+    printed = capsys.readouterr().out
+    if script == "shadow_volume.py":
+        # The volume sliced at the ground has the planar shadow's area.
+        sliced, planar = (float(text) for text in re.findall(r"\d+\.\d{9}", printed))
+        assert sliced == pytest.approx(planar, rel=1e-9)
+    if script == "converted_scene.py":
+        # glTF and USD keep the shapes' roles; X3D keeps the group the shadows went in.
+        for name in ("courtyard_shadows.glb", "courtyard_shadows.usda"):
+            assert sg.load(tmp_path / name).shapes_with_role("shadow"), name
+        assert 'DEF="shadows_lamp"' in (tmp_path / "courtyard_shadows.x3d").read_text()
