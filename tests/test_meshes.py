@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import json
 import math
 
@@ -303,3 +304,89 @@ def test_gltf_writer_refuses_a_scale_that_is_not_positive(tmp_path):
     with pytest.raises(sg.SceneError, match=r"metersPerUnit must be > 0"):
         sg.save(sg.Scene(meters_per_unit=0.0), tmp_path / "zero.glb")
     assert list(tmp_path.iterdir()) == []
+
+
+def _one_triangle_gltf() -> dict:
+    """A valid glTF with one triangle on node 0, built by hand from the spec."""
+    positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4").tobytes()
+    uri = "data:application/octet-stream;base64," + base64.b64encode(positions).decode()
+    return {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "tri", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"byteLength": len(positions), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteLength": len(positions)}],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 3,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            }
+        ],
+    }
+
+
+def test_hand_written_gltf_reads(tmp_path):
+    path = tmp_path / "tri.gltf"
+    path.write_text(json.dumps(_one_triangle_gltf()))
+    (shape,) = sg.load(path).shapes
+    assert shape.name == "tri"
+    np.testing.assert_array_equal(_triangles(shape)[0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+
+
+def _hostile(document: dict, change: str) -> dict:
+    if change == "extras are a string":
+        document["nodes"][0]["extras"] = {"shadowgeo": "not an object"}
+    elif change == "a node is its own child":
+        document["nodes"][0]["children"] = [0]
+    elif change == "light index out of range":
+        document["extensions"] = {"KHR_lights_punctual": {"lights": []}}
+        document["nodes"][0]["extensions"] = {"KHR_lights_punctual": {"light": 5}}
+    elif change == "unknown light type":
+        document["extensions"] = {"KHR_lights_punctual": {"lights": [{"type": "laser"}]}}
+        document["nodes"][0]["extensions"] = {"KHR_lights_punctual": {"light": 0}}
+    elif change == "negative light range":
+        lights = [{"type": "point", "range": -1}]
+        document["extensions"] = {"KHR_lights_punctual": {"lights": lights}}
+        document["nodes"][0]["extensions"] = {"KHR_lights_punctual": {"light": 0}}
+    elif change == "mesh index out of range":
+        document["nodes"][0]["mesh"] = 7
+    elif change == "accessor longer than its buffer":
+        document["accessors"][0]["count"] = 3000
+    return document
+
+
+@pytest.mark.parametrize(
+    "change, error",
+    [
+        ("extras are a string", None),
+        ("a node is its own child", None),
+        ("light index out of range", "malformed GLTF"),
+        ("unknown light type", "unknown light type 'laser'"),
+        ("negative light range", "radius must be > 0"),
+        ("mesh index out of range", r"nodes\[0\] .tri.: mesh 7 does not exist"),
+        ("accessor longer than its buffer", "GLTF"),
+    ],
+)
+def test_hostile_gltf_gives_a_scene_error_or_reads(tmp_path, change, error):
+    path = tmp_path / "hostile.gltf"
+    path.write_text(json.dumps(_hostile(_one_triangle_gltf(), change)))
+    if error is None:
+        scene = sg.load(path)
+        assert [s.role for s in scene.shapes] == ["geometry"]
+    else:
+        with pytest.raises(sg.SceneError, match=error) as caught:
+            sg.load(path)
+        assert "hostile.gltf" in str(caught.value)
+
+
+def test_deeply_nested_json_is_refused(tmp_path):
+    path = tmp_path / "deep.gltf"
+    path.write_text('{"asset": ' + "[" * 100_000 + "]" * 100_000 + "}")
+    with pytest.raises(sg.SceneError, match=r"deep\.gltf.*(nested too deeply|asset)"):
+        sg.load(path)

@@ -53,13 +53,35 @@ def _gltf_document(path: Path) -> dict:
         document = json.loads(data)
     except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise SceneError(f"not glTF: invalid JSON ({error})", path=str(path)) from None
+    except RecursionError:
+        raise SceneError("not glTF: JSON nested too deeply", path=str(path)) from None
     if not isinstance(document, dict) or not isinstance(document.get("asset"), dict):
         raise SceneError("not glTF: no 'asset' object", path=str(path))
     version = str(document["asset"].get("version", ""))
     if not version.startswith("2."):
         raise SceneError(f"glTF version {version!r} is not supported (2.x)", path=str(path))
     _check_uris(document, path)
+    _check_references(document, path)
     return document
+
+
+def _check_references(document: dict, path: Path) -> None:
+    """Node references to meshes and nodes must exist (trimesh skips a missing
+    mesh silently, which would lose geometry without a word)."""
+    nodes = document.get("nodes") or []
+    n_meshes = len(document.get("meshes") or [])
+    for index, node in enumerate(nodes):
+        where = f"nodes[{index}]" + (f" {node.get('name')!r}" if isinstance(node, dict) else "")
+        if not isinstance(node, dict):
+            raise SceneError("malformed glTF: a node is not an object", path=str(path), node=where)
+        mesh = node.get("mesh")
+        if mesh is not None and not (isinstance(mesh, int) and 0 <= mesh < n_meshes):
+            message = f"mesh {mesh!r} does not exist ({n_meshes} meshes)"
+            raise SceneError(message, path=str(path), node=where)
+        for child in node.get("children") or []:
+            if not (isinstance(child, int) and 0 <= child < len(nodes)):
+                message = f"child {child!r} does not exist ({len(nodes)} nodes)"
+                raise SceneError(message, path=str(path), node=where)
 
 
 def _check_uris(document: dict, path: Path) -> None:
@@ -89,6 +111,13 @@ def _frame_names(document: dict) -> dict[str, int]:
         name = node.get("name", str(index)) if isinstance(node, dict) else str(index)
         names[trimesh.util.unique_name(name, names, counts=counts)] = index
     return names
+
+
+def _shadowgeo_extras(node) -> dict:
+    """``node["extras"]["shadowgeo"]`` where both are objects, else ``{}``."""
+    extras = node.get("extras") if isinstance(node, dict) else None
+    found = extras.get("shadowgeo") if isinstance(extras, dict) else None
+    return found if isinstance(found, dict) else {}
 
 
 def _material_from_gltf(entry: dict) -> tuple[Material, bool]:
@@ -211,10 +240,11 @@ def read(path, **options) -> Scene:
         _read_shapes(scene, loaded, path, frames, nodes, document)
         if is_gltf:
             _read_lights(scene, graph, frames, nodes, document)
-    except (TypeError, ValueError, KeyError, IndexError) as error:
+    except (TypeError, ValueError, KeyError, IndexError, AttributeError) as error:
         if isinstance(error, SceneError):
             raise
-        raise SceneError(f"malformed glTF: {error}", path=str(path)) from error
+        kind = path.suffix.lower().lstrip(".").upper()
+        raise SceneError(f"malformed {kind}: {error}", path=str(path)) from error
     if not is_gltf and not any(shape.n_faces for shape in scene.shapes):
         # A glTF may hold only lights; a plain mesh file without triangles is broken.
         raise SceneError("no triangles in the file", path=str(path))
@@ -240,7 +270,7 @@ def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
             continue
         index = _node_index(graph, frame, frames)
         node = nodes[index] if index is not None else {}
-        extras = (node.get("extras") or {}).get("shadowgeo") or {}
+        extras = _shadowgeo_extras(node)
         material, solid = _material_from_trimesh(geometry)
         primitives = (document.get("meshes") or [{}])[node["mesh"]] if "mesh" in node else {}
         primitives = primitives.get("primitives") or []
@@ -275,7 +305,7 @@ def _read_lights(scene, graph, frames, nodes, document) -> None:
         if reference is None or frame not in graph.nodes:
             continue
         world, _ = graph.get(frame)
-        extras = (node.get("extras") or {}).get("shadowgeo") or {}
+        extras = _shadowgeo_extras(node)
         scene.lights.append(
             _light(entries[reference["light"]], np.asarray(world), node.get("name"), extras)
         )
