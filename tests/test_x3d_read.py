@@ -16,6 +16,7 @@ from lxml import etree
 
 import shadowgeo as sg
 from shadowgeo.io import x3d_read
+from shadowgeo.io.x3d_defaults import DEFAULTS
 
 DATA = Path(__file__).parent / "data"
 
@@ -414,6 +415,39 @@ def test_inline_x3d_and_gltf(tmp_path):
     assert light.name == "Inside"
     np.testing.assert_allclose(light.light.position, [10, 0, 0])
     assert not scene.warnings
+
+
+# -- the defaults table ------------------------------------------------------------------
+
+
+def test_defaults_table_is_what_the_schema_says(x3d_schema):
+    """The committed table is what tools/x3d_defaults.py makes of the schema."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "x3d_defaults_tool", Path(__file__).parents[1] / "tools" / "x3d_defaults.py"
+    )
+    tool = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tool)
+    assert tool.table(x3d_schema) == DEFAULTS
+
+
+@pytest.mark.parametrize(
+    "node, field, value",
+    [  # values printed in ISO/IEC 19775-1 (X3D 4.0) field tables
+        ("Transform", "scale", "1 1 1"), ("Transform", "rotation", "0 0 1 0"),
+        ("Box", "size", "2 2 2"), ("Sphere", "radius", "1"), ("Cone", "bottomRadius", "1"),
+        ("Cone", "height", "2"), ("Cylinder", "radius", "1"), ("IndexedFaceSet", "ccw", "true"),
+        ("IndexedFaceSet", "convex", "true"), ("ElevationGrid", "xSpacing", "1.0"),
+        ("Material", "diffuseColor", "0.8 0.8 0.8"), ("Material", "shininess", "0.2"),
+        ("PointLight", "radius", "100"), ("PointLight", "attenuation", "1 0 0"),
+        ("DirectionalLight", "direction", "0 0 -1"), ("SpotLight", "cutOffAngle", "1.570796"),
+        ("SpotLight", "beamWidth", "0.589049"), ("SpotLight", "shadows", "false"),
+        ("Switch", "whichChoice", "-1"), ("DirectionalLight", "global", "false"),
+    ],
+)  # fmt: skip
+def test_defaults_match_the_specification(node, field, value):
+    assert DEFAULTS[node][field][1] == value
 
 
 # -- the corpus -----------------------------------------------------------------------
