@@ -221,3 +221,26 @@ def test_options_reach_the_library(capsys, tmp_path):
     assert [g.get("DEF") for g in root.findall("Scene/Group")] == ["shadows_fill"]
     quiet = in_process(capsys, "convert", EXAMPLE, tmp_path / "q.x3d")
     assert "%" not in quiet.stderr  # no bar when stderr is not a terminal
+
+
+def test_glb_input_gives_a_fresh_valid_x3d_4_document(capsys, converted, tmp_path, x3d_schema):
+    out = tmp_path / "from_glb.x3d"
+    done = in_process(capsys, "convert", converted[".glb"], out, "--light", "lamp")
+    assert done.returncode == 0, done.stderr
+    assert x3d_schema_errors(out, x3d_schema) == []
+    root = etree.parse(str(out), SAFE).getroot()
+    assert root.get("version") == "4.0"
+    assert root.find("Scene/PointLight[@DEF='lamp']") is not None
+    assert root.find("Scene/Group[@class='shadowgeo-shadows']/Shape") is not None
+
+
+def test_tolerance_reaches_the_tessellation(capsys, tmp_path):
+    counts = []
+    for tolerance in ("0.05", "0.0005"):
+        out = tmp_path / f"t{tolerance}.x3d"
+        done = in_process(capsys, "convert", EXAMPLE, out, "--tolerance", tolerance)
+        assert done.returncode == 0, done.stderr
+        counts.append(int(done.stdout.split(" triangles")[0].rsplit(" ", 1)[1]))
+    assert counts[0] < counts[1]  # a finer column outline, a finer shadow
+    with pytest.raises(SystemExit):
+        main(["convert", str(EXAMPLE), str(tmp_path / "x.x3d"), "--tolerance", "2"])
