@@ -18,7 +18,8 @@ function loader(folder) {
   return (uri) =>
     new Promise((resolve, reject) => {
       const target = path.resolve(folder, decodeURIComponent(uri));
-      if (path.relative(folder, target).startsWith("..")) {
+      const relative = path.relative(folder, target);
+      if (relative === ".." || relative.startsWith(".." + path.sep) || path.isAbsolute(relative)) {
         reject(`refusing ${uri}: it leaves ${folder}`);
         return;
       }
