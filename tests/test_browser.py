@@ -1,4 +1,4 @@
-"""The X3D shadowgeo writes, with its shadows added, shows its shadow in a real X3D browser.
+"""The X3D ``shadowgeo convert`` writes shows its baked shadow in a real X3D browser.
 
 X_ITE (the npm package ``x_ite``) runs in headless Debian Chromium with
 software WebGL (SwiftShader). Everything is served from a thread on
@@ -8,9 +8,10 @@ the server answers only once X_ITE has loaded the scene and drawn a few
 frames, so the screenshot is of the rendered scene, not of a blank canvas.
 
 The check: looking straight down with an OrthoViewpoint whose field of view we
-set, the pixels inside the shadow polygon are dark and those around it are
-lit. The polygon is an independent reference: the convex hull of the box's
-corners projected from the light by similar triangles.
+set (in the input scene; the converter keeps it), the pixels inside the shadow
+polygon are dark and those around it are lit. The polygon is an independent
+reference: the convex hull of the box's corners projected from the light by
+similar triangles.
 """
 
 from __future__ import annotations
@@ -24,9 +25,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import trimesh
-
-import shadowgeo as sg
 
 ROOT = Path(__file__).resolve().parents[1]
 X_ITE = ROOT / "tests" / "node" / "node_modules" / "x_ite" / "dist"
@@ -36,13 +34,27 @@ HALF_VIEW = 10.0  # the OrthoViewpoint shows x, z in [-10, 10]
 PIXELS = 400
 LOAD_TIMEOUT = 45.0  # seconds for X_ITE to load and draw, in software
 
-WORLD = f"""<?xml version="1.0" encoding="UTF-8"?>
+# The input scene: ground, a red box (an X3D Box, tessellated by the reader), a lamp.
+# shadows="false": X_ITE must show the shadow shadowgeo baked, not one of its own.
+SCENE = f"""<?xml version="1.0" encoding="UTF-8"?>
 <X3D profile="Interchange" version="4.0">
   <Scene>
     <NavigationInfo headlight="true" type='"NONE"'/>
     <OrthoViewpoint position="0 50 0" orientation="1 0 0 -1.5707963267948966"
                     fieldOfView="{-HALF_VIEW} {-HALF_VIEW} {HALF_VIEW} {HALF_VIEW}"/>
-    <Inline url='"converted.x3d"'/>
+    <PointLight DEF="lamp" location="{LIGHT[0]} {LIGHT[1]} {LIGHT[2]}" shadows="false"/>
+    <Shape DEF="ground">
+      <Appearance><Material diffuseColor="0.8 0.8 0.8"/></Appearance>
+      <IndexedFaceSet coordIndex="0 1 2 3 -1" solid="false">
+        <Coordinate point="-15 0 -15, -15 0 15, 15 0 15, 15 0 -15"/>
+      </IndexedFaceSet>
+    </Shape>
+    <Transform translation="{BOX.mean(axis=0)[0]} {BOX.mean(axis=0)[1]} {BOX.mean(axis=0)[2]}">
+      <Shape DEF="box">
+        <Appearance><Material diffuseColor="0.8 0.1 0.1"/></Appearance>
+        <Box size="{BOX[1, 0] - BOX[0, 0]} {BOX[1, 1] - BOX[0, 1]} {BOX[1, 2] - BOX[0, 2]}"/>
+      </Shape>
+    </Transform>
   </Scene>
 </X3D>
 """
@@ -52,7 +64,7 @@ PAGE = f"""<!DOCTYPE html>
 <style>html, body {{ margin: 0; overflow: hidden; background: #f0f; }}</style>
 <script src="x_ite/x_ite.min.js"></script></head>
 <body>
-<x3d-canvas src="world.x3d" splashScreen="false" notifications="false" contextMenu="false"
+<x3d-canvas src="converted.x3d" splashScreen="false" notifications="false" contextMenu="false"
             style="display: block; width: {PIXELS}px; height: {PIXELS}px"></x3d-canvas>
 <script>
   const canvas = document.querySelector("x3d-canvas");
@@ -86,20 +98,14 @@ def reference_shadow():
     return shapely.MultiPoint(landed[:, [0, 2]]).convex_hull
 
 
-def converted_scene(path: Path) -> None:
-    """A scene (ground, box, point light) with its shadows added, written as X3D."""
-    half = 15.0  # wider than the view, so the view is all ground
-    ground = sg.Shape(
-        [[-half, 0, -half], [half, 0, -half], [half, 0, half], [-half, 0, half]],
-        [[0, 2, 1], [0, 3, 2]],
-        name="ground",
-    )
-    box = trimesh.creation.box(bounds=BOX)
-    red = sg.Material(diffuse_color=(0.8, 0.1, 0.1))
-    # shadows=False: X_ITE must show the shadow shadowgeo baked, not one of its own.
-    lamp = sg.SceneLight(sg.PointLight(LIGHT), name="lamp", shadows=False)
-    scene = sg.Scene([ground, sg.Shape(box.vertices, box.faces, name="box", material=red)], [lamp])
-    sg.save(sg.add_shadows(scene), path)
+def convert(folder: Path) -> Path:
+    """``shadowgeo convert`` the input scene to ``converted.x3d``."""
+    from cli.main import main
+
+    source, target = folder / "scene.x3d", folder / "converted.x3d"
+    source.write_text(SCENE)
+    assert main(["convert", str(source), str(target)]) == 0
+    return target
 
 
 class _Server(http.server.ThreadingHTTPServer):
@@ -187,8 +193,7 @@ def test_x_ite_shows_the_baked_shadow(tmp_path):
         pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
     shapely = pytest.importorskip("shapely")
 
-    converted_scene(tmp_path / "converted.x3d")
-    (tmp_path / "world.x3d").write_text(WORLD)
+    convert(tmp_path)
     (tmp_path / "index.html").write_text(PAGE)
     (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
     image = screenshot(tmp_path, browser)
