@@ -227,6 +227,13 @@ def test_reader_primitive_fields(tmp_path):
     assert not np.any(np.all(np.isclose(cone.vertices, [0, -2, 0]), axis=1))  # no base centre
 
 
+def test_equal_primitives_share_a_tessellation_not_their_flags(tmp_path):
+    body = '<Shape><Sphere/></Shape><Shape><Sphere solid="false"/></Shape><Shape><Sphere/></Shape>'
+    first, second, third = read(tmp_path, body).shapes
+    assert np.shares_memory(first.vertices, third.vertices)
+    assert (first.solid, second.solid, third.solid) == (True, False, True)
+
+
 def test_reader_refuses_a_non_positive_radius(tmp_path):
     with pytest.raises(sg.SceneError, match=r"line 1, Sphere: field radius: -1.0 must be > 0"):
         read(tmp_path, '<Shape><Sphere radius="-1"/></Shape>')

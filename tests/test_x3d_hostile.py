@@ -307,3 +307,14 @@ def test_inlined_gltf_may_not_reach_outside_the_folder(tmp_path, no_network, uri
     path = scene(folder, "<Inline url='\"part.gltf\"'/>")
     with pytest.raises(sg.SceneError, match=f"refers to '{re.escape(uri)}', outside the scene"):
         sg.load(path)
+
+
+def test_transforms_overflowing_to_infinity(tmp_path):
+    body = (
+        '<Transform scale="1e200 1e200 1e200"><Transform scale="1e200 1e200 1e200">'
+        "<Shape><Box/></Shape></Transform></Transform>"
+    )
+    with pytest.raises(
+        sg.SceneError, match="line 2, Transform: the transforms down to here overflow"
+    ):
+        sg.load(scene(tmp_path, body))

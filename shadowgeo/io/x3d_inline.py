@@ -21,14 +21,15 @@ from . import x3d_parse
 from .x3d_fields import Context
 from .x3d_geometry import Instance, Mesh
 
-_URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
+URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 X3D_SUFFIXES = {".x3d", ".x3dz"}
 GLTF_SUFFIXES = {".gltf", ".glb"}
+MAX_INLINE_DEPTH = 16
 
 
 def resolve_url(reader, context: Context, element, url: str) -> Path | str:
     """The local file ``url`` names, or a string saying why there is none."""
-    if _URL_SCHEME.match(url) and not re.match(r"^[A-Za-z]:[\\/]", url):
+    if URL_SCHEME.match(url) and not re.match(r"^[A-Za-z]:[\\/]", url):
         return f"'{url}' is remote (never fetched)"
     folder = Path(context.path).resolve().parent
     candidate = (folder / url).resolve()
@@ -65,8 +66,8 @@ def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> 
 def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
     if path in reader.inline_stack:
         raise context.error(element, f"Inline cycle: {path.name} includes itself")
-    if len(reader.inline_stack) > 16:
-        raise context.error(element, "Inlines nested more than 16 deep")
+    if len(reader.inline_stack) > MAX_INLINE_DEPTH:
+        raise context.error(element, f"Inlines nested more than {MAX_INLINE_DEPTH} deep")
     tree = x3d_parse.parse(path)
     reader.document(tree, path, str(path), matrix, name=name)
 
@@ -91,7 +92,7 @@ def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, nam
 
     for uri in _gltf_uris(path):
         target = (path.parent / uri).resolve()
-        if _URL_SCHEME.match(uri) or not target.is_relative_to(reader.root_folder):
+        if URL_SCHEME.match(uri) or not target.is_relative_to(reader.root_folder):
             raise context.error(
                 element,
                 f"glTF '{path.name}' refers to '{uri}', outside the scene's folder; refused",

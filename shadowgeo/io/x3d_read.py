@@ -36,14 +36,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SceneError
+from ..errors import GeometryError, SceneError
 from ..scene import Scene, Shape
 from ..tolerance import Tolerance
 from . import x3d_parse
 from .x3d_defaults import DEFAULTS
 from .x3d_fields import Context, local_name, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
-from .x3d_inline import load_inline
+from .x3d_inline import URL_SCHEME, load_inline
 from .x3d_lights import LIGHTS, material, scene_light
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
@@ -52,7 +52,6 @@ GROUPS |= {"Switch", "LOD"}
 RENDERED_FIELDS = {"children", "choice", "level", "layers", "shape"}
 SILENT = {"WorldInfo", "ProtoDeclare", "ExternProtoDeclare", "IS", "connect", "field"}
 TEXTURES = {"ImageTexture", "MovieTexture", "ImageCubeMapTexture", "ImageTexture3D"}
-MAX_INLINE_DEPTH = 16
 # Node instances visited at most: DEF/USE nesting can expand exponentially.
 MAX_NODES = 2_000_000
 # Why nodes of a kind are skipped, for the warnings.
@@ -64,7 +63,6 @@ REASONS = [
       "OrthoViewpoint", "ViewpointGroup", "TextureBackground"),
      "view, sound and environment settings cast no shadow"),
 ]  # fmt: skip
-_URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 
 
 class _Reader:
@@ -73,7 +71,8 @@ class _Reader:
         self.warnings = warnings
         self.instances: list[Instance] = []
         self.lights = []
-        self.skipped: dict[str, list] = {}  # tag -> [first place, count]
+        self.skipped: dict[tuple, list] = {}  # (tag, why) -> [first place, count]
+        self.textures_seen: set = set()
         self.geometry_cache: dict = {}
         self.material_cache: dict = {}
         self.inline_stack: list[Path] = []
@@ -145,10 +144,13 @@ class _Reader:
         if tag in GROUPS:
             if tag == "Billboard":
                 context.warn(element, "Billboard: children kept unrotated (no viewer)")
-            local = _local_matrix(context, element, tag)
+            with np.errstate(over="ignore", invalid="ignore"):
+                world = matrix @ _local_matrix(context, element, tag)
+            if not np.all(np.isfinite(world)):
+                raise context.error(element, "the transforms down to here overflow to infinity")
             self.open_groups.add(id(element))  # the element stays alive meanwhile
             try:
-                self.children(context, element, matrix @ local, name)
+                self.children(context, element, world, name)
             finally:
                 self.open_groups.discard(id(element))
         elif tag == "Shape":
@@ -210,12 +212,12 @@ class _Reader:
     def _textures(self, context: Context, appearance) -> None:
         for texture in appearance.iter(*TEXTURES):
             texture = context.resolve(texture)
-            if texture in self.material_cache:
+            if texture in self.textures_seen:
                 continue
-            self.material_cache[texture] = None
+            self.textures_seen.add(texture)
             urls = [u for u in context.field(texture, "url", "MFString") if u]
             folder = Path(context.path).parent
-            local = [u for u in urls if not _URL_SCHEME.match(u)]
+            local = [u for u in urls if not URL_SCHEME.match(u)]
             found = [u for u in local if (folder / u).is_file()]
             if urls and not found:
                 context.warn(texture, f"texture not found: {', '.join(urls[:3])}")
@@ -250,7 +252,7 @@ class _Reader:
                     transform=instance.transform,
                     material=instance.material,
                     name=instance.name,
-                    solid=built.solid,
+                    solid=instance.geometry.solid,
                     source=instance.source,
                 )
             )
@@ -371,8 +373,10 @@ def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None
     reader = _Reader(path.resolve().parent, scene.warnings)
     try:
         reader.document(tree, path, str(path), np.eye(4), scene)
+        reader.finish(scene, tolerance, chord)
     except RecursionError:
         message = "nodes nested too deeply (through DEF/USE or Inline)"
         raise SceneError(message, path=str(path)) from None
-    reader.finish(scene, tolerance, chord)
+    except GeometryError as problem:  # e.g. transforms that overflow to infinity
+        raise SceneError(str(problem), path=str(path)) from None
     return scene
