@@ -134,13 +134,13 @@ class Caster:
         ``edge_slots[edge_slot_starts[i]:edge_slot_starts[i + 1]]``."""
         return self._edge_table[3]
 
-    @cached_property
+    @property
     def edge_slot_starts(self) -> np.ndarray:
         """(e + 1,) offsets of each edge's group in :attr:`edge_slots`."""
-        return np.concatenate([[0], np.cumsum(self.edge_face_count)]).astype(np.int64)
+        return self._edge_table[4]
 
     @cached_property
-    def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         # One argsort of a single int64 key per face edge gives the unique
         # edges, each face edge's index and the slots grouped by edge at once
         # (np.unique with return_inverse would sort, and edge_face_slots sort
@@ -161,7 +161,8 @@ class Caster:
         inverse[order] = np.cumsum(first) - 1
         edges = np.column_stack([unique_keys // n, unique_keys % n])
         sign = np.where(starts < ends, 1, -1).astype(np.int64)
-        return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3), order
+        group_starts = np.append(np.flatnonzero(first), len(keys)).astype(np.int64)
+        return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3), order, group_starts
 
     @property
     def edges(self) -> np.ndarray:
@@ -182,17 +183,16 @@ class Caster:
     @cached_property
     def edge_face_count(self) -> np.ndarray:
         """(e,) number of faces that use each edge."""
-        return np.bincount(self.face_edges.reshape(-1), minlength=len(self.edges))
+        return np.diff(self.edge_slot_starts)
 
     @cached_property
     def edge_net_direction(self) -> np.ndarray:
         """(e,) sum of the face edge signs: 0 on every edge of a closed,
         consistently wound mesh."""
-        return np.bincount(
-            self.face_edges.reshape(-1),
-            weights=self.face_edge_signs.reshape(-1),
-            minlength=len(self.edges),
-        ).astype(np.int64)
+        if len(self.edge_slots) == 0:
+            return np.zeros(0, dtype=np.int64)
+        grouped = self.face_edge_signs.reshape(-1)[self.edge_slots]
+        return np.add.reduceat(grouped, self.edge_slot_starts[:-1])
 
     @cached_property
     def is_closed(self) -> bool:

@@ -70,6 +70,10 @@ def test_edge_table_matches_a_brute_force_dictionary(closed):
         begin, end = caster.edge_slot_starts[edge_index : edge_index + 2]
         assert sorted(caster.edge_slots[begin:end].tolist()) == table[edge]
         assert caster.edge_face_count[edge_index] == len(table[edge])
+        directions = [
+            1 if faces.reshape(-1)[slot] == edge[0] else -1 for slot in table[edge]
+        ]  # +1 where the face runs the edge from its lower vertex
+        assert caster.edge_net_direction[edge_index] == sum(directions)
     for slot in range(3 * len(faces)):
         face_index, corner = divmod(slot, 3)
         start, end = faces[face_index, corner], faces[face_index, (corner + 1) % 3]
