@@ -329,3 +329,11 @@ def test_progress_counts_up_to_the_total():
     done = [d for d, _ in calls]
     assert done == sorted(done) and len(set(done)) > 2  # per caster, not per light
     assert calls[-1][0] == calls[-1][1] == 2 * 1 * 4  # lights x receivers x shapes
+
+
+def test_running_twice_replaces_the_first_shadows():
+    scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
+    once = sg.add_shadows(scene)
+    twice = sg.add_shadows(once)
+    assert [s.name for s in twice.shapes] == [s.name for s in once.shapes]
+    assert np.array_equal(twice.shapes[-1].vertices, once.shapes[-1].vertices)

@@ -207,7 +207,7 @@ def test_converting_a_converted_file_again_changes_nothing(tmp_path):
     group = parse(first).getroot().find("Scene/Group")
     assert group.get("class") == "shadowgeo-shadows"
     again = sg.add_shadows(sg.load(first))
-    assert any("baked by an earlier run" in w for w in again.warnings)
+    assert any("added by an earlier run" in w for w in again.warnings)
     sg.save(again, second)
     assert second.read_bytes() == first.read_bytes()
 

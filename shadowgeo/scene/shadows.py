@@ -106,6 +106,9 @@ def add_shadows(
         A new scene: the input's shapes, then the added ones (group
         ``"shadows_<light>"``, unique DEF-safe names), and ``warnings`` with
         notes on what was chosen and skipped. ``document`` is shared.
+        Shadows an earlier run added (role ``"shadow"``/``"volume"``, or
+        baked into the X3D document) are replaced, so running it again on
+        its own output gives the same scene.
 
     Raises
     ------
@@ -177,16 +180,21 @@ def add_shadows(
 
 
 def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
-    """The scene's shapes less those an earlier run baked into its X3D document
-    (Shapes inside a Group of class ``MARK``): they are replaced, not shadowed."""
-    if not hasattr(scene.document, "xpath"):
-        return list(scene.shapes)
-    marked = f"contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')"
-    baked = set(scene.document.xpath(f"//*[{marked}]//*[local-name()='Shape']/@DEF"))
-    kept = [s for s in scene.shapes if not (s.name in baked and s.role == "geometry")]
+    """The scene's shapes less the shadows an earlier run added: shapes with
+    role "shadow" or "volume" (glTF and USD keep roles) and Shapes inside an
+    X3D Group of class ``MARK``. They are replaced, neither cast nor stay."""
+    baked: set[str] = set()
+    if hasattr(scene.document, "xpath"):
+        marked = f"contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')"
+        baked = set(scene.document.xpath(f"//*[{marked}]//*[local-name()='Shape']/@DEF"))
+    kept = [
+        s
+        for s in scene.shapes
+        if s.role not in ("shadow", "volume") and not (s.role == "geometry" and s.name in baked)
+    ]
     if len(kept) < len(scene.shapes):
         notes.append(
-            f"shadows: {len(scene.shapes) - len(kept)} shadow shapes baked by an earlier run "
+            f"shadows: {len(scene.shapes) - len(kept)} shadow shapes added by an earlier run "
             "are replaced"
         )
     return kept
