@@ -207,7 +207,19 @@ def test_casters_that_cannot_shadow_are_skipped():
     above = box([-0.5, 5, -0.5], [0.5, 6, 0.5], "above")  # beyond the light's height
     far = box([20, 1, 20], [21, 2, 21], "far")  # its shadow misses the ground
     scene = sg.Scene([ground(), below, above, far], [light([0, 4, 0])])
-    assert shadows(sg.add_shadows(scene)) == []
+    result = sg.add_shadows(scene)
+    assert shadows(result) == []
+    assert "no shadow falls on the receivers (ground)" in result.warnings[-1]
+
+
+def test_a_named_receiver_used_twice_receives_in_both_places():
+    tiles = [ground(1, "tile"), ground(1, "tile")]
+    tiles[1].transform = np.array([[1, 0, 0, 3.0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+    cube = box([0.5, 1, -0.5], [2.5, 2, 0.5], "cube")  # over both tiles
+    result = sg.add_shadows(sg.Scene([*tiles, cube], [light([1.5, 5, 0])]), receivers=["tile"])
+    assert [s.name for s in shadows(result)] == ["shadow_lamp_tile", "shadow_lamp_tile_2"]
+    centres = [float(s.world_vertices[:, 0].mean()) for s in shadows(result)]
+    assert centres[0] < 1 < 2 < centres[1]
 
 
 def test_spot_cone_and_radius_limit_the_shadow():

@@ -135,22 +135,28 @@ def select(
 
     found = []
     if names is not None:
-        by_name = {shape.name: shape for shape in geometry if shape.name}
+        by_name: dict[str, list[Shape]] = {}
+        for shape in geometry:
+            if shape.name:
+                by_name.setdefault(shape.name, []).append(shape)  # USEd: every instance
         for name in names:
             if name not in by_name:
                 raise SceneError(f"no shape named '{name}' to receive shadows", path=scene.path)
-            shape = by_name[name]
-            flat = patches(shape, tolerance)
-            total = sum(area for _, _, area in flat)
-            if not flat or flat[0][2] < NAMED_FRACTION * total:
-                share = flat[0][2] / total if flat and total else 0.0
-                raise GeometryError(
-                    f"receiver '{name}' is not planar: its largest flat part is "
-                    f"{100 * share:.3g}% of its area (tolerance "
-                    f"{tolerance.coplanar_length:.3g}); give a plane instead"
-                )
-            kept = [p for p in flat if p[2] >= AREA_FRACTION * flat[0][2]]
-            found += [receiver(shape, *p, count) for count, p in enumerate(kept)]
+            count = 0
+            for shape in by_name[name]:
+                flat = patches(shape, tolerance)
+                total = sum(area for _, _, area in flat)
+                if not flat or flat[0][2] < NAMED_FRACTION * total:
+                    share = flat[0][2] / total if flat and total else 0.0
+                    raise GeometryError(
+                        f"receiver '{name}' is not planar: its largest flat part is "
+                        f"{100 * share:.3g}% of its area (tolerance "
+                        f"{tolerance.coplanar_length:.3g}); give a plane instead"
+                    )
+                for patch in flat:
+                    if patch[2] >= AREA_FRACTION * flat[0][2]:
+                        found.append(receiver(shape, *patch, count))
+                        count += 1
         return found
 
     bounds = scene.bounds

@@ -176,6 +176,9 @@ def add_shadows(
                 added.append(shape)
         if progress is not None:
             progress(total, total)
+        if not added:
+            listed = ", ".join(receiver.name for receiver in found)
+            notes.append(f"shadows: no shadow falls on the receivers ({listed})")
     return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
 
 
