@@ -127,7 +127,17 @@ class Context:
 
 
 def parse(text: str, kind: str):
-    """Parse ``text`` as X3D field type ``kind``; ValueError says why not."""
+    """Parse ``text`` as X3D field type ``kind``; ValueError says why not.
+
+    Examples
+    --------
+    >>> parse("0 1, 0 1.5708", "SFRotation").tolist()
+    [0.0, 1.0, 0.0, 1.5708]
+    >>> parse("TRUE", "SFBool"), parse('"a b" "c"', "MFString")
+    (True, ['a b', 'c'])
+    >>> parse("1 2 3 -1", "MFInt32").tolist()
+    [1, 2, 3, -1]
+    """
     if kind == "SFBool":
         word = text.strip().lower()
         if word not in ("true", "false"):

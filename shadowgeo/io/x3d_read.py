@@ -366,6 +366,23 @@ def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None
     SceneError
         The file cannot be read safely or correctly; the message names the
         file, line and node.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "box.x3d"
+    >>> _ = path.write_text(
+    ...     '<X3D version="4.0"><Scene><Transform translation="0 1 0">'
+    ...     '<Shape DEF="crate"><Box/></Shape></Transform>'
+    ...     '<PointLight location="0 5 0" shadows="true"/><Viewpoint/></Scene></X3D>'
+    ... )
+    >>> scene = read(path)
+    >>> [(shape.name, shape.n_faces) for shape in scene.shapes]
+    [('crate', 12)]
+    >>> scene.bounds.tolist(), scene.lights[0].light.position.tolist()
+    ([[-1.0, 0.0, -1.0], [1.0, 2.0, 1.0]], [0.0, 5.0, 0.0])
+    >>> scene.warnings[0].split(": ", 1)[1]
+    'skipped, view, sound and environment settings cast no shadow'
     """
     path = Path(path)
     tree = x3d_parse.parse(path)
