@@ -140,7 +140,9 @@ def add_shadows(
     chosen = _select_lights(scene, lights, notes)
     positions = [light.light.position for light in chosen if is_positional(light.light)]
     if not isinstance(tolerance, Tolerance):
-        bounds = scene.bounds if geometry else np.zeros((0, 3))
+        bounds = (
+            dataclasses.replace(scene, shapes=geometry).bounds if geometry else np.zeros((0, 3))
+        )
         settings = {} if tolerance is None else {"chord": float(tolerance)}
         tolerance = Tolerance.for_points(bounds, *positions, **settings)
     lift = _DEFAULT_OFFSET * tolerance.scale if offset is None else float(offset)
@@ -151,7 +153,8 @@ def add_shadows(
     if method == "volume":
         added = _volumes(scene, geometry, chosen, tolerance, names, notes, progress)
     else:
-        found = select_receivers(scene, geometry, receivers, plane, tolerance, notes)
+        own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
+        found = select_receivers(own, geometry, receivers, plane, tolerance, notes)
         casters = [_Caster(shape) for shape in geometry]
         added = []
         total, done = len(chosen) * len(found) * len(casters), 0
