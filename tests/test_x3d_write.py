@@ -247,3 +247,19 @@ def test_added_shadows_read_back_in_world_coordinates(tmp_path):
     sg.save(result, out)
     read = {s.name: s for s in sg.load(out).shapes}["shadow_lamp_ground"]
     assert np.array_equal(read.world_vertices[read.faces], shadow.world_vertices[shadow.faces])
+
+
+def test_core_profile_gets_the_components_the_shadows_need(tmp_path, x3d_schema):
+    source = tmp_path / "core.x3d"
+    source.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n<X3D profile="Core" version="4.0">'
+        '<head><meta name="title" content="core"/></head><Scene/></X3D>\n'
+    )
+    out = tmp_path / "out.x3d"
+    x3d_write.write(document_scene(source, [shadow_shape()]), out)
+    head = parse(out).getroot().find("head")
+    assert [(c.get("name"), c.get("level")) for c in head.findall("component")] == [
+        ("Grouping", "1"), ("Rendering", "3"), ("Shape", "1")
+    ]  # fmt: skip
+    assert [child.tag for child in head] == ["component"] * 3 + ["meta"]
+    assert x3d_schema_errors(out, x3d_schema) == []

@@ -83,10 +83,34 @@ def _with_added(scene: Scene):
     if added:
         _remove_marked(tree)
     used = set(tree.xpath("//@DEF"))
+    if added and root.get("profile") == "Core":
+        _require_components(root, namespace)
     groups = _add_groups(body, added, used, namespace)
     if groups:
         _indent(body, groups)
     return tree
+
+
+# What the added nodes need beyond the Core profile (Interchange and up have it).
+_COMPONENTS = {"Grouping": 1, "Rendering": 3, "Shape": 1}
+
+
+def _require_components(root, namespace: str) -> None:
+    """Declare the components the added nodes use in a ``profile="Core"``
+    document's ``<head>`` (components come first in it)."""
+    head = root.find(f"{namespace}head")
+    if head is None:
+        head = etree.Element(f"{namespace}head")
+        root.insert(0, head)
+    declared = {
+        c.get("name"): int(c.get("level", "1") or 1) for c in head.findall(f"{namespace}component")
+    }
+    position = len(head.findall(f"{namespace}component"))
+    for name, level in _COMPONENTS.items():
+        if declared.get(name, 0) < level:
+            component = etree.Element(f"{namespace}component", name=name, level=str(level))
+            head.insert(position, component)
+            position += 1
 
 
 def _remove_marked(tree) -> None:
