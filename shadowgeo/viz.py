@@ -85,6 +85,22 @@ def _collect(things, role: str, items: list[_Item], lights: list) -> None:
         )
 
 
+def _unique_lights(lights: list) -> list:
+    """``lights`` without repeats: a scene's light and the same light carried by
+    a Shadow of it are drawn and lit once (the scene's, with its colour)."""
+    seen, unique = set(), []
+    for light in sorted(lights, key=lambda light: not isinstance(light, SceneLight)):
+        geometry = light.light if isinstance(light, SceneLight) else light
+        where = getattr(geometry, "position", None)
+        if where is None:
+            where = geometry.direction
+        key = (type(geometry).__name__, *np.round(np.asarray(where, dtype=float), 12).tolist())
+        if key not in seen:
+            seen.add(key)
+            unique.append(light)
+    return unique
+
+
 def _polydata(item: _Item):
     import pyvista as pv
 
@@ -154,7 +170,7 @@ def _vtk_light(scene_light, center: np.ndarray, scale: float):
         result.positional = True
         result.cone_angle = np.degrees(light.cut_off_angle) if isinstance(light, SpotLight) else 90
     result.intensity = float(min(intensity, 1.0))
-    result.diffuse_color = tuple(color)
+    result.diffuse_color = tuple(float(c) for c in color)  # ints would read as 0..255
     return result
 
 
@@ -239,6 +255,7 @@ def scene_plotter(
     _collect(volumes, "volume", items, scene_lights)
     if lights is not True and lights is not False:
         scene_lights = list(lights)
+    scene_lights = _unique_lights(scene_lights)
     up_axis = scene_or_meshes.up_axis if isinstance(scene_or_meshes, Scene) else "Y"
 
     if off_screen and no_display_reason() is not None:

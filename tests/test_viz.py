@@ -332,3 +332,16 @@ def test_examples_draw_their_pictures(script, picture, tmp_path, monkeypatch, ca
         for name in ("courtyard_shadows.glb", "courtyard_shadows.usda"):
             assert sg.load(tmp_path / name).shapes_with_role("shadow"), name
         assert 'DEF="shadows_lamp"' in (tmp_path / "courtyard_shadows.x3d").read_text()
+
+
+def test_a_light_given_twice_is_drawn_and_lit_once():
+    light = sg.PointLight(LIGHT)
+    shadow = sg.project_shadow(box_mesh(), light, sg.Plane([0, 1, 0], 0))
+    scene = sg.Scene([ground_shape()], [sg.SceneLight(sg.PointLight(LIGHT), color=(1, 0, 0))])
+    plotter = viz.scene_plotter(scene, shadows=[shadow, shadow], off_screen=True, window_size=SIZE)
+    try:
+        scene_lights = [light for light in plotter.renderer.lights if not light.is_headlight]
+        assert len(scene_lights) == 1
+        assert tuple(scene_lights[0].diffuse_color.float_rgb) == (1.0, 0.0, 0.0)  # the scene's
+    finally:
+        plotter.close()
