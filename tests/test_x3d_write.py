@@ -210,6 +210,16 @@ def test_converting_a_converted_file_again_changes_nothing(tmp_path):
     assert any("added by an earlier run" in w for w in again.warnings)
     sg.save(again, second)
     assert second.read_bytes() == first.read_bytes()
+    # Read and written back without add_shadows, the baked group stays.
+    plain = tmp_path / "plain.x3d"
+    sg.save(sg.load(first), plain)
+    assert len(parse(plain).getroot().findall("Scene/Group")) == 1
+    # Re-run where no shadow falls any more: the old group goes too.
+    moved = sg.load(first)
+    moved.lights[0].light = sg.PointLight([3.0, -8.0, 4.0])  # below the ground
+    gone = tmp_path / "gone.x3d"
+    sg.save(sg.add_shadows(moved, lights=["lamp"]), gone)
+    assert parse(gone).getroot().findall("Scene/Group") == []
 
 
 def test_fresh_document_reads_back_the_same(tmp_path):

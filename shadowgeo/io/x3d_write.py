@@ -9,9 +9,9 @@ Two cases:
   the ``version`` attribute stay as they were; the added nodes (Group, Shape,
   Appearance, Material, IndexedTriangleSet, Coordinate) exist in every X3D
   version from 3.0, so the version stays valid. The added groups have
-  ``class="shadowgeo-shadows"``: writing added shapes over a document that
-  already has such groups (a converted file converted again) replaces them
-  rather than stacking a second set.
+  ``class="shadowgeo-shadows"``: such a group whose shapes the scene no
+  longer holds (``add_shadows`` replaced them: a converted file converted
+  again) is dropped rather than stacked under a second set.
 * Otherwise (glTF, USD, mesh input, or a scene built in code): a fresh X3D 4.0
   document with the lights, one ``Transform`` (translation, rotation, scale,
   scaleOrientation: any affine transform exactly) around each shape that is
@@ -80,8 +80,7 @@ def _with_added(scene: Scene):
     if body is None:
         raise SceneError("the X3D document has no <Scene> element", path=scene.path)
     added = [s for s in scene.shapes if s.role in ADDED_ROLES]
-    if added:
-        _remove_marked(tree)
+    _remove_marked(tree, {s.name for s in scene.shapes if s.role == "geometry" and s.name})
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
@@ -113,12 +112,14 @@ def _require_components(root, namespace: str) -> None:
             position += 1
 
 
-def _remove_marked(tree) -> None:
-    """Drop the groups an earlier run added (they are being replaced), keeping
-    the whitespace around them as it was."""
-    for group in tree.xpath(
-        f"//*[contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')]"
-    ):
+def _remove_marked(tree, kept: set[str]) -> None:
+    """Drop the groups an earlier run added whose shapes the scene no longer
+    holds (add_shadows replaced them), keeping the whitespace around them."""
+    marked = f"contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')"
+    for group in tree.xpath(f"//*[{marked}]"):
+        names = set(group.xpath(".//*[local-name()='Shape']/@DEF"))
+        if names & kept:
+            continue  # read and written back unchanged: keep it
         parent = group.getparent()
         previous = group.getprevious()
         if previous is not None:
