@@ -262,12 +262,16 @@ class _Reader:
         settings = {} if chord is None else {"chord": float(chord)}
         if tolerance is not None:
             return tolerance.with_settings(**settings)
-        points = []
+        # Primitives are measured on a coarse tessellation (1% of their size):
+        # their bounding cube would overstate a turned sphere's extent.
+        points, coarse = [], {}
         for instance in self.instances:
             built, transform = instance.geometry, instance.transform
             if isinstance(built, Primitive):
-                corners = np.array(np.meshgrid(*[[-1.0, 1.0]] * 3)).reshape(3, -1).T
-                local = corners * built.radius
+                key = (built.kind, tuple(sorted(built.parameters.items())))
+                if key not in coarse:
+                    coarse[key] = built.tessellate(0.01 * built.radius).vertices
+                local = coarse[key]
             else:
                 local = built.vertices
             points.append(local @ transform[:3, :3].T + transform[:3, 3])

@@ -168,16 +168,17 @@ def sphere(radius: float = 1.0, chord: float = 1e-3) -> tuple[np.ndarray, np.nda
     >>> import numpy as np
     >>> vertices, faces = sphere(2.0, chord=0.01)
     >>> bool(np.allclose(np.linalg.norm(vertices, axis=1), 2.0)), len(faces)
-    (True, 2400)
+    (True, 1980)
     """
     radius = _positive(radius, "Sphere radius")
-    around = _segments(radius, chord)
+    # a quad dips by about the sum of its two edges' sagittas: start at half the chord
+    around = _segments(radius, chord / 2)
     while True:
         rings = max(2, math.ceil(around / 2))
         vertices, faces = _uv_sphere(radius, around, rings)
         if _inscribed_deviation(vertices, faces, radius) <= chord or around >= 1 << 16:
             return vertices, faces
-        around = math.ceil(around * 1.15)
+        around = math.ceil(around * 1.05)
 
 
 def _uv_sphere(radius: float, around: int, rings: int) -> tuple[np.ndarray, np.ndarray]:
