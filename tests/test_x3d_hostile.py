@@ -108,6 +108,7 @@ def test_empty_geometry_is_skipped_with_a_warning(tmp_path):
         '<Shape><IndexedFaceSet coordIndex="0 1 -1">' + TRIANGLE + "</IndexedFaceSet></Shape>\n"
         '<Shape><ElevationGrid xDimension="1" zDimension="1" height="0"/></Shape>\n'
         "<Shape/>\n"
+        '<Shape><IndexedFaceSet coordIndex="0 1 2"/></Shape>\n'
         '<Shape><Box size="1 1 1"/></Shape>'
     )
     result = sg.load(scene(tmp_path, body))
@@ -118,6 +119,7 @@ def test_empty_geometry_is_skipped_with_a_warning(tmp_path):
     assert "line 3, IndexedFaceSet: empty geometry" in text
     assert "line 4, ElevationGrid: empty geometry" in text
     assert "line 5, Shape: Shape without geometry" in text
+    assert "line 6, IndexedFaceSet: no Coordinate node" in text
 
 
 def test_def_cycle_is_refused(tmp_path):

@@ -62,6 +62,9 @@ def test_basic_scene_shapes_names_and_instances():
     assert roof.solid is False and floor.solid is True
     assert "line" in roof.source and "IndexedFaceSet DEF='Roof'" in roof.source
     assert isinstance(scene.document, etree._ElementTree)
+    # the document is the file as parsed, untouched
+    fresh = etree.parse(str(DATA / "basic.x3d"), etree.XMLParser(load_dtd=False, no_network=True))
+    assert etree.tostring(scene.document) == etree.tostring(fresh)
     assert any(isinstance(node, etree._Comment) for node in scene.document.iter())
     assert scene.path == str(DATA / "basic.x3d")
 

@@ -24,6 +24,7 @@ MESHES = {
     "TriangleStripSet",
 }  # fmt: skip
 GEOMETRY = PRIMITIVES | MESHES
+COORDINATES = {"Coordinate", "CoordinateDouble", "GeoCoordinate"}
 # Geometry that has no area to cast a shadow with, or that shadowgeo does not model.
 UNMODELLED_GEOMETRY = {
     "Text", "IndexedLineSet", "LineSet", "PointSet", "Extrusion", "Arc2D", "ArcClose2D",
@@ -80,6 +81,8 @@ def geometry(context: Context, element) -> Mesh | Primitive:
     solid = context.field(element, "solid")
     if tag in PRIMITIVES:
         return _primitive(context, element, tag, solid)
+    if tag != "ElevationGrid" and not context.children(element, COORDINATES):
+        return Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), solid, ["no Coordinate node"])
     mesh = _MESH_BUILDERS[tag](context, element)
     if context.field(element, "ccw") is False:
         mesh.faces = mesh.faces[:, ::-1].copy()
@@ -116,7 +119,7 @@ def _primitive(context: Context, element, tag: str, solid: bool) -> Primitive:
 
 def coordinates(context: Context, element) -> np.ndarray:
     """(n, 3) points of the element's Coordinate or CoordinateDouble child."""
-    nodes = context.children(element, {"Coordinate", "CoordinateDouble", "GeoCoordinate"})
+    nodes = context.children(element, COORDINATES)
     if not nodes:
         return np.zeros((0, 3))
     node = nodes[0]
