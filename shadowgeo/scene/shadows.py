@@ -32,6 +32,12 @@ the i-th of n lights is lifted ``offset * (1 + i / n)`` so that shadows of
 different lights do not z-fight).
 Each becomes a shape with a black material whose transparency is
 ``1 - shadow_intensity``.
+
+``method="volume"`` instead adds one closed shadow volume
+(:func:`shadowgeo.volume.shadow_volume`) per shape and light, role
+``"volume"``, ending one scene size past the scene's farthest corner.
+A scene with no light that is on raises :class:`~shadowgeo.SceneError`: X3D's
+headlight follows the viewer and casts no fixed shadow.
 """
 
 from __future__ import annotations
