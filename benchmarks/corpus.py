@@ -50,7 +50,7 @@ def convert(path: Path, out: Path, schema: Path | None) -> dict:
         row["shadows"] = f"{len(added)} ({sum(s.n_faces for s in added)} tri)"
         sg.save(result, out)
     except (sg.SceneError, sg.GeometryError) as error:
-        row["outcome"] = f"fails: {str(error).replace(str(path), path.name)}"
+        row["outcome"] = f"fails: {getattr(error, 'message', str(error))}"
     else:
         row["outcome"] = "converts"
     row["seconds"] = f"{time.perf_counter() - start:.2f}"  # without the validation
