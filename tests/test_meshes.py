@@ -390,3 +390,22 @@ def test_deeply_nested_json_is_refused(tmp_path):
     path.write_text('{"asset": ' + "[" * 100_000 + "]" * 100_000 + "}")
     with pytest.raises(sg.SceneError, match=r"deep\.gltf.*(nested too deeply|asset)"):
         sg.load(path)
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf", ".usda"])
+def test_a_shape_without_triangles_keeps_its_place(tmp_path, suffix):
+    triangle = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    moved = np.eye(4)
+    moved[:3, 3] = [1, 2, 3]
+    shapes = [
+        sg.Shape(triangle, [[0, 1, 2]], name="first"),
+        sg.Shape(np.zeros((0, 3)), np.zeros((0, 3)), moved, name="empty", role="shadow", group="g"),
+        sg.Shape(triangle, [[0, 1, 2]], name="last"),
+    ]
+    path = tmp_path / f"scene{suffix}"
+    sg.save(sg.Scene(shapes=shapes), path)
+    back = sg.load(path).shapes
+    assert [s.name for s in back] == ["first", "empty", "last"]
+    assert [s.n_faces for s in back] == [1, 0, 1]
+    assert (back[1].role, back[1].group) == ("shadow", "g")
+    np.testing.assert_array_equal(back[1].transform, moved)

@@ -262,6 +262,7 @@ def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
     graph = loaded.graph
     # In the file's node order (trimesh's graph order is not).
     order = sorted(graph.nodes_geometry, key=lambda f: (_node_index(graph, f, frames) or 0, f))
+    keys: list[int] = []
     for frame in order:
         transform, geometry_name = graph[frame]
         geometry = loaded.geometry[geometry_name]
@@ -295,6 +296,32 @@ def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
                 receives_shadow=bool(extras.get("receivesShadow", False)),
             )
         )
+        keys.append(index or 0)
+    _read_empty_shapes(scene, graph, frames, nodes, keys)
+
+
+def _read_empty_shapes(scene, graph, frames, nodes, keys) -> None:
+    """Shapes shadowgeo wrote without triangles are nodes without a mesh
+    (glTF forbids empty accessors); put them back in node order."""
+    for frame, index in frames.items():
+        extras = _shadowgeo_extras(nodes[index])
+        if "mesh" in nodes[index] or extras.get("role") not in ("geometry", "shadow", "volume"):
+            continue
+        if frame not in graph.nodes:
+            continue
+        scene.shapes.append(
+            Shape(
+                np.zeros((0, 3)),
+                np.zeros((0, 3), dtype=np.int64),
+                np.asarray(graph.get(frame)[0], dtype=np.float64),
+                name=nodes[index].get("name"),
+                role=extras["role"],
+                group=extras.get("group"),
+            )
+        )
+        keys.append(index)
+    order = sorted(range(len(keys)), key=keys.__getitem__)
+    scene.shapes = [scene.shapes[i] for i in order]
 
 
 def _read_lights(scene, graph, frames, nodes, document) -> None:
