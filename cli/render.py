@@ -38,7 +38,8 @@ def add_picture_options(parser) -> None:
         type=parse_view,
         default="iso",
         metavar="iso|top|front|X,Y,Z",
-        help="camera direction from the scene's centre (default iso)",
+        help="camera direction from the scene's centre (default iso); "
+        "write --view=-1,1,0 when X starts with a minus",
     )
     parser.add_argument("--no-shadows", action="store_true", help="do not compute shadows")
     parser.add_argument("--pbr", action="store_true", help="physically based shading")
