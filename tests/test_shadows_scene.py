@@ -278,6 +278,10 @@ def test_volume_method_is_a_clear_error_until_it_exists():
     triangles = mesh.vertices[mesh.faces]
     assert ray_crossings([0.0, 0.5, 0.0], triangles) % 2 == 1  # hidden
     assert ray_crossings([3.0, 0.5, 0.0], triangles) % 2 == 0  # lit
+    # Out of a light's reach, a shape has no volume.
+    short = sg.SceneLight(sg.PointLight([0, 4, 0], radius=2.5), name="short")
+    reach = sg.add_shadows(sg.Scene(scene.shapes, [short]), method="volume")
+    assert [v.name for v in reach.shapes_with_role("volume")] == ["volume_short_cube"]
 
 
 def ray_crossings(point, triangles, direction=(0.3141, 0.2718, 0.9127)):

@@ -304,6 +304,27 @@ class _Caster:
         return self._cut[key]
 
 
+def _lit(caster: _Caster, light) -> bool:
+    """False when no part of the caster is within the light's radius or, for a
+    spot light, its cone (bounding box and sphere tests)."""
+    if not is_positional(light):
+        return True
+    position = light.position
+    nearest = np.clip(position, caster.low, caster.high)
+    if float(np.linalg.norm(nearest - position)) > light.radius:
+        return False
+    if isinstance(light, SpotLight):
+        center = 0.5 * (caster.low + caster.high)
+        radius = 0.5 * float(np.linalg.norm(caster.high - caster.low))
+        to_center = center - position
+        reach = float(np.linalg.norm(to_center))
+        if reach > radius:
+            angle = math.acos(np.clip(to_center @ light.direction / reach, -1.0, 1.0))
+            if angle - math.asin(radius / reach) > light.cut_off_angle:
+                return False
+    return True
+
+
 def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Tolerance) -> bool:
     """False when the caster certainly casts nothing on the receiver's box."""
     distance = plane.signed_distance(caster.vertices)
@@ -314,18 +335,8 @@ def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Toleranc
         height = float(plane.signed_distance(position[None])[0])
         if distance.min() >= height - tolerance.length:
             return False  # wholly at or beyond the light's height
-        nearest = np.clip(position, caster.low, caster.high)
-        if float(np.linalg.norm(nearest - position)) > light.radius:
+        if not _lit(caster, light):
             return False
-        if isinstance(light, SpotLight):
-            center = 0.5 * (caster.low + caster.high)
-            radius = 0.5 * float(np.linalg.norm(caster.high - caster.low))
-            to_center = center - position
-            reach = float(np.linalg.norm(to_center))
-            if reach > radius:
-                angle = math.acos(np.clip(to_center @ light.direction / reach, -1.0, 1.0))
-                if angle - math.asin(radius / reach) > light.cut_off_angle:
-                    return False
         if box2d is None or distance.min() <= tolerance.length:
             return True
         # Every vertex lies strictly between the plane and the light: the
@@ -431,6 +442,10 @@ def _volumes(scene, geometry, chosen, tolerance, names, notes, progress) -> list
         for shape in geometry:
             done += 1
             caster = _Caster(shape)
+            if not _lit(caster, light):
+                if progress is not None:
+                    progress(done, total)
+                continue
             try:
                 volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)
             except GeometryError as error:
