@@ -287,6 +287,52 @@ def test_elevation_grid(tmp_path):
     assert _area(flat) == pytest.approx(4 * 5)
 
 
+def _extrusion(tmp_path, attributes: str) -> trimesh.Trimesh:
+    (shape,) = scene_of(tmp_path, f"<Shape><Extrusion {attributes}/></Shape>").shapes
+    mesh = trimesh.Trimesh(shape.vertices, shape.faces)  # merges the seam's duplicates
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    return mesh
+
+
+def test_extrusion_default_is_the_unit_box(tmp_path):
+    box = _extrusion(tmp_path, "")
+    np.testing.assert_allclose(box.bounds, [[-1, 0, -1], [1, 1, 1]])
+    assert box.volume == pytest.approx(4.0)  # positive: faces point outwards
+
+
+@pytest.mark.parametrize(
+    "attributes, volume",
+    [
+        ('spine="0 0 0 1 1 1"', 4 * math.sqrt(3)),  # a straight spine, any direction
+        ('spine="0 0 0 0 0 -3"', 12.0),
+        ('scale="1 1 0.5 0.5"', (4 + 1 + 2) / 3),  # frustum: h (A1 + A2 + sqrt(A1 A2)) / 3
+        ('scale="2 1" orientation="0 1 0 0.5"', 8.0),  # one value for every spine point
+        # concave caps; written clockwise in (x, z), like the default square
+        ('crossSection="0 0 0 1 1 0.5 2 1 2 0 0 0" convex="false"', 2 - 0.5),
+    ],
+)
+def test_extrusion_volumes(tmp_path, attributes, volume):
+    assert _extrusion(tmp_path, attributes).volume == pytest.approx(volume, rel=1e-12)
+
+
+def test_extrusion_written_the_other_way_round_faces_inwards(tmp_path):
+    # X3D's ccw is about the order as written: the reversed square gives inward faces
+    box = _extrusion(tmp_path, 'crossSection="1 1 -1 1 -1 -1 1 -1 1 1"')
+    assert box.volume == pytest.approx(-4.0)
+    assert _extrusion(tmp_path, 'crossSection="1 1 -1 1 -1 -1 1 -1 1 1" ccw="false"').volume > 0
+
+
+def test_extrusion_along_a_closed_circle_obeys_pappus(tmp_path):
+    # a square of side 0.2 swept round a circle of radius 2: V = 2 pi R A (Pappus)
+    angles = np.linspace(0, 2 * math.pi, 257)
+    spine = np.column_stack([2 * np.cos(angles), np.zeros_like(angles), 2 * np.sin(angles)])
+    spine[-1] = spine[0]
+    text = " ".join(f"{c!r}" for c in spine.ravel().tolist())
+    section = "0.1 0.1 0.1 -0.1 -0.1 -0.1 -0.1 0.1 0.1 0.1"
+    ring = _extrusion(tmp_path, f'spine="{text}" crossSection="{section}"')
+    assert abs(ring.volume) == pytest.approx(2 * math.pi * 2 * 0.04, rel=1e-3)
+
+
 # -- grouping nodes ---------------------------------------------------------------------
 
 

@@ -30,7 +30,8 @@ XS = "{http://www.w3.org/2001/XMLSchema}"
 NODES = [
     "Anchor", "Appearance", "Billboard", "Box", "CADAssembly", "CADFace", "CADLayer", "CADPart",
     "Collision", "Color", "ColorRGBA", "Cone",
-    "Coordinate", "CoordinateDouble", "Cylinder", "DirectionalLight", "ElevationGrid", "Group",
+    "Coordinate", "CoordinateDouble", "Cylinder", "DirectionalLight", "ElevationGrid", "Extrusion",
+    "Group",
     "IndexedFaceSet", "IndexedQuadSet", "IndexedTriangleFanSet", "IndexedTriangleSet",
     "IndexedTriangleStripSet", "Inline", "LOD", "Material", "PhysicalMaterial", "PointLight",
     "QuadSet", "Shape", "Sphere", "SpotLight", "StaticGroup", "Switch", "Transform",

@@ -108,6 +108,18 @@ DEFAULTS = {
         "zDimension": ("SFInt32", "0"),
         "zSpacing": ("SFFloat", "1.0"),
     },
+    "Extrusion": {
+        "beginCap": ("SFBool", "true"),
+        "ccw": ("SFBool", "true"),
+        "convex": ("SFBool", "true"),
+        "creaseAngle": ("SFFloat", "0"),
+        "crossSection": ("MFVec2f", "1 1 1 -1 -1 -1 -1 1 1 1"),
+        "endCap": ("SFBool", "true"),
+        "orientation": ("MFRotation", "0 0 1 0"),
+        "scale": ("MFVec2f", "1 1"),
+        "solid": ("SFBool", "true"),
+        "spine": ("MFVec3f", "0 0 0 0 1 0"),
+    },
     "Group": {
         "bboxCenter": ("SFVec3f", "0 0 0"),
         "bboxDisplay": ("SFBool", "false"),

@@ -121,7 +121,7 @@ class Context:
                 raise self.error(element, f"field {name}: '{shown}' {problem}") from None
             if name in ANGLE_FIELDS:
                 value = value * self.angle_factor
-            elif kind == "SFRotation":
+            elif kind in ("SFRotation", "MFRotation"):
                 value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
         return value
 

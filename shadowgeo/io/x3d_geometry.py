@@ -1,7 +1,7 @@
 """X3D geometry nodes to triangles in the node's own frame.
 
 :func:`geometry` turns one geometry element into a :class:`Mesh` (explicit
-vertices: IndexedFaceSet, the triangle and quad sets, ElevationGrid) or a
+vertices: IndexedFaceSet, the triangle and quad sets, ElevationGrid, Extrusion) or a
 :class:`Primitive` (Box, Sphere, Cone, Cylinder), which the reader tessellates
 once it knows the scene's size and hence the chord tolerance. Faces are
 counter-clockwise (``ccw="false"`` is flipped here).
@@ -15,19 +15,20 @@ import numpy as np
 from manifold3d import triangulate
 
 from ..scene import primitives
+from .x3d_extrusion import extrusion
 from .x3d_fields import Context, local_name
 
 PRIMITIVES = {"Box", "Sphere", "Cone", "Cylinder"}
 MESHES = {
     "IndexedFaceSet", "IndexedTriangleSet", "TriangleSet", "IndexedQuadSet", "QuadSet",
     "ElevationGrid", "IndexedTriangleFanSet", "IndexedTriangleStripSet", "TriangleFanSet",
-    "TriangleStripSet",
+    "TriangleStripSet", "Extrusion",
 }  # fmt: skip
 GEOMETRY = PRIMITIVES | MESHES
 COORDINATES = {"Coordinate", "CoordinateDouble", "GeoCoordinate"}
 # Geometry that has no area to cast a shadow with, or that shadowgeo does not model.
 UNMODELLED_GEOMETRY = {
-    "Text", "IndexedLineSet", "LineSet", "PointSet", "Extrusion", "Arc2D", "ArcClose2D",
+    "Text", "IndexedLineSet", "LineSet", "PointSet", "Arc2D", "ArcClose2D",
     "Circle2D", "Disk2D", "Polyline2D", "Polypoint2D", "Rectangle2D", "TriangleSet2D",
     "NurbsPatchSurface", "NurbsTrimmedSurface", "GeoElevationGrid", "ParticleSystem",
 }  # fmt: skip
@@ -81,7 +82,7 @@ def geometry(context: Context, element) -> Mesh | Primitive:
     solid = context.field(element, "solid")
     if tag in PRIMITIVES:
         return _primitive(context, element, tag, solid)
-    if tag != "ElevationGrid" and not context.children(element, COORDINATES):
+    if tag not in ("ElevationGrid", "Extrusion") and not context.children(element, COORDINATES):
         return Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), solid, ["no Coordinate node"])
     mesh = _MESH_BUILDERS[tag](context, element)
     if context.field(element, "ccw") is False:
@@ -328,7 +329,12 @@ def _elevation_grid(context: Context, element) -> Mesh:
     return Mesh(vertices, _quads_to_triangles(quads).astype(np.int64))
 
 
+def _extrusion(context: Context, element) -> Mesh:
+    return Mesh(*extrusion(context, element, polygon_triangles))
+
+
 _MESH_BUILDERS = {
+    "Extrusion": _extrusion,
     "IndexedFaceSet": _indexed_face_set,
     "IndexedTriangleSet": _indexed_triangle_set,
     "TriangleSet": _triangle_set,

@@ -1,0 +1,118 @@
+"""X3D Extrusion: a cross-section swept along a spine, as triangles.
+
+Follows ISO/IEC 19775-1, 13.3.5 (Extrusion): at each spine point the
+cross-section ``(x, z)`` is scaled by ``scale``, turned by ``orientation``
+and placed in the spine-aligned cross-section plane (SCP), whose Y axis runs
+along the spine and whose Z axis is the spine's local bend normal (kept from
+the previous point where the spine is straight, flipped when it would reverse,
+and for a wholly straight spine the turn taking +Y onto the spine). Sides are
+quads between consecutive cross-sections; the caps are the first and last
+cross-sections (skipped when the spine is closed), triangulated like
+IndexedFaceSet polygons.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .x3d_fields import Context, rotation_matrix
+
+
+def _unit(vector: np.ndarray) -> np.ndarray | None:
+    length = float(np.linalg.norm(vector))
+    return vector / length if length > 1e-12 else None
+
+
+def _turn(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The rotation (3x3) taking unit ``source`` onto unit ``target``."""
+    axis = np.cross(source, target)
+    sine, cosine = float(np.linalg.norm(axis)), float(np.dot(source, target))
+    if sine < 1e-12:
+        return np.eye(3) if cosine > 0 else np.diag([1.0, -1.0, -1.0])  # half turn about x
+    return rotation_matrix(np.append(axis, np.arctan2(sine, cosine)))
+
+
+def frames(spine: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) SCP axes per spine point: columns X, Y, Z (world)."""
+    n = len(spine)
+    closed = n > 2 and np.allclose(spine[0], spine[-1])
+    ys, zs = [], []
+    for i in range(n):
+        if closed and i in (0, n - 1):
+            y = spine[1] - spine[n - 2]
+            z = np.cross(spine[1] - spine[0], spine[n - 2] - spine[0])
+        else:
+            after, before = spine[min(i + 1, n - 1)], spine[max(i - 1, 0)]
+            y = after - before
+            inner = min(max(i, 1), n - 2) if n > 2 else None
+            z = (
+                np.cross(spine[inner + 1] - spine[inner], spine[inner - 1] - spine[inner])
+                if inner is not None
+                else np.zeros(3)
+            )
+        ys.append(_unit(y))
+        zs.append(_unit(z))
+    # a spine with repeated points: borrow the nearest defined direction
+    known = [y for y in ys if y is not None]
+    fallback = known[0] if known else np.array([0.0, 1.0, 0.0])
+    ys = [fallback if y is None else y for y in ys]
+    if all(z is None for z in zs):  # a straight spine: turn +Y onto it
+        turn = _turn(np.array([0.0, 1.0, 0.0]), ys[0])
+        return np.repeat(turn[None], n, axis=0)
+    first = next(z for z in zs if z is not None)
+    out, previous = [], first
+    for y, z in zip(ys, zs, strict=True):
+        z = previous if z is None else z
+        if np.dot(z, previous) < 0:
+            z = -z
+        x = _unit(np.cross(y, z))
+        if x is None:
+            x = np.cross(y, previous)
+        out.append(np.column_stack([x, y, z]))
+        previous = z
+    return np.array(out)
+
+
+def _per_point(values: np.ndarray, n: int) -> np.ndarray:
+    """X3D: one value applies everywhere; a short list repeats its last."""
+    if len(values) >= n:
+        return values[:n]
+    return np.concatenate([values, np.repeat(values[-1:], n - len(values), axis=0)])
+
+
+def extrusion(context: Context, element, polygon_triangles) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (n, 3) float64 and faces (m, 3) int64 of an Extrusion element;
+    ``polygon_triangles(points)`` triangulates a concave cap."""
+    spine = context.field(element, "spine").reshape(-1, 3)
+    section = context.field(element, "crossSection").reshape(-1, 2)
+    if len(spine) < 2 or len(section) < 2:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    scale = _per_point(context.field(element, "scale").reshape(-1, 2), len(spine))
+    turns = _per_point(context.field(element, "orientation").reshape(-1, 4), len(spine))
+    axes = frames(spine)
+    flat = np.column_stack([section[:, 0], np.zeros(len(section)), section[:, 1]])
+    rings = []
+    for point, frame, size, turn in zip(spine, axes, scale, turns, strict=True):
+        local = (flat * [size[0], 1.0, size[1]]) @ rotation_matrix(turn).T
+        rings.append(local @ frame.T + point)
+    vertices = np.concatenate(rings)
+    m = len(section)
+    i, j = np.meshgrid(np.arange(len(spine) - 1), np.arange(m - 1), indexing="ij")
+    a = (i * m + j).ravel()
+    # (i, j), (i, j+1), (i+1, j+1), (i+1, j): outward for the default box
+    faces = [np.column_stack([a, a + 1, a + m + 1]), np.column_stack([a, a + m + 1, a + m])]
+    closed_spine = len(spine) > 2 and np.allclose(spine[0], spine[-1])
+    ring = np.arange(m - 1 if np.allclose(section[0], section[-1]) else m)
+    if len(ring) >= 3 and not closed_spine:
+        convex = context.field(element, "convex")
+        cap = polygon_triangles(flat[ring]) if not convex else None
+        if cap is None:
+            cap = np.column_stack([np.zeros(len(ring) - 2, int), ring[1:-1], ring[2:]])
+        else:
+            cap = ring[cap]
+        # the section as written faces +Y of its SCP: the end cap as is, the begin cap turned
+        if context.field(element, "endCap"):
+            faces.append(cap + (len(spine) - 1) * m)
+        if context.field(element, "beginCap"):
+            faces.append(cap[:, ::-1])
+    return vertices, np.concatenate(faces).astype(np.int64)
