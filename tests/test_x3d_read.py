@@ -608,6 +608,22 @@ def test_corpus_units(corpus_dir):
     assert any("units_helper.x3dv" in warning for warning in scene.warnings)
 
 
+def test_angle_unit_scales_every_angle_field(tmp_path):
+    head = '<unit category="angle" name="degrees" conversionFactor="0.017453292519943295"/>'
+    body = (
+        '<Transform rotation="0 0 1 90"><SpotLight direction="1 0 0" cutOffAngle="30" '
+        'beamWidth="15"/></Transform><Shape><Extrusion orientation="0 1 0 90" '
+        'crossSection="2 1 2 -1 -2 -1 -2 1 2 1"/></Shape>'
+    )
+    scene = scene_of(tmp_path, body, head=head)
+    (spot,) = scene.lights
+    np.testing.assert_allclose(spot.light.direction, [0, 1, 0], atol=1e-15)
+    assert spot.light.cut_off_angle == pytest.approx(math.pi / 6)
+    assert spot.beam_width == pytest.approx(math.pi / 12)
+    # the 4 x 2 section turned a quarter about y: 2 wide in x, 4 deep in z
+    np.testing.assert_allclose(np.ptp(scene.shapes[0].vertices, axis=0), [2, 1, 4], atol=1e-12)
+
+
 def test_corpus_invalid_unit_warns(corpus_dir):
     scene = sg.load(corpus_dir / "x3d" / "warnings" / "units_invalid.x3d")
     assert any("unit" in warning and "line 5" in warning for warning in scene.warnings)
