@@ -608,6 +608,21 @@ def test_corpus_units(corpus_dir):
     assert any("units_helper.x3dv" in warning for warning in scene.warnings)
 
 
+def test_a_default_namespace_changes_nothing(tmp_path):
+    path = tmp_path / "namespaced.x3d"
+    path.write_text(
+        '<X3D xmlns="http://www.web3d.org/specifications/x3d-namespace" version="4.0"><head>'
+        '<unit category="length" name="cm" conversionFactor="0.01"/></head><Scene>'
+        '<Transform translation="1 0 0"><Shape DEF="s"><Appearance><ImageTexture url=\'"no.png"\'/>'
+        "</Appearance><Box/></Shape></Transform></Scene></X3D>"
+    )
+    scene = sg.load(path)
+    (shape,) = scene.shapes
+    assert shape.name == "s" and scene.meters_per_unit == 0.01
+    np.testing.assert_allclose(shape.world_vertices.min(axis=0), [0, -1, -1])
+    assert any("texture not found: no.png" in warning for warning in scene.warnings)
+
+
 def test_angle_unit_scales_every_angle_field(tmp_path):
     head = '<unit category="angle" name="degrees" conversionFactor="0.017453292519943295"/>'
     body = (

@@ -98,7 +98,7 @@ class _Reader:
             self.inline_stack.pop()
 
     def _units(self, context: Context, root, scene) -> None:
-        for unit in root.iter("unit"):
+        for unit in (e for e in root.iter() if local_name(e) == "unit"):
             category, factor = unit.get("category"), unit.get("conversionFactor", "")
             try:
                 value = float(factor)
@@ -210,7 +210,7 @@ class _Reader:
         )
 
     def _textures(self, context: Context, appearance) -> None:
-        for texture in appearance.iter(*TEXTURES):
+        for texture in (e for e in appearance.iter() if local_name(e) in TEXTURES):
             texture = context.resolve(texture)
             if texture in self.textures_seen:
                 continue
