@@ -320,3 +320,11 @@ def test_transforms_overflowing_to_infinity(tmp_path):
         sg.SceneError, match="line 2, Transform: the transforms down to here overflow"
     ):
         sg.load(scene(tmp_path, body))
+
+
+def test_use_of_a_node_of_another_type(tmp_path):
+    body = '<Transform DEF="T"/>\n<Shape><Box USE="T"/></Shape>'
+    with pytest.raises(
+        sg.SceneError, match=r"line 3, Box USE='T': USE='T' names a Transform \(line 2\), not a Box"
+    ):
+        sg.load(scene(tmp_path, body))

@@ -66,6 +66,12 @@ class Context:
         target = self.defs.get(name)
         if target is None:
             raise self.error(element, f"USE='{name}' names no DEF in this file")
+        if local_name(target) != local_name(element):
+            raise self.error(
+                element,
+                f"USE='{name}' names a {local_name(target)} (line {target.sourceline}), "
+                f"not a {local_name(element)}",
+            )
         return target
 
     def children(self, element, tags=None):
