@@ -1,7 +1,8 @@
 """What the converter does with every file of the shared corpus, as a table.
 
-Each X3D file is read, given the shadows of its own lights on the receivers
-found in it (or, when none is found, on the plane y = 0: ``--plane 0,1,0,0``),
+Each X3D file is read, given the shadows of its own lights (or, when it has
+none, of a sun as ``--sun 0.3,-1,0.2`` gives) on the receivers found in it (or,
+when none is found, on the plane y = 0: ``--plane 0,1,0,0``),
 written back as X3D, and validated against the X3D 4.0 schema next to the
 input (the corpus has X3D 3.x files with errors of their own: the output must
 add none). Run from the repository root:
@@ -28,6 +29,7 @@ from x3d_schema import new_schema_errors, x3d_schema_errors  # noqa: E402
 import shadowgeo as sg  # noqa: E402
 
 GROUND = (0.0, 1.0, 0.0, 0.0)
+SUN = sg.SceneLight(sg.DirectionalLight([0.3, -1.0, 0.2]), name="sun", shadows=True)
 
 
 def convert(path: Path, out: Path, schema: Path | None) -> dict:
@@ -38,13 +40,16 @@ def convert(path: Path, out: Path, schema: Path | None) -> dict:
         scene = sg.load(path)
         row["shapes"] = f"{len(scene.shapes)} ({sum(s.n_faces for s in scene.shapes)} tri)"
         row["lights"] = str(len(scene.lights))
+        extra = [] if any(light.on for light in scene.lights) else [SUN]
+        if extra:
+            row["lights"] += " (--sun)"
         try:
-            result = sg.add_shadows(scene)
+            result = sg.add_shadows(scene, extra_lights=extra)
             row["receivers"] = "found"
         except sg.SceneError as error:
             if "no receiver found" not in error.message:
                 raise
-            result = sg.add_shadows(scene, plane=GROUND)
+            result = sg.add_shadows(scene, plane=GROUND, extra_lights=extra)
             row["receivers"] = "plane y=0"
         added = result.shapes_with_role("shadow")
         row["shadows"] = f"{len(added)} ({sum(s.n_faces for s in added)} tri)"

@@ -19,8 +19,11 @@ examples:
   shadowgeo convert scene.x3d scene.glb --light sun --receiver floor
   shadowgeo convert model.glb model.usda --plane 0,1,0,0
   shadowgeo convert scene.x3dz scene.x3d --method volume --progress
+  shadowgeo convert unlit.x3d unlit.glb --sun 0.3,-1,0.2
 
 Lights with shadows="true" cast (else every light that is on, with a note);
+--sun adds a directional light that casts but is not written into the scene
+(for scenes with no light of their own), and then only it and --light cast;
 receivers are the large planar shapes (ground, floor, walls) unless named.
 Exit codes: 0 done, 1 bad input (one line naming the file and what is wrong),
 2 bad usage.
@@ -51,6 +54,13 @@ def register(subparsers) -> None:
         action="append",
         metavar="DEF",
         help="a light that casts (repeat for several); default: lights with shadows=true",
+    )
+    parser.add_argument(
+        "--sun",
+        type=direction_argument,
+        metavar="DX,DY,DZ",
+        help="also cast from a directional light travelling along DX,DY,DZ "
+        "(not added to the scene); the scene's lights then cast only if named with --light",
     )
     receiving = parser.add_mutually_exclusive_group()
     receiving.add_argument(
@@ -89,6 +99,18 @@ def plane_argument(text: str) -> shadowgeo.Plane:
         ) from None
 
 
+def direction_argument(text: str) -> shadowgeo.DirectionalLight:
+    try:
+        values = [float(part) for part in text.split(",")]
+        if len(values) != 3:
+            raise ValueError(f"{len(values)} numbers")
+        return shadowgeo.DirectionalLight(values)
+    except (ValueError, shadowgeo.GeometryError) as error:
+        raise argparse.ArgumentTypeError(
+            f"expected three numbers dx,dy,dz, not all zero, got {text!r} ({error})"
+        ) from None
+
+
 def tolerance_argument(text: str) -> float:
     try:
         value = float(text)
@@ -123,6 +145,10 @@ class ProgressBar:
             self.stream.flush()
 
 
+def sun_light(light: shadowgeo.DirectionalLight) -> shadowgeo.SceneLight:
+    return shadowgeo.SceneLight(light, name="sun", shadows=True)
+
+
 def run(args) -> int:
     source, target = args.input, args.output
     if target.exists() and source.exists() and os.path.samefile(source, target):
@@ -151,6 +177,7 @@ def run(args) -> int:
             plane=args.plane,
             tolerance=args.tolerance,
             progress=bar,
+            extra_lights=[] if args.sun is None else [sun_light(args.sun)],
         )
     finally:
         if bar is not None:

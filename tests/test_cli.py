@@ -196,6 +196,44 @@ def test_scene_without_lights_is_one_line_and_writes_nothing(capsys, tmp_path):
     assert not (tmp_path / "out.x3d").exists()
 
 
+def test_sun_lights_a_scene_without_lights(capsys, tmp_path):
+    dark = tmp_path / "dark.x3d"
+    dark.write_text(
+        '<?xml version="1.0"?>\n<X3D version="4.0" profile="Interchange"><Scene>'
+        "<Shape><Box/></Shape></Scene></X3D>\n"
+    )
+    out = tmp_path / "out.x3d"
+    done = in_process(
+        capsys, "convert", dark, out, "--plane", "0,1,0,3", "--sun", "1,-2,0", "--progress"
+    )
+    assert done.returncode == 0, done.stderr
+    # By hand: the box [-1, 1]^3 under rays along (1, -2, 0) onto y = -3 moves
+    # its top face by 2 in x and its bottom face by 1: x in [0, 3], z in [-1, 1].
+    written = sg.load(out)
+    shadows = [s for s in written.shapes if (s.name or "").startswith("shadow_sun")]
+    assert len(shadows) == 1 and not written.lights  # the sun is not added to the scene
+    points = shadows[0].world_vertices
+    triangles = points[shadows[0].faces]
+    area = (
+        0.5
+        * np.linalg.norm(
+            np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1
+        ).sum()
+    )
+    assert area == pytest.approx(6.0, rel=1e-9)
+    assert points[:, 0].min() == pytest.approx(0.0, abs=1e-9)
+    assert points[:, 0].max() == pytest.approx(3.0, abs=1e-9)
+    assert np.all(points[:, 1] > -3.0) and np.all(points[:, 1] < -2.9)  # lifted, not buried
+
+
+@pytest.mark.parametrize("sun", ["0,0,0", "1,2", "a,b,c"])
+def test_bad_sun_is_bad_usage(capsys, tmp_path, sun):
+    with pytest.raises(SystemExit) as stop:
+        main(["convert", str(EXAMPLE), str(tmp_path / "o.x3d"), "--sun", sun])
+    assert stop.value.code == 2
+    assert "--sun" in capsys.readouterr().err
+
+
 def test_unknown_light_or_receiver_names_the_known_ones(capsys, tmp_path):
     done = in_process(capsys, "convert", EXAMPLE, tmp_path / "o.x3d", "--light", "sun")
     one_line_error(done, "no light named 'sun'", "fill, lamp")

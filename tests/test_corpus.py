@@ -1,11 +1,12 @@
 """Every file of the shared corpus converts and validates no worse than its
 input, or fails with the one clear message we judged right for it.
 
-Judged failures: a scene with no light (most of the corpus: test files for
-containerField, metadata, prototypes, text) has nothing to cast a shadow, and
-says so; whether it really has none is checked here by looking for light
-elements in the XML directly. Files whose reader warnings matter (missing
-textures, invalid fields) must still read.
+A scene with no light (most of the corpus: test files for containerField,
+metadata, prototypes, text) has nothing to cast a shadow and says so; it then
+converts with a sun given as ``shadowgeo convert --sun`` does. Whether a file
+really has no light is checked by looking for light elements in the XML
+directly. Files whose reader warnings matter (missing textures, invalid
+fields) must still read.
 """
 
 from __future__ import annotations
@@ -28,15 +29,19 @@ def lights_in_xml(path) -> int:
     return sum(len(root.findall(f".//{name}")) for name in LIGHTS)
 
 
-def convert(path):
-    """What ``shadowgeo convert`` does: own lights, found receivers, else y = 0."""
+SUN = sg.SceneLight(sg.DirectionalLight([0.3, -1.0, 0.2]), name="sun", shadows=True)
+
+
+def convert(path, extra_lights=()):
+    """What ``shadowgeo convert`` does: own lights (or ``--sun``), found
+    receivers, else ``--plane 0,1,0,0``."""
     scene = sg.load(path)
     try:
-        return sg.add_shadows(scene)
+        return sg.add_shadows(scene, extra_lights=extra_lights)
     except sg.SceneError as error:
         if "no receiver found" not in str(error):
             raise
-        return sg.add_shadows(scene, plane=(0, 1, 0, 0))
+        return sg.add_shadows(scene, plane=(0, 1, 0, 0), extra_lights=extra_lights)
 
 
 def check_shadows(result) -> None:
@@ -63,12 +68,12 @@ def test_every_corpus_file_converts_or_fails_clearly(corpus_dir, x3d_schema, tmp
         except (sg.SceneError, sg.GeometryError) as error:
             message = str(error)
             assert "\n" not in message and path.name in message, message
-            # The one failure we judged right: no light at all in the file.
+            # Judged right: no light at all in the file; a sun then casts.
             assert "has no lights" in message, f"{name}: {message}"
             assert lights_in_xml(path) == 0, name
-            outcomes[name] = "no lights"
-            continue
-        assert result.lights, name
+            result = convert(path, extra_lights=[SUN])
+            assert not result.lights, name  # the sun is not added to the scene
+            name += " (--sun)"
         check_shadows(result)
         sg.save(result, out)
         before = x3d_schema_errors(path, x3d_schema)
@@ -82,7 +87,10 @@ def test_every_corpus_file_converts_or_fails_clearly(corpus_dir, x3d_schema, tmp
         added = 5 * len(shadows) + len({s.group for s in shadows})
         assert len(written.xpath("//*")) == len(original.xpath("//*")) + added, name
         outcomes[name] = f"{len(shadows)} shadows"
-    converted = [n for n, o in outcomes.items() if o != "no lights"]
-    # Every file with a light converts; the scenes with lights cast something.
-    assert len(converted) == sum(lights_in_xml(p) > 0 for p in files)
-    assert all(outcomes[n] != "0 shadows" for n in converted), outcomes
+    # Every file converts, with its own lights where it has them.
+    assert len(outcomes) == len(files)
+    with_sun = [n for n in outcomes if n.endswith("(--sun)")]
+    assert len(with_sun) == sum(lights_in_xml(p) == 0 for p in files)
+    # The scenes with lights of their own cast something.
+    lit = [n for n in outcomes if n not in with_sun]
+    assert all(outcomes[n] != "0 shadows" for n in lit), outcomes

@@ -37,7 +37,8 @@ Each becomes a shape with a black material whose transparency is
 (:func:`shadowgeo.volume.shadow_volume`) per shape and light, role
 ``"volume"``, ending one scene size past the scene's farthest corner.
 A scene with no light that is on raises :class:`~shadowgeo.SceneError`: X3D's
-headlight follows the viewer and casts no fixed shadow.
+headlight follows the viewer and casts no fixed shadow. ``extra_lights`` gives
+lights that cast without being added to the scene (a sun for such a scene).
 """
 
 from __future__ import annotations
@@ -82,6 +83,7 @@ def add_shadows(
     tolerance: Tolerance | float | None = None,
     offset: float | None = None,
     progress: Progress | None = None,
+    extra_lights: Sequence[SceneLight] = (),
 ) -> Scene:
     """The scene with the shadows of its lights added as shapes.
 
@@ -105,6 +107,11 @@ def add_shadows(
         Lift of the shadows off their receiver (scene units).
     progress : callable, optional
         Called as ``progress(done, total)`` as casters are processed.
+    extra_lights : sequence of SceneLight
+        Lights that cast shadows but are not added to the scene, e.g. a sun
+        for a scene with no light of its own. When given, they cast together
+        with the lights named in ``lights`` (none by default): the scene's own
+        lights then cast only when named.
 
     Returns
     -------
@@ -143,7 +150,7 @@ def add_shadows(
     notes: list[str] = []
     kept = _without_baked(scene, notes)
     geometry = [s for s in kept if s.role == "geometry" and s.n_faces]
-    chosen = _select_lights(scene, lights, notes)
+    chosen = _select_lights(scene, lights, notes, extra_lights)
     positions = [light.light.position for light in chosen if is_positional(light.light)]
     if not isinstance(tolerance, Tolerance):
         bounds = (
@@ -246,7 +253,13 @@ class _Names:
         return safe_name(light.name) if light.name else f"light{index}"
 
 
-def _select_lights(scene: Scene, names, notes: list[str]) -> list[SceneLight]:
+def _select_lights(scene: Scene, names, notes: list[str], extra=()) -> list[SceneLight]:
+    extra = list(extra)
+    for light in extra:
+        if not isinstance(light, SceneLight):
+            raise GeometryError(f"extra_lights must hold SceneLight values, got {light!r}")
+    if extra and names is None:
+        return extra
     if names is not None:
         by_name = {light.name: light for light in scene.lights if light.name}
         chosen = []
@@ -257,13 +270,14 @@ def _select_lights(scene: Scene, names, notes: list[str]) -> list[SceneLight]:
             if not by_name[name].on:
                 raise SceneError(f"light '{name}' is off (on=\"false\")", path=scene.path)
             chosen.append(by_name[name])
-        return chosen
+        return [*chosen, *extra]
     lit = [light for light in scene.lights if light.on]
     if not lit:
         what = "no lights" if not scene.lights else "no light that is on"
         raise SceneError(
             f"the scene has {what}, so nothing casts a shadow "
-            "(X3D's headlight follows the viewer and casts none)",
+            "(X3D's headlight follows the viewer and casts none; give one with "
+            "extra_lights=, or shadowgeo convert --sun DX,DY,DZ)",
             path=scene.path,
         )
     chosen = [light for light in lit if light.shadows]
