@@ -328,3 +328,13 @@ def test_use_of_a_node_of_another_type(tmp_path):
         sg.SceneError, match=r"line 3, Box USE='T': USE='T' names a Transform \(line 2\), not a Box"
     ):
         sg.load(scene(tmp_path, body))
+
+
+def test_angle_unit_overflowing_an_angle(tmp_path):
+    path = write(
+        tmp_path,
+        '<X3D version="3.3"><head><unit category="angle" name="big" conversionFactor="1e308"/>'
+        '</head><Scene>\n<Transform rotation="0 1 0 10"/></Scene></X3D>',
+    )
+    with pytest.raises(sg.SceneError, match="line 2, Transform: field rotation: not finite"):
+        sg.load(path)

@@ -101,6 +101,15 @@ class Context:
     def warn(self, element, message: str) -> None:
         self.warnings.append(f"{self.where(element)}: {message}")
 
+    def _radians(self, element, name: str, kind: str, value):
+        if kind in ("SFRotation", "MFRotation"):
+            value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
+        else:
+            value = value * self.angle_factor
+        if not np.all(np.isfinite(value)):
+            raise self.error(element, f"field {name}: not finite in radians")
+        return value
+
     def field(self, element, name: str, kind: str | None = None):
         """The value of field ``name`` of ``element``, or its default.
 
@@ -125,10 +134,8 @@ class Context:
             except ValueError as problem:
                 shown = text if len(text) <= 40 else text[:37] + "..."
                 raise self.error(element, f"field {name}: '{shown}' {problem}") from None
-            if name in ANGLE_FIELDS:
-                value = value * self.angle_factor
-            elif kind in ("SFRotation", "MFRotation"):
-                value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
+            if name in ANGLE_FIELDS or kind in ("SFRotation", "MFRotation"):
+                value = self._radians(element, name, kind, value)
         return value
 
 
