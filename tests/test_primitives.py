@@ -237,3 +237,12 @@ def test_equal_primitives_share_a_tessellation_not_their_flags(tmp_path):
 def test_reader_refuses_a_non_positive_radius(tmp_path):
     with pytest.raises(sg.SceneError, match=r"line 1, Sphere: field radius: -1.0 must be > 0"):
         read(tmp_path, '<Shape><Sphere radius="-1"/></Shape>')
+
+
+def test_sphere_segments_are_capped_and_the_reader_says_so(tmp_path, monkeypatch):
+    monkeypatch.setattr(primitives, "MAX_SPHERE_SEGMENTS", 64)
+    scene = read(tmp_path, '<Shape><Sphere radius="2"/></Shape>', chord=1e-6)
+    (sphere,) = scene.shapes
+    assert sphere.n_faces <= 2 * 64 * 32
+    (warning,) = scene.warnings
+    assert "scene.x3d line 1, Sphere: Sphere tessellation capped" in warning

@@ -73,7 +73,12 @@ class Primitive:
             vertices, faces = make.get(self.kind, primitives.cylinder)(
                 chord=chord, **self.parameters
             )
-        return Mesh(vertices, faces, self.solid)
+        notes = []
+        if self.kind == "Sphere":
+            reached = primitives.inscribed_deviation(vertices, faces, self.radius)
+            if reached > chord:
+                notes.append(f"Sphere tessellation capped: within {reached:.3g}, not {chord:.3g}")
+        return Mesh(vertices, faces, self.solid, notes)
 
 
 def geometry(context: Context, element) -> Mesh | Primitive:

@@ -244,6 +244,8 @@ class _Reader:
                 key = (built.kind, parameters, None if built.kind == "Box" else local_chord)
                 if key not in tessellated:
                     tessellated[key] = built.tessellate(local_chord)
+                    for note in tessellated[key].notes:
+                        self.warnings.append(f"{instance.source}: {note}")
                 built = tessellated[key]
             scene.shapes.append(
                 Shape(

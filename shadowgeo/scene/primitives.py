@@ -19,6 +19,10 @@ import numpy as np
 from ..errors import GeometryError
 from ..tolerance import Tolerance
 
+# A sphere gets at most this many segments around (8.4 million triangles): a
+# chord below about 1e-6 of its radius is then not met (the reader warns).
+MAX_SPHERE_SEGMENTS = 2048
+
 
 def _segments(radius: float, chord: float, sweep: float = 2 * math.pi, minimum: int = 8) -> int:
     if not (chord > 0 and math.isfinite(chord)):
@@ -159,7 +163,7 @@ def sphere(radius: float = 1.0, chord: float = 1e-3) -> tuple[np.ndarray, np.nda
     trapezoid, hence planar and inscribed; its largest deviation from the
     sphere is ``r - d`` with ``d`` the distance of its plane from the centre.
     The counts start from :meth:`Tolerance.segments` and grow until that bound
-    is at most ``chord`` for every face.
+    is at most ``chord`` for every face, or reach :data:`MAX_SPHERE_SEGMENTS`.
 
     Returns ``(vertices (n, 3) float64, faces (m, 3) int64)``.
 
@@ -172,13 +176,13 @@ def sphere(radius: float = 1.0, chord: float = 1e-3) -> tuple[np.ndarray, np.nda
     """
     radius = _positive(radius, "Sphere radius")
     # a quad dips by about the sum of its two edges' sagittas: start at half the chord
-    around = _segments(radius, chord / 2)
+    around = min(_segments(radius, chord / 2), MAX_SPHERE_SEGMENTS)
     while True:
         rings = max(2, math.ceil(around / 2))
         vertices, faces = _uv_sphere(radius, around, rings)
-        if _inscribed_deviation(vertices, faces, radius) <= chord or around >= 1 << 16:
+        if inscribed_deviation(vertices, faces, radius) <= chord or around >= MAX_SPHERE_SEGMENTS:
             return vertices, faces
-        around = math.ceil(around * 1.05)
+        around = min(math.ceil(around * 1.05), MAX_SPHERE_SEGMENTS)
 
 
 def _uv_sphere(radius: float, around: int, rings: int) -> tuple[np.ndarray, np.ndarray]:
@@ -207,8 +211,9 @@ def _uv_sphere(radius: float, around: int, rings: int) -> tuple[np.ndarray, np.n
     return vertices, np.concatenate(parts).astype(np.int64)
 
 
-def _inscribed_deviation(vertices: np.ndarray, faces: np.ndarray, radius: float) -> float:
-    """Upper bound of how far the triangles dip inside the sphere."""
+def inscribed_deviation(vertices: np.ndarray, faces: np.ndarray, radius: float) -> float:
+    """Upper bound of how far the triangles of a sphere mesh centred on the
+    origin dip inside the sphere of ``radius``."""
     corners = vertices[faces]
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     lengths = np.linalg.norm(normals, axis=1)
