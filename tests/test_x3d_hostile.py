@@ -338,3 +338,11 @@ def test_angle_unit_overflowing_an_angle(tmp_path):
     )
     with pytest.raises(sg.SceneError, match="line 2, Transform: field rotation: not finite"):
         sg.load(path)
+
+
+def test_extrusion_that_would_explode_is_refused(tmp_path):
+    spine = " ".join(f"0 {i} 0" for i in range(5000))
+    section = " ".join(f"{i} 0" for i in range(5000))
+    body = f'<Shape><Extrusion spine="{spine}" crossSection="{section}"/></Shape>'
+    with pytest.raises(sg.SceneError, match="5000 spine points x 5000 section points"):
+        sg.load(scene(tmp_path, body))

@@ -17,6 +17,10 @@ import numpy as np
 
 from .x3d_fields import Context, rotation_matrix
 
+# Vertices one Extrusion may make (spine x section): a few kilobytes of text
+# could otherwise ask for billions.
+MAX_POINTS = 20_000_000
+
 
 def _unit(vector: np.ndarray) -> np.ndarray | None:
     length = float(np.linalg.norm(vector))
@@ -87,6 +91,12 @@ def extrusion(context: Context, element, polygon_triangles) -> tuple[np.ndarray,
     section = context.field(element, "crossSection").reshape(-1, 2)
     if len(spine) < 2 or len(section) < 2:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
+    if len(spine) * len(section) > MAX_POINTS:
+        raise context.error(
+            element,
+            f"{len(spine)} spine points x {len(section)} section points is more than "
+            f"{MAX_POINTS} vertices; refused",
+        )
     scale = _per_point(context.field(element, "scale").reshape(-1, 2), len(spine))
     turns = _per_point(context.field(element, "orientation").reshape(-1, 4), len(spine))
     axes = frames(spine)
