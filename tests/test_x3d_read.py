@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from lxml import etree
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_read
+from shadowgeo.io import x3d_extrusion, x3d_read
 from shadowgeo.io.x3d_defaults import DEFAULTS
 
 DATA = Path(__file__).parent / "data"
@@ -320,6 +320,21 @@ def test_extrusion_written_the_other_way_round_faces_inwards(tmp_path):
     box = _extrusion(tmp_path, 'crossSection="1 1 -1 1 -1 -1 1 -1 1 1"')
     assert box.volume == pytest.approx(-4.0)
     assert _extrusion(tmp_path, 'crossSection="1 1 -1 1 -1 -1 1 -1 1 1" ccw="false"').volume > 0
+
+
+def test_extrusion_frames_at_a_bend_by_hand():
+    # at the corner of (0,0,0) -> (0,1,0) -> (1,1,0): Y = (1, 1, 0) / sqrt 2,
+    # Z = (s2 - s1) x (s0 - s1) = (1, 0, 0) x (0, -1, 0) = (0, 0, -1), X = Y x Z
+    spine = np.array([[0.0, 0, 0], [0, 1, 0], [1, 1, 0]])
+    axes = x3d_extrusion.frames(spine)
+    root = math.sqrt(0.5)
+    np.testing.assert_allclose(axes[1], np.column_stack([[-root, root, 0], [root, root, 0],
+                                                         [0, 0, -1]]), atol=1e-15)  # fmt: skip
+    # the ends: Y along their segment, Z borrowed from the corner
+    np.testing.assert_allclose(axes[0][:, 1], [0, 1, 0])
+    np.testing.assert_allclose(axes[2][:, 1], [1, 0, 0])
+    np.testing.assert_allclose(axes[0][:, 2], [0, 0, -1])
+    np.testing.assert_allclose(axes[2][:, 2], [0, 0, -1])
 
 
 def test_extrusion_along_a_closed_circle_obeys_pappus(tmp_path):
