@@ -346,3 +346,19 @@ def test_extrusion_that_would_explode_is_refused(tmp_path):
     body = f'<Shape><Extrusion spine="{spine}" crossSection="{section}"/></Shape>'
     with pytest.raises(sg.SceneError, match="5000 spine points x 5000 section points"):
         sg.load(scene(tmp_path, body))
+
+
+def test_a_def_name_given_again_rebinds_later_uses(tmp_path):
+    body = (
+        '<Transform DEF="T" translation="1 0 0"><Shape><Box/></Shape></Transform>'
+        '<Group USE="T"/>\n'
+        '<Transform DEF="T" translation="5 0 0"><Shape><Box/></Shape></Transform>'
+        '<Group><Transform USE="T"/></Group>'
+    )
+    with pytest.raises(sg.SceneError, match="names a Transform"):
+        sg.load(scene(tmp_path, body))  # the first USE is a Group: a type mismatch
+    body = body.replace('<Group USE="T"/>', '<Transform USE="T"/>')
+    result = sg.load(scene(tmp_path, body))
+    centres = [float(s.world_vertices.mean(axis=0)[0]) for s in result.shapes]
+    assert centres == [1, 1, 5, 5]
+    assert any("line 3, Transform DEF='T': DEF 'T' is defined again" in w for w in result.warnings)

@@ -56,14 +56,28 @@ class Context:
     version: tuple[int, int] = (4, 0)
     angle_factor: float = 1.0
     warnings: list[str] = field(default_factory=list)
-    defs: dict = field(default_factory=dict)
+    defs: dict = field(default_factory=dict)  # DEF name -> [elements, in document order]
+    _order: dict | None = None
+
+    def definition(self, element):
+        """The element a ``USE`` names: the latest DEF of that name before it in
+        the document (X3D lets a later DEF rebind a name), or None."""
+        found = self.defs.get(element.get("USE"), [])
+        if len(found) < 2:
+            return found[0] if found else None
+        if self._order is None:
+            root = element.getroottree().getroot()
+            self._order = {node: index for index, node in enumerate(root.iter())}
+        here = self._order[element]
+        before = [node for node in found if self._order[node] < here]
+        return before[-1] if before else found[0]
 
     def resolve(self, element):
         """The node a ``USE`` names (the same element, not a copy), or ``element``."""
         name = element.get("USE")
         if name is None:
             return element
-        target = self.defs.get(name)
+        target = self.definition(element)
         if target is None:
             raise self.error(element, f"USE='{name}' names no DEF in this file")
         if local_name(target) != local_name(element):

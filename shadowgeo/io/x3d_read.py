@@ -14,7 +14,8 @@ Rules the reader follows, where X3D leaves a choice:
   level 0, the most detailed; Billboard keeps its children unrotated (it faces
   the viewer, and there is none); Collision's ``proxy`` is not rendered. A USE
   goes to its node type's default containerField unless it names one (as X3D
-  browsers do), not to the DEF's.
+  browsers do), not to the DEF's. A DEF name given again rebinds the USEs
+  after it (with a warning).
 - **Defaults** are X3D 4.0's (from the schema), except that files declaring
   version 3.x get 3.x SpotLight defaults (beamWidth pi/2, cutOffAngle pi/4).
 - **Units.** ``<unit category="length">`` sets ``Scene.meters_per_unit``;
@@ -291,7 +292,7 @@ def _expanded_size(context: Context, element, sizes: dict) -> int:
     """Number of nodes the subtree stands for once every USE is expanded,
     counted in linear time (each DEF'd node once); a cycle counts 0 here and
     is reported by the traversal."""
-    target = context.defs.get(element.get("USE")) if element.get("USE") else element
+    target = context.definition(element) if element.get("USE") else element
     if target is None:
         return 1
     if target in sizes:
@@ -312,7 +313,8 @@ def _version(root, display: str, warnings: list[str]) -> tuple[int, int]:
 
 
 def _definitions(context: Context, root) -> dict:
-    """DEF name -> element, outside prototype declarations (their names are local)."""
+    """DEF name -> elements in document order, outside prototype declarations
+    (their names are local)."""
     defs: dict = {}
     for element in root.iter():
         if not isinstance(element.tag, str) or element.get("DEF") is None:
@@ -323,9 +325,8 @@ def _definitions(context: Context, root) -> dict:
             continue
         name = element.get("DEF")
         if name in defs:
-            context.warn(element, f"DEF '{name}' is defined again; USE refers to the first")
-            continue
-        defs[name] = element
+            context.warn(element, f"DEF '{name}' is defined again; later USEs refer to this one")
+        defs.setdefault(name, []).append(element)
     return defs
 
 
