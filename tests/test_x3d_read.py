@@ -659,6 +659,26 @@ def test_corpus_invalid_unit_warns(corpus_dir):
     assert any("unit" in warning and "line 5" in warning for warning in scene.warnings)
 
 
+def test_textures_found_only_inside_the_scene_folder(tmp_path):
+    folder = tmp_path / "scene"
+    (folder / "maps").mkdir(parents=True)
+    (folder / "maps" / "wood.png").write_bytes(b"png")
+    (tmp_path / "outside.png").write_bytes(b"png")
+    body = (
+        "<Shape><Appearance><ImageTexture url='\"maps/wood.png\"'/></Appearance><Box/></Shape>"
+        "<Shape><Appearance><ImageTexture url='\"../outside.png\"'/></Appearance><Box/></Shape>"
+        "<Shape><Appearance><ImageTexture url='\"http://example.com/a.png\"'/></Appearance>"
+        "<Box/></Shape>"
+    )
+    scene = scene_of(folder, body)
+    text = "\n".join(scene.warnings)
+    assert "texture not found: ../outside.png" in text
+    assert "texture not found: http://example.com/a.png" in text
+    assert "texture not found: maps/wood.png" not in text
+    assert "ImageTexture: skipped, textures not modelled" in text
+    assert len(scene.shapes) == 3
+
+
 def test_corpus_missing_textures_are_named(corpus_dir):
     scene = sg.load(corpus_dir / "x3d" / "car" / "car.x3d")
     missing = [warning for warning in scene.warnings if "texture not found" in warning]

@@ -217,10 +217,11 @@ class _Reader:
                 continue
             self.textures_seen.add(texture)
             urls = [u for u in context.field(texture, "url", "MFString") if u]
-            folder = Path(context.path).parent
-            local = [u for u in urls if not URL_SCHEME.match(u)]
-            found = [u for u in local if (folder / u).is_file()]
-            if urls and not found:
+            folder = Path(context.path).resolve().parent
+            local = [(folder / u).resolve() for u in urls if not URL_SCHEME.match(u)]
+            # only files inside the scene's folder count (nothing outside is looked at)
+            inside = [path for path in local if path.is_relative_to(self.root_folder)]
+            if urls and not any(path.is_file() for path in inside):
                 context.warn(texture, f"texture not found: {', '.join(urls[:3])}")
             else:
                 self._skip(context, texture, local_name(texture), "textures not modelled")
