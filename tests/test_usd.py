@@ -337,8 +337,12 @@ def test_failed_write_leaves_the_existing_file_untouched(tmp_path, monkeypatch):
 
 
 _coordinates = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
-# USD strings end at a NUL character (C strings underneath), so names have none.
-_names = st.one_of(st.none(), st.text(st.characters(exclude_characters="\x00"), max_size=12))
+# USD strings end at a NUL character (C strings underneath) and are UTF-8 (no lone
+# surrogates, which the writer replaces), so the names here have neither.
+_names = st.one_of(
+    st.none(),
+    st.text(st.characters(exclude_characters="\x00", exclude_categories=["Cs"]), max_size=12),
+)
 
 
 @st.composite
@@ -429,3 +433,11 @@ def test_an_animated_stage_reads_at_its_first_time_sample(tmp_path):
     np.testing.assert_array_equal(
         shape.world_vertices[shape.faces[0]], [[1, 2, 3], [2, 2, 3], [1, 3, 3]]
     )
+
+
+def test_a_name_python_allows_but_utf8_does_not_is_replaced(tmp_path):
+    path = tmp_path / "surrogate.usda"
+    shape = sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="a\ud800b")
+    sg.save(sg.Scene(shapes=[shape]), path)
+    assert usd_errors(path) == []
+    assert sg.load(path).shapes[0].name == "a\ufffdb"

@@ -67,7 +67,7 @@ class _Names:
     def child(self, parent: str, wanted: str | None, fallback: str) -> str:
         from pxr import Tf
 
-        base = Tf.MakeValidIdentifier(wanted) if wanted else fallback
+        base = Tf.MakeValidIdentifier(_text(wanted)) if wanted else fallback
         taken = self.taken.setdefault(parent, set())
         name, count = base, 1
         while name in taken:
@@ -75,6 +75,12 @@ class _Names:
             count += 1
         taken.add(name)
         return f"{parent}/{name}"
+
+
+def _text(name: str) -> str:
+    """``name`` as USD can store it: UTF-8, so a lone surrogate (which no
+    parsed file holds, but a Python string can) becomes U+FFFD."""
+    return "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in name)
 
 
 def _matrix(transform: np.ndarray):
@@ -128,9 +134,9 @@ class _Writer:
             label = shape.group or f"shadowgeo {shape.role}s"
             path = self.names.child("/World", label, "Group")
             prim = UsdGeom.Xform.Define(self.stage, path).GetPrim()
-            prim.SetDisplayName(label)
+            prim.SetDisplayName(_text(label))
             if shape.group:
-                _custom(prim, "group", Sdf.ValueTypeNames.String, shape.group)
+                _custom(prim, "group", Sdf.ValueTypeNames.String, _text(shape.group))
             self.groups[key] = path
         return self.groups[key]
 
@@ -148,7 +154,7 @@ class _Writer:
         mesh = UsdGeom.Mesh.Define(self.stage, path)
         prim = mesh.GetPrim()
         if shape.name:
-            prim.SetDisplayName(shape.name)
+            prim.SetDisplayName(_text(shape.name))
         points = Vt.Vec3fArray.FromNumpy(vertices.astype(np.float32))
         mesh.CreatePointsAttr(points)
         mesh.CreateFaceVertexCountsAttr(Vt.IntArray([3] * len(faces)))
@@ -189,7 +195,7 @@ class _Writer:
                 UsdGeom.Scope.Define(self.stage, "/World/Looks")
             material = UsdShade.Material.Define(self.stage, path)
             if look.name:
-                material.GetPrim().SetDisplayName(look.name)
+                material.GetPrim().SetDisplayName(_text(look.name))
             shader = UsdShade.Shader.Define(self.stage, f"{path}/PreviewSurface")
             shader.CreateIdAttr("UsdPreviewSurface")
             color = Sdf.ValueTypeNames.Color3f
@@ -221,7 +227,7 @@ class _Writer:
                 transform[:3, :3] = look_rotation(light.direction)
             prim = usd_light.GetPrim()
             if scene_light.name:
-                prim.SetDisplayName(scene_light.name)
+                prim.SetDisplayName(_text(scene_light.name))
             if isinstance(light, SpotLight):
                 shaping = UsdLux.ShapingAPI.Apply(prim)
                 shaping.CreateShapingConeAngleAttr(math.degrees(light.cut_off_angle))
