@@ -409,3 +409,26 @@ def test_a_shape_without_triangles_keeps_its_place(tmp_path, suffix):
     assert [s.n_faces for s in back] == [1, 0, 1]
     assert (back[1].role, back[1].group) == ("shadow", "g")
     np.testing.assert_array_equal(back[1].transform, moved)
+
+
+def test_external_buffer_in_the_folder_is_read(tmp_path):
+    document = _one_triangle_gltf()
+    uri = document["buffers"][0]["uri"]
+    (tmp_path / "bin").mkdir()
+    (tmp_path / "bin" / "tri data.bin").write_bytes(base64.b64decode(uri.split(",", 1)[1]))
+    document["buffers"][0]["uri"] = "bin/tri%20data.bin"
+    path = tmp_path / "external.gltf"
+    path.write_text(json.dumps(document))
+    (shape,) = sg.load(path).shapes
+    np.testing.assert_array_equal(_triangles(shape)[0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf"])
+def test_duplicate_names_with_braces_survive(tmp_path, suffix):
+    # trimesh formats duplicate names with str.format, so "{" once broke reading.
+    triangle = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    names = ["{", "{", "node0", "a_1", "a", "a", "world"]
+    shapes = [sg.Shape(triangle, [[0, 1, 2]], name=name) for name in names]
+    path = tmp_path / f"braces{suffix}"
+    sg.save(sg.Scene(shapes=shapes), path)
+    assert [s.name for s in sg.load(path).shapes] == names

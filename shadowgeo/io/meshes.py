@@ -19,6 +19,7 @@ with ``meters_per_unit=1`` too, which is what they mean in practice.
 
 from __future__ import annotations
 
+import io
 import json
 import math
 import struct
@@ -36,18 +37,26 @@ _GLB_MAGIC = b"glTF"
 _LIGHTS = "KHR_lights_punctual"
 
 
-def _gltf_document(path: Path) -> dict:
-    """The JSON part of a .gltf or .glb file, checked to be a JSON object."""
+def _gltf_document(path: Path) -> tuple[dict, bytes | None]:
+    """The JSON part of a .gltf or .glb file, checked to be a JSON object, and
+    a GLB's binary chunk (None for .gltf)."""
     try:
         data = path.read_bytes()
     except OSError as error:
         raise SceneError(f"cannot read: {error.strerror}", path=str(path)) from error
+    binary = None
     if data[:4] == _GLB_MAGIC:
         if len(data) < 20:
             raise SceneError("truncated GLB header", path=str(path))
         length, kind = struct.unpack_from("<II", data, 12)
         if kind != 0x4E4F534A or 20 + length > len(data):
             raise SceneError("GLB's first chunk is not a complete JSON chunk", path=str(path))
+        rest = data[20 + length :]
+        binary = b""
+        if len(rest) >= 8:
+            bin_length, bin_kind = struct.unpack_from("<II", rest, 0)
+            if bin_kind == 0x004E4942:
+                binary = rest[8 : 8 + bin_length]
         data = data[20 : 20 + length]
     try:
         document = json.loads(data)
@@ -62,7 +71,7 @@ def _gltf_document(path: Path) -> dict:
         raise SceneError(f"glTF version {version!r} is not supported (2.x)", path=str(path))
     _check_uris(document, path)
     _check_references(document, path)
-    return document
+    return document, binary
 
 
 def _check_references(document: dict, path: Path) -> None:
@@ -102,15 +111,42 @@ def _check_uris(document: dict, path: Path) -> None:
                 raise SceneError("missing external file", path=str(path), node=where)
 
 
-def _frame_names(document: dict) -> dict[str, int]:
-    """trimesh's graph frame name -> glTF node index (it names frames as
-    ``trimesh.util.unique_name`` does, in node order)."""
-    names: dict[str, int] = {}
-    counts: dict = {}
-    for index, node in enumerate(document.get("nodes") or []):
-        name = node.get("name", str(index)) if isinstance(node, dict) else str(index)
-        names[trimesh.util.unique_name(name, names, counts=counts)] = index
-    return names
+def _for_trimesh(document: dict, binary: bytes | None) -> tuple[bytes, dict[str, int]]:
+    """The file trimesh reads, and its frame name -> glTF node index.
+
+    Nodes and meshes are renamed ``node<i>`` and ``mesh<i>``: trimesh renames
+    duplicate names (and fails on duplicates holding ``{``), so the real names
+    come from ``document`` instead. Resource URIs are percent-decoded.
+    """
+    renamed = dict(document)
+    renamed["nodes"] = [
+        {**node, "name": f"node{index}"} for index, node in enumerate(document.get("nodes") or [])
+    ]
+    if document.get("meshes"):
+        renamed["meshes"] = [
+            {**mesh, "name": f"mesh{index}"} if isinstance(mesh, dict) else mesh
+            for index, mesh in enumerate(document["meshes"])
+        ]
+    # URIs are percent-encoded (RFC 3986) and trimesh does not decode them;
+    # _check_uris has already kept them inside the file's folder.
+    for kind in ("buffers", "images"):
+        if document.get(kind):
+            renamed[kind] = [
+                {**item, "uri": unquote(item["uri"])}
+                if isinstance(item, dict) and not str(item.get("uri", "data:")).startswith("data:")
+                else item
+                for item in document[kind]
+            ]
+    text = json.dumps(renamed).encode()
+    frames = {f"node{index}": index for index in range(len(renamed["nodes"]))}
+    if binary is None:
+        return text, frames
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<II", len(text), 0x4E4F534A) + text
+    if binary:
+        binary += b"\0" * (-len(binary) % 4)
+        chunks += struct.pack("<II", len(binary), 0x004E4942) + binary
+    return struct.pack("<4sII", _GLB_MAGIC, 2, 12 + len(chunks)) + chunks, frames
 
 
 def _shadowgeo_extras(node) -> dict:
@@ -191,9 +227,19 @@ def _light(entry: dict, world: np.ndarray, name: str | None, extras: dict) -> Sc
     )
 
 
-def _load(path: Path) -> trimesh.Scene:
+def _load(path: Path, data: bytes | None = None) -> trimesh.Scene:
+    """trimesh's scene of ``path``, or of ``data`` in its place (external
+    resources then resolve from the file's folder)."""
     try:
-        loaded = trimesh.load_scene(path, allow_remote=False)
+        if data is None:
+            loaded = trimesh.load_scene(path, allow_remote=False)
+        else:
+            loaded = trimesh.load_scene(
+                io.BytesIO(data),
+                file_type=path.suffix.lower().lstrip("."),
+                resolver=trimesh.resolvers.FilePathResolver(str(path)),
+                allow_remote=False,
+            )
     except SceneError:
         raise
     except Exception as error:  # trimesh raises many kinds on corrupt files
@@ -230,10 +276,12 @@ def read(path, **options) -> Scene:
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
     is_gltf = path.suffix.lower() in (".glb", ".gltf")
-    document = _gltf_document(path) if is_gltf else {}
-    loaded = _load(path)
+    document, frames, data = {}, {}, None
+    if is_gltf:
+        document, binary = _gltf_document(path)
+        data, frames = _for_trimesh(document, binary)
+    loaded = _load(path, data)
     scene = Scene(path=str(path))
-    frames = _frame_names(document) if is_gltf else {}
     nodes = document.get("nodes") or []
     graph = loaded.graph
     try:
