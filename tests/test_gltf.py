@@ -245,10 +245,13 @@ def test_sheared_transform_is_baked_into_the_vertices(tmp_path, node_tools):
     assert gltf_problems(gltf_report(path)) == []
 
 
-def test_z_up_scene_in_centimetres_is_rotated_and_scaled_to_y_up_metres(tmp_path):
+def test_z_up_scene_in_centimetres_is_rotated_and_scaled_to_y_up_metres(tmp_path, node_tools):
     triangle = sg.Shape([[0, 0, 0], [100, 0, 0], [0, 0, 200]], [[0, 1, 2]], name="t")
+    light = sg.SceneLight(sg.SpotLight([0, 0, 300], [0, 0, -1]), name="down")
     path = tmp_path / "z.glb"
-    sg.save(sg.Scene(shapes=[triangle], up_axis="Z", meters_per_unit=0.01), path)
+    scene = sg.Scene(shapes=[triangle], lights=[light], up_axis="Z", meters_per_unit=0.01)
+    sg.save(scene, path)
+    assert gltf_problems(gltf_report(path)) == []
     document, _ = _read_glb(path)
     root = document["nodes"][document["scenes"][0]["nodes"][0]]
     matrix = np.array(root["matrix"]).reshape(4, 4).T
