@@ -130,6 +130,8 @@ def usd_errors(path, *, warnings: bool = False) -> list[str]:
 def _compliance_errors(path, *, warnings: bool) -> list[str]:
     from pxr import UsdUtils
 
+    if not hasattr(UsdUtils, "ComplianceChecker"):
+        pytest.skip("this usd-core has neither UsdValidation nor UsdUtils.ComplianceChecker")
     checker = UsdUtils.ComplianceChecker()
     checker.CheckCompliance(str(path))
     lines = list(checker.GetErrors()) + list(checker.GetFailedChecks())
