@@ -362,3 +362,17 @@ def test_a_def_name_given_again_rebinds_later_uses(tmp_path):
     centres = [float(s.world_vertices.mean(axis=0)[0]) for s in result.shapes]
     assert centres == [1, 1, 5, 5]
     assert any("line 3, Transform DEF='T': DEF 'T' is defined again" in w for w in result.warnings)
+
+
+def test_prototype_expansion_bomb_is_refused(tmp_path):
+    # P0 is a box; each P(k) holds ten P(k-1): five levels make 11,111 copies
+    declarations = [
+        '<ProtoDeclare name="P0"><ProtoBody><Shape><Box/></Shape></ProtoBody></ProtoDeclare>'
+    ]
+    for level in range(1, 6):
+        inner = f'<ProtoInstance name="P{level - 1}"/>' * 10
+        body = f"<ProtoBody><Group>{inner}</Group></ProtoBody>"
+        declarations.append(f'<ProtoDeclare name="P{level}">{body}</ProtoDeclare>')
+    body = "".join(declarations) + '\n<ProtoInstance name="P5"/>'
+    with pytest.raises(sg.SceneError, match="prototypes expand more than 10000 times"):
+        sg.load(scene(tmp_path, body))

@@ -404,6 +404,67 @@ def test_materials(tmp_path):
     assert classic.shininess == 0.7
 
 
+# -- prototypes -------------------------------------------------------------------------
+
+PROTOS = """
+<ProtoDeclare name="Post">
+  <ProtoInterface>
+    <field name="height" type="SFFloat" accessType="initializeOnly" value="2"/>
+    <field name="where" type="SFVec3f" accessType="initializeOnly" value="0 0 0"/>
+    <field name="look" type="SFNode" accessType="initializeOnly"/>
+  </ProtoInterface>
+  <ProtoBody>
+    <Transform DEF="Base"><IS><connect nodeField="translation" protoField="where"/></IS>
+      <Shape DEF="Pole"><IS><connect nodeField="appearance" protoField="look"/></IS>
+        <Cylinder radius="0.5"><IS><connect nodeField="height" protoField="height"/></IS></Cylinder>
+      </Shape>
+      <Transform translation="0 3 0"><Shape USE="Pole"/></Transform>
+    </Transform>
+    <TimeSensor/>
+  </ProtoBody>
+</ProtoDeclare>
+<ProtoDeclare name="Loop"><ProtoBody><Group><ProtoInstance name="Loop"/></Group></ProtoBody>
+</ProtoDeclare>
+<ExternProtoDeclare name="Far" url='"http://example.com/far.x3d#Far"'/>
+"""
+
+
+def test_prototype_instances_are_copies_of_their_body(tmp_path):
+    body = PROTOS + (
+        '<ProtoInstance DEF="First" name="Post"><fieldValue name="where" value="5 0 0"/>'
+        '<fieldValue name="height" value="4"/><fieldValue name="look">'
+        '<Appearance><Material diffuseColor="0 0 1"/></Appearance></fieldValue></ProtoInstance>'
+        '<ProtoInstance name="Post"/><ProtoInstance name="Far"/>'
+    )
+    scene = scene_of(tmp_path, body)
+    assert [shape.name for shape in scene.shapes] == ["Pole"] * 4
+    first, first_top, second, second_top = scene.shapes
+    # the instance's values: at x = 5, height 4, blue; the defaults: at 0, height 2, unlit
+    assert np.ptp(first.world_vertices[:, 1]) == pytest.approx(4)
+    np.testing.assert_allclose(first.transform[:3, 3], [5, 0, 0])
+    np.testing.assert_allclose(first_top.transform[:3, 3], [5, 3, 0])
+    assert first.material.diffuse_color == (0, 0, 1)
+    assert np.ptp(second.world_vertices[:, 1]) == pytest.approx(2)
+    np.testing.assert_allclose(second_top.transform[:3, 3], [0, 3, 0])
+    assert second.material.emissive_color == (1, 1, 1)
+    (warning,) = [w for w in scene.warnings if "ProtoInstance" in w]
+    assert "ProtoInstance name='Far' skipped" in warning
+    # the document is untouched: the body still holds its IS elements
+    assert len(scene.document.xpath("//IS")) == 3
+
+
+def test_prototype_inside_itself_is_refused(tmp_path):
+    with pytest.raises(sg.SceneError, match="nested too deeply .*prototypes"):
+        scene_of(tmp_path, PROTOS + '<ProtoInstance name="Loop"/>')
+
+
+def test_corpus_prototype_of_a_material(corpus_dir):
+    scene = sg.load(corpus_dir / "x3d" / "proto_of_material.x3d")
+    (shape,) = scene.shapes
+    assert shape.material.diffuse_color == (1, 0, 0)  # the instance's fieldValue
+    assert shape.n_faces == 12 and not scene.warnings
+
+
 # -- lights -----------------------------------------------------------------------------
 
 

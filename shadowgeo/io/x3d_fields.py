@@ -58,6 +58,7 @@ class Context:
     warnings: list[str] = field(default_factory=list)
     defs: dict = field(default_factory=dict)  # DEF name -> [elements, in document order]
     _order: dict | None = None
+    prototypes: object = None  # x3d_proto.Prototypes of the document
 
     def definition(self, element):
         """The element a ``USE`` names: the latest DEF of that name before it in
@@ -88,13 +89,22 @@ class Context:
             )
         return target
 
+    def node(self, element):
+        """The node ``element`` stands for: itself, the DEF a USE names, or the
+        copy of a prototype's body a ProtoInstance stands for (None if none)."""
+        element = self.resolve(element)
+        if local_name(element) == "ProtoInstance":
+            return None if self.prototypes is None else self.prototypes.expand(self, element)
+        return element
+
     def children(self, element, tags=None):
-        """Child nodes (USE resolved), optionally only those whose tag is in ``tags``."""
+        """Child nodes (see :meth:`node`), optionally only those whose tag is in ``tags``."""
         out = []
         for child in element:
-            tag = local_name(child)
-            if tag and (tags is None or tag in tags):
-                out.append(self.resolve(child))
+            if local_name(child):
+                child = self.node(child)
+                if child is not None and (tags is None or local_name(child) in tags):
+                    out.append(child)
         return out
 
     def describe(self, element) -> str:

@@ -46,6 +46,7 @@ from .x3d_fields import Context, local_name, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
 from .x3d_inline import URL_SCHEME, load_inline
 from .x3d_lights import LIGHTS, material, scene_light
+from .x3d_proto import Prototypes
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
 GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}
@@ -85,6 +86,7 @@ class _Reader:
         context = Context(display, _version(root, display, self.warnings), warnings=self.warnings)
         self._units(context, root, scene)
         context.defs = _definitions(context, root)
+        context.prototypes = Prototypes(root)
         scenes = [child for child in root if local_name(child) == "Scene"]
         if not scenes:
             raise SceneError("no <Scene> element", path=display, line=root.sourceline)
@@ -132,13 +134,15 @@ class _Reader:
             self.node(context, child, matrix, name)
 
     def node(self, context: Context, written, matrix, name):
-        element = context.resolve(written)
+        element = context.node(written)
+        if element is None:  # a prototype instance that could not be expanded
+            return
         if id(element) in self.open_groups:
             raise context.error(
                 written, f"DEF/USE cycle: '{written.get('USE')}' is used inside itself"
             )
         tag = local_name(element)
-        name = element.get("DEF") or name
+        name = _public(written.get("DEF") or element.get("DEF")) or name
         if "visible" in DEFAULTS.get(tag, {}) and not context.field(element, "visible"):
             context.warn(element, "visible='false': skipped")
             return
@@ -198,14 +202,12 @@ class _Reader:
             self.material_cache[appearance] = material(context, appearance)
             if appearance is not None:
                 self._textures(context, appearance)
-                if context.children(appearance, {"ProtoInstance"}):
-                    context.warn(appearance, "prototype instance in Appearance not modelled")
         self.instances.append(
             Instance(
                 built,
                 matrix,
                 self.material_cache[appearance],
-                element.get("DEF") or node.get("DEF") or name,
+                _public(element.get("DEF") or node.get("DEF")) or name,
                 f"{Path(context.path).name} line {node.sourceline}, {context.describe(node)}",
             )
         )
@@ -280,6 +282,11 @@ class _Reader:
                 local = built.vertices
             points.append(local @ transform[:3, :3].T + transform[:3, 3])
         return Tolerance.for_points(*points, **settings)
+
+
+def _public(name: str | None) -> str | None:
+    """A DEF name as the file writes it (prototype copies prefix theirs with 'N#')."""
+    return name.split("#", 1)[1] if name and re.match(r"\d+#", name) else name
 
 
 def _why(tag: str) -> str:
@@ -400,7 +407,7 @@ def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None
         reader.document(tree, path, str(path), np.eye(4), scene)
         reader.finish(scene, tolerance, chord)
     except RecursionError:
-        message = "nodes nested too deeply (through DEF/USE or Inline)"
+        message = "nodes nested too deeply (through DEF/USE, prototypes or Inline)"
         raise SceneError(message, path=str(path)) from None
     except GeometryError as problem:  # e.g. transforms that overflow to infinity
         raise SceneError(str(problem), path=str(path)) from None
