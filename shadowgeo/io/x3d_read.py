@@ -20,14 +20,18 @@ Rules the reader follows, where X3D leaves a choice:
   version 3.x get 3.x SpotLight defaults (beamWidth pi/2, cutOffAngle pi/4).
 - **Units.** ``<unit category="length">`` sets ``Scene.meters_per_unit``;
   ``category="angle"`` scales every angle field.
+- **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
+  the instance's field values (:mod:`.x3d_proto`); ExternProtoDeclare is not
+  followed.
 - **Skipped, with a warning in** ``Scene.warnings``: nodes shadowgeo does not
-  model (scripts, sensors, interpolators, routes, viewpoints, prototypes,
-  text, lines, points, textures), missing textures, empty geometry, Inline
-  files that are missing, remote (never fetched) or not X3D/glTF. Metadata
-  and WorldInfo are skipped silently.
+  model (scripts, sensors, interpolators, routes, viewpoints, text, lines,
+  points, textures, external prototypes), missing textures, empty geometry,
+  Inline files that are missing, remote (never fetched) or not X3D/glTF.
+  Metadata and WorldInfo are skipped silently.
 - **Refused with a SceneError:** malformed XML, DOCTYPE entity declarations,
-  field values of the wrong type, indices out of range, DEF/USE and Inline
-  cycles, Inline paths that leave the scene's folder.
+  field values of the wrong type, indices out of range, DEF/USE, prototype and
+  Inline cycles, expansion bombs (DEF/USE beyond 2 million nodes, prototypes
+  beyond 10,000 copies), Inline and glTF paths that leave the scene's folder.
 """
 
 from __future__ import annotations
