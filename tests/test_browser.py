@@ -163,6 +163,8 @@ def screenshot(folder: Path, browser: str) -> np.ndarray:
         "--disable-default-apps",
         "--no-first-run",
         "--disable-quic",
+        "--disable-dev-shm-usage",  # containers often have a tiny /dev/shm
+        "--mute-audio",
         "--hide-scrollbars",
         f"--user-data-dir={folder / 'profile'}",
         f"--screenshot={shot}",
