@@ -432,3 +432,32 @@ def test_duplicate_names_with_braces_survive(tmp_path, suffix):
     path = tmp_path / f"braces{suffix}"
     sg.save(sg.Scene(shapes=shapes), path)
     assert [s.name for s in sg.load(path).shapes] == names
+
+
+def test_a_missing_texture_is_a_warning_not_an_error(tmp_path):
+    document = _one_triangle_gltf()
+    document["images"] = [{"uri": "textures/brick%20wall.png"}]
+    document["samplers"] = [{}]
+    document["textures"] = [{"source": 0, "sampler": 0}]
+    document["materials"] = [
+        {
+            "pbrMetallicRoughness": {
+                "baseColorFactor": [0.5, 0.25, 1, 1],
+                "baseColorTexture": {"index": 0},
+            },
+            "normalTexture": {"index": 0},
+        }
+    ]
+    document["meshes"][0]["primitives"][0]["material"] = 0
+    path = tmp_path / "textured.gltf"
+    path.write_text(json.dumps(document))
+    scene = sg.load(path)
+    assert scene.shapes[0].material.diffuse_color == (0.5, 0.25, 1.0)
+    assert scene.warnings == [
+        "textured.gltf: images[0] uri 'textures/brick%20wall.png': missing texture image, ignored"
+    ]
+    # Outside the folder is still refused, texture or not.
+    document["images"] = [{"uri": "../secret.png"}]
+    path.write_text(json.dumps(document))
+    with pytest.raises(sg.SceneError, match=r"images\[0\].*leaves the file's folder"):
+        sg.load(path)

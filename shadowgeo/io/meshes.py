@@ -69,7 +69,6 @@ def _gltf_document(path: Path) -> tuple[dict, bytes | None]:
     version = str(document["asset"].get("version", ""))
     if not version.startswith("2."):
         raise SceneError(f"glTF version {version!r} is not supported (2.x)", path=str(path))
-    _check_uris(document, path)
     _check_references(document, path)
     return document, binary
 
@@ -93,13 +92,16 @@ def _check_references(document: dict, path: Path) -> None:
                 raise SceneError(message, path=str(path), node=where)
 
 
-def _check_uris(document: dict, path: Path) -> None:
-    """Refuse resources that are remote or outside the file's folder."""
+def _check_uris(document: dict, path: Path) -> list[str]:
+    """Refuse resources that are remote or outside the file's folder, and
+    missing buffers; return warnings for missing images (textures, which
+    shadowgeo does not use)."""
     folder = path.resolve().parent
+    warnings = []
     for kind in ("buffers", "images"):
         for index, resource in enumerate(document.get(kind) or []):
             uri = resource.get("uri") if isinstance(resource, dict) else None
-            if uri is None or uri.startswith("data:"):
+            if not isinstance(uri, str) or uri.startswith("data:"):
                 continue
             where = f"{kind}[{index}] uri {uri!r}"
             if ":" in uri.split("/")[0] or uri.startswith(("/", "\\")):
@@ -107,8 +109,12 @@ def _check_uris(document: dict, path: Path) -> None:
             target = (folder / unquote(uri)).resolve()
             if not target.is_relative_to(folder):
                 raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
-            if not target.is_file():
+            if target.is_file():
+                continue
+            if kind == "buffers":
                 raise SceneError("missing external file", path=str(path), node=where)
+            warnings.append(f"{path.name}: {where}: missing texture image, ignored")
+    return warnings
 
 
 def _for_trimesh(document: dict, binary: bytes | None) -> tuple[bytes, dict[str, int]]:
@@ -129,14 +135,18 @@ def _for_trimesh(document: dict, binary: bytes | None) -> tuple[bytes, dict[str,
         ]
     # URIs are percent-encoded (RFC 3986) and trimesh does not decode them;
     # _check_uris has already kept them inside the file's folder.
-    for kind in ("buffers", "images"):
-        if document.get(kind):
-            renamed[kind] = [
-                {**item, "uri": unquote(item["uri"])}
-                if isinstance(item, dict) and not str(item.get("uri", "data:")).startswith("data:")
-                else item
-                for item in document[kind]
-            ]
+    if document.get("buffers"):
+        renamed["buffers"] = [
+            {**item, "uri": unquote(item["uri"])}
+            if isinstance(item, dict) and not str(item.get("uri", "data:")).startswith("data:")
+            else item
+            for item in document["buffers"]
+        ]
+    # Textures play no part in shadows: trimesh need not decode (or miss) them.
+    for kind in ("images", "textures", "samplers"):
+        renamed.pop(kind, None)
+    if document.get("materials"):
+        renamed["materials"] = [_untextured(material) for material in document["materials"]]
     text = json.dumps(renamed).encode()
     frames = {f"node{index}": index for index in range(len(renamed["nodes"]))}
     if binary is None:
@@ -147,6 +157,25 @@ def _for_trimesh(document: dict, binary: bytes | None) -> tuple[bytes, dict[str,
         binary += b"\0" * (-len(binary) % 4)
         chunks += struct.pack("<II", len(binary), 0x004E4942) + binary
     return struct.pack("<4sII", _GLB_MAGIC, 2, 12 + len(chunks)) + chunks, frames
+
+
+def _untextured(material):
+    """A glTF material without its texture references (and extensions, which
+    may hold more)."""
+    if not isinstance(material, dict):
+        return material
+    plain = {
+        key: value
+        for key, value in material.items()
+        if key not in ("normalTexture", "occlusionTexture", "emissiveTexture", "extensions")
+    }
+    if isinstance(plain.get("pbrMetallicRoughness"), dict):
+        plain["pbrMetallicRoughness"] = {
+            key: value
+            for key, value in plain["pbrMetallicRoughness"].items()
+            if key not in ("baseColorTexture", "metallicRoughnessTexture")
+        }
+    return plain
 
 
 def _shadowgeo_extras(node) -> dict:
@@ -276,12 +305,13 @@ def read(path, **options) -> Scene:
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
     is_gltf = path.suffix.lower() in (".glb", ".gltf")
-    document, frames, data = {}, {}, None
+    document, frames, data, warnings = {}, {}, None, []
     if is_gltf:
         document, binary = _gltf_document(path)
+        warnings = _check_uris(document, path)
         data, frames = _for_trimesh(document, binary)
     loaded = _load(path, data)
-    scene = Scene(path=str(path))
+    scene = Scene(path=str(path), warnings=warnings)
     nodes = document.get("nodes") or []
     graph = loaded.graph
     try:
