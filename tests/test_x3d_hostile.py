@@ -376,3 +376,13 @@ def test_prototype_expansion_bomb_is_refused(tmp_path):
     body = "".join(declarations) + '\n<ProtoInstance name="P5"/>'
     with pytest.raises(sg.SceneError, match="prototypes expand more than 10000 times"):
         sg.load(scene(tmp_path, body))
+
+
+def test_prototype_connect_to_a_bad_field_name(tmp_path):
+    body = (
+        '<ProtoDeclare name="P"><ProtoInterface><field name="r" type="SFFloat" value="1"/>'
+        '</ProtoInterface><ProtoBody><Shape><Sphere><IS><connect nodeField="1e308" protoField="r"/>'
+        '</IS></Sphere></Shape></ProtoBody></ProtoDeclare>\n<ProtoInstance name="P"/>'
+    )
+    with pytest.raises(sg.SceneError, match="line 2, connect: connect nodeField='1e308' is not"):
+        sg.load(scene(tmp_path, body))

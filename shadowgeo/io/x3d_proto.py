@@ -13,12 +13,14 @@ from __future__ import annotations
 
 import copy
 import itertools
+import re
 
 from .x3d_fields import local_name
 
 # Copies made per document at most: a prototype whose body holds an instance
 # of itself would otherwise expand for ever.
 MAX_EXPANSIONS = 10_000
+_FIELD_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 class Prototypes:
@@ -52,7 +54,7 @@ class Prototypes:
             )
         values, node_values = _field_values(declaration, instance)
         body = copy.deepcopy(body)
-        _connect(body, values, node_values)
+        _connect(context, body, values, node_values)
         self._private_names(context, body)
         first = next(node for node in body if local_name(node))
         self.copies[instance] = first
@@ -94,13 +96,17 @@ def _field_values(declaration, instance) -> tuple[dict, dict]:
     return values, node_values
 
 
-def _connect(body, values: dict, node_values: dict) -> None:
+def _connect(context, body, values: dict, node_values: dict) -> None:
     for holder in [e for e in body.iter() if local_name(e) == "IS"]:
         node = holder.getparent()
         for connect in holder:
             if local_name(connect) != "connect":
                 continue
             node_field, proto_field = connect.get("nodeField"), connect.get("protoField")
+            if not _FIELD_NAME.fullmatch(node_field or ""):
+                raise context.error(
+                    connect, f"connect nodeField={node_field!r} is not a field name"
+                )
             if proto_field in values:
                 node.set(node_field, values[proto_field])
             for child in node_values.get(proto_field, []):
