@@ -555,12 +555,26 @@ def plots(method, tessellation, primitive, heights, shifts, grazing, out):
     images = {}
     scenes = list(dict.fromkeys(r["scene"] for r in method))
     fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 4), squeeze=False)
+    # One colour per method (tab20 has enough), one marker per family of methods.
+    names = list(dict.fromkeys(r["method"] for r in method))
+    colours = {name: plt.cm.tab20(index % 20) for index, name in enumerate(names)}
+
+    def marker(name):
+        if name.startswith("shadowgeo"):
+            return "*" if name == "shadowgeo exact" else "P"
+        if name.startswith("shadow map"):
+            return "o" if "no bias" in name else "s"
+        return "^" if name.startswith("ray sampling") else "D"
+
     for ax, scene in zip(axes[0], scenes, strict=True):
         for r in (r for r in method if r["scene"] == scene):
-            family = r["method"].split(" ")[0] + " " + r["method"].split(" ")[1]
-            marker = {"shadowgeo exact": "*", "shadowgeo triangle": "P"}.get(family, "o")
             ax.scatter(
-                1e3 * r["seconds"], max(r["error"], 1e-17), label=r["method"], marker=marker, s=40
+                1e3 * r["seconds"],
+                max(r["error"], 1e-17),
+                label=r["method"],
+                marker=marker(r["method"]),
+                color=colours[r["method"]],
+                s=60 if r["method"].startswith("shadowgeo") else 36,
             )
         ax.set_xscale("log")
         ax.set_yscale("log")
