@@ -394,7 +394,14 @@ def test_materials(tmp_path):
         '<Shape><Appearance><Material emissiveColor="1 0 0" specularColor="0.5 0.5 0.5" '
         'shininess="0.7"/></Appearance><Box/></Shape>'
     )
-    physical, unlit, bare, classic = (s.material for s in scene_of(tmp_path, body).shapes)
+    body += (
+        '<Shape><Appearance><Material containerField="backMaterial" diffuseColor="1 0 0"/>'
+        '<Material diffuseColor="0 1 0"/></Appearance><Box/></Shape>'
+    )
+    physical, unlit, bare, classic, two_sided = (
+        s.material for s in scene_of(tmp_path, body).shapes
+    )
+    assert two_sided.diffuse_color == (0, 1, 0)  # the front, not the backMaterial
     assert physical.diffuse_color == (0, 1, 0) and physical.transparency == 0.5
     assert unlit.emissive_color == (0, 0, 1)
     # X3D: a Shape without a Material is unlit white

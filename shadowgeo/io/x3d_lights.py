@@ -82,7 +82,9 @@ def material(context: Context, appearance) -> Material:
     unlit = Material(diffuse_color=(0.0, 0.0, 0.0), emissive_color=(1.0, 1.0, 1.0))
     if appearance is None:
         return unlit
-    nodes = context.children(appearance, MATERIALS)
+    # X3D 4's backMaterial colours back faces only; the front material is the one
+    front = [child for child in appearance if child.get("containerField") != "backMaterial"]
+    nodes = [node for node in map(context.node, front) if local_name(node) in MATERIALS]
     if not nodes:
         return unlit
     node = nodes[0]
