@@ -273,8 +273,12 @@ def _quad_set(context: Context, element) -> Mesh:
 
 
 def _fans(runs: list[np.ndarray]) -> np.ndarray:
-    return _stack([np.column_stack([run[0].repeat(len(run) - 2), run[1:-1], run[2:]])
-                   for run in runs if len(run) >= 3])  # fmt: skip
+    fans = [
+        np.column_stack([run[0].repeat(len(run) - 2), run[1:-1], run[2:]])
+        for run in runs
+        if len(run) >= 3
+    ]
+    return _stack(fans)
 
 
 def _strips(runs: list[np.ndarray]) -> np.ndarray:
@@ -319,10 +323,9 @@ def _elevation_grid(context: Context, element) -> Mesh:
     nx, nz = context.field(element, "xDimension"), context.field(element, "zDimension")
     heights = context.field(element, "height")
     if nx < 0 or nz < 0 or len(heights) < nx * nz:
-        raise context.error(
-            element, f"height has {len(heights)} values; xDimension {nx} x zDimension {nz} needs"
-            f" {max(nx, 0) * max(nz, 0)}"
-        )  # fmt: skip
+        needed = max(nx, 0) * max(nz, 0)
+        message = f"height has {len(heights)} values; xDimension {nx} x zDimension {nz} needs"
+        raise context.error(element, f"{message} {needed}")
     if nx < 2 or nz < 2:
         return Mesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64))
     dx, dz = context.field(element, "xSpacing"), context.field(element, "zSpacing")
