@@ -386,3 +386,20 @@ def test_prototype_connect_to_a_bad_field_name(tmp_path):
     )
     with pytest.raises(sg.SceneError, match="line 2, connect: connect nodeField='1e308' is not"):
         sg.load(scene(tmp_path, body))
+
+
+@pytest.mark.parametrize(
+    "body, expected",
+    [
+        ('<ElevationGrid xDimension="3" zDimension="2" height="0 0 0"/>',
+         "height has 3 values; xDimension 3 x zDimension 2 needs 6"),
+        (f'<TriangleFanSet fanCount="2">{TRIANGLE}</TriangleFanSet>',
+         "fanCount [2] needs counts >= 3 summing to <= 3"),
+        (f'<TriangleStripSet stripCount="4">{TRIANGLE}</TriangleStripSet>',
+         "stripCount [4] needs counts >= 3 summing to <= 3"),
+    ],
+)  # fmt: skip
+def test_counts_that_do_not_fit_the_points(tmp_path, body, expected):
+    with pytest.raises(sg.SceneError, match="line 2") as error:
+        sg.load(scene(tmp_path, f"<Shape>{body}</Shape>"))
+    assert expected in str(error.value)
