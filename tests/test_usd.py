@@ -441,3 +441,30 @@ def test_a_name_python_allows_but_utf8_does_not_is_replaced(tmp_path):
     sg.save(sg.Scene(shapes=[shape]), path)
     assert usd_errors(path) == []
     assert sg.load(path).shapes[0].name == "a\ufffdb"
+
+
+def test_concave_polygons_are_triangulated_not_fanned(tmp_path):
+    # An L-shaped hexagon (area 3), a concave quad (a dart, area 0.5), a square
+    # hole and a hole index out of range.
+    ell = [(0, 0, 0), (2, 0, 0), (2, 1, 0), (1, 1, 0), (1, 2, 0), (0, 2, 0)]
+    dart = [(5, 0, 0), (6, 1, 0), (5, 0.5, 0), (4, 1, 0)]
+    hole = [(8, 0, 0), (9, 0, 0), (9, 1, 0), (8, 1, 0)]
+
+    def build(stage):
+        mesh = UsdGeom.Mesh.Define(stage, "/Floor")
+        mesh.CreatePointsAttr(ell + dart + hole)
+        mesh.CreateFaceVertexCountsAttr([6, 4, 4])
+        # Each polygon starts where a fan would fold a triangle over.
+        mesh.CreateFaceVertexIndicesAttr([2, 3, 4, 5, 0, 1, 7, 8, 9, 6, 10, 11, 12, 13])
+        mesh.CreateHoleIndicesAttr([2, 99])
+
+    path = tmp_path / "floor.usda"
+    _author(path, build)
+    (floor,) = sg.load(path).shapes
+    triangles = floor.world_vertices[floor.faces]
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    # Every triangle faces +z (a wrong fan folds one over) and the areas add up.
+    assert np.all(normals[:, 2] > 0)
+    assert 0.5 * normals[:, 2].sum() == pytest.approx(3.0 + 0.5)
+    assert len(triangles) == 4 + 2
+    assert triangles[..., 0].max() <= 6  # the hole's polygon is gone

@@ -2,11 +2,11 @@
 
 :mod:`.usd` (the writer) describes the layout shadowgeo writes; this reads it
 back exactly (``shadowgeo:`` attributes restore the float64 points, roles,
-groups and X3D light fields) and reads USD from other tools too: polygons are
-fanned into triangles (right for convex polygons), ``leftHanded`` meshes are
-flipped, an animated stage is read at its first time sample, invisible and
-guide meshes are skipped, other geometry (Cube, Sphere, ...) and lights (Rect,
-Dome, ...) are skipped with a warning.
+groups and X3D light fields) and reads USD from other tools too: convex
+polygons are fanned into triangles and others triangulated in their plane,
+``leftHanded`` meshes are flipped, an animated stage is read at its first time
+sample, invisible and guide meshes are skipped, other geometry (Cube, Sphere,
+...) and lights (Rect, Dome, ...) are skipped with a warning.
 
 Before usd-core composes a file, every layer it would pull in (sublayers,
 references, payloads) must be a file inside the scene's folder; anything else
@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, SceneLight, Shape
+from .x3d_geometry import polygon_triangles
 
 
 def _pxr():
@@ -90,33 +91,50 @@ def _name(prim, marker: str) -> str | None:
     return None if prim.GetAttribute(f"shadowgeo:{marker}") else prim.GetName()
 
 
-def _triangles(counts: np.ndarray, indices: np.ndarray, holes) -> tuple[np.ndarray, int]:
-    """(m, 3) triangles fanned from polygons, and how many polygons were dropped
-    (fewer than 3 vertices, or holes). Fans are right for convex polygons."""
+def _convex(corners: np.ndarray) -> np.ndarray:
+    """(m, k, 3) polygons -> (m,) True where convex: every turn is to the same
+    side of the Newell normal and the turns add up to one full turn."""
+    following = np.roll(corners, -1, axis=1)
+    normal = np.cross(corners, following).sum(axis=1)
+    edges = following - corners
+    turns = np.cross(edges, np.roll(edges, -1, axis=1))
+    sine = np.einsum("mkd,md->mk", turns, normal)
+    cosine = np.einsum("mkd,mkd->mk", edges, np.roll(edges, -1, axis=1))
+    angles = np.arctan2(sine, cosine * np.linalg.norm(normal, axis=1)[:, None])
+    return np.all(angles >= -1e-12, axis=1) & np.isclose(angles.sum(axis=1), 2 * np.pi)
+
+
+def _triangles(points: np.ndarray, counts: np.ndarray, indices: np.ndarray, holes):
+    """Triangulate USD polygons.
+
+    Returns (m, 3) triangles in the file's polygon order and the number of
+    polygons dropped (fewer than 3 vertices, or holes). Convex polygons are
+    fanned; others are triangulated in their own plane.
+    """
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
     keep = counts >= 3
-    if len(holes):
-        keep[np.asarray(holes, dtype=np.int64)] = False
-    triangles = []
-    for fan in range(3, int(counts.max(initial=3)) + 1):
-        polygons = np.flatnonzero(keep & (counts >= fan))
-        if len(polygons):
-            first = starts[polygons]
-            triangles.append(
-                (
-                    polygons,
-                    np.stack(
-                        [indices[first], indices[first + fan - 2], indices[first + fan - 1]],
-                        axis=1,
-                    ),
-                )
-            )
-    if not triangles:
-        return np.zeros((0, 3), dtype=np.int64), int((~keep).sum())
-    # Keep each polygon's triangles together, in the file's polygon order.
-    order = np.concatenate([polygons for polygons, _ in triangles])
-    faces = np.concatenate([faces for _, faces in triangles])
-    return faces[np.argsort(order, kind="stable")], int((~keep).sum())
+    holes = np.asarray(holes, dtype=np.int64).reshape(-1)
+    keep[holes[(holes >= 0) & (holes < len(counts))]] = False
+    owners, pieces = [], []
+    for size in np.unique(counts[keep]):
+        polygons = np.flatnonzero(keep & (counts == size))
+        block = indices[starts[polygons][:, None] + np.arange(size)]
+        if size > 3:
+            convex = _convex(points[block])
+            for polygon, corners in zip(polygons[~convex], block[~convex], strict=True):
+                triangles = corners[polygon_triangles(points[corners])]
+                owners.append(np.full(len(triangles), polygon))
+                pieces.append(triangles)
+            polygons, block = polygons[convex], block[convex]
+        fan = np.arange(1, size - 1)
+        first = np.repeat(block[:, :1], size - 2, axis=1)
+        pieces.append(np.stack([first, block[:, fan], block[:, fan + 1]], -1).reshape(-1, 3))
+        owners.append(np.repeat(polygons, size - 2))
+    dropped = int((~keep).sum())
+    if not pieces:
+        return np.zeros((0, 3), dtype=np.int64), dropped
+    order = np.argsort(np.concatenate(owners), kind="stable")
+    return np.concatenate(pieces).astype(np.int64)[order], dropped
 
 
 def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
@@ -145,7 +163,8 @@ def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
             path=str(path),
             node=where,
         )
-    faces, dropped = _triangles(counts, indices, mesh.GetHoleIndicesAttr().Get(time) or [])
+    holes = mesh.GetHoleIndicesAttr().Get(time) or []
+    faces, dropped = _triangles(points, counts, indices, holes)
     if dropped:
         scene.warnings.append(f"{path.name}: {where}: skipped {dropped} holes or degenerate faces")
     if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
