@@ -264,6 +264,16 @@ def test_bad_files_name_the_file_and_the_prim(tmp_path):
     with pytest.raises(sg.SceneError, match=r"range\.usda.*Mesh </Bad>.*point 9 of 3"):
         sg.load(path)
 
+    def negative_count(stage):
+        mesh = UsdGeom.Mesh.Define(stage, "/Bad")
+        mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+        mesh.CreateFaceVertexCountsAttr([5, -2])
+        mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
+
+    _author(path, negative_count)
+    with pytest.raises(sg.SceneError, match=r"range\.usda.*Mesh </Bad>.*faceVertexCounts holds -2"):
+        sg.load(path)
+
 
 @pytest.mark.parametrize(
     "asset, reason",

@@ -150,6 +150,8 @@ def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
             points = exact
     counts = np.array(mesh.GetFaceVertexCountsAttr().Get(time) or [], dtype=np.int64)
     indices = np.array(mesh.GetFaceVertexIndicesAttr().Get(time) or [], dtype=np.int64)
+    if len(counts) and counts.min() < 0:
+        raise SceneError(f"faceVertexCounts holds {int(counts.min())}", path=str(path), node=where)
     if counts.sum() != len(indices):
         raise SceneError(
             f"faceVertexCounts add up to {int(counts.sum())} but there are "
