@@ -478,3 +478,41 @@ def test_concave_polygons_are_triangulated_not_fanned(tmp_path):
     assert 0.5 * normals[:, 2].sum() == pytest.approx(3.0 + 0.5)
     assert len(triangles) == 4 + 2
     assert triangles[..., 0].max() <= 6  # the hole's polygon is gone
+
+
+def test_lights_from_another_author(tmp_path):
+    def build(stage):
+        sun = UsdLux.DistantLight.Define(stage, "/Sun")
+        sun.AddRotateXOp().Set(-90.0)  # turns -Z to -Y: shining straight down
+        sun.CreateIntensityAttr(3.0)
+        spot = UsdLux.SphereLight.Define(stage, "/Spot")
+        spot.AddTranslateOp().Set(Gf.Vec3d(1, 2, 3))
+        spot.AddRotateXOp().Set(-90.0)
+        shaping = UsdLux.ShapingAPI.Apply(spot.GetPrim())
+        shaping.CreateShapingConeAngleAttr(30.0)
+        shaping.CreateShapingConeSoftnessAttr(0.5)
+        bulb = UsdLux.SphereLight.Define(stage, "/Bulb")
+        bulb.AddTranslateOp().Set(Gf.Vec3d(0, 5, 0))
+        bulb.CreateColorAttr(Gf.Vec3f(1, 0.5, 0.25))
+        bulb.CreateRadiusAttr(0.5)
+        UsdLux.DomeLight.Define(stage, "/Sky")
+
+    path = tmp_path / "lights.usda"
+    _author(path, build)
+    scene = sg.load(path)
+    lights = {light.name: light for light in scene.lights}
+    assert sorted(lights) == ["Bulb", "Spot", "Sun"]
+    assert isinstance(lights["Sun"].light, sg.DirectionalLight)
+    np.testing.assert_allclose(lights["Sun"].light.direction, [0, -1, 0], atol=1e-12)
+    assert lights["Sun"].intensity == 3.0
+    spot = lights["Spot"]
+    assert isinstance(spot.light, sg.SpotLight)
+    np.testing.assert_allclose(spot.light.position, [1, 2, 3])
+    np.testing.assert_allclose(spot.light.direction, [0, -1, 0], atol=1e-12)
+    assert spot.light.cut_off_angle == pytest.approx(math.pi / 6)
+    assert spot.beam_width == pytest.approx(0.5 * math.pi / 6)  # softness 0.5: half the cone
+    bulb = lights["Bulb"]
+    assert isinstance(bulb.light, sg.PointLight) and bulb.light.radius == math.inf
+    np.testing.assert_allclose(bulb.light.position, [0, 5, 0])
+    assert bulb.color == (1.0, 0.5, 0.25)
+    assert any("DomeLight </Sky>" in warning for warning in scene.warnings)
