@@ -325,3 +325,19 @@ def test_an_empty_scene_is_a_valid_file(tmp_path, node_tools, suffix):
     assert gltf_problems(gltf_report(path)) == []
     back = sg.load(path)
     assert back.shapes == [] and back.lights == []
+
+
+def test_out_of_range_looks_and_intensities_are_clamped_to_what_gltf_allows(tmp_path, node_tools):
+    odd = sg.Material((1.5, -0.2, 0.5), (2.0, 0.0, 0.0), shininess=3.0, transparency=-0.5)
+    shape = sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], material=odd)
+    light = sg.SceneLight(sg.PointLight([0, 1, 0]), color=(2, 1, -1), intensity=-3.0)
+    path = tmp_path / "odd.glb"
+    sg.save(sg.Scene(shapes=[shape], lights=[light]), path)
+    assert gltf_problems(gltf_report(path)) == []
+    document, _ = _read_glb(path)
+    material = document["materials"][0]
+    assert material["pbrMetallicRoughness"]["baseColorFactor"] == [1.0, 0.0, 0.5, 1.0]
+    assert material["emissiveFactor"] == [1.0, 0.0, 0.0]
+    assert material["pbrMetallicRoughness"]["roughnessFactor"] == 0.0
+    entry = document["extensions"]["KHR_lights_punctual"]["lights"][0]
+    assert entry["color"] == [1.0, 1.0, 0.0] and entry["intensity"] == 0.0

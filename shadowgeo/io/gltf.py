@@ -161,7 +161,7 @@ class _Builder:
 
     def material(self, shape: Shape) -> int:
         look = shape.material
-        alpha = 1.0 - float(look.transparency)
+        alpha = _unit_float(1.0 - float(look.transparency))
         key = (tuple(look.diffuse_color), tuple(look.emissive_color), alpha, shape.solid, look.name)
         if key not in self.materials:
             material = {
@@ -226,7 +226,7 @@ class _Builder:
         geometry = light.light
         entry: dict = {
             "color": [_unit_float(c) for c in light.color],
-            "intensity": float(light.intensity) if light.on else 0.0,
+            "intensity": max(float(light.intensity), 0.0) if light.on else 0.0,
         }
         node: dict = {}
         if isinstance(geometry, DirectionalLight):
