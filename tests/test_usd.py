@@ -112,6 +112,13 @@ def test_stage_layout_as_usd_core_reads_it(tmp_path):
     assert ball.GetDoubleSidedAttr().Get() is False
     assert UsdGeom.Mesh(meshes[1]).GetDoubleSidedAttr().Get() is True
     np.testing.assert_array_equal(ball.GetExtentAttr().Get(), [points.min(0), points.max(0)])
+    # Flat shading: each corner carries its face's unit normal.
+    assert ball.GetNormalsInterpolation() == "faceVarying"
+    corners = points[np.array(ball.GetFaceVertexIndicesAttr().Get()).reshape(-1, 3)]
+    expected = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    expected /= np.linalg.norm(expected, axis=1, keepdims=True)
+    normals = np.array(ball.GetNormalsAttr().Get()).reshape(-1, 3, 3)
+    np.testing.assert_allclose(normals, np.repeat(expected[:, None], 3, axis=1), atol=1e-6)
     world = np.array(ball.ComputeLocalToWorldTransform(Usd.TimeCode.Default())).T
     np.testing.assert_array_equal(world, scene.shapes[0].transform)
 

@@ -9,7 +9,8 @@ shape, one Xform per light group holding that group's shadows, the lights, and
 Stage metadata ``upAxis`` and ``metersPerUnit`` come from the scene.
 
 - Meshes: ``points``, ``faceVertexCounts`` (all 3), ``faceVertexIndices``,
-  ``extent``, ``orientation = rightHanded``, ``doubleSided`` when not solid,
+  face normals (``faceVarying``, so shading is flat as in glTF), ``extent``,
+  ``orientation = rightHanded``, ``doubleSided`` when not solid,
   ``subdivisionScheme = none`` (these are polygons, not cages), the shape's
   transform as one double-precision ``xformOp:transform``, ``displayColor`` /
   ``displayOpacity`` and a bound material.
@@ -81,6 +82,16 @@ def _text(name: str) -> str:
     """``name`` as USD can store it: UTF-8, so a lone surrogate (which no
     parsed file holds, but a Python string can) becomes U+FFFD."""
     return "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in name)
+
+
+def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(3 m, 3) float32 unit normal of each face, once per corner (zero for a
+    face without area)."""
+    corners = vertices[faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, lengths, out=np.zeros_like(normals), where=lengths > 0)
+    return np.repeat(normals, 3, axis=0).astype(np.float32)
 
 
 def _matrix(transform: np.ndarray):
@@ -164,6 +175,11 @@ class _Writer:
         mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
         if len(vertices):
             mesh.CreateExtentAttr(UsdGeom.PointBased.ComputeExtent(points))
+        if len(faces):
+            # Flat shading, as glTF draws a mesh without normals and X3D a face
+            # set with creaseAngle 0; renderers would otherwise smooth the corners.
+            mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(_face_normals(vertices, faces)))
+            mesh.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
         _custom(prim, "points", Sdf.ValueTypeNames.Point3dArray, Vt.Vec3dArray.FromNumpy(vertices))
         _custom(prim, "role", Sdf.ValueTypeNames.String, shape.role)
         if not shape.casts_shadow or shape.receives_shadow:
