@@ -10,7 +10,8 @@ that :mod:`.gltf` writes (roles, light groups, X3D light fields).
 Safety: a glTF's buffers and images may only be data URIs or relative paths
 that stay in the file's folder; anything else (``http:``, ``/etc/...``,
 ``../``) is refused before trimesh sees the file, and trimesh never fetches
-remote resources.
+remote resources. Textures play no part in shadows and are not decoded; a
+missing image is a warning, a missing buffer an error.
 
 glTF is Y-up in metres, so a glTF scene reads as ``up_axis="Y"``,
 ``meters_per_unit=1``. Other mesh formats carry no units: they read as Y-up
