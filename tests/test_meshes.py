@@ -461,3 +461,36 @@ def test_a_missing_texture_is_a_warning_not_an_error(tmp_path):
     path.write_text(json.dumps(document))
     with pytest.raises(sg.SceneError, match=r"images\[0\].*leaves the file's folder"):
         sg.load(path)
+
+
+def test_a_mesh_of_two_primitives_gives_two_shapes_on_one_node(tmp_path):
+    document = _one_triangle_gltf()
+    document["nodes"][0]["translation"] = [0, 0, 5]
+    primitive = document["meshes"][0]["primitives"][0]
+    indices = np.array([0, 2, 1], dtype="<u2").tobytes() + b"\0\0"
+    raw = base64.b64decode(document["buffers"][0]["uri"].split(",", 1)[1]) + indices
+    document["buffers"][0] = {
+        "byteLength": len(raw),
+        "uri": "data:application/octet-stream;base64," + base64.b64encode(raw).decode(),
+    }
+    document["bufferViews"].append({"buffer": 0, "byteOffset": 36, "byteLength": 6})
+    document["accessors"].append(
+        {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+    )
+    document["materials"] = [
+        {"pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0, 1]}},
+        {"pbrMetallicRoughness": {"baseColorFactor": [0, 0, 1, 1]}},
+    ]
+    flipped = {"attributes": {"POSITION": 0}, "indices": 1, "material": 1}
+    document["meshes"][0]["primitives"] = [{**primitive, "material": 0}, flipped]
+    path = tmp_path / "two.gltf"
+    path.write_text(json.dumps(document))
+    shapes = sg.load(path).shapes
+    assert [s.name for s in shapes] == ["tri", "tri"]
+    colours = sorted(s.material.diffuse_color for s in shapes)
+    assert colours == [(0.0, 0.0, 1.0), (1.0, 0.0, 0.0)]
+    normals = sorted(
+        float(np.cross(*(_triangles(s)[0, 1:] - _triangles(s)[0, 0]))[2]) for s in shapes
+    )
+    assert normals == [-1.0, 1.0]  # one wound each way
+    assert all(np.all(_triangles(s)[..., 2] == 5) for s in shapes)
