@@ -494,3 +494,21 @@ def test_a_mesh_of_two_primitives_gives_two_shapes_on_one_node(tmp_path):
     )
     assert normals == [-1.0, 1.0]  # one wound each way
     assert all(np.all(_triangles(s)[..., 2] == 5) for s in shapes)
+
+
+@pytest.mark.parametrize("extension", ["EXT_meshopt_compression", "KHR_draco_mesh_compression"])
+def test_compressed_geometry_trimesh_cannot_decode_is_refused(tmp_path, extension):
+    if extension == "KHR_draco_mesh_compression":
+        try:
+            import DracoPy  # noqa: F401
+
+            pytest.skip("DracoPy is installed: trimesh decodes Draco")
+        except ImportError:
+            pass
+    document = _one_triangle_gltf()
+    document["extensionsUsed"] = [extension]
+    document["extensionsRequired"] = [extension]
+    path = tmp_path / "packed.gltf"
+    path.write_text(json.dumps(document))
+    with pytest.raises(sg.SceneError, match=rf"packed\.gltf.*{extension}"):
+        sg.load(path)

@@ -71,7 +71,24 @@ def _gltf_document(path: Path) -> tuple[dict, bytes | None]:
     if not version.startswith("2."):
         raise SceneError(f"glTF version {version!r} is not supported (2.x)", path=str(path))
     _check_references(document, path)
+    _check_compression(document, path)
     return document, binary
+
+
+def _check_compression(document: dict, path: Path) -> None:
+    """Refuse compressed geometry trimesh cannot decode: it would read as
+    placeholder zeros (trimesh only logs that), and shadows of zeros are wrong."""
+    used = set(document.get("extensionsUsed") or []) | set(document.get("extensionsRequired") or [])
+    if "EXT_meshopt_compression" in used:
+        raise SceneError("EXT_meshopt_compression is not supported", path=str(path))
+    if "KHR_draco_mesh_compression" in used:
+        try:
+            import DracoPy  # noqa: F401  (trimesh decodes Draco through it)
+        except ImportError:
+            raise SceneError(
+                "KHR_draco_mesh_compression needs the DracoPy package (pip install DracoPy)",
+                path=str(path),
+            ) from None
 
 
 def _check_references(document: dict, path: Path) -> None:
