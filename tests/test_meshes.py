@@ -512,3 +512,22 @@ def test_compressed_geometry_trimesh_cannot_decode_is_refused(tmp_path, extensio
     path.write_text(json.dumps(document))
     with pytest.raises(sg.SceneError, match=rf"packed\.gltf.*{extension}"):
         sg.load(path)
+
+
+def test_normalized_integer_positions_are_refused(tmp_path):
+    # KHR_mesh_quantization allows them; trimesh would read the raw integers.
+    document = _one_triangle_gltf()
+    positions = np.array([[0, 0, 0], [127, 0, 0], [0, 127, 0]], dtype="<i1")
+    raw = np.zeros((3, 4), dtype="<i1")
+    raw[:, :3] = positions  # each element padded to 4 bytes, as the spec requires
+    document["extensionsUsed"] = document["extensionsRequired"] = ["KHR_mesh_quantization"]
+    document["buffers"][0] = {
+        "byteLength": 12,
+        "uri": "data:application/octet-stream;base64," + base64.b64encode(raw.tobytes()).decode(),
+    }
+    document["bufferViews"][0] = {"buffer": 0, "byteLength": 12, "byteStride": 4}
+    document["accessors"][0].update(componentType=5120, normalized=True, max=[1, 1, 0])
+    path = tmp_path / "quantized.gltf"
+    path.write_text(json.dumps(document))
+    with pytest.raises(sg.SceneError, match=r"quantized\.gltf.*POSITION accessor 0.*normalized"):
+        sg.load(path)
