@@ -250,6 +250,28 @@ def test_fresh_document_reads_back_the_same(tmp_path):
     assert np.allclose(by_name["sun"].light.direction, [0, -1, 0])
 
 
+def test_z_up_usd_scene_stands_upright_in_x3d(tmp_path, x3d_schema):
+    # A Z-up scene (as USD often is): its "up" is +z, X3D's is +y, so (x, y, z)
+    # must come back as (x, z, -y), lights included.
+    vertices = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 5.0]])
+    shape = sg.Shape(vertices, [[0, 1, 2]], name="spire", solid=False)
+    lamp = sg.SceneLight(sg.PointLight([1.0, 2.0, 3.0]), name="lamp")
+    sun = sg.SceneLight(sg.DirectionalLight([0.0, 0.0, -1.0]), name="sun")
+    usd = tmp_path / "z_up.usda"
+    sg.save(sg.Scene([shape], [lamp, sun], up_axis="Z"), usd)
+    assert sg.load(usd).up_axis == "Z"
+    out = tmp_path / "z_up.x3d"
+    sg.save(sg.load(usd), out)
+    assert x3d_schema_errors(out, x3d_schema) == []
+    back = sg.load(out)
+    (read,) = back.shapes
+    expected = vertices[:, [0, 2, 1]] * [1, 1, -1]
+    assert np.allclose(read.world_vertices[read.faces], expected[[0, 1, 2]], atol=1e-12)
+    by_name = {light.name: light.light for light in back.lights}
+    assert np.allclose(by_name["lamp"].position, [1.0, 3.0, -2.0], atol=1e-12)
+    assert np.allclose(by_name["sun"].direction, [0.0, -1.0, 0.0], atol=1e-12)
+
+
 def test_added_shadows_read_back_in_world_coordinates(tmp_path):
     result = sg.add_shadows(sg.load(EXAMPLE))
     (shadow,) = result.shapes_with_role("shadow")

@@ -235,6 +235,13 @@ def _fresh(scene: Scene):
         )
     body = etree.SubElement(root, "Scene")
     used: set[str] = set()
+    up = (scene.up_axis or "Y").upper()
+    if up not in ("Y", "Z"):
+        raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}", path=scene.path)
+    if up == "Z":
+        # X3D is Y-up: one rotation about x takes (x, y, z) to (x, z, -y).
+        name = _unique("shadowgeo_z_up", used)
+        body = etree.SubElement(body, "Transform", DEF=name, rotation=f"1 0 0 {-math.pi / 2!r}")
     for light in scene.lights:
         body.append(_light_element(light, used))
     for shape in scene.shapes:
