@@ -281,6 +281,22 @@ def test_added_shadows_read_back_in_world_coordinates(tmp_path):
     assert np.array_equal(read.world_vertices[read.faces], shadow.world_vertices[shadow.faces])
 
 
+@pytest.mark.parametrize("method", ["planar", "volume"])
+def test_added_shapes_read_back_with_their_role_not_as_casters(tmp_path, method):
+    scene = sg.load(EXAMPLE)
+    result = sg.add_shadows(scene, method=method)
+    role = "shadow" if method == "planar" else "volume"
+    added = {s.name: s.group for s in result.shapes_with_role(role)}
+    assert added
+    out = tmp_path / "out.x3d"
+    sg.save(result, out)
+    back = sg.load(out)
+    assert {s.name: s.group for s in back.shapes if s.role == role} == added
+    # The scene's own shapes are all that is left as geometry.
+    own = sorted(s.name or "" for s in scene.shapes)
+    assert sorted(s.name or "" for s in back.shapes_with_role("geometry")) == own
+
+
 def test_core_profile_gets_the_components_the_shadows_need(tmp_path, x3d_schema):
     source = tmp_path / "core.x3d"
     source.write_text(

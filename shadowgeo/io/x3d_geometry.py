@@ -53,6 +53,8 @@ class Instance:
     material: object
     name: str | None
     source: str
+    role: str = "geometry"
+    group: str | None = None
 
 
 @dataclass

@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import GeometryError, SceneError
 from ..scene import Scene, Shape
+from ..scene.model import MARK
 from ..tolerance import Tolerance
 from . import x3d_parse
 from .x3d_defaults import DEFAULTS
@@ -83,6 +84,7 @@ class _Reader:
         self.material_cache: dict = {}
         self.inline_stack: list[Path] = []
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
+        self.baked: list[str] = []  # DEFs of the enclosing groups of shadows shadowgeo added
 
     # -- documents ---------------------------------------------------------------
     def document(self, tree, path: Path, display: str, matrix, scene=None, name=None):
@@ -158,10 +160,15 @@ class _Reader:
             if not np.all(np.isfinite(world)):
                 raise context.error(element, "the transforms down to here overflow to infinity")
             self.open_groups.add(id(element))  # the element stays alive meanwhile
+            baked = MARK in (element.get("class") or "").split()
+            if baked:
+                self.baked.append(element.get("DEF") or "shadows")
             try:
                 self.children(context, element, world, name)
             finally:
                 self.open_groups.discard(id(element))
+                if baked:
+                    self.baked.pop()
         elif tag == "Shape":
             self.shape(context, element, matrix, name)
         elif tag in LIGHTS:
@@ -213,8 +220,17 @@ class _Reader:
                 self.material_cache[appearance],
                 _public(element.get("DEF") or node.get("DEF")) or name,
                 f"{Path(context.path).name} line {node.sourceline}, {context.describe(node)}",
+                *self._added_role(element),
             )
         )
+
+    def _added_role(self, element) -> tuple[str, str | None]:
+        """Shapes in a group of shadows shadowgeo added read back as role
+        "shadow" (or "volume"), not as geometry that casts."""
+        if not self.baked:
+            return "geometry", None
+        volume = f"{MARK}-volume" in (element.get("class") or "").split()
+        return ("volume" if volume else "shadow"), self.baked[-1]
 
     def _textures(self, context: Context, appearance) -> None:
         for texture in (e for e in appearance.iter() if local_name(e) in TEXTURES):
@@ -264,6 +280,8 @@ class _Reader:
                     name=instance.name,
                     solid=instance.geometry.solid,
                     source=instance.source,
+                    role=instance.role,
+                    group=instance.group,
                 )
             )
         scene.lights.extend(self.lights)

@@ -35,7 +35,8 @@ from lxml import etree
 from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
-from ..scene.shadows import MARK, safe_name
+from ..scene.model import MARK
+from ..scene.shadows import safe_name
 from .atomic import atomic_path
 
 ADDED_ROLES = ("shadow", "volume")
@@ -138,7 +139,9 @@ def _add_groups(parent, shapes: list[Shape], used: set[str], namespace: str = ""
             groups[key] = etree.SubElement(
                 parent, f"{namespace}Group", DEF=_unique(key, used), attrib={"class": MARK}
             )
-        groups[key].append(_shape_element(shape, used, namespace, world=True))
+        element = _shape_element(shape, used, namespace, world=True)
+        element.set("class", f"{MARK}-{shape.role}")  # read back as this role
+        groups[key].append(element)
     return list(groups.values())
 
 

@@ -17,6 +17,10 @@ from ..lights import DirectionalLight, PointLight, SpotLight
 
 Color = tuple[float, float, float]
 
+# The X3D ``class`` of the groups holding the shapes shadowgeo adds; each added
+# Shape's class is ``MARK + "-" + role``, so a reader gives it back its role.
+MARK = "shadowgeo-shadows"
+
 
 @dataclass
 class Material:

@@ -65,8 +65,6 @@ from .receivers import select as select_receivers
 # shape's area and of the scene's bounding-box diagonal.
 _RECEIVER_AREA_FRACTION = 0.25
 _RECEIVER_SIZE_FRACTION = 0.25
-# The X3D ``class`` of the groups of added shapes (see shadowgeo.io.x3d_write).
-MARK = "shadowgeo-shadows"
 # Default lift of shadows off their receiver, relative to the scene's size.
 _DEFAULT_OFFSET = 1e-3
 
@@ -200,17 +198,9 @@ def add_shadows(
 
 def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
     """The scene's shapes less the shadows an earlier run added: shapes with
-    role "shadow" or "volume" (glTF and USD keep roles) and Shapes inside an
-    X3D Group of class ``MARK``. They are replaced, neither cast nor stay."""
-    baked: set[str] = set()
-    if hasattr(scene.document, "xpath"):
-        marked = f"contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')"
-        baked = set(scene.document.xpath(f"//*[{marked}]//*[local-name()='Shape']/@DEF"))
-    kept = [
-        s
-        for s in scene.shapes
-        if s.role not in ("shadow", "volume") and not (s.role == "geometry" and s.name in baked)
-    ]
+    role "shadow" or "volume" (every reader keeps roles; X3D through the
+    ``MARK`` class of the groups). They are replaced, neither cast nor stay."""
+    kept = [s for s in scene.shapes if s.role not in ("shadow", "volume")]
     if len(kept) < len(scene.shapes):
         notes.append(
             f"shadows: {len(scene.shapes) - len(kept)} shadow shapes added by an earlier run "
