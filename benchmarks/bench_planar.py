@@ -24,6 +24,7 @@ shapely (GEOS, float64), which is exact to rounding. Times are medians.
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import platform
 import statistics
 import sys
@@ -230,7 +231,7 @@ def main() -> None:
     print(
         f"shadowgeo {shadowgeo.__version__}, numpy {np.__version__}, "
         f"trimesh {trimesh.__version__}, "
-        f"manifold3d {getattr(manifold3d, '__version__', '?')}, shapely {shapely.__version__}, "
+        f"manifold3d {importlib.metadata.version('manifold3d')}, shapely {shapely.__version__}, "
         f"Python {platform.python_version()}, {platform.machine()}"
     )
     rows = run(args.quick, 3 if args.quick else args.repeat)
