@@ -28,9 +28,7 @@ from __future__ import annotations
 import argparse
 import importlib.metadata
 import platform
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import manifold3d
@@ -40,37 +38,10 @@ import trimesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from common import median_time, meshes  # noqa: E402
+
 import shadowgeo  # noqa: E402
 from shadowgeo import DirectionalLight, Plane, PointLight, project_shadow  # noqa: E402
-
-
-def median_time(function, repeat: int) -> tuple[float, object]:
-    times, result = [], None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), result
-
-
-def meshes(quick: bool) -> dict[str, trimesh.Trimesh]:
-    subdivisions = 3 if quick else 6
-    sphere = trimesh.creation.icosphere(subdivisions=subdivisions)
-    bumpy = trimesh.creation.icosphere(subdivisions=subdivisions)
-    direction = bumpy.vertices / np.linalg.norm(bumpy.vertices, axis=1, keepdims=True)
-    wave = 1 + 0.15 * np.sin(5 * direction[:, 0]) * np.sin(4 * direction[:, 1] + 1) * np.cos(
-        6 * direction[:, 2]
-    )
-    bumpy.vertices = direction * wave[:, None]
-    sections = (40, 16) if quick else (320, 128)
-    torus = trimesh.creation.torus(
-        major_radius=1.0,
-        minor_radius=0.3,
-        major_sections=sections[0],
-        minor_sections=sections[1],
-    )
-    torus.apply_transform(trimesh.transformations.rotation_matrix(0.5, [1, 0, 0]))
-    return {"icosphere": sphere, "bumpy sphere (non-convex)": bumpy, "torus (non-convex)": torus}
 
 
 def frame(plane: Plane) -> np.ndarray:

@@ -17,7 +17,6 @@ import importlib.metadata
 import math
 import os
 import platform
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -33,22 +32,11 @@ sys.path.insert(0, str(HERE))
 
 import exact  # noqa: E402
 import shadowmap  # noqa: E402
+from common import median_time  # noqa: E402
 
 import shadowgeo as sg  # noqa: E402
 
 GROUND = sg.Plane([0, 1, 0], 0)
-
-
-def timed(function, repeat=3):
-    times, result = [], None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = function()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times), result
-
-
-# -- scenes -----------------------------------------------------------------------------------
 
 
 def sphere_scene(subdivisions):
@@ -239,15 +227,17 @@ def method_rows(name, mesh, light, exact_region, quick):
             }
         )
 
-    seconds, shadow = timed(lambda: sg.project_shadow(mesh, point, GROUND), 5)
+    seconds, shadow = median_time(lambda: sg.project_shadow(mesh, point, GROUND), 5)
     add("shadowgeo exact", seconds, polygon_errors(exact_region, shadow.to_shapely()))
-    seconds, shadow = timed(lambda: sg.project_shadow(mesh, point, GROUND, method="triangles"))
+    seconds, shadow = median_time(
+        lambda: sg.project_shadow(mesh, point, GROUND, method="triangles")
+    )
     add("shadowgeo triangle union", seconds, polygon_errors(exact_region, shadow.to_shapely()))
-    seconds, region = timed(lambda: manifold_warp_project(mesh, light))
+    seconds, region = median_time(lambda: manifold_warp_project(mesh, light))
     add("manifold3d warp + project", seconds, polygon_errors(exact_region, region), "float32")
-    seconds, region = timed(lambda: trimesh_warp_projected(mesh, light), 1)
+    seconds, region = median_time(lambda: trimesh_warp_projected(mesh, light), 1)
     add("trimesh warp + polygons.projected", seconds, polygon_errors(exact_region, region))
-    seconds, region = timed(lambda: textbook(mesh, light), 1)
+    seconds, region = median_time(lambda: textbook(mesh, light), 1)
     add("textbook matrix + shapely union", seconds, polygon_errors(exact_region, region))
 
     grid, cell = evaluation_grid(exact_region, 400 if quick else 1200)
@@ -288,7 +278,7 @@ def method_rows(name, mesh, light, exact_region, quick):
         ys = np.linspace(miny, maxy, density)
         gx, gy = np.meshgrid(xs, ys)
         samples = np.column_stack([gx.ravel(), np.zeros(gx.size), -gy.ravel()])
-        seconds, hits = timed(lambda s=samples: shadowmap.ray_test(mesh, s, light), 1)
+        seconds, hits = median_time(lambda s=samples: shadowmap.ray_test(mesh, s, light), 1)
         # Each evaluation point takes the answer of its nearest sample.
         col = np.clip(np.rint((grid[:, 0] - minx) / (xs[1] - xs[0])).astype(int), 0, density - 1)
         row = np.clip(np.rint((grid[:, 1] - miny) / (ys[1] - ys[0])).astype(int), 0, density - 1)
@@ -340,7 +330,7 @@ def tessellation_rows(quick):
         mesh.apply_translation(center)
         point = sg.PointLight(light)
         sg.project_shadow(mesh, point, GROUND)
-        seconds, shadow = timed(lambda m=mesh, p=point: sg.project_shadow(m, p, GROUND), 5)
+        seconds, shadow = median_time(lambda m=mesh, p=point: sg.project_shadow(m, p, GROUND), 5)
         rows.append(
             {
                 "subdivisions": subdivisions,
@@ -398,7 +388,7 @@ def primitive_rows(quick):
             tessellate = time.perf_counter() - start
             vertices = vertices + [0.0, 0.5 + size / 2, 0.0]  # standing above the ground
             sg.project_shadow((vertices, faces), light, GROUND)
-            seconds, shadow = timed(
+            seconds, shadow = median_time(
                 lambda v=vertices, f=faces: sg.project_shadow((v, f), light, GROUND), 9
             )
             rows.append(
