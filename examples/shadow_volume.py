@@ -13,6 +13,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import manifold3d
 import numpy as np
 import trimesh
 
@@ -34,9 +35,16 @@ print(
 )
 
 shadow = sg.project_shadow(box, light, ground, offset=0.01)
-section = volume.section(plane_origin=[0, 0, 0], plane_normal=[0, 1, 0])
-planar, _ = section.to_2D(to_2D=np.eye(4)[[0, 2, 1, 3]])  # (x, z, y): the ground's own axes
-print(f"volume sliced at the ground: area {planar.area:.9f}; planar shadow: {shadow.area:.9f}")
+# Slice the volume at the ground with manifold3d (float32): turned so +y is +z.
+turned = volume.vertices @ np.array([[1.0, 0, 0], [0, 0, 1], [0, -1, 0]])
+solid = manifold3d.Manifold(
+    manifold3d.Mesh(
+        vert_properties=np.ascontiguousarray(turned, dtype=np.float32),
+        tri_verts=np.ascontiguousarray(volume.faces, dtype=np.uint32),
+    )
+)
+sliced = solid.slice(0.0).area()
+print(f"volume sliced at the ground: area {sliced:.6f}; planar shadow: {shadow.area:.6f}")
 
 half = 5.0
 floor = sg.Shape(

@@ -355,9 +355,10 @@ def test_examples_draw_their_pictures(script, picture, tmp_path, monkeypatch, ca
     assert (image.mean(axis=2) < 90).mean() > 0.005  # a shadow is in the picture
     printed = capsys.readouterr().out
     if script == "shadow_volume.py":
-        # The volume sliced at the ground has the planar shadow's area.
-        sliced, planar = (float(text) for text in re.findall(r"\d+\.\d{9}", printed))
-        assert sliced == pytest.approx(planar, rel=1e-9)
+        # The volume sliced at the ground has the planar shadow's area
+        # (manifold3d slices in float32: agreement to a few parts in 1e7).
+        sliced, planar = (float(text) for text in re.findall(r"\b\d+\.\d{6}\b", printed))
+        assert sliced == pytest.approx(planar, rel=2e-6)
     if script == "converted_scene.py":
         # glTF and USD keep the shapes' roles; X3D keeps the group the shadows went in.
         for name in ("courtyard_shadows.glb", "courtyard_shadows.usda"):
