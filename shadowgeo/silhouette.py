@@ -203,6 +203,8 @@ def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
         return []
     order = np.argsort(starts, kind="stable")
     sorted_starts = starts[order]
+    if np.all(sorted_starts[1:] != sorted_starts[:-1]):
+        return _chain_cycles(starts, ends, order, sorted_starts)
     vertex_ids, first = np.unique(sorted_starts, return_index=True)
     next_out = dict(zip(vertex_ids.tolist(), first.tolist(), strict=True))
     order_list = order.tolist()
@@ -232,6 +234,37 @@ def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
         if len(loop) >= 3:
             loops.append(np.array(loop))
     return loops
+
+
+def _chain_cycles(starts, ends, order, sorted_starts) -> list[np.ndarray]:
+    """:func:`chain` when every vertex starts one edge: the loops are the cycles
+    of the successor permutation, found by pointer jumping in O(k log k) numpy
+    steps instead of a Python walk (the common case: a silhouette whose loops
+    do not touch)."""
+    count = len(starts)
+    position = np.minimum(np.searchsorted(sorted_starts, ends), count - 1)
+    if np.any(sorted_starts[position] != ends):
+        vertex = int(ends[np.flatnonzero(sorted_starts[position] != ends)[0]])
+        raise GeometryError(f"internal error: the outline is not closed at vertex {vertex}")
+    successor = order[position]
+    steps = max(1, int(count).bit_length())
+    # Each edge's loop label: the smallest edge index on its cycle.
+    label, jump = np.arange(count), successor.copy()
+    for _ in range(steps):
+        label = np.minimum(label, label[jump])
+        jump = jump[jump]
+    # Cut each cycle before its labelled edge and rank edges by their distance
+    # to the cut: the labelled edge comes first, then its successors in order.
+    indices = np.arange(count)
+    last = successor == label
+    after = np.where(last, indices, successor)
+    remaining = (~last).astype(np.int64)
+    for _ in range(steps):
+        remaining = remaining + np.where(after == indices, 0, remaining[after])
+        after = after[after]
+    walk = np.lexsort((-remaining, label))
+    cuts = np.flatnonzero(np.diff(label[walk])) + 1
+    return [loop for loop in np.split(starts[walk], cuts) if len(loop) >= 3]
 
 
 def check_light_outside(caster: Caster, position: np.ndarray, tolerance: Tolerance) -> None:

@@ -232,3 +232,43 @@ def test_topology_is_computed_once_for_many_lights():
     second = silhouette(torus, PointLight([3, 0, 0]))
     assert as_caster(torus) is caster
     assert not np.array_equal(first.front, second.front)
+
+
+def canonical(loop) -> tuple:
+    """A loop as a tuple starting at its smallest vertex (rotation removed)."""
+    loop = list(loop)
+    first = loop.index(min(loop))
+    return tuple(loop[first:] + loop[:first])
+
+
+def shuffled_cycles(rng, shortest: int):
+    lengths = rng.integers(shortest, 60, size=rng.integers(2, 12))
+    vertices = rng.permutation(10 * int(lengths.sum()))[: int(lengths.sum())]
+    cycles = np.split(vertices, np.cumsum(lengths)[:-1])
+    starts = np.concatenate(cycles)
+    ends = np.concatenate([np.roll(cycle, -1) for cycle in cycles])
+    shuffle = rng.permutation(len(starts))
+    return [c.tolist() for c in cycles], starts[shuffle], ends[shuffle]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_chain_recovers_shuffled_cycles(seed):
+    from shadowgeo.silhouette import chain
+
+    cycles, starts, ends = shuffled_cycles(np.random.default_rng(seed), shortest=1)
+    # Loops of one or two edges enclose nothing and are dropped.
+    expected = sorted(canonical(c) for c in cycles if len(c) >= 3)
+    assert sorted(canonical(loop.tolist()) for loop in chain(starts, ends)) == expected
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_chain_of_loops_touching_at_a_vertex_uses_every_edge_once(seed):
+    from shadowgeo.silhouette import chain
+
+    cycles, starts, ends = shuffled_cycles(np.random.default_rng(seed), shortest=3)
+    shared = cycles[0][0]
+    # The last cycle passes through the first one's vertex too (a figure 8).
+    starts = np.where(starts == cycles[-1][0], shared, starts)
+    ends = np.where(ends == cycles[-1][0], shared, ends)
+    loops = chain(starts, ends)
+    assert sorted(loop_edges(loops)) == sorted(zip(starts.tolist(), ends.tolist(), strict=True))
