@@ -34,7 +34,7 @@ Each becomes a shape with a black material whose transparency is
 ``1 - shadow_intensity``.
 
 ``method="volume"`` instead adds one closed shadow volume
-(:func:`shadowgeo.volume.shadow_volume`) per shape and light, role
+(:func:`shadowgeo.shadow_volume`) per shape and light, role
 ``"volume"``, ending one scene size past the scene's farthest corner.
 A scene with no light that is on raises :class:`~shadowgeo.SceneError`: X3D's
 headlight follows the viewer and casts no fixed shadow. ``extra_lights`` gives
@@ -57,6 +57,7 @@ from ..plane import Plane
 from ..projection import project_shadow
 from ..tolerance import Tolerance
 from ..topology import Caster
+from ..volume import shadow_volume
 from .model import Material, Scene, SceneLight, Shape
 from .receivers import Receiver
 from .receivers import select as select_receivers
@@ -127,7 +128,7 @@ def add_shadows(
         A named light or receiver does not exist, no light is on, or no
         receiver is found.
     GeometryError
-        A named receiver is not planar, or ``method="volume"`` is not available.
+        A named receiver is not planar.
 
     Examples
     --------
@@ -422,19 +423,13 @@ def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_nam
 def _volumes(scene, geometry, chosen, tolerance, names, notes, progress) -> list[Shape]:
     """Shadow volumes of every shape for every light, ending one scene size past
     the farthest corner of the scene (a sweep of twice its size for a sun)."""
-    try:
-        from ..volume import shadow_volume
-    except ImportError as error:
-        raise GeometryError(
-            "method 'volume' is not available in this version of shadowgeo "
-            "(shadowgeo.shadow_volume is not built yet); use method 'planar'"
-        ) from error
     bounds = scene.bounds
     corners = np.array(
         [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
     )
+    casters = [_Caster(shape) for shape in geometry]  # topology once, for every light
     added = []
-    total, done = len(chosen) * len(geometry), 0
+    total, done = len(chosen) * len(casters), 0
     for index, scene_light in enumerate(chosen):
         light = scene_light.light
         if is_positional(light):
@@ -443,21 +438,17 @@ def _volumes(scene, geometry, chosen, tolerance, names, notes, progress) -> list
             extent = 2 * tolerance.scale
         light_name = names.light(scene_light, index)
         group = names.unique(f"shadows_{light_name}")
-        for shape in geometry:
+        for caster in casters:
             done += 1
-            caster = _Caster(shape)
+            if progress is not None:
+                progress(done, total)
             if not _lit(caster, light):
-                if progress is not None:
-                    progress(done, total)
                 continue
             try:
                 volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)
             except GeometryError as error:
                 notes.append(f"shadows: {caster.name} has no volume for {light_name}: {error}")
                 continue
-            finally:
-                if progress is not None:
-                    progress(done, total)
             if len(volume.faces) == 0:
                 continue
             added.append(
