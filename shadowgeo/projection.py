@@ -237,8 +237,8 @@ def project_shadow(
         raise GeometryError(f"offset must be finite, got {offset!r}")
     if method not in ("auto", "triangles"):
         raise GeometryError(f"method must be 'auto' or 'triangles', got {method!r}")
-    projector = _Projector(caster, light, plane, receiver_points, offset, tolerance)
-    projector.per_triangle = method == "triangles"
+    per_triangle = method == "triangles"
+    projector = _Projector(caster, light, plane, receiver_points, offset, tolerance, per_triangle)
     return projector.run()
 
 
@@ -265,7 +265,9 @@ def _receiver_points(receiver) -> np.ndarray:
 class _Projector:
     """One call of :func:`project_shadow`; holds the per-call frame."""
 
-    def __init__(self, caster: Caster, light, plane: Plane, receiver, offset, tol) -> None:
+    def __init__(
+        self, caster: Caster, light, plane: Plane, receiver, offset, tol, per_triangle: bool
+    ) -> None:
         self.caster = caster
         self.light = light
         self.plane = plane
@@ -274,20 +276,18 @@ class _Projector:
         self.tol = tol
         self.clipped: dict[str, int] = {}
         self.limits: list[str] = []
-        self.per_triangle = False
+        self.per_triangle = per_triangle
 
     # -- result helpers -------------------------------------------------------------------
 
-    def empty(self, reason: str | None, **diagnostics) -> Shadow:
-        mesh = trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)
+    def empty(self, reason: str | None) -> Shadow:
         info = ShadowDiagnostics(
             n_triangles=self.caster.n_faces,
             clipped=dict(self.clipped),
             limits=tuple(self.limits),
             empty_reason=reason,
-            **diagnostics,
         )
-        return Shadow(self.plane, self.light, mesh, [], 0.0, info)
+        return Shadow(self.plane, self.light, _empty_mesh(), [], 0.0, info)
 
     # -- the computation ------------------------------------------------------------------
 
@@ -314,7 +314,7 @@ class _Projector:
             if self.light.radius <= height:
                 return self.empty("the light's radius does not reach the plane")
             self.height = height
-            self._check_light_outside_caster()
+            check_light_outside(self.caster, self.light.position, tol)
             homogeneous = np.append(self.light_position, 1.0)
             self.origin = self.light_position - height * normal  # the light's foot
         else:
@@ -383,11 +383,6 @@ class _Projector:
             region = poly.intersect(region, limit)
         return self._result(region, len(loops))
 
-    def _check_light_outside_caster(self) -> None:
-        """A light touching the caster has no meaningful shadow; nor does one
-        inside a closed caster (everything would be dark)."""
-        check_light_outside(self.caster, self.light.position, self.tol)
-
     def _receiver_2d(self) -> np.ndarray:
         points = self.receiver - self.center
         distance = points @ self.plane.normal + self.d
@@ -415,11 +410,7 @@ class _Projector:
         the rectangle [low, high] in local units; None when they miss."""
         light = self.light
         axis = light.direction
-        helper = np.zeros(3)
-        helper[int(np.argmin(np.abs(axis)))] = 1.0
-        side = np.cross(axis, helper)
-        side /= np.linalg.norm(side)
-        up = np.cross(axis, side)
+        side, up = Plane(axis, 0.0).basis  # across the axis; the rim's winding is fixed below
         rectangle_planes = _rectangle_planes(low, high)
         if light.cut_off_angle >= math.pi / 2 - 1e-6:
             # A hemisphere: the half-plane of points in front of the light.
@@ -545,7 +536,7 @@ class _Projector:
             n_loops=n_loops,
         )
         if not parts:
-            return Shadow(self.plane, self.light, self.empty(None).mesh, [], 0.0, info)
+            return Shadow(self.plane, self.light, _empty_mesh(), [], 0.0, info)
         u, v = self.plane.basis
         origin2d = self.plane.to_2d(self.origin + self.center)[0]
         polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
@@ -555,6 +546,10 @@ class _Projector:
         points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v) + self.center
         mesh = trimesh.Trimesh(points, faces, process=False)
         return Shadow(self.plane, self.light, mesh, polygons, area, info)
+
+
+def _empty_mesh() -> trimesh.Trimesh:
+    return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)
 
 
 def _rectangle_planes(low, high) -> np.ndarray:
