@@ -3,7 +3,6 @@ hand-derived regions and shapely references built in the test."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 
 import numpy as np
@@ -261,12 +260,8 @@ def test_shadow_intensity_sets_transparency_and_names_are_unique_and_def_safe():
     assert shadow.name == "shadow_my_lamp_ground_2"
 
 
-def test_volume_method_is_a_clear_error_until_it_exists():
+def test_volume_method_adds_a_closed_volume_per_shape_and_light():
     scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
-    if importlib.util.find_spec("shadowgeo.volume") is None:
-        with pytest.raises(GeometryError, match="not available"):
-            sg.add_shadows(scene, method="volume")
-        return
     result = sg.add_shadows(scene, method="volume")
     volumes = result.shapes_with_role("volume")
     assert [v.group for v in volumes] == ["shadows_lamp", "shadows_lamp"]
