@@ -35,8 +35,7 @@ from lxml import etree
 from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
-from ..scene.model import MARK
-from ..scene.shadows import safe_name
+from ..scene.model import MARK, unique_name
 from .atomic import atomic_path
 
 ADDED_ROLES = ("shadow", "volume")
@@ -137,7 +136,7 @@ def _add_groups(parent, shapes: list[Shape], used: set[str], namespace: str = ""
         key = shape.group or f"shadows_{shape.role}"
         if key not in groups:
             groups[key] = etree.SubElement(
-                parent, f"{namespace}Group", DEF=_unique(key, used), attrib={"class": MARK}
+                parent, f"{namespace}Group", DEF=unique_name(key, used), attrib={"class": MARK}
             )
         element = _shape_element(shape, used, namespace, world=True)
         element.set("class", f"{MARK}-{shape.role}")  # read back as this role
@@ -168,16 +167,6 @@ def _indent(body, groups) -> None:
     groups[-1].tail = closing
 
 
-def _unique(text: str, used: set[str]) -> str:
-    base = name = safe_name(text)
-    count = 1
-    while name in used:
-        count += 1
-        name = f"{base}_{count}"
-    used.add(name)
-    return name
-
-
 def _numbers(values) -> str:
     return " ".join(map(repr, np.asarray(values, dtype=np.float64).ravel().tolist()))
 
@@ -190,7 +179,7 @@ def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: 
     """A ``<Shape>``: vertices in world coordinates when ``world``, else local."""
     element = etree.Element(f"{namespace}Shape")
     if shape.name:
-        element.set("DEF", _unique(shape.name, used))
+        element.set("DEF", unique_name(shape.name, used))
     appearance = etree.SubElement(element, f"{namespace}Appearance")
     material = shape.material
     attributes = {"diffuseColor": _numbers(material.diffuse_color)}
@@ -243,7 +232,7 @@ def _fresh(scene: Scene):
         raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}", path=scene.path)
     if up == "Z":
         # X3D is Y-up: one rotation about x takes (x, y, z) to (x, z, -y).
-        name = _unique("shadowgeo_z_up", used)
+        name = unique_name("shadowgeo_z_up", used)
         body = etree.SubElement(body, "Transform", DEF=name, rotation=f"1 0 0 {-math.pi / 2!r}")
     for light in scene.lights:
         body.append(_light_element(light, used))
@@ -276,7 +265,7 @@ def _light_element(scene_light: SceneLight, used: set[str]):
         element.set("radius", repr(float(radius)))
         element.set("attenuation", _numbers(scene_light.attenuation))
     if scene_light.name:
-        element.set("DEF", _unique(scene_light.name, used))
+        element.set("DEF", unique_name(scene_light.name, used))
     element.set("color", _numbers(scene_light.color))
     element.set("intensity", repr(float(scene_light.intensity)))
     element.set("ambientIntensity", repr(float(scene_light.ambient_intensity)))

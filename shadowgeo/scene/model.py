@@ -8,6 +8,7 @@ world transform; lights are stored in world coordinates.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -20,6 +21,33 @@ Color = tuple[float, float, float]
 # The X3D ``class`` of the groups holding the shapes shadowgeo adds; each added
 # Shape's class is ``MARK + "-" + role``, so a reader gives it back its role.
 MARK = "shadowgeo-shadows"
+
+
+def safe_name(text: str) -> str:
+    """``text`` made a valid X3D DEF name (an XML NCName): other characters
+    become ``_`` and a leading digit, ``-`` or ``.`` gets a ``_`` before it.
+
+    >>> safe_name("1st lamp:a")
+    '_1st_lamp_a'
+    """
+    name = re.sub(r"[^A-Za-z0-9_.\-]", "_", text) or "_"
+    return name if re.match(r"[A-Za-z_]", name) else "_" + name
+
+
+def unique_name(text: str, used: set[str]) -> str:
+    """``safe_name(text)``, numbered ``_2``, ``_3``, ... until it is not in
+    ``used``; the name is added to ``used``.
+
+    >>> unique_name("lamp", {"lamp"})
+    'lamp_2'
+    """
+    base = name = safe_name(text)
+    count = 1
+    while name in used:
+        count += 1
+        name = f"{base}_{count}"
+    used.add(name)
+    return name
 
 
 @dataclass

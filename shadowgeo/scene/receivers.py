@@ -28,9 +28,10 @@ import dataclasses
 import numpy as np
 
 from ..errors import GeometryError, SceneError
+from ..lights import is_positional
 from ..plane import Plane
 from ..tolerance import Tolerance
-from .model import Scene, Shape
+from .model import Scene, Shape, safe_name
 
 # A found receiver: at least these fractions of the largest patch's area and of
 # the scene's bounding-box diagonal.
@@ -68,7 +69,7 @@ class Receiver:
         """The plane turned towards ``light``; None when the light lies in it,
         or behind a one-sided patch."""
         plane = self.plane
-        if hasattr(light, "position"):
+        if is_positional(light):
             side = float(plane.signed_distance(light.position[None])[0])
             if abs(side) <= tolerance.length:
                 return None
@@ -116,8 +117,6 @@ def select(
     scene: Scene, geometry: list[Shape], names, plane, tolerance: Tolerance, notes: list[str]
 ) -> list[Receiver]:
     """The receivers for :func:`shadowgeo.add_shadows` (see the module notes)."""
-    from .shadows import safe_name
-
     if plane is not None:
         if not isinstance(plane, Plane):
             plane = Plane.from_coefficients(plane)

@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -58,7 +57,7 @@ from ..projection import project_shadow
 from ..tolerance import Tolerance
 from ..topology import Caster
 from ..volume import shadow_volume
-from .model import Material, Scene, SceneLight, Shape
+from .model import Material, Scene, SceneLight, Shape, safe_name, unique_name
 from .receivers import Receiver
 from .receivers import select as select_receivers
 
@@ -210,17 +209,6 @@ def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
     return kept
 
 
-def safe_name(text: str) -> str:
-    """``text`` made a valid X3D DEF name (an XML NCName): other characters
-    become ``_`` and a leading digit, ``-`` or ``.`` gets a ``_`` before it.
-
-    >>> safe_name("1st lamp:a")
-    '_1st_lamp_a'
-    """
-    name = re.sub(r"[^A-Za-z0-9_.\-]", "_", text) or "_"
-    return name if re.match(r"[A-Za-z_]", name) else "_" + name
-
-
 class _Names:
     """Unique DEF-safe names, avoiding every name the scene already uses."""
 
@@ -231,13 +219,7 @@ class _Names:
         self.used |= set(s.group for s in shapes if s.group)
 
     def unique(self, text: str) -> str:
-        base = name = safe_name(text)
-        count = 1
-        while name in self.used:
-            count += 1
-            name = f"{base}_{count}"
-        self.used.add(name)
-        return name
+        return unique_name(text, self.used)
 
     @staticmethod
     def light(light: SceneLight, index: int) -> str:
