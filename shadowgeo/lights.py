@@ -114,3 +114,12 @@ Light = PointLight | DirectionalLight | SpotLight
 def is_positional(light: Light) -> bool:
     """True for lights with a position (point and spot lights)."""
     return not isinstance(light, DirectionalLight)
+
+
+def require_light(light) -> Light:
+    """``light`` itself, or :class:`GeometryError` when it is not a light."""
+    if not isinstance(light, PointLight | DirectionalLight | SpotLight):
+        raise GeometryError(
+            f"light must be a PointLight, SpotLight or DirectionalLight, got {light!r}"
+        )
+    return light

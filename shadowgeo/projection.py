@@ -30,7 +30,7 @@ import trimesh
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional
+from .lights import Light, SpotLight, is_positional, require_light
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
@@ -66,6 +66,7 @@ def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
     --------
     The ground y = 0 and a light at (8, 9, 10), in row-vector form:
 
+    >>> from shadowgeo import Plane, PointLight
     >>> M = shadow_matrix(Plane([0, 1, 0], 0), PointLight([8, 9, 10]))
     >>> M.T
     array([[  9.,   0.,   0.,   0.],
@@ -221,6 +222,7 @@ def project_shadow(
 
     >>> vertices = [[-2, 3, -1], [2, 3, -1], [0, 3, 2], [0, 5, 0]]
     >>> faces = [[1, 0, 3], [2, 1, 3], [0, 2, 3], [0, 1, 2]]
+    >>> from shadowgeo import Plane, PointLight
     >>> shadow = project_shadow((vertices, faces), PointLight([8, 9, 10]), Plane([0, 1, 0], 0))
     >>> round(shadow.area, 9)
     31.5
@@ -243,10 +245,7 @@ def project_shadow(
 
 
 def _check_types(light, plane) -> None:
-    if not isinstance(light, PointLight | DirectionalLight | SpotLight):
-        raise GeometryError(
-            f"light must be a PointLight, SpotLight or DirectionalLight, got {light!r}"
-        )
+    require_light(light)
     if not isinstance(plane, Plane):
         raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
 

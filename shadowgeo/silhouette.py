@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import GeometryError
-from .lights import DirectionalLight, Light, PointLight, SpotLight
+from .lights import Light, is_positional, require_light
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 
@@ -86,6 +86,7 @@ def silhouette(mesh, light: Light) -> Silhouette:
 
     >>> import trimesh
     >>> cube = trimesh.creation.box()
+    >>> from shadowgeo import DirectionalLight
     >>> outline = silhouette(cube, DirectionalLight([0, 0, -1]))
     >>> int(outline.front.sum()), len(outline.edges), [len(loop) for loop in outline.loops]
     (2, 4, [4])
@@ -120,11 +121,9 @@ def silhouette(mesh, light: Light) -> Silhouette:
 def light_homogeneous(caster: Caster, light: Light) -> np.ndarray:
     """(4,) the light as a homogeneous vector in the caster's centred frame
     (:attr:`Caster.centered`)."""
-    if isinstance(light, PointLight | SpotLight):
+    if is_positional(require_light(light)):
         return np.append(light.position - caster.center, 1.0)
-    if isinstance(light, DirectionalLight):
-        return np.append(-light.direction, 0.0)
-    raise GeometryError(f"light must be a PointLight, SpotLight or DirectionalLight, got {light!r}")
+    return np.append(-light.direction, 0.0)
 
 
 def front_boundary(caster: Caster, front: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -156,16 +155,16 @@ def boundary_loops(
     Edges shared by two triangles of the same orientation cancel, so for a
     closed caster only the silhouette remains. Also returns the vertices used.
     """
-    starts, ends = _net_boundary(caster, selected, orientation)
-    if len(starts) == 0:
-        return [], np.zeros(0, dtype=np.int64)
-    return chain(starts, ends), np.unique(np.concatenate([starts, ends]))
+    return _loops_and_vertices(*_net_boundary(caster, selected, orientation))
 
 
 def silhouette_loops(caster: Caster, front: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
     """Loops of a closed caster's silhouette (see :func:`front_boundary`),
     and the vertices they use."""
-    starts, ends = front_boundary(caster, front)
+    return _loops_and_vertices(*front_boundary(caster, front))
+
+
+def _loops_and_vertices(starts, ends) -> tuple[list[np.ndarray], np.ndarray]:
     if len(starts) == 0:
         return [], np.zeros(0, dtype=np.int64)
     return chain(starts, ends), np.unique(np.concatenate([starts, ends]))

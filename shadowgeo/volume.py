@@ -24,7 +24,7 @@ import numpy as np
 import trimesh
 
 from .errors import GeometryError
-from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional
+from .lights import DirectionalLight, Light, is_positional, require_light
 from .silhouette import check_light_outside, light_homogeneous
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
@@ -109,10 +109,7 @@ def shadow_volume(
     (True, True, 2.0)
     """
     caster = as_caster(mesh)
-    if not isinstance(light, PointLight | SpotLight | DirectionalLight):
-        raise GeometryError(
-            f"light must be a PointLight, SpotLight or DirectionalLight, got {light!r}"
-        )
+    require_light(light)
     if extent is not None:
         extent = float(extent)
         if not math.isfinite(extent) or extent <= 0:
