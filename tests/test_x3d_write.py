@@ -214,6 +214,7 @@ def test_converting_a_converted_file_again_changes_nothing(tmp_path):
     plain = tmp_path / "plain.x3d"
     sg.save(sg.load(first), plain)
     assert len(parse(plain).getroot().findall("Scene/Group")) == 1
+    assert plain.read_bytes() == first.read_bytes()
     # Re-run where no shadow falls any more: the old group goes too.
     moved = sg.load(first)
     moved.lights[0].light = sg.PointLight([3.0, -8.0, 4.0])  # below the ground

@@ -80,7 +80,7 @@ def _with_added(scene: Scene):
     if body is None:
         raise SceneError("the X3D document has no <Scene> element", path=scene.path)
     added = [s for s in scene.shapes if s.role in ADDED_ROLES]
-    _remove_marked(tree, {s.name for s in scene.shapes if s.role == "geometry" and s.name})
+    _remove_marked(tree)  # the scene's added shapes replace them
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
@@ -112,14 +112,13 @@ def _require_components(root, namespace: str) -> None:
             position += 1
 
 
-def _remove_marked(tree, kept: set[str]) -> None:
-    """Drop the groups an earlier run added whose shapes the scene no longer
-    holds (add_shadows replaced them), keeping the whitespace around them."""
+def _remove_marked(tree) -> None:
+    """Drop the groups an earlier run added, keeping the whitespace around
+    them: the reader gave their shapes back as role "shadow"/"volume", so the
+    scene's added shapes are what is written (the same ones, or new ones
+    add_shadows made)."""
     marked = f"contains(concat(' ', normalize-space(@class), ' '), ' {MARK} ')"
     for group in tree.xpath(f"//*[{marked}]"):
-        names = set(group.xpath(".//*[local-name()='Shape']/@DEF"))
-        if names & kept:
-            continue  # read and written back unchanged: keep it
         parent = group.getparent()
         previous = group.getprevious()
         if previous is not None:
