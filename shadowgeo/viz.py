@@ -379,6 +379,12 @@ def plot(
     (120, 160, 3)
     """
     off_screen = bool(off_screen or screenshot is not None)
+    reason = None if off_screen else no_display_reason()
+    if reason is not None:
+        raise RuntimeError(
+            f"no display for an interactive window ({reason}); "
+            "pass off_screen=True or screenshot=..."
+        )
     plotter = scene_plotter(
         scene_or_meshes,
         shadows=shadows,
@@ -390,13 +396,6 @@ def plot(
         pbr=pbr,
     )
     if not off_screen:
-        reason = no_display_reason()
-        if reason is not None:
-            plotter.close()
-            raise RuntimeError(
-                f"no display for an interactive window ({reason}); "
-                "pass off_screen=True or screenshot=..."
-            )
         plotter.show()
         return plotter
     try:
