@@ -91,10 +91,9 @@ def _unique_lights(lights: list) -> list:
     seen, unique = set(), []
     for light in sorted(lights, key=lambda light: not isinstance(light, SceneLight)):
         geometry = light.light if isinstance(light, SceneLight) else light
-        where = getattr(geometry, "position", None)
-        if where is None:
-            where = geometry.direction
-        key = (type(geometry).__name__, *np.round(np.asarray(where, dtype=float), 12).tolist())
+        # Position and direction both: two spots at one place may aim different ways.
+        where = [getattr(geometry, name, ()) for name in ("position", "direction")]
+        key = (type(geometry).__name__, *np.round(np.concatenate(where), 12).tolist())
         if key not in seen:
             seen.add(key)
             unique.append(light)

@@ -377,3 +377,12 @@ def test_a_light_given_twice_is_drawn_and_lit_once():
         assert tuple(scene_lights[0].diffuse_color.float_rgb) == (1.0, 0.0, 0.0)  # the scene's
     finally:
         plotter.close()
+
+
+def test_two_spots_at_one_place_aiming_apart_are_both_lit():
+    spots = [sg.SpotLight(LIGHT, direction) for direction in ([0, -1, 0], [1, -1, 0])]
+    plotter = viz.scene_plotter([ground_shape()], lights=spots, off_screen=True, window_size=SIZE)
+    try:
+        assert len([light for light in plotter.renderer.lights if not light.is_headlight]) == 2
+    finally:
+        plotter.close()
