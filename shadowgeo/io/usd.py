@@ -47,16 +47,9 @@ from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, Shape
 from .atomic import atomic_path
 from .gltf import look_rotation
-from .usd_read import read
+from .usd_read import _pxr, read
 
 __all__ = ["read", "write"]
-
-
-def _pxr():
-    """usd-core's modules, imported when first needed (it is slow to load)."""
-    from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
-
-    return Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
 
 
 class _Names:
