@@ -51,7 +51,7 @@ _ELEMENT_ARRAY_BUFFER = 34963
 _FLOAT = 5126
 _UNSIGNED_INT = 5125
 _LIGHTS = "KHR_lights_punctual"
-_GLB_MAGIC, _JSON_CHUNK, _BIN_CHUNK = 0x46546C67, 0x4E4F534A, 0x004E4942
+GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = b"glTF", 0x4E4F534A, 0x004E4942
 
 # Matrices whose TRS decomposition misses them by more than this (relative)
 # are not TRS: glTF's validator rejects them, so they are baked into vertices.
@@ -344,15 +344,21 @@ def build(scene: Scene) -> tuple[dict, bytes]:
     return builder.gltf, bytes(builder.binary)
 
 
+def glb_container(text: bytes, binary: bytes) -> bytes:
+    """A GLB file of a JSON chunk ``text`` and, when not empty, a BIN chunk
+    ``binary``, each padded to 4 bytes as the spec requires (spaces, zeros)."""
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<II", len(text), JSON_CHUNK) + text
+    if binary:
+        binary += b"\0" * (-len(binary) % 4)
+        chunks += struct.pack("<II", len(binary), BIN_CHUNK) + binary
+    return struct.pack("<4sII", GLB_MAGIC, 2, 12 + len(chunks)) + chunks
+
+
 def _glb(gltf: dict, binary: bytes) -> bytes:
     if binary:
         gltf["buffers"] = [{"byteLength": len(binary)}]
-    text = json.dumps(gltf, separators=(",", ":"), allow_nan=False).encode()
-    text += b" " * (-len(text) % 4)
-    chunks = struct.pack("<II", len(text), _JSON_CHUNK) + text
-    if binary:
-        chunks += struct.pack("<II", len(binary), _BIN_CHUNK) + binary
-    return struct.pack("<III", _GLB_MAGIC, 2, 12 + len(chunks)) + chunks
+    return glb_container(json.dumps(gltf, separators=(",", ":"), allow_nan=False).encode(), binary)
 
 
 def _embedded(gltf: dict, binary: bytes) -> bytes:

@@ -33,8 +33,8 @@ import trimesh
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, SceneLight, Shape
+from .gltf import BIN_CHUNK, GLB_MAGIC, JSON_CHUNK, glb_container
 
-_GLB_MAGIC = b"glTF"
 _LIGHTS = "KHR_lights_punctual"
 
 
@@ -46,17 +46,17 @@ def _gltf_document(path: Path) -> tuple[dict, bytes | None]:
     except OSError as error:
         raise SceneError(f"cannot read: {error.strerror}", path=str(path)) from error
     binary = None
-    if data[:4] == _GLB_MAGIC:
+    if data[:4] == GLB_MAGIC:
         if len(data) < 20:
             raise SceneError("truncated GLB header", path=str(path))
         length, kind = struct.unpack_from("<II", data, 12)
-        if kind != 0x4E4F534A or 20 + length > len(data):
+        if kind != JSON_CHUNK or 20 + length > len(data):
             raise SceneError("GLB's first chunk is not a complete JSON chunk", path=str(path))
         rest = data[20 + length :]
         binary = b""
         if len(rest) >= 8:
             bin_length, bin_kind = struct.unpack_from("<II", rest, 0)
-            if bin_kind == 0x004E4942:
+            if bin_kind == BIN_CHUNK:
                 binary = rest[8 : 8 + bin_length]
         data = data[20 : 20 + length]
     try:
@@ -181,14 +181,7 @@ def _for_trimesh(document: dict, binary: bytes | None) -> tuple[bytes, dict[str,
         renamed["materials"] = [_untextured(material) for material in document["materials"]]
     text = json.dumps(renamed).encode()
     frames = {f"node{index}": index for index in range(len(renamed["nodes"]))}
-    if binary is None:
-        return text, frames
-    text += b" " * (-len(text) % 4)
-    chunks = struct.pack("<II", len(text), 0x4E4F534A) + text
-    if binary:
-        binary += b"\0" * (-len(binary) % 4)
-        chunks += struct.pack("<II", len(binary), 0x004E4942) + binary
-    return struct.pack("<4sII", _GLB_MAGIC, 2, 12 + len(chunks)) + chunks, frames
+    return (text if binary is None else glb_container(text, binary)), frames
 
 
 def _untextured(material):
