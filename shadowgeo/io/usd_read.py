@@ -44,13 +44,8 @@ def _check_layers(path: Path) -> None:
         if current in seen:
             continue
         seen.add(current)
-        try:
-            # Anonymous: read afresh, never a stale copy from the layer registry.
-            layer = Sdf.Layer.OpenAsAnonymous(str(current))
-        except Tf.ErrorException as error:
-            raise SceneError(f"not a USD file: {_first_line(error)}", path=str(current)) from None
-        if layer is None:
-            raise SceneError("not a USD file", path=str(current))
+        # Anonymous: read afresh, never a stale copy from the layer registry.
+        layer = _opened(Sdf.Layer.OpenAsAnonymous, current, "not a USD file")
         for asset in layer.GetCompositionAssetDependencies():
             where = f"layer dependency {asset!r}"
             if not asset:
@@ -65,9 +60,19 @@ def _check_layers(path: Path) -> None:
             pending.append(target)
 
 
-def _first_line(error: Exception) -> str:
-    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
-    return lines[-1] if lines else type(error).__name__
+def _opened(opener, path: Path, failure: str):
+    """``opener(path)`` (a layer or a stage); a SceneError saying ``failure``
+    and usd-core's last message line when it raises or returns None."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+    try:
+        opened = opener(str(path))
+    except Tf.ErrorException as error:
+        lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+        reason = lines[-1] if lines else type(error).__name__
+        raise SceneError(f"{failure}: {reason}", path=str(path)) from None
+    if opened is None:
+        raise SceneError(failure, path=str(path))
+    return opened
 
 
 def _world(xformable, time) -> np.ndarray:
@@ -286,12 +291,7 @@ def read(path, **options) -> Scene:
         raise SceneError("no such file", path=str(path))
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
     _check_layers(path)
-    try:
-        stage = Usd.Stage.Open(str(path))
-    except Tf.ErrorException as error:
-        raise SceneError(f"cannot open: {_first_line(error)}", path=str(path)) from None
-    if stage is None:
-        raise SceneError("cannot open", path=str(path))
+    stage = _opened(Usd.Stage.Open, path, "cannot open")
     up = UsdGeom.GetStageUpAxis(stage)
     scene = Scene(
         path=str(path),
