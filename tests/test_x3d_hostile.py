@@ -378,6 +378,14 @@ def test_prototype_expansion_bomb_is_refused(tmp_path):
         sg.load(scene(tmp_path, body))
 
 
+def test_unexpandable_prototype_as_a_material_is_skipped(tmp_path):
+    body = '<Shape><Appearance><ProtoInstance name="Nope"/></Appearance><Box/></Shape>'
+    loaded = sg.load(scene(tmp_path, body))
+    (shape,) = loaded.shapes
+    assert shape.material.emissive_color == (1, 1, 1)  # no Material: X3D's unlit white
+    assert any("ProtoInstance name='Nope' skipped" in w for w in loaded.warnings)
+
+
 def test_prototype_connect_to_a_bad_field_name(tmp_path):
     body = (
         '<ProtoDeclare name="P"><ProtoInterface><field name="r" type="SFFloat" value="1"/>'

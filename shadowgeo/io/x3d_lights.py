@@ -84,7 +84,9 @@ def material(context: Context, appearance) -> Material:
         return unlit
     # X3D 4's backMaterial colours back faces only; the front material is the one
     front = [child for child in appearance if child.get("containerField") != "backMaterial"]
-    nodes = [node for node in map(context.node, front) if local_name(node) in MATERIALS]
+    # context.node is None for a ProtoInstance that could not be expanded (already warned)
+    nodes = [node for node in map(context.node, front) if node is not None]
+    nodes = [node for node in nodes if local_name(node) in MATERIALS]
     if not nodes:
         return unlit
     node = nodes[0]
