@@ -15,7 +15,9 @@ extension                     read                         write
 
 Each module provides ``read(path, **options) -> Scene`` and/or
 ``write(scene, path, **options) -> None``; writers go through
-:func:`shadowgeo.io.atomic.atomic_path`, so a failure leaves no partial file.
+:func:`shadowgeo.io.atomic.atomic_path`, so a failure leaves no partial file;
+readers that follow references to other files check them with
+:func:`refuse_outside`.
 """
 
 from __future__ import annotations
@@ -63,6 +65,16 @@ def _module(table: dict[str, str], path, verb: str):
             f"cannot {verb} '{suffix or 'no extension'}' files (known: {known})", path=str(path)
         )
     return importlib.import_module(f"{__name__}.{table[suffix]}")
+
+
+def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: str) -> None:
+    """Raise a SceneError unless ``reference`` (a URI or asset path a file
+    names) is relative and ``target`` (what it resolves to) is inside
+    ``folder``: readers open nothing remote, absolute or in a parent folder."""
+    if ":" in reference.split("/")[0] or reference.startswith(("/", "\\")):
+        raise SceneError("refused: not a relative path", path=str(path), node=where)
+    if not target.is_relative_to(folder):
+        raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
 
 
 def load(path, **options) -> Scene:

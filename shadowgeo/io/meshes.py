@@ -33,6 +33,7 @@ import trimesh
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, SceneLight, Shape
+from . import refuse_outside
 from .gltf import BIN_CHUNK, GLB_MAGIC, JSON_CHUNK, glb_container
 
 _LIGHTS = "KHR_lights_punctual"
@@ -136,11 +137,8 @@ def _check_uris(document: dict, path: Path) -> list[str]:
             if not isinstance(uri, str) or uri.startswith("data:"):
                 continue
             where = f"{kind}[{index}] uri {uri!r}"
-            if ":" in uri.split("/")[0] or uri.startswith(("/", "\\")):
-                raise SceneError("refused: not a relative path", path=str(path), node=where)
             target = (folder / unquote(uri)).resolve()
-            if not target.is_relative_to(folder):
-                raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
+            refuse_outside(uri, target, folder, path=path, where=where)
             if target.is_file():
                 continue
             if kind == "buffers":

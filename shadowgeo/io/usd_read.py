@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, SceneLight, Shape
+from . import refuse_outside
 from .x3d_geometry import polygon_triangles
 
 
@@ -50,11 +51,8 @@ def _check_layers(path: Path) -> None:
             where = f"layer dependency {asset!r}"
             if not asset:
                 continue
-            if ":" in asset.split("/")[0] or asset.startswith(("/", "\\")):
-                raise SceneError("refused: not a relative path", path=str(path), node=where)
             target = (current.parent / asset).resolve()
-            if not target.is_relative_to(folder):
-                raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
+            refuse_outside(asset, target, folder, path=path, where=where)
             if not target.is_file():
                 raise SceneError("missing layer", path=str(path), node=where)
             pending.append(target)
