@@ -185,23 +185,25 @@ def test_receiver_and_plane_together_are_bad_usage(capsys, tmp_path):
     assert exit_.value.code == 2 and "not allowed with" in capsys.readouterr().err
 
 
-def test_scene_without_lights_is_one_line_and_writes_nothing(capsys, tmp_path):
+def unlit_box(tmp_path) -> Path:
+    """An X3D scene of one box and no light."""
     dark = tmp_path / "dark.x3d"
     dark.write_text(
         '<?xml version="1.0"?>\n<X3D version="4.0" profile="Interchange"><Scene>'
         "<Shape><Box/></Shape></Scene></X3D>\n"
     )
+    return dark
+
+
+def test_scene_without_lights_is_one_line_and_writes_nothing(capsys, tmp_path):
+    dark = unlit_box(tmp_path)
     done = in_process(capsys, "convert", dark, tmp_path / "out.x3d", "--plane", "0,1,0,1")
     one_line_error(done, "dark.x3d", "no lights")
     assert not (tmp_path / "out.x3d").exists()
 
 
 def test_sun_lights_a_scene_without_lights(capsys, tmp_path):
-    dark = tmp_path / "dark.x3d"
-    dark.write_text(
-        '<?xml version="1.0"?>\n<X3D version="4.0" profile="Interchange"><Scene>'
-        "<Shape><Box/></Shape></Scene></X3D>\n"
-    )
+    dark = unlit_box(tmp_path)
     out = tmp_path / "out.x3d"
     done = in_process(
         capsys, "convert", dark, out, "--plane", "0,1,0,3", "--sun", "1,-2,0", "--progress"
