@@ -161,10 +161,9 @@ def run(args) -> int:
             f"cannot write '{target.suffix or 'no extension'}' files (known: {known})",
             path=str(target),
         )
-    options = {} if args.tolerance is None else {"chord": args.tolerance}
-    if source.suffix.lower() not in (".x3d", ".x3dz"):
-        options = {}  # the chord only matters for X3D's curved primitives
-    scene = shadowgeo.load(source, **options)
+    # The chord only matters for X3D's curved primitives; other readers take no options.
+    curved = args.tolerance is not None and source.suffix.lower() in (".x3d", ".x3dz")
+    scene = shadowgeo.load(source, **({"chord": args.tolerance} if curved else {}))
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar(f"shadows ({args.method})") if show else None
     known = len(scene.warnings)
