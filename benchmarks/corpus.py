@@ -59,11 +59,10 @@ def convert(path: Path, out: Path, schema: Path | None) -> dict:
     else:
         row["outcome"] = "converts"
     row["seconds"] = f"{time.perf_counter() - start:.2f}"  # without the validation
-    if row["outcome"] == "converts":
-        if schema is not None:
-            before = x3d_schema_errors(path, schema)
-            new = new_schema_errors(before, x3d_schema_errors(out, schema))
-            row["outcome"] += f", {len(new)} new schema errors (input has {len(before)})"
+    if row["outcome"] == "converts" and schema is not None:
+        before = x3d_schema_errors(path, schema)
+        new = new_schema_errors(before, x3d_schema_errors(out, schema))
+        row["outcome"] += f", {len(new)} new schema errors (input has {len(before)})"
     return row
 
 
