@@ -523,3 +523,13 @@ def test_lights_from_another_author(tmp_path):
     np.testing.assert_allclose(bulb.light.position, [0, 5, 0])
     assert bulb.color == (1.0, 0.5, 0.25)
     assert any("DomeLight </Sky>" in warning for warning in scene.warnings)
+
+
+@pytest.mark.parametrize(
+    ("scene", "message"),
+    [(sg.Scene(up_axis="X"), "up axis"), (sg.Scene(meters_per_unit=0.0), "metersPerUnit")],
+)
+def test_usd_writer_refuses_an_unknown_up_axis_or_scale(tmp_path, scene, message):
+    with pytest.raises(sg.SceneError, match=rf"bad\.usda.*{message}"):
+        sg.save(scene, tmp_path / "bad.usda")
+    assert list(tmp_path.iterdir()) == []

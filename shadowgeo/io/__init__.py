@@ -23,6 +23,7 @@ readers that follow references to other files check them with
 from __future__ import annotations
 
 import importlib
+import math
 from pathlib import Path
 
 from ..errors import SceneError
@@ -65,6 +66,18 @@ def _module(table: dict[str, str], path, verb: str):
             f"cannot {verb} '{suffix or 'no extension'}' files (known: {known})", path=str(path)
         )
     return importlib.import_module(f"{__name__}.{table[suffix]}")
+
+
+def up_and_units(scene: Scene) -> tuple[str, float]:
+    """The scene's up axis (``"Y"`` or ``"Z"``) and metres per unit, checked
+    for the writers; SceneError for any other axis or a scale not > 0."""
+    up = (scene.up_axis or "Y").upper()
+    if up not in ("Y", "Z"):
+        raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}", path=scene.path)
+    meters = float(scene.meters_per_unit)
+    if not (math.isfinite(meters) and meters > 0):
+        raise SceneError(f"metersPerUnit must be > 0, got {scene.meters_per_unit!r}")
+    return up, meters
 
 
 def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: str) -> None:

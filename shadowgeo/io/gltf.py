@@ -44,6 +44,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
+from . import up_and_units
 from .atomic import atomic_path
 
 _ARRAY_BUFFER = 34962
@@ -113,18 +114,14 @@ def is_trs(matrix: np.ndarray) -> bool:
 
 def _root_matrix(scene: Scene) -> np.ndarray | None:
     """Column-vector matrix taking the scene to glTF's Y-up metres, or None."""
-    up = (scene.up_axis or "Y").upper()
-    if up not in ("Y", "Z"):
-        raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}", path=scene.path)
-    if not (math.isfinite(scene.meters_per_unit) and scene.meters_per_unit > 0):
-        raise SceneError(f"metersPerUnit must be > 0, got {scene.meters_per_unit!r}")
-    if up == "Y" and scene.meters_per_unit == 1.0:
+    up, meters_per_unit = up_and_units(scene)
+    if up == "Y" and meters_per_unit == 1.0:
         return None
     matrix = np.eye(4)
     if up == "Z":
         # Z-up to Y-up: (x, y, z) -> (x, z, -y).
         matrix[:3, :3] = [[1, 0, 0], [0, 0, 1], [0, -1, 0]]
-    matrix[:3, :3] *= scene.meters_per_unit
+    matrix[:3, :3] *= meters_per_unit
     return matrix
 
 

@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, Shape
+from . import up_and_units
 from .atomic import atomic_path
 from .gltf import look_rotation
 from .usd_read import _pxr, read
@@ -101,15 +102,11 @@ def _custom(prim, name: str, type_name, value) -> None:
 class _Writer:
     def __init__(self, scene: Scene) -> None:
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
-        up = (scene.up_axis or "Y").upper()
-        if up not in ("Y", "Z"):
-            raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}")
-        if not (math.isfinite(scene.meters_per_unit) and scene.meters_per_unit > 0):
-            raise SceneError(f"metersPerUnit must be > 0, got {scene.meters_per_unit!r}")
+        up, meters_per_unit = up_and_units(scene)
         self.scene = scene
         self.stage = Usd.Stage.CreateInMemory()
         UsdGeom.SetStageUpAxis(self.stage, UsdGeom.Tokens.y if up == "Y" else UsdGeom.Tokens.z)
-        UsdGeom.SetStageMetersPerUnit(self.stage, float(scene.meters_per_unit))
+        UsdGeom.SetStageMetersPerUnit(self.stage, meters_per_unit)
         world = UsdGeom.Xform.Define(self.stage, "/World")
         self.stage.SetDefaultPrim(world.GetPrim())
         self.names = _Names()
