@@ -173,7 +173,7 @@ def _vtk_light(scene_light, center: np.ndarray, scale: float):
     return result
 
 
-def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, framed) -> None:
+def _camera(plotter, view, center: np.ndarray, scale: float, z_up: bool, framed) -> None:
     """Point the camera at ``center`` from the direction ``view`` names."""
     if view is None:
         view = "iso"
@@ -181,7 +181,7 @@ def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, frame
         if view not in VIEWS:
             raise GeometryError(f"view must be one of {sorted(VIEWS)} or (x, y, z), got {view!r}")
         direction = np.array(VIEWS[view])
-        if up_axis.upper() == "Z":  # Y-up directions rotated to Z-up: (x, y, z) -> (x, -z, y)
+        if z_up:  # Y-up directions rotated to Z-up: (x, y, z) -> (x, -z, y)
             direction = np.array([direction[0], -direction[2], direction[1]])
     else:
         direction = np.asarray(view, dtype=np.float64).reshape(3)
@@ -189,9 +189,9 @@ def _camera(plotter, view, center: np.ndarray, scale: float, up_axis: str, frame
     if not np.isfinite(norm) or norm == 0:
         raise GeometryError(f"view direction must be finite and non-zero, got {view!r}")
     direction = direction / norm
-    up = np.eye(3)["XYZ".index(up_axis.upper())] if up_axis.upper() in "XYZ" else np.eye(3)[1]
+    up = np.array([0.0, 0.0, 1.0]) if z_up else np.array([0.0, 1.0, 0.0])
     if abs(direction @ up) > 0.999:  # looking along the up axis: screen-up is -z (or +y)
-        up = np.array([0.0, 0.0, -1.0]) if up[1] else np.array([0.0, 1.0, 0.0])
+        up = np.array([0.0, 1.0, 0.0]) if z_up else np.array([0.0, 0.0, -1.0])
     plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
     # Frame the geometry and the positional lights (not the arrows of directional ones).
     frame = np.column_stack([framed.min(axis=0), framed.max(axis=0)]).ravel()
@@ -255,7 +255,7 @@ def scene_plotter(
     if lights is not True and lights is not False:
         scene_lights = list(lights)
     scene_lights = _unique_lights(scene_lights)
-    up_axis = scene_or_meshes.up_axis if isinstance(scene_or_meshes, Scene) else "Y"
+    z_up = isinstance(scene_or_meshes, Scene) and (scene_or_meshes.up_axis or "Y").upper() == "Z"
 
     if off_screen and no_display_reason() is not None:
         # VTK would try X first and print "bad X server connection" before
@@ -309,7 +309,7 @@ def scene_plotter(
         np.reshape(light.position, (1, 3)) for light in glyph_lights if hasattr(light, "position")
     ]
     framed = np.concatenate(framed) if framed else np.zeros((1, 3))
-    _camera(plotter, view, center, scale, up_axis, framed)
+    _camera(plotter, view, center, scale, z_up, framed)
     return plotter
 
 
