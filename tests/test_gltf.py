@@ -341,3 +341,16 @@ def test_out_of_range_looks_and_intensities_are_clamped_to_what_gltf_allows(tmp_
     assert material["pbrMetallicRoughness"]["roughnessFactor"] == 0.0
     entry = document["extensions"]["KHR_lights_punctual"]["lights"][0]
     assert entry["color"] == [1.0, 1.0, 0.0] and entry["intensity"] == 0.0
+
+
+def test_shapes_differing_only_in_shininess_keep_their_own_roughness(tmp_path):
+    triangle = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    scene = sg.Scene(
+        shapes=[
+            sg.Shape(triangle, [[0, 1, 2]], name="dull", material=sg.Material(shininess=0.25)),
+            sg.Shape(triangle, [[0, 1, 2]], name="shiny", material=sg.Material(shininess=0.75)),
+        ]
+    )
+    sg.save(scene, tmp_path / "two.glb")
+    back = sg.load(tmp_path / "two.glb")
+    assert [shape.material.shininess for shape in back.shapes] == [0.25, 0.75]

@@ -159,13 +159,21 @@ class _Builder:
     def material(self, shape: Shape) -> int:
         look = shape.material
         alpha = _unit_float(1.0 - float(look.transparency))
-        key = (tuple(look.diffuse_color), tuple(look.emissive_color), alpha, shape.solid, look.name)
+        roughness = _unit_float(1.0 - look.shininess)
+        key = (
+            tuple(look.diffuse_color),
+            tuple(look.emissive_color),
+            alpha,
+            roughness,
+            shape.solid,
+            look.name,
+        )
         if key not in self.materials:
             material = {
                 "pbrMetallicRoughness": {
                     "baseColorFactor": [*(_unit_float(c) for c in look.diffuse_color), alpha],
                     "metallicFactor": 0.0,
-                    "roughnessFactor": _unit_float(1.0 - look.shininess),
+                    "roughnessFactor": roughness,
                 },
                 "doubleSided": not shape.solid,
             }
