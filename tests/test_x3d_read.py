@@ -3,6 +3,8 @@ and the real files of the shared corpus."""
 
 from __future__ import annotations
 
+import base64
+import json
 import math
 from pathlib import Path
 
@@ -547,6 +549,37 @@ def test_inline_x3d_and_gltf(tmp_path):
     assert light.name == "Inside"
     np.testing.assert_allclose(light.light.position, [10, 0, 0])
     assert not scene.warnings
+
+
+def _triangle_gltf(**material) -> dict:
+    positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4").tobytes()
+    return {
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,"
+                     + base64.b64encode(positions).decode()}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}],
+        "materials": [material],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+        "nodes": [{"mesh": 0, "name": "leaf"}],
+        "scenes": [{"nodes": [0]}],
+    }  # fmt: skip
+
+
+def test_inlined_gltf_is_read_by_the_gltf_reader(tmp_path):
+    colour = {"baseColorFactor": [0.25, 0.5, 0.75, 1.0]}
+    leaf = _triangle_gltf(pbrMetallicRoughness=colour, doubleSided=True)
+    (tmp_path / "leaf.gltf").write_text(json.dumps(leaf))
+    (shape,) = scene_of(tmp_path, "<Inline url='\"leaf.gltf\"'/>").shapes
+    assert shape.name == "leaf"
+    assert shape.material.diffuse_color == (0.25, 0.5, 0.75)  # not rounded to 8 bits
+    assert shape.solid is False  # doubleSided
+    packed = _triangle_gltf()
+    packed["extensionsUsed"] = packed["extensionsRequired"] = ["EXT_meshopt_compression"]
+    (tmp_path / "packed.gltf").write_text(json.dumps(packed))
+    with pytest.raises(sg.SceneError, match=r"packed\.gltf.*EXT_meshopt_compression"):
+        scene_of(tmp_path, "<Inline url='\"packed.gltf\"'/>")
 
 
 # -- the defaults table ------------------------------------------------------------------

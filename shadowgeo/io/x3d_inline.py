@@ -4,8 +4,8 @@ Each ``url`` is tried in order. Remote URLs (any ``scheme:``) are never
 fetched; a relative path is taken from the inlining file's folder and must
 stay inside the top scene's folder (else SceneError); the first that exists is
 read. X3D is read with the same rules as the scene (its own DEF names); glTF
-and GLB go through trimesh. An Inline that includes itself, directly or not,
-is a SceneError.
+and GLB with the glTF reader (:mod:`.meshes`), lights left out (with a
+warning). An Inline that includes itself, directly or not, is a SceneError.
 """
 
 from __future__ import annotations
@@ -16,8 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene import Material
-from . import x3d_parse
+from . import meshes, x3d_parse
 from .x3d_fields import Context
 from .x3d_geometry import Instance, Mesh
 
@@ -81,15 +80,13 @@ def _gltf_uris(path: Path) -> list[str]:
     try:
         document = json.loads(data)
     except ValueError:
-        return []  # trimesh will say what is wrong with it
+        return []  # the glTF reader will say what is wrong with it
     items = [*document.get("buffers", []), *document.get("images", [])]
     uris = [item.get("uri") for item in items if isinstance(item, dict)]
     return [uri for uri in uris if isinstance(uri, str) and not uri.startswith("data:")]
 
 
 def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
-    import trimesh
-
     for uri in _gltf_uris(path):
         target = (path.parent / uri).resolve()
         if URL_SCHEME.match(uri) or not target.is_relative_to(reader.root_folder):
@@ -97,26 +94,20 @@ def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, nam
                 element,
                 f"glTF '{path.name}' refers to '{uri}', outside the scene's folder; refused",
             )
-    try:
-        loaded = trimesh.load(str(path), force="scene")
-    except Exception as problem:  # trimesh raises many types on bad files
-        raise context.error(element, f"cannot read glTF '{path.name}': {problem}") from None
-    for node_name in loaded.graph.nodes_geometry:
-        transform, geometry_name = loaded.graph[node_name]
-        mesh = loaded.geometry[geometry_name]
-        if not hasattr(mesh, "faces") or len(mesh.faces) == 0:
+    # the glTF reader's own checks (compression, quantized positions, ...) and materials
+    loaded = meshes.read(path)
+    reader.warnings.extend(loaded.warnings)
+    if loaded.lights:
+        context.warn(element, f"{len(loaded.lights)} light(s) of '{path.name}' not read")
+    for shape in loaded.shapes:
+        if shape.n_faces == 0:
             continue
-        color = (0.8, 0.8, 0.8)
-        visual_material = getattr(getattr(mesh, "visual", None), "material", None)
-        base = getattr(visual_material, "baseColorFactor", None)
-        if base is not None:
-            color = tuple(float(c) / (255.0 if np.max(base) > 1 else 1.0) for c in base[:3])
         reader.instances.append(
             Instance(
-                Mesh(np.asarray(mesh.vertices, float), np.asarray(mesh.faces, np.int64)),
-                matrix @ np.asarray(transform, float),
-                Material(diffuse_color=color),
-                str(node_name) or name,
-                f"{path.name}, glTF node '{node_name}'",
+                Mesh(shape.vertices, shape.faces, shape.solid),
+                matrix @ shape.transform,
+                shape.material,
+                shape.name or name,
+                shape.source or path.name,
             )
         )
