@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from manifold3d import triangulate
 
+from ..plane import Plane
 from ..scene import primitives
 from .x3d_extrusion import extrusion
 from .x3d_fields import Context, local_name
@@ -203,11 +204,7 @@ def polygon_triangles(points: np.ndarray) -> np.ndarray:
     length = float(np.linalg.norm(normal))
     if length == 0.0 or not np.isfinite(length):
         return np.zeros((0, 3), dtype=np.int64)
-    normal /= length
-    helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
-    u = np.cross(helper, normal)
-    u /= np.linalg.norm(u)
-    v = np.cross(normal, u)  # (u, v, normal) right-handed: the polygon runs CCW in (u, v)
+    u, v = Plane(normal).basis  # u x v = normal: the polygon runs CCW in (u, v)
     centred = points - points.mean(axis=0)
     flat = np.column_stack([centred @ u, centred @ v])
     return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)
@@ -263,7 +260,7 @@ def _indexed_quad_set(context: Context, element) -> Mesh:
     index = _checked(context, element, "index", context.field(element, "index"), len(points))
     notes = [f"{len(index) % 4} trailing index value(s) ignored"] if len(index) % 4 else []
     quads = index[: len(index) // 4 * 4].reshape(-1, 4)
-    return Mesh(points, _quads_to_triangles(quads).reshape(-1, 3), notes=notes)
+    return Mesh(points, _quads_to_triangles(quads), notes=notes)
 
 
 def _quad_set(context: Context, element) -> Mesh:
@@ -271,7 +268,7 @@ def _quad_set(context: Context, element) -> Mesh:
     count = len(points) // 4 * 4
     notes = [f"{len(points) - count} trailing point(s) ignored"] if len(points) - count else []
     quads = np.arange(count, dtype=np.int64).reshape(-1, 4)
-    return Mesh(points, _quads_to_triangles(quads).reshape(-1, 3), notes=notes)
+    return Mesh(points, _quads_to_triangles(quads), notes=notes)
 
 
 def _fans(runs: list[np.ndarray]) -> np.ndarray:
