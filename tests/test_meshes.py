@@ -11,6 +11,7 @@ import pytest
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from validators import one_triangle_gltf
 
 import shadowgeo as sg
 
@@ -306,34 +307,9 @@ def test_gltf_writer_refuses_a_scale_that_is_not_positive(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def _one_triangle_gltf() -> dict:
-    """A valid glTF with one triangle on node 0, built by hand from the spec."""
-    positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4").tobytes()
-    uri = "data:application/octet-stream;base64," + base64.b64encode(positions).decode()
-    return {
-        "asset": {"version": "2.0"},
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"name": "tri", "mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
-        "buffers": [{"byteLength": len(positions), "uri": uri}],
-        "bufferViews": [{"buffer": 0, "byteLength": len(positions)}],
-        "accessors": [
-            {
-                "bufferView": 0,
-                "componentType": 5126,
-                "count": 3,
-                "type": "VEC3",
-                "min": [0, 0, 0],
-                "max": [1, 1, 0],
-            }
-        ],
-    }
-
-
 def test_hand_written_gltf_reads(tmp_path):
     path = tmp_path / "tri.gltf"
-    path.write_text(json.dumps(_one_triangle_gltf()))
+    path.write_text(json.dumps(one_triangle_gltf()))
     (shape,) = sg.load(path).shapes
     assert shape.name == "tri"
     np.testing.assert_array_equal(_triangles(shape)[0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]])
@@ -375,7 +351,7 @@ def _hostile(document: dict, change: str) -> dict:
 )
 def test_hostile_gltf_gives_a_scene_error_or_reads(tmp_path, change, error):
     path = tmp_path / "hostile.gltf"
-    path.write_text(json.dumps(_hostile(_one_triangle_gltf(), change)))
+    path.write_text(json.dumps(_hostile(one_triangle_gltf(), change)))
     if error is None:
         scene = sg.load(path)
         assert [s.role for s in scene.shapes] == ["geometry"]
@@ -412,7 +388,7 @@ def test_a_shape_without_triangles_keeps_its_place(tmp_path, suffix):
 
 
 def test_external_buffer_in_the_folder_is_read(tmp_path):
-    document = _one_triangle_gltf()
+    document = one_triangle_gltf()
     uri = document["buffers"][0]["uri"]
     (tmp_path / "bin").mkdir()
     (tmp_path / "bin" / "tri data.bin").write_bytes(base64.b64decode(uri.split(",", 1)[1]))
@@ -435,7 +411,7 @@ def test_duplicate_names_with_braces_survive(tmp_path, suffix):
 
 
 def test_a_missing_texture_is_a_warning_not_an_error(tmp_path):
-    document = _one_triangle_gltf()
+    document = one_triangle_gltf()
     document["images"] = [{"uri": "textures/brick%20wall.png"}]
     document["samplers"] = [{}]
     document["textures"] = [{"source": 0, "sampler": 0}]
@@ -464,7 +440,7 @@ def test_a_missing_texture_is_a_warning_not_an_error(tmp_path):
 
 
 def test_a_mesh_of_two_primitives_gives_two_shapes_on_one_node(tmp_path):
-    document = _one_triangle_gltf()
+    document = one_triangle_gltf()
     document["nodes"][0]["translation"] = [0, 0, 5]
     primitive = document["meshes"][0]["primitives"][0]
     indices = np.array([0, 2, 1], dtype="<u2").tobytes() + b"\0\0"
@@ -505,7 +481,7 @@ def test_compressed_geometry_trimesh_cannot_decode_is_refused(tmp_path, extensio
             pytest.skip("DracoPy is installed: trimesh decodes Draco")
         except ImportError:
             pass
-    document = _one_triangle_gltf()
+    document = one_triangle_gltf()
     document["extensionsUsed"] = [extension]
     document["extensionsRequired"] = [extension]
     path = tmp_path / "packed.gltf"
@@ -516,7 +492,7 @@ def test_compressed_geometry_trimesh_cannot_decode_is_refused(tmp_path, extensio
 
 def test_normalized_integer_positions_are_refused(tmp_path):
     # KHR_mesh_quantization allows them; trimesh would read the raw integers.
-    document = _one_triangle_gltf()
+    document = one_triangle_gltf()
     positions = np.array([[0, 0, 0], [127, 0, 0], [0, 127, 0]], dtype="<i1")
     raw = np.zeros((3, 4), dtype="<i1")
     raw[:, :3] = positions  # each element padded to 4 bytes, as the spec requires

@@ -8,6 +8,8 @@ Import from any test::
 through node and ``tests/node/validate_gltf.mjs``) and returns its report;
 ``gltf_reports(paths)`` does many files in one run of node;
 ``gltf_problems(report)`` lists its errors (and warnings, if asked) as lines.
+``one_triangle_gltf()`` is a minimal valid glTF document written by hand
+from the spec, for tests that validate, read or break it.
 ``usd_errors(path)`` runs every validator usd-core registers
 (``pxr.UsdValidation``; ``UsdUtils.ComplianceChecker`` on usd-core older than
 24.11) and returns the errors as lines. Each skips the calling test (via
@@ -16,8 +18,10 @@ through node and ``tests/node/validate_gltf.mjs``) and returns its report;
 
 from __future__ import annotations
 
+import base64
 import json
 import shutil
+import struct
 import subprocess
 from pathlib import Path
 
@@ -25,6 +29,34 @@ import pytest
 
 NODE_DIR = Path(__file__).resolve().parent / "node"
 GLTF_SCRIPT = NODE_DIR / "validate_gltf.mjs"
+
+
+def one_triangle_gltf(accessor_count: int = 3) -> dict:
+    """A valid glTF with one triangle on node 0 (named ``tri``) and the
+    buffer embedded; an ``accessor_count`` other than 3 makes the POSITION
+    accessor read past its buffer view, which the validator must report."""
+    positions = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
+    uri = "data:application/octet-stream;base64," + base64.b64encode(positions).decode()
+    return {
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"name": "tri", "mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"byteLength": len(positions), "uri": uri}],
+        "bufferViews": [{"buffer": 0, "byteLength": len(positions), "target": 34962}],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": accessor_count,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            }
+        ],
+    }
+
 
 # Severities in the Khronos validator's report.
 GLTF_ERROR, GLTF_WARNING, GLTF_INFO, GLTF_HINT = 0, 1, 2, 3
