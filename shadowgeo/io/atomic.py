@@ -32,9 +32,8 @@ def atomic_path(path, suffix: str | None = None) -> Iterator[Path]:
     'done'
     """
     path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
     handle, name = tempfile.mkstemp(
-        prefix=f".{path.name}.", suffix=path.suffix if suffix is None else suffix, dir=folder
+        prefix=f".{path.name}.", suffix=path.suffix if suffix is None else suffix, dir=path.parent
     )
     os.close(handle)
     temporary = Path(name)
