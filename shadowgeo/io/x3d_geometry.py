@@ -252,7 +252,8 @@ def _triangle_set(context: Context, element) -> Mesh:
 
 
 def _quads_to_triangles(quads: np.ndarray) -> np.ndarray:
-    return np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]) if len(quads) else quads
+    """(m, 4) quads to (2m, 3) triangles, (0, 3) for none."""
+    return np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
 
 
 def _indexed_quad_set(context: Context, element) -> Mesh:
