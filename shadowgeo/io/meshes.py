@@ -336,11 +336,10 @@ def read(path, **options) -> Scene:
     loaded = _load(path, data)
     scene = Scene(path=str(path), warnings=warnings)
     nodes = document.get("nodes") or []
-    graph = loaded.graph
     try:
         _read_shapes(scene, loaded, path, frames, nodes, document)
         if is_gltf:
-            _read_lights(scene, graph, frames, nodes, document)
+            _read_lights(scene, loaded.graph, frames, nodes, document)
     except (TypeError, ValueError, KeyError, IndexError, AttributeError) as error:
         if isinstance(error, SceneError):
             raise
@@ -361,8 +360,9 @@ def _node_index(graph, frame: str, frames: dict[str, int]) -> int | None:
 
 def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
     graph = loaded.graph
+    indices = {frame: _node_index(graph, frame, frames) for frame in graph.nodes_geometry}
     # In the file's node order (trimesh's graph order is not).
-    order = sorted(graph.nodes_geometry, key=lambda f: (_node_index(graph, f, frames) or 0, f))
+    order = sorted(indices, key=lambda frame: (indices[frame] or 0, frame))
     keys: list[int] = []
     for frame in order:
         transform, geometry_name = graph[frame]
@@ -370,7 +370,7 @@ def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
         if not isinstance(geometry, trimesh.Trimesh):
             scene.warnings.append(f"{path.name}: skipped {frame!r}: {type(geometry).__name__}")
             continue
-        index = _node_index(graph, frame, frames)
+        index = indices[frame]
         node = nodes[index] if index is not None else {}
         extras = _shadowgeo_extras(node)
         material, solid = _material_from_trimesh(geometry)
