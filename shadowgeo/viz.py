@@ -85,12 +85,17 @@ def _collect(things, role: str, items: list[_Item], lights: list) -> None:
         )
 
 
+def _bare(light):
+    """The PointLight, SpotLight or DirectionalLight, unwrapped from a SceneLight."""
+    return light.light if isinstance(light, SceneLight) else light
+
+
 def _unique_lights(lights: list) -> list:
     """``lights`` without repeats: a scene's light and the same light carried by
     a Shadow of it are drawn and lit once (the scene's, with its colour)."""
     seen, unique = set(), []
     for light in sorted(lights, key=lambda light: not isinstance(light, SceneLight)):
-        geometry = light.light if isinstance(light, SceneLight) else light
+        geometry = _bare(light)
         # Position and direction both: two spots at one place may aim different ways.
         where = [getattr(geometry, name, ()) for name in ("position", "direction")]
         key = (type(geometry).__name__, *np.round(np.concatenate(where), 12).tolist())
@@ -111,7 +116,8 @@ def _bounds(items: list[_Item], lights: list) -> tuple[np.ndarray, float]:
     """Centre and diagonal of the drawn geometry (lights excluded unless alone)."""
     points = [item.vertices for item in items if len(item.vertices)]
     if not points:
-        points = [np.array([light.position]) for light in lights if hasattr(light, "position")]
+        positions = [_bare(light) for light in lights]
+        points = [np.array([light.position]) for light in positions if hasattr(light, "position")]
     if not points:
         return np.zeros(3), 1.0
     stacked = np.concatenate(points)
@@ -149,7 +155,7 @@ def _vtk_light(scene_light, center: np.ndarray, scale: float):
     """A pyvista light matching a shadowgeo light (or a scene light)."""
     import pyvista as pv
 
-    light = scene_light.light if isinstance(scene_light, SceneLight) else scene_light
+    light = _bare(scene_light)
     intensity = scene_light.intensity if isinstance(scene_light, SceneLight) else 1.0
     color = scene_light.color if isinstance(scene_light, SceneLight) else (1.0, 1.0, 1.0)
     if isinstance(light, DirectionalLight):
@@ -296,9 +302,7 @@ def scene_plotter(
             )
     glyph_lights = []
     if lights is not False:
-        glyph_lights = [
-            light.light if isinstance(light, SceneLight) else light for light in scene_lights
-        ]
+        glyph_lights = [_bare(light) for light in scene_lights]
         for light in glyph_lights:
             glyph = _light_glyph(light, center, 0.02 * scale)
             plotter.add_mesh(glyph, color=LIGHT_COLOR, lighting=False)

@@ -386,3 +386,15 @@ def test_two_spots_at_one_place_aiming_apart_are_both_lit():
         assert len([light for light in plotter.renderer.lights if not light.is_headlight]) == 2
     finally:
         plotter.close()
+
+
+def test_a_scene_of_lights_alone_is_centred_on_its_positional_lights():
+    lamp, sun = sg.PointLight([10.0, 10.0, 10.0]), sg.DirectionalLight([0, -1, 0])
+    scene = sg.Scene([], [sg.SceneLight(lamp), sg.SceneLight(sun)])
+    plotter = viz.scene_plotter(scene, off_screen=True, window_size=SIZE)
+    try:
+        lights = [light for light in plotter.renderer.lights if not light.is_headlight]
+        (sunlight,) = [light for light in lights if not light.positional]
+        np.testing.assert_allclose(sunlight.focal_point, lamp.position)  # lit towards the centre
+    finally:
+        plotter.close()
