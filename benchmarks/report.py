@@ -35,6 +35,7 @@ import shadowmap  # noqa: E402
 from common import median_time  # noqa: E402
 
 import shadowgeo as sg  # noqa: E402
+from shadowgeo import polygons  # noqa: E402
 
 GROUND = sg.Plane([0, 1, 0], 0)
 
@@ -70,14 +71,13 @@ def pyramid():
 
 
 def corpus_scene():
-    """Casters of a real scene from ../shared/corpus, if the reader and the
-    corpus are there: (name, mesh) or None."""
+    """Casters of a real scene from ../shared/corpus, if the corpus is there:
+    (name, mesh) or None."""
     path = HERE.parents[1] / "shared" / "corpus" / "castle-demo-models" / "x3d" / "car" / "car.x3d"
-    load = getattr(sg, "load", None)
-    if load is None or not path.exists():
+    if not path.exists():
         return None
     try:
-        scene = load(path)
+        scene = sg.load(path)
     except Exception as error:  # noqa: BLE001 - the report says why it skipped
         print(f"corpus scene skipped: {error}", file=sys.stderr)
         return None
@@ -98,18 +98,9 @@ def corpus_scene():
 
 
 def to_shapely_cross_section(section):
-    parts = []
-    for part in section.decompose():
-        loops = [np.asarray(p) for p in part.to_polygons()]
-        areas = [shapely.Polygon(loop).area * (1 if _ccw(loop) else -1) for loop in loops]
-        order = np.argsort(areas)[::-1]
-        parts.append(shapely.Polygon(loops[order[0]], [loops[i] for i in order[1:]]))
+    """A manifold3d CrossSection as shapely, its parts outer loop first."""
+    parts = [shapely.Polygon(outer, holes) for outer, *holes in polygons.components(section)]
     return shapely.MultiPolygon(parts) if parts else shapely.MultiPolygon()
-
-
-def _ccw(loop):
-    x, y = loop[:, 0], loop[:, 1]
-    return np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) > 0
 
 
 def project_uv(points, light):
@@ -681,8 +672,8 @@ def main() -> None:
         )
     else:
         corpus_note = (
-            "The real-scene row is missing: `../shared/corpus` (or its X3D reader) was not "
-            "available where this report was generated."
+            "The real-scene row is missing: `../shared/corpus` was not available where this "
+            "report was generated."
         )
     method = []
     for name, mesh, light, reference in scenes:
