@@ -36,10 +36,15 @@ def _turn(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     return rotation_matrix(np.append(axis, np.arctan2(sine, cosine)))
 
 
+def _is_closed(spine: np.ndarray) -> bool:
+    """A spine of more than two points that ends where it starts."""
+    return len(spine) > 2 and bool(np.allclose(spine[0], spine[-1]))
+
+
 def frames(spine: np.ndarray) -> np.ndarray:
     """(n, 3, 3) SCP axes per spine point: columns X, Y, Z (world)."""
     n = len(spine)
-    closed = n > 2 and np.allclose(spine[0], spine[-1])
+    closed = _is_closed(spine)
     ys, zs = [], []
     for i in range(n):
         if closed and i in (0, n - 1):
@@ -111,15 +116,13 @@ def extrusion(context: Context, element, polygon_triangles) -> tuple[np.ndarray,
     a = (i * m + j).ravel()
     # (i, j), (i, j+1), (i+1, j+1), (i+1, j): outward for the default box
     faces = [np.column_stack([a, a + 1, a + m + 1]), np.column_stack([a, a + m + 1, a + m])]
-    closed_spine = len(spine) > 2 and np.allclose(spine[0], spine[-1])
+    closed_spine = _is_closed(spine)
     ring = np.arange(m - 1 if np.allclose(section[0], section[-1]) else m)
     if len(ring) >= 3 and not closed_spine:
-        convex = context.field(element, "convex")
-        cap = polygon_triangles(flat[ring]) if not convex else None
-        if cap is None:
+        if context.field(element, "convex"):
             cap = np.column_stack([np.zeros(len(ring) - 2, int), ring[1:-1], ring[2:]])
         else:
-            cap = ring[cap]
+            cap = ring[polygon_triangles(flat[ring])]
         # the section as written faces +Y of its SCP: the end cap as is, the begin cap turned
         if context.field(element, "endCap"):
             faces.append(cap + (len(spine) - 1) * m)
