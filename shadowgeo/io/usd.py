@@ -121,10 +121,8 @@ class _Writer:
             if shape.role != "geometry" or shape.group:
                 parent = self._group(shape)
             path = self.names.child(parent, shape.name, f"Shape_{index}")
-            self._mesh(shape, path)
             # Group Xforms change the traversal order; keep the scene's.
-            prim = self.stage.GetPrimAtPath(path)
-            _custom(prim, "index", Sdf.ValueTypeNames.Int, index)
+            _custom(self._mesh(shape, path), "index", Sdf.ValueTypeNames.Int, index)
 
     def _group(self, shape: Shape) -> str:
         """The Xform holding a light group's shadows; unnamed groups (one per
@@ -141,7 +139,8 @@ class _Writer:
             self.groups[key] = path
         return self.groups[key]
 
-    def _mesh(self, shape: Shape, path: str) -> None:
+    def _mesh(self, shape: Shape, path: str):
+        """Define the shape's Mesh prim at ``path`` and return the prim."""
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
         vertices = np.ascontiguousarray(shape.vertices, dtype=np.float64)
         faces = np.asarray(shape.faces, dtype=np.int64)
@@ -186,6 +185,7 @@ class _Writer:
             Vt.FloatArray([1.0 - look.transparency])
         )
         UsdShade.MaterialBindingAPI.Apply(prim).Bind(self._look(look))
+        return prim
 
     def _look(self, look: Material):
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
