@@ -68,6 +68,11 @@ class Primitive:
     radius: float
     solid: bool = True
 
+    @property
+    def key(self) -> tuple:
+        """Equal for equal primitives (which share one tessellation)."""
+        return (self.kind, tuple(sorted(self.parameters.items())))
+
     def tessellate(self, chord: float) -> Mesh:
         if self.kind == "Box":
             vertices, faces = primitives.box(**self.parameters)

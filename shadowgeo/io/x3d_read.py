@@ -176,7 +176,7 @@ class _Reader:
             if light is not None:
                 self.lights.append(light)
         elif tag == "Inline":
-            self.inline(context, element, matrix, name)
+            load_inline(self, context, element, matrix, name)
         elif tag in SILENT or tag.startswith("Metadata"):
             pass
         else:
@@ -248,9 +248,6 @@ class _Reader:
             else:
                 self._skip(context, texture, local_name(texture), "textures not modelled")
 
-    def inline(self, context: Context, element, matrix, name):
-        load_inline(self, context, element, matrix, name)
-
     # -- result ------------------------------------------------------------------
     def finish(self, scene: Scene, tolerance: Tolerance | None, chord: float | None) -> None:
         for (_, why), (where, count) in self.skipped.items():
@@ -264,8 +261,7 @@ class _Reader:
                 stretch = float(np.linalg.norm(instance.transform[:3, :3], 2)) or 1.0
                 local_chord = tolerance.chord_length / stretch
                 # equal primitives share one tessellation (and its arrays)
-                parameters = tuple(sorted(built.parameters.items()))
-                key = (built.kind, parameters, None if built.kind == "Box" else local_chord)
+                key = (built.key, None if built.kind == "Box" else local_chord)
                 if key not in tessellated:
                     tessellated[key] = built.tessellate(local_chord)
                     for note in tessellated[key].notes:
@@ -296,10 +292,9 @@ class _Reader:
         for instance in self.instances:
             built, transform = instance.geometry, instance.transform
             if isinstance(built, Primitive):
-                key = (built.kind, tuple(sorted(built.parameters.items())))
-                if key not in coarse:
-                    coarse[key] = built.tessellate(0.01 * built.radius).vertices
-                local = coarse[key]
+                if built.key not in coarse:
+                    coarse[built.key] = built.tessellate(0.01 * built.radius).vertices
+                local = coarse[built.key]
             else:
                 local = built.vertices
             points.append(local @ transform[:3, :3].T + transform[:3, 3])
