@@ -327,3 +327,20 @@ def test_shapes_differing_only_in_shininess_keep_their_own_roughness(tmp_path):
     sg.save(scene, tmp_path / "two.glb")
     back = sg.load(tmp_path / "two.glb")
     assert [shape.material.shininess for shape in back.shapes] == [0.25, 0.75]
+
+
+@pytest.mark.parametrize(
+    ("vertices", "faces", "message"),
+    [
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, -1]], "vertex -1 of 3"),
+        (np.zeros((0, 3)), [[0, 1, 2]], "vertex 0 of 0"),  # not silently dropped
+    ],
+)
+@pytest.mark.parametrize("suffix", [".glb", ".usda"])
+def test_writers_name_the_face_index_that_has_no_vertex(tmp_path, vertices, faces, message, suffix):
+    if suffix == ".usda":
+        pytest.importorskip("pxr")
+    shape = sg.Shape(vertices, faces, name="bad")
+    with pytest.raises(sg.SceneError, match=rf"'bad'.*{message}"):
+        sg.save(sg.Scene(shapes=[shape]), tmp_path / f"bad{suffix}")
+    assert list(tmp_path.iterdir()) == []

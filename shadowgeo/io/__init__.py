@@ -27,7 +27,7 @@ import math
 from pathlib import Path
 
 from ..errors import SceneError
-from ..scene import Scene
+from ..scene import Scene, Shape
 
 READERS = {
     ".x3d": "x3d_read",
@@ -78,6 +78,17 @@ def up_and_units(scene: Scene) -> tuple[str, float]:
     if not (math.isfinite(meters) and meters > 0):
         raise SceneError(f"metersPerUnit must be > 0, got {scene.meters_per_unit!r}")
     return up, meters
+
+
+def check_face_indices(shape: Shape) -> None:
+    """SceneError naming the first face index that is not one of the shape's
+    vertices (negative or too large), for the writers."""
+    outside = (shape.faces < 0) | (shape.faces >= len(shape.vertices))
+    if outside.any():
+        raise SceneError(
+            f"faces index vertex {int(shape.faces[outside][0])} of {len(shape.vertices)}",
+            node=f"shape {shape.name!r}",
+        )
 
 
 def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: str) -> None:

@@ -44,7 +44,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
-from . import up_and_units
+from . import check_face_indices, up_and_units
 from .atomic import atomic_path
 
 _ARRAY_BUFFER = 34962
@@ -191,14 +191,10 @@ class _Builder:
     def mesh(self, shape: Shape, vertices: np.ndarray) -> int | None:
         """A one-primitive mesh for ``vertices`` (n, 3) and the shape's faces;
         None when there is nothing to draw (glTF forbids empty accessors)."""
-        if len(shape.faces) == 0 or len(vertices) == 0:
+        check_face_indices(shape)
+        if len(shape.faces) == 0:
             return None
         used = np.unique(shape.faces)
-        if used[0] < 0 or used[-1] >= len(vertices):
-            raise SceneError(
-                f"faces index vertex {int(used[-1])} of {len(vertices)}",
-                node=f"shape {shape.name!r}",
-            )
         # Only the vertices the faces use: glTF's validator flags unused ones.
         remap = np.zeros(len(vertices), dtype=np.int64)
         remap[used] = np.arange(len(used))

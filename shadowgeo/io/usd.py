@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, Shape
-from . import up_and_units
+from . import check_face_indices, up_and_units
 from .atomic import atomic_path
 from .gltf import look_rotation
 from .usd_read import _pxr, read
@@ -146,11 +146,7 @@ class _Writer:
         faces = np.asarray(shape.faces, dtype=np.int64)
         if not np.all(np.isfinite(vertices)) or not np.all(np.isfinite(shape.transform)):
             raise SceneError("non-finite vertex or transform", node=f"shape {shape.name!r}")
-        if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
-            raise SceneError(
-                f"faces index vertex {int(faces.max())} of {len(vertices)}",
-                node=f"shape {shape.name!r}",
-            )
+        check_face_indices(shape)
         mesh = UsdGeom.Mesh.Define(self.stage, path)
         prim = mesh.GetPrim()
         if shape.name:
