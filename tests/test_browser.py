@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from reference import ray_plane
 
 ROOT = Path(__file__).resolve().parents[1]
 X_ITE = ROOT / "tests" / "node" / "node_modules" / "x_ite" / "dist"
@@ -93,8 +94,7 @@ def reference_shadow():
     """shapely Polygon of the box's shadow on y = 0, in (x, z)."""
     shapely = pytest.importorskip("shapely")
     corners = np.array([[x, y, z] for x in BOX[:, 0] for y in BOX[:, 1] for z in BOX[:, 2]])
-    t = LIGHT[1] / (LIGHT[1] - corners[:, 1])  # the ray light -> corner reaches y = 0 at t
-    landed = LIGHT + t[:, None] * (corners - LIGHT)
+    landed = ray_plane(corners, LIGHT, np.array([0.0, 1.0, 0.0]), 0.0)
     return shapely.MultiPoint(landed[:, [0, 2]]).convex_hull
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from reference import ray_plane
 from scipy.spatial import ConvexHull
 
 import shadowgeo as sg
@@ -75,11 +76,7 @@ def reference_shadow_xz():
     corners = np.array(
         [[x, y, z] for x in (-0.5, 0.5) for y in (1.5, 2.5) for z in (-0.5, 0.5)], dtype=float
     )
-    # A corner at height y lands where the ray from the light reaches y = 0:
-    # t = Ly / (Ly - y) along light -> corner.
-    t = LIGHT[1] / (LIGHT[1] - corners[:, 1])
-    landed = LIGHT + t[:, None] * (corners - LIGHT)
-    xz = landed[:, [0, 2]]
+    xz = ray_plane(corners, LIGHT, np.array([0.0, 1.0, 0.0]), 0.0)[:, [0, 2]]
     return xz[ConvexHull(xz).vertices]
 
 
