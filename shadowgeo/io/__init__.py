@@ -3,21 +3,22 @@ not the shadow algorithms.
 
 :func:`load` and :func:`save` pick the module from the file's extension:
 
-============================  ===========================  =======================
-extension                     read                         write
-============================  ===========================  =======================
-``.x3d``, ``.x3dz``           :mod:`.x3d_read`             :mod:`.x3d_write`
-``.glb``, ``.gltf``           :mod:`.meshes` (trimesh)     :mod:`.gltf`
-``.usda``, ``.usdc``, ``.usd``  :mod:`.usd`                 :mod:`.usd`
-``.obj``, ``.stl``, ``.ply``,  :mod:`.meshes` (trimesh)     --
+================================  ==========================  ==================
+extension                         read                        write
+================================  ==========================  ==================
+``.x3d``, ``.x3dz``               :mod:`.x3d_read`            :mod:`.x3d_write`
+``.glb``, ``.gltf``               :mod:`.meshes` (trimesh)    :mod:`.gltf`
+``.usda``, ``.usdc``, ``.usd``    :mod:`.usd`                 :mod:`.usd`
+``.obj``, ``.stl``, ``.ply``,     :mod:`.meshes` (trimesh)    --
 ``.off``
-============================  ===========================  =======================
+================================  ==========================  ==================
 
 Each module provides ``read(path, **options) -> Scene`` and/or
 ``write(scene, path, **options) -> None``; writers go through
-:func:`shadowgeo.io.atomic.atomic_path`, so a failure leaves no partial file;
-readers that follow references to other files check them with
-:func:`refuse_outside`.
+:func:`shadowgeo.io.atomic.atomic_path`, so a failure leaves no partial file.
+Checks more than one format needs live here: :func:`up_and_units` and
+:func:`check_face_indices` for writers, :func:`refuse_outside` for readers
+that follow references to other files.
 """
 
 from __future__ import annotations
