@@ -467,6 +467,20 @@ def test_prototype_inside_itself_is_refused(tmp_path):
         scene_of(tmp_path, PROTOS + '<ProtoInstance name="Loop"/>')
 
 
+def test_def_given_again_in_a_prototype_and_in_the_scene(tmp_path):
+    body = (
+        '<ProtoDeclare name="Pair"><ProtoBody><Group>'
+        '<Transform DEF="A" translation="1 0 0"><Shape><Box/></Shape></Transform>'
+        '<Transform DEF="A" translation="2 0 0"><Shape><Box/></Shape></Transform>'
+        '<Transform USE="A"/></Group></ProtoBody></ProtoDeclare>'
+        '<Transform DEF="B"><Shape><Box/></Shape></Transform>'
+        '<Transform DEF="B" translation="9 0 0"/><Transform USE="B"/><ProtoInstance name="Pair"/>'
+    )
+    # each tree (the document, the prototype's copy) is ordered on its own
+    centres = [shape.world_vertices.mean(axis=0)[0] for shape in scene_of(tmp_path, body).shapes]
+    assert centres == pytest.approx([0, 1, 2, 2])  # the USE takes the later DEF
+
+
 def test_corpus_prototype_of_a_material(corpus_dir):
     scene = sg.load(corpus_dir / "x3d" / "proto_of_material.x3d")
     (shape,) = scene.shapes

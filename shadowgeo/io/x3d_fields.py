@@ -57,7 +57,7 @@ class Context:
     angle_factor: float = 1.0
     warnings: list[str] = field(default_factory=list)
     defs: dict = field(default_factory=dict)  # DEF name -> [elements, in document order]
-    _order: dict | None = None
+    _order: dict = field(default_factory=dict)  # element -> index in its own tree
     prototypes: object = None  # x3d_proto.Prototypes of the document
 
     def definition(self, element):
@@ -66,9 +66,11 @@ class Context:
         found = self.defs.get(element.get("USE"), [])
         if len(found) < 2:
             return found[0] if found else None
-        if self._order is None:
+        # a prototype copy is a tree of its own (its names are its own, so the
+        # DEFs found are in the same tree as the USE): index each tree once
+        if element not in self._order:
             root = element.getroottree().getroot()
-            self._order = {node: index for index, node in enumerate(root.iter())}
+            self._order.update((node, index) for index, node in enumerate(root.iter()))
         here = self._order[element]
         before = [node for node in found if self._order[node] < here]
         return before[-1] if before else found[0]
