@@ -20,6 +20,7 @@ from . import meshes, x3d_parse
 from .x3d_fields import Context
 from .x3d_geometry import Instance, Mesh
 
+# A scheme of two letters or more: a Windows drive ("C:/...") is not one.
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 X3D_SUFFIXES = {".x3d", ".x3dz"}
 GLTF_SUFFIXES = {".gltf", ".glb"}
@@ -28,7 +29,7 @@ MAX_INLINE_DEPTH = 16
 
 def resolve_url(reader, context: Context, element, url: str) -> Path | str:
     """The local file ``url`` names, or a string saying why there is none."""
-    if URL_SCHEME.match(url) and not re.match(r"^[A-Za-z]:[\\/]", url):
+    if URL_SCHEME.match(url):
         return f"'{url}' is remote (never fetched)"
     folder = Path(context.path).resolve().parent
     candidate = (folder / url).resolve()
