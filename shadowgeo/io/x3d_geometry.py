@@ -256,17 +256,12 @@ def _triangle_set(context: Context, element) -> Mesh:
     return Mesh(points, np.arange(count, dtype=np.int64).reshape(-1, 3), notes=notes)
 
 
-def _quads_to_triangles(quads: np.ndarray) -> np.ndarray:
-    """(m, 4) quads to (2m, 3) triangles, (0, 3) for none."""
-    return np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
-
-
 def _indexed_quad_set(context: Context, element) -> Mesh:
     points = coordinates(context, element)
     index = _checked(context, element, "index", context.field(element, "index"), len(points))
     notes = [f"{len(index) % 4} trailing index value(s) ignored"] if len(index) % 4 else []
     quads = index[: len(index) // 4 * 4].reshape(-1, 4)
-    return Mesh(points, _quads_to_triangles(quads), notes=notes)
+    return Mesh(points, primitives.quads_to_triangles(quads), notes=notes)
 
 
 def _quad_set(context: Context, element) -> Mesh:
@@ -274,7 +269,7 @@ def _quad_set(context: Context, element) -> Mesh:
     count = len(points) // 4 * 4
     notes = [f"{len(points) - count} trailing point(s) ignored"] if len(points) - count else []
     quads = np.arange(count, dtype=np.int64).reshape(-1, 4)
-    return Mesh(points, _quads_to_triangles(quads), notes=notes)
+    return Mesh(points, primitives.quads_to_triangles(quads), notes=notes)
 
 
 def _fans(runs: list[np.ndarray]) -> np.ndarray:
@@ -339,7 +334,7 @@ def _elevation_grid(context: Context, element) -> Mesh:
     corner = (i[:-1, :-1] + j[:-1, :-1] * nx).ravel()
     # (i, j) -> (i, j+1) -> (i+1, j+1) -> (i+1, j): Z x X = +Y, CCW seen from above
     quads = np.column_stack([corner, corner + nx, corner + nx + 1, corner + 1])
-    return Mesh(vertices, _quads_to_triangles(quads).astype(np.int64))
+    return Mesh(vertices, primitives.quads_to_triangles(quads).astype(np.int64))
 
 
 def _extrusion(context: Context, element) -> Mesh:

@@ -53,8 +53,12 @@ def box(size=(2.0, 2.0, 2.0)) -> tuple[np.ndarray, np.ndarray]:
     quads = np.array(
         [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]]
     )
-    faces = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
-    return signs * half, faces.astype(np.int64)
+    return signs * half, quads_to_triangles(quads).astype(np.int64)
+
+
+def quads_to_triangles(quads: np.ndarray) -> np.ndarray:
+    """(m, 4) quads to (2m, 3) triangles wound as the quads are; (0, 3) for none."""
+    return np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
 
 
 def _ring(radius: float, height: float, count: int) -> np.ndarray:
