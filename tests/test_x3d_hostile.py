@@ -266,6 +266,17 @@ def test_def_use_expansion_bomb_is_refused(tmp_path):
         sg.load(scene(tmp_path, "\n".join(levels)))
 
 
+def test_inline_expansion_bomb_is_refused(tmp_path, monkeypatch):
+    # no document is large, but each inlines the next twice: 2 ** 6 copies of the last
+    monkeypatch.setattr(x3d_read, "MAX_NODES", 50)
+    scene(tmp_path, "<Shape><Box/></Shape>", "level0.x3d")
+    for level in range(1, 7):
+        inline = f"<Inline DEF='next' url='\"level{level - 1}.x3d\"'/><Inline USE='next'/>"
+        scene(tmp_path, inline, f"level{level}.x3d")
+    with pytest.raises(sg.SceneError, match="expands .* to more than 50 nodes"):
+        sg.load(tmp_path / "level6.x3d")
+
+
 def test_invisible_nodes_are_skipped_with_a_warning(tmp_path):
     body = (
         '<Transform visible="false"><Shape><Box/></Shape></Transform>'

@@ -68,8 +68,9 @@ def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name
         raise context.error(element, f"Inline cycle: {path.name} includes itself")
     if len(reader.inline_stack) > MAX_INLINE_DEPTH:
         raise context.error(element, f"Inlines nested more than {MAX_INLINE_DEPTH} deep")
-    tree = x3d_parse.parse(path)
-    reader.document(tree, path, str(path), matrix, name=name)
+    if path not in reader.inline_trees:
+        reader.inline_trees[path] = x3d_parse.parse(path)
+    reader.document(reader.inline_trees[path], path, str(path), matrix, name=name)
 
 
 def _gltf_uris(path: Path) -> list[str]:

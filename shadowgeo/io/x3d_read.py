@@ -30,7 +30,7 @@ Rules the reader follows, where X3D leaves a choice:
   Metadata and WorldInfo are skipped silently.
 - **Refused with a SceneError:** malformed XML, DOCTYPE entity declarations,
   field values of the wrong type, indices out of range, DEF/USE, prototype and
-  Inline cycles, expansion bombs (DEF/USE beyond 2 million nodes, prototypes
+  Inline cycles, expansion bombs (DEF/USE and Inline beyond 2 million nodes, prototypes
   beyond 10,000 copies), Inline and glTF paths that leave the scene's folder.
 """
 
@@ -85,6 +85,8 @@ class _Reader:
         self.inline_stack: list[Path] = []
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
         self.baked: list[str] = []  # DEFs of the enclosing groups of shadows shadowgeo added
+        self.expanded = 0  # nodes the documents read so far expand to, Inlines included
+        self.inline_trees: dict[Path, object] = {}  # each Inline file parsed once
 
     # -- documents ---------------------------------------------------------------
     def document(self, tree, path: Path, display: str, matrix, scene=None, name=None):
@@ -96,9 +98,12 @@ class _Reader:
         scenes = [child for child in root if local_name(child) == "Scene"]
         if not scenes:
             raise SceneError("no <Scene> element", path=display, line=root.sourceline)
-        if _expanded_size(context, scenes[0], {}) > MAX_NODES:
+        # counted over every document read: Inlines used again multiply too
+        self.expanded += _expanded_size(context, scenes[0], {})
+        if self.expanded > MAX_NODES:
             raise context.error(
-                scenes[0], f"the scene expands (through DEF/USE) to more than {MAX_NODES} nodes"
+                scenes[0],
+                f"the scene expands (through DEF/USE and Inline) to more than {MAX_NODES} nodes",
             )
         self.inline_stack.append(path.resolve())
         try:
