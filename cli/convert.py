@@ -155,12 +155,7 @@ def run(args) -> int:
         raise shadowgeo.SceneError(
             "OUT is the input file; it is never overwritten", path=str(target)
         )
-    if target.suffix.lower() not in shadowgeo.io.WRITERS:
-        known = ", ".join(sorted(shadowgeo.io.WRITERS))
-        raise shadowgeo.SceneError(
-            f"cannot write '{target.suffix or 'no extension'}' files (known: {known})",
-            path=str(target),
-        )
+    shadowgeo.io.check_writable(target)  # before the long work
     # The chord only matters for X3D's curved primitives; other readers take no options.
     curved = args.tolerance is not None and source.suffix.lower() in (".x3d", ".x3dz")
     scene = shadowgeo.load(source, **({"chord": args.tolerance} if curved else {}))

@@ -312,3 +312,22 @@ def test_core_profile_gets_the_components_the_shadows_need(tmp_path, x3d_schema)
     ]  # fmt: skip
     assert [child.tag for child in head] == ["component"] * 3 + ["meta"]
     assert x3d_schema_errors(out, x3d_schema) == []
+
+
+@pytest.mark.parametrize(("axis", "scale", "message"), [("X", 1.0, "up axis"), ("Y", 0.0, "> 0")])
+def test_fresh_document_refuses_an_unknown_axis_or_scale(tmp_path, axis, scale, message):
+    scene = sg.Scene([shadow_shape()], up_axis=axis, meters_per_unit=scale)
+    scene.shapes[0].role = "geometry"
+    with pytest.raises(sg.SceneError, match=message):
+        x3d_write.write(scene, tmp_path / "bad.x3d")
+    assert not (tmp_path / "bad.x3d").exists()
+
+
+def test_fresh_document_states_a_unit_other_than_metres(tmp_path, x3d_schema):
+    shape = shadow_shape()
+    shape.role = "geometry"
+    out = tmp_path / "cm.x3d"
+    x3d_write.write(sg.Scene([shape], meters_per_unit=0.01), out)
+    (unit,) = parse(out).getroot().findall("head/unit")
+    assert unit.get("category") == "length" and float(unit.get("conversionFactor")) == 0.01
+    assert x3d_schema_errors(out, x3d_schema) == []

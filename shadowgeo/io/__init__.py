@@ -118,6 +118,12 @@ def load(path, **options) -> Scene:
     return module.read(path, **options)
 
 
+def check_writable(path) -> None:
+    """SceneError, naming the known extensions, unless :func:`save` can write
+    a file named ``path``: for callers that check before long work."""
+    _module(WRITERS, path, "write")
+
+
 def save(scene: Scene, path, **options) -> None:
     """Write ``scene`` to ``path`` atomically; the format comes from the extension."""
     module = _module(WRITERS, path, "write")

@@ -36,6 +36,7 @@ from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, unique_name
+from . import up_and_units
 from .atomic import atomic_path
 
 ADDED_ROLES = ("shadow", "volume")
@@ -205,6 +206,7 @@ def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: 
 
 
 def _fresh(scene: Scene):
+    up, meters = up_and_units(scene)
     xsd = "http://www.w3.org/2001/XMLSchema-instance"
     root = etree.Element("X3D", profile="Immersive", version="4.0", nsmap={"xsd": xsd})
     root.set(
@@ -213,22 +215,16 @@ def _fresh(scene: Scene):
     head = etree.SubElement(root, "head")
     from .. import __version__
 
+    # The schema's order in <head>: component, unit, meta.
+    if meters != 1.0:
+        etree.SubElement(
+            head, "unit", category="length", name="metres_per_unit", conversionFactor=repr(meters)
+        )
     etree.SubElement(head, "meta", name="generator", content=f"shadowgeo {__version__}")
     if scene.path:
         etree.SubElement(head, "meta", name="source", content=Path(scene.path).name)
-    if scene.meters_per_unit != 1.0:
-        etree.SubElement(
-            head,
-            "unit",
-            category="length",
-            name="metres_per_unit",
-            conversionFactor=repr(float(scene.meters_per_unit)),
-        )
     body = etree.SubElement(root, "Scene")
     used: set[str] = set()
-    up = (scene.up_axis or "Y").upper()
-    if up not in ("Y", "Z"):
-        raise SceneError(f"up axis must be 'Y' or 'Z', got {scene.up_axis!r}", path=scene.path)
     if up == "Z":
         # X3D is Y-up: one rotation about x takes (x, y, z) to (x, z, -y).
         name = unique_name("shadowgeo_z_up", used)
