@@ -596,6 +596,21 @@ def test_inlined_gltf_is_read_by_the_gltf_reader(tmp_path):
         scene_of(tmp_path, "<Inline url='\"packed.gltf\"'/>")
 
 
+def test_an_inline_used_again_is_read_once(tmp_path):
+    (tmp_path / "leaf.gltf").write_text(json.dumps(_triangle_gltf()))
+    (tmp_path / "post.x3d").write_text(
+        '<X3D version="4.0"><Scene><Shape><TriangleSet><Coordinate point="0 0 0 1 0 0 0 1 0"/>'
+        "</TriangleSet></Shape></Scene></X3D>"
+    )
+    body = (
+        "<Inline DEF='leaf' url='\"leaf.gltf\"'/><Inline USE='leaf'/>"
+        "<Inline DEF='post' url='\"post.x3d\"'/><Inline USE='post'/>"
+    )
+    leaf, leaf_again, post, post_again = scene_of(tmp_path, body).shapes
+    assert np.shares_memory(leaf.vertices, leaf_again.vertices)  # one read, one mesh
+    assert np.shares_memory(post.vertices, post_again.vertices)
+
+
 # -- the defaults table ------------------------------------------------------------------
 
 

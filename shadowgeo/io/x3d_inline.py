@@ -68,9 +68,9 @@ def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name
         raise context.error(element, f"Inline cycle: {path.name} includes itself")
     if len(reader.inline_stack) > MAX_INLINE_DEPTH:
         raise context.error(element, f"Inlines nested more than {MAX_INLINE_DEPTH} deep")
-    if path not in reader.inline_trees:
-        reader.inline_trees[path] = x3d_parse.parse(path)
-    reader.document(reader.inline_trees[path], path, str(path), matrix, name=name)
+    if path not in reader.inline_files:
+        reader.inline_files[path] = x3d_parse.parse(path)
+    reader.document(reader.inline_files[path], path, str(path), matrix, name=name)
 
 
 def _gltf_uris(path: Path) -> list[str]:
@@ -88,7 +88,7 @@ def _gltf_uris(path: Path) -> list[str]:
     return [uri for uri in uris if isinstance(uri, str) and not uri.startswith("data:")]
 
 
-def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
+def _read_gltf(reader, context: Context, element, path: Path):
     for uri in _gltf_uris(path):
         target = (path.parent / uri).resolve()
         if URL_SCHEME.match(uri) or not target.is_relative_to(reader.root_folder):
@@ -101,7 +101,13 @@ def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, nam
     reader.warnings.extend(loaded.warnings)
     if loaded.lights:
         context.warn(element, f"{len(loaded.lights)} light(s) of '{path.name}' not read")
-    for shape in loaded.shapes:
+    return loaded
+
+
+def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
+    if path not in reader.inline_files:
+        reader.inline_files[path] = _read_gltf(reader, context, element, path)
+    for shape in reader.inline_files[path].shapes:
         if shape.n_faces == 0:
             continue
         reader.instances.append(

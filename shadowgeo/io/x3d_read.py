@@ -86,7 +86,7 @@ class _Reader:
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
         self.baked: list[str] = []  # DEFs of the enclosing groups of shadows shadowgeo added
         self.expanded = 0  # nodes the documents read so far expand to, Inlines included
-        self.inline_trees: dict[Path, object] = {}  # each Inline file parsed once
+        self.inline_files: dict[Path, object] = {}  # each Inline file read once: tree or Scene
 
     # -- documents ---------------------------------------------------------------
     def document(self, tree, path: Path, display: str, matrix, scene=None, name=None):
