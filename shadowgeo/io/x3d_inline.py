@@ -70,7 +70,7 @@ def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name
         raise context.error(element, f"Inlines nested more than {MAX_INLINE_DEPTH} deep")
     if path not in reader.inline_files:
         reader.inline_files[path] = x3d_parse.parse(path)
-    reader.document(reader.inline_files[path], path, str(path), matrix, name=name)
+    reader.document(reader.inline_files[path], path, matrix, name=name)
 
 
 def _gltf_uris(path: Path) -> list[str]:

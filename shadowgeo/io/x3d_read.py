@@ -89,8 +89,9 @@ class _Reader:
         self.inline_files: dict[Path, object] = {}  # each Inline file read once: tree or Scene
 
     # -- documents ---------------------------------------------------------------
-    def document(self, tree, path: Path, display: str, matrix, scene=None, name=None):
+    def document(self, tree, path: Path, matrix, scene=None, name=None):
         root = tree.getroot()
+        display = str(path)
         context = Context(display, _version(root, display, self.warnings), warnings=self.warnings)
         self._units(context, root, scene)
         context.defs = _definitions(context, root)
@@ -426,7 +427,7 @@ def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None
     scene = Scene(path=str(path), document=tree)
     reader = _Reader(path.resolve().parent, scene.warnings)
     try:
-        reader.document(tree, path, str(path), np.eye(4), scene)
+        reader.document(tree, path, np.eye(4), scene)
         reader.finish(scene, tolerance, chord)
     except RecursionError:
         message = "nodes nested too deeply (through DEF/USE, prototypes or Inline)"
