@@ -277,6 +277,19 @@ def test_inline_expansion_bomb_is_refused(tmp_path, monkeypatch):
         sg.load(tmp_path / "level6.x3d")
 
 
+def test_prototype_body_expansion_bomb_is_refused(tmp_path):
+    # the DEF/USE bomb of test_def_use_expansion_bomb_is_refused, inside a ProtoBody
+    levels = ['<Group DEF="g0"><Shape><Box/></Shape></Group>']
+    for level in range(1, 8):
+        levels.append(f'<Group DEF="g{level}">' + f'<Group USE="g{level - 1}"/>' * 10 + "</Group>")
+    body = (
+        '<ProtoDeclare name="Bomb"><ProtoBody><Group>' + "".join(levels) + "</Group>"
+        '</ProtoBody></ProtoDeclare>\n<ProtoInstance name="Bomb"/>'
+    )
+    with pytest.raises(sg.SceneError, match="line 3, ProtoInstance: .*expands .* to more than"):
+        sg.load(scene(tmp_path, body))
+
+
 def test_invisible_nodes_are_skipped_with_a_warning(tmp_path):
     body = (
         '<Transform visible="false"><Shape><Box/></Shape></Transform>'

@@ -30,8 +30,9 @@ Rules the reader follows, where X3D leaves a choice:
   Metadata and WorldInfo are skipped silently.
 - **Refused with a SceneError:** malformed XML, DOCTYPE entity declarations,
   field values of the wrong type, indices out of range, DEF/USE, prototype and
-  Inline cycles, expansion bombs (DEF/USE and Inline beyond 2 million nodes, prototypes
-  beyond 10,000 copies), Inline and glTF paths that leave the scene's folder.
+  Inline cycles, expansion bombs (DEF/USE, Inline and prototypes beyond 2 million
+  nodes, prototypes beyond 10,000 copies), Inline and glTF paths that leave the
+  scene's folder.
 """
 
 from __future__ import annotations
@@ -85,7 +86,8 @@ class _Reader:
         self.inline_stack: list[Path] = []
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
         self.baked: list[str] = []  # DEFs of the enclosing groups of shadows shadowgeo added
-        self.expanded = 0  # nodes the documents read so far expand to, Inlines included
+        self.expanded = 0  # nodes the documents and prototype copies read so far expand to
+        self.sizes: dict = {}  # element -> its expanded size (see _expanded_size)
         self.inline_files: dict[Path, object] = {}  # each Inline file read once: tree or Scene
 
     # -- documents ---------------------------------------------------------------
@@ -99,18 +101,24 @@ class _Reader:
         scenes = [child for child in root if local_name(child) == "Scene"]
         if not scenes:
             raise SceneError("no <Scene> element", path=display, line=root.sourceline)
-        # counted over every document read: Inlines used again multiply too
-        self.expanded += _expanded_size(context, scenes[0], {})
-        if self.expanded > MAX_NODES:
-            raise context.error(
-                scenes[0],
-                f"the scene expands (through DEF/USE and Inline) to more than {MAX_NODES} nodes",
-            )
+        self._count(context, scenes[0])
         self.inline_stack.append(path.resolve())
         try:
             self.children(context, scenes[0], matrix, name)
         finally:
             self.inline_stack.pop()
+
+    def _count(self, context: Context, element, at=None) -> None:
+        """Add the nodes ``element`` expands to to the budget, counted over every
+        document and prototype copy read (Inlines and prototypes used again
+        multiply too); refuse the scene beyond :data:`MAX_NODES`, naming ``at``."""
+        self.expanded += _expanded_size(context, element, self.sizes)
+        if self.expanded > MAX_NODES:
+            raise context.error(
+                element if at is None else at,
+                f"the scene expands (through DEF/USE, Inline or prototypes) to more than "
+                f"{MAX_NODES} nodes",
+            )
 
     def _units(self, context: Context, root, scene) -> None:
         for unit in (e for e in root.iter() if local_name(e) == "unit"):
@@ -149,6 +157,8 @@ class _Reader:
         element = context.node(written)
         if element is None:  # a prototype instance that could not be expanded
             return
+        if local_name(written) == "ProtoInstance":
+            self._count(context, element, written)  # the copy of the prototype's body
         if id(element) in self.open_groups:
             raise context.error(
                 written, f"DEF/USE cycle: '{written.get('USE')}' is used inside itself"
