@@ -45,10 +45,10 @@ def resolve_url(reader, context: Context, element, url: str) -> Path | str:
 def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> None:
     if not context.field(element, "load"):
         return
-    urls = [u for u in context.field(element, "url") if u.strip()]
+    urls = [url.strip() for url in context.field(element, "url") if url.strip()]
     reasons = []
     for url in urls:
-        found = resolve_url(reader, context, element, url.strip())
+        found = resolve_url(reader, context, element, url)
         if isinstance(found, str):
             reasons.append(found)
             continue
