@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
+from .plane import Plane
+
 # Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
 # its 1e8 fixed-point scaling overflows int64's safe range).
 MAX_COORDINATE = 1e8
@@ -77,3 +79,26 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     if not vertices:
         return np.zeros((0, 2)), np.zeros((0, 3), dtype=np.int64)
     return np.concatenate(vertices), np.concatenate(faces)
+
+
+def polygon_triangles(points: np.ndarray) -> np.ndarray:
+    """Triangulate one simple polygon (k, 3), convex or not, in its own plane.
+
+    Returns (m, 3) indices into ``points``, wound as the polygon is (its Newell
+    normal). A polygon with no area gives no triangles.
+    """
+    shifted = np.roll(points, -1, axis=0)
+    normal = np.array(
+        [
+            np.sum((points[:, 1] - shifted[:, 1]) * (points[:, 2] + shifted[:, 2])),
+            np.sum((points[:, 2] - shifted[:, 2]) * (points[:, 0] + shifted[:, 0])),
+            np.sum((points[:, 0] - shifted[:, 0]) * (points[:, 1] + shifted[:, 1])),
+        ]
+    )
+    length = float(np.linalg.norm(normal))
+    if length == 0.0 or not np.isfinite(length):
+        return np.zeros((0, 3), dtype=np.int64)
+    u, v = Plane(normal).basis  # u x v = normal: the polygon runs CCW in (u, v)
+    centred = points - points.mean(axis=0)
+    flat = np.column_stack([centred @ u, centred @ v])
+    return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)

@@ -22,9 +22,9 @@ import numpy as np
 
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
+from ..polygons import polygon_triangles
 from ..scene import Material, Scene, SceneLight, Shape
 from . import refuse_outside
-from .x3d_geometry import polygon_triangles
 
 
 def _pxr():

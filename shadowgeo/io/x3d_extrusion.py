@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..polygons import polygon_triangles
 from .x3d_fields import Context, rotation_matrix
 
 # Vertices one Extrusion may make (spine x section): a few kilobytes of text
@@ -89,9 +90,9 @@ def _per_point(values: np.ndarray, n: int) -> np.ndarray:
     return np.concatenate([values, np.repeat(values[-1:], n - len(values), axis=0)])
 
 
-def extrusion(context: Context, element, polygon_triangles) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (n, 3) float64 and faces (m, 3) int64 of an Extrusion element;
-    ``polygon_triangles(points)`` triangulates a concave cap."""
+def extrusion(context: Context, element) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (n, 3) float64 and faces (m, 3) int64 of an Extrusion element
+    (a concave cap is triangulated in its plane)."""
     spine = context.field(element, "spine").reshape(-1, 3)
     section = context.field(element, "crossSection").reshape(-1, 2)
     if len(spine) < 2 or len(section) < 2:

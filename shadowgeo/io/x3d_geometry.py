@@ -12,9 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from manifold3d import triangulate
 
-from ..plane import Plane
+from ..polygons import polygon_triangles
 from ..scene import primitives
 from .x3d_extrusion import extrusion
 from .x3d_fields import Context, local_name
@@ -192,29 +191,6 @@ def _is_convex(corners: np.ndarray) -> np.ndarray:
     return np.all(angles >= -1e-12, axis=1) & np.isclose(angles.sum(axis=1), 2 * np.pi)
 
 
-def polygon_triangles(points: np.ndarray) -> np.ndarray:
-    """Triangulate one simple polygon (k, 3), convex or not, in its own plane.
-
-    Returns (m, 3) indices into ``points``, wound as the polygon is (its Newell
-    normal). A polygon with no area gives no triangles.
-    """
-    shifted = np.roll(points, -1, axis=0)
-    normal = np.array(
-        [
-            np.sum((points[:, 1] - shifted[:, 1]) * (points[:, 2] + shifted[:, 2])),
-            np.sum((points[:, 2] - shifted[:, 2]) * (points[:, 0] + shifted[:, 0])),
-            np.sum((points[:, 0] - shifted[:, 0]) * (points[:, 1] + shifted[:, 1])),
-        ]
-    )
-    length = float(np.linalg.norm(normal))
-    if length == 0.0 or not np.isfinite(length):
-        return np.zeros((0, 3), dtype=np.int64)
-    u, v = Plane(normal).basis  # u x v = normal: the polygon runs CCW in (u, v)
-    centred = points - points.mean(axis=0)
-    flat = np.column_stack([centred @ u, centred @ v])
-    return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)
-
-
 def _indexed_face_set(context: Context, element) -> Mesh:
     points = coordinates(context, element)
     indices = _checked(
@@ -338,7 +314,7 @@ def _elevation_grid(context: Context, element) -> Mesh:
 
 
 def _extrusion(context: Context, element) -> Mesh:
-    return Mesh(*extrusion(context, element, polygon_triangles))
+    return Mesh(*extrusion(context, element))
 
 
 _MESH_BUILDERS = {
