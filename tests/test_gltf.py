@@ -13,7 +13,8 @@ import trimesh
 from validators import gltf_problems, gltf_report, one_triangle_gltf
 
 import shadowgeo as sg
-from shadowgeo.io.gltf import is_trs, look_rotation, quaternion_xyzw
+from shadowgeo.io import look_rotation
+from shadowgeo.io.gltf import is_trs, quaternion_xyzw
 
 
 def test_validator_passes_a_clean_file_and_catches_a_broken_one(tmp_path, node_tools):

@@ -8,7 +8,7 @@ extension                         read                        write
 ================================  ==========================  ==================
 ``.x3d``, ``.x3dz``               :mod:`.x3d_read`            :mod:`.x3d_write`
 ``.glb``, ``.gltf``               :mod:`.meshes` (trimesh)    :mod:`.gltf`
-``.usda``, ``.usdc``, ``.usd``    :mod:`.usd`                 :mod:`.usd`
+``.usda``, ``.usdc``, ``.usd``    :mod:`.usd_read`            :mod:`.usd_write`
 ``.obj``, ``.stl``, ``.ply``,     :mod:`.meshes` (trimesh)    --
 ``.off``
 ================================  ==========================  ==================
@@ -27,6 +27,8 @@ import importlib
 import math
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import SceneError
 from ..scene import Scene, Shape
 
@@ -39,9 +41,9 @@ READERS = {
     ".stl": "meshes",
     ".ply": "meshes",
     ".off": "meshes",
-    ".usda": "usd",
-    ".usdc": "usd",
-    ".usd": "usd",
+    ".usda": "usd_read",
+    ".usdc": "usd_read",
+    ".usd": "usd_read",
 }
 
 WRITERS = {
@@ -49,9 +51,9 @@ WRITERS = {
     ".x3dz": "x3d_write",
     ".glb": "gltf",
     ".gltf": "gltf",
-    ".usda": "usd",
-    ".usdc": "usd",
-    ".usd": "usd",
+    ".usda": "usd_write",
+    ".usdc": "usd_write",
+    ".usd": "usd_write",
 }
 
 
@@ -100,6 +102,28 @@ def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: s
         raise SceneError("refused: not a relative path", path=str(path), node=where)
     if not target.is_relative_to(folder):
         raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
+
+
+def look_rotation(direction) -> np.ndarray:
+    """(3, 3) rotation turning -Z onto ``direction`` (the convention of glTF
+    and USD lights), by the shortest arc.
+
+    Examples
+    --------
+    >>> look_rotation([1.0, 0.0, 0.0]) @ [0.0, 0.0, -1.0]
+    array([1., 0., 0.])
+    """
+    target = np.asarray(direction, dtype=np.float64)
+    target = target / np.linalg.norm(target)
+    source = np.array([0.0, 0.0, -1.0])
+    cosine = float(source @ target)
+    axis = np.cross(source, target)
+    if cosine < -1.0 + 1e-12:
+        # Pointing along +Z: half a turn about X.
+        return np.diag([1.0, -1.0, -1.0])
+    # Rodrigues' formula for the rotation by the angle between source and target.
+    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + cross + cross @ cross / (1.0 + cosine)
 
 
 def load(path, **options) -> Scene:

@@ -44,7 +44,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
-from . import check_face_indices, up_and_units
+from . import check_face_indices, look_rotation, up_and_units
 from .atomic import atomic_path
 
 _ARRAY_BUFFER = 34962
@@ -57,28 +57,6 @@ GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = b"glTF", 0x4E4F534A, 0x004E4942
 # Matrices whose TRS decomposition misses them by more than this (relative)
 # are not TRS: glTF's validator rejects them, so they are baked into vertices.
 _TRS_RELATIVE = 1e-9
-
-
-def look_rotation(direction) -> np.ndarray:
-    """(3, 3) rotation turning -Z onto ``direction`` (the convention of glTF
-    and USD lights), by the shortest arc.
-
-    Examples
-    --------
-    >>> look_rotation([1.0, 0.0, 0.0]) @ [0.0, 0.0, -1.0]
-    array([1., 0., 0.])
-    """
-    target = np.asarray(direction, dtype=np.float64)
-    target = target / np.linalg.norm(target)
-    source = np.array([0.0, 0.0, -1.0])
-    cosine = float(source @ target)
-    axis = np.cross(source, target)
-    if cosine < -1.0 + 1e-12:
-        # Pointing along +Z: half a turn about X.
-        return np.diag([1.0, -1.0, -1.0])
-    # Rodrigues' formula for the rotation by the angle between source and target.
-    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + cross + cross @ cross / (1.0 + cosine)
 
 
 def quaternion_xyzw(rotation: np.ndarray) -> list[float]:

@@ -24,74 +24,13 @@ from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..polygons import polygon_triangles
 from ..scene import Material, Scene, SceneLight, Shape
-from . import refuse_outside
-
-
-def _pxr():
-    """usd-core's modules, imported when first needed (it is slow to load)."""
-    from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
-
-    return Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
-
-
-def _check_layers(path: Path) -> None:
-    """Refuse a file whose sublayers, references or payloads are remote or
-    outside its folder, before usd-core composes (and so opens) them."""
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
-    folder = path.resolve().parent
-    pending, seen = [path.resolve()], set()
-    while pending:
-        current = pending.pop()
-        if current in seen:
-            continue
-        seen.add(current)
-        # Anonymous: read afresh, never a stale copy from the layer registry.
-        layer = _opened(Sdf.Layer.OpenAsAnonymous, current, "not a USD file")
-        for asset in layer.GetCompositionAssetDependencies():
-            where = f"layer dependency {asset!r}"
-            if not asset:
-                continue
-            target = (current.parent / asset).resolve()
-            refuse_outside(asset, target, folder, path=path, where=where)
-            if not target.is_file():
-                raise SceneError("missing layer", path=str(path), node=where)
-            pending.append(target)
-
-
-def _opened(opener, path: Path, failure: str):
-    """``opener(path)`` (a layer or a stage); a SceneError saying ``failure``
-    and usd-core's last message line when it raises or returns None."""
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
-    try:
-        opened = opener(str(path))
-    except Tf.ErrorException as error:
-        lines = [line.strip() for line in str(error).splitlines() if line.strip()]
-        reason = lines[-1] if lines else type(error).__name__
-        raise SceneError(f"{failure}: {reason}", path=str(path)) from None
-    if opened is None:
-        raise SceneError(failure, path=str(path))
-    return opened
+from .usd_assets import check_assets
+from .usd_layout import custom, opened, pxr, stored_name
 
 
 def _world(xformable, time) -> np.ndarray:
     """(4, 4) column-vector local-to-world transform of a prim."""
     return np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
-
-
-def _shadowgeo(prim, name: str, default=None):
-    attribute = prim.GetAttribute(f"shadowgeo:{name}")
-    if attribute and attribute.HasAuthoredValue():
-        return attribute.Get()
-    return default
-
-
-def _name(prim, marker: str) -> str | None:
-    """The original name: the displayName; for an unnamed shape or light that
-    shadowgeo wrote (it has the ``shadowgeo:`` ``marker`` attribute), None;
-    otherwise the prim's name."""
-    if prim.GetDisplayName():
-        return prim.GetDisplayName()
-    return None if prim.GetAttribute(f"shadowgeo:{marker}") else prim.GetName()
 
 
 def _convex(corners: np.ndarray) -> np.ndarray:
@@ -141,11 +80,11 @@ def _triangles(points: np.ndarray, counts: np.ndarray, indices: np.ndarray, hole
 
 
 def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     mesh = UsdGeom.Mesh(prim)
     where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
     points = np.array(mesh.GetPointsAttr().Get(time) or [], dtype=np.float64).reshape(-1, 3)
-    exact = _shadowgeo(prim, "points")
+    exact = custom(prim, "points")
     if exact is not None:
         exact = np.array(exact, dtype=np.float64).reshape(-1, 3)
         # The float64 copy counts only while it still matches what tools see.
@@ -197,20 +136,20 @@ def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
             faces,
             _world(mesh, time),
             material=material,
-            name=_name(prim, "role"),
+            name=stored_name(prim, "role"),
             solid=not mesh.GetDoubleSidedAttr().Get(time),
-            role=_shadowgeo(prim, "role", "geometry"),
-            group=_shadowgeo(parent, "group") if parent else None,
+            role=custom(prim, "role", "geometry"),
+            group=custom(parent, "group") if parent and not parent.IsPseudoRoot() else None,
             source=f"{path.name}, {where}",
-            casts_shadow=bool(_shadowgeo(prim, "castsShadow", True)),
-            receives_shadow=bool(_shadowgeo(prim, "receivesShadow", False)),
+            casts_shadow=bool(custom(prim, "castsShadow", True)),
+            receives_shadow=bool(custom(prim, "receivesShadow", False)),
         )
     )
 
 
 def _read_light(scene: Scene, prim, time) -> bool:
     """Append the light at ``prim``; False when it is no light shadowgeo models."""
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     if prim.IsA(UsdLux.DistantLight):
         usd_light = UsdLux.DistantLight(prim)
     elif prim.IsA(UsdLux.SphereLight):
@@ -219,8 +158,8 @@ def _read_light(scene: Scene, prim, time) -> bool:
         return False
     world = _world(usd_light, time)
     direction = world[:3, :3] @ [0.0, 0.0, -1.0]
-    radius = float(_shadowgeo(prim, "range", math.inf))
-    beam = _shadowgeo(prim, "beamWidth")
+    radius = float(custom(prim, "range", math.inf))
+    beam = custom(prim, "beamWidth")
     if isinstance(usd_light, UsdLux.DistantLight):
         light = DirectionalLight(direction)
     else:
@@ -230,7 +169,7 @@ def _read_light(scene: Scene, prim, time) -> bool:
         )
         if cone is not None and 0 < cone <= 90:
             cut_off = math.radians(cone)
-            exact = _shadowgeo(prim, "cutOffAngle")
+            exact = custom(prim, "cutOffAngle")
             if exact is not None and abs(exact - cut_off) <= 1e-6 * cut_off:
                 cut_off = float(exact)
             light = SpotLight(world[:3, 3], direction, min(cut_off, math.pi / 2), radius)
@@ -244,16 +183,16 @@ def _read_light(scene: Scene, prim, time) -> bool:
     scene.lights.append(
         SceneLight(
             light,
-            name=_name(prim, "global"),
+            name=stored_name(prim, "global"),
             color=tuple(float(c) for c in (usd_light.GetColorAttr().Get(time) or (1, 1, 1))),
             intensity=float(usd_light.GetIntensityAttr().Get(time) or 0.0),
-            ambient_intensity=float(_shadowgeo(prim, "ambientIntensity", 0.0)),
-            attenuation=tuple(float(a) for a in _shadowgeo(prim, "attenuation", (1.0, 0.0, 0.0))),
+            ambient_intensity=float(custom(prim, "ambientIntensity", 0.0)),
+            attenuation=tuple(float(a) for a in custom(prim, "attenuation", (1.0, 0.0, 0.0))),
             beam_width=float(beam if beam is not None else math.pi / 4),
             on=visibility != UsdGeom.Tokens.invisible,
-            global_=bool(_shadowgeo(prim, "global", True)),
+            global_=bool(custom(prim, "global", True)),
             shadows=bool(shadow),
-            shadow_intensity=float(_shadowgeo(prim, "shadowIntensity", 1.0)),
+            shadow_intensity=float(custom(prim, "shadowIntensity", 1.0)),
         )
     )
     return True
@@ -287,9 +226,9 @@ def read(path, **options) -> Scene:
         raise SceneError(f"USD reader takes no options, got {sorted(options)}", path=str(path))
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
-    _check_layers(path)
-    stage = _opened(Usd.Stage.Open, path, "cannot open")
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+    check_assets(path)
+    stage = opened(Usd.Stage.Open, path, "cannot open")
     up = UsdGeom.GetStageUpAxis(stage)
     scene = Scene(
         path=str(path),
@@ -308,7 +247,7 @@ def read(path, **options) -> Scene:
             if imageable.ComputePurpose() == UsdGeom.Tokens.guide:
                 continue
             _read_mesh(scene, prim, path, time)
-            indices.append(_shadowgeo(prim, "index"))
+            indices.append(custom(prim, "index"))
         elif prim.IsA(UsdGeom.Gprim):
             scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
         elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):

@@ -1,38 +1,7 @@
-"""USD writer (``.usda`` text, ``.usdc`` binary, ``.usd`` binary) with usd-core;
-:func:`read` comes from :mod:`.usd_read`.
+"""USD writer (``.usda`` text, ``.usdc`` binary, ``.usd`` binary) with usd-core.
 
-Layout written
---------------
-``/World`` (an Xform, the default prim) holds one ``UsdGeom.Mesh`` per scene
-shape, one Xform per light group holding that group's shadows, the lights, and
-``/World/Looks`` with one ``UsdPreviewSurface`` material per distinct look.
-Stage metadata ``upAxis`` and ``metersPerUnit`` come from the scene.
-
-- Meshes: ``points``, ``faceVertexCounts`` (all 3), ``faceVertexIndices``,
-  face normals (``faceVarying``, so shading is flat as in glTF), ``extent``,
-  ``orientation = rightHanded``, ``doubleSided`` when not solid,
-  ``subdivisionScheme = none`` (these are polygons, not cages), the shape's
-  transform as one double-precision ``xformOp:transform``, ``displayColor`` /
-  ``displayOpacity`` and a bound material.
-- Lights: a point light is a ``SphereLight`` with ``treatAsPoint``; a spot
-  light the same with ``ShapingAPI`` (``shaping:cone:angle`` = the cut-off
-  angle in degrees, softness from the beam width); a directional light a
-  ``DistantLight``. Lights shine down their -Z, so the transform turns -Z onto
-  the light's direction. ``ShadowAPI``'s ``inputs:shadow:enable`` carries X3D's
-  ``shadows``; a light that is off is ``invisible``.
-- Names: prims get valid, unique identifiers; the original name is the prim's
-  ``displayName`` (USD strings end at a NUL character). A shape or light
-  without a name gets a generated prim name and reads back as unnamed.
-- Fields USD has no place for (a light's range, beam width, shadow intensity,
-  attenuation, shape roles, group names, the scene's shape order) are
-  ``shadowgeo:`` attributes.
-
-Precision
----------
-USD's ``points`` are float32. The writer also stores the float64 vertices as
-``shadowgeo:points`` (``point3d[]``); the reader uses them when they agree
-with ``points`` to float32 precision (so a tool that edits ``points`` and
-leaves the copy stale is still obeyed), which makes round trips exact.
+The layout written, which :mod:`.usd_read` reads back, is described in
+:mod:`.usd_layout`.
 """
 
 from __future__ import annotations
@@ -45,12 +14,9 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, Shape
-from . import check_face_indices, up_and_units
+from . import check_face_indices, look_rotation, up_and_units
 from .atomic import atomic_path
-from .gltf import look_rotation
-from .usd_read import _pxr, read
-
-__all__ = ["read", "write"]
+from .usd_layout import pxr, set_custom, usd_text
 
 
 class _Names:
@@ -62,7 +28,7 @@ class _Names:
     def child(self, parent: str, wanted: str | None, fallback: str) -> str:
         from pxr import Tf
 
-        base = Tf.MakeValidIdentifier(_text(wanted)) if wanted else fallback
+        base = Tf.MakeValidIdentifier(usd_text(wanted)) if wanted else fallback
         taken = self.taken.setdefault(parent, set())
         name, count = base, 1
         while name in taken:
@@ -70,12 +36,6 @@ class _Names:
             count += 1
         taken.add(name)
         return f"{parent}/{name}"
-
-
-def _text(name: str) -> str:
-    """``name`` as USD can store it: UTF-8, so a lone surrogate (which no
-    parsed file holds, but a Python string can) becomes U+FFFD."""
-    return "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in name)
 
 
 def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -95,13 +55,9 @@ def _matrix(transform: np.ndarray):
     return Gf.Matrix4d(np.asarray(transform, dtype=np.float64).T.tolist())
 
 
-def _custom(prim, name: str, type_name, value) -> None:
-    prim.CreateAttribute(f"shadowgeo:{name}", type_name, custom=True).Set(value)
-
-
 class _Writer:
     def __init__(self, scene: Scene) -> None:
-        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         up, meters_per_unit = up_and_units(scene)
         self.scene = scene
         self.stage = Usd.Stage.CreateInMemory()
@@ -115,33 +71,33 @@ class _Writer:
         self.groups: dict[object, str] = {}
 
     def write_shapes(self) -> None:
-        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         for index, shape in enumerate(self.scene.shapes):
             parent = "/World"
             if shape.role != "geometry" or shape.group:
                 parent = self._group(shape)
             path = self.names.child(parent, shape.name, f"Shape_{index}")
             # Group Xforms change the traversal order; keep the scene's.
-            _custom(self._mesh(shape, path), "index", Sdf.ValueTypeNames.Int, index)
+            set_custom(self._mesh(shape, path), "index", Sdf.ValueTypeNames.Int, index)
 
     def _group(self, shape: Shape) -> str:
         """The Xform holding a light group's shadows; unnamed groups (one per
         role) get a display name but no ``shadowgeo:group``, so read back as None."""
-        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         key = shape.group or (None, shape.role)
         if key not in self.groups:
             label = shape.group or f"shadowgeo {shape.role}s"
             path = self.names.child("/World", label, "Group")
             prim = UsdGeom.Xform.Define(self.stage, path).GetPrim()
-            prim.SetDisplayName(_text(label))
+            prim.SetDisplayName(usd_text(label))
             if shape.group:
-                _custom(prim, "group", Sdf.ValueTypeNames.String, _text(shape.group))
+                set_custom(prim, "group", Sdf.ValueTypeNames.String, usd_text(shape.group))
             self.groups[key] = path
         return self.groups[key]
 
     def _mesh(self, shape: Shape, path: str):
         """Define the shape's Mesh prim at ``path`` and return the prim."""
-        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         vertices = np.ascontiguousarray(shape.vertices, dtype=np.float64)
         faces = np.asarray(shape.faces, dtype=np.int64)
         if not np.all(np.isfinite(vertices)) or not np.all(np.isfinite(shape.transform)):
@@ -150,7 +106,7 @@ class _Writer:
         mesh = UsdGeom.Mesh.Define(self.stage, path)
         prim = mesh.GetPrim()
         if shape.name:
-            prim.SetDisplayName(_text(shape.name))
+            prim.SetDisplayName(usd_text(shape.name))
         points = Vt.Vec3fArray.FromNumpy(vertices.astype(np.float32))
         mesh.CreatePointsAttr(points)
         mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)))
@@ -166,11 +122,13 @@ class _Writer:
             # set with creaseAngle 0; renderers would otherwise smooth the corners.
             mesh.CreateNormalsAttr(Vt.Vec3fArray.FromNumpy(_face_normals(vertices, faces)))
             mesh.SetNormalsInterpolation(UsdGeom.Tokens.faceVarying)
-        _custom(prim, "points", Sdf.ValueTypeNames.Point3dArray, Vt.Vec3dArray.FromNumpy(vertices))
-        _custom(prim, "role", Sdf.ValueTypeNames.String, shape.role)
+        set_custom(
+            prim, "points", Sdf.ValueTypeNames.Point3dArray, Vt.Vec3dArray.FromNumpy(vertices)
+        )
+        set_custom(prim, "role", Sdf.ValueTypeNames.String, shape.role)
         if not shape.casts_shadow or shape.receives_shadow:
-            _custom(prim, "castsShadow", Sdf.ValueTypeNames.Bool, bool(shape.casts_shadow))
-            _custom(prim, "receivesShadow", Sdf.ValueTypeNames.Bool, bool(shape.receives_shadow))
+            set_custom(prim, "castsShadow", Sdf.ValueTypeNames.Bool, bool(shape.casts_shadow))
+            set_custom(prim, "receivesShadow", Sdf.ValueTypeNames.Bool, bool(shape.receives_shadow))
         if not np.array_equal(shape.transform, np.eye(4)):
             mesh.AddTransformOp(UsdGeom.XformOp.PrecisionDouble).Set(_matrix(shape.transform))
         look = shape.material
@@ -184,7 +142,7 @@ class _Writer:
         return prim
 
     def _look(self, look: Material):
-        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         key = (
             look.diffuse_color,
             look.emissive_color,
@@ -198,7 +156,7 @@ class _Writer:
                 UsdGeom.Scope.Define(self.stage, "/World/Looks")
             material = UsdShade.Material.Define(self.stage, path)
             if look.name:
-                material.GetPrim().SetDisplayName(_text(look.name))
+                material.GetPrim().SetDisplayName(usd_text(look.name))
             shader = UsdShade.Shader.Define(self.stage, f"{path}/PreviewSurface")
             shader.CreateIdAttr("UsdPreviewSurface")
             color = Sdf.ValueTypeNames.Color3f
@@ -214,7 +172,7 @@ class _Writer:
         return self.looks[key]
 
     def write_lights(self) -> None:
-        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = _pxr()
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         for index, scene_light in enumerate(self.scene.lights):
             light = scene_light.light
             path = self.names.child("/World", scene_light.name, f"Light_{index}")
@@ -230,29 +188,29 @@ class _Writer:
                 transform[:3, :3] = look_rotation(light.direction)
             prim = usd_light.GetPrim()
             if scene_light.name:
-                prim.SetDisplayName(_text(scene_light.name))
+                prim.SetDisplayName(usd_text(scene_light.name))
             if isinstance(light, SpotLight):
                 shaping = UsdLux.ShapingAPI.Apply(prim)
                 shaping.CreateShapingConeAngleAttr(math.degrees(light.cut_off_angle))
                 beam = min(max(scene_light.beam_width / light.cut_off_angle, 0.0), 1.0)
                 shaping.CreateShapingConeSoftnessAttr(1.0 - beam)
-                _custom(prim, "beamWidth", Sdf.ValueTypeNames.Double, scene_light.beam_width)
+                set_custom(prim, "beamWidth", Sdf.ValueTypeNames.Double, scene_light.beam_width)
                 # The cone angle is float32 degrees; keep the exact radians too.
-                _custom(prim, "cutOffAngle", Sdf.ValueTypeNames.Double, light.cut_off_angle)
+                set_custom(prim, "cutOffAngle", Sdf.ValueTypeNames.Double, light.cut_off_angle)
             if not isinstance(light, DirectionalLight) and math.isfinite(light.radius):
-                _custom(prim, "range", Sdf.ValueTypeNames.Double, float(light.radius))
+                set_custom(prim, "range", Sdf.ValueTypeNames.Double, float(light.radius))
             usd_light.CreateIntensityAttr(float(scene_light.intensity))
             usd_light.CreateColorAttr(Gf.Vec3f(*scene_light.color))
             UsdLux.ShadowAPI.Apply(prim).CreateShadowEnableAttr(bool(scene_light.shadows))
-            _custom(
+            set_custom(
                 prim, "shadowIntensity", Sdf.ValueTypeNames.Double, scene_light.shadow_intensity
             )
-            _custom(
+            set_custom(
                 prim, "ambientIntensity", Sdf.ValueTypeNames.Double, scene_light.ambient_intensity
             )
             attenuation = Gf.Vec3d(*scene_light.attenuation)
-            _custom(prim, "attenuation", Sdf.ValueTypeNames.Double3, attenuation)
-            _custom(prim, "global", Sdf.ValueTypeNames.Bool, bool(scene_light.global_))
+            set_custom(prim, "attenuation", Sdf.ValueTypeNames.Double3, attenuation)
+            set_custom(prim, "global", Sdf.ValueTypeNames.Bool, bool(scene_light.global_))
             if not scene_light.on:
                 usd_light.CreateVisibilityAttr(UsdGeom.Tokens.invisible)
             if not np.array_equal(transform, np.eye(4)):

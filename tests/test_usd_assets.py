@@ -1,0 +1,260 @@
+"""USD asset containment: no asset path of any kind reaches outside the
+scene's folder, and usd-core never opens the file it names."""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+import pytest
+
+import shadowgeo as sg
+
+pxr = pytest.importorskip("pxr")
+from pxr import Sdf, Usd  # noqa: E402
+
+from shadowgeo.io.usd_assets import layer_assets  # noqa: E402
+
+# Its points come from the value clip.
+TRIANGLE = """
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points
+"""
+
+# A layer with one triangle at /Secret, time samples for value clips too.
+SECRET = """#usda 1.0
+def Mesh "Secret"
+{
+    int[] faceVertexCounts = [3]
+    int[] faceVertexIndices = [0, 1, 2]
+    point3f[] points = [(0, 0, 0), (7, 0, 0), (0, 7, 0)]
+    point3f[] points.timeSamples = { 0: [(0, 0, 0), (7, 0, 0), (0, 7, 0)] }
+}
+"""
+
+
+def _clip(asset_paths: str) -> str:
+    return f"""#usda 1.0
+def Mesh "Tri" (
+    clips = {{
+        dictionary default = {{
+            double2[] active = [(0, 0)]
+            asset[] assetPaths = [{asset_paths}]
+            string primPath = "/Secret"
+            double2[] times = [(0, 0)]
+        }}
+    }}
+)
+{{{TRIANGLE}}}
+"""
+
+
+def _template(pattern: str) -> str:
+    return f"""#usda 1.0
+def Mesh "Tri" (
+    clips = {{
+        dictionary default = {{
+            string templateAssetPath = "{pattern}"
+            double templateStartTime = 1
+            double templateEndTime = 1
+            double templateStride = 1
+            string primPath = "/Secret"
+        }}
+    }}
+)
+{{{TRIANGLE}}}
+"""
+
+
+CASES = {
+    "value clip": _clip("@../outside/secret.usda@"),
+    "value clip template": _template("../outside/secret.#.usda"),
+    "value clip manifest": _clip("@clip.usda@").replace(
+        "string primPath", "asset manifestAssetPath = @../outside/secret.usda@\n string primPath"
+    ),
+    "reference": '#usda 1.0\ndef Mesh "Tri" (references = @../outside/secret.usda@</S>)\n{}\n',
+    "payload": '#usda 1.0\ndef Mesh "Tri" (payload = @../outside/secret.usda@</S>)\n{}\n',
+    "sublayer": "#usda 1.0\n(\n subLayers = [@../outside/secret.usda@]\n)\n",
+    "variant reference": """#usda 1.0
+def Xform "Tri" (
+    variants = {
+        string v = "a"
+    }
+    prepend variantSets = "v"
+)
+{
+    variantSet "v" = {
+        "a" (prepend references = @../outside/secret.usda@</Secret>) {}
+    }
+}
+""",
+    "asset": '#usda 1.0\ndef Mesh "Tri"\n{\n asset inputs:file = @../outside/secret.usda@\n}\n',
+    "asset time sample": (
+        '#usda 1.0\ndef Mesh "Tri"\n{\n'
+        " asset[] textures.timeSamples = { 0: [@ok.png@], 1: [@../outside/secret.usda@] }\n}\n"
+    ),
+}
+
+
+def _folders(tmp_path):
+    """``scene/`` for the scene, ``outside/secret.usda`` (and a clip-template
+    match) beside it."""
+    scene, outside = tmp_path / "scene", tmp_path / "outside"
+    scene.mkdir()
+    outside.mkdir()
+    (outside / "secret.usda").write_text(SECRET)
+    (outside / "secret.1.usda").write_text(SECRET)
+    (scene / "clip.usda").write_text(SECRET)
+    return scene, outside
+
+
+@pytest.fixture
+def opened(monkeypatch) -> list[str]:
+    """The files handed to usd-core's openers during the test (a stage opens
+    its layers in C++, out of sight: a refusal must come before any stage)."""
+    calls: list[str] = []
+    for owner, name in [
+        (Usd.Stage, "Open"),
+        (Sdf.Layer, "OpenAsAnonymous"),
+        (Sdf.Layer, "FindOrOpen"),
+    ]:
+        original = getattr(owner, name)
+
+        def spy(path, *args, _original=original, _name=name, **kwargs):
+            calls.append(f"{_name} {path}")
+            return _original(path, *args, **kwargs)
+
+        monkeypatch.setattr(owner, name, staticmethod(spy))
+    return calls
+
+
+def _never_opened(opened: list[str], outside) -> None:
+    assert not any(call.startswith("Open ") for call in opened), opened
+    assert not any(str(outside) in call for call in opened), opened
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_an_asset_path_outside_the_folder_is_refused_before_usd_opens_it(tmp_path, opened, case):
+    scene, outside = _folders(tmp_path)
+    path = scene / "main.usda"
+    path.write_text(CASES[case])
+    kind = case.replace("variant ", "").replace(" time sample", "")
+    asset = (
+        "../outside/secret.#.usda" if kind == "value clip template" else "../outside/secret.usda"
+    )
+    with pytest.raises(sg.SceneError, match="leaves the file's folder") as caught:
+        sg.load(path)
+    message = str(caught.value)
+    assert str(path) in message and f"{kind} '{asset}'" in message
+    _never_opened(opened, outside)
+
+
+def test_the_value_clip_finding_is_refused(shared_dir):
+    path = shared_dir / "findings/robustness/hostile/scene/usd_valueclip_outside.usda"
+    if not path.is_file():
+        pytest.skip(f"{path} is absent")
+    with pytest.raises(sg.SceneError) as caught:
+        sg.load(path)
+    message = str(caught.value)
+    assert "usd_valueclip_outside.usda" in message
+    assert "value clip '../outside/secret_ts.usda'" in message
+    assert "leaves the file's folder" in message
+
+
+@pytest.mark.parametrize(
+    "asset, reason",
+    [
+        ("/etc/hosts", "not a relative path"),
+        ("file:///etc/hosts", "not a relative path"),
+        ("https://example.com/clip.usda", "not a relative path"),
+        ('`"../outside/secret.usda"`', "a variable expression"),
+        ("missing.usda", "missing layer"),
+    ],
+)
+def test_clip_asset_paths_must_be_plain_relative_files(tmp_path, opened, asset, reason):
+    scene, outside = _folders(tmp_path)
+    path = scene / "main.usda"
+    path.write_text(_clip(f"@{asset}@"))
+    with pytest.raises(sg.SceneError, match=reason) as caught:
+        sg.load(path)
+    assert f"value clip {asset!r}" in str(caught.value)
+    _never_opened(opened, outside)
+
+
+def test_a_layer_inside_the_folder_is_checked_in_turn(tmp_path, opened):
+    scene, outside = _folders(tmp_path)
+    (scene / "parts").mkdir()
+    (scene / "parts" / "part.usda").write_text(_clip("@../../outside/secret.usda@"))
+    path = scene / "main.usda"
+    path.write_text("#usda 1.0\n(\n subLayers = [@parts/part.usda@]\n)\n")
+    with pytest.raises(sg.SceneError, match="leaves the file's folder") as caught:
+        sg.load(path)
+    assert "value clip '../../outside/secret.usda' in parts/part.usda" in str(caught.value)
+    _never_opened(opened, outside)
+
+
+def test_a_template_match_that_links_outside_is_refused(tmp_path, opened):
+    scene, outside = _folders(tmp_path)
+    try:
+        os.symlink(outside / "secret.1.usda", scene / "clip.1.usda")
+    except OSError:
+        pytest.skip("symbolic links are not available")
+    path = scene / "main.usda"
+    path.write_text(_template("clip.#.usda"))
+    with pytest.raises(sg.SceneError, match="clip.1.usda leaves the file's folder"):
+        sg.load(path)
+    _never_opened(opened, outside)
+
+
+def test_value_clips_inside_the_folder_are_read(tmp_path, opened):
+    scene, _ = _folders(tmp_path)
+    path = scene / "main.usda"
+    path.write_text(_clip("@clip.usda@"))
+    (shape,) = sg.load(path).shapes
+    assert f"Open {path}" in opened  # the spy sees a stage open
+    # The clip's points (the 7-unit triangle), not the prim's own.
+    assert shape.vertices.max() == 7.0
+    shutil.copy(scene / "clip.usda", scene / "frame.1.usda")
+    path.write_text(_template("frame.#.usda"))
+    (shape,) = sg.load(path).shapes
+    assert shape.vertices.max() == 7.0
+
+
+def test_every_kind_of_asset_path_is_listed(tmp_path):
+    scene, _ = _folders(tmp_path)
+    path = scene / "kinds.usda"
+    path.write_text(
+        """#usda 1.0
+(
+    subLayers = [@sub.usda@]
+    customLayerData = { asset note = @note.txt@ }
+)
+def Xform "A" (
+    references = [@ref.usda@</X>, </Internal>]
+    payload = @payload.usda@
+    assetInfo = { asset identifier = @identifier.usda@ }
+    clips = { dictionary default = {
+        asset[] assetPaths = [@clip.usda@]
+        asset manifestAssetPath = @manifest.usda@
+        string templateAssetPath = "frame.###.usda"
+    } }
+)
+{
+    asset inputs:file = @texture.png@
+}
+"""
+    )
+    found = set(layer_assets(Sdf.Layer.OpenAsAnonymous(str(path))))
+    assert found == {
+        ("sublayer", "sub.usda"),
+        ("asset", "note.txt"),
+        ("reference", "ref.usda"),
+        ("reference", ""),
+        ("payload", "payload.usda"),
+        ("asset", "identifier.usda"),
+        ("value clip", "clip.usda"),
+        ("value clip manifest", "manifest.usda"),
+        ("value clip template", "frame.###.usda"),
+        ("asset", "texture.png"),
+    }
