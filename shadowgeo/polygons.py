@@ -102,3 +102,68 @@ def polygon_triangles(points: np.ndarray) -> np.ndarray:
     centred = points - points.mean(axis=0)
     flat = np.column_stack([centred @ u, centred @ v])
     return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)
+
+
+# A corner that turns this far (radians) the wrong way still counts as straight.
+_CONVEX_TURN = 1e-12
+
+
+def is_convex(corners: np.ndarray) -> np.ndarray:
+    """(m, k, 3) polygons -> (m,) bool: True where convex, every turn to the
+    same side of the polygon's Newell normal and the turns adding up to one
+    full turn (so a star that winds twice is not convex)."""
+    following = np.roll(corners, -1, axis=1)
+    normal = np.cross(corners, following).sum(axis=1)  # Newell's normal, times 2
+    edges = following - corners
+    turns = np.cross(edges, np.roll(edges, -1, axis=1))
+    sine = np.einsum("mkd,md->mk", turns, normal)
+    cosine = np.einsum("mkd,mkd->mk", edges, np.roll(edges, -1, axis=1))
+    scale = np.linalg.norm(normal, axis=1)[:, None]
+    angles = np.arctan2(sine, cosine * scale)
+    return np.all(angles >= -_CONVEX_TURN, axis=1) & np.isclose(angles.sum(axis=1), 2 * np.pi)
+
+
+def fan(block: np.ndarray) -> np.ndarray:
+    """(m, k) vertex indices of convex polygons -> (m * (k - 2), 3) triangles
+    fanned from each polygon's first vertex, polygon by polygon."""
+    size = block.shape[1]
+    spokes = np.arange(1, size - 1)
+    first = np.repeat(block[:, :1], size - 2, axis=1)
+    return np.stack([first, block[:, spokes], block[:, spokes + 1]], -1).reshape(-1, 3)
+
+
+def polygons_triangles(
+    points: np.ndarray, block: np.ndarray, *, convex: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
+    """Triangulate polygons that all have k corners.
+
+    Parameters
+    ----------
+    points : (n, 3) float64
+    block : (m, k) int
+        Each row a polygon's indices into ``points``, k >= 3.
+    convex : bool
+        True when the polygons are known to be convex: all are fanned.
+        Otherwise those that are not convex are triangulated in their plane
+        (:func:`polygon_triangles`), the rest fanned.
+
+    Returns
+    -------
+    triangles : (t, 3) int64
+        Indices into ``points``: first the non-convex polygons' triangles,
+        polygon by polygon, then the fans.
+    rows : (t,) int64
+        The row of ``block`` each triangle comes from.
+    """
+    rows = np.arange(len(block))
+    triangles, owners = [], []
+    if block.shape[1] > 3 and not convex:
+        fits = is_convex(points[block])
+        for row, corners in zip(rows[~fits], block[~fits], strict=True):
+            pieces = corners[polygon_triangles(points[corners])]
+            triangles.append(pieces)
+            owners.append(np.full(len(pieces), row))
+        rows, block = rows[fits], block[fits]
+    triangles.append(fan(block))
+    owners.append(np.repeat(rows, block.shape[1] - 2))
+    return np.concatenate(triangles).astype(np.int64), np.concatenate(owners).astype(np.int64)

@@ -34,7 +34,7 @@ from .lights import Light, SpotLight, is_positional, require_light
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, as_caster, empty_mesh
 
 
 def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
@@ -286,7 +286,7 @@ class _Projector:
             limits=tuple(self.limits),
             empty_reason=reason,
         )
-        return Shadow(self.plane, self.light, _empty_mesh(), [], 0.0, info)
+        return Shadow(self.plane, self.light, empty_mesh(), [], 0.0, info)
 
     # -- the computation ------------------------------------------------------------------
 
@@ -535,7 +535,7 @@ class _Projector:
             n_loops=n_loops,
         )
         if not parts:
-            return Shadow(self.plane, self.light, _empty_mesh(), [], 0.0, info)
+            return Shadow(self.plane, self.light, empty_mesh(), [], 0.0, info)
         u, v = self.plane.basis
         origin2d = self.plane.to_2d(self.origin + self.center)[0]
         polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
@@ -545,10 +545,6 @@ class _Projector:
         points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v) + self.center
         mesh = trimesh.Trimesh(points, faces, process=False)
         return Shadow(self.plane, self.light, mesh, polygons, area, info)
-
-
-def _empty_mesh() -> trimesh.Trimesh:
-    return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)
 
 
 def _rectangle_planes(low, high) -> np.ndarray:

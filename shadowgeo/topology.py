@@ -11,6 +11,7 @@ from __future__ import annotations
 from functools import cached_property
 
 import numpy as np
+import trimesh
 
 from .errors import GeometryError
 
@@ -254,3 +255,9 @@ def as_caster(caster) -> Caster:
         "caster must be a trimesh.Trimesh, a shadowgeo Caster or a (vertices, faces) pair, "
         f"got {type(caster).__name__}"
     )
+
+
+def empty_mesh() -> trimesh.Trimesh:
+    """A ``trimesh.Trimesh`` without vertices or faces: the shadow or shadow
+    volume where there is none."""
+    return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)

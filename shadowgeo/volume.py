@@ -27,7 +27,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, is_positional, require_light
 from .silhouette import check_light_outside, light_homogeneous
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, as_caster, empty_mesh
 
 
 def shadow_volume(
@@ -115,7 +115,7 @@ def shadow_volume(
         if not math.isfinite(extent) or extent <= 0:
             raise GeometryError(f"extent must be finite and > 0, got {extent!r}")
     if caster.n_faces == 0:
-        return _empty()
+        return empty_mesh()
     if tolerance is None:
         tolerance = Tolerance.for_points(
             caster.bounds, *([light.position] if is_positional(light) else [])
@@ -132,7 +132,7 @@ def shadow_volume(
         orientation = (facing > 0).astype(np.int8)
     cap = np.flatnonzero(orientation)
     if len(cap) == 0:
-        return _empty()
+        return empty_mesh()
 
     corner_vertex, boundary = _cap_corners(caster, cap, orientation[cap])
     # Compact the used ids: near vertices first, their far copies after.
@@ -159,10 +159,6 @@ def shadow_volume(
     info.update(n_cap_faces=len(cap), n_side_faces=len(sides), two_sided=two_sided)
     result.metadata["shadowgeo"] = info
     return result
-
-
-def _empty() -> trimesh.Trimesh:
-    return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)
 
 
 def _check_edge_manifold(caster: Caster) -> None:

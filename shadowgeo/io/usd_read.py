@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
-from ..polygons import polygon_triangles
+from ..polygons import polygons_triangles
 from ..scene import Material, Scene, SceneLight, Shape
 from .usd_assets import check_assets
 from .usd_layout import custom, opened, pxr, stored_name
@@ -31,19 +31,6 @@ from .usd_layout import custom, opened, pxr, stored_name
 def _world(xformable, time) -> np.ndarray:
     """(4, 4) column-vector local-to-world transform of a prim."""
     return np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
-
-
-def _convex(corners: np.ndarray) -> np.ndarray:
-    """(m, k, 3) polygons -> (m,) True where convex: every turn is to the same
-    side of the Newell normal and the turns add up to one full turn."""
-    following = np.roll(corners, -1, axis=1)
-    normal = np.cross(corners, following).sum(axis=1)
-    edges = following - corners
-    turns = np.cross(edges, np.roll(edges, -1, axis=1))
-    sine = np.einsum("mkd,md->mk", turns, normal)
-    cosine = np.einsum("mkd,mkd->mk", edges, np.roll(edges, -1, axis=1))
-    angles = np.arctan2(sine, cosine * np.linalg.norm(normal, axis=1)[:, None])
-    return np.all(angles >= -1e-12, axis=1) & np.isclose(angles.sum(axis=1), 2 * np.pi)
 
 
 def _triangles(points: np.ndarray, counts: np.ndarray, indices: np.ndarray, holes):
@@ -61,17 +48,9 @@ def _triangles(points: np.ndarray, counts: np.ndarray, indices: np.ndarray, hole
     for size in np.unique(counts[keep]):
         polygons = np.flatnonzero(keep & (counts == size))
         block = indices[starts[polygons][:, None] + np.arange(size)]
-        if size > 3:
-            convex = _convex(points[block])
-            for polygon, corners in zip(polygons[~convex], block[~convex], strict=True):
-                triangles = corners[polygon_triangles(points[corners])]
-                owners.append(np.full(len(triangles), polygon))
-                pieces.append(triangles)
-            polygons, block = polygons[convex], block[convex]
-        fan = np.arange(1, size - 1)
-        first = np.repeat(block[:, :1], size - 2, axis=1)
-        pieces.append(np.stack([first, block[:, fan], block[:, fan + 1]], -1).reshape(-1, 3))
-        owners.append(np.repeat(polygons, size - 2))
+        triangles, rows = polygons_triangles(points, block)
+        pieces.append(triangles)
+        owners.append(polygons[rows])
     dropped = int((~keep).sum())
     if not pieces:
         return np.zeros((0, 3), dtype=np.int64), dropped
@@ -79,17 +58,21 @@ def _triangles(points: np.ndarray, counts: np.ndarray, indices: np.ndarray, hole
     return np.concatenate(pieces).astype(np.int64)[order], dropped
 
 
-def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
-    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
-    mesh = UsdGeom.Mesh(prim)
-    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+def _points(mesh, time) -> np.ndarray:
+    """(n, 3) float64 points: the writer's exact ``shadowgeo:points`` while
+    they still match ``points`` (what other tools see and may have edited)."""
     points = np.array(mesh.GetPointsAttr().Get(time) or [], dtype=np.float64).reshape(-1, 3)
-    exact = custom(prim, "points")
+    exact = custom(mesh.GetPrim(), "points")
     if exact is not None:
         exact = np.array(exact, dtype=np.float64).reshape(-1, 3)
-        # The float64 copy counts only while it still matches what tools see.
         if exact.shape == points.shape and np.array_equal(exact.astype(np.float32), points):
-            points = exact
+            return exact
+    return points
+
+
+def _polygons(mesh, time, n_points: int, path: Path, where: str):
+    """``faceVertexCounts`` and ``faceVertexIndices`` as int64 arrays, checked
+    to agree with each other and with the ``n_points`` points."""
     counts = np.array(mesh.GetFaceVertexCountsAttr().Get(time) or [], dtype=np.int64)
     indices = np.array(mesh.GetFaceVertexIndicesAttr().Get(time) or [], dtype=np.int64)
     if len(counts) and counts.min() < 0:
@@ -101,25 +84,26 @@ def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
             path=str(path),
             node=where,
         )
-    if len(indices) and (indices.min() < 0 or indices.max() >= len(points)):
+    if len(indices) and (indices.min() < 0 or indices.max() >= n_points):
         raise SceneError(
-            f"faceVertexIndices refer to point {int(indices.max())} of {len(points)}",
+            f"faceVertexIndices refer to point {int(indices.max())} of {n_points}",
             path=str(path),
             node=where,
         )
-    holes = mesh.GetHoleIndicesAttr().Get(time) or []
-    faces, dropped = _triangles(points, counts, indices, holes)
-    if dropped:
-        scene.warnings.append(f"{path.name}: {where}: skipped {dropped} holes or degenerate faces")
-    if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
-        faces = faces[:, ::-1]
+    return counts, indices
+
+
+def _material(mesh, time) -> Material:
+    """The display colour and opacity, refined by a bound UsdPreviewSurface's
+    emissive colour and roughness and the material's name."""
+    UsdShade = pxr()[6]
     opacity = mesh.GetDisplayOpacityPrimvar().Get(time)
     color = mesh.GetDisplayColorPrimvar().Get(time)
     material = Material(
         diffuse_color=tuple(float(c) for c in color[0]) if color else Material().diffuse_color,
         transparency=1.0 - float(opacity[0]) if opacity else 0.0,
     )
-    bound, _ = UsdShade.MaterialBindingAPI(prim).ComputeBoundMaterial()
+    bound, _ = UsdShade.MaterialBindingAPI(mesh.GetPrim()).ComputeBoundMaterial()
     if bound:
         shader = bound.ComputeSurfaceSource()[0]
         emissive = shader.GetInput("emissiveColor") if shader else None
@@ -129,13 +113,30 @@ def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
         if roughness and roughness.Get() is not None:
             material.shininess = 1.0 - float(roughness.Get())
         material.name = bound.GetPrim().GetDisplayName() or None
+    return material
+
+
+def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
+    """Append the shape of the ``UsdGeom.Mesh`` at ``prim``: its points,
+    triangulated polygons, material, world transform and shadowgeo fields."""
+    UsdGeom = pxr()[4]
+    mesh = UsdGeom.Mesh(prim)
+    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+    points = _points(mesh, time)
+    counts, indices = _polygons(mesh, time, len(points), path, where)
+    holes = mesh.GetHoleIndicesAttr().Get(time) or []
+    faces, dropped = _triangles(points, counts, indices, holes)
+    if dropped:
+        scene.warnings.append(f"{path.name}: {where}: skipped {dropped} holes or degenerate faces")
+    if mesh.GetOrientationAttr().Get(time) == UsdGeom.Tokens.leftHanded:
+        faces = faces[:, ::-1]
     parent = prim.GetParent()
     scene.shapes.append(
         Shape(
             points,
             faces,
             _world(mesh, time),
-            material=material,
+            material=_material(mesh, time),
             name=stored_name(prim, "role"),
             solid=not mesh.GetDoubleSidedAttr().Get(time),
             role=custom(prim, "role", "geometry"),

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..polygons import polygon_triangles
+from ..polygons import polygons_triangles
 from ..scene import primitives
 from .x3d_extrusion import extrusion
 from .x3d_fields import Context, local_name
@@ -170,27 +170,6 @@ def _polygon_blocks(indices: np.ndarray) -> dict[int, np.ndarray]:
     }
 
 
-def _fan(block: np.ndarray) -> np.ndarray:
-    """(m, k) convex polygons to (m * (k - 2), 3) triangles."""
-    size = block.shape[1]
-    fan = np.arange(1, size - 1)
-    first = np.repeat(block[:, :1], size - 2, axis=1)
-    return np.stack([first, block[:, fan], block[:, fan + 1]], -1).reshape(-1, 3)
-
-
-def _is_convex(corners: np.ndarray) -> np.ndarray:
-    """(m, k, 3) polygons -> (m,) bool: every turn the same way, turning once."""
-    following = np.roll(corners, -1, axis=1)
-    normal = np.cross(corners, following).sum(axis=1)  # Newell's normal, times 2
-    edges = following - corners
-    turns = np.cross(edges, np.roll(edges, -1, axis=1))
-    sine = np.einsum("mkd,md->mk", turns, normal)
-    cosine = np.einsum("mkd,mkd->mk", edges, np.roll(edges, -1, axis=1))
-    scale = np.linalg.norm(normal, axis=1)[:, None]
-    angles = np.arctan2(sine, cosine * scale)
-    return np.all(angles >= -1e-12, axis=1) & np.isclose(angles.sum(axis=1), 2 * np.pi)
-
-
 def _indexed_face_set(context: Context, element) -> Mesh:
     points = coordinates(context, element)
     indices = _checked(
@@ -202,13 +181,8 @@ def _indexed_face_set(context: Context, element) -> Mesh:
         if size < 3:
             short += len(block)
             continue
-        if size > 3 and not convex:
-            # convex="false" says only that some may not be: fan those that are
-            fits = _is_convex(points[block])
-            for polygon in block[~fits]:
-                faces.append(polygon[polygon_triangles(points[polygon])])
-            block = block[fits]
-        faces.append(_fan(block))
+        # convex="false" says only that some may not be: fan those that are
+        faces.append(polygons_triangles(points, block, convex=bool(convex))[0])
     if short:
         notes.append(f"{short} polygon(s) with fewer than 3 points skipped")
     return Mesh(points, _stack(faces), notes=notes)

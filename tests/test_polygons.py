@@ -1,0 +1,72 @@
+"""Polygon helpers shared by the X3D and USD readers: convexity and
+triangulation of same-size polygon blocks, checked against shapely areas and
+hand-derived triangles."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+
+from shadowgeo.polygons import fan, is_convex, polygons_triangles
+from shadowgeo.topology import empty_mesh
+
+
+def _in_plane(flat: np.ndarray, seed: int) -> np.ndarray:
+    """(k, 2) points placed on a random plane in 3-D by a random rotation and offset."""
+    rng = np.random.default_rng(seed)
+    rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    return np.column_stack([flat, np.zeros(len(flat))]) @ rotation.T + rng.normal(size=3) * 10
+
+
+SQUARE = np.array([[0.0, 0], [2, 0], [2, 2], [0, 2]])
+DART = np.array([[0.0, 0], [2, 1], [4, 0], [2, 3]])  # concave at (2, 1)
+HEXAGON = np.array([[np.cos(a), np.sin(a)] for a in np.arange(6) * np.pi / 3])
+PENTAGRAM = np.array([[np.cos(a), np.sin(a)] for a in np.arange(5) * 4 * np.pi / 5])
+
+
+@pytest.mark.parametrize(
+    "flat, expected",
+    [(SQUARE, True), (SQUARE[::-1], True), (HEXAGON, True), (DART, False), (DART[::-1], False)],
+)
+def test_convexity_in_any_plane_and_winding(flat, expected):
+    corners = np.stack([_in_plane(flat, seed) for seed in range(5)])
+    assert is_convex(corners).tolist() == [expected] * 5
+
+
+def test_a_star_that_winds_twice_is_not_convex():
+    # Every turn is to the same side, but the turns add up to two full turns.
+    assert not is_convex(_in_plane(PENTAGRAM, 3)[None])[0]
+
+
+def test_fan_is_from_the_first_corner():
+    assert fan(np.array([[5, 6, 7, 8, 9]])).tolist() == [[5, 6, 7], [5, 7, 8], [5, 8, 9]]
+
+
+def test_mixed_block_is_triangulated_with_the_area_of_each_polygon():
+    points = np.concatenate([_in_plane(SQUARE, 1), _in_plane(DART, 2), _in_plane(DART, 4)])
+    block = np.arange(12).reshape(3, 4)
+    triangles, rows = polygons_triangles(points, block)
+    assert triangles.shape == (6, 3) and len(rows) == 6
+    corners = points[triangles]
+    areas = 0.5 * np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    for row, flat in enumerate([SQUARE, DART, DART]):
+        mine = rows == row
+        assert set(triangles[mine].ravel()) <= set(block[row])
+        assert np.isclose(areas[mine].sum(), shapely.Polygon(flat).area)
+    # The non-convex polygons come first, then the fans.
+    assert rows.tolist() == [1, 1, 2, 2, 0, 0]
+
+
+def test_known_convex_polygons_are_fanned_untested():
+    points = _in_plane(DART, 0)
+    triangles, rows = polygons_triangles(points, np.array([[0, 1, 2, 3]]), convex=True)
+    assert triangles.tolist() == [[0, 1, 2], [0, 2, 3]] and rows.tolist() == [0, 0]
+
+
+def test_empty_mesh_has_nothing():
+    mesh = empty_mesh()
+    assert mesh.vertices.shape == (0, 3) and mesh.faces.shape == (0, 3)
+    assert mesh.faces.dtype == np.int64
