@@ -14,7 +14,8 @@ from validators import gltf_problems, gltf_report, one_triangle_gltf
 
 import shadowgeo as sg
 from shadowgeo.io import look_rotation
-from shadowgeo.io.gltf import is_trs, quaternion_xyzw
+from shadowgeo.io.gltf_layout import quaternion_xyzw
+from shadowgeo.io.gltf_write import is_trs
 
 
 def test_validator_passes_a_clean_file_and_catches_a_broken_one(tmp_path, node_tools):

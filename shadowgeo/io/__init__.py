@@ -1,24 +1,33 @@
-"""Readers and writers, one module per format. They know the scene model,
-not the shadow algorithms.
+"""Readers and writers, one module (or small family of modules) per format.
+They know the scene model, not the shadow algorithms.
 
 :func:`load` and :func:`save` pick the module from the file's extension:
 
-================================  ==========================  ==================
-extension                         read                        write
-================================  ==========================  ==================
-``.x3d``, ``.x3dz``               :mod:`.x3d_read`            :mod:`.x3d_write`
-``.glb``, ``.gltf``               :mod:`.meshes` (trimesh)    :mod:`.gltf`
-``.usda``, ``.usdc``, ``.usd``    :mod:`.usd_read`            :mod:`.usd_write`
-``.obj``, ``.stl``, ``.ply``,     :mod:`.meshes` (trimesh)    --
-``.off``
-================================  ==========================  ==================
+=========  ==============================  =======================  ==================
+format     extensions                      read                     write
+=========  ==============================  =======================  ==================
+X3D        ``.x3d``, ``.x3dz``             :mod:`.x3d_read`         :mod:`.x3d_write`
+glTF 2.0   ``.glb``, ``.gltf``             :mod:`.gltf_read`        :mod:`.gltf_write`
+USD        ``.usda``, ``.usdc``, ``.usd``  :mod:`.usd_read`         :mod:`.usd_write`
+OBJ, STL,  ``.obj``, ``.stl``, ``.ply``,   :mod:`.trimesh_formats`  --
+PLY, OFF   ``.off``
+=========  ==============================  =======================  ==================
 
-Each module provides ``read(path, **options) -> Scene`` and/or
+What a format's reader and writer share lives beside them, named for the
+format: :mod:`.gltf_layout` (the GLB container, ``KHR_lights_punctual`` and
+``extras["shadowgeo"]``), :mod:`.usd_layout` (usd-core, the ``shadowgeo:``
+attributes) and :mod:`.usd_assets` (every asset path checked before usd-core
+opens a stage); X3D's reader is split into ``x3d_parse``, ``x3d_fields``,
+``x3d_geometry``, ``x3d_extrusion``, ``x3d_lights``, ``x3d_proto``,
+``x3d_inline`` and ``x3d_defaults``.
+
+Each reader provides ``read(path, **options) -> Scene`` and each writer
 ``write(scene, path, **options) -> None``; writers go through
 :func:`shadowgeo.io.atomic.atomic_path`, so a failure leaves no partial file.
-Checks more than one format needs live here: :func:`up_and_units` and
-:func:`check_face_indices` for writers, :func:`refuse_outside` for readers
-that follow references to other files.
+Helpers more than one format needs live here: :func:`up_and_units`,
+:func:`check_face_indices` and :func:`look_rotation` for writers,
+:func:`outside_reason` and :func:`refuse_outside` for readers that follow
+references to other files.
 """
 
 from __future__ import annotations
@@ -35,12 +44,12 @@ from ..scene import Scene, Shape
 READERS = {
     ".x3d": "x3d_read",
     ".x3dz": "x3d_read",
-    ".glb": "meshes",
-    ".gltf": "meshes",
-    ".obj": "meshes",
-    ".stl": "meshes",
-    ".ply": "meshes",
-    ".off": "meshes",
+    ".glb": "gltf_read",
+    ".gltf": "gltf_read",
+    ".obj": "trimesh_formats",
+    ".stl": "trimesh_formats",
+    ".ply": "trimesh_formats",
+    ".off": "trimesh_formats",
     ".usda": "usd_read",
     ".usdc": "usd_read",
     ".usd": "usd_read",
@@ -49,8 +58,8 @@ READERS = {
 WRITERS = {
     ".x3d": "x3d_write",
     ".x3dz": "x3d_write",
-    ".glb": "gltf",
-    ".gltf": "gltf",
+    ".glb": "gltf_write",
+    ".gltf": "gltf_write",
     ".usda": "usd_write",
     ".usdc": "usd_write",
     ".usd": "usd_write",
@@ -94,14 +103,26 @@ def check_face_indices(shape: Shape) -> None:
         )
 
 
-def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: str) -> None:
-    """Raise a SceneError unless ``reference`` (a URI or asset path a file
-    names) is relative and ``target`` (what it resolves to) is inside
-    ``folder``: readers open nothing remote, absolute or in a parent folder."""
+def outside_reason(reference: str, target: Path, folder: Path) -> str | None:
+    """Why a reader may not open ``reference`` (a URI or asset path a file
+    names), which resolves to ``target``: ``"not a relative path"`` (remote,
+    absolute, a drive), ``"it leaves the file's folder"`` (``target`` is not
+    inside ``folder``), or None when it may."""
     if ":" in reference.split("/")[0] or reference.startswith(("/", "\\")):
-        raise SceneError("refused: not a relative path", path=str(path), node=where)
+        return "not a relative path"
     if not target.is_relative_to(folder):
-        raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
+        return "it leaves the file's folder"
+    return None
+
+
+def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: str) -> None:
+    """Raise a SceneError naming ``path`` and ``where`` unless ``reference``
+    is relative and ``target`` (what it resolves to) is inside ``folder``
+    (:func:`outside_reason`): readers open nothing remote, absolute or in a
+    parent folder."""
+    reason = outside_reason(reference, target, folder)
+    if reason is not None:
+        raise SceneError(f"refused: {reason}", path=str(path), node=where)
 
 
 def look_rotation(direction) -> np.ndarray:

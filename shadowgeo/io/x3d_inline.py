@@ -4,19 +4,21 @@ Each ``url`` is tried in order. Remote URLs (any ``scheme:``) are never
 fetched; a relative path is taken from the inlining file's folder and must
 stay inside the top scene's folder (else SceneError); the first that exists is
 read. X3D is read with the same rules as the scene (its own DEF names); glTF
-and GLB with the glTF reader (:mod:`.meshes`), lights left out (with a
-warning). An Inline that includes itself, directly or not, is a SceneError.
+and GLB with the glTF reader (:mod:`.gltf_read`), lights left out (with a
+warning), after checking that its buffers and images stay inside the scene's
+folder too. An Inline that includes itself, directly or not, is a SceneError.
 """
 
 from __future__ import annotations
 
-import json
 import re
 from pathlib import Path
+from urllib.parse import unquote
 
 import numpy as np
 
-from . import meshes, x3d_parse
+from . import gltf_read, outside_reason, x3d_parse
+from .gltf_layout import external_uris, json_document
 from .x3d_fields import Context
 from .x3d_geometry import Instance, Mesh
 
@@ -33,7 +35,7 @@ def resolve_url(reader, context: Context, element, url: str) -> Path | str:
         return f"'{url}' is remote (never fetched)"
     folder = Path(context.path).resolve().parent
     candidate = (folder / url).resolve()
-    if not candidate.is_relative_to(reader.root_folder):
+    if outside_reason(url, candidate, reader.root_folder) is not None:
         raise context.error(
             element, f"Inline url '{url}' leaves the scene's folder {reader.root_folder}; refused"
         )
@@ -73,31 +75,17 @@ def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name
     reader.document(reader.inline_files[path], path, matrix, name=name)
 
 
-def _gltf_uris(path: Path) -> list[str]:
-    """The external ``uri`` of a glTF's buffers and images (JSON or GLB)."""
-    data = path.read_bytes()
-    if data[:4] == b"glTF":
-        length = int.from_bytes(data[12:16], "little")
-        data = data[20 : 20 + length]
-    try:
-        document = json.loads(data)
-    except ValueError:
-        return []  # the glTF reader will say what is wrong with it
-    items = [*document.get("buffers", []), *document.get("images", [])]
-    uris = [item.get("uri") for item in items if isinstance(item, dict)]
-    return [uri for uri in uris if isinstance(uri, str) and not uri.startswith("data:")]
-
-
 def _read_gltf(reader, context: Context, element, path: Path):
-    for uri in _gltf_uris(path):
-        target = (path.parent / uri).resolve()
-        if URL_SCHEME.match(uri) or not target.is_relative_to(reader.root_folder):
+    document, _ = json_document(path)
+    for _, uri in external_uris(document):
+        target = (path.parent / unquote(uri)).resolve()
+        if outside_reason(uri, target, reader.root_folder) is not None:
             raise context.error(
                 element,
                 f"glTF '{path.name}' refers to '{uri}', outside the scene's folder; refused",
             )
     # the glTF reader's own checks (compression, quantized positions, ...) and materials
-    loaded = meshes.read(path)
+    loaded = gltf_read.read(path)
     reader.warnings.extend(loaded.warnings)
     if loaded.lights:
         context.warn(element, f"{len(loaded.lights)} light(s) of '{path.name}' not read")

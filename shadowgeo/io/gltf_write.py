@@ -12,16 +12,14 @@ What is written
   transparent, ``doubleSided`` when the shape is not solid, emissive colour.
 - Shadows and shadow volumes (shapes with role ``"shadow"`` / ``"volume"``) as
   their own meshes under one node per light group, named after the group.
-- Lights through ``KHR_lights_punctual``: each on a node whose translation is
-  the light's position and whose rotation turns the node's -Z onto the
-  light's direction. Point and spot lights get ``range`` from a finite radius;
-  a spot's ``outerConeAngle`` is its cut-off angle and ``innerConeAngle`` its
-  beam width, kept just below the outer angle as glTF requires.
+- Lights through ``KHR_lights_punctual``, each on its own node
+  (:func:`.gltf_layout.light_entry`).
 - glTF is Y-up in metres: a scene that is Z-up, or not in metres, goes under
   one root node that rotates and scales it there.
 - What glTF has no field for (roles, groups, X3D's ``shadows``,
   ``shadowIntensity``, ``on``, attenuation, ambient intensity) goes in the
-  node's ``extras["shadowgeo"]``, which :mod:`.meshes` reads back.
+  node's ``extras["shadowgeo"]`` (:mod:`.gltf_layout`), which
+  :mod:`.gltf_read` reads back.
 
 Precision
 ---------
@@ -35,47 +33,24 @@ from __future__ import annotations
 
 import base64
 import json
-import math
-import struct
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SceneError
-from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
-from . import check_face_indices, look_rotation, up_and_units
+from . import check_face_indices, up_and_units
 from .atomic import atomic_path
+from .gltf_layout import LIGHTS, glb_container, light_entry, shape_extras, unit_float
 
 _ARRAY_BUFFER = 34962
 _ELEMENT_ARRAY_BUFFER = 34963
 _FLOAT = 5126
 _UNSIGNED_INT = 5125
-_LIGHTS = "KHR_lights_punctual"
-GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = b"glTF", 0x4E4F534A, 0x004E4942
 
 # Matrices whose TRS decomposition misses them by more than this (relative)
 # are not TRS: glTF's validator rejects them, so they are baked into vertices.
 _TRS_RELATIVE = 1e-9
-
-
-def quaternion_xyzw(rotation: np.ndarray) -> list[float]:
-    """Unit quaternion ``[x, y, z, w]`` of a (3, 3) rotation matrix."""
-    m = np.asarray(rotation, dtype=np.float64)
-    trace = np.trace(m)
-    if trace > 0:
-        s = 2.0 * math.sqrt(trace + 1.0)
-        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
-    else:
-        i = int(np.argmax(np.diag(m)))
-        j, k = (i + 1) % 3, (i + 2) % 3
-        s = 2.0 * math.sqrt(max(1.0 + m[i, i] - m[j, j] - m[k, k], 0.0))
-        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / s]
-        q[i] = s / 4
-        q[j] = (m[j, i] + m[i, j]) / s
-        q[k] = (m[k, i] + m[i, k]) / s
-    q = np.array(q) / np.linalg.norm(q)
-    return [float(v) for v in q]
 
 
 def is_trs(matrix: np.ndarray) -> bool:
@@ -136,8 +111,8 @@ class _Builder:
 
     def material(self, shape: Shape) -> int:
         look = shape.material
-        alpha = _unit_float(1.0 - float(look.transparency))
-        roughness = _unit_float(1.0 - look.shininess)
+        alpha = unit_float(1.0 - float(look.transparency))
+        roughness = unit_float(1.0 - look.shininess)
         key = (
             tuple(look.diffuse_color),
             tuple(look.emissive_color),
@@ -149,14 +124,14 @@ class _Builder:
         if key not in self.materials:
             material = {
                 "pbrMetallicRoughness": {
-                    "baseColorFactor": [*(_unit_float(c) for c in look.diffuse_color), alpha],
+                    "baseColorFactor": [*(unit_float(c) for c in look.diffuse_color), alpha],
                     "metallicFactor": 0.0,
                     "roughnessFactor": roughness,
                 },
                 "doubleSided": not shape.solid,
             }
             if any(look.emissive_color):
-                material["emissiveFactor"] = [_unit_float(c) for c in look.emissive_color]
+                material["emissiveFactor"] = [unit_float(c) for c in look.emissive_color]
             if alpha < 1.0:
                 material["alphaMode"] = "BLEND"
             if look.name:
@@ -165,6 +140,16 @@ class _Builder:
             materials.append(material)
             self.materials[key] = len(materials) - 1
         return self.materials[key]
+
+    def light(self, light: SceneLight) -> dict:
+        """Add the light's KHR_lights_punctual entry; return the node placing it."""
+        lights = self.gltf.setdefault("extensions", {}).setdefault(LIGHTS, {"lights": []})
+        entry, node = light_entry(light, len(lights["lights"]))
+        lights["lights"].append(entry)
+        self.gltf.setdefault("extensionsUsed", [])
+        if LIGHTS not in self.gltf["extensionsUsed"]:
+            self.gltf["extensionsUsed"].append(LIGHTS)
+        return node
 
     def mesh(self, shape: Shape, vertices: np.ndarray) -> int | None:
         """A one-primitive mesh for ``vertices`` (n, 3) and the shape's faces;
@@ -200,55 +185,6 @@ class _Builder:
         meshes.append({"primitives": [primitive], **({"name": shape.name} if shape.name else {})})
         return len(meshes) - 1
 
-    def light(self, light: SceneLight) -> dict:
-        """The KHR_lights_punctual entry and the node that places it."""
-        geometry = light.light
-        entry: dict = {
-            "color": [_unit_float(c) for c in light.color],
-            "intensity": max(float(light.intensity), 0.0) if light.on else 0.0,
-        }
-        node: dict = {}
-        if isinstance(geometry, DirectionalLight):
-            entry["type"] = "directional"
-        else:
-            entry["type"] = "spot" if isinstance(geometry, SpotLight) else "point"
-            node["translation"] = [float(v) for v in geometry.position]
-            if math.isfinite(geometry.radius):
-                entry["range"] = float(geometry.radius)
-        if isinstance(geometry, SpotLight):
-            outer = float(geometry.cut_off_angle)
-            inner = min(max(float(light.beam_width), 0.0), float(np.nextafter(outer, 0.0)))
-            entry["spot"] = {"innerConeAngle": inner, "outerConeAngle": outer}
-        if not isinstance(geometry, PointLight):
-            node["rotation"] = quaternion_xyzw(look_rotation(geometry.direction))
-        if light.name:
-            entry["name"] = light.name
-            node["name"] = light.name
-        lights = self.gltf.setdefault("extensions", {}).setdefault(_LIGHTS, {"lights": []})
-        lights["lights"].append(entry)
-        node["extensions"] = {_LIGHTS: {"light": len(lights["lights"]) - 1}}
-        node["extras"] = {
-            "shadowgeo": {
-                "on": bool(light.on),
-                "intensity": float(light.intensity),
-                "shadows": bool(light.shadows),
-                "shadowIntensity": float(light.shadow_intensity),
-                "ambientIntensity": float(light.ambient_intensity),
-                "attenuation": [float(a) for a in light.attenuation],
-                "beamWidth": float(light.beam_width),
-                "global": bool(light.global_),
-            }
-        }
-        self.gltf.setdefault("extensionsUsed", [])
-        if _LIGHTS not in self.gltf["extensionsUsed"]:
-            self.gltf["extensionsUsed"].append(_LIGHTS)
-        return node
-
-
-def _unit_float(value: float) -> float:
-    """A colour or factor clamped to glTF's [0, 1]."""
-    return min(max(float(value), 0.0), 1.0)
-
 
 def _shape_node(builder: _Builder, shape: Shape) -> dict:
     node: dict = {}
@@ -264,13 +200,7 @@ def _shape_node(builder: _Builder, shape: Shape) -> dict:
     mesh = builder.mesh(shape, vertices)
     if mesh is not None:
         node["mesh"] = mesh
-    extras = {"role": shape.role}
-    if shape.group:
-        extras["group"] = shape.group
-    if not shape.casts_shadow or shape.receives_shadow:
-        extras["castsShadow"] = bool(shape.casts_shadow)
-        extras["receivesShadow"] = bool(shape.receives_shadow)
-    node["extras"] = {"shadowgeo": extras}
+    node["extras"] = shape_extras(shape)
     return node
 
 
@@ -321,17 +251,6 @@ def build(scene: Scene) -> tuple[dict, bytes]:
         del builder.gltf["scenes"][0]["nodes"], builder.gltf["nodes"]
     builder.binary.extend(b"\0" * (-len(builder.binary) % 4))
     return builder.gltf, bytes(builder.binary)
-
-
-def glb_container(text: bytes, binary: bytes) -> bytes:
-    """A GLB file of a JSON chunk ``text`` and, when not empty, a BIN chunk
-    ``binary``, each padded to 4 bytes as the spec requires (spaces, zeros)."""
-    text += b" " * (-len(text) % 4)
-    chunks = struct.pack("<II", len(text), JSON_CHUNK) + text
-    if binary:
-        binary += b"\0" * (-len(binary) % 4)
-        chunks += struct.pack("<II", len(binary), BIN_CHUNK) + binary
-    return struct.pack("<4sII", GLB_MAGIC, 2, 12 + len(chunks)) + chunks
 
 
 def _glb(gltf: dict, binary: bytes) -> bytes:

@@ -1,11 +1,12 @@
-"""Mesh-format input through trimesh: ``.glb``, ``.gltf``, ``.obj``, ``.stl``,
-``.ply``, ``.off``.
+"""glTF 2.0 input (``.glb``, ``.gltf``): triangles through trimesh, the rest
+from the JSON.
 
-trimesh decodes the triangles and the node graph. For glTF this module also
-reads the JSON itself, for what trimesh drops or changes: the nodes' own
-names (trimesh renames duplicates), materials as float factors (trimesh keeps
-8-bit colours), ``KHR_lights_punctual`` lights and the ``extras["shadowgeo"]``
-that :mod:`.gltf` writes (roles, light groups, X3D light fields).
+trimesh decodes the triangles and the node graph (:mod:`.trimesh_formats`).
+This module reads the JSON itself for what trimesh drops or changes: the
+nodes' own names (trimesh renames duplicates), materials as float factors
+(trimesh keeps 8-bit colours), ``KHR_lights_punctual`` lights and the
+``extras["shadowgeo"]`` that :mod:`.gltf_write` writes (roles, light groups,
+X3D light fields; the layout is in :mod:`.gltf_layout`).
 
 Safety: a glTF's buffers and images may only be data URIs or relative paths
 that stay in the file's folder; anything else (``http:``, ``/etc/...``,
@@ -14,59 +15,38 @@ remote resources. Textures play no part in shadows and are not decoded; a
 missing image is a warning, a missing buffer an error.
 
 glTF is Y-up in metres, so a glTF scene reads as ``up_axis="Y"``,
-``meters_per_unit=1``. Other mesh formats carry no units: they read as Y-up
-with ``meters_per_unit=1`` too, which is what they mean in practice.
+``meters_per_unit=1``.
 """
 
 from __future__ import annotations
 
-import io
 import json
-import math
-import struct
 from pathlib import Path
 from urllib.parse import unquote
 
 import numpy as np
-import trimesh
 
 from ..errors import SceneError
-from ..lights import DirectionalLight, PointLight, SpotLight
-from ..scene import Material, Scene, SceneLight, Shape
+from ..scene import Material, Scene, Shape
 from . import refuse_outside
-from .gltf import BIN_CHUNK, GLB_MAGIC, JSON_CHUNK, glb_container
-
-_LIGHTS = "KHR_lights_punctual"
+from .gltf_layout import (
+    LIGHTS,
+    external_uris,
+    glb_container,
+    json_document,
+    scene_light,
+    shadowgeo_extras,
+    shape_fields,
+)
+from .trimesh_formats import MALFORMED, load_scene, mesh_shape, triangle_meshes
 
 
 def _gltf_document(path: Path) -> tuple[dict, bytes | None]:
-    """The JSON part of a .gltf or .glb file, checked to be a JSON object, and
-    a GLB's binary chunk (None for .gltf)."""
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise SceneError(f"cannot read: {error.strerror}", path=str(path)) from error
-    binary = None
-    if data[:4] == GLB_MAGIC:
-        if len(data) < 20:
-            raise SceneError("truncated GLB header", path=str(path))
-        length, kind = struct.unpack_from("<II", data, 12)
-        if kind != JSON_CHUNK or 20 + length > len(data):
-            raise SceneError("GLB's first chunk is not a complete JSON chunk", path=str(path))
-        rest = data[20 + length :]
-        binary = b""
-        if len(rest) >= 8:
-            bin_length, bin_kind = struct.unpack_from("<II", rest, 0)
-            if bin_kind == BIN_CHUNK:
-                binary = rest[8 : 8 + bin_length]
-        data = data[20 : 20 + length]
-    try:
-        document = json.loads(data)
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise SceneError(f"not glTF: invalid JSON ({error})", path=str(path)) from None
-    except RecursionError:
-        raise SceneError("not glTF: JSON nested too deeply", path=str(path)) from None
-    if not isinstance(document, dict) or not isinstance(document.get("asset"), dict):
+    """The JSON document of a .gltf or .glb file, checked to be glTF 2.x with
+    node references that exist and geometry trimesh decodes correctly, and a
+    GLB's binary chunk (None for .gltf)."""
+    document, binary = json_document(path)
+    if not isinstance(document.get("asset"), dict):
         raise SceneError("not glTF: no 'asset' object", path=str(path))
     version = str(document["asset"].get("version", ""))
     if not version.startswith("2."):
@@ -131,19 +111,14 @@ def _check_uris(document: dict, path: Path) -> list[str]:
     shadowgeo does not use)."""
     folder = path.resolve().parent
     warnings = []
-    for kind in ("buffers", "images"):
-        for index, resource in enumerate(document.get(kind) or []):
-            uri = resource.get("uri") if isinstance(resource, dict) else None
-            if not isinstance(uri, str) or uri.startswith("data:"):
-                continue
-            where = f"{kind}[{index}] uri {uri!r}"
-            target = (folder / unquote(uri)).resolve()
-            refuse_outside(uri, target, folder, path=path, where=where)
-            if target.is_file():
-                continue
-            if kind == "buffers":
-                raise SceneError("missing external file", path=str(path), node=where)
-            warnings.append(f"{path.name}: {where}: missing texture image, ignored")
+    for where, uri in external_uris(document):
+        target = (folder / unquote(uri)).resolve()
+        refuse_outside(uri, target, folder, path=path, where=where)
+        if target.is_file():
+            continue
+        if where.startswith("buffers"):
+            raise SceneError("missing external file", path=str(path), node=where)
+        warnings.append(f"{path.name}: {where}: missing texture image, ignored")
     return warnings
 
 
@@ -201,13 +176,6 @@ def _untextured(material):
     return plain
 
 
-def _shadowgeo_extras(node) -> dict:
-    """``node["extras"]["shadowgeo"]`` where both are objects, else ``{}``."""
-    extras = node.get("extras") if isinstance(node, dict) else None
-    found = extras.get("shadowgeo") if isinstance(extras, dict) else None
-    return found if isinstance(found, dict) else {}
-
-
 def _material_from_gltf(entry: dict) -> tuple[Material, bool]:
     """(Material, solid) from a glTF material object."""
     pbr = entry.get("pbrMetallicRoughness") or {}
@@ -223,132 +191,60 @@ def _material_from_gltf(entry: dict) -> tuple[Material, bool]:
     return material, not entry.get("doubleSided", False)
 
 
-def _material_from_trimesh(geometry) -> tuple[Material, bool]:
-    """(Material, solid) from a trimesh visual (8-bit colours)."""
-    visual = getattr(geometry, "visual", None)
-    material = getattr(visual, "material", None)
-    color = None
-    solid = True
-    if material is not None:
-        color = getattr(material, "baseColorFactor", None)
-        if color is None:
-            color = getattr(material, "main_color", None)
-        solid = not getattr(material, "doubleSided", False)
-    elif visual is not None and getattr(visual, "kind", None) in ("face", "vertex"):
-        color = visual.main_color
-    if color is None:
-        return Material(), solid
-    rgba = np.asarray(color, dtype=np.float64).reshape(-1)[:4] / 255.0
-    alpha = rgba[3] if len(rgba) == 4 else 1.0
-    name = getattr(material, "name", None)
-    return Material(diffuse_color=tuple(rgba[:3]), transparency=1.0 - alpha, name=name), solid
-
-
-def _light(entry: dict, world: np.ndarray, name: str | None, extras: dict) -> SceneLight:
-    """A SceneLight from a KHR_lights_punctual entry placed by ``world`` (4, 4)."""
-    kind = entry.get("type")
-    position = world[:3, 3]
-    direction = world[:3, :3] @ [0.0, 0.0, -1.0]
-    radius = float(entry.get("range", math.inf))
-    if kind == "directional":
-        light = DirectionalLight(direction)
-    elif kind == "point":
-        light = PointLight(position, radius)
-    elif kind == "spot":
-        cone = entry.get("spot") or {}
-        light = SpotLight(
-            position, direction, float(cone.get("outerConeAngle", math.pi / 4)), radius
-        )
-    else:
-        raise ValueError(f"unknown light type {kind!r}")
-    beam = extras.get("beamWidth")
-    if beam is None:
-        beam = (entry.get("spot") or {}).get("innerConeAngle", 0.0)  # the spec's default
-    return SceneLight(
-        light,
-        name=name if name is not None else entry.get("name"),
-        color=tuple(float(c) for c in entry.get("color", [1, 1, 1])[:3]),
-        intensity=float(extras.get("intensity", entry.get("intensity", 1.0))),
-        ambient_intensity=float(extras.get("ambientIntensity", 0.0)),
-        attenuation=tuple(float(a) for a in extras.get("attenuation", (1.0, 0.0, 0.0))),
-        beam_width=float(beam),
-        on=bool(extras.get("on", True)),
-        global_=bool(extras.get("global", True)),
-        shadows=bool(extras.get("shadows", False)),
-        shadow_intensity=float(extras.get("shadowIntensity", 1.0)),
-    )
-
-
-def _load(path: Path, data: bytes | None = None) -> trimesh.Scene:
-    """trimesh's scene of ``path``, or of ``data`` in its place (external
-    resources then resolve from the file's folder)."""
-    try:
-        if data is None:
-            loaded = trimesh.load_scene(path, allow_remote=False)
-        else:
-            loaded = trimesh.load_scene(
-                io.BytesIO(data),
-                file_type=path.suffix.lower().lstrip("."),
-                resolver=trimesh.resolvers.FilePathResolver(str(path)),
-                allow_remote=False,
-            )
-    except SceneError:
-        raise
-    except Exception as error:  # trimesh raises many kinds on corrupt files
-        kind = path.suffix.lower().lstrip(".").upper()
-        message = f"{type(error).__name__}: {error}" if str(error) else type(error).__name__
-        raise SceneError(f"cannot read as {kind}: {message}", path=str(path)) from error
-    return loaded
-
-
 def read(path, **options) -> Scene:
-    """Read a mesh file into a :class:`Scene`.
+    """Read a glTF 2.0 file into a :class:`Scene`.
 
     Parameters
     ----------
     path : str or Path
-        ``.glb``, ``.gltf``, ``.obj``, ``.stl``, ``.ply`` or ``.off``.
+        ``.glb`` or ``.gltf``.
 
     Returns
     -------
     Scene
-        One shape per mesh instance (glTF node, OBJ object, ...), with its
-        world transform, material, name and, for glTF written by shadowgeo,
-        its role and light group; glTF lights. Points and lines are skipped
-        with a warning.
+        One shape per mesh instance (glTF node), with its world transform,
+        material, name and, for glTF written by shadowgeo, its role and light
+        group; the ``KHR_lights_punctual`` lights. Points and lines are
+        skipped with a warning.
 
     Raises
     ------
     SceneError
-        Missing, unreadable or corrupt file; a glTF resource outside its folder.
+        Missing, unreadable or corrupt file; a resource outside its folder.
     """
     path = Path(path)
     if options:
-        raise SceneError(f"mesh reader takes no options, got {sorted(options)}", path=str(path))
+        raise SceneError(f"glTF reader takes no options, got {sorted(options)}", path=str(path))
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
-    is_gltf = path.suffix.lower() in (".glb", ".gltf")
-    document, frames, data, warnings = {}, {}, None, []
-    if is_gltf:
-        document, binary = _gltf_document(path)
-        warnings = _check_uris(document, path)
-        data, frames = _for_trimesh(document, binary)
-    loaded = _load(path, data)
+    document, binary = _gltf_document(path)
+    warnings = _check_uris(document, path)
+    data, frames = _for_trimesh(document, binary)
+    loaded = load_scene(path, data)
     scene = Scene(path=str(path), warnings=warnings)
     nodes = document.get("nodes") or []
     try:
         _read_shapes(scene, loaded, path, frames, nodes, document)
-        if is_gltf:
-            _read_lights(scene, loaded.graph, frames, nodes, document)
-    except (TypeError, ValueError, KeyError, IndexError, AttributeError) as error:
+        _read_lights(scene, loaded.graph, frames, nodes, document)
+    except MALFORMED as error:
         if isinstance(error, SceneError):
             raise
         kind = path.suffix.lower().lstrip(".").upper()
         raise SceneError(f"malformed {kind}: {error}", path=str(path)) from error
-    if not is_gltf and not any(shape.n_faces for shape in scene.shapes):
-        # A glTF may hold only lights; a plain mesh file without triangles is broken.
-        raise SceneError("no triangles in the file", path=str(path))
+    # A glTF may hold only lights: no triangles is no error here.
     return scene
+
+
+def _look(document: dict, node: dict) -> dict:
+    """``material`` and ``solid`` from the glTF material of a node whose mesh
+    is one primitive with a material (exact float factors); else ``{}``, and
+    trimesh's 8-bit colours serve."""
+    primitives = (document.get("meshes") or [{}])[node["mesh"]] if "mesh" in node else {}
+    primitives = primitives.get("primitives") or []
+    if len(primitives) == 1 and "material" in primitives[0]:
+        material, solid = _material_from_gltf(document["materials"][primitives[0]["material"]])
+        return {"material": material, "solid": solid}
+    return {}
 
 
 def _node_index(graph, frame: str, frames: dict[str, int]) -> int | None:
@@ -364,39 +260,11 @@ def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
     # In the file's node order (trimesh's graph order is not).
     order = sorted(indices, key=lambda frame: (indices[frame] or 0, frame))
     keys: list[int] = []
-    for frame in order:
-        transform, geometry_name = graph[frame]
-        geometry = loaded.geometry[geometry_name]
-        if not isinstance(geometry, trimesh.Trimesh):
-            scene.warnings.append(f"{path.name}: skipped {frame!r}: {type(geometry).__name__}")
-            continue
+    for frame, transform, _, geometry in triangle_meshes(loaded, path, scene.warnings, order):
         index = indices[frame]
         node = nodes[index] if index is not None else {}
-        extras = _shadowgeo_extras(node)
-        material, solid = _material_from_trimesh(geometry)
-        primitives = (document.get("meshes") or [{}])[node["mesh"]] if "mesh" in node else {}
-        primitives = primitives.get("primitives") or []
-        if len(primitives) == 1 and "material" in primitives[0]:
-            material, solid = _material_from_gltf(document["materials"][primitives[0]["material"]])
-        if document:
-            name = node.get("name")
-        else:
-            name = geometry_name if len(loaded.geometry) > 1 else path.stem
-        scene.shapes.append(
-            Shape(
-                np.array(geometry.vertices, dtype=np.float64),
-                np.array(geometry.faces, dtype=np.int64),
-                np.array(transform, dtype=np.float64),
-                material=material,
-                name=name,
-                solid=solid,
-                role=extras.get("role", "geometry"),
-                group=extras.get("group"),
-                source=f"{path.name}, node {name!r}" if name else path.name,
-                casts_shadow=bool(extras.get("castsShadow", True)),
-                receives_shadow=bool(extras.get("receivesShadow", False)),
-            )
-        )
+        fields = {**_look(document, node), **shape_fields(shadowgeo_extras(node))}
+        scene.shapes.append(mesh_shape(geometry, transform, node.get("name"), path, **fields))
         keys.append(index or 0)
     _read_empty_shapes(scene, graph, frames, nodes, keys)
 
@@ -405,7 +273,7 @@ def _read_empty_shapes(scene, graph, frames, nodes, keys) -> None:
     """Shapes shadowgeo wrote without triangles are nodes without a mesh
     (glTF forbids empty accessors); put them back in node order."""
     for frame, index in frames.items():
-        extras = _shadowgeo_extras(nodes[index])
+        extras = shadowgeo_extras(nodes[index])
         if "mesh" in nodes[index] or extras.get("role") not in ("geometry", "shadow", "volume"):
             continue
         if frame not in graph.nodes:
@@ -416,8 +284,7 @@ def _read_empty_shapes(scene, graph, frames, nodes, keys) -> None:
                 np.zeros((0, 3), dtype=np.int64),
                 np.asarray(graph.get(frame)[0], dtype=np.float64),
                 name=nodes[index].get("name"),
-                role=extras["role"],
-                group=extras.get("group"),
+                **shape_fields(extras),
             )
         )
         keys.append(index)
@@ -426,14 +293,14 @@ def _read_empty_shapes(scene, graph, frames, nodes, keys) -> None:
 
 
 def _read_lights(scene, graph, frames, nodes, document) -> None:
-    entries = ((document.get("extensions") or {}).get(_LIGHTS) or {}).get("lights") or []
+    entries = ((document.get("extensions") or {}).get(LIGHTS) or {}).get("lights") or []
     for frame, index in frames.items():
         node = nodes[index]
-        reference = (node.get("extensions") or {}).get(_LIGHTS)
+        reference = (node.get("extensions") or {}).get(LIGHTS)
         if reference is None or frame not in graph.nodes:
             continue
         world, _ = graph.get(frame)
-        extras = _shadowgeo_extras(node)
+        extras = shadowgeo_extras(node)
         scene.lights.append(
-            _light(entries[reference["light"]], np.asarray(world), node.get("name"), extras)
+            scene_light(entries[reference["light"]], np.asarray(world), node.get("name"), extras)
         )

@@ -1,0 +1,240 @@
+"""What the glTF reader and writer share: the GLB container, the JSON
+document, the ``KHR_lights_punctual`` lights and the ``extras["shadowgeo"]``
+layout, each written and read back here, side by side.
+
+``extras["shadowgeo"]``
+-----------------------
+What glTF has no field for goes in a node's ``extras["shadowgeo"]``:
+
+- shape nodes: ``role`` (``"geometry"``, ``"shadow"``, ``"volume"``), ``group``
+  (the light group) and, when not the defaults, ``castsShadow`` and
+  ``receivesShadow``;
+- light nodes: ``on``, ``intensity`` (unclamped), ``shadows``,
+  ``shadowIntensity``, ``ambientIntensity``, ``attenuation``, ``beamWidth``
+  and ``global``, X3D's light fields;
+- group and root nodes the writer adds: ``role`` ``"group"`` / ``"root"``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SceneError
+from ..lights import DirectionalLight, PointLight, SpotLight
+from ..scene import SceneLight, Shape
+from . import look_rotation
+
+GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = b"glTF", 0x4E4F534A, 0x004E4942
+LIGHTS = "KHR_lights_punctual"
+
+
+# -- the container ------------------------------------------------------------------------
+
+
+def glb_container(text: bytes, binary: bytes) -> bytes:
+    """A GLB file of a JSON chunk ``text`` and, when not empty, a BIN chunk
+    ``binary``, each padded to 4 bytes as the spec requires (spaces, zeros)."""
+    text += b" " * (-len(text) % 4)
+    chunks = struct.pack("<II", len(text), JSON_CHUNK) + text
+    if binary:
+        binary += b"\0" * (-len(binary) % 4)
+        chunks += struct.pack("<II", len(binary), BIN_CHUNK) + binary
+    return struct.pack("<4sII", GLB_MAGIC, 2, 12 + len(chunks)) + chunks
+
+
+def glb_chunks(data: bytes, path: Path) -> tuple[bytes, bytes]:
+    """The JSON chunk and the BIN chunk (``b""`` when there is none) of the
+    GLB file ``data``, each checked to lie inside the file."""
+    if len(data) < 20:
+        raise SceneError("truncated GLB header", path=str(path))
+    length, kind = struct.unpack_from("<II", data, 12)
+    if kind != JSON_CHUNK or 20 + length > len(data):
+        raise SceneError("GLB's first chunk is not a complete JSON chunk", path=str(path))
+    rest = data[20 + length :]
+    binary = b""
+    if len(rest) >= 8:
+        bin_length, bin_kind = struct.unpack_from("<II", rest, 0)
+        if bin_kind == BIN_CHUNK:
+            binary = rest[8 : 8 + bin_length]
+    return data[20 : 20 + length], binary
+
+
+def json_document(path: Path) -> tuple[dict, bytes | None]:
+    """The JSON document of a ``.gltf`` or ``.glb`` file, checked to be a JSON
+    object, and a GLB's binary chunk (None for ``.gltf``)."""
+    try:
+        data = path.read_bytes()
+    except OSError as error:
+        raise SceneError(f"cannot read: {error.strerror}", path=str(path)) from error
+    binary = None
+    if data[:4] == GLB_MAGIC:
+        data, binary = glb_chunks(data, path)
+    try:
+        document = json.loads(data)
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise SceneError(f"not glTF: invalid JSON ({error})", path=str(path)) from None
+    except RecursionError:
+        raise SceneError("not glTF: JSON nested too deeply", path=str(path)) from None
+    if not isinstance(document, dict):
+        raise SceneError("not glTF: no 'asset' object", path=str(path))
+    return document, binary
+
+
+def external_uris(document: dict) -> list[tuple[str, str]]:
+    """``(where, uri)`` of each buffer and image that names a file (not a
+    ``data:`` URI), ``where`` as in ``"buffers[0] uri 'a.bin'"``."""
+    found = []
+    for kind in ("buffers", "images"):
+        for index, resource in enumerate(document.get(kind) or []):
+            uri = resource.get("uri") if isinstance(resource, dict) else None
+            if isinstance(uri, str) and not uri.startswith("data:"):
+                found.append((f"{kind}[{index}] uri {uri!r}", uri))
+    return found
+
+
+# -- extras["shadowgeo"] ------------------------------------------------------------------
+
+
+def shadowgeo_extras(node) -> dict:
+    """``node["extras"]["shadowgeo"]`` where both are objects, else ``{}``."""
+    extras = node.get("extras") if isinstance(node, dict) else None
+    found = extras.get("shadowgeo") if isinstance(extras, dict) else None
+    return found if isinstance(found, dict) else {}
+
+
+def shape_extras(shape: Shape) -> dict:
+    """A shape node's ``extras`` (see the module's docstring)."""
+    extras = {"role": shape.role}
+    if shape.group:
+        extras["group"] = shape.group
+    if not shape.casts_shadow or shape.receives_shadow:
+        extras["castsShadow"] = bool(shape.casts_shadow)
+        extras["receivesShadow"] = bool(shape.receives_shadow)
+    return {"shadowgeo": extras}
+
+
+def shape_fields(extras: dict) -> dict:
+    """The :class:`Shape` keyword arguments a shape node's
+    ``extras["shadowgeo"]`` holds, with their defaults."""
+    return {
+        "role": extras.get("role", "geometry"),
+        "group": extras.get("group"),
+        "casts_shadow": bool(extras.get("castsShadow", True)),
+        "receives_shadow": bool(extras.get("receivesShadow", False)),
+    }
+
+
+# -- lights -------------------------------------------------------------------------------
+
+
+def quaternion_xyzw(rotation: np.ndarray) -> list[float]:
+    """Unit quaternion ``[x, y, z, w]`` of a (3, 3) rotation matrix."""
+    m = np.asarray(rotation, dtype=np.float64)
+    trace = np.trace(m)
+    if trace > 0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    else:
+        i = int(np.argmax(np.diag(m)))
+        j, k = (i + 1) % 3, (i + 2) % 3
+        s = 2.0 * math.sqrt(max(1.0 + m[i, i] - m[j, j] - m[k, k], 0.0))
+        q = [0.0, 0.0, 0.0, (m[k, j] - m[j, k]) / s]
+        q[i] = s / 4
+        q[j] = (m[j, i] + m[i, j]) / s
+        q[k] = (m[k, i] + m[i, k]) / s
+    q = np.array(q) / np.linalg.norm(q)
+    return [float(v) for v in q]
+
+
+def unit_float(value: float) -> float:
+    """A colour or factor clamped to glTF's [0, 1]."""
+    return min(max(float(value), 0.0), 1.0)
+
+
+def light_entry(light: SceneLight, index: int) -> tuple[dict, dict]:
+    """The ``KHR_lights_punctual`` entry of ``light`` and the node that places
+    it and refers to the entry by ``index``.
+
+    The node's translation is the light's position and its rotation turns the
+    node's -Z onto the light's direction. Point and spot lights get ``range``
+    from a finite radius; a spot's ``outerConeAngle`` is its cut-off angle and
+    ``innerConeAngle`` its beam width, kept just below the outer angle as glTF
+    requires. The node's ``extras`` keep what glTF has no field for.
+    """
+    geometry = light.light
+    entry: dict = {
+        "color": [unit_float(c) for c in light.color],
+        "intensity": max(float(light.intensity), 0.0) if light.on else 0.0,
+    }
+    node: dict = {}
+    if isinstance(geometry, DirectionalLight):
+        entry["type"] = "directional"
+    else:
+        entry["type"] = "spot" if isinstance(geometry, SpotLight) else "point"
+        node["translation"] = [float(v) for v in geometry.position]
+        if math.isfinite(geometry.radius):
+            entry["range"] = float(geometry.radius)
+    if isinstance(geometry, SpotLight):
+        outer = float(geometry.cut_off_angle)
+        inner = min(max(float(light.beam_width), 0.0), float(np.nextafter(outer, 0.0)))
+        entry["spot"] = {"innerConeAngle": inner, "outerConeAngle": outer}
+    if not isinstance(geometry, PointLight):
+        node["rotation"] = quaternion_xyzw(look_rotation(geometry.direction))
+    if light.name:
+        entry["name"] = light.name
+        node["name"] = light.name
+    node["extensions"] = {LIGHTS: {"light": index}}
+    node["extras"] = {
+        "shadowgeo": {
+            "on": bool(light.on),
+            "intensity": float(light.intensity),
+            "shadows": bool(light.shadows),
+            "shadowIntensity": float(light.shadow_intensity),
+            "ambientIntensity": float(light.ambient_intensity),
+            "attenuation": [float(a) for a in light.attenuation],
+            "beamWidth": float(light.beam_width),
+            "global": bool(light.global_),
+        }
+    }
+    return entry, node
+
+
+def scene_light(entry: dict, world: np.ndarray, name: str | None, extras: dict) -> SceneLight:
+    """A SceneLight from a ``KHR_lights_punctual`` entry placed by ``world``
+    (4, 4), the node's ``name`` and its ``extras["shadowgeo"]``."""
+    kind = entry.get("type")
+    position = world[:3, 3]
+    direction = world[:3, :3] @ [0.0, 0.0, -1.0]
+    radius = float(entry.get("range", math.inf))
+    if kind == "directional":
+        light = DirectionalLight(direction)
+    elif kind == "point":
+        light = PointLight(position, radius)
+    elif kind == "spot":
+        cone = entry.get("spot") or {}
+        light = SpotLight(
+            position, direction, float(cone.get("outerConeAngle", math.pi / 4)), radius
+        )
+    else:
+        raise ValueError(f"unknown light type {kind!r}")
+    beam = extras.get("beamWidth")
+    if beam is None:
+        beam = (entry.get("spot") or {}).get("innerConeAngle", 0.0)  # the spec's default
+    return SceneLight(
+        light,
+        name=name if name is not None else entry.get("name"),
+        color=tuple(float(c) for c in entry.get("color", [1, 1, 1])[:3]),
+        intensity=float(extras.get("intensity", entry.get("intensity", 1.0))),
+        ambient_intensity=float(extras.get("ambientIntensity", 0.0)),
+        attenuation=tuple(float(a) for a in extras.get("attenuation", (1.0, 0.0, 0.0))),
+        beam_width=float(beam),
+        on=bool(extras.get("on", True)),
+        global_=bool(extras.get("global", True)),
+        shadows=bool(extras.get("shadows", False)),
+        shadow_intensity=float(extras.get("shadowIntensity", 1.0)),
+    )

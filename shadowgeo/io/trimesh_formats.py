@@ -1,0 +1,137 @@
+"""OBJ, STL, PLY and OFF input through trimesh (read only).
+
+trimesh decodes the triangles and, for formats that have one, the node
+graph. These formats carry no units: a scene reads as Y-up with
+``meters_per_unit=1``, which is what they mean in practice. The glTF reader
+(:mod:`.gltf_read`) also decodes its triangles here, with
+:func:`load_scene` and :func:`trimesh_material`.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from ..errors import SceneError
+from ..scene import Material, Scene, Shape
+
+MALFORMED = (TypeError, ValueError, KeyError, IndexError, AttributeError)
+
+
+def load_scene(path: Path, data: bytes | None = None) -> trimesh.Scene:
+    """trimesh's scene of ``path``, or of ``data`` in its place (external
+    resources then resolve from the file's folder); SceneError naming the
+    file when trimesh cannot read it. Nothing remote is ever fetched."""
+    try:
+        if data is None:
+            loaded = trimesh.load_scene(path, allow_remote=False)
+        else:
+            loaded = trimesh.load_scene(
+                io.BytesIO(data),
+                file_type=path.suffix.lower().lstrip("."),
+                resolver=trimesh.resolvers.FilePathResolver(str(path)),
+                allow_remote=False,
+            )
+    except SceneError:
+        raise
+    except Exception as error:  # trimesh raises many kinds on corrupt files
+        kind = path.suffix.lower().lstrip(".").upper()
+        message = f"{type(error).__name__}: {error}" if str(error) else type(error).__name__
+        raise SceneError(f"cannot read as {kind}: {message}", path=str(path)) from error
+    return loaded
+
+
+def trimesh_material(geometry) -> tuple[Material, bool]:
+    """(Material, solid) from a trimesh visual (8-bit colours)."""
+    visual = getattr(geometry, "visual", None)
+    material = getattr(visual, "material", None)
+    color = None
+    solid = True
+    if material is not None:
+        color = getattr(material, "baseColorFactor", None)
+        if color is None:
+            color = getattr(material, "main_color", None)
+        solid = not getattr(material, "doubleSided", False)
+    elif visual is not None and getattr(visual, "kind", None) in ("face", "vertex"):
+        color = visual.main_color
+    if color is None:
+        return Material(), solid
+    rgba = np.asarray(color, dtype=np.float64).reshape(-1)[:4] / 255.0
+    alpha = rgba[3] if len(rgba) == 4 else 1.0
+    name = getattr(material, "name", None)
+    return Material(diffuse_color=tuple(rgba[:3]), transparency=1.0 - alpha, name=name), solid
+
+
+def triangle_meshes(loaded: trimesh.Scene, path: Path, warnings: list[str], frames):
+    """``(frame, transform, geometry name, Trimesh)`` of each of ``frames``
+    (frames of ``loaded``'s graph that hold geometry), skipping points and
+    lines with a warning."""
+    for frame in frames:
+        transform, geometry_name = loaded.graph[frame]
+        geometry = loaded.geometry[geometry_name]
+        if not isinstance(geometry, trimesh.Trimesh):
+            warnings.append(f"{path.name}: skipped {frame!r}: {type(geometry).__name__}")
+            continue
+        yield frame, transform, geometry_name, geometry
+
+
+def mesh_shape(geometry, transform, name: str | None, path: Path, **fields) -> Shape:
+    """The :class:`Shape` of a ``trimesh.Trimesh`` placed by ``transform``
+    (4, 4), named ``name`` in the file ``path``; its material and solidity
+    come from trimesh unless ``fields`` (other Shape arguments) give them."""
+    material, solid = trimesh_material(geometry)
+    return Shape(
+        np.array(geometry.vertices, dtype=np.float64),
+        np.array(geometry.faces, dtype=np.int64),
+        np.array(transform, dtype=np.float64),
+        name=name,
+        source=f"{path.name}, node {name!r}" if name else path.name,
+        **{"material": material, "solid": solid, **fields},
+    )
+
+
+def read(path, **options) -> Scene:
+    """Read an OBJ, STL, PLY or OFF file into a :class:`Scene`.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``.obj``, ``.stl``, ``.ply`` or ``.off``.
+
+    Returns
+    -------
+    Scene
+        One shape per mesh instance (OBJ object, ...), with its world
+        transform, colour and name (the geometry's, or the file's stem when
+        there is one geometry). Points and lines are skipped with a warning.
+
+    Raises
+    ------
+    SceneError
+        Missing, unreadable or corrupt file, or a file without triangles.
+    """
+    path = Path(path)
+    if options:
+        raise SceneError(f"mesh reader takes no options, got {sorted(options)}", path=str(path))
+    if not path.is_file():
+        raise SceneError("no such file", path=str(path))
+    loaded = load_scene(path)
+    scene = Scene(path=str(path))
+    frames = sorted(loaded.graph.nodes_geometry)
+    try:
+        for _, transform, geometry_name, geometry in triangle_meshes(
+            loaded, path, scene.warnings, frames
+        ):
+            name = geometry_name if len(loaded.geometry) > 1 else path.stem
+            scene.shapes.append(mesh_shape(geometry, transform, name, path))
+    except MALFORMED as error:
+        if isinstance(error, SceneError):
+            raise
+        kind = path.suffix.lower().lstrip(".").upper()
+        raise SceneError(f"malformed {kind}: {error}", path=str(path)) from error
+    if not any(shape.n_faces for shape in scene.shapes):
+        raise SceneError("no triangles in the file", path=str(path))
+    return scene
