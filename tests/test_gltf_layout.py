@@ -1,0 +1,95 @@
+"""What the glTF reader and writer share: GLB chunks parsed with length
+checks (for files and X3D Inlines alike), the extras layout, and the one
+containment rule for the files a scene names."""
+
+from __future__ import annotations
+
+import json
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import shadowgeo as sg
+from shadowgeo.io import outside_reason
+from shadowgeo.io.gltf_layout import BIN_CHUNK, JSON_CHUNK, glb_chunks, glb_container
+
+TEXT = json.dumps({"asset": {"version": "2.0"}}).encode()
+
+
+def _glb(json_length: int, chunk: bytes, tail: bytes = b"") -> bytes:
+    """A GLB by hand: header, a JSON chunk header claiming ``json_length``, ``chunk``."""
+    body = struct.pack("<II", json_length, JSON_CHUNK) + chunk + tail
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(body)) + body
+
+
+def test_chunks_come_back_as_written():
+    binary = bytes(range(10))
+    text, back = glb_chunks(glb_container(TEXT, binary), Path("x.glb"))
+    # The container pads JSON with spaces and BIN with zeros to 4 bytes.
+    assert text.rstrip(b" ") == TEXT and back == binary + b"\0\0"
+    assert glb_chunks(glb_container(TEXT, b""), Path("x.glb"))[1] == b""
+
+
+@pytest.mark.parametrize(
+    "data, message",
+    [
+        (b"glTF\x02\x00\x00\x00", "truncated GLB header"),
+        (_glb(len(TEXT) + 1, TEXT), "not a complete JSON chunk"),
+        (_glb(2**31, TEXT), "not a complete JSON chunk"),
+        (_glb(len(TEXT), TEXT).replace(struct.pack("<I", JSON_CHUNK), b"BIN\0"), "JSON chunk"),
+    ],
+)
+def test_lying_lengths_are_refused(data, message):
+    with pytest.raises(sg.SceneError, match=message) as caught:
+        glb_chunks(data, Path("liar.glb"))
+    assert "liar.glb" in str(caught.value)
+
+
+def test_a_bin_chunk_longer_than_the_file_gives_what_is_there():
+    tail = struct.pack("<II", 1000, BIN_CHUNK) + b"\1\2\3\4"
+    assert glb_chunks(_glb(len(TEXT), TEXT, tail), Path("x.glb"))[1] == b"\1\2\3\4"
+
+
+def test_an_inlined_glb_with_a_lying_length_is_a_scene_error(tmp_path):
+    (tmp_path / "part.glb").write_bytes(_glb(len(TEXT) + 400, TEXT))
+    scene = tmp_path / "scene.x3d"
+    scene.write_text(
+        '<X3D version="4.0"><Scene><Inline url=\'"part.glb"\'/></Scene></X3D>', encoding="utf-8"
+    )
+    with pytest.raises(sg.SceneError, match="part.glb.*not a complete JSON chunk"):
+        sg.load(scene)
+
+
+@pytest.mark.parametrize(
+    "reference, target, reason",
+    [
+        ("a/b.bin", "scene/a/b.bin", None),
+        ("../b.bin", "b.bin", "it leaves the file's folder"),
+        ("/etc/passwd", "/etc/passwd", "not a relative path"),
+        ("\\\\server\\share", "scene/x", "not a relative path"),
+        ("http://example.com/b.bin", "scene/x", "not a relative path"),
+        ("C:/b.bin", "scene/x", "not a relative path"),
+        ("link.bin", "elsewhere/b.bin", "it leaves the file's folder"),
+    ],
+)
+def test_containment_rule(tmp_path, reference, target, reason):
+    folder = tmp_path / "scene"
+    assert outside_reason(reference, tmp_path / target, folder) == reason
+
+
+def test_empty_shapes_keep_their_shadow_flags_through_gltf(tmp_path):
+    empty = sg.Shape(
+        np.zeros((0, 3)), np.zeros((0, 3)), name="e", casts_shadow=False, receives_shadow=True
+    )
+    triangle = sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="t")
+    path = tmp_path / "flags.gltf"
+    sg.save(sg.Scene(shapes=[empty, triangle]), path)
+    node = json.loads(path.read_text())["nodes"][0]
+    assert node["extras"]["shadowgeo"]["castsShadow"] is False
+    back = sg.load(path).shapes
+    assert [(s.name, s.casts_shadow, s.receives_shadow) for s in back] == [
+        ("e", False, True),
+        ("t", True, False),
+    ]
