@@ -1,6 +1,6 @@
 """USD reader: ``UsdGeom.Mesh`` prims and UsdLux lights into a :class:`Scene`.
 
-:mod:`.usd` (the writer) describes the layout shadowgeo writes; this reads it
+:mod:`.usd_layout` describes the layout :mod:`.usd_write` writes; this reads it
 back exactly (``shadowgeo:`` attributes restore the float64 points, roles,
 groups and X3D light fields) and reads USD from other tools too: convex
 polygons are fanned into triangles and others triangulated in their plane,
@@ -8,9 +8,10 @@ polygons are fanned into triangles and others triangulated in their plane,
 sample, invisible and guide meshes are skipped, other geometry (Cube, Sphere,
 ...) and lights (Rect, Dome, ...) are skipped with a warning.
 
-Before usd-core composes a file, every layer it would pull in (sublayers,
-references, payloads) must be a file inside the scene's folder; anything else
-is refused.
+Before usd-core composes a file, every asset path in it and in every layer it
+would pull in (sublayers, references, payloads, value clips, textures, ...)
+must stay inside the scene's folder (:mod:`.usd_assets`); anything else is
+refused.
 """
 
 from __future__ import annotations
@@ -219,7 +220,7 @@ def read(path, **options) -> Scene:
     Raises
     ------
     SceneError
-        Missing or corrupt file, a layer outside the file's folder, or a mesh
+        Missing or corrupt file, an asset path outside the file's folder, or a mesh
         whose indices do not match its points.
     """
     path = Path(path)
