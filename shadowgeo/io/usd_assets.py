@@ -13,9 +13,9 @@ Asset paths of every kind are checked:
 - references and payloads, on prims and inside variants;
 - value clips (the ``clips`` metadata): ``assetPaths``, ``manifestAssetPath``
   and ``templateAssetPath``, a file-name pattern whose ``#`` stand for digits;
-- every other asset value: asset-valued attributes (textures), their time
-  samples, and asset values in metadata dictionaries (``customData``,
-  ``assetInfo``, ...).
+- every other asset value, as ``UsdUtils.ModifyAssetPaths`` lists them:
+  asset-valued attributes (textures) and their time samples, and asset values
+  in metadata (``customData``, ``assetInfo``, ...).
 
 Sublayers, references, payloads, clips and manifests are layers usd-core
 opens: each must be a file, and is walked in turn; the files a clip template
@@ -35,7 +35,6 @@ from .usd_layout import opened, pxr
 
 # Kinds of asset path that name a layer usd-core opens.
 LAYER_KINDS = {"sublayer", "reference", "payload", "value clip", "value clip manifest"}
-_ASSET_TYPES = {"asset", "asset[]"}
 
 
 def check_assets(path: Path) -> None:
@@ -62,11 +61,7 @@ def check_assets(path: Path) -> None:
         # Anonymous: read afresh, never a stale copy from the layer registry.
         layer = opened(Sdf.Layer.OpenAsAnonymous, current, "not a USD file")
         inside = "" if current == root else f" in {current.relative_to(folder)}"
-        try:
-            assets = list(layer_assets(layer))
-        except SceneError as error:
-            raise SceneError(error.message, path=str(path), node=f"{error.node}{inside}") from None
-        for kind, asset in assets:
+        for kind, asset in layer_assets(layer):
             if not asset:
                 continue  # an internal reference or payload
             where = f"{kind} {asset!r}{inside}"
@@ -99,6 +94,8 @@ def _template_files(pattern: Path, folder: Path, path: Path, where: str) -> list
     files = []
     for match in sorted(pattern.parent.glob(name)):
         target = match.resolve()
+        if not target.is_file():
+            continue
         if not target.is_relative_to(folder):
             raise SceneError(
                 f"refused: {match.name} leaves the file's folder", path=str(path), node=where
@@ -107,43 +104,42 @@ def _template_files(pattern: Path, folder: Path, path: Path, where: str) -> list
     return files
 
 
-def layer_assets(layer) -> Iterator[tuple[str, str]]:
-    """Every ``(kind, asset path)`` an ``Sdf.Layer`` holds, as authored."""
-    Sdf = pxr()[1]
-    for sublayer in layer.subLayerPaths:
-        yield "sublayer", sublayer
-    specs = []
-    layer.Traverse(Sdf.Path.absoluteRootPath, specs.append)
-    for spec_path in specs:
-        spec = layer.GetObjectAtPath(spec_path)
-        if spec is not None:
-            yield from _spec_assets(spec, spec_path)
+def layer_assets(layer) -> list[tuple[str, str]]:
+    """Every ``(kind, asset path)`` an ``Sdf.Layer`` holds, as authored.
+
+    The layer must be a throwaway copy (opened anonymously): its ``clips``
+    metadata is cleared once read, so that ``UsdUtils`` (which lists every
+    other asset path, in C++) does not look for a clip template's files.
+    """
+    from pxr import UsdUtils
+
+    found = [("sublayer", sublayer) for sublayer in layer.subLayerPaths]
+    prims = list(layer.rootPrims)
+    while prims:
+        prim = prims.pop()
+        found.extend(_arcs_and_clips(prim))
+        prims.extend(prim.nameChildren)
+        for variant_set in prim.variantSets.values():
+            prims.extend(variant.primSpec for variant in variant_set.variants.values())
+    labelled = {asset for _, asset in found}
+    others = []
+    UsdUtils.ModifyAssetPaths(layer, lambda asset: others.append(asset) or asset)
+    found.extend(("asset", asset) for asset in others if asset not in labelled)
+    return found
 
 
-def _spec_assets(spec, spec_path) -> Iterator[tuple[str, str]]:
-    """The asset paths in one spec's fields (its metadata and values)."""
-    is_attribute = spec_path.IsPropertyPath() and spec.GetInfo("typeName") in _ASSET_TYPES
-    for key in spec.ListInfoKeys():
-        if key in ("subLayers", "subLayerOffsets"):
-            continue  # walked through layer.subLayerPaths
-        if key in ("default", "timeSamples") and spec_path.IsPropertyPath() and not is_attribute:
-            continue  # a value of a type that holds no asset (points, ...)
-        try:
-            value = spec.GetInfo(key)
-        except TypeError:
-            # A field Python cannot see might hold an asset path: fail closed.
-            raise SceneError(
-                f"refused: cannot inspect {key!r} for asset paths", node=f"<{spec_path}>"
-            ) from None
-        if key in ("references", "payload"):
-            kind = "reference" if key == "references" else "payload"
-            for item in _list_op_items(value):
+def _arcs_and_clips(spec) -> Iterator[tuple[str, str]]:
+    """A prim's or variant's references, payloads and value clips, labelled;
+    its ``clips`` are cleared once read (see :func:`layer_assets`)."""
+    for key, kind in (("references", "reference"), ("payload", "payload")):
+        if spec.HasInfo(key):
+            for item in _list_op_items(spec.GetInfo(key)):
                 yield kind, item.assetPath
-        elif key == "clips" and isinstance(value, dict):
-            yield from _clip_assets(value)
-        else:
-            for asset in _asset_values(value):
-                yield "asset", asset
+    if spec.HasInfo("clips"):
+        clips = spec.GetInfo("clips")
+        spec.ClearInfo("clips")
+        if isinstance(clips, dict):
+            yield from _clip_assets(clips)
 
 
 def _list_op_items(list_op) -> list:

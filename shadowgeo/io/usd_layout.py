@@ -37,6 +37,7 @@ leaves the copy stale is still obeyed), which makes round trips exact.
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 from ..errors import SceneError
@@ -44,6 +45,7 @@ from ..errors import SceneError
 PREFIX = "shadowgeo:"
 
 
+@functools.cache
 def pxr():
     """usd-core's modules ``Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt``,
     imported when first needed (it is slow to load)."""
