@@ -258,3 +258,34 @@ def Xform "A" (
         ("value clip template", "frame.###.usda"),
         ("asset", "texture.png"),
     }
+
+
+def test_a_template_with_digits_in_its_folder_is_refused(tmp_path, opened):
+    scene, outside = _folders(tmp_path)
+    path = scene / "main.usda"
+    path.write_text(_template("clips.#/../../outside/secret.usda"))
+    with pytest.raises(sg.SceneError, match="'#' outside the file name"):
+        sg.load(path)
+    _never_opened(opened, outside)
+
+
+def test_expression_variables_are_refused(tmp_path, opened):
+    scene, outside = _folders(tmp_path)
+    path = scene / "main.usda"
+    path.write_text(
+        '#usda 1.0\n(\n expressionVariables = { string DIR = "." }\n)\n'
+        'def Mesh "Tri"\n{\n asset inputs:file = @`"${DIR}/secret.usda"`@\n}\n'
+    )
+    with pytest.raises(sg.SceneError, match="expressionVariables") as caught:
+        sg.load(path)
+    assert str(path) in str(caught.value)
+    _never_opened(opened, outside)
+
+
+def test_an_expression_in_a_texture_path_is_checked_as_it_evaluates(tmp_path, opened):
+    scene, outside = _folders(tmp_path)
+    path = scene / "main.usda"
+    path.write_text('#usda 1.0\ndef Mesh "Tri"\n{\n asset t = @`"../outside/secret.usda"`@\n}\n')
+    with pytest.raises(sg.SceneError, match="leaves the file's folder"):
+        sg.load(path)
+    _never_opened(opened, outside)

@@ -4,7 +4,8 @@ usd-core opens whatever a layer names as it composes a stage, so the check
 comes first: :func:`check_assets` reads each layer alone with ``Sdf`` (no
 composition, nothing else opened), collects every asset path it holds, and
 refuses the file when one is absolute, has a URI scheme or a variable
-expression, or resolves (symbolic links followed) outside the scene's folder.
+expression, or resolves (symbolic links followed) outside the scene's folder,
+and refuses layers that define ``expressionVariables``.
 Only then may the caller open the ``Usd.Stage``.
 
 Asset paths of every kind are checked:
@@ -61,6 +62,14 @@ def check_assets(path: Path) -> None:
         # Anonymous: read afresh, never a stale copy from the layer registry.
         layer = opened(Sdf.Layer.OpenAsAnonymous, current, "not a USD file")
         inside = "" if current == root else f" in {current.relative_to(folder)}"
+        if layer.expressionVariables:
+            # They would let an expression evaluate, in the composed stage, to
+            # a path this check never saw.
+            raise SceneError(
+                "refused: expressionVariables (variable expressions) are not supported",
+                path=str(path),
+                node=f"layer metadata{inside}",
+            )
         for kind, asset in layer_assets(layer):
             if not asset:
                 continue  # an internal reference or payload
