@@ -62,7 +62,7 @@ def check_assets(path: Path) -> None:
         # Anonymous: read afresh, never a stale copy from the layer registry.
         layer = opened(Sdf.Layer.OpenAsAnonymous, current, "not a USD file")
         inside = "" if current == root else f" in {current.relative_to(folder)}"
-        if layer.expressionVariables:
+        if getattr(layer, "expressionVariables", None):
             # They would let an expression evaluate, in the composed stage, to
             # a path this check never saw.
             raise SceneError(
@@ -186,13 +186,19 @@ def _asset_values(value) -> Iterator[str]:
     dictionary or list holding them (time samples, custom data)."""
     Sdf = pxr()[1]
     if isinstance(value, Sdf.AssetPath):
-        yield value.authoredPath or value.path
+        yield _authored(value)
     elif isinstance(value, Sdf.AssetPathArray):
         for item in value:
-            yield item.authoredPath or item.path
+            yield _authored(item)
     elif isinstance(value, dict):
         for item in value.values():
             yield from _asset_values(item)
     elif isinstance(value, (list, tuple)):
         for item in value:
             yield from _asset_values(item)
+
+
+def _authored(asset) -> str:
+    """An ``Sdf.AssetPath`` as written in the file (before any expression is
+    evaluated; usd-core before 25 keeps only ``path``)."""
+    return getattr(asset, "authoredPath", None) or asset.path
