@@ -20,7 +20,9 @@ Asset paths of every kind are checked:
 
 Sublayers, references, payloads, clips and manifests are layers usd-core
 opens: each must be a file, and is walked in turn; the files a clip template
-matches are walked too. Other assets (textures) are only checked, not opened.
+matches are walked too. Other assets (textures) are never opened, by usd-core
+or by shadowgeo: one outside the folder (DCC tools often write absolute
+texture paths) is named in a note and the scene is still read.
 """
 
 from __future__ import annotations
@@ -31,16 +33,17 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from ..errors import SceneError
-from . import refuse_outside
+from . import outside_reason, refuse_outside
 from .usd_layout import opened, pxr
 
 # Kinds of asset path that name a layer usd-core opens.
 LAYER_KINDS = {"sublayer", "reference", "payload", "value clip", "value clip manifest"}
 
 
-def check_assets(path: Path) -> None:
-    """Refuse ``path`` unless every asset path in it, and in every layer it
-    pulls in, stays inside its folder.
+def check_assets(path: Path, notes: list[str] | None = None) -> None:
+    """Refuse ``path`` unless every layer-type asset path in it, and in every
+    layer it pulls in, stays inside its folder; other asset paths (textures)
+    that leave it are appended to ``notes``.
 
     Raises
     ------
@@ -74,6 +77,9 @@ def check_assets(path: Path) -> None:
             if not asset:
                 continue  # an internal reference or payload
             where = f"{kind} {asset!r}{inside}"
+            if kind == "asset":
+                _note_outside(asset, current.parent, folder, path, where, notes)
+                continue
             target = _checked_target(kind, asset, current.parent, folder, path, where)
             if kind == "value clip template":
                 pending.extend(_template_files(target, folder, path, where))
@@ -94,6 +100,16 @@ def _checked_target(kind, asset: str, base: Path, folder: Path, path: Path, wher
     target = (base / asset).resolve()
     refuse_outside(asset, target, folder, path=path, where=where)
     return target
+
+
+def _note_outside(asset: str, base: Path, folder: Path, path: Path, where: str, notes) -> None:
+    """A note, not a refusal, for an asset that is never opened (a texture)."""
+    if asset.startswith("`"):
+        reason = "a variable expression"
+    else:
+        reason = outside_reason(asset, (base / asset).resolve(), folder)
+    if reason is not None and notes is not None:
+        notes.append(f"{path.name}: {where}: not read ({reason})")
 
 
 def _template_files(pattern: Path, folder: Path, path: Path, where: str) -> list[Path]:

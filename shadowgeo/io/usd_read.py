@@ -229,7 +229,8 @@ def read(path, **options) -> Scene:
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
-    check_assets(path)
+    notes: list[str] = []
+    check_assets(path, notes)
     stage = opened(Usd.Stage.Open, path, "cannot open")
     up = UsdGeom.GetStageUpAxis(stage)
     scene = Scene(
@@ -237,6 +238,7 @@ def read(path, **options) -> Scene:
         up_axis="Z" if up == UsdGeom.Tokens.z else "Y",
         meters_per_unit=float(UsdGeom.GetStageMetersPerUnit(stage)),
     )
+    scene.warnings.extend(notes)
     # An animated stage reads at its first time sample; a static one at its defaults.
     time = Usd.TimeCode.EarliestTime()
     indices: list[int | None] = []
