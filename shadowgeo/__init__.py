@@ -13,6 +13,8 @@ from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
+from .sun import sun_direction
+from .sunstudy import SunStudies, SunStudy, sun_study, sun_study_by_day
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 from .viz import plot
@@ -33,6 +35,8 @@ __all__ = [
     "Shape",
     "Silhouette",
     "SpotLight",
+    "SunStudies",
+    "SunStudy",
     "Tolerance",
     "add_shadows",
     "as_caster",
@@ -43,6 +47,9 @@ __all__ = [
     "shadow_matrix",
     "shadow_volume",
     "silhouette",
+    "sun_direction",
+    "sun_study",
+    "sun_study_by_day",
 ]
 
 __version__ = "0.1.0"

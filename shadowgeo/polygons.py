@@ -27,10 +27,18 @@ def local_scale(extent: float) -> float:
 
 def signed_areas(loops: list[np.ndarray]) -> np.ndarray:
     """Shoelace signed area of each (k, 2) loop, positive counter-clockwise."""
-    out = np.empty(len(loops))
-    for i, loop in enumerate(loops):
-        x, y = loop[:, 0], loop[:, 1]
-        out[i] = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    if not loops:
+        return np.zeros(0)
+    points = np.concatenate(loops).reshape(-1, 2)
+    lengths = np.array([len(loop) for loop in loops])
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    nonempty = lengths > 0
+    following = np.arange(1, len(points) + 1)
+    # each loop closes on its own first point
+    following[(starts + lengths - 1)[nonempty]] = starts[nonempty]
+    cross = points[:, 0] * points[following, 1] - points[following, 0] * points[:, 1]
+    out = np.zeros(len(loops))
+    out[nonempty] = 0.5 * np.add.reduceat(cross, starts[nonempty]) if len(cross) else 0.0
     return out
 
 
