@@ -22,9 +22,12 @@ examples:
   shadowgeo convert unlit.x3d unlit.glb --sun 0.3,-1,0.2
 
 Lights with shadows="true" cast (else every light that is on, with a note);
---sun adds a directional light that casts but is not written into the scene
-(for scenes with no light of their own), and then only it and --light cast;
-receivers are the large planar shapes (ground, floor, walls) unless named.
+a scene with no light that is on gets a default sun travelling along
+(0.3, -1, 0.2), 70 degrees above the horizon (Z up: (0.3, -0.2, -1)), with a
+note; --sun gives another directional light, and then only it and --light
+cast; neither is written into the scene. Receivers are the large planar
+shapes (ground, floor, walls) unless named; when there is none, the ground
+plane under the scene's lowest point receives, with a note.
 Exit codes: 0 done, 1 bad input (one line naming the file and what is wrong),
 2 bad usage.
 """
@@ -59,15 +62,17 @@ def register(subparsers) -> None:
         "--sun",
         type=direction_argument,
         metavar="DX,DY,DZ",
-        help="also cast from a directional light travelling along DX,DY,DZ "
-        "(not added to the scene); the scene's lights then cast only if named with --light",
+        help="cast from a directional light travelling along DX,DY,DZ (not added to the "
+        "scene) instead of the scene's lights (unless named with --light) or the default "
+        "sun",
     )
     receiving = parser.add_mutually_exclusive_group()
     receiving.add_argument(
         "--receiver",
         action="append",
         metavar="DEF",
-        help="a planar shape that receives (repeat for several); default: found automatically",
+        help="a planar shape that receives (repeat for several); default: found "
+        "automatically, else the ground under the scene",
     )
     receiving.add_argument(
         "--plane",

@@ -195,11 +195,22 @@ def unlit_box(tmp_path) -> Path:
     return dark
 
 
-def test_scene_without_lights_is_one_line_and_writes_nothing(capsys, tmp_path):
+def test_scene_without_lights_or_receiver_converts_with_no_flags(capsys, tmp_path):
     dark = unlit_box(tmp_path)
-    done = in_process(capsys, "convert", dark, tmp_path / "out.x3d", "--plane", "0,1,0,1")
-    one_line_error(done, "dark.x3d", "no lights")
-    assert not (tmp_path / "out.x3d").exists()
+    out = tmp_path / "out.x3d"
+    done = in_process(capsys, "convert", dark, out)
+    assert done.returncode == 0, done.stderr
+    assert "note: shadows: the scene has no lights; a default sun casts" in done.stderr
+    assert "note: shadows: no receiver found" in done.stderr
+    # By hand: the default sun along (0.3, -1, 0.2) onto the ground y = -1 under
+    # the box [-1, 1]^3 moves its top face (2 above) by (0.6, 0.4) in (x, z):
+    # the hull of the two squares, area 4 + 2 * 0.6 + 2 * 0.4 = 6.
+    (shadow,) = sg.load(out).shapes_with_role("shadow")
+    points = shadow.world_vertices
+    region = shapely.union_all([shapely.Polygon(t) for t in points[shadow.faces][:, :, [0, 2]]])
+    expected = shapely.union_all([shapely.box(-1, -1, 1, 1), shapely.box(-0.4, -0.6, 1.6, 1.4)])
+    assert region.symmetric_difference(expected.convex_hull).area < 1e-9
+    assert np.all(points[:, 1] > -1.0) and np.all(points[:, 1] < -0.99)  # lifted, not buried
 
 
 def test_sun_lights_a_scene_without_lights(capsys, tmp_path):
