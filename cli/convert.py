@@ -154,6 +154,25 @@ def sun_light(light: shadowgeo.DirectionalLight) -> shadowgeo.SceneLight:
     return shadowgeo.SceneLight(light, name="sun", shadows=True)
 
 
+# Notes of the reader printed at most (shadowgeo info lists them all).
+MAX_READER_NOTES = 20
+
+
+def print_notes(notes: list[str], n_reader: int, source: Path) -> None:
+    """The reader's notes (what it skipped; at most :data:`MAX_READER_NOTES`),
+    then every note on the shadows, one ``note:`` line each, on stderr."""
+    for note in notes[: min(n_reader, MAX_READER_NOTES)]:
+        print(f"note: {note}", file=sys.stderr)
+    if n_reader > MAX_READER_NOTES:
+        print(
+            f"note: ... and {n_reader - MAX_READER_NOTES} more notes of the reader "
+            f"(shadowgeo info {source} lists them all)",
+            file=sys.stderr,
+        )
+    for note in notes[n_reader:]:
+        print(f"note: {note}", file=sys.stderr)
+
+
 def run(args) -> int:
     source, target = args.input, args.output
     if target.exists() and source.exists() and os.path.samefile(source, target):
@@ -188,8 +207,7 @@ def run(args) -> int:
         raise shadowgeo.SceneError(
             f"cannot write: {error.strerror or error}", path=str(target)
         ) from None
-    for note in result.warnings[known:]:
-        print(f"note: {note}", file=sys.stderr)
+    print_notes(result.warnings, known, args.input)
     added = [s for s in result.shapes if s.role in ("shadow", "volume")]
     groups = sorted({s.group for s in added if s.group})
     triangles = sum(s.n_faces for s in added)

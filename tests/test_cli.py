@@ -296,3 +296,30 @@ def test_tolerance_reaches_the_tessellation(capsys, tmp_path):
     assert counts[0] < counts[1]  # a finer column outline, a finer shadow
     with pytest.raises(SystemExit):
         main(["convert", str(EXAMPLE), str(tmp_path / "x.x3d"), "--tolerance", "2"])
+
+
+def test_lenient_x3d_converts_with_notes_and_a_truncated_one_fails_in_one_line(capsys, tmp_path):
+    scene = tmp_path / "lenient.x3d"
+    scene.write_text(
+        '<X3D version="4.0"><Scene>\n'
+        '<Transform DEF="T" translation="0 abc 0"><Shape DEF="crate"><Box/></Shape></Transform>\n'
+        '<Shape><Sphere USE="T"/></Shape>\n'
+        '<Inline url=\'"../elsewhere.x3d" "https://example.com/a.x3d" "gone.x3d"\'/>\n'
+        "<FancyNode/>\n"
+        "</Scene></X3D>\n"
+    )
+    out = tmp_path / "out.x3d"
+    done = in_process(capsys, "convert", scene, out)
+    assert done.returncode == 0, done.stderr
+    notes = done.stderr
+    assert "lenient.x3d line 2, Transform DEF='T': field translation: '0 abc 0'" in notes
+    assert "line 3, Sphere USE='T': USE='T' names a Transform (line 2), not a Sphere" in notes
+    assert "line 4, Inline: Inline skipped: '../elsewhere.x3d' leaves the scene's folder" in notes
+    assert "'https://example.com/a.x3d' is remote" in notes and "'gone.x3d' not found" in notes
+    assert "line 5, FancyNode: skipped" in notes
+    (crate,) = sg.load(out).shapes_with_role("geometry")
+    assert crate.name == "crate"
+    np.testing.assert_array_equal(crate.world_vertices.min(axis=0), [-1, -1, -1])  # not moved
+    truncated = tmp_path / "truncated.x3d"
+    truncated.write_text(scene.read_text()[:80])
+    one_line_error(in_process(capsys, "convert", truncated, out), "truncated.x3d", "malformed XML")

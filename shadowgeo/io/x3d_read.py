@@ -23,16 +23,20 @@ Rules the reader follows, where X3D leaves a choice:
 - **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
   the instance's field values (:mod:`.x3d_proto`); ExternProtoDeclare is not
   followed.
-- **Skipped, with a warning in** ``Scene.warnings``: nodes shadowgeo does not
-  model (scripts, sensors, interpolators, routes, viewpoints, text, lines,
-  points, textures, external prototypes), missing textures, empty geometry,
-  Inline files that are missing, remote (never fetched) or not X3D/glTF.
-  Metadata and WorldInfo are skipped silently.
-- **Refused with a SceneError:** malformed XML, DOCTYPE entity declarations,
-  field values of the wrong type, indices out of range, DEF/USE, prototype and
-  Inline cycles, expansion bombs (DEF/USE, Inline and prototypes beyond 2 million
-  nodes, prototypes beyond 10,000 copies), Inline and glTF paths that leave the
-  scene's folder.
+- **Skipped, with a warning in** ``Scene.warnings`` naming file, line and
+  node, where X3D browsers are lenient: nodes shadowgeo does not model or does
+  not know (scripts, sensors, interpolators, routes, text, lines, points,
+  textures, external prototypes), missing textures, empty geometry, a USE
+  naming no DEF or a node of another type, a field value that cannot be read
+  (the field takes its default), geometry that cannot be built (indices out of
+  range, counts that do not fit: that Shape), Inline files that are missing,
+  remote (never fetched), outside the scene's folder (never read), unreadable
+  or not X3D/glTF. Metadata and WorldInfo are skipped silently.
+- **Refused with a SceneError** (what cannot be read as a scene at all):
+  malformed XML, DOCTYPE entity declarations, a root that is not X3D, DEF/USE,
+  prototype and Inline cycles, expansion bombs (DEF/USE, Inline and prototypes
+  beyond 2 million nodes, prototypes beyond 10,000 copies), transforms that
+  overflow.
 """
 
 from __future__ import annotations
@@ -213,7 +217,12 @@ class _Reader:
             self._skip(context, node, tag, "geometry not modelled (no area or not supported)")
             return
         if node not in self.geometry_cache:
-            built = geometry(context, node)
+            try:
+                built = geometry(context, node)
+            except (SceneError, GeometryError) as error:  # a bad index, count, size, ...
+                self.warnings.append(f"{error}; the Shape is skipped")
+                self.geometry_cache[node] = None
+                return
             empty = isinstance(built, Mesh) and (len(built.faces) == 0 or len(built.vertices) == 0)
             for note in getattr(built, "notes", []):
                 context.warn(node, note)
@@ -251,7 +260,7 @@ class _Reader:
     def _textures(self, context: Context, appearance) -> None:
         for texture in (e for e in appearance.iter() if local_name(e) in TEXTURES):
             texture = context.resolve(texture)
-            if texture in self.textures_seen:
+            if texture is None or texture in self.textures_seen:
                 continue
             self.textures_seen.add(texture)
             urls = [u for u in context.field(texture, "url", "MFString") if u]
