@@ -135,7 +135,9 @@ def test_info_prints_shapes_lights_and_what_was_skipped(capsys):
     assert row["ground"][1] == "2" and row["tent"][1] == "6" and row["crate"][1] == "12"
     assert row["lamp"][1:4] == ["PointLight", "on", "yes"] and row["fill"][3] == "no"
     assert "bounds: min -6 0 -6  max 6 3 6" in done.stdout
-    assert any("Viewpoint" in line and "skipped" in line for line in lines)
+    # The Viewpoint: position 0 9 14, about +x by -0.571: looks along (0, -sin, -cos).
+    assert row["overview"][1:4] == ["0", "9", "14"]
+    assert "  0.000 -0.540 -0.841  45 deg " in done.stdout
     assert any("ROUTE" in line for line in lines)
 
 

@@ -262,12 +262,19 @@ def test_inline_of_an_unreadable_file_is_skipped_naming_it(tmp_path):
 
 def test_unknown_and_unmodelled_nodes_warn(tmp_path):
     body = (
-        '<Script DEF="s"/><TimeSensor/><TimeSensor/><Viewpoint/><FancyNode/>'
+        '<Script DEF="s"/><TimeSensor/><TimeSensor/><Background/><FancyNode/>'
         '<ProtoInstance name="P"/><Shape><Text string=\'"hi"\'/></Shape>'
     )
     result = sg.load(scene(tmp_path, body))
     text = "\n".join(result.warnings)
-    for name in ["Script DEF='s'", "TimeSensor", "Viewpoint", "FancyNode", "ProtoInstance", "Text"]:
+    for name in [
+        "Script DEF='s'",
+        "TimeSensor",
+        "Background",
+        "FancyNode",
+        "ProtoInstance",
+        "Text",
+    ]:
         assert f"line 2, {name}" in text
     assert "(2 such nodes)" in text
 

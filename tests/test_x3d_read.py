@@ -94,7 +94,8 @@ def test_basic_scene_lights_in_world_coordinates():
 def test_basic_scene_warnings_name_what_was_skipped():
     scene = sg.load(DATA / "basic.x3d")
     text = "\n".join(scene.warnings)
-    assert "Viewpoint" in text and "ROUTE" in text
+    assert "ROUTE" in text and "Viewpoint" not in text  # read, not skipped
+    assert [view.position for view in scene.viewpoints] == [(0, 5, 20)]
     assert all("basic.x3d line" in warning for warning in scene.warnings)
     assert "WorldInfo" not in text
 

@@ -39,7 +39,7 @@ WIDTH = {
     "MFVec4f": 4, "MFRotation": 4, "MFFloat": 1, "MFDouble": 1, "MFTime": 1, "MFInt32": 1,
 }  # fmt: skip
 # Fields holding angles, scaled by an X3D ``<unit category="angle">``.
-ANGLE_FIELDS = {"cutOffAngle", "beamWidth", "creaseAngle"}
+ANGLE_FIELDS = {"cutOffAngle", "beamWidth", "creaseAngle", "fieldOfView"}
 _STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
 
 

@@ -18,6 +18,9 @@ Rules the reader follows, where X3D leaves a choice:
   after it (with a warning).
 - **Defaults** are X3D 4.0's (from the schema), except that files declaring
   version 3.x get 3.x SpotLight defaults (beamWidth pi/2, cutOffAngle pi/4).
+- **Viewpoints** of the scene's own file (not of its Inlines, as X3D binds
+  none of those first) go to ``Scene.viewpoints`` in world coordinates, in
+  the order they are reached.
 - **Units.** ``<unit category="length">`` sets ``Scene.meters_per_unit``;
   ``category="angle"`` scales every angle field.
 - **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
@@ -48,7 +51,7 @@ import numpy as np
 
 from ..errors import GeometryError, SceneError
 from ..scene import Scene, Shape
-from ..scene.model import MARK
+from ..scene.model import MARK, Viewpoint, axis_angle
 from ..tolerance import Tolerance
 from . import x3d_parse
 from .x3d_defaults import DEFAULTS
@@ -71,7 +74,7 @@ REASONS = [
     (("Sensor", "Interpolator", "Script", "ROUTE", "Trigger", "Sequencer", "Filter", "Follower",
       "Chaser", "Damper", "HAnim", "Proto", "IMPORT", "EXPORT"),
      "animation and behaviour are not modelled (the scene is taken as it is at load time)"),
-    (("Viewpoint", "NavigationInfo", "Background", "Fog", "Sound", "AudioClip", "Environment",
+    (("NavigationInfo", "Background", "Fog", "Sound", "AudioClip", "Environment",
       "OrthoViewpoint", "ViewpointGroup", "TextureBackground"),
      "view, sound and environment settings cast no shadow"),
 ]  # fmt: skip
@@ -83,6 +86,7 @@ class _Reader:
         self.warnings = warnings
         self.instances: list[Instance] = []
         self.lights = []
+        self.viewpoints: list[Viewpoint] = []  # the top document's, in traversal order
         self.skipped: dict[tuple, list] = {}  # (tag, why) -> [first place, count]
         self.textures_seen: set = set()
         self.geometry_cache: dict = {}
@@ -197,6 +201,10 @@ class _Reader:
                 self.lights.append(light)
         elif tag == "Inline":
             load_inline(self, context, element, matrix, name)
+        elif tag == "Viewpoint" and len(self.inline_stack) == 1:
+            self.viewpoints.append(_viewpoint(context, element, matrix))
+        elif tag == "Viewpoint":
+            self._skip(context, element, tag, "a Viewpoint of an inlined file (X3D binds none)")
         elif tag in SILENT or tag.startswith("Metadata"):
             pass
         else:
@@ -306,6 +314,7 @@ class _Reader:
                 )
             )
         scene.lights.extend(self.lights)
+        scene.viewpoints.extend(self.viewpoints)
 
     def _tolerance(self, tolerance: Tolerance | None, chord: float | None) -> Tolerance:
         settings = {} if chord is None else {"chord": float(chord)}
@@ -329,6 +338,24 @@ class _Reader:
 def _public(name: str | None) -> str | None:
     """A DEF name as the file writes it (prototype copies prefix theirs with 'N#')."""
     return name.split("#", 1)[1] if name and re.match(r"\d+#", name) else name
+
+
+def _viewpoint(context: Context, element, matrix: np.ndarray) -> Viewpoint:
+    """A Viewpoint in world coordinates (the transforms' scale does not
+    change its field of view)."""
+    rotation = rotation_matrix(context.field(element, "orientation"))
+    position = matrix[:3, :3] @ context.field(element, "position") + matrix[:3, 3]
+    field_of_view = context.field(element, "fieldOfView")
+    if not 0 < field_of_view < np.pi:
+        context.warn_once(element, f"fieldOfView {field_of_view:g} is not in (0, pi); pi/4 used")
+        field_of_view = np.pi / 4
+    return Viewpoint(
+        tuple(float(v) for v in position),
+        axis_angle(matrix[:3, :3] @ rotation),
+        float(field_of_view),
+        context.field(element, "description"),
+        _public(element.get("DEF")),
+    )
 
 
 def _why(tag: str) -> str:
@@ -431,13 +458,16 @@ def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None
     >>> _ = path.write_text(
     ...     '<X3D version="4.0"><Scene><Transform translation="0 1 0">'
     ...     '<Shape DEF="crate"><Box/></Shape></Transform>'
-    ...     '<PointLight location="0 5 0" shadows="true"/><Viewpoint/></Scene></X3D>'
+    ...     '<PointLight location="0 5 0" shadows="true"/><Viewpoint description="front"/>'
+    ...     '<Background/></Scene></X3D>'
     ... )
     >>> scene = read(path)
     >>> [(shape.name, shape.n_faces) for shape in scene.shapes]
     [('crate', 12)]
     >>> scene.bounds.tolist(), scene.lights[0].light.position.tolist()
     ([[-1.0, 0.0, -1.0], [1.0, 2.0, 1.0]], [0.0, 5.0, 0.0])
+    >>> scene.viewpoints[0].position, scene.viewpoints[0].description
+    ((0.0, 0.0, 10.0), 'front')
     >>> scene.warnings[0].split(": ", 1)[1]
     'skipped, view, sound and environment settings cast no shadow'
     """
