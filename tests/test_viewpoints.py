@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 import pytest
+import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -99,3 +100,63 @@ def test_axis_angle_at_its_hard_cases(axis, angle):
     np.testing.assert_allclose(rotation(found[:3], found[3]), turn, atol=1e-12)
     if angle == math.pi:
         assert found[3] == pytest.approx(math.pi)
+
+
+def corners(points):
+    low, high = points.min(axis=0), points.max(axis=0)
+    return np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                     for z in (low[2], high[2])])  # fmt: skip
+
+
+@pytest.mark.parametrize("up_axis", ["Y", "Z"])
+def test_a_fresh_document_gets_a_viewpoint_over_the_scene_and_its_shadows(
+    tmp_path, up_axis, x3d_schema
+):
+    from x3d_schema import x3d_schema_errors
+
+    up = np.array([0, 1, 0]) if up_axis == "Y" else np.array([0, 0, 1])
+    flat = np.array([1, 1, 1]) - up
+    ground = sg.Shape(
+        np.array([[-5, -5, -5], [5, -5, -5], [5, -5, 5], [-5, -5, 5]]) * flat,
+        [[0, 2, 1], [0, 3, 2]] if up_axis == "Y" else [[0, 1, 2], [0, 2, 3]],
+        name="ground",
+    )
+    box = trimesh.creation.box(bounds=[up * 1 - flat * 0.5, up * 2 + flat * 0.5])
+    sun = sg.SceneLight(sg.DirectionalLight(-up + flat * [1, 0.5, 0.2]), name="sun")
+    scene = sg.Scene([ground, sg.Shape(box.vertices, box.faces, name="box")], [sun])
+    scene.up_axis = up_axis
+    result = sg.add_shadows(scene)
+    path = tmp_path / "fresh.x3d"
+    sg.save(result, path)
+    assert x3d_schema_errors(path, x3d_schema) == []
+    (view,) = sg.load(path).viewpoints
+    # X3D is Y-up: a Z-up scene is written turned, (x, y, z) -> (x, z, -y).
+    turn = np.eye(3) if up_axis == "Y" else np.array([[1, 0, 0], [0, 0, 1], [0, -1, 0]])
+    everything = np.concatenate([s.world_vertices for s in result.shapes]) @ turn.T
+    position = np.array(view.position)
+    # From above, at an angle: higher than everything, looking down, not straight down.
+    assert position[1] > everything[:, 1].max()
+    assert -0.95 < view.direction[1] < -0.3
+    assert view.up[1] > 0.5  # the picture's up is the world's
+    # Every corner of the scene and its shadows is inside the field of view.
+    rays = corners(everything) - position
+    angles = np.arccos(rays @ view.direction / np.linalg.norm(rays, axis=1))
+    assert np.all(angles < view.field_of_view / 2)
+    assert view.name == "shadowgeo_overview"
+
+
+def test_a_fresh_document_keeps_the_scenes_viewpoints(tmp_path):
+    ground = sg.Shape([[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], [[0, 2, 1], [0, 3, 2]])
+    views = [
+        sg.Viewpoint((1, 2, 3), (0, 1, 0, 0.25), 0.5, "first", "one"),
+        sg.Viewpoint((0, 9, 0), (1, 0, 0, -math.pi / 2), 1.0, "from above"),
+    ]
+    path = tmp_path / "kept.x3d"
+    sg.save(sg.Scene([ground], viewpoints=views), path)
+    read = sg.load(path).viewpoints
+    assert [v.name for v in read] == ["one", None]
+    for written, back in zip(views, read, strict=True):
+        assert back.position == written.position and back.description == written.description
+        np.testing.assert_allclose(back.direction, written.direction, atol=1e-12)
+        np.testing.assert_allclose(back.up, written.up, atol=1e-12)
+        assert back.field_of_view == written.field_of_view

@@ -263,3 +263,48 @@ class Scene:
             return np.zeros((2, 3))
         stacked = np.concatenate(points)
         return np.array([stacked.min(axis=0), stacked.max(axis=0)])
+
+
+# Where the overview camera looks from, seen from the scene's centre, Y up:
+# from +z (in front, as X3D's default camera) a little to +x, 35 degrees up,
+# on the side the default sun's shadows fall to (not hidden behind casters).
+OVERVIEW_FROM = (1.0, 1.2, 1.4)
+
+
+def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
+    """A Viewpoint that shows the whole scene, its shadows included, from
+    above at an angle (:data:`OVERVIEW_FROM`, turned for a Z-up scene): the
+    bounding sphere of every shape fits in ``field_of_view``.
+
+    Examples
+    --------
+    >>> cube = Shape([[-1, -1, -1], [1, 1, 1], [1, -1, 1]], [[0, 1, 2]])
+    >>> view = overview(Scene([cube]))
+    >>> [round(v, 4) for v in view.position]  # sqrt(3) / sin(pi / 8) along (1, 1.2, 1.4)
+    [2.1577, 2.5893, 3.0208]
+    >>> to_centre = -np.array(view.position) / np.linalg.norm(view.position)
+    >>> round(float(view.direction @ to_centre), 12), round(float(view.up[1]), 4)  # cos 34.9 deg
+    (1.0, 0.8202)
+    """
+    points = [shape.world_vertices for shape in scene.shapes if shape.n_faces]
+    stacked = np.concatenate(points) if points else np.zeros((1, 3))
+    low, high = stacked.min(axis=0), stacked.max(axis=0)
+    center = (low + high) / 2
+    radius = max(float(np.linalg.norm(high - low)) / 2, 1e-6)
+    x, y, z = OVERVIEW_FROM
+    z_up = (scene.up_axis or "Y").upper() == "Z"
+    away = np.array([x, -z, y] if z_up else [x, y, z])
+    away /= np.linalg.norm(away)
+    up = np.array([0.0, 0.0, 1.0] if z_up else [0.0, 1.0, 0.0])
+    position = center + away * radius / math.sin(field_of_view / 2)
+    # The camera's frame as columns: right, up, backwards (the -Z it looks along).
+    right = np.cross(-away, up)
+    right /= np.linalg.norm(right)
+    frame = np.column_stack([right, np.cross(away, right), away])
+    return Viewpoint(
+        tuple(float(v) for v in position),
+        axis_angle(frame),
+        field_of_view,
+        "shadowgeo: the scene and its shadows",
+        "shadowgeo_overview",
+    )
