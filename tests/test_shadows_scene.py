@@ -160,6 +160,9 @@ def test_a_scene_without_lights_gets_the_default_sun():
     region, _ = xz_union(shadows(result)[0])
     assert region.symmetric_difference(shapely.box(0, 0, 1, 1)).area < 1e-9
     assert not any("default sun" in w for w in result.warnings)
+    # An empty scene: nothing to do, and it says so.
+    empty = sg.add_shadows(sg.Scene([], []))
+    assert empty.shapes == [] and "no geometry, so nothing casts" in empty.warnings[-1]
 
 
 def test_receivers_found_automatically_skip_small_planar_shapes():

@@ -157,6 +157,9 @@ def add_shadows(
     kept = _without_baked(scene, notes)
     geometry = [s for s in kept if s.role == "geometry" and s.n_faces]
     chosen = _select_lights(scene, lights, notes, extra_lights)
+    if not geometry and receivers is None:
+        notes.append("shadows: the scene has no geometry, so nothing casts or receives")
+        return dataclasses.replace(scene, shapes=kept, warnings=[*scene.warnings, *notes])
     positions = [light.light.position for light in chosen if is_positional(light.light)]
     if not isinstance(tolerance, Tolerance):
         bounds = (
