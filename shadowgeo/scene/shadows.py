@@ -247,9 +247,9 @@ def default_sun(up_axis: str = "Y") -> SceneLight:
     Examples
     --------
     >>> default_sun().light.direction.round(3).tolist()
-    [0.281, -0.937, 0.187]
+    [0.282, -0.941, 0.188]
     >>> default_sun("Z").light.direction.round(3).tolist()
-    [0.281, -0.187, -0.937]
+    [0.282, -0.188, -0.941]
     """
     x, y, z = DEFAULT_SUN_DIRECTION
     direction = (x, -z, y) if (up_axis or "Y").upper() == "Z" else (x, y, z)
