@@ -22,9 +22,12 @@ examples:
   shadowgeo convert unlit.x3d unlit.glb --sun 0.3,-1,0.2
 
 Lights with shadows="true" cast (else every light that is on, with a note);
---sun adds a directional light that casts but is not written into the scene
-(for scenes with no light of their own), and then only it and --light cast;
-receivers are the large planar shapes (ground, floor, walls) unless named.
+a scene with no light that is on gets a default sun travelling along
+(0.3, -1, 0.2), 70 degrees above the horizon (Z up: (0.3, -0.2, -1)), with a
+note; --sun gives another directional light, and then only it and --light
+cast; neither is written into the scene. Receivers are the large planar
+shapes (ground, floor, walls) unless named; when there is none, the ground
+plane under the scene's lowest point receives, with a note.
 Exit codes: 0 done, 1 bad input (one line naming the file and what is wrong),
 2 bad usage.
 """
@@ -59,15 +62,17 @@ def register(subparsers) -> None:
         "--sun",
         type=direction_argument,
         metavar="DX,DY,DZ",
-        help="also cast from a directional light travelling along DX,DY,DZ "
-        "(not added to the scene); the scene's lights then cast only if named with --light",
+        help="cast from a directional light travelling along DX,DY,DZ (not added to the "
+        "scene) instead of the scene's lights (unless named with --light) or the default "
+        "sun",
     )
     receiving = parser.add_mutually_exclusive_group()
     receiving.add_argument(
         "--receiver",
         action="append",
         metavar="DEF",
-        help="a planar shape that receives (repeat for several); default: found automatically",
+        help="a planar shape that receives (repeat for several); default: found "
+        "automatically, else the ground under the scene",
     )
     receiving.add_argument(
         "--plane",
@@ -149,6 +154,25 @@ def sun_light(light: shadowgeo.DirectionalLight) -> shadowgeo.SceneLight:
     return shadowgeo.SceneLight(light, name="sun", shadows=True)
 
 
+# Notes of the reader printed at most (shadowgeo info lists them all).
+MAX_READER_NOTES = 20
+
+
+def print_notes(notes: list[str], n_reader: int, source: Path) -> None:
+    """The reader's notes (what it skipped; at most :data:`MAX_READER_NOTES`),
+    then every note on the shadows, one ``note:`` line each, on stderr."""
+    for note in notes[: min(n_reader, MAX_READER_NOTES)]:
+        print(f"note: {note}", file=sys.stderr)
+    if n_reader > MAX_READER_NOTES:
+        print(
+            f"note: ... and {n_reader - MAX_READER_NOTES} more notes of the reader "
+            f"(shadowgeo info {source} lists them all)",
+            file=sys.stderr,
+        )
+    for note in notes[n_reader:]:
+        print(f"note: {note}", file=sys.stderr)
+
+
 def run(args) -> int:
     source, target = args.input, args.output
     if target.exists() and source.exists() and os.path.samefile(source, target):
@@ -183,8 +207,7 @@ def run(args) -> int:
         raise shadowgeo.SceneError(
             f"cannot write: {error.strerror or error}", path=str(target)
         ) from None
-    for note in result.warnings[known:]:
-        print(f"note: {note}", file=sys.stderr)
+    print_notes(result.warnings, known, args.input)
     added = [s for s in result.shapes if s.role in ("shadow", "volume")]
     groups = sorted({s.group for s in added if s.group})
     triangles = sum(s.n_faces for s in added)

@@ -1,7 +1,7 @@
 """``shadowgeo info IN``: what shadowgeo reads from a scene, as tables.
 
-Shapes (triangles, world bounds, where they come from), lights, the scene's
-bounds, and what the reader skipped and why.
+Shapes (triangles, world bounds, where they come from), lights, viewpoints,
+the scene's bounds, and what the reader skipped and why.
 """
 
 from __future__ import annotations
@@ -106,7 +106,20 @@ def run(args) -> int:
         print("\nlights")
         print(table(["name", "type", "on", "shadows", "intensity", "where"], rows))
     else:
-        print("\nlights: none (convert needs at least one light that is on)")
+        print("\nlights: none (convert casts from a default sun, or --sun)")
+    if scene.viewpoints:
+        rows = [
+            [
+                view.name or f"#{index}",
+                vector(view.position),
+                " ".join(f"{v:.3f}" for v in view.direction + 0.0),
+                f"{math.degrees(view.field_of_view):.3g} deg",
+                view.description,
+            ]
+            for index, view in enumerate(scene.viewpoints)
+        ]
+        print("\nviewpoints (the first is shown first; shadowgeo render --viewpoint NAME)")
+        print(table(["name", "position", "direction", "field of view", "description"], rows))
     if scene.warnings:
         print(f"\nskipped or noted ({len(scene.warnings)})")
         for warning in scene.warnings:

@@ -36,10 +36,15 @@ def add_picture_options(parser) -> None:
     parser.add_argument(
         "--view",
         type=parse_view,
-        default="iso",
         metavar="iso|top|front|X,Y,Z",
-        help="camera direction from the scene's centre (default iso); "
+        help="camera direction from the scene's centre, framing the scene and its shadows "
+        "(default: the scene's first Viewpoint, else iso); "
         "write --view=-1,1,0 when X starts with a minus",
+    )
+    parser.add_argument(
+        "--viewpoint",
+        metavar="NAME",
+        help="the scene's Viewpoint with this DEF name or description as the camera",
     )
     parser.add_argument("--no-shadows", action="store_true", help="do not compute shadows")
     parser.add_argument("--pbr", action="store_true", help="physically based shading")
@@ -69,6 +74,24 @@ def parse_view(text: str):
     return direction
 
 
+def camera(args, scene: sg.Scene):
+    """What ``view=`` of :func:`shadowgeo.plot` gets: ``--view``, else the
+    Viewpoint ``--viewpoint`` names, else None (the scene's first Viewpoint,
+    else the automatic view)."""
+    if args.view is not None:
+        return args.view
+    if args.viewpoint is None:
+        return None
+    for viewpoint in scene.viewpoints:
+        if args.viewpoint in (viewpoint.name, viewpoint.description):
+            return viewpoint
+    known = ", ".join(v.name or repr(v.description) for v in scene.viewpoints) or "none"
+    raise sg.SceneError(
+        f"no Viewpoint named or described '{args.viewpoint}' (viewpoints: {known})",
+        path=str(args.input),
+    )
+
+
 def scene_to_draw(args) -> sg.Scene:
     """Load the scene and add its shadows, as the options ask."""
     scene = sg.load(args.input)
@@ -88,7 +111,8 @@ def run(args) -> int:
         )
         return 2
     scene = scene_to_draw(args)
-    sg.plot(scene, screenshot=args.output, window_size=args.size, view=args.view, pbr=args.pbr)
+    view = camera(args, scene)
+    sg.plot(scene, screenshot=args.output, window_size=args.size, view=view, pbr=args.pbr)
     n_shadows = len(scene.shapes_with_role("shadow"))
     width, height = args.size
     print(

@@ -12,7 +12,7 @@ from pathlib import Path
 import shadowgeo as sg
 from shadowgeo import viz
 
-from .render import add_picture_options, scene_to_draw
+from .render import add_picture_options, camera, scene_to_draw
 
 
 def register(subparsers) -> None:
@@ -36,5 +36,5 @@ def run(args) -> int:
         )
         return 1
     scene = scene_to_draw(args)
-    sg.plot(scene, view=args.view, pbr=args.pbr)
+    sg.plot(scene, view=camera(args, scene), pbr=args.pbr)
     return 0

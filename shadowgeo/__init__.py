@@ -10,7 +10,7 @@ from .io import load, save
 from .lights import DirectionalLight, PointLight, SpotLight
 from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
-from .scene import Material, Scene, SceneLight, Shape
+from .scene import Material, Scene, SceneLight, Shape, Viewpoint
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
 from .sun import sun_direction
@@ -38,6 +38,7 @@ __all__ = [
     "SunStudies",
     "SunStudy",
     "Tolerance",
+    "Viewpoint",
     "add_shadows",
     "as_caster",
     "load",

@@ -14,12 +14,18 @@ What is drawn:
 * the lights: a small sphere at a point light, a cone opening along a spot
   light's axis, an arrow along a directional light's rays.
 
+The camera is the scene's first Viewpoint (what the author framed) unless a
+view is asked for; without one, the automatic view frames the geometry and
+its shadows (and only the lights near them), and a directional light's arrow
+is put beside the geometry, never in front of it.
+
 VTK's own lighting casts no shadows here: every dark region in the picture is
 shadow geometry that shadowgeo computed.
 """
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 from collections.abc import Iterable, Sequence
@@ -31,7 +37,7 @@ from .errors import GeometryError
 from .io.atomic import atomic_path
 from .lights import DirectionalLight, PointLight, SpotLight
 from .projection import Shadow
-from .scene.model import Scene, SceneLight, Shape
+from .scene.model import Scene, SceneLight, Shape, Viewpoint
 
 SHADOW_COLOR = (0.06, 0.06, 0.08)
 VOLUME_COLOR = (0.25, 0.45, 0.95)
@@ -125,8 +131,9 @@ def _bounds(items: list[_Item], lights: list) -> tuple[np.ndarray, float]:
     return (low + high) / 2, max(float(np.linalg.norm(high - low)), 1e-12)
 
 
-def _light_glyph(light, center: np.ndarray, size: float):
-    """A mesh marking ``light``: sphere (point), cone (spot) or arrow (directional)."""
+def _light_glyph(light, center: np.ndarray, size: float, start=None):
+    """A mesh marking ``light``: sphere (point), cone (spot) or arrow
+    (directional, from ``start`` when given)."""
     import pyvista as pv
 
     if isinstance(light, SpotLight):
@@ -147,8 +154,36 @@ def _light_glyph(light, center: np.ndarray, size: float):
     if np.linalg.norm(side) < 1e-6:
         side = np.array([1.0, 0.0, 0.0])
     side = side / np.linalg.norm(side)
-    start = center - light.direction * length * 1.5 + side * length
+    start = center - light.direction * length * 1.5 + side * length if start is None else start
     return pv.Arrow(start=start, direction=light.direction, scale=length)
+
+
+def _arrow_start(direction, length: float, camera, points: np.ndarray, margin: float):
+    """Where an arrow along ``direction`` starts so that, seen from ``camera``,
+    it lies right of every point of ``points`` (in perspective), halfway up,
+    at the depth of their middle; None when the camera is among the points."""
+    position = np.array(camera.position)
+    forward = np.array(camera.focal_point) - position
+    forward /= np.linalg.norm(forward)
+    up = np.array(camera.up) - forward * (np.array(camera.up) @ forward)
+    up /= np.linalg.norm(up)
+    right = np.cross(forward, up)
+    relative = points - position
+    depth = relative @ forward
+    if np.any(depth <= 0):
+        return None
+    slope_x, slope_y = (relative @ right) / depth, (relative @ up) / depth
+    middle = float(np.median(depth))
+    arrow = np.asarray(direction) * length
+    # Midpoint of the arrow at the middle depth, on the line of the points' middle height.
+    mid_y = (slope_y.max() + slope_y.min()) / 2
+    start = position + forward * middle + up * (mid_y * middle) - arrow / 2
+    ends = np.array([start, start + arrow]) - position
+    ends_depth = ends @ forward
+    if np.any(ends_depth <= 0):
+        return None
+    needed = (slope_x.max() + margin / middle) * ends_depth - ends @ right
+    return start + right * float(needed.max())
 
 
 def _vtk_light(scene_light, center: np.ndarray, scale: float):
@@ -179,8 +214,37 @@ def _vtk_light(scene_light, center: np.ndarray, scale: float):
     return result
 
 
+def view_angle(field_of_view: float, width: int, height: int) -> float:
+    """VTK's (vertical) view angle, in degrees, for an X3D ``fieldOfView``
+    (radians, the smaller of the picture's two angles).
+
+    >>> round(view_angle(math.pi / 2, 800, 600), 9), round(view_angle(math.pi / 2, 600, 800), 4)
+    (90.0, 106.2602)
+    """
+    if width >= height:
+        return math.degrees(field_of_view)
+    return math.degrees(2 * math.atan(math.tan(field_of_view / 2) * height / width))
+
+
+def _viewpoint_camera(plotter, viewpoint: Viewpoint, center: np.ndarray, scale: float) -> None:
+    """The camera of an X3D Viewpoint: its position, looking along its
+    orientation's -Z with its +Y up, and its field of view."""
+    position = np.asarray(viewpoint.position, dtype=np.float64)
+    direction, up = viewpoint.direction, viewpoint.up
+    # The focal point only matters to interaction: the scene's centre's depth.
+    distance = max(float((center - position) @ direction), 1e-3 * scale)
+    plotter.camera_position = [tuple(position), tuple(position + direction * distance), tuple(up)]
+    width, height = plotter.window_size
+    plotter.camera.view_angle = view_angle(viewpoint.field_of_view, width, height)
+    plotter.renderer.ResetCameraClippingRange()
+
+
 def _camera(plotter, view, center: np.ndarray, scale: float, z_up: bool, framed) -> None:
-    """Point the camera at ``center`` from the direction ``view`` names."""
+    """Point the camera at ``center`` from the direction ``view`` names, or
+    place it where a Viewpoint says."""
+    if isinstance(view, Viewpoint):
+        _viewpoint_camera(plotter, view, center, scale)
+        return
     if view is None:
         view = "iso"
     if isinstance(view, str):
@@ -199,7 +263,6 @@ def _camera(plotter, view, center: np.ndarray, scale: float, z_up: bool, framed)
     if abs(direction @ up) > 0.999:  # looking along the up axis: screen-up is -z (or +y)
         up = np.array([0.0, 1.0, 0.0]) if z_up else np.array([0.0, 0.0, -1.0])
     plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
-    # Frame the geometry and the positional lights (not the arrows of directional ones).
     frame = np.column_stack([framed.min(axis=0), framed.max(axis=0)]).ravel()
     plotter.reset_camera(bounds=frame)
     _fit(plotter, framed)
@@ -300,20 +363,35 @@ def scene_plotter(
                 specular=0.3,
                 specular_power=20,
             )
-    glyph_lights = []
-    if lights is not False:
-        glyph_lights = [_bare(light) for light in scene_lights]
-        for light in glyph_lights:
-            glyph = _light_glyph(light, center, 0.02 * scale)
-            plotter.add_mesh(glyph, color=LIGHT_COLOR, lighting=False)
+    glyph_lights = [_bare(light) for light in scene_lights] if lights is not False else []
     # No depth peeling: with EGL off-screen it renders a blank picture, and a few
     # convex translucent volumes sort well enough without it.
-    framed = [item.vertices for item in items if len(item.faces)]
-    framed += [
-        np.reshape(light.position, (1, 3)) for light in glyph_lights if hasattr(light, "position")
+    if view is None and isinstance(scene_or_meshes, Scene) and scene_or_meshes.viewpoints:
+        view = scene_or_meshes.viewpoints[0]  # what the author framed
+    drawn = [item.vertices for item in items if len(item.faces)]
+    # Frame the geometry and its shadows, and the positional lights near them
+    # (a far lamp would shrink the scene to a dot); not the directional arrows.
+    near = [
+        np.reshape(light.position, (1, 3))
+        for light in glyph_lights
+        if hasattr(light, "position")
+        and (not drawn or np.linalg.norm(light.position - center) <= scale)
     ]
-    framed = np.concatenate(framed) if framed else np.zeros((1, 3))
+    framed = np.concatenate(drawn + near) if drawn + near else np.zeros((1, 3))
     _camera(plotter, view, center, scale, z_up, framed)
+    size = 0.02 * scale
+    arrows = []
+    for light in glyph_lights:
+        start = None
+        if isinstance(light, DirectionalLight) and drawn:
+            start = _arrow_start(light.direction, 12 * size, plotter.camera, framed, 2 * size)
+            if start is not None:
+                arrows.append([start, start + light.direction * 12 * size])
+        glyph = _light_glyph(light, center, size, start)
+        plotter.add_mesh(glyph, color=LIGHT_COLOR, lighting=False)
+    if arrows and not isinstance(view, Viewpoint):
+        _fit(plotter, np.concatenate([framed, *arrows]))  # room for the arrows beside
+        plotter.renderer.ResetCameraClippingRange()
     return plotter
 
 
@@ -351,9 +429,11 @@ def plot(
         Also write the image to this PNG file (atomically); implies off-screen.
     window_size : (width, height)
         In pixels.
-    view : {"iso", "top", "front"} or (3,) array_like, optional
+    view : {"iso", "top", "front"}, (3,) array_like or Viewpoint, optional
         Where the camera looks from: a named view (relative to the scene's
-        up axis) or a direction from the scene's centre. Default ``"iso"``.
+        up axis), a direction from the scene's centre, or a
+        :class:`~shadowgeo.Viewpoint` (its position, orientation and field of
+        view). Default: the scene's first Viewpoint, else ``"iso"``.
     pbr : bool
         Physically based shading instead of Phong.
 

@@ -219,3 +219,72 @@ def test_x_ite_shows_the_baked_shadow(tmp_path):
     dark = (brightness < 40).sum() * (2 * HALF_VIEW / PIXELS) ** 2
     expected = shadow.difference(box).area
     assert abs(dark - expected) < shadow.length * 3 * margin, (dark, expected)
+
+
+def test_x_ite_opens_a_converted_gltf_looking_at_its_shadow(tmp_path):
+    """A glTF with no light of its own, converted with no flags: X_ITE opens
+    the X3D at the Viewpoint shadowgeo wrote, and the default sun's shadow is
+    dark where that camera, projected here by hand, puts it."""
+    browser = chromium()
+    if not (X_ITE / "x_ite.min.js").is_file():
+        pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
+    shapely = pytest.importorskip("shapely")
+    import trimesh
+
+    import shadowgeo as sg
+    from cli.main import main
+
+    ground = sg.Shape(
+        [[-6, 0, -6], [6, 0, -6], [6, 0, 6], [-6, 0, 6]],
+        [[0, 2, 1], [0, 3, 2]],
+        material=sg.Material(diffuse_color=(0.8, 0.8, 0.8)),
+        name="ground",
+    )
+    box = trimesh.creation.box(bounds=BOX)
+    red = sg.Material(diffuse_color=(0.8, 0.1, 0.1))
+    scene = sg.Scene([ground, sg.Shape(box.vertices, box.faces, material=red, name="box")])
+    sg.save(scene, tmp_path / "scene.glb")
+    assert main(["convert", str(tmp_path / "scene.glb"), str(tmp_path / "converted.x3d")]) == 0
+    (view,) = sg.load(tmp_path / "converted.x3d").viewpoints
+    (tmp_path / "index.html").write_text(PAGE)
+    (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
+    image = screenshot(tmp_path, browser)
+
+    # The default sun travels along (0.3, -1, 0.2): the box's corners land on y = 0.
+    corners = np.array([[x, y, z] for x in BOX[:, 0] for y in BOX[:, 1] for z in BOX[:, 2]])
+    sun = np.array([0.3, -1.0, 0.2])
+    landed = corners - np.outer(corners[:, 1] / sun[1], sun)
+    shadow = shapely.MultiPoint(landed[:, [0, 2]]).convex_hull
+
+    # The camera by hand: the Viewpoint's orientation turns -z (forward) and +y (up).
+    axis, angle = np.array(view.orientation[:3]), view.orientation[3]
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    turn = np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k
+    right, up, back = turn[:, 0], turn[:, 1], turn[:, 2]
+    tangent = np.tan(view.field_of_view / 2)  # a square canvas: both angles are the field of view
+    eye = np.array(view.position)
+
+    def pixel_to_ground(rows, columns):
+        """Where the ray through each pixel centre meets y = 0, as (x, y, z)."""
+        ndc_x = (columns + 0.5) / PIXELS * 2 - 1
+        ndc_y = 1 - (rows + 0.5) / PIXELS * 2
+        rays = -back + np.outer(ndc_x * tangent, right) + np.outer(ndc_y * tangent, up)
+        reach = -eye[1] / rays[:, 1]
+        return eye + rays * reach[:, None]
+
+    rows, columns = np.mgrid[0:PIXELS, 0:PIXELS]
+    on_ground = pixel_to_ground(rows.ravel().astype(float), columns.ravel().astype(float))
+    points = shapely.points(on_ground[:, 0], on_ground[:, 2])
+    margin = 0.15  # about two pixels on the ground at this distance
+    # Only the ground the box does not hide from the camera is checked: what
+    # hides it is the hull of the box's corners cast from the camera onto y = 0.
+    behind = eye + (corners - eye) * (eye[1] / (eye[1] - corners[:, 1]))[:, None]
+    hidden = shapely.MultiPoint(np.vstack([behind, corners])[:, [0, 2]]).convex_hull
+    inside = shapely.contains(shadow.buffer(-margin).difference(hidden.buffer(margin)), points)
+    near_ground = shapely.box(-5.5, -5.5, 5.5, 5.5)
+    outside = shapely.contains(near_ground.difference(shadow.union(hidden).buffer(margin)), points)
+    brightness = image.astype(float).mean(axis=2).ravel()
+    assert inside.sum() > 100, inside.sum()  # the shadow is in the picture, not edge-on
+    assert np.mean(brightness[inside] < 40) > 0.95, np.percentile(brightness[inside], 95)
+    assert outside.sum() > 10_000  # most of the ground is in the picture too
+    assert np.mean(brightness[outside] > 60) > 0.95, np.percentile(brightness[outside], 5)

@@ -135,7 +135,9 @@ def test_info_prints_shapes_lights_and_what_was_skipped(capsys):
     assert row["ground"][1] == "2" and row["tent"][1] == "6" and row["crate"][1] == "12"
     assert row["lamp"][1:4] == ["PointLight", "on", "yes"] and row["fill"][3] == "no"
     assert "bounds: min -6 0 -6  max 6 3 6" in done.stdout
-    assert any("Viewpoint" in line and "skipped" in line for line in lines)
+    # The Viewpoint: position 0 9 14, about +x by -0.571: looks along (0, -sin, -cos).
+    assert row["overview"][1:4] == ["0", "9", "14"]
+    assert "  0.000 -0.540 -0.841  45 deg " in done.stdout
     assert any("ROUTE" in line for line in lines)
 
 
@@ -195,11 +197,22 @@ def unlit_box(tmp_path) -> Path:
     return dark
 
 
-def test_scene_without_lights_is_one_line_and_writes_nothing(capsys, tmp_path):
+def test_scene_without_lights_or_receiver_converts_with_no_flags(capsys, tmp_path):
     dark = unlit_box(tmp_path)
-    done = in_process(capsys, "convert", dark, tmp_path / "out.x3d", "--plane", "0,1,0,1")
-    one_line_error(done, "dark.x3d", "no lights")
-    assert not (tmp_path / "out.x3d").exists()
+    out = tmp_path / "out.x3d"
+    done = in_process(capsys, "convert", dark, out)
+    assert done.returncode == 0, done.stderr
+    assert "note: shadows: the scene has no lights; a default sun casts" in done.stderr
+    assert "note: shadows: no receiver found" in done.stderr
+    # By hand: the default sun along (0.3, -1, 0.2) onto the ground y = -1 under
+    # the box [-1, 1]^3 moves its top face (2 above) by (0.6, 0.4) in (x, z):
+    # the hull of the two squares, area 4 + 2 * 0.6 + 2 * 0.4 = 6.
+    (shadow,) = sg.load(out).shapes_with_role("shadow")
+    points = shadow.world_vertices
+    region = shapely.union_all([shapely.Polygon(t) for t in points[shadow.faces][:, :, [0, 2]]])
+    expected = shapely.union_all([shapely.box(-1, -1, 1, 1), shapely.box(-0.4, -0.6, 1.6, 1.4)])
+    assert region.symmetric_difference(expected.convex_hull).area < 1e-9
+    assert np.all(points[:, 1] > -1.0) and np.all(points[:, 1] < -0.99)  # lifted, not buried
 
 
 def test_sun_lights_a_scene_without_lights(capsys, tmp_path):
@@ -285,3 +298,30 @@ def test_tolerance_reaches_the_tessellation(capsys, tmp_path):
     assert counts[0] < counts[1]  # a finer column outline, a finer shadow
     with pytest.raises(SystemExit):
         main(["convert", str(EXAMPLE), str(tmp_path / "x.x3d"), "--tolerance", "2"])
+
+
+def test_lenient_x3d_converts_with_notes_and_a_truncated_one_fails_in_one_line(capsys, tmp_path):
+    scene = tmp_path / "lenient.x3d"
+    scene.write_text(
+        '<X3D version="4.0"><Scene>\n'
+        '<Transform DEF="T" translation="0 abc 0"><Shape DEF="crate"><Box/></Shape></Transform>\n'
+        '<Shape><Sphere USE="T"/></Shape>\n'
+        '<Inline url=\'"../elsewhere.x3d" "https://example.com/a.x3d" "gone.x3d"\'/>\n'
+        "<FancyNode/>\n"
+        "</Scene></X3D>\n"
+    )
+    out = tmp_path / "out.x3d"
+    done = in_process(capsys, "convert", scene, out)
+    assert done.returncode == 0, done.stderr
+    notes = done.stderr
+    assert "lenient.x3d line 2, Transform DEF='T': field translation: '0 abc 0'" in notes
+    assert "line 3, Sphere USE='T': USE='T' names a Transform (line 2), not a Sphere" in notes
+    assert "line 4, Inline: Inline skipped: '../elsewhere.x3d' leaves the scene's folder" in notes
+    assert "'https://example.com/a.x3d' is remote" in notes and "'gone.x3d' not found" in notes
+    assert "line 5, FancyNode: skipped" in notes
+    (crate,) = sg.load(out).shapes_with_role("geometry")
+    assert crate.name == "crate"
+    np.testing.assert_array_equal(crate.world_vertices.min(axis=0), [-1, -1, -1])  # not moved
+    truncated = tmp_path / "truncated.x3d"
+    truncated.write_text(scene.read_text()[:80])
+    one_line_error(in_process(capsys, "convert", truncated, out), "truncated.x3d", "malformed XML")

@@ -52,14 +52,17 @@ def test_a_bin_chunk_longer_than_the_file_gives_what_is_there():
     assert glb_chunks(_glb(len(TEXT), TEXT, tail), Path("x.glb"))[1] == b"\1\2\3\4"
 
 
-def test_an_inlined_glb_with_a_lying_length_is_a_scene_error(tmp_path):
+def test_an_inlined_glb_with_a_lying_length_is_skipped_with_its_reason(tmp_path):
     (tmp_path / "part.glb").write_bytes(_glb(len(TEXT) + 400, TEXT))
     scene = tmp_path / "scene.x3d"
     scene.write_text(
         '<X3D version="4.0"><Scene><Inline url=\'"part.glb"\'/></Scene></X3D>', encoding="utf-8"
     )
-    with pytest.raises(sg.SceneError, match="part.glb.*not a complete JSON chunk"):
-        sg.load(scene)
+    loaded = sg.load(scene)
+    assert loaded.shapes == []
+    (warning,) = loaded.warnings
+    assert "Inline skipped" in warning and "part.glb" in warning
+    assert "not a complete JSON chunk" in warning
 
 
 @pytest.mark.parametrize(

@@ -234,9 +234,12 @@ def test_equal_primitives_share_a_tessellation_not_their_flags(tmp_path):
     assert (first.solid, second.solid, third.solid) == (True, False, True)
 
 
-def test_reader_refuses_a_non_positive_radius(tmp_path):
-    with pytest.raises(sg.SceneError, match=r"line 1, Sphere: field radius: -1.0 must be > 0"):
-        read(tmp_path, '<Shape><Sphere radius="-1"/></Shape>')
+def test_reader_skips_a_shape_with_a_non_positive_radius(tmp_path):
+    scene = read(tmp_path, '<Shape><Sphere radius="-1"/></Shape><Shape><Box/></Shape>')
+    (box,) = scene.shapes
+    assert box.n_faces == 12
+    (warning,) = scene.warnings
+    assert "line 1, Sphere: field radius: -1.0 must be > 0; the Shape is skipped" in warning
 
 
 def test_sphere_segments_are_capped_and_the_reader_says_so(tmp_path, monkeypatch):

@@ -132,12 +132,37 @@ def test_lights_picked_by_name():
         sg.add_shadows(scene, lights=["x"])
 
 
-def test_a_scene_without_lights_is_a_clear_error():
-    with pytest.raises(SceneError, match="no lights"):
-        sg.add_shadows(sg.Scene([ground(), box([0, 1, 0], [1, 2, 1], "cube")], []))
-    off = [light([0, 4, 0], on=False)]
-    with pytest.raises(SceneError, match="no light that is on"):
-        sg.add_shadows(sg.Scene([ground(), box([0, 1, 0], [1, 2, 1], "cube")], off))
+def test_a_scene_without_lights_gets_the_default_sun():
+    # Sun along (0.3, -1, 0.2): a point at height h lands (0.3 h, 0.2 h) away in
+    # (x, z). The cube [0, 1] x [1, 2] x [0, 1] throws the hull of its bottom
+    # square moved (0.3, 0.2) and its top square moved (0.6, 0.4): area
+    # 1 + 0.3 + 0.2 (a unit square swept by (a, b) covers 1 + |a| + |b|).
+    cube = box([0, 1, 0], [1, 2, 1], "cube")
+    for lights in ([], [light([0, 4, 0], on=False)]):
+        result = sg.add_shadows(sg.Scene([ground(), cube], lights), offset=0.0)
+        (shadow,) = shadows(result)
+        assert shadow.group == "shadows_sun" and not result.lights[1:]
+        region, _ = xz_union(shadow)
+        moved = [[0.3, 0.2], [0.6, 0.4]]
+        squares = [shapely.box(dx, dz, 1 + dx, 1 + dz) for dx, dz in moved]
+        expected = shapely.union_all(squares).convex_hull
+        assert expected.area == pytest.approx(1.5)
+        assert region.symmetric_difference(expected).area < 1e-9
+        what = "no lights" if not lights else "no light that is on"
+        assert any(f"has {what}; a default sun casts" in w for w in result.warnings)
+    # Given lights replace it; its direction is the documented one.
+    direction = sg.scene.shadows.default_sun().light.direction
+    np.testing.assert_allclose(direction, np.array([0.3, -1, 0.2]) / math.sqrt(1.13))
+    z_up = sg.scene.shadows.default_sun("Z").light.direction
+    np.testing.assert_allclose(z_up, np.array([0.3, -0.2, -1]) / math.sqrt(1.13))
+    top = sg.SceneLight(sg.DirectionalLight([0, -1, 0]), name="top")
+    result = sg.add_shadows(sg.Scene([ground(), cube], []), extra_lights=[top], offset=0.0)
+    region, _ = xz_union(shadows(result)[0])
+    assert region.symmetric_difference(shapely.box(0, 0, 1, 1)).area < 1e-9
+    assert not any("default sun" in w for w in result.warnings)
+    # An empty scene: nothing to do, and it says so.
+    empty = sg.add_shadows(sg.Scene([], []))
+    assert empty.shapes == [] and "no geometry, so nothing casts" in empty.warnings[-1]
 
 
 def test_receivers_found_automatically_skip_small_planar_shapes():
@@ -171,10 +196,31 @@ def test_named_receiver_must_exist_and_be_planar():
         sg.add_shadows(scene, receivers=["ground"], plane=(0, 1, 0, 0))
 
 
-def test_no_receiver_is_a_clear_error_and_a_plane_fixes_it():
+def test_no_receiver_gives_the_ground_under_the_lowest_point():
+    # The cube's bottom (y = 1) is the lowest point: the ground is y = 1. Its top
+    # (1 above it) seen from the lamp 3 above it projects scaled 3 / (3 - 1):
+    # a square of half-width 0.75, area 2.25.
     scene = sg.Scene([box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
-    with pytest.raises(SceneError, match="no receiver found"):
-        sg.add_shadows(scene)
+    result = sg.add_shadows(scene, offset=0.0)
+    (shadow,) = shadows(result)
+    region, _ = xz_union(shadow)
+    assert region.symmetric_difference(shapely.box(-0.75, -0.75, 0.75, 0.75)).area < 1e-9
+    assert np.all(shadow.world_vertices[:, 1] == 1.0)
+    assert shadow.name == "shadow_lamp_ground"
+    assert any("ground plane y = 1 under the scene's lowest point" in w for w in result.warnings)
+    # Z up: the same scene turned, the ground is z = 1.
+    turned = box([-0.5, -0.5, 1], [0.5, 0.5, 2], "cube")
+    scene = sg.Scene([turned], [light([0, 0, 4])], up_axis="Z")
+    (shadow,) = shadows(sg.add_shadows(scene, offset=0.0))
+    assert np.all(shadow.world_vertices[:, 2] == 1.0)
+    triangles = shadow.world_vertices[shadow.faces][:, :, :2]
+    region = shapely.union_all([shapely.Polygon(t) for t in triangles])
+    assert region.symmetric_difference(shapely.box(-0.75, -0.75, 0.75, 0.75)).area < 1e-9
+    # A lamp under the ground lights nothing on it.
+    scene = sg.Scene([box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, -4, 0])])
+    assert shadows(sg.add_shadows(scene)) == []
+    # A plane given instead receives the whole shadow.
+    scene = sg.Scene([box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
     (shadow,) = shadows(sg.add_shadows(scene, plane=(0, 2, 0, 0), offset=0.0))
     region, _ = xz_union(shadow)
     assert region.area == pytest.approx(4.0, rel=1e-9)  # unbounded plane: the whole shadow

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 import trimesh
 from reference import ray_plane
-from scipy.spatial import ConvexHull
+from scipy.spatial import ConvexHull, Delaunay
 
 import shadowgeo as sg
 from shadowgeo import viz
@@ -187,17 +187,45 @@ def test_positional_lights_are_marked_where_they_are(light):
         plotter.close()
 
 
-def test_directional_light_is_an_arrow_along_its_rays():
+def test_directional_light_is_an_arrow_along_its_rays_beside_the_geometry():
     light = sg.DirectionalLight([0.0, -1.0, 0.0])
-    # Seen from the front, an arrow pointing down: a vertical yellow stroke above the ground.
+    # Seen from the front, an arrow pointing down: a vertical yellow stroke
+    # right of the ground (never in front of it), its head at the bottom.
     plotter, image = render([ground_shape()], lights=[light], view="front")
     try:
         yellow = (image[..., 0] > 180) & (image[..., 1] > 140) & (image[..., 2] < 90)
         rows, columns = np.nonzero(yellow)
         assert len(rows) > 20
         assert np.ptp(rows) > 2 * np.ptp(columns)
-        (ground,) = to_pixels(plotter, [[0.0, 0.0, 0.0]])
-        assert rows.max() < ground[0]  # above the ground
+        (right_end,) = to_pixels(plotter, [[10.0, 0.0, 10.0]])  # the nearest right corner
+        assert columns.min() > right_end[1]
+        widths = np.bincount(rows - rows.min(), weights=np.ones(len(rows)))
+        assert np.argmax(widths) > len(widths) / 2  # the head (widest) is below the middle
+    finally:
+        plotter.close()
+
+
+@pytest.mark.parametrize("direction", [(0.3, -1.0, 0.2), (-1.0, -0.2, 0.0), (0.0, -0.3, -1.0)])
+@pytest.mark.parametrize("view", ["iso", "top", (-1.0, 0.5, 0.3)])
+def test_light_markers_never_hide_the_casters_and_far_lights_do_not_shrink_them(direction, view):
+    box = box_mesh()
+    scene = sg.Scene(
+        [ground_shape(), sg.Shape(box.vertices, box.faces)],
+        [sg.SceneLight(sg.DirectionalLight(direction)), sg.SceneLight(sg.PointLight([0, 900, 0]))],
+    )
+    plotter, image = render(scene, view=view)
+    try:
+        # Every yellow pixel lies outside the hull of the geometry's pixels.
+        corners = [[x, y, z] for x in (-10, 10) for y in (0, 2.5) for z in (-10, 10)]
+        pixels = np.array(to_pixels(plotter, corners), dtype=float)
+        hull = Delaunay(pixels)
+        yellow = (image[..., 0] > 180) & (image[..., 1] > 140) & (image[..., 2] < 90)
+        assert yellow.sum() > 20  # the arrow is drawn
+        assert np.all(hull.find_simplex(np.argwhere(yellow).astype(float)) < 0)
+        # The far lamp is not framed: the geometry spans most of the picture.
+        height, width = image.shape[:2]
+        span = np.ptp(pixels, axis=0)
+        assert span[0] > 0.5 * height or span[1] > 0.5 * width
     finally:
         plotter.close()
 
@@ -395,3 +423,74 @@ def test_a_scene_of_lights_alone_is_centred_on_its_positional_lights():
         np.testing.assert_allclose(sunlight.focal_point, lamp.position)  # lit towards the centre
     finally:
         plotter.close()
+
+
+VIEWPOINTS = """<X3D version="4.0"><Scene>
+<Shape DEF="ground"><IndexedFaceSet coordIndex="0 1 2 3 -1">
+<Coordinate point="-10 0 -10 -10 0 10 10 0 10 10 0 -10"/></IndexedFaceSet></Shape>
+<Transform translation="0 2 0"><Shape DEF="crate"><Box size="1 1 1"/></Shape></Transform>
+<DirectionalLight direction="0.3 -1 0.2" shadows="true"/>
+<Transform translation="10 0 0" rotation="0 1 0 1.5707963267948966" scale="2 2 2">
+<Viewpoint DEF="side" position="1 2 3" orientation="1 0 0 -0.5" fieldOfView="0.6"/></Transform>
+<Viewpoint DEF="front" description="From the front" position="0 3 20" fieldOfView="0.9"/>
+</Scene></X3D>
+"""
+
+
+def camera_of(plotter):
+    camera = plotter.camera
+    position, focal = np.array(camera.position), np.array(camera.focal_point)
+    direction = (focal - position) / np.linalg.norm(focal - position)
+    return position, direction, np.array(camera.up), camera.view_angle
+
+
+@pytest.mark.parametrize("size", [(320, 240), (240, 320)])
+def test_render_camera_is_the_scenes_first_viewpoint(tmp_path, size):
+    path = tmp_path / "views.x3d"
+    path.write_text(VIEWPOINTS)
+    scene = sg.add_shadows(sg.load(path))
+    plotter = viz.scene_plotter(scene, off_screen=True, window_size=size)
+    try:
+        position, direction, up, angle = camera_of(plotter)
+    finally:
+        plotter.close()
+    # By hand: a quarter turn about +y takes (x, y, z) to (z, y, -x). The
+    # Viewpoint (1, 2, 3) scaled by 2 and moved by (10, 0, 0) is at (16, 4, -2);
+    # about +x by -0.5, -z becomes (0, -sin .5, -cos .5) and +y (0, cos .5, -sin .5).
+    np.testing.assert_allclose(position, [16, 4, -2], atol=1e-9)
+    np.testing.assert_allclose(direction, [-np.cos(0.5), -np.sin(0.5), 0], atol=1e-9)
+    np.testing.assert_allclose(up, [-np.sin(0.5), np.cos(0.5), 0], atol=1e-9)
+    # fieldOfView is the smaller angle; VTK's view angle is the vertical one.
+    width, height = size
+    vertical = 0.6 if width >= height else 2 * np.arctan(np.tan(0.3) * height / width)
+    assert angle == pytest.approx(np.degrees(vertical), rel=1e-12)
+
+
+def test_render_viewpoint_option_and_view_override(tmp_path, capsys):
+    from cli.main import build_parser, main
+    from cli.render import camera
+
+    path = tmp_path / "views.x3d"
+    path.write_text(VIEWPOINTS)
+    scene = sg.load(path)
+    for name in ("front", "From the front"):
+        args = build_parser().parse_args(["render", str(path), "o.png", "--viewpoint", name])
+        plotter = viz.scene_plotter(
+            scene, off_screen=True, window_size=SIZE, view=camera(args, scene)
+        )
+        try:
+            position, direction, up, angle = camera_of(plotter)
+        finally:
+            plotter.close()
+        np.testing.assert_allclose(position, [0, 3, 20], atol=1e-12)
+        np.testing.assert_allclose(direction, [0, 0, -1], atol=1e-12)
+        np.testing.assert_allclose(up, [0, 1, 0], atol=1e-12)
+        assert angle == pytest.approx(np.degrees(0.9))
+    args = build_parser().parse_args(["render", str(path), "o.png", "--view", "top"])
+    assert camera(args, scene) == "top"  # --view overrides the Viewpoint
+    out = tmp_path / "front.png"
+    assert main(["render", str(path), str(out), "--viewpoint", "front", "--size", "64x48"]) == 0
+    assert out.is_file()
+    assert main(["render", str(path), str(out), "--viewpoint", "nope"]) == 1
+    error = capsys.readouterr().err.strip().splitlines()
+    assert error[-1].endswith("no Viewpoint named or described 'nope' (viewpoints: side, front)")

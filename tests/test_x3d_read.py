@@ -6,6 +6,7 @@ from __future__ import annotations
 import base64
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -93,7 +94,8 @@ def test_basic_scene_lights_in_world_coordinates():
 def test_basic_scene_warnings_name_what_was_skipped():
     scene = sg.load(DATA / "basic.x3d")
     text = "\n".join(scene.warnings)
-    assert "Viewpoint" in text and "ROUTE" in text
+    assert "ROUTE" in text and "Viewpoint" not in text  # read, not skipped
+    assert [view.position for view in scene.viewpoints] == [(0, 5, 20)]
     assert all("basic.x3d line" in warning for warning in scene.warnings)
     assert "WorldInfo" not in text
 
@@ -592,8 +594,14 @@ def test_inlined_gltf_is_read_by_the_gltf_reader(tmp_path):
     packed = _triangle_gltf()
     packed["extensionsUsed"] = packed["extensionsRequired"] = ["EXT_meshopt_compression"]
     (tmp_path / "packed.gltf").write_text(json.dumps(packed))
-    with pytest.raises(sg.SceneError, match=r"packed\.gltf.*EXT_meshopt_compression"):
-        scene_of(tmp_path, "<Inline url='\"packed.gltf\"'/>")
+    # A glTF the reader cannot read is skipped, naming it; the next url is tried.
+    loaded = scene_of(tmp_path, '<Inline url=\'"packed.gltf" "leaf.gltf"\'/>')
+    assert [shape.name for shape in loaded.shapes] == ["leaf"]
+    loaded = scene_of(tmp_path, "<Inline url='\"packed.gltf\"'/>")
+    assert loaded.shapes == []
+    (warning,) = [w for w in loaded.warnings if "Inline skipped" in w]
+    assert re.search(r"line \d+, Inline: Inline skipped: 'packed\.gltf' cannot be read: ", warning)
+    assert "EXT_meshopt_compression" in warning
 
 
 def test_an_inline_used_again_is_read_once(tmp_path):

@@ -36,6 +36,7 @@ NODES = [
     "IndexedTriangleStripSet", "Inline", "LOD", "Material", "PhysicalMaterial", "PointLight",
     "QuadSet", "Shape", "Sphere", "SpotLight", "StaticGroup", "Switch", "Transform",
     "TriangleFanSet", "TriangleSet", "TriangleStripSet", "TwoSidedMaterial", "UnlitMaterial",
+    "Viewpoint",
 ]  # fmt: skip
 
 # Nodes outside X3D 4.0 that real files use (Castle Game Engine, VRML 97).

@@ -312,4 +312,16 @@ DEFAULTS = {
         "normalScale": ("SFFloat", "1"),
         "transparency": ("SFFloat", "0"),
     },
+    "Viewpoint": {
+        "centerOfRotation": ("SFVec3f", "0 0 0"),
+        "description": ("SFString", ""),
+        "farDistance": ("SFFloat", "-1"),
+        "fieldOfView": ("SFFloat", "0.7854"),
+        "jump": ("SFBool", "true"),
+        "nearDistance": ("SFFloat", "-1"),
+        "orientation": ("SFRotation", "0 0 1 0"),
+        "position": ("SFVec3f", "0 0 10"),
+        "retainUserOffsets": ("SFBool", "false"),
+        "viewAll": ("SFBool", "false"),
+    },
 }

@@ -4,9 +4,11 @@ Field types and defaults come from :mod:`.x3d_defaults` (generated from the X3D
 4.0 XML Schema by ``tools/x3d_defaults.py``). X3D 3.x files differ in a few
 defaults; :data:`X3D3_DEFAULTS` holds those, chosen by the ``<X3D version>``.
 
-Every parse error is a :class:`~shadowgeo.SceneError` naming the file, line,
-node and field: ``scene.x3d line 12, Transform DEF='arm': field translation:
-'abc' is not a number (SFVec3f needs 3)``.
+As X3D browsers do, a field whose value cannot be read takes its default, with
+a warning naming the file, line, node and field: ``scene.x3d line 12,
+Transform DEF='arm': field translation: '1 abc 3' is not numbers (SFVec3f:
+'abc' is not a number); the default '0 0 0' is used``. A USE naming no DEF,
+or a node of another type, stands for no node, with a warning.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ WIDTH = {
     "MFVec4f": 4, "MFRotation": 4, "MFFloat": 1, "MFDouble": 1, "MFTime": 1, "MFInt32": 1,
 }  # fmt: skip
 # Fields holding angles, scaled by an X3D ``<unit category="angle">``.
-ANGLE_FIELDS = {"cutOffAngle", "beamWidth", "creaseAngle"}
+ANGLE_FIELDS = {"cutOffAngle", "beamWidth", "creaseAngle", "fieldOfView"}
 _STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
 
 
@@ -59,6 +61,7 @@ class Context:
     defs: dict = field(default_factory=dict)  # DEF name -> [elements, in document order]
     _order: dict = field(default_factory=dict)  # element -> index in its own tree
     prototypes: object = None  # x3d_proto.Prototypes of the document
+    _said: set = field(default_factory=set)  # warnings given once (fields read again)
 
     def definition(self, element):
         """The element a ``USE`` names: the latest DEF of that name before it in
@@ -76,26 +79,30 @@ class Context:
         return before[-1] if before else found[0]
 
     def resolve(self, element):
-        """The node a ``USE`` names (the same element, not a copy), or ``element``."""
+        """The node a ``USE`` names (the same element, not a copy), or ``element``;
+        None, with a warning, when the USE names no DEF or a node of another type
+        (X3D browsers skip such a node)."""
         name = element.get("USE")
         if name is None:
             return element
         target = self.definition(element)
         if target is None:
-            raise self.error(element, f"USE='{name}' names no DEF in this file")
+            self.warn_once(element, f"USE='{name}' names no DEF in this file; skipped")
+            return None
         if local_name(target) != local_name(element):
-            raise self.error(
+            self.warn_once(
                 element,
                 f"USE='{name}' names a {local_name(target)} (line {target.sourceline}), "
-                f"not a {local_name(element)}",
+                f"not a {local_name(element)}; skipped",
             )
+            return None
         return target
 
     def node(self, element):
         """The node ``element`` stands for: itself, the DEF a USE names, or the
         copy of a prototype's body a ProtoInstance stands for (None if none)."""
         element = self.resolve(element)
-        if local_name(element) == "ProtoInstance":
+        if element is not None and local_name(element) == "ProtoInstance":
             return None if self.prototypes is None else self.prototypes.expand(self, element)
         return element
 
@@ -127,17 +134,26 @@ class Context:
     def warn(self, element, message: str) -> None:
         self.warnings.append(f"{self.where(element)}: {message}")
 
-    def _radians(self, element, name: str, kind: str, value):
+    def warn_once(self, element, message: str) -> None:
+        """:meth:`warn`, once per element and message (a node used again is
+        read again)."""
+        text = f"{self.where(element)}: {message}"
+        if text not in self._said:
+            self._said.add(text)
+            self.warnings.append(text)
+
+    def _radians(self, kind: str, value):
         if kind in ("SFRotation", "MFRotation"):
             value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
         else:
             value = value * self.angle_factor
         if not np.all(np.isfinite(value)):
-            raise self.error(element, f"field {name}: not finite in radians")
+            raise ValueError("is not finite in radians")
         return value
 
     def field(self, element, name: str, kind: str | None = None):
-        """The value of field ``name`` of ``element``, or its default.
+        """The value of field ``name`` of ``element``, or its default (also,
+        with a warning, when the value written cannot be read).
 
         Returns a bool, int, float, str, list[str] (MFString) or float64 /
         int64 numpy array ((k,) for SF vectors, (n, k) for MF vectors).
@@ -148,21 +164,22 @@ class Context:
             if spec is None:
                 raise KeyError(f"{tag}.{name} is not in the defaults table")
             kind = spec[0]
+        default = spec[1] if spec else ""
+        if self.version < (4, 0):
+            default = X3D3_DEFAULTS.get((tag, name), default)
         text = element.get(name)
-        if text is None:
-            text = spec[1] if spec else ""
-            if self.version < (4, 0):
-                text = X3D3_DEFAULTS.get((tag, name), text)
-            value = parse(text, kind)
-        else:
+        if text is not None:
             try:
                 value = parse(text, kind)
+                if name in ANGLE_FIELDS or kind in ("SFRotation", "MFRotation"):
+                    value = self._radians(kind, value)
+                return value
             except ValueError as problem:
                 shown = text if len(text) <= 40 else text[:37] + "..."
-                raise self.error(element, f"field {name}: '{shown}' {problem}") from None
-            if name in ANGLE_FIELDS or kind in ("SFRotation", "MFRotation"):
-                value = self._radians(element, name, kind, value)
-        return value
+                self.warn_once(
+                    element, f"field {name}: '{shown}' {problem}; the default '{default}' is used"
+                )
+        return parse(default, kind)
 
 
 def parse(text: str, kind: str):

@@ -1,12 +1,16 @@
 """X3D Inline: local X3D or glTF files only, inside the scene's folder.
 
-Each ``url`` is tried in order. Remote URLs (any ``scheme:``) are never
-fetched; a relative path is taken from the inlining file's folder and must
-stay inside the top scene's folder (else SceneError); the first that exists is
-read. X3D is read with the same rules as the scene (its own DEF names); glTF
-and GLB with the glTF reader (:mod:`.gltf_read`), lights left out (with a
-warning), after checking that its buffers and images stay inside the scene's
-folder too. An Inline that includes itself, directly or not, is a SceneError.
+Each ``url`` is tried in order, as X3D browsers do; the first that reads is
+used. Remote URLs (any ``scheme:``) are never fetched; a relative path is
+taken from the inlining file's folder and is never read when it leaves the
+top scene's folder. X3D is read with the same rules as the scene (its own DEF
+names); glTF and GLB with the glTF reader (:mod:`.gltf_read`), lights left out
+(with a warning); a glTF whose buffers or images lie outside the folder is
+not read. When no url gives a file that reads (missing, remote, outside the
+folder, unreadable, not X3D or glTF), the Inline is skipped with a warning
+naming the file, line and every url with why it was not used. An Inline that
+includes itself, directly or not, is a SceneError (as are the reader's limits
+on nesting and expansion).
 """
 
 from __future__ import annotations
@@ -17,9 +21,10 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from ..errors import GeometryError, SceneError
 from . import gltf_read, outside_reason, x3d_parse
 from .gltf_layout import external_uris, json_document
-from .x3d_fields import Context
+from .x3d_fields import Context, local_name
 from .x3d_geometry import Instance, Mesh
 
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
@@ -29,16 +34,18 @@ GLTF_SUFFIXES = {".gltf", ".glb"}
 MAX_INLINE_DEPTH = 16
 
 
-def resolve_url(reader, context: Context, element, url: str) -> Path | str:
-    """The local file ``url`` names, or a string saying why there is none."""
+def resolve_url(reader, context: Context, url: str) -> Path | str:
+    """The local file ``url`` names, or a string saying why there is none
+    (nothing outside the scene's folder is looked at)."""
     if URL_SCHEME.match(url):
         return f"'{url}' is remote (never fetched)"
     folder = Path(context.path).resolve().parent
     candidate = (folder / url).resolve()
-    if outside_reason(url, candidate, reader.root_folder) is not None:
-        raise context.error(
-            element, f"Inline url '{url}' leaves the scene's folder {reader.root_folder}; refused"
-        )
+    reason = outside_reason(url, candidate, reader.root_folder)
+    if reason == "it leaves the file's folder":
+        return f"'{url}' leaves the scene's folder {reader.root_folder} (never read)"
+    if reason is not None:
+        return f"'{url}' is {reason} (never read)"
     if not candidate.is_file():
         return f"'{url}' not found"
     return candidate
@@ -50,52 +57,74 @@ def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> 
     urls = [url.strip() for url in context.field(element, "url") if url.strip()]
     reasons = []
     for url in urls:
-        found = resolve_url(reader, context, element, url)
+        found = resolve_url(reader, context, url)
         if isinstance(found, str):
             reasons.append(found)
             continue
         suffix = found.suffix.lower()
         if suffix in X3D_SUFFIXES:
-            _x3d(reader, context, element, found, matrix, name)
+            problem = _x3d(reader, context, element, found, matrix, name)
+        elif suffix in GLTF_SUFFIXES:
+            problem = _gltf(reader, context, element, found, matrix, name)
+        else:
+            problem = "is not X3D XML or glTF"
+        if problem is None:
             return
-        if suffix in GLTF_SUFFIXES:
-            _gltf(reader, context, element, found, matrix, name)
-            return
-        reasons.append(f"'{url}' is not X3D XML or glTF")
+        reasons.append(f"'{url}' {problem}")
     context.warn(element, "Inline skipped: " + ("; ".join(reasons) or "no url"))
 
 
-def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
+def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> str | None:
+    """Read an inlined X3D file into ``reader``; None, or why it cannot be read."""
     if path in reader.inline_stack:
         raise context.error(element, f"Inline cycle: {path.name} includes itself")
     if len(reader.inline_stack) > MAX_INLINE_DEPTH:
         raise context.error(element, f"Inlines nested more than {MAX_INLINE_DEPTH} deep")
     if path not in reader.inline_files:
-        reader.inline_files[path] = x3d_parse.parse(path)
-    reader.document(reader.inline_files[path], path, matrix, name=name)
+        try:
+            tree = x3d_parse.parse(path)
+        except SceneError as error:
+            tree = f"cannot be read: {error}"
+        else:
+            if not any(local_name(child) == "Scene" for child in tree.getroot()):
+                tree = "cannot be read: it has no <Scene> element"
+        reader.inline_files[path] = tree
+    tree = reader.inline_files[path]
+    if isinstance(tree, str):
+        return tree
+    reader.document(tree, path, matrix, name=name)
+    return None
 
 
 def _read_gltf(reader, context: Context, element, path: Path):
-    document, _ = json_document(path)
+    """The glTF file read as a Scene, or why it is not read."""
+    try:
+        document, _ = json_document(path)
+    except SceneError as error:
+        return f"cannot be read: {error}"
     for _, uri in external_uris(document):
         target = (path.parent / unquote(uri)).resolve()
         if outside_reason(uri, target, reader.root_folder) is not None:
-            raise context.error(
-                element,
-                f"glTF '{path.name}' refers to '{uri}', outside the scene's folder; refused",
-            )
+            return f"refers to '{uri}', outside the scene's folder (never read)"
     # the glTF reader's own checks (compression, quantized positions, ...) and materials
-    loaded = gltf_read.read(path)
+    try:
+        loaded = gltf_read.read(path)
+    except (SceneError, GeometryError) as error:
+        return f"cannot be read: {error}"
     reader.warnings.extend(loaded.warnings)
     if loaded.lights:
         context.warn(element, f"{len(loaded.lights)} light(s) of '{path.name}' not read")
     return loaded
 
 
-def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> None:
+def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> str | None:
+    """Add an inlined glTF's shapes to ``reader``; None, or why it cannot be read."""
     if path not in reader.inline_files:
         reader.inline_files[path] = _read_gltf(reader, context, element, path)
-    for shape in reader.inline_files[path].shapes:
+    loaded = reader.inline_files[path]
+    if isinstance(loaded, str):
+        return loaded
+    for shape in loaded.shapes:
         if shape.n_faces == 0:
             continue
         reader.instances.append(
@@ -107,3 +136,4 @@ def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, nam
                 shape.source or path.name,
             )
         )
+    return None

@@ -18,21 +18,28 @@ Rules the reader follows, where X3D leaves a choice:
   after it (with a warning).
 - **Defaults** are X3D 4.0's (from the schema), except that files declaring
   version 3.x get 3.x SpotLight defaults (beamWidth pi/2, cutOffAngle pi/4).
+- **Viewpoints** of the scene's own file (not of its Inlines, as X3D binds
+  none of those first) go to ``Scene.viewpoints`` in world coordinates, in
+  the order they are reached.
 - **Units.** ``<unit category="length">`` sets ``Scene.meters_per_unit``;
   ``category="angle"`` scales every angle field.
 - **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
   the instance's field values (:mod:`.x3d_proto`); ExternProtoDeclare is not
   followed.
-- **Skipped, with a warning in** ``Scene.warnings``: nodes shadowgeo does not
-  model (scripts, sensors, interpolators, routes, viewpoints, text, lines,
-  points, textures, external prototypes), missing textures, empty geometry,
-  Inline files that are missing, remote (never fetched) or not X3D/glTF.
-  Metadata and WorldInfo are skipped silently.
-- **Refused with a SceneError:** malformed XML, DOCTYPE entity declarations,
-  field values of the wrong type, indices out of range, DEF/USE, prototype and
-  Inline cycles, expansion bombs (DEF/USE, Inline and prototypes beyond 2 million
-  nodes, prototypes beyond 10,000 copies), Inline and glTF paths that leave the
-  scene's folder.
+- **Skipped, with a warning in** ``Scene.warnings`` naming file, line and
+  node, where X3D browsers are lenient: nodes shadowgeo does not model or does
+  not know (scripts, sensors, interpolators, routes, text, lines, points,
+  textures, external prototypes), missing textures, empty geometry, a USE
+  naming no DEF or a node of another type, a field value that cannot be read
+  (the field takes its default), geometry that cannot be built (indices out of
+  range, counts that do not fit: that Shape), Inline files that are missing,
+  remote (never fetched), outside the scene's folder (never read), unreadable
+  or not X3D/glTF. Metadata and WorldInfo are skipped silently.
+- **Refused with a SceneError** (what cannot be read as a scene at all):
+  malformed XML, DOCTYPE entity declarations, a root that is not X3D, DEF/USE,
+  prototype and Inline cycles, expansion bombs (DEF/USE, Inline and prototypes
+  beyond 2 million nodes, prototypes beyond 10,000 copies), transforms that
+  overflow.
 """
 
 from __future__ import annotations
@@ -44,7 +51,7 @@ import numpy as np
 
 from ..errors import GeometryError, SceneError
 from ..scene import Scene, Shape
-from ..scene.model import MARK
+from ..scene.model import MARK, Viewpoint, axis_angle
 from ..tolerance import Tolerance
 from . import x3d_parse
 from .x3d_defaults import DEFAULTS
@@ -67,7 +74,7 @@ REASONS = [
     (("Sensor", "Interpolator", "Script", "ROUTE", "Trigger", "Sequencer", "Filter", "Follower",
       "Chaser", "Damper", "HAnim", "Proto", "IMPORT", "EXPORT"),
      "animation and behaviour are not modelled (the scene is taken as it is at load time)"),
-    (("Viewpoint", "NavigationInfo", "Background", "Fog", "Sound", "AudioClip", "Environment",
+    (("NavigationInfo", "Background", "Fog", "Sound", "AudioClip", "Environment",
       "OrthoViewpoint", "ViewpointGroup", "TextureBackground"),
      "view, sound and environment settings cast no shadow"),
 ]  # fmt: skip
@@ -79,6 +86,7 @@ class _Reader:
         self.warnings = warnings
         self.instances: list[Instance] = []
         self.lights = []
+        self.viewpoints: list[Viewpoint] = []  # the top document's, in traversal order
         self.skipped: dict[tuple, list] = {}  # (tag, why) -> [first place, count]
         self.textures_seen: set = set()
         self.geometry_cache: dict = {}
@@ -193,6 +201,10 @@ class _Reader:
                 self.lights.append(light)
         elif tag == "Inline":
             load_inline(self, context, element, matrix, name)
+        elif tag == "Viewpoint" and len(self.inline_stack) == 1:
+            self.viewpoints.append(_viewpoint(context, element, matrix))
+        elif tag == "Viewpoint":
+            self._skip(context, element, tag, "a Viewpoint of an inlined file (X3D binds none)")
         elif tag in SILENT or tag.startswith("Metadata"):
             pass
         else:
@@ -213,7 +225,12 @@ class _Reader:
             self._skip(context, node, tag, "geometry not modelled (no area or not supported)")
             return
         if node not in self.geometry_cache:
-            built = geometry(context, node)
+            try:
+                built = geometry(context, node)
+            except (SceneError, GeometryError) as error:  # a bad index, count, size, ...
+                self.warnings.append(f"{error}; the Shape is skipped")
+                self.geometry_cache[node] = None
+                return
             empty = isinstance(built, Mesh) and (len(built.faces) == 0 or len(built.vertices) == 0)
             for note in getattr(built, "notes", []):
                 context.warn(node, note)
@@ -251,7 +268,7 @@ class _Reader:
     def _textures(self, context: Context, appearance) -> None:
         for texture in (e for e in appearance.iter() if local_name(e) in TEXTURES):
             texture = context.resolve(texture)
-            if texture in self.textures_seen:
+            if texture is None or texture in self.textures_seen:
                 continue
             self.textures_seen.add(texture)
             urls = [u for u in context.field(texture, "url", "MFString") if u]
@@ -297,6 +314,7 @@ class _Reader:
                 )
             )
         scene.lights.extend(self.lights)
+        scene.viewpoints.extend(self.viewpoints)
 
     def _tolerance(self, tolerance: Tolerance | None, chord: float | None) -> Tolerance:
         settings = {} if chord is None else {"chord": float(chord)}
@@ -320,6 +338,24 @@ class _Reader:
 def _public(name: str | None) -> str | None:
     """A DEF name as the file writes it (prototype copies prefix theirs with 'N#')."""
     return name.split("#", 1)[1] if name and re.match(r"\d+#", name) else name
+
+
+def _viewpoint(context: Context, element, matrix: np.ndarray) -> Viewpoint:
+    """A Viewpoint in world coordinates (the transforms' scale does not
+    change its field of view)."""
+    rotation = rotation_matrix(context.field(element, "orientation"))
+    position = matrix[:3, :3] @ context.field(element, "position") + matrix[:3, 3]
+    field_of_view = context.field(element, "fieldOfView")
+    if not 0 < field_of_view < np.pi:
+        context.warn_once(element, f"fieldOfView {field_of_view:g} is not in (0, pi); pi/4 used")
+        field_of_view = np.pi / 4
+    return Viewpoint(
+        tuple(float(v) for v in position),
+        axis_angle(matrix[:3, :3] @ rotation),
+        float(field_of_view),
+        context.field(element, "description"),
+        _public(element.get("DEF")),
+    )
 
 
 def _why(tag: str) -> str:
@@ -422,13 +458,16 @@ def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None
     >>> _ = path.write_text(
     ...     '<X3D version="4.0"><Scene><Transform translation="0 1 0">'
     ...     '<Shape DEF="crate"><Box/></Shape></Transform>'
-    ...     '<PointLight location="0 5 0" shadows="true"/><Viewpoint/></Scene></X3D>'
+    ...     '<PointLight location="0 5 0" shadows="true"/><Viewpoint description="front"/>'
+    ...     '<Background/></Scene></X3D>'
     ... )
     >>> scene = read(path)
     >>> [(shape.name, shape.n_faces) for shape in scene.shapes]
     [('crate', 12)]
     >>> scene.bounds.tolist(), scene.lights[0].light.position.tolist()
     ([[-1.0, 0.0, -1.0], [1.0, 2.0, 1.0]], [0.0, 5.0, 0.0])
+    >>> scene.viewpoints[0].position, scene.viewpoints[0].description
+    ((0.0, 0.0, 10.0), 'front')
     >>> scene.warnings[0].split(": ", 1)[1]
     'skipped, view, sound and environment settings cast no shadow'
     """

@@ -13,7 +13,9 @@ Two cases:
   longer holds (``add_shadows`` replaced them: a converted file converted
   again) is dropped rather than stacked under a second set.
 * Otherwise (glTF, USD, mesh input, or a scene built in code): a fresh X3D 4.0
-  document with the lights, one ``Transform`` (translation, rotation, scale,
+  document with the scene's viewpoints (else one that shows the scene and
+  its shadows from above at an angle: :func:`~shadowgeo.scene.model.overview`),
+  the lights, one ``Transform`` (translation, rotation, scale,
   scaleOrientation: any affine transform exactly) around each shape that is
   not in world coordinates, and the added shapes in their groups.
 
@@ -35,7 +37,7 @@ from lxml import etree
 from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
-from ..scene.model import MARK, unique_name
+from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units
 from .atomic import atomic_path
 
@@ -229,6 +231,11 @@ def _fresh(scene: Scene):
         # X3D is Y-up: one rotation about x takes (x, y, z) to (x, z, -y).
         name = unique_name("shadowgeo_z_up", used)
         body = etree.SubElement(body, "Transform", DEF=name, rotation=f"1 0 0 {-math.pi / 2!r}")
+    # The input's cameras, else one showing the scene and its shadows from
+    # above at an angle (X3D's default camera stands at ground level, where a
+    # ground and its shadows are edge-on).
+    for viewpoint in scene.viewpoints or [overview(scene)]:
+        body.append(_viewpoint_element(viewpoint, used))
     for light in scene.lights:
         body.append(_light_element(light, used))
     for shape in scene.shapes:
@@ -243,6 +250,20 @@ def _fresh(scene: Scene):
     _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used)
     etree.indent(root, space="  ")
     return etree.ElementTree(root)
+
+
+def _viewpoint_element(viewpoint: Viewpoint, used: set[str]):
+    element = etree.Element(
+        "Viewpoint",
+        position=_numbers(viewpoint.position),
+        orientation=_numbers(viewpoint.orientation),
+        fieldOfView=repr(float(viewpoint.field_of_view)),
+    )
+    if viewpoint.description:
+        element.set("description", viewpoint.description)
+    if viewpoint.name:
+        element.set("DEF", unique_name(viewpoint.name, used))
+    return element
 
 
 def _light_element(scene_light: SceneLight, used: set[str]):

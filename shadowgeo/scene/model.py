@@ -132,9 +132,111 @@ class Shape:
         return len(self.faces)
 
 
+def rotate(axis_angle, vector) -> np.ndarray:
+    """``vector`` (3,) turned by the rotation ``(x, y, z, angle)`` (right-hand
+    rule about the axis; a zero axis turns nothing), by Rodrigues' formula.
+
+    >>> rotate((0, 1, 0, math.pi / 2), (0, 0, -1)).round(12).tolist()
+    [-1.0, 0.0, -0.0]
+    """
+    axis = np.asarray(axis_angle[:3], dtype=np.float64)
+    angle = float(axis_angle[3])
+    vector = np.asarray(vector, dtype=np.float64)
+    length = float(np.linalg.norm(axis))
+    if length == 0.0:
+        return vector.copy()
+    axis = axis / length
+    return (
+        vector * math.cos(angle)
+        + np.cross(axis, vector) * math.sin(angle)
+        + axis * float(axis @ vector) * (1.0 - math.cos(angle))
+    )
+
+
+def axis_angle(matrix) -> tuple[float, float, float, float]:
+    """The rotation ``(x, y, z, angle)`` nearest to the 3x3 ``matrix`` (its
+    polar factor: scale and shear dropped, a mirror undone), with a unit axis
+    and ``0 <= angle <= pi``; ``(0, 0, 1, 0)`` for no rotation.
+
+    >>> [round(v, 12) for v in axis_angle([[0, 0, 1], [0, 1, 0], [-1, 0, 0]])]
+    [0.0, 1.0, 0.0, 1.570796326795]
+    """
+    left, _, right = np.linalg.svd(np.asarray(matrix, dtype=np.float64).reshape(3, 3))
+    turn = left @ right
+    if np.linalg.det(turn) < 0:
+        left[:, -1] *= -1
+        turn = left @ right
+    # Shepperd's method: the quaternion from the largest of its four squares.
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = turn.tolist()
+    trace = r00 + r11 + r22
+    if trace >= max(r00, r11, r22):
+        s = 2 * math.sqrt(max(1 + trace, 0.0))
+        w, x, y, z = s / 4, (r21 - r12) / s, (r02 - r20) / s, (r10 - r01) / s
+    elif r00 >= r11 and r00 >= r22:
+        s = 2 * math.sqrt(max(1 + r00 - r11 - r22, 0.0))
+        w, x, y, z = (r21 - r12) / s, s / 4, (r01 + r10) / s, (r02 + r20) / s
+    elif r11 >= r22:
+        s = 2 * math.sqrt(max(1 + r11 - r00 - r22, 0.0))
+        w, x, y, z = (r02 - r20) / s, (r01 + r10) / s, s / 4, (r12 + r21) / s
+    else:
+        s = 2 * math.sqrt(max(1 + r22 - r00 - r11, 0.0))
+        w, x, y, z = (r10 - r01) / s, (r02 + r20) / s, (r12 + r21) / s, s / 4
+    if w < 0:
+        w, x, y, z = -w, -x, -y, -z
+    sine = math.sqrt(x * x + y * y + z * z)
+    if sine == 0.0:
+        return (0.0, 0.0, 1.0, 0.0)
+    return (x / sine, y / sine, z / sine, 2 * math.atan2(sine, w))
+
+
+@dataclass(frozen=True)
+class Viewpoint:
+    """A camera the scene's author placed (X3D's Viewpoint), in world coordinates.
+
+    Parameters
+    ----------
+    position : (x, y, z)
+    orientation : (x, y, z, angle)
+        Axis and angle (radians) turning the default camera, which looks
+        along -Z with +Y up, to this one.
+    field_of_view : float
+        Radians: the smaller of the picture's two view angles (X3D's
+        ``fieldOfView``; its default is pi / 4).
+    description : str
+        The text a browser lists it by.
+    name : str, optional
+        The DEF name.
+
+    Examples
+    --------
+    >>> view = Viewpoint((0, 5, 0), (1, 0, 0, -math.pi / 2))
+    >>> (view.direction.round(12) + 0.0).tolist(), (view.up.round(12) + 0.0).tolist()
+    ([0.0, -1.0, 0.0], [0.0, 0.0, -1.0])
+    """
+
+    position: tuple[float, float, float] = (0.0, 0.0, 10.0)
+    orientation: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 0.0)
+    field_of_view: float = math.pi / 4
+    description: str = ""
+    name: str | None = None
+
+    @property
+    def direction(self) -> np.ndarray:
+        """(3,) unit vector the camera looks along: -Z turned by ``orientation``."""
+        return rotate(self.orientation, (0.0, 0.0, -1.0))
+
+    @property
+    def up(self) -> np.ndarray:
+        """(3,) unit vector of the picture's up: +Y turned by ``orientation``."""
+        return rotate(self.orientation, (0.0, 1.0, 0.0))
+
+
 @dataclass
 class Scene:
-    """Shapes, lights and what the reader noticed.
+    """Shapes, lights, the author's cameras and what the reader noticed.
+
+    ``viewpoints`` are in document order; the first is the one a browser
+    shows first (X3D's bound Viewpoint).
 
     ``document`` keeps the reader's own representation (for X3D, the parsed XML
     tree) so a writer of the same format can keep everything shadowgeo does not
@@ -148,6 +250,7 @@ class Scene:
     meters_per_unit: float = 1.0
     warnings: list[str] = field(default_factory=list)
     document: Any = None
+    viewpoints: list[Viewpoint] = field(default_factory=list)
 
     def shapes_with_role(self, role: str) -> list[Shape]:
         return [shape for shape in self.shapes if shape.role == role]
@@ -160,3 +263,48 @@ class Scene:
             return np.zeros((2, 3))
         stacked = np.concatenate(points)
         return np.array([stacked.min(axis=0), stacked.max(axis=0)])
+
+
+# Where the overview camera looks from, seen from the scene's centre, Y up:
+# from +z (in front, as X3D's default camera) a little to +x, 35 degrees up,
+# on the side the default sun's shadows fall to (not hidden behind casters).
+OVERVIEW_FROM = (1.0, 1.2, 1.4)
+
+
+def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
+    """A Viewpoint that shows the whole scene, its shadows included, from
+    above at an angle (:data:`OVERVIEW_FROM`, turned for a Z-up scene): the
+    bounding sphere of every shape fits in ``field_of_view``.
+
+    Examples
+    --------
+    >>> cube = Shape([[-1, -1, -1], [1, 1, 1], [1, -1, 1]], [[0, 1, 2]])
+    >>> view = overview(Scene([cube]))
+    >>> [round(v, 4) for v in view.position]  # sqrt(3) / sin(pi / 8) along (1, 1.2, 1.4)
+    [2.1577, 2.5893, 3.0208]
+    >>> to_centre = -np.array(view.position) / np.linalg.norm(view.position)
+    >>> round(float(view.direction @ to_centre), 12), round(float(view.up[1]), 4)  # cos 34.9 deg
+    (1.0, 0.8202)
+    """
+    points = [shape.world_vertices for shape in scene.shapes if shape.n_faces]
+    stacked = np.concatenate(points) if points else np.zeros((1, 3))
+    low, high = stacked.min(axis=0), stacked.max(axis=0)
+    center = (low + high) / 2
+    radius = max(float(np.linalg.norm(high - low)) / 2, 1e-6)
+    x, y, z = OVERVIEW_FROM
+    z_up = (scene.up_axis or "Y").upper() == "Z"
+    away = np.array([x, -z, y] if z_up else [x, y, z])
+    away /= np.linalg.norm(away)
+    up = np.array([0.0, 0.0, 1.0] if z_up else [0.0, 1.0, 0.0])
+    position = center + away * radius / math.sin(field_of_view / 2)
+    # The camera's frame as columns: right, up, backwards (the -Z it looks along).
+    right = np.cross(-away, up)
+    right /= np.linalg.norm(right)
+    frame = np.column_stack([right, np.cross(away, right), away])
+    return Viewpoint(
+        tuple(float(v) for v in position),
+        axis_angle(frame),
+        field_of_view,
+        "shadowgeo: the scene and its shadows",
+        "shadowgeo_overview",
+    )

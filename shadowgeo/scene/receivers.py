@@ -14,7 +14,9 @@ shapes:
 * named (``--receiver DEF``): the named shape's patches of at least a quarter
   of its largest patch's area; its largest patch must cover at least a tenth
   of the shape's area, else it is not planar;
-* a plane ``a x + b y + c z + d = 0``: unbounded, lit from either side.
+* a plane ``a x + b y + c z + d = 0``: unbounded, lit from either side;
+* when none is found: the ground plane under the scene's lowest point (along
+  its up axis), unbounded, lit from above, with a note.
 
 A patch of a ``solid`` shape receives only on its front (the side its
 triangles face, as a renderer culls the back); a patch of a ``solid="false"``
@@ -113,6 +115,24 @@ def patches(shape: Shape, tolerance: Tolerance) -> list[tuple[Plane, np.ndarray,
     return found
 
 
+def ground(scene: Scene, geometry: list[Shape], notes: list[str]) -> Receiver:
+    """The receiver when none is found: the unbounded ground plane through the
+    lowest point of the geometry (height along the scene's up axis), facing
+    up, with a note."""
+    axis = 2 if (scene.up_axis or "Y").upper() == "Z" else 1
+    points = [shape.world_vertices for shape in geometry]
+    lowest = float(np.concatenate(points)[:, axis].min()) if points else 0.0
+    normal = np.zeros(3)
+    normal[axis] = 1.0
+    name = "xyz"[axis]
+    notes.append(
+        "shadows: no receiver found (no large flat surface with something in front of it); "
+        f"the ground plane {name} = {lowest:.6g} under the scene's lowest point receives "
+        "(--receiver DEF or --plane a,b,c,d chooses another)"
+    )
+    return Receiver(Plane(normal, -lowest), "ground", two_sided=False)
+
+
 def select(
     scene: Scene, geometry: list[Shape], names, plane, tolerance: Tolerance, notes: list[str]
 ) -> list[Receiver]:
@@ -181,10 +201,6 @@ def select(
             counts[id(shape)] = count + 1
             found.append(receiver(shape, fitted, member, area, count))
     if not found:
-        raise SceneError(
-            "no receiver found: no large flat surface (ground, floor, wall); "
-            "name one (--receiver DEF) or give a plane (--plane a,b,c,d)",
-            path=scene.path,
-        )
+        return [ground(scene, geometry, notes)]
     notes.append("shadows: receivers found: " + ", ".join(r.name for r in found))
     return found

@@ -10,7 +10,9 @@ Lights
     The lights with ``shadows=True`` (X3D 4's ``shadows="true"``) cast. When no
     light has it, every light that is on casts, and a note in
     ``scene.warnings`` says so. ``lights=`` names the lights (DEF names) to use
-    instead.
+    instead. A scene with no light that is on gets :func:`default_sun` (high,
+    slightly oblique: travelling along ``(0.3, -1, 0.2)`` when Y is up), with
+    a note; ``extra_lights`` replaces it.
 Receivers
     Flat patches of the shapes (a ground, a floor, a slab's top, a wall),
     found automatically or from the shapes named in ``receivers=``, or one
@@ -36,9 +38,10 @@ Each becomes a shape with a black material whose transparency is
 ``method="volume"`` instead adds one closed shadow volume
 (:func:`shadowgeo.shadow_volume`) per shape and light, role
 ``"volume"``, ending one scene size past the scene's farthest corner.
-A scene with no light that is on raises :class:`~shadowgeo.SceneError`: X3D's
-headlight follows the viewer and casts no fixed shadow. ``extra_lights`` gives
-lights that cast without being added to the scene (a sun for such a scene).
+X3D's headlight follows the viewer and casts no fixed shadow, so a scene with
+no light that is on is lit by :func:`default_sun`, which is not added to the
+scene. ``extra_lights`` gives other lights that cast without being added to
+the scene.
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ import numpy as np
 
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
-from ..lights import SpotLight, is_positional
+from ..lights import DirectionalLight, SpotLight, is_positional
 from ..plane import Plane
 from ..projection import project_shadow
 from ..tolerance import Tolerance
@@ -67,6 +70,12 @@ _RECEIVER_AREA_FRACTION = 0.25
 _RECEIVER_SIZE_FRACTION = 0.25
 # Default lift of shadows off their receiver, relative to the scene's size.
 _DEFAULT_OFFSET = 1e-3
+# The sun that casts in a scene with no light that is on, for a Y-up scene:
+# high (about 70 degrees above the horizon) and slightly oblique, so that
+# shadows fall beside their casters, towards +x and +z (the X3D default
+# viewpoint looks down -z, so they fall towards the viewer, to the right).
+DEFAULT_SUN_DIRECTION = (0.3, -1.0, 0.2)
+DEFAULT_SUN_ELEVATION = math.degrees(math.atan2(1.0, math.hypot(0.3, 0.2)))
 
 Progress = Callable[[int, int], None]
 
@@ -124,8 +133,7 @@ def add_shadows(
     Raises
     ------
     SceneError
-        A named light or receiver does not exist, no light is on, or no
-        receiver is found.
+        A named light or receiver does not exist, or a named light is off.
     GeometryError
         A named receiver is not planar.
 
@@ -149,6 +157,9 @@ def add_shadows(
     kept = _without_baked(scene, notes)
     geometry = [s for s in kept if s.role == "geometry" and s.n_faces]
     chosen = _select_lights(scene, lights, notes, extra_lights)
+    if not geometry and receivers is None:
+        notes.append("shadows: the scene has no geometry, so nothing casts or receives")
+        return dataclasses.replace(scene, shapes=kept, warnings=[*scene.warnings, *notes])
     positions = [light.light.position for light in chosen if is_positional(light.light)]
     if not isinstance(tolerance, Tolerance):
         bounds = (
@@ -226,6 +237,25 @@ class _Names:
         return safe_name(light.name) if light.name else f"light{index}"
 
 
+def default_sun(up_axis: str = "Y") -> SceneLight:
+    """The sun :func:`add_shadows` uses for a scene with no light that is on.
+
+    It travels along :data:`DEFAULT_SUN_DIRECTION` ``(0.3, -1, 0.2)`` in a
+    Y-up scene, ``(0.3, -0.2, -1)`` in a Z-up one (the same sun: Y-up ``(x,
+    y, z)`` is Z-up ``(x, -z, y)``), named ``"sun"``, with ``shadows=True``.
+
+    Examples
+    --------
+    >>> default_sun().light.direction.round(3).tolist()
+    [0.282, -0.941, 0.188]
+    >>> default_sun("Z").light.direction.round(3).tolist()
+    [0.282, -0.188, -0.941]
+    """
+    x, y, z = DEFAULT_SUN_DIRECTION
+    direction = (x, -z, y) if (up_axis or "Y").upper() == "Z" else (x, y, z)
+    return SceneLight(DirectionalLight(direction), name="sun", shadows=True)
+
+
 def _select_lights(scene: Scene, names, notes: list[str], extra=()) -> list[SceneLight]:
     extra = list(extra)
     for light in extra:
@@ -246,13 +276,16 @@ def _select_lights(scene: Scene, names, notes: list[str], extra=()) -> list[Scen
         return [*chosen, *extra]
     lit = [light for light in scene.lights if light.on]
     if not lit:
+        sun = default_sun(scene.up_axis)
         what = "no lights" if not scene.lights else "no light that is on"
-        raise SceneError(
-            f"the scene has {what}, so nothing casts a shadow "
-            "(X3D's headlight follows the viewer and casts none; give one with "
-            "extra_lights=, or shadowgeo convert --sun DX,DY,DZ)",
-            path=scene.path,
+        direction = ", ".join(f"{value:.3g}" for value in sun.light.direction)
+        notes.append(
+            f"shadows: the scene has {what}; a default sun casts, travelling along "
+            f"({direction}), {DEFAULT_SUN_ELEVATION:.0f} degrees above the horizon "
+            "(X3D's headlight follows the viewer and casts none; shadowgeo convert "
+            "--sun DX,DY,DZ gives another)"
         )
+        return [sun]
     chosen = [light for light in lit if light.shadows]
     if not chosen:
         listed = ", ".join(_Names.light(light, i) for i, light in enumerate(lit))
