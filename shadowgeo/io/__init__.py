@@ -7,6 +7,8 @@ not the shadow algorithms.
 extension                         read                        write
 ================================  ==========================  ==================
 ``.x3d``, ``.x3dz``               :mod:`.x3d_read`            :mod:`.x3d_write`
+``.x3dv``, ``.x3dvz``, ``.wrl``,  :mod:`.x3d_read`            :mod:`.x3d_write`
+``.wrz`` (and ``.gz`` of each)    (:mod:`.x3d_classic_read`)  (``.x3dv`` only)
 ``.glb``, ``.gltf``               :mod:`.meshes` (trimesh)    :mod:`.gltf`
 ``.usda``, ``.usdc``, ``.usd``    :mod:`.usd`                 :mod:`.usd`
 ``.obj``, ``.stl``, ``.ply``,     :mod:`.meshes` (trimesh)    --
@@ -33,6 +35,8 @@ from ..scene import Scene, Shape
 READERS = {
     ".x3d": "x3d_read",
     ".x3dz": "x3d_read",
+    ".x3d.gz": "x3d_read",
+    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d_read"),
     ".glb": "meshes",
     ".gltf": "meshes",
     ".obj": "meshes",
@@ -47,6 +51,7 @@ READERS = {
 WRITERS = {
     ".x3d": "x3d_write",
     ".x3dz": "x3d_write",
+    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz"], "x3d_write"),
     ".glb": "gltf",
     ".gltf": "gltf",
     ".usda": "usd",
@@ -56,7 +61,11 @@ WRITERS = {
 
 
 def _suffix(path) -> str:
-    return Path(path).suffix.lower()
+    """The extension, with the one before it for gzip (``.x3dv.gz``)."""
+    path = Path(path)
+    if path.suffix.lower() == ".gz":
+        return "".join(path.suffixes[-2:]).lower()
+    return path.suffix.lower()
 
 
 def _module(table: dict[str, str], path, verb: str):

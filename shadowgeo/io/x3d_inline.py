@@ -1,4 +1,4 @@
-"""X3D Inline: local X3D or glTF files only, inside the scene's folder.
+"""X3D Inline: local X3D (any encoding) or glTF files only, inside the scene's folder.
 
 Each ``url`` is tried in order. Remote URLs (any ``scheme:``) are never
 fetched; a relative path is taken from the inlining file's folder and must
@@ -22,7 +22,8 @@ from .x3d_geometry import Instance, Mesh
 
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
-X3D_SUFFIXES = {".x3d", ".x3dz"}
+X3D_SUFFIXES = {".x3d", ".x3dz", ".x3dv", ".x3dvz", ".wrl", ".wrz"}
+X3D_SUFFIXES |= {".x3d.gz", ".x3dv.gz", ".wrl.gz"}
 GLTF_SUFFIXES = {".gltf", ".glb"}
 MAX_INLINE_DEPTH = 16
 
@@ -52,14 +53,17 @@ def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> 
         if isinstance(found, str):
             reasons.append(found)
             continue
-        suffix = found.suffix.lower()
+        suffix = "".join(found.suffixes[-2:] if found.suffix == ".gz" else [found.suffix]).lower()
+        if suffix in X3D_SUFFIXES and x3d_parse.read_bytes(found).startswith(b"#VRML V1."):
+            reasons.append(f"'{url}' is VRML 1.0 (not supported)")
+            continue
         if suffix in X3D_SUFFIXES:
             _x3d(reader, context, element, found, matrix, name)
             return
         if suffix in GLTF_SUFFIXES:
             _gltf(reader, context, element, found, matrix, name)
             return
-        reasons.append(f"'{url}' is not X3D XML or glTF")
+        reasons.append(f"'{url}' is not X3D, VRML 97 or glTF")
     context.warn(element, "Inline skipped: " + ("; ".join(reasons) or "no url"))
 
 
