@@ -54,7 +54,19 @@ _NAME = re.compile(
     r"[^\x00-\x20\x22\x23\x27\x2b-\x2e\x30-\x39\x5b-\x5d\x7b\x7d\x7f]"
     r"[^\x00-\x20\x22\x23\x27\x2c\x2e\x5b-\x5d\x7b\x7d\x7f]*"
 )
+ZERO_WIDTH = "\u200b"
 XSD = "http://www.w3.org/2001/XMLSchema-instance"
+
+
+def xml_comment(text: str) -> str:
+    """``text`` as an XML comment can hold it: a zero-width space between dashes
+    (XML forbids ``--`` and a final ``-``); :func:`classic_comment` undoes it."""
+    return re.sub(r"-(?=-|\Z)", "-" + ZERO_WIDTH, text)
+
+
+def classic_comment(text: str) -> str:
+    """The comment text :func:`xml_comment` was given."""
+    return text.replace("-" + ZERO_WIDTH, "-")
 
 
 def is_classic(data: bytes) -> bool:
@@ -152,8 +164,7 @@ class _Parser:
             self.comments.append(self.tokens[self.position])
             self.position += 1
         for comment in self.comments:
-            text = re.sub("-(?=-)", "- ", comment.text)
-            node = etree.Comment(text + " " if text.endswith("-") else text)
+            node = etree.Comment(xml_comment(comment.text))
             node.tail = None
             parent.append(node)
         self.comments = []
