@@ -36,7 +36,7 @@ from ..errors import SceneError
 from .x3d_classic_tokens import Token, is_number, number_text, quote, tokens
 from .x3d_field_types import CONTAINER_FIELDS, field_type
 
-MAX_DEPTH = 200
+MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000
 ACCESS = {
     "field": "initializeOnly", "exposedField": "inputOutput", "eventIn": "inputOnly",
