@@ -98,11 +98,11 @@ def reference_shadow():
     return shapely.MultiPoint(landed[:, [0, 2]]).convex_hull
 
 
-def convert(folder: Path) -> Path:
-    """``shadowgeo convert`` the input scene to ``converted.x3d``."""
+def convert(folder: Path, suffix: str = ".x3d") -> Path:
+    """``shadowgeo convert`` the input scene to ``converted<suffix>``."""
     from cli.main import main
 
-    source, target = folder / "scene.x3d", folder / "converted.x3d"
+    source, target = folder / "scene.x3d", folder / f"converted{suffix}"
     source.write_text(SCENE)
     assert main(["convert", str(source), str(target)]) == 0
     return target
@@ -189,14 +189,16 @@ def screenshot(folder: Path, browser: str) -> np.ndarray:
     return np.asarray(Image.open(shot).convert("RGB"))
 
 
-def test_x_ite_shows_the_baked_shadow(tmp_path):
+# every X3D encoding shadowgeo writes: XML, ClassicVRML
+@pytest.mark.parametrize("suffix", [".x3d", ".x3dv"])
+def test_x_ite_shows_the_baked_shadow(tmp_path, suffix):
     browser = chromium()
     if not (X_ITE / "x_ite.min.js").is_file():
         pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
     shapely = pytest.importorskip("shapely")
 
-    convert(tmp_path)
-    (tmp_path / "index.html").write_text(PAGE)
+    convert(tmp_path, suffix)
+    (tmp_path / "index.html").write_text(PAGE.replace("converted.x3d", f"converted{suffix}"))
     (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
     image = screenshot(tmp_path, browser)
     assert image.shape[:2] == (PIXELS, PIXELS)

@@ -346,23 +346,15 @@ def test_corpus_converts_or_fails_clearly(classic_corpus_dir, tmp_path):
             vrml1 += 1
             continue
         try:
-            scene = sg.load(path)
-            lights = () if scene.lights else (SUN,)
-            try:
-                scene = sg.add_shadows(scene, extra_lights=lights)
-            except sg.SceneError as error:
-                if "no receiver found" not in str(error):
-                    raise
-                scene = sg.add_shadows(scene, plane=(0, 1, 0, 0), extra_lights=lights)
+            # as shadowgeo convert IN out.x3dv --sun 0.3,-1,0.2 --plane 0,1,0,0
+            scene = sg.add_shadows(sg.load(path), plane=(0, 1, 0, 0), extra_lights=[SUN])
             sg.save(scene, tmp_path / "out.x3dv")
             written += 1
         except sg.SceneError as error:
             assert "\n" not in str(error)
             (refused if any(why in str(error) for why in ALLOWED) else failed).append(path)
     # only files the corpus marks as deliberately broken fail for another reason
-    # x3d/are_set_changed_optional.x3dv: add_shadows with the test's sun fails (not parsing)
-    unexpected = [path for path in failed if "warnings" not in path.parts]
-    assert len(unexpected) <= 1, unexpected
+    assert [path for path in failed if "warnings" not in path.parts] == []
     assert vrml1 >= 30 and written >= 150
     assert written / (written + len(failed)) >= 0.95
 
