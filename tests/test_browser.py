@@ -17,7 +17,9 @@ similar triangles.
 from __future__ import annotations
 
 import http.server
+import math
 import os
+import re
 import shutil
 import subprocess
 import threading
@@ -59,6 +61,16 @@ SCENE = f"""<?xml version="1.0" encoding="UTF-8"?>
   </Scene>
 </X3D>
 """
+
+# VRML 97 has no OrthoViewpoint: a Viewpoint straight above shows the ground plane
+# (square to the view) as linearly as the orthographic one, with the same field
+PERSPECTIVE_SCENE = re.sub(
+    r"<OrthoViewpoint[^>]*/>",
+    '<Viewpoint position="0 50 0" orientation="1 0 0 -1.5707963267948966" '
+    f'fieldOfView="{2 * math.atan(HALF_VIEW / 50)!r}"/>',
+    SCENE,
+)
+assert PERSPECTIVE_SCENE != SCENE
 
 PAGE = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8">
@@ -103,7 +115,7 @@ def convert(folder: Path, suffix: str = ".x3d") -> Path:
     from cli.main import main
 
     source, target = folder / "scene.x3d", folder / f"converted{suffix}"
-    source.write_text(SCENE)
+    source.write_text(PERSPECTIVE_SCENE if suffix == ".wrl" else SCENE)
     assert main(["convert", str(source), str(target)]) == 0
     return target
 
@@ -189,8 +201,8 @@ def screenshot(folder: Path, browser: str) -> np.ndarray:
     return np.asarray(Image.open(shot).convert("RGB"))
 
 
-# every X3D encoding shadowgeo writes: XML, ClassicVRML
-@pytest.mark.parametrize("suffix", [".x3d", ".x3dv"])
+# every X3D encoding shadowgeo writes: XML, ClassicVRML, VRML 97
+@pytest.mark.parametrize("suffix", [".x3d", ".x3dv", ".wrl"])
 def test_x_ite_shows_the_baked_shadow(tmp_path, suffix):
     browser = chromium()
     if not (X_ITE / "x_ite.min.js").is_file():

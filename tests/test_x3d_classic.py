@@ -514,3 +514,53 @@ def geometry(scene) -> list:
         points = points[np.lexsort(np.round(points, 4).T[::-1])]
         out.append((shape.n_faces, points))
     return sorted(out, key=lambda item: (item[0], *np.round(item[1].mean(axis=0), 4)))
+
+
+# -- VRML 97 output ----------------------------------------------------------------------
+
+
+def test_vrml97_output_undoes_x3d_names_and_reads_back_the_same(tmp_path):
+    (tmp_path / "twin.x3d").write_text(VRML97_XML)
+    scene = sg.add_shadows(sg.load(tmp_path / "twin.x3d"), plane=(0, 1, 0, 0))
+    sg.save(scene, tmp_path / "out.wrl")
+    text = (tmp_path / "out.wrl").read_text()
+    assert text.startswith("#VRML V2.0 utf8\n")
+    for written in ("exposedField SFVec3f where", "field SFFloat reach", "collide FALSE"):
+        assert written in text
+    assert "level [" in text and "choice DEF chosen Shape" in text and "enabled" not in text
+    assert "IndexedTriangleSet" not in text and "coordIndex [ " in text  # shadows as faces
+    back = sg.load(tmp_path / "out.wrl")
+    authored = [shape for shape in back.shapes if shape.role == "geometry"]
+    assert world(authored) == world([s for s in scene.shapes if s.role == "geometry"])
+    assert lights(back) == lights(scene)
+    shadows, expected = back.shapes_with_role("shadow"), scene.shapes_with_role("shadow")
+    assert len(shadows) == len(expected) > 0
+    for got, want in zip(shadows, expected, strict=True):
+        assert np.array_equal(got.world_vertices, want.world_vertices)
+        assert np.array_equal(got.faces, want.faces)
+
+
+def test_wrl_to_wrl_keeps_the_document_and_replaces_old_shadows(tmp_path):
+    (tmp_path / "old.wrl").write_text(VRML97)
+    sg.save(sg.add_shadows(sg.load(tmp_path / "old.wrl"), plane=(0, 1, 0, 0)), tmp_path / "a.wrl")
+    text = (tmp_path / "a.wrl").read_text()
+    assert "# VRML 97 names: exposedField, Collision collide, LOD level, Switch choice" in text
+    assert "PROTO Lamp [" in text and "location IS where" in text and "DEF chosen Shape" in text
+    again = sg.add_shadows(sg.load(tmp_path / "a.wrl"), plane=(0, 1, 0, 0))
+    sg.save(again, tmp_path / "b.wrl")
+    groups = (tmp_path / "b.wrl").read_text().count('class "shadowgeo-shadows"')
+    assert groups == text.count('class "shadowgeo-shadows"') == 2  # one per light
+    assert (tmp_path / "b.wrl").read_text().count("#VRML V2.0 utf8") == 1
+
+
+def test_x3d4_spotlight_defaults_survive_the_vrml97_translation(tmp_path):
+    # VRML 97 is read with X3D 3 defaults (beamWidth pi/2, cutOffAngle pi/4): the
+    # writer states X3D 4's (3 pi / 16 and pi / 2) so the light stays the same
+    (tmp_path / "spot.x3d").write_text(
+        "<X3D version='4.0'><Scene><SpotLight location='0 5 0' direction='0 -1 0'/>"
+        "<Shape><Box/></Shape></Scene></X3D>"
+    )
+    sg.save(sg.load(tmp_path / "spot.x3d"), tmp_path / "spot.wrl")
+    light = sg.load(tmp_path / "spot.wrl").lights[0]
+    assert light.light.cut_off_angle == pytest.approx(math.pi / 2, abs=1e-6)
+    assert light.beam_width == pytest.approx(3 * math.pi / 16, abs=1e-6)

@@ -8,7 +8,15 @@ extension                         read                        write
 ================================  ==========================  ==================
 ``.x3d``, ``.x3dz``               :mod:`.x3d_read`            :mod:`.x3d_write`
 ``.x3dv``, ``.x3dvz``, ``.wrl``,  :mod:`.x3d_read`            :mod:`.x3d_write`
-``.wrz`` (and ``.gz`` of each)    (:mod:`.x3d_classic_read`)  (``.x3dv`` only)
+``.wrz`` (and ``.gz`` of each)
+================================  ==========================  ==================
+
+ClassicVRML and VRML 97 are parsed to the XML tree by :mod:`.x3d_classic_read`
+and written from it by :mod:`.x3d_classic_write`.
+
+================================  ==========================  ==================
+extension                         read                        write
+================================  ==========================  ==================
 ``.glb``, ``.gltf``               :mod:`.meshes` (trimesh)    :mod:`.gltf`
 ``.usda``, ``.usdc``, ``.usd``    :mod:`.usd`                 :mod:`.usd`
 ``.obj``, ``.stl``, ``.ply``,     :mod:`.meshes` (trimesh)    --
@@ -51,7 +59,7 @@ READERS = {
 WRITERS = {
     ".x3d": "x3d_write",
     ".x3dz": "x3d_write",
-    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz"], "x3d_write"),
+    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d_write"),
     ".glb": "gltf",
     ".gltf": "gltf",
     ".usda": "usd",

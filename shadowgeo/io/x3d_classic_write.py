@@ -9,6 +9,13 @@ schema table (:mod:`.x3d_field_types`), a prototype's declaration, or a
 written ``TRUE`` / ``FALSE``. A child node goes to its ``containerField``
 (or its type's default one). Script code held as XML text is written as the
 first ``url`` string, as ClassicVRML has no other place for it.
+
+VRML 97 (``.wrl``) is the same syntax with X3D's later names undone: access
+types (``exposedField``, ...), Collision ``collide``, LOD ``level``, Switch
+``choice``; IndexedTriangleSet (the shadows) becomes IndexedFaceSet; the head
+(PROFILE, COMPONENT, UNIT, META) becomes comments. Nodes VRML 97 lacks are
+written as they are (X3D browsers read them); the ``class`` field that marks
+shadowgeo's groups is kept, as X3D browsers accept it in VRML 97 files.
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ from lxml import etree
 
 from .x3d_classic_read import classic_comment
 from .x3d_classic_tokens import is_number, quote
+from .x3d_defaults import DEFAULTS
 from .x3d_field_types import CONTAINER_FIELDS, field_type
 from .x3d_fields import local_name
 from .x3d_fields import parse as parse_field
@@ -25,10 +33,20 @@ INDENT = "  "
 # Nodes whose XML text content is code (a CDATA section), written as a url.
 CODE_NODES = {"Script", "ShaderPart", "ShaderProgram", "PackagedShader"}
 _SKIPPED = {"DEF", "USE", "containerField"}
+# X3D names VRML 97 spells otherwise: (node, X3D field) -> VRML 97 field; access types.
+VRML97_FIELDS = {("Collision", "enabled"): "collide", ("LOD", "children"): "level"}
+VRML97_FIELDS[("Switch", "children")] = "choice"
+_SPOT = DEFAULTS["SpotLight"]
+X3D4_DEFAULTS = {("SpotLight", name): _SPOT[name][1] for name in ("beamWidth", "cutOffAngle")}
+VRML97_ACCESS = {
+    "initializeOnly": "field", "inputOutput": "exposedField", "inputOnly": "eventIn",
+    "outputOnly": "eventOut",
+}  # fmt: skip
 
 
-def classic_text(tree) -> str:
-    """The ClassicVRML text of an X3D XML tree (``lxml`` tree or root element).
+def classic_text(tree, vrml97: bool = False) -> str:
+    """The ClassicVRML text of an X3D XML tree (``lxml`` tree or root element),
+    or with ``vrml97`` its VRML 97 translation (see :data:`VRML97_FIELDS`).
 
     Examples
     --------
@@ -50,9 +68,11 @@ def classic_text(tree) -> str:
     }
     """
     root = tree.getroot() if isinstance(tree, etree._ElementTree) else tree
-    writer = _Writer()
     version = root.get("version", "4.0")
+    writer = _Writer(vrml97, x3d4=not version.startswith(("3.", "2.")))
     lines = [f"#X3D V{version} utf8", f"PROFILE {root.get('profile') or 'Immersive'}"]
+    if vrml97:
+        lines = ["#VRML V2.0 utf8"]
     for part in root:
         if local_name(part) == "head":
             lines += [line for entry in part for line in writer.head(entry)]
@@ -67,19 +87,26 @@ def classic_text(tree) -> str:
 
 
 class _Writer:
-    def __init__(self) -> None:
+    def __init__(self, vrml97: bool = False, x3d4: bool = True) -> None:
+        self.vrml97 = vrml97
+        # defaults X3D 4 changed, written out when VRML 97 (read as 3.x) would change them
+        self.explicit = X3D4_DEFAULTS if vrml97 and x3d4 else {}
         self.protos: dict[str, dict[str, str]] = {}  # prototype name -> field -> type
 
     def head(self, entry) -> list[str]:
         tag = local_name(entry)
+        lines = []
         if tag == "component":
-            return [f"COMPONENT {entry.get('name')}:{entry.get('level', '1')}"]
-        if tag == "unit":
+            lines = [f"COMPONENT {entry.get('name')}:{entry.get('level', '1')}"]
+        elif tag == "unit":
             words = [entry.get(key, "") for key in ("category", "name", "conversionFactor")]
-            return ["UNIT " + " ".join(words)]
-        if tag == "meta":
-            return [f"META {quote(entry.get('name', ''))} {quote(entry.get('content', ''))}"]
-        return self.statement(entry, 0) if not isinstance(entry.tag, str) else []
+            lines = ["UNIT " + " ".join(words)]
+        elif tag == "meta":
+            lines = [f"META {quote(entry.get('name', ''))} {quote(entry.get('content', ''))}"]
+        elif not isinstance(entry.tag, str):
+            return self.statement(entry, 0)
+        # VRML 97 has no head: its entries stay as comments
+        return [f"# {line}" for line in lines] if self.vrml97 else lines
 
     # -- statements --------------------------------------------------------------
     def statement(self, element, depth: int) -> list[str]:
@@ -127,7 +154,8 @@ class _Writer:
         """``accessType type name [value | IS name]`` of a ``<field>``."""
         pad = INDENT * depth
         kind, access = field.get("type", ""), field.get("accessType", "initializeOnly")
-        start = f"{pad}{access} {kind} {field.get('name')}"
+        written = VRML97_ACCESS.get(access, access) if self.vrml97 else access
+        start = f"{pad}{written} {kind} {field.get('name')}"
         if connected:
             return [f"{start} IS {connected}"]
         if not with_value or access not in ("initializeOnly", "inputOutput"):
@@ -144,6 +172,8 @@ class _Writer:
         tag = local_name(element)
         instance = tag == "ProtoInstance"
         kind = element.get("name", "") if instance else tag
+        if self.vrml97 and tag == "IndexedTriangleSet":
+            kind = "IndexedFaceSet"  # VRML 97 has no triangle sets
         if element.get("DEF") is not None:
             start += f"DEF {element.get('DEF')} "
         body = self.body(element, tag, kind, instance, depth + 1)
@@ -162,12 +192,21 @@ class _Writer:
         }
         declared = {f.get("name") for f in element if local_name(f) == "field"}
         lines = []
-        for name, text in element.attrib.items():
+        attributes = dict(element.attrib)
+        for (node, name), default in self.explicit.items():
+            if node == tag and name not in attributes:
+                attributes[name] = default
+        for name, text in attributes.items():
             if name in _SKIPPED or (instance and name == "name") or name in connects:
                 continue
             if name.startswith("{"):
                 continue  # namespaced attributes (xsd:...) are XML-only
-            lines.append(f"{pad}{name} {self.value(text, field_type(tag, name))}")
+            kind_of = field_type(tag, name)
+            if self.vrml97 and tag == "IndexedTriangleSet" and name == "index":
+                name, text = "coordIndex", _faces(text)
+            if self.vrml97:
+                name = VRML97_FIELDS.get((tag, name), name)
+            lines.append(f"{pad}{name} {self.value(text, kind_of)}")
         code = (element.text or "").strip()
         if tag in CODE_NODES and code and element.get("url") is None:
             lines.append(f"{pad}url [ {quote(code)} ]")
@@ -196,6 +235,8 @@ class _Writer:
                 )
                 pending = []
         for field, items in groups.items():
+            if self.vrml97:
+                field = VRML97_FIELDS.get((tag, field), field)
             many = sum(isinstance(item.tag, str) for item in items) > 1
             lines += self.nodes(f"{pad}{field}", items, depth, many)
         lines += [line for c in pending for line in self.statement(c, depth)]
@@ -240,6 +281,13 @@ class _Writer:
         if kind.startswith("MF"):
             return f"[ {text.strip()} ]"
         return text.strip() or '""'
+
+
+def _faces(index: str) -> str:
+    """IndexedTriangleSet ``index`` as IndexedFaceSet ``coordIndex`` (-1 after each triangle)."""
+    values = index.replace(",", " ").split()
+    triangles = [" ".join(values[start : start + 3]) for start in range(0, len(values), 3)]
+    return " -1 ".join(triangles) + (" -1" if triangles else "")
 
 
 def _child(element, tag: str):
