@@ -70,7 +70,10 @@ def test_tokens_numbers_strings_and_comments_follow_the_grammar(tmp_path):
         '  info [ "x", "y" ] }\n'
         'Inline { url "one.x3dv" }\n'
         "PixelTexture { image 1 1 3 0xFF00FF }\n"
-        "Shape { geometry IndexedFaceSet { coordIndex 0 1 2 -1 solid FALSE } }\n",
+        "Shape { geometry IndexedFaceSet { coordIndex 0 1 2 -1 solid FALSE } }\n"
+        "Shape { geometry PointSet { coord Coordinate { point [ 0 0 0, 1 0 0 # a comment\n"
+        "  0 1 0 ] } } }\n"
+        "Transform { children [ ] scale [ 0x2 3 4 ] }\n",
     )
     scene = root.find("Scene")
     transform = scene.find("Transform")
@@ -85,6 +88,10 @@ def test_tokens_numbers_strings_and_comments_follow_the_grammar(tmp_path):
     assert scene.find("PixelTexture").get("image") == f"1 1 3 {0xFF00FF}"
     faces = scene.find("Shape/IndexedFaceSet")
     assert faces.get("coordIndex") == "0 1 2 -1" and faces.get("solid") == "false"
+    coordinate = scene.find("Shape/PointSet/Coordinate")
+    assert coordinate.get("point") == "0 0 0 1 0 0 0 1 0"  # a comment inside [ ]
+    empty = scene.findall("Transform")[-1]
+    assert len(empty) == 0 and empty.get("children") is None and empty.get("scale") == "2 3 4"
     comments = [c.text for c in root.iter(etree.Comment)]
     assert (
         " a comment after a brace" in comments and " numbers as the grammar writes them" in comments

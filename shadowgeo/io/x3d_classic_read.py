@@ -283,14 +283,18 @@ class _Parser:
             declaration if external else self.element(declaration, "ProtoInterface", keyword.line)
         )
         self.protos[name] = {}
-        self.expect("[")
-        while not self.at("]"):
-            self.flush_comments(holder)
-            if self.at("]"):
-                break
-            field = self.interface(holder, external, in_proto=True)
-            self.protos[name][field.get("name")] = field.get("type")
-        self.expect("]")
+        empty = self.peek()
+        if empty is not None and empty.kind == "numbers" and not empty.text.strip(" \t\r\n,"):
+            self.take()  # PROTO name [ ]: no fields (read as an empty list of numbers)
+        else:
+            self.expect("[")
+            while not self.at("]"):
+                self.flush_comments(holder)
+                if self.at("]"):
+                    break
+                field = self.interface(holder, external, in_proto=True)
+                self.protos[name][field.get("name")] = field.get("type")
+            self.expect("]")
         if external:
             url = self.value("ExternProtoDeclare", "url", "MFString", keyword)
             self.set(declaration, "url", url, keyword.line)
@@ -421,6 +425,19 @@ class _Parser:
     def value(self, kind, field, declared, token, holder=None, container=None):
         """The XML attribute text of the next field value, or None when it was
         nodes (appended to ``holder``) or NULL."""
+        following = self.peek()
+        if following is not None and following.kind == "numbers":
+            self.take()
+            words = following.text.replace(",", " ").split()
+            if not words:
+                return None if declared is None or declared.endswith("Node") else ""
+            if declared in ("SFString", "MFString"):
+                return _text(
+                    [Token("word", word, following.line) for word in words], declared, True
+                )
+            if "x" in following.text or "X" in following.text:
+                words = [number_text(word) for word in words]
+            return " ".join(words)
         if self.at("["):
             self.take()
             items: list[Token] = []
