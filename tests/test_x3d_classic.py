@@ -571,3 +571,23 @@ def test_x3d4_spotlight_defaults_survive_the_vrml97_translation(tmp_path):
     light = sg.load(tmp_path / "spot.wrl").lights[0]
     assert light.light.cut_off_angle == pytest.approx(math.pi / 2, abs=1e-6)
     assert light.beam_width == pytest.approx(3 * math.pi / 16, abs=1e-6)
+
+
+def test_vrml97_has_no_units_so_lengths_are_scaled_and_angles_refused(tmp_path):
+    (tmp_path / "cm.x3dv").write_text(CLASSIC)  # UNIT length centimetre 0.01
+    scene = sg.load(tmp_path / "cm.x3dv")
+    sg.save(scene, tmp_path / "cm.wrl")
+    text = (tmp_path / "cm.wrl").read_text()
+    assert "scale 0.01 0.01 0.01" in text and "ROUTE clock.fraction_changed" in text
+    assert text.index("PROTO Post") < text.index("children [") < text.index("ROUTE")
+    back = sg.load(tmp_path / "cm.wrl")
+    assert back.meters_per_unit == 1.0
+    for got, want in zip(world(back), world(scene), strict=True):
+        assert got[0] == want[0] and np.allclose(np.array(got[1]), 0.01 * np.array(want[1]))
+    (tmp_path / "deg.x3dv").write_text(
+        "#X3D V3.3 utf8\nPROFILE Interchange\nUNIT angle degree 0.017453292519943295\n"
+        "Transform { rotation 0 1 0 90 children Shape { geometry Box { } } }\n"
+    )
+    with pytest.raises(sg.SceneError, match="VRML 97 has no angle unit") as raised:
+        sg.save(sg.load(tmp_path / "deg.x3dv"), tmp_path / "deg.wrl")
+    assert raised.value.path == str(tmp_path / "deg.wrl") and not (tmp_path / "deg.wrl").exists()

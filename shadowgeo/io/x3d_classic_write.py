@@ -13,7 +13,8 @@ first ``url`` string, as ClassicVRML has no other place for it.
 VRML 97 (``.wrl``) is the same syntax with X3D's later names undone: access
 types (``exposedField``, ...), Collision ``collide``, LOD ``level``, Switch
 ``choice``; IndexedTriangleSet (the shadows) becomes IndexedFaceSet; the head
-(PROFILE, COMPONENT, UNIT, META) becomes comments. Nodes VRML 97 lacks are
+(PROFILE, COMPONENT, UNIT, META) becomes comments, a length unit a scale
+around the scene; an angle unit is refused (SceneError). Nodes VRML 97 lacks are
 written as they are (X3D browsers read them); the ``class`` field that marks
 shadowgeo's groups is kept, as X3D browsers accept it in VRML 97 files.
 """
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 from lxml import etree
 
+from ..errors import SceneError
 from .x3d_classic_read import classic_comment
 from .x3d_classic_tokens import is_number, quote
 from .x3d_defaults import DEFAULTS
@@ -77,13 +79,52 @@ def classic_text(tree, vrml97: bool = False) -> str:
         if local_name(part) == "head":
             lines += [line for entry in part for line in writer.head(entry)]
     lines.append("")
+    length = _vrml97_length(root) if vrml97 else 1.0
     for part in root:
-        if local_name(part) == "Scene":
+        if local_name(part) == "Scene" and length != 1.0:
+            lines += _scaled(writer, list(part), length)
+        elif local_name(part) == "Scene":
             for child in part:
                 lines += writer.statement(child, 0)
         elif not isinstance(part.tag, str):
             lines += writer.statement(part, 0)
     return "\n".join(lines) + "\n"
+
+
+def _vrml97_length(root) -> float:
+    """The length unit's factor, for VRML 97 (which has no units); SceneError
+    for an angle unit, which would change the meaning of every angle field."""
+    factors = {}
+    for head in (part for part in root if local_name(part) == "head"):
+        for unit in (entry for entry in head if local_name(entry) == "unit"):
+            factors[unit.get("category")] = unit.get("conversionFactor", "1")
+    try:
+        angle, length = float(factors.get("angle", 1)), float(factors.get("length", 1))
+    except ValueError:
+        raise SceneError(f"a unit's conversionFactor is not a number: {factors}") from None
+    if angle != 1.0:
+        raise SceneError(
+            "VRML 97 has no angle unit, and this document's angles are in "
+            f"{factors['angle']} radians; write .x3dv or .x3d instead"
+        )
+    return length
+
+
+def _scaled(writer, children: list, length: float) -> list[str]:
+    """The scene inside a Transform scaled to metres: VRML 97 has no length
+    unit. Prototypes come first, routes last (VRML 97 allows neither among nodes)."""
+    statements = ("ProtoDeclare", "ExternProtoDeclare", "ROUTE", "IMPORT", "EXPORT")
+    protos = [c for c in children if local_name(c) in statements[:2]]
+    routes = [c for c in children if local_name(c) in statements[2:]]
+    nodes = [c for c in children if local_name(c) not in statements]
+    lines = [f"# the document's length unit ({length!r} metres), as a scale", "Transform {"]
+    lines.append(f"{INDENT}scale {length!r} {length!r} {length!r}")
+    lines += [line for child in protos for line in writer.statement(child, 1)]
+    lines.append(f"{INDENT}children [")
+    lines += [line for child in nodes for line in writer.statement(child, 2)]
+    lines.append(f"{INDENT}]")
+    lines += [line for child in routes for line in writer.statement(child, 1)]
+    return lines + ["}"]
 
 
 class _Writer:

@@ -70,7 +70,10 @@ def write(scene: Scene, path) -> None:
     name = path.name.lower()
     if name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
         vrml97 = name.endswith(VRML97_SUFFIXES)
-        data = x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")
+        try:
+            data = x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")
+        except SceneError as problem:  # a document VRML 97 cannot say
+            raise SceneError(problem.message, path=str(path)) from None
     else:
         declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
         data = declaration + etree.tostring(tree, xml_declaration=False, encoding="UTF-8")
