@@ -11,6 +11,7 @@ import math
 import os
 import re
 import shutil
+import socket
 import subprocess
 import threading
 from pathlib import Path
@@ -132,6 +133,35 @@ def test_nesting_beyond_the_limit_is_refused_not_a_recursion_error(tmp_path):
     path.write_text("#X3D V4.0 utf8\n" + "Group { children " * depth + "}" * depth)
     with pytest.raises(sg.SceneError, match="nested more than"):
         sg.load(path)
+
+
+def test_hostile_classic_input_is_refused_or_never_followed(tmp_path, monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("the reader tried to use the network")
+
+    monkeypatch.setattr(socket, "socket", refuse)
+    monkeypatch.setattr(socket, "create_connection", refuse)
+    # DEF/USE doubling 30 times: 2**30 nodes once expanded
+    levels = ["DEF n0 Shape { geometry Box { } }"]
+    levels += [f"DEF n{k} Group {{ children [ USE n{k - 1} USE n{k - 1} ] }}" for k in range(1, 31)]
+    (tmp_path / "bomb.x3dv").write_text("#X3D V4.0 utf8\nPROFILE Interchange\n" + "\n".join(levels))
+    with pytest.raises(sg.SceneError, match="expands .* to more than"):
+        sg.load(tmp_path / "bomb.x3dv")
+    folder = tmp_path / "scene"
+    folder.mkdir()
+    (tmp_path / "outside.wrl").write_text("#VRML V2.0 utf8\nShape { geometry Box { } }\n")
+    (folder / "in.wrl").write_text('#VRML V2.0 utf8\nInline { url "../outside.wrl" }\n')
+    with pytest.raises(sg.SceneError, match="leaves the scene's folder") as raised:
+        sg.load(folder / "in.wrl")
+    assert raised.value.line == 2
+    (folder / "far.x3dv").write_text(
+        "#X3D V4.0 utf8\nPROFILE Immersive\n"
+        'EXTERNPROTO Far [ inputOutput SFVec3f size ] [ "https://example.com/far.x3dv#Far" ]\n'
+        "Far { size 1 1 1 }\nShape { geometry Box { } }\n"
+    )
+    scene = sg.load(folder / "far.x3dv")
+    assert len(scene.shapes) == 1
+    assert any("ProtoInstance name='Far' skipped" in warning for warning in scene.warnings)
 
 
 # -- the same scene in both encodings ---------------------------------------------------
