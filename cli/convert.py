@@ -181,7 +181,8 @@ def run(args) -> int:
         )
     shadowgeo.io.check_writable(target)  # before the long work
     # The chord only matters for X3D's curved primitives; other readers take no options.
-    curved = args.tolerance is not None and source.suffix.lower() in (".x3d", ".x3dz")
+    x3d = (".x3d", ".x3dz", ".x3dv", ".x3dvz", ".wrl", ".wrz", ".gz")
+    curved = args.tolerance is not None and source.suffix.lower() in x3d
     scene = shadowgeo.load(source, **({"chord": args.tolerance} if curved else {}))
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar(f"shadows ({args.method})") if show else None

@@ -37,6 +37,15 @@ def corpus_dir(shared_dir) -> Path:
 
 
 @pytest.fixture(scope="session")
+def classic_corpus_dir(shared_dir) -> Path:
+    """The shared corpus of ClassicVRML and VRML 97 scenes, or skip."""
+    corpus = shared_dir / "corpus" / "castle-demo-models-classic"
+    if not corpus.is_dir():
+        pytest.skip(f"{corpus} is absent")
+    return corpus
+
+
+@pytest.fixture(scope="session")
 def x3d_schema(shared_dir) -> Path:
     """The X3D 4.0 XML Schema file, or skip."""
     schema = shared_dir / "schemas" / "x3d" / "x3d-4.0.xsd"

@@ -17,7 +17,9 @@ similar triangles.
 from __future__ import annotations
 
 import http.server
+import math
 import os
+import re
 import shutil
 import subprocess
 import threading
@@ -60,6 +62,16 @@ SCENE = f"""<?xml version="1.0" encoding="UTF-8"?>
 </X3D>
 """
 
+# VRML 97 has no OrthoViewpoint: a Viewpoint straight above shows the ground plane
+# (square to the view) as linearly as the orthographic one, with the same field
+PERSPECTIVE_SCENE = re.sub(
+    r"<OrthoViewpoint[^>]*/>",
+    '<Viewpoint position="0 50 0" orientation="1 0 0 -1.5707963267948966" '
+    f'fieldOfView="{2 * math.atan(HALF_VIEW / 50)!r}"/>',
+    SCENE,
+)
+assert PERSPECTIVE_SCENE != SCENE
+
 PAGE = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8">
 <style>html, body {{ margin: 0; overflow: hidden; background: #f0f; }}</style>
@@ -98,12 +110,12 @@ def reference_shadow():
     return shapely.MultiPoint(landed[:, [0, 2]]).convex_hull
 
 
-def convert(folder: Path) -> Path:
-    """``shadowgeo convert`` the input scene to ``converted.x3d``."""
+def convert(folder: Path, suffix: str = ".x3d") -> Path:
+    """``shadowgeo convert`` the input scene to ``converted<suffix>``."""
     from cli.main import main
 
-    source, target = folder / "scene.x3d", folder / "converted.x3d"
-    source.write_text(SCENE)
+    source, target = folder / "scene.x3d", folder / f"converted{suffix}"
+    source.write_text(PERSPECTIVE_SCENE if suffix == ".wrl" else SCENE)
     assert main(["convert", str(source), str(target)]) == 0
     return target
 
@@ -189,14 +201,16 @@ def screenshot(folder: Path, browser: str) -> np.ndarray:
     return np.asarray(Image.open(shot).convert("RGB"))
 
 
-def test_x_ite_shows_the_baked_shadow(tmp_path):
+# every X3D encoding shadowgeo writes: XML, ClassicVRML, VRML 97
+@pytest.mark.parametrize("suffix", [".x3d", ".x3dv", ".wrl"])
+def test_x_ite_shows_the_baked_shadow(tmp_path, suffix):
     browser = chromium()
     if not (X_ITE / "x_ite.min.js").is_file():
         pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
     shapely = pytest.importorskip("shapely")
 
-    convert(tmp_path)
-    (tmp_path / "index.html").write_text(PAGE)
+    convert(tmp_path, suffix)
+    (tmp_path / "index.html").write_text(PAGE.replace("converted.x3d", f"converted{suffix}"))
     (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
     image = screenshot(tmp_path, browser)
     assert image.shape[:2] == (PIXELS, PIXELS)

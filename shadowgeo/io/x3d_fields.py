@@ -75,7 +75,8 @@ class Context:
             root = element.getroottree().getroot()
             self._order.update((node, index) for index, node in enumerate(root.iter()))
         here = self._order[element]
-        before = [node for node in found if self._order[node] < here]
+        # DEFs of another tree (the document, seen from a prototype copy) do not count
+        before = [node for node in found if self._order.get(node, here) < here]
         return before[-1] if before else found[0]
 
     def resolve(self, element):

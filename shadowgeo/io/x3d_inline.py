@@ -1,4 +1,4 @@
-"""X3D Inline: local X3D or glTF files only, inside the scene's folder.
+"""X3D Inline: local X3D (any encoding) or glTF files only, inside the scene's folder.
 
 Each ``url`` is tried in order, as X3D browsers do; the first that reads is
 used. Remote URLs (any ``scheme:``) are never fetched; a relative path is
@@ -29,7 +29,8 @@ from .x3d_geometry import Instance, Mesh
 
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
-X3D_SUFFIXES = {".x3d", ".x3dz"}
+X3D_SUFFIXES = {".x3d", ".x3dz", ".x3dv", ".x3dvz", ".wrl", ".wrz"}
+X3D_SUFFIXES |= {".x3d.gz", ".x3dv.gz", ".wrl.gz"}
 GLTF_SUFFIXES = {".gltf", ".glb"}
 MAX_INLINE_DEPTH = 16
 
@@ -61,17 +62,27 @@ def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> 
         if isinstance(found, str):
             reasons.append(found)
             continue
-        suffix = found.suffix.lower()
+        suffix = "".join(found.suffixes[-2:] if found.suffix == ".gz" else [found.suffix]).lower()
+        if suffix in X3D_SUFFIXES and _is_vrml1(found):
+            reasons.append(f"'{url}' is VRML 1.0 (not supported)")
+            continue
         if suffix in X3D_SUFFIXES:
             problem = _x3d(reader, context, element, found, matrix, name)
         elif suffix in GLTF_SUFFIXES:
             problem = _gltf(reader, context, element, found, matrix, name)
         else:
-            problem = "is not X3D XML or glTF"
+            problem = "is not X3D, VRML 97 or glTF"
         if problem is None:
             return
         reasons.append(f"'{url}' {problem}")
     context.warn(element, "Inline skipped: " + ("; ".join(reasons) or "no url"))
+
+
+def _is_vrml1(path: Path) -> bool:
+    try:
+        return x3d_parse.read_bytes(path).startswith(b"#VRML V1.")
+    except SceneError:
+        return False  # _x3d says why it cannot be read
 
 
 def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> str | None:

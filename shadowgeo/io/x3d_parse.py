@@ -15,6 +15,7 @@ from pathlib import Path
 from lxml import etree
 
 from ..errors import SceneError
+from . import x3d_classic_read
 
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).
 MAX_BYTES = 512 * 1024 * 1024
@@ -38,7 +39,7 @@ def read_bytes(path: Path) -> bytes:
         with open(path, "rb") as handle:
             head = handle.read(2)
             handle.seek(0)
-            if path.suffix.lower() == ".x3dz" or head == b"\x1f\x8b":
+            if path.suffix.lower() in (".x3dz", ".x3dvz", ".wrz") or head == b"\x1f\x8b":
                 with gzip.GzipFile(fileobj=handle) as inflated:
                     data = inflated.read(MAX_BYTES + 1)
             else:
@@ -53,6 +54,9 @@ def read_bytes(path: Path) -> bytes:
 def parse(path: Path) -> etree._ElementTree:
     """Parse ``path`` (``.x3d`` or gzip ``.x3dz``) into an lxml tree, comments kept.
 
+    ClassicVRML and VRML 97 files (known by their ``#X3D`` / ``#VRML`` header,
+    whatever the extension) give the same tree, from :mod:`.x3d_classic_read`.
+
     Raises
     ------
     SceneError
@@ -60,6 +64,8 @@ def parse(path: Path) -> etree._ElementTree:
         element other than ``<X3D>``.
     """
     data = read_bytes(path)
+    if x3d_classic_read.is_classic(data):
+        return x3d_classic_read.parse_bytes(data, str(path))
     try:
         tree = etree.parse(io.BytesIO(data), _parser())
     except etree.XMLSyntaxError as problem:

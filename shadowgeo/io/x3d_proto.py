@@ -54,8 +54,9 @@ class Prototypes:
             )
         values, node_values = _field_values(declaration, instance)
         body = copy.deepcopy(body)
-        _connect(context, body, values, node_values)
+        # names first: the nodes IS brings in keep the names of the scope they come from
         self._private_names(context, body)
+        _connect(context, body, values, node_values)
         first = next(node for node in body if local_name(node))
         self.copies[instance] = first
         return first
@@ -109,8 +110,11 @@ def _connect(context, body, values: dict, node_values: dict) -> None:
                 )
             if proto_field in values:
                 node.set(node_field, values[proto_field])
-            for child in node_values.get(proto_field, []):
-                child = copy.deepcopy(child)
+            for value in node_values.get(proto_field, []):
+                target = context.resolve(value)
+                if target is None:
+                    continue  # a USE of no DEF (or of another type): noted, the field keeps no node
+                child = copy.deepcopy(target)
                 child.set("containerField", node_field)
                 node.append(child)
         node.remove(holder)

@@ -1,4 +1,8 @@
-"""Read X3D XML (``.x3d``, gzip ``.x3dz``) into a :class:`~shadowgeo.Scene`.
+"""Read X3D (XML ``.x3d``, ClassicVRML ``.x3dv``, VRML 97 ``.wrl``; gzip
+``.x3dz``, ``.x3dvz``, ``.wrz``, ``*.gz``) into a :class:`~shadowgeo.Scene`.
+
+Every encoding is parsed into the XML encoding's element tree
+(:mod:`.x3d_parse`, :mod:`.x3d_classic_read`), which this one reader reads.
 
 Rules the reader follows, where X3D leaves a choice:
 
@@ -425,7 +429,8 @@ def _local_matrix(context: Context, element, tag: str) -> np.ndarray:
 
 
 def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None) -> Scene:
-    """Read an X3D XML file (``.x3d``, or gzip ``.x3dz``).
+    """Read an X3D file: XML (``.x3d``), ClassicVRML (``.x3dv``) or VRML 97
+    (``.wrl``), or any of them gzip-compressed.
 
     Parameters
     ----------

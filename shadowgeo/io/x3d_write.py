@@ -1,4 +1,7 @@
-"""X3D XML writer (``.x3d``, and ``.x3dz``: the same, gzip-compressed).
+"""X3D XML writer (``.x3d``, and ``.x3dz``: the same, gzip-compressed); the
+same tree in ClassicVRML for ``.x3dv`` (``.x3dvz``, ``.x3dv.gz``: gzip), or
+translated to VRML 97 for ``.wrl`` (``.wrz``, ``.wrl.gz``), through
+:mod:`.x3d_classic_write`.
 
 Two cases:
 
@@ -38,10 +41,13 @@ from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, Viewpoint, overview, unique_name
-from . import up_and_units
+from . import up_and_units, x3d_classic_write
 from .atomic import atomic_path
 
 ADDED_ROLES = ("shadow", "volume")
+# Written in the ClassicVRML encoding (the same tree, another syntax).
+CLASSIC_SUFFIXES = (".x3dv", ".x3dvz", ".x3dv.gz")
+VRML97_SUFFIXES = (".wrl", ".wrz", ".wrl.gz")
 # X3D's SFFloat has no infinity: an unlimited light radius is written as this.
 _UNLIMITED_RADIUS = 1e30
 
@@ -63,11 +69,19 @@ def write(scene: Scene, path) -> None:
     """
     path = Path(path)
     tree = _with_added(scene) if scene.document is not None else _fresh(scene)
-    declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
-    data = declaration + etree.tostring(tree, xml_declaration=False, encoding="UTF-8")
+    name = path.name.lower()
+    if name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
+        vrml97 = name.endswith(VRML97_SUFFIXES)
+        try:
+            data = x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")
+        except SceneError as problem:  # a document VRML 97 cannot say
+            raise SceneError(problem.message, path=str(path)) from None
+    else:
+        declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
+        data = declaration + etree.tostring(tree, xml_declaration=False, encoding="UTF-8")
     if not data.endswith(b"\n"):
         data += b"\n"
-    if path.suffix.lower() == ".x3dz":
+    if name.endswith((".x3dz", ".x3dvz", ".wrz", ".gz")):
         data = gzip.compress(data, mtime=0)
     with atomic_path(path) as temporary:
         temporary.write_bytes(data)

@@ -1,0 +1,92 @@
+"""Tokens of X3D's ClassicVRML encoding (ISO/IEC 19776-2) and of VRML 97.
+
+Both share one lexical grammar: white space and commas separate tokens; ``#``
+starts a comment to the end of the line, except inside a string; a string is
+double-quoted, may span lines, and escapes ``"`` and ``\\`` with a backslash;
+``{ } [ ]`` are tokens of their own; everything else is a word (a name, a
+keyword, ``TRUE``/``FALSE``/``NULL``, or a number such as ``1e-3``, ``.5``,
+``-0`` or hex ``0xFF``).
+"""
+
+from __future__ import annotations
+
+import re
+from typing import NamedTuple
+
+from ..errors import SceneError
+
+_TOKEN = re.compile(
+    r"""(?P<space>[ \t\r\n,]+)
+      | (?P<comment>\#[^\n\r]*)
+      | (?P<string>"(?:[^"\\]|\\.)*")
+      | (?P<open>")
+      | (?P<numbers>\[[0-9a-fA-FxX.+\- \t\r\n,]*\])
+      | (?P<punct>[{}\[\]])
+      | (?P<word>[^ \t\r\n,\#"{}\[\]]+)""",
+    re.VERBOSE | re.DOTALL,
+)
+_NUMBER = re.compile(r"[+-]?(?:0[xX][0-9A-Fa-f]+|(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)")
+_HEX = re.compile(r"[+-]?0[xX][0-9A-Fa-f]+")
+_ESCAPE = re.compile(r"\\(.)", re.DOTALL)
+
+
+class Token(NamedTuple):
+    """One token: ``kind`` is ``"word"``, ``"string"`` (``text`` unescaped),
+    ``"punct"``, ``"comment"`` (``text`` without the ``#``) or ``"numbers"``:
+    brackets holding only characters of numbers (``text`` between them), one
+    token so that large arrays are read at the speed of a regular expression
+    (the numbers are checked where they are used, as in the XML encoding)."""
+
+    kind: str
+    text: str
+    line: int
+
+
+def tokens(text: str, path: str) -> list[Token]:
+    """The tokens of ``text``, comments included, with their line numbers.
+
+    Raises
+    ------
+    SceneError
+        A string that is not closed before the end of the file.
+
+    Examples
+    --------
+    >>> [(t.kind, t.text) for t in tokens('a [1,.5] ["x \\\\"#y" b] # c', "f")]
+    ... # doctest: +NORMALIZE_WHITESPACE
+    [('word', 'a'), ('numbers', '1,.5'), ('punct', '['), ('string', 'x "#y'),
+     ('word', 'b'), ('punct', ']'), ('comment', ' c')]
+    """
+    found: list[Token] = []
+    line = 1
+    for match in _TOKEN.finditer(text):
+        kind, value = match.lastgroup, match.group()
+        if kind == "open":
+            raise SceneError(
+                "a string is not closed before the end of the file", path=path, line=line
+            )
+        if kind == "string":
+            found.append(Token(kind, _ESCAPE.sub(r"\1", value[1:-1]), line))
+        elif kind == "numbers":
+            found.append(Token(kind, value[1:-1], line))
+        elif kind == "comment":
+            found.append(Token(kind, value[1:], line))
+        elif kind != "space":
+            found.append(Token(kind, value, line))
+        line += value.count("\n")
+    return found
+
+
+def is_number(word: str) -> bool:
+    """Whether ``word`` is an X3D number (integer, float or hex integer)."""
+    return _NUMBER.fullmatch(word) is not None
+
+
+def number_text(word: str) -> str:
+    """``word`` as the XML encoding writes it: hex integers in decimal."""
+    return str(int(word, 16)) if _HEX.fullmatch(word) else word
+
+
+def quote(text: str) -> str:
+    """``text`` as a double-quoted string, ``"`` and ``\\`` escaped."""
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
