@@ -7,6 +7,7 @@ not the shadow algorithms.
 extension                         read                        write
 ================================  ==========================  ==================
 ``.x3d``, ``.x3dz``               :mod:`.x3d_read`            :mod:`.x3d_write`
+``.x3dj``, ``.json`` (X3D JSON)   :mod:`.x3d_read`            :mod:`.x3d_write`
 ``.glb``, ``.gltf``               :mod:`.meshes` (trimesh)    :mod:`.gltf`
 ``.usda``, ``.usdc``, ``.usd``    :mod:`.usd`                 :mod:`.usd`
 ``.obj``, ``.stl``, ``.ply``,     :mod:`.meshes` (trimesh)    --
@@ -33,6 +34,8 @@ from ..scene import Scene, Shape
 READERS = {
     ".x3d": "x3d_read",
     ".x3dz": "x3d_read",
+    ".x3dj": "x3d_read",
+    ".json": "x3d_read",
     ".glb": "meshes",
     ".gltf": "meshes",
     ".obj": "meshes",
@@ -47,6 +50,8 @@ READERS = {
 WRITERS = {
     ".x3d": "x3d_write",
     ".x3dz": "x3d_write",
+    ".x3dj": "x3d_write",
+    ".json": "x3d_write",
     ".glb": "gltf",
     ".gltf": "gltf",
     ".usda": "usd",

@@ -22,7 +22,7 @@ from .x3d_geometry import Instance, Mesh
 
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
-X3D_SUFFIXES = {".x3d", ".x3dz"}
+X3D_SUFFIXES = {".x3d", ".x3dz", *x3d_parse.ENCODINGS}
 GLTF_SUFFIXES = {".gltf", ".glb"}
 MAX_INLINE_DEPTH = 16
 
@@ -59,7 +59,7 @@ def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> 
         if suffix in GLTF_SUFFIXES:
             _gltf(reader, context, element, found, matrix, name)
             return
-        reasons.append(f"'{url}' is not X3D XML or glTF")
+        reasons.append(f"'{url}' is not X3D or glTF")
     context.warn(element, "Inline skipped: " + ("; ".join(reasons) or "no url"))
 
 

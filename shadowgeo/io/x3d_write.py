@@ -1,4 +1,5 @@
-"""X3D XML writer (``.x3d``, and ``.x3dz``: the same, gzip-compressed).
+"""X3D writer: XML (``.x3d``; ``.x3dz``, the same gzip-compressed) and the
+JSON encoding (``.x3dj``, ``.json``: the same document, by :mod:`.x3d_json`).
 
 Two cases:
 
@@ -36,7 +37,7 @@ from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, unique_name
-from . import up_and_units
+from . import up_and_units, x3d_json
 from .atomic import atomic_path
 
 ADDED_ROLES = ("shadow", "volume")
@@ -45,7 +46,8 @@ _UNLIMITED_RADIUS = 1e30
 
 
 def write(scene: Scene, path) -> None:
-    """Write ``scene`` as X3D XML to ``path`` (gzip when it ends in ``.x3dz``).
+    """Write ``scene`` as X3D to ``path``: XML, gzip when it ends in ``.x3dz``,
+    the JSON encoding when in ``.x3dj`` or ``.json``.
 
     Parameters
     ----------
@@ -61,6 +63,11 @@ def write(scene: Scene, path) -> None:
     """
     path = Path(path)
     tree = _with_added(scene) if scene.document is not None else _fresh(scene)
+    if x3d_json.is_x3d_json(path):
+        data = x3d_json.dumps(tree)
+        with atomic_path(path) as temporary:
+            temporary.write_bytes(data)
+        return
     declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
     data = declaration + etree.tostring(tree, xml_declaration=False, encoding="UTF-8")
     if not data.endswith(b"\n"):
