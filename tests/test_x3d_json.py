@@ -603,3 +603,51 @@ def test_inlines_of_json_and_from_json_follow_the_xml_rules(tmp_path):
     (folder / "cycle.x3dj").write_text(json.dumps(cycle))
     with pytest.raises(sg.SceneError, match="Inline cycle"):
         sg.load(folder / "cycle.x3dj")
+
+
+# -- in a browser -------------------------------------------------------------------------
+
+
+def test_x_ite_shows_the_shadow_of_an_x3dj_output(tmp_path):
+    """X_ITE loads the JSON ``shadowgeo convert`` writes and draws its baked
+    shadow: the scene, server and pixel check of test_browser, in JSON."""
+    from test_browser import (
+        BOX,
+        HALF_VIEW,
+        PAGE,
+        PIXELS,
+        SCENE,
+        X_ITE,
+        chromium,
+        reference_shadow,
+        screenshot,
+    )
+
+    from cli.main import main
+
+    browser = chromium()
+    if not (X_ITE / "x_ite.min.js").is_file():
+        pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
+    shapely = pytest.importorskip("shapely")
+    (tmp_path / "scene.x3d").write_text(SCENE)
+    target = tmp_path / "converted.x3dj"
+    assert main(["convert", str(tmp_path / "scene.x3d"), str(target)]) == 0
+    assert "X3D" in json.loads(target.read_text())
+    (tmp_path / "index.html").write_text(
+        PAGE.replace('src="converted.x3d"', 'src="converted.x3dj"')
+    )
+    (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
+    image = screenshot(tmp_path, browser)
+
+    centres = (np.arange(PIXELS) + 0.5) / PIXELS * 2 * HALF_VIEW - HALF_VIEW
+    x, z = np.meshgrid(centres, centres)  # rows run along +z, columns along +x
+    points = shapely.points(x.ravel(), z.ravel())
+    shadow = reference_shadow()
+    box = shapely.box(*BOX[0, [0, 2]], *BOX[1, [0, 2]])
+    margin = 2.5 * 2 * HALF_VIEW / PIXELS
+    inside = shapely.contains(shadow.buffer(-margin).difference(box.buffer(margin)), points)
+    outside = ~shapely.intersects(shadow.union(box).buffer(margin), points)
+    brightness = image.astype(float).mean(axis=2).ravel()
+    assert inside.sum() > 1000
+    assert np.mean(brightness[inside] < 40) > 0.99, np.percentile(brightness[inside], 99)
+    assert np.mean(brightness[outside] > 80) > 0.99, np.percentile(brightness[outside], 1)
