@@ -1,4 +1,5 @@
-"""Read X3D XML (``.x3d``, gzip ``.x3dz``) into a :class:`~shadowgeo.Scene`.
+"""Read X3D (XML ``.x3d``, gzip ``.x3dz``; the JSON encoding ``.x3dj``, ``.json``
+through :mod:`.x3d_json`, which builds the same tree) into a :class:`~shadowgeo.Scene`.
 
 Rules the reader follows, where X3D leaves a choice:
 
@@ -389,7 +390,7 @@ def _local_matrix(context: Context, element, tag: str) -> np.ndarray:
 
 
 def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None) -> Scene:
-    """Read an X3D XML file (``.x3d``, or gzip ``.x3dz``).
+    """Read an X3D file (XML ``.x3d``, gzip ``.x3dz``; JSON ``.x3dj``, ``.json``).
 
     Parameters
     ----------

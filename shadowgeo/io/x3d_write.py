@@ -59,23 +59,22 @@ def write(scene: Scene, path) -> None:
     Raises
     ------
     SceneError
-        The scene's document has no ``<Scene>`` element.
+        The scene's document has no ``<Scene>`` element; for JSON, a field
+        value that is not of its field's type (JSON types every value).
     """
     path = Path(path)
     tree = _with_added(scene) if scene.document is not None else _fresh(scene)
-    if x3d_json.is_x3d_json(path):
-        data = x3d_json.dumps(tree)
-        with atomic_path(path) as temporary:
-            temporary.write_bytes(data)
-        return
+    data = x3d_json.dumps(tree) if x3d_json.is_x3d_json(path) else _xml(tree, path)
+    with atomic_path(path) as temporary:
+        temporary.write_bytes(data)
+
+
+def _xml(tree, path: Path) -> bytes:
     declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
     data = declaration + etree.tostring(tree, xml_declaration=False, encoding="UTF-8")
     if not data.endswith(b"\n"):
         data += b"\n"
-    if path.suffix.lower() == ".x3dz":
-        data = gzip.compress(data, mtime=0)
-    with atomic_path(path) as temporary:
-        temporary.write_bytes(data)
+    return gzip.compress(data, mtime=0) if path.suffix.lower() == ".x3dz" else data
 
 
 def _with_added(scene: Scene):
