@@ -27,12 +27,13 @@ Parsing is as safe as the XML parser's: the size limit and gzip-bomb guard of
 
 from __future__ import annotations
 
-import bisect
 import json
 import math
 import re
+from decimal import Decimal
 from pathlib import Path
 
+import numpy as np
 from lxml import etree
 
 from ..errors import SceneError
@@ -70,7 +71,7 @@ FIELDS["MatrixTransform"] = (  # Castle Game Engine / VRML 97, outside X3D 4.0
 )
 _INTEGER = re.compile(r"[+-]?\d+")
 _HEX = re.compile(r"[+-]?0[xX][0-9a-fA-F]+")
-_BRACES = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"|[{}]')
+_OPEN, _CLOSE, _QUOTE, _BACKSLASH = (ord(mark) for mark in '{}"\\')
 _QUOTED = re.compile(r'"((?:[^"\\]|\\.)*)"', re.DOTALL)
 
 
@@ -116,24 +117,38 @@ class _Lines:
     """JSON line numbers of the objects a document decodes to.
 
     json's decoder creates each object at its closing brace, so the k-th
-    object created is the one whose ``{`` is the k-th closed; one regular
-    expression pass over the (valid) text pairs them, strings skipped."""
+    object created is the one whose ``{`` is the k-th closed. Braces and
+    quotes are found with numpy; only they are walked, to skip strings."""
 
     def __init__(self, text: str, objects: list[dict]):
-        newlines = [match.start() for match in re.finditer("\n", text)]
-        opened, closed = [], []
-        for match in _BRACES.finditer(text):
-            if match.group() == "{":
-                opened.append(match.start())
-            elif match.group() == "}":
+        raw = np.frombuffer(text.encode("utf-8", "surrogatepass"), dtype=np.uint8)
+        marks = np.flatnonzero((raw == _OPEN) | (raw == _CLOSE) | (raw == _QUOTE))
+        opened, closed, in_string = [], [], False
+        for position, mark in zip(marks.tolist(), raw[marks].tolist(), strict=True):
+            if mark == _QUOTE:
+                if in_string and _escaped(raw, position):
+                    continue
+                in_string = not in_string
+            elif in_string:
+                continue
+            elif mark == _OPEN:
+                opened.append(position)
+            else:
                 closed.append(opened.pop())
-        self.lines = {
-            id(body): bisect.bisect_left(newlines, offset) + 1
-            for body, offset in zip(objects, closed, strict=True)
-        }
+        newlines = np.flatnonzero(raw == ord("\n"))
+        lines = (np.searchsorted(newlines, closed) + 1).tolist()
+        self.lines = {id(body): line for body, line in zip(objects, lines, strict=True)}
 
     def of(self, body) -> int | None:
         return self.lines.get(id(body))
+
+
+def _escaped(raw: np.ndarray, position: int) -> bool:
+    """Whether the quote at ``position`` follows an odd number of backslashes."""
+    start = position
+    while start > 0 and raw[start - 1] == _BACKSLASH:
+        start -= 1
+    return (position - start) % 2 == 1
 
 
 def _decode(data: bytes, path: Path):
@@ -151,7 +166,9 @@ def _decode(data: bytes, path: Path):
         return body
 
     try:
-        document = json.loads(text, object_pairs_hook=created)
+        # Decimal keeps a number's digits as written (the reader parses field
+        # values itself, and refuses 1e400), and is quick to turn back into text.
+        document = json.loads(text, object_pairs_hook=created, parse_float=Decimal)
     except json.JSONDecodeError as problem:
         raise SceneError(
             f"malformed JSON: {problem.msg}", path=str(path), line=problem.lineno
@@ -220,30 +237,26 @@ class _Builder:
 
     def text(self, value, body, where: str) -> str:
         """The XML attribute text of a JSON field value."""
-        if isinstance(value, str):
-            return value
-        if isinstance(value, (bool, int, float)):
-            return self.scalar(value, body, where)
         if not isinstance(value, list):
-            raise self.error(body, where, f"a field value cannot be {_kind(value)}")
+            return self.scalar(value, body, where)
         flat = _flatten(value)
-        strings = [item for item in flat if isinstance(item, str)]
-        if strings and len(strings) < len(flat):
+        kinds = set(map(type, flat))
+        if kinds <= {Decimal, int}:  # the common case, at C speed
+            return " ".join(map(str, flat)).replace("E", "e")
+        if str in kinds and len(kinds) > 1:
             raise self.error(body, where, "an array mixes strings and other values")
-        if strings:
-            return " ".join('"' + _escape(item) + '"' for item in strings)
+        if str in kinds:
+            return " ".join('"' + _escape(item) + '"' for item in flat)
         return " ".join(self.scalar(item, body, where) for item in flat)
 
     def scalar(self, value, body, where: str) -> str:
         if isinstance(value, bool):
             return "true" if value else "false"
-        if isinstance(value, int):
-            return str(value)
-        if isinstance(value, float):
-            if not math.isfinite(value):
-                raise self.error(body, where, f"{value} is not a finite number")
-            return repr(value)
-        raise self.error(body, where, f"an array item cannot be {_kind(value)}")
+        if isinstance(value, str):
+            return value
+        if isinstance(value, (int, Decimal)):
+            return str(value).replace("E", "e")  # Decimal writes 1e-7 as 1E-7
+        raise self.error(body, where, f"a field value cannot be {_kind(value)}")
 
     def nodes(self, element, field: str, value, where: str, depth: int) -> None:
         if isinstance(value, dict):
@@ -293,6 +306,8 @@ def _kind(value) -> str:
 
 def _flatten(values: list) -> list:
     """The scalars of nested arrays, in order (iteratively: no recursion limit)."""
+    if list not in set(map(type, values)):
+        return values
     flat, stack = [], [iter(values)]
     while stack:
         for item in stack[-1]:
@@ -440,11 +455,11 @@ def typed(kind: str, text: str):
     if kind == "MFString":
         found = [_unescape(match) for match in _QUOTED.findall(text)]
         return found if found or not text.strip() else [text]
-    tokens = [token for token in re.split(r"[\s,]+", text) if token]
+    tokens = text.replace(",", " ").split()
     if kind in ("SFBool", "MFBool"):
         values = [_boolean(token) for token in tokens]
     else:
-        values = [_number(token) for token in tokens]
+        values = _numbers(tokens)
     if kind.startswith("MF") or kind not in ("SFBool", "SFInt32", "SFFloat", "SFDouble", "SFTime"):
         return values
     if len(values) != 1:
@@ -460,6 +475,23 @@ def _boolean(token: str) -> bool:
     if token.lower() not in ("true", "false"):
         raise ValueError(f"{token!r} is not true or false")
     return token.lower() == "true"
+
+
+def _numbers(tokens: list[str]) -> list[int | float]:
+    """Numbers as written: integers (decimal or hex) stay integers."""
+    try:
+        values = list(map(float, tokens))
+    except ValueError:  # hex (SFImage pixels), or not a number
+        return [_number(token) for token in tokens]
+    if not all(map(math.isfinite, values)):
+        bad = next(
+            token for token, value in zip(tokens, values, strict=True) if not math.isfinite(value)
+        )
+        raise ValueError(f"{bad!r} is not a finite number")
+    return [
+        int(token) if token.lstrip("+-").isdigit() else value
+        for token, value in zip(tokens, values, strict=True)
+    ]
 
 
 def _number(token: str) -> int | float:
@@ -486,7 +518,7 @@ def _emit(value, indent: str, chunks: list[str]) -> None:
             chunks.append(("," if index else "") + "\n" + inner + json.dumps(key) + ": ")
             _emit(item, inner, chunks)
         chunks.append("\n" + indent + "}")
-    elif isinstance(value, list) and any(isinstance(item, (dict, list)) for item in value):
+    elif isinstance(value, list) and {dict, list} & set(map(type, value)):
         chunks.append("[")
         for index, item in enumerate(value):
             chunks.append(("," if index else "") + "\n" + inner)
