@@ -22,7 +22,8 @@ the declaration of its prototype.
 
 Parsing is as safe as the XML parser's: the size limit and gzip-bomb guard of
 :func:`.x3d_parse.read_bytes`, nodes nested at most :data:`MAX_DEPTH` deep
-(libxml2's own limit for XML), errors naming the JSON line and path.
+(about libxml2's limit for XML), errors naming the JSON line (up to line
+65534: lxml keeps 16 bits) and the path of keys to the node.
 """
 
 from __future__ import annotations
@@ -97,8 +98,11 @@ def parse(path: Path) -> etree._ElementTree:
     data = x3d_parse.read_bytes(path)
     document, lines = _decode(data, path)
     if not isinstance(document, dict) or "X3D" not in document:
-        found = ", ".join(map(repr, list(document)[:5])) if isinstance(document, dict) else ""
-        kind = f"its top-level keys are {found}" if found else "it is not a JSON object"
+        if isinstance(document, dict):
+            found = ", ".join(map(repr, list(document)[:5])) or "none"
+            kind = f"its top-level keys are {found}"
+        else:
+            kind = "it is not a JSON object"
         raise SceneError(
             f"not an X3D JSON document: {kind}, not 'X3D' (a .json file is read as the "
             "X3D JSON encoding only)",
@@ -201,7 +205,7 @@ class _Builder:
         except ValueError:
             raise self.error(body, where, f"{tag!r} is not a node or statement name") from None
         line = self.lines.of(body)
-        if line is not None:
+        if line is not None and line < 65535:  # lxml keeps lines in 16 bits
             element.sourceline = line
         for key, value in body.items():
             here = f"{where}/{key}"
@@ -283,7 +287,7 @@ class _Builder:
         if not isinstance(text, str):
             raise self.error(body, where, f"#comment must be a string, not {_kind(text)}")
         # XML comments cannot hold "--" or end in "-"
-        text = text.replace("--", "- -")
+        text = re.sub("-(?=-)", "- ", text)
         return etree.Comment(text + " " if text.endswith("-") else text)
 
     def source_code(self, element, value, body, where: str) -> None:
@@ -337,7 +341,7 @@ def dumps(tree) -> bytes:
         SFVec3f: JSON types every value, XML text does not), or non-finite.
     """
     root = tree.getroot() if isinstance(tree, etree._ElementTree) else tree
-    writer = _Writer(_declared_fields(root))
+    writer = _Writer(root)
     body = {"encoding": "UTF-8"}
     body["@profile"] = root.get("profile") or "Full"
     body["@version"] = root.get("version") or "4.0"
@@ -375,9 +379,23 @@ def _declared_fields(root) -> dict[str, dict[str, str]]:
     return out
 
 
+def _first_nodes(root) -> dict[str, str]:
+    """prototype name -> the type of its ProtoBody's first node, whose
+    containerField an instance without one takes."""
+    out = {}
+    for body in root.iter("ProtoBody"):
+        nodes = [_local(child) for child in body if _local(child) not in IN_CHILDREN | {""}]
+        if nodes:
+            out[body.getparent().get("name", "")] = nodes[0]
+    return out
+
+
 class _Writer:
-    def __init__(self, prototypes: dict[str, dict[str, str]]):
-        self.prototypes = prototypes
+    def __init__(self, root):
+        self.prototypes = _declared_fields(root)
+        self.first_nodes = _first_nodes(root)
+        # X3D 3 put metadata nodes in "metadata" by default, X3D 4 in "value"
+        self.version_3 = (root.get("version") or "4.0").startswith("3")
 
     def object(self, element) -> dict:
         body: dict = {}
@@ -399,6 +417,12 @@ class _Writer:
                 continue  # processing instructions and entities
             if name in LISTED:
                 body.setdefault(name, []).append(self.object(child))
+            elif name in SINGLE and name in body:  # given twice: one, with both's content
+                for key, value in self.object(child).items():
+                    if isinstance(value, list) and isinstance(body[name].get(key), list):
+                        body[name][key].extend(value)
+                    else:
+                        body[name][key] = value
             elif name in SINGLE:
                 body[name] = self.object(child)
             elif name in IN_CHILDREN:
@@ -412,11 +436,17 @@ class _Writer:
                 body["#sourceCode"] = source.split("\n")
 
     def node(self, tag: str, body: dict, name: str, child) -> None:
-        default = FIELDS.get(name, ("children",))[0]
+        kind = self.first_nodes.get(child.get("name", "")) if name == "ProtoInstance" else name
+        default = FIELDS.get(kind, ("children",))[0]
+        if self.version_3 and kind and kind.startswith("Metadata"):
+            default = "metadata"
+        fields = FIELDS.get(tag, ("", {}))[1]
+        if f"-{default}" not in fields and "-children" in fields:
+            default = "children"  # e.g. HAnimMotion in a Group (X3D's "smart" default)
         field = "children" if tag in HOLDERS else child.get("containerField") or default
         key = "-" + field
         entry = {name: self.object(child)}
-        single = FIELDS.get(tag, ("", {}))[1].get(key) == "SFNode"
+        single = fields.get(key) == "SFNode"
         if single and key not in body:
             body[key] = entry
         elif isinstance(body.get(key), dict):  # a second node in an SFNode field
