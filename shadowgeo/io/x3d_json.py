@@ -93,6 +93,18 @@ def parse(path: Path) -> etree._ElementTree:
         Malformed JSON (with its line), a top-level key other than ``X3D``,
         nodes nested more than :data:`MAX_DEPTH` deep, values of a shape the
         encoding does not have (naming the JSON line and path).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "box.x3dj"
+    >>> _ = path.write_text(
+    ...     '{"X3D": {"Scene": {"-children": [\n'
+    ...     '{"Shape": {"-geometry": {"Box": {"@size": [1, 2.5, 3]}}}}]}}}'
+    ... )
+    >>> shape = parse(path).getroot().find("Scene/Shape")
+    >>> shape.find("Box").get("size"), shape.sourceline
+    ('1 2.5 3', 2)
     """
     path = Path(path)
     data = x3d_parse.read_bytes(path)
@@ -339,6 +351,18 @@ def dumps(tree) -> bytes:
     SceneError
         A field value that is not of its field's type (``1 2 x`` for an
         SFVec3f: JSON types every value, XML text does not), or non-finite.
+
+    Examples
+    --------
+    >>> root = etree.fromstring(
+    ...     '<X3D profile="Interchange" version="4.0"><Scene><!-- a crate -->'
+    ...     '<Shape DEF="crate"><Box size="1 2.5 3" solid="false"/></Shape></Scene></X3D>'
+    ... )
+    >>> scene = json.loads(dumps(root))["X3D"]["Scene"]
+    >>> scene["-children"][0], scene["-children"][1]["Shape"]["@DEF"]
+    ({'#comment': ' a crate '}, 'crate')
+    >>> scene["-children"][1]["Shape"]["-geometry"]
+    {'Box': {'@size': [1, 2.5, 3], '@solid': False}}
     """
     root = tree.getroot() if isinstance(tree, etree._ElementTree) else tree
     writer = _Writer(root)
