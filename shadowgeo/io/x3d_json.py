@@ -99,7 +99,7 @@ def parse(path: Path) -> etree._ElementTree:
     >>> import pathlib, tempfile
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "box.x3dj"
     >>> _ = path.write_text(
-    ...     '{"X3D": {"Scene": {"-children": [\n'
+    ...     '{"X3D": {"Scene": {"-children": [\\n'
     ...     '{"Shape": {"-geometry": {"Box": {"@size": [1, 2.5, 3]}}}}]}}}'
     ... )
     >>> shape = parse(path).getroot().find("Scene/Shape")
