@@ -125,6 +125,10 @@ def parse(path: Path) -> etree._ElementTree:
         root = builder.element("X3D", document["X3D"], "X3D", 0)
     except RecursionError:
         raise SceneError("nested too deeply", path=str(path)) from None
+    except SceneError:
+        raise
+    except ValueError as problem:  # text lxml refuses, e.g. a lone surrogate in a comment
+        raise SceneError(f"cannot be held in an X3D document: {problem}", path=str(path)) from None
     etree.indent(root, space="  ")
     return etree.ElementTree(root)
 

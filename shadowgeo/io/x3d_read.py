@@ -29,7 +29,7 @@ Rules the reader follows, where X3D leaves a choice:
   points, textures, external prototypes), missing textures, empty geometry,
   Inline files that are missing, remote (never fetched) or not X3D/glTF.
   Metadata and WorldInfo are skipped silently.
-- **Refused with a SceneError:** malformed XML, DOCTYPE entity declarations,
+- **Refused with a SceneError:** malformed XML or JSON, DOCTYPE entity declarations,
   field values of the wrong type, indices out of range, DEF/USE, prototype and
   Inline cycles, expansion bombs (DEF/USE, Inline and prototypes beyond 2 million
   nodes, prototypes beyond 10,000 copies), Inline and glTF paths that leave the
