@@ -7,6 +7,7 @@ import copy
 import gzip
 import json
 import math
+import re
 import shutil
 from pathlib import Path
 
@@ -58,7 +59,7 @@ XML = f"""<?xml version="1.0" encoding="UTF-8"?>
     <ROUTE fromNode="clock" fromField="fraction_changed" toNode="mover" toField="set_fraction"/>
     <ROUTE fromNode="mover" fromField="value_changed" toNode="lift" toField="set_translation"/>
     <Viewpoint description='the "front"' position="0 2 20"/>
-    <Anchor url='"a b.x3d" "q\\"uote.x3d"'/>
+    <WorldInfo info='"a b" "q\\"uote"'/>
   </Scene>
 </X3D>
 """
@@ -187,7 +188,7 @@ JSON = {
                     }
                 },
                 {"Viewpoint": {"@description": 'the "front"', "@position": [0, 2, 20]}},
-                {"Anchor": {"@url": ["a b.x3d", 'q"uote.x3d']}},
+                {"WorldInfo": {"@info": ["a b", 'q"uote']}},
             ]
         },
     }
@@ -238,8 +239,12 @@ def added_groups(document: dict) -> list[dict]:
 
 @pytest.fixture(scope="session")
 def json_schema(shared_dir):
-    """A validator of the X3D 4.0 JSON schema (draft 2020-12, formats checked
-    where jsonschema has a checker for them), or skip."""
+    """A validator of the X3D 4.0 JSON schema, or skip.
+
+    The schema is draft 2020-12, where ``format`` is only an annotation
+    unless the validator asserts it; we assert its two formats, ``iri`` (the
+    schema location) and ``iri-reference`` (every url), with RFC 3987's
+    characters: jsonschema's own checker for them needs rfc3987 (GPL)."""
     jsonschema = pytest.importorskip("jsonschema")
     path = shared_dir / "schemas" / "x3d" / "x3d-4.0-JSONSchema.json"
     if not path.is_file():
@@ -248,7 +253,34 @@ def json_schema(shared_dir):
     validator = jsonschema.validators.validator_for(schema)
     assert validator is jsonschema.Draft202012Validator  # what the schema's $schema says
     validator.check_schema(schema)
-    return validator(schema, format_checker=validator.FORMAT_CHECKER)
+    formats = jsonschema.FormatChecker()
+    formats.checks("iri-reference")(iri_reference)
+    formats.checks("iri")(lambda text: iri_reference(text) and IRI_SCHEME.match(text) is not None)
+    return validator(schema, format_checker=formats)
+
+
+# Characters no IRI holds (RFC 3987: outside ucschar, iprivate and the ASCII it allows).
+IRI_FORBIDDEN = re.compile(r'[\x00-\x20"<>\\^`{|}\x7f-\x9f]')
+IRI_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")
+
+
+def iri_reference(text) -> bool:
+    if not isinstance(text, str):
+        return True
+    percent_ok = all(re.fullmatch(r"%[0-9A-Fa-f]{2}", m) for m in re.findall(r"%..?", text))
+    return IRI_FORBIDDEN.search(text) is None and percent_ok
+
+
+def test_the_schema_check_asserts_urls_and_types(json_schema):
+    def errors(node):
+        return list(json_schema.iter_errors({"X3D": {
+            "encoding": "UTF-8", "@profile": "Full", "@version": "4.0",
+            "Scene": {"-children": [node]}}}))  # fmt: skip
+
+    assert errors({"Anchor": {"@url": ["../a%20b.x3d", "https://example.org/ü.x3d"]}}) == []
+    assert errors({"Anchor": {"@url": ["a b.x3d"]}})  # a space is no IRI
+    assert errors({"Transform": {"@translation": [0, 1]}})  # SFVec3f has 3 numbers
+    assert errors({"Transform": {"@visible": "true"}})  # SFBool is a JSON boolean
 
 
 def schema_errors(validator, path: Path) -> list[str]:
@@ -297,7 +329,7 @@ def test_json_becomes_the_xml_reader_tree(tmp_path, suffix):
     assert ifs.find("Coordinate").get("point") == "0 0 0 2 0 0 0 0 3"
     assert scene.find("Transform").get("rotation") == f"0 1 0 {HALF_PI!r}"
     assert scene.find("PointLight").get("shadows") == "true"
-    assert scene.find("Anchor").get("url") == '"a b.x3d" "q\\"uote.x3d"'
+    assert scene.find("WorldInfo").get("info") == '"a b" "q\\"uote"'
     assert scene.find("Viewpoint").get("description") == 'the "front"'
     assert root.find("head/unit").get("conversionFactor") == "0.01"
     routes = scene.findall("ROUTE")
@@ -539,6 +571,7 @@ def test_reader_errors_name_the_json_line(tmp_path):
         ({"Bad Name": {}}, "'Bad Name' is not a node or statement name"),
         ({"Box": {"@size": [1e400, 1, 1]}}, "'1e\\+400 1 1' has a value that is not finite"),
         ({"WorldInfo": {"@title": "nul \u0000"}}, "WorldInfo/@title: cannot be an X3D field"),
+        ({"Box": {"#comment": "\ud800"}}, "cannot be held in an X3D document"),
     ],
 )
 def test_values_json_has_but_x3d_does_not_are_refused(tmp_path, node, message):
