@@ -747,3 +747,15 @@ def test_castle_corpus_xml_as_json_is_valid_and_the_same_scene(corpus_dir, tmp_p
         assert scene_facts(from_json) == scene_facts(from_xml), source.name
         checked += 1
     assert checked >= 10
+
+
+def test_converting_a_converted_x3dj_again_replaces_its_shadows(tmp_path):
+    from cli.main import main
+
+    _, source = write_twins(tmp_path)
+    once, twice = tmp_path / "once.x3dj", tmp_path / "twice.x3dj"
+    assert main(["convert", str(source), str(once), "--plane", "0,1,0,0"]) == 0
+    assert main(["convert", str(once), str(twice), "--plane", "0,1,0,0"]) == 0
+    first, second = json.loads(once.read_text()), json.loads(twice.read_text())
+    assert len(added_groups(second)) == 1
+    assert second == first  # the same shadows, in the same place, written the same
