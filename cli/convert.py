@@ -38,7 +38,7 @@ def register(subparsers) -> None:
         "convert",
         help="add shadows to a scene and write it as X3D, glTF or USD",
         description="Read IN, add the shadows of its lights as geometry, write OUT. "
-        "Formats come from the extensions: .x3d .x3dz .glb .gltf .usda .usdc "
+        "Formats come from the extensions: .x3d .x3dz .x3dj .glb .gltf .usda .usdc "
         "(and .obj .stl .ply .off as input). IN is never modified; OUT is "
         "written atomically.",
         epilog=EPILOG,
@@ -181,8 +181,8 @@ def run(args) -> int:
         )
     shadowgeo.io.check_writable(target)  # before the long work
     # The chord only matters for X3D's curved primitives; other readers take no options.
-    x3d = (".x3d", ".x3dz", ".x3dv", ".x3dvz", ".wrl", ".wrz", ".gz")
-    curved = args.tolerance is not None and source.suffix.lower() in x3d
+    reader = shadowgeo.io.READERS.get(source.suffix.lower())
+    curved = args.tolerance is not None and reader == "x3d_read"  # any X3D encoding
     scene = shadowgeo.load(source, **({"chord": args.tolerance} if curved else {}))
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar(f"shadows ({args.method})") if show else None

@@ -3,23 +3,24 @@ They know the scene model, not the shadow algorithms.
 
 :func:`load` and :func:`save` pick the module from the file's extension:
 
-=========  ===================================  ==========================  ===========================
-format     extensions                           read                        write
-=========  ===================================  ==========================  ===========================
-X3D XML    ``.x3d``, ``.x3dz``, ``.x3d.gz``     :mod:`.x3d_read`            :mod:`.x3d_write`
-Classic    ``.x3dv``, ``.x3dvz``, ``.x3dv.gz``  :mod:`.x3d_classic_read`    :mod:`.x3d_classic_write`
-VRML 97    ``.wrl``, ``.wrz``, ``.wrl.gz``      (as ClassicVRML)            (as ClassicVRML)
-glTF 2.0   ``.glb``, ``.gltf``                  :mod:`.gltf_read`           :mod:`.gltf_write`
-USD        ``.usda``, ``.usdc``, ``.usd``       :mod:`.usd_read`            :mod:`.usd_write`
-OBJ, STL,  ``.obj``, ``.stl``, ``.ply``,        :mod:`.trimesh_formats`     --
+=========  ===================================  ========================  =========================
+format     extensions                           read                      write
+=========  ===================================  ========================  =========================
+X3D XML    ``.x3d``, ``.x3dz``, ``.x3d.gz``     :mod:`.x3d_read`          :mod:`.x3d_write`
+X3D JSON   ``.x3dj``, ``.json``                 :mod:`.x3d_json`          :mod:`.x3d_json`
+Classic    ``.x3dv``, ``.x3dvz``, ``.x3dv.gz``  :mod:`.x3d_classic_read`  :mod:`.x3d_classic_write`
+VRML 97    ``.wrl``, ``.wrz``, ``.wrl.gz``      (as ClassicVRML)          (as ClassicVRML)
+glTF 2.0   ``.glb``, ``.gltf``                  :mod:`.gltf_read`         :mod:`.gltf_write`
+USD        ``.usda``, ``.usdc``, ``.usd``       :mod:`.usd_read`          :mod:`.usd_write`
+OBJ, STL,  ``.obj``, ``.stl``, ``.ply``,        :mod:`.trimesh_formats`   --
 PLY, OFF   ``.off``
-=========  ===================================  ==========================  ===========================
+=========  ===================================  ========================  =========================
 
 Every X3D encoding becomes the same XML element tree: :mod:`.x3d_parse` parses
-XML and hands ClassicVRML and VRML 97 text (``#X3D``, ``#VRML V2.0``) to
-:mod:`.x3d_classic_read`; :mod:`.x3d_read` reads that tree whatever the
-encoding, and :mod:`.x3d_write` writes it back in the encoding the output's
-extension names.
+XML, hands JSON to :mod:`.x3d_json` and ClassicVRML and VRML 97 text
+(``#X3D``, ``#VRML V2.0``) to :mod:`.x3d_classic_read`; :mod:`.x3d_read`
+reads that tree whatever the encoding, and :mod:`.x3d_write` writes it back in
+the encoding the output's extension names.
 
 What a format's reader and writer share lives beside them, named for the
 format: :mod:`.gltf_layout` (the GLB container, ``KHR_lights_punctual`` and
@@ -52,6 +53,8 @@ from ..scene import Scene, Shape
 READERS = {
     ".x3d": "x3d_read",
     ".x3dz": "x3d_read",
+    ".x3dj": "x3d_read",
+    ".json": "x3d_read",
     ".x3d.gz": "x3d_read",
     **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d_read"),
     ".glb": "gltf_read",
@@ -68,6 +71,8 @@ READERS = {
 WRITERS = {
     ".x3d": "x3d_write",
     ".x3dz": "x3d_write",
+    ".x3dj": "x3d_write",
+    ".json": "x3d_write",
     **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d_write"),
     ".glb": "gltf_write",
     ".gltf": "gltf_write",

@@ -31,6 +31,7 @@ from .x3d_geometry import Instance, Mesh
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 X3D_SUFFIXES = {".x3d", ".x3dz", ".x3dv", ".x3dvz", ".wrl", ".wrz"}
 X3D_SUFFIXES |= {".x3d.gz", ".x3dv.gz", ".wrl.gz"}
+X3D_SUFFIXES |= set(x3d_parse.ENCODINGS)
 GLTF_SUFFIXES = {".gltf", ".glb"}
 MAX_INLINE_DEPTH = 16
 

@@ -9,6 +9,7 @@ inflated only up to :data:`MAX_BYTES`.
 from __future__ import annotations
 
 import gzip
+import importlib
 import io
 from pathlib import Path
 
@@ -17,6 +18,8 @@ from lxml import etree
 from ..errors import SceneError
 from . import x3d_classic_read
 
+# X3D encodings other than XML: extension -> module whose parse(path) gives the tree.
+ENCODINGS = {".x3dj": "x3d_json", ".json": "x3d_json"}
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).
 MAX_BYTES = 512 * 1024 * 1024
 
@@ -52,7 +55,9 @@ def read_bytes(path: Path) -> bytes:
 
 
 def parse(path: Path) -> etree._ElementTree:
-    """Parse ``path`` (``.x3d`` or gzip ``.x3dz``) into an lxml tree, comments kept.
+    """Parse ``path`` (``.x3d`` or gzip ``.x3dz``) into an lxml tree, comments kept;
+    a file of another encoding (:data:`ENCODINGS`) is parsed by its module into
+    the same tree.
 
     ClassicVRML and VRML 97 files (known by their ``#X3D`` / ``#VRML`` header,
     whatever the extension) give the same tree, from :mod:`.x3d_classic_read`.
@@ -63,6 +68,9 @@ def parse(path: Path) -> etree._ElementTree:
         Malformed XML (with its line), a DOCTYPE declaring entities, a root
         element other than ``<X3D>``.
     """
+    encoding = ENCODINGS.get(Path(path).suffix.lower())
+    if encoding is not None:
+        return importlib.import_module(f"{__package__}.{encoding}").parse(Path(path))
     data = read_bytes(path)
     if x3d_classic_read.is_classic(data):
         return x3d_classic_read.parse_bytes(data, str(path))

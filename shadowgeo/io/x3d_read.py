@@ -1,8 +1,10 @@
-"""Read X3D (XML ``.x3d``, ClassicVRML ``.x3dv``, VRML 97 ``.wrl``; gzip
-``.x3dz``, ``.x3dvz``, ``.wrz``, ``*.gz``) into a :class:`~shadowgeo.Scene`.
+"""Read X3D (XML ``.x3d``, JSON ``.x3dj`` / ``.json``, ClassicVRML ``.x3dv``,
+VRML 97 ``.wrl``; gzip ``.x3dz``, ``.x3dvz``, ``.wrz``, ``*.gz``) into a
+:class:`~shadowgeo.Scene`.
 
 Every encoding is parsed into the XML encoding's element tree
-(:mod:`.x3d_parse`, :mod:`.x3d_classic_read`), which this one reader reads.
+(:mod:`.x3d_parse`, :mod:`.x3d_json`, :mod:`.x3d_classic_read`), which this one
+reader reads.
 
 Rules the reader follows, where X3D leaves a choice:
 
@@ -40,7 +42,7 @@ Rules the reader follows, where X3D leaves a choice:
   remote (never fetched), outside the scene's folder (never read), unreadable
   or not X3D/glTF. Metadata and WorldInfo are skipped silently.
 - **Refused with a SceneError** (what cannot be read as a scene at all):
-  malformed XML, DOCTYPE entity declarations, a root that is not X3D, DEF/USE,
+  malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D, DEF/USE,
   prototype and Inline cycles, expansion bombs (DEF/USE, Inline and prototypes
   beyond 2 million nodes, prototypes beyond 10,000 copies), transforms that
   overflow.
@@ -429,8 +431,8 @@ def _local_matrix(context: Context, element, tag: str) -> np.ndarray:
 
 
 def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None) -> Scene:
-    """Read an X3D file: XML (``.x3d``), ClassicVRML (``.x3dv``) or VRML 97
-    (``.wrl``), or any of them gzip-compressed.
+    """Read an X3D file: XML (``.x3d``), JSON (``.x3dj``, ``.json``), ClassicVRML
+    (``.x3dv``) or VRML 97 (``.wrl``), the XML and Classic ones also gzip-compressed.
 
     Parameters
     ----------

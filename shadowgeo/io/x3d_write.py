@@ -1,7 +1,7 @@
-"""X3D XML writer (``.x3d``, and ``.x3dz``: the same, gzip-compressed); the
-same tree in ClassicVRML for ``.x3dv`` (``.x3dvz``, ``.x3dv.gz``: gzip), or
-translated to VRML 97 for ``.wrl`` (``.wrz``, ``.wrl.gz``), through
-:mod:`.x3d_classic_write`.
+"""X3D writer, every encoding of the same tree: XML (``.x3d``; ``.x3dz``, the
+same gzip-compressed), JSON (``.x3dj``, ``.json``, by :mod:`.x3d_json`),
+ClassicVRML (``.x3dv``; ``.x3dvz``, ``.x3dv.gz``: gzip) or a translation to
+VRML 97 (``.wrl``; ``.wrz``, ``.wrl.gz``), both by :mod:`.x3d_classic_write`.
 
 Two cases:
 
@@ -41,7 +41,7 @@ from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
 from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, Viewpoint, overview, unique_name
-from . import up_and_units, x3d_classic_write
+from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
 
 ADDED_ROLES = ("shadow", "volume")
@@ -53,7 +53,8 @@ _UNLIMITED_RADIUS = 1e30
 
 
 def write(scene: Scene, path) -> None:
-    """Write ``scene`` as X3D XML to ``path`` (gzip when it ends in ``.x3dz``).
+    """Write ``scene`` as X3D to ``path``: XML, gzip when it ends in ``.x3dz``,
+    the JSON encoding when in ``.x3dj`` or ``.json``.
 
     Parameters
     ----------
@@ -65,12 +66,15 @@ def write(scene: Scene, path) -> None:
     Raises
     ------
     SceneError
-        The scene's document has no ``<Scene>`` element.
+        The scene's document has no ``<Scene>`` element; for JSON, a field
+        value that is not of its field's type (JSON types every value).
     """
     path = Path(path)
     tree = _with_added(scene) if scene.document is not None else _fresh(scene)
     name = path.name.lower()
-    if name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
+    if x3d_json.is_x3d_json(path):
+        data = x3d_json.dumps(tree)
+    elif name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
         vrml97 = name.endswith(VRML97_SUFFIXES)
         try:
             data = x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")
