@@ -4,6 +4,7 @@ Field types and defaults come from :mod:`.x3d_defaults` (generated from the X3D
 4.0 XML Schema by ``tools/x3d_defaults.py``). X3D 3.x files differ in a few
 defaults; :data:`X3D3_DEFAULTS` holds those, chosen by the ``<X3D version>``.
 
+Every number must be finite and within ``+-limits.LARGEST_COORDINATE``.
 Every parse error is a :class:`~shadowgeo.SceneError` naming the file, line,
 node and field: ``scene.x3d line 12, Transform DEF='arm': field translation:
 'abc' is not a number (SFVec3f needs 3)``.
@@ -19,6 +20,7 @@ import numpy as np
 from lxml import etree
 
 from ..errors import SceneError
+from ..limits import LARGEST_COORDINATE
 from .x3d_defaults import DEFAULTS
 
 # VRML 97 / X3D 3.3 SpotLight defaults; X3D 4.0 changed both (the schema's
@@ -222,6 +224,12 @@ def _numbers(text: str, kind: str) -> np.ndarray:
         raise ValueError(f"is not numbers ({kind}: '{bad[:20]}' is not a number)") from None
     if not np.all(np.isfinite(numbers)):
         raise ValueError(f"has a value that is not finite ({kind})")
+    if numbers.size and float(np.abs(numbers).max()) > LARGEST_COORDINATE:
+        value = float(numbers[np.argmax(np.abs(numbers))])
+        raise ValueError(
+            f"has the value {value:g}, outside the supported range +-{LARGEST_COORDINATE:g} "
+            "(see shadowgeo.limits)"
+        )
     return numbers
 
 

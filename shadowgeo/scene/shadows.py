@@ -52,6 +52,7 @@ import numpy as np
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
 from ..lights import SpotLight, is_positional
+from ..limits import check_light
 from ..plane import Plane
 from ..projection import project_shadow
 from ..tolerance import Tolerance
@@ -149,6 +150,8 @@ def add_shadows(
     kept = _without_baked(scene, notes)
     geometry = [s for s in kept if s.role == "geometry" and s.n_faces]
     chosen = _select_lights(scene, lights, notes, extra_lights)
+    for index, light in enumerate(chosen):
+        check_light(light.light, f"light '{light.name or index}'")  # see shadowgeo.limits
     positions = [light.light.position for light in chosen if is_positional(light.light)]
     if not isinstance(tolerance, Tolerance):
         bounds = (
