@@ -519,11 +519,16 @@ class _Projector:
                 loops, loop_vertices = silhouette_loops(caster, front)
             else:
                 loops, loop_vertices = boundary_loops(caster, whole & front, front.astype(np.int64))
-        elif self.per_triangle:
-            loops, loop_vertices = _triangle_loops(caster, whole, facing)
         else:
-            orientation = np.sign(facing).astype(np.int64)
-            loops, loop_vertices = boundary_loops(caster, whole, orientation)
+            # An open caster unites its triangles: copies and zero-area faces
+            # add nothing but work (quadratic in the copies), so they go first.
+            distinct = caster.distinct
+            cut &= distinct
+            if self.per_triangle:
+                loops, loop_vertices = _triangle_loops(caster, whole & distinct, facing)
+            else:
+                orientation = np.sign(facing).astype(np.int64)
+                loops, loop_vertices = boundary_loops(caster, whole & distinct, orientation)
         if loop_vertices.size:
             image = homogeneous[loop_vertices] @ self.H.T
             if np.any(image[:, 2] <= 0):

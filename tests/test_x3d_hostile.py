@@ -336,12 +336,19 @@ def test_inlined_gltf_may_not_reach_outside_the_folder(tmp_path, no_network, uri
 
 
 def test_transforms_overflowing_to_infinity(tmp_path):
-    body = (
-        '<Transform scale="1e200 1e200 1e200"><Transform scale="1e200 1e200 1e200">'
-        "<Shape><Box/></Shape></Transform></Transform>"
-    )
+    # Each scale is within shadowgeo.limits' range; their product is not finite.
+    level = '<Transform scale="1e70 1e70 1e70">'
+    body = level * 5 + "<Shape><Box/></Shape>" + "</Transform>" * 5
     with pytest.raises(
         sg.SceneError, match="line 2, Transform: the transforms down to here overflow"
+    ):
+        sg.load(scene(tmp_path, body))
+
+
+def test_a_number_outside_the_coordinate_range(tmp_path):
+    body = '<Transform scale="1e200 1e200 1e200"><Shape><Box/></Shape></Transform>'
+    with pytest.raises(
+        sg.SceneError, match=r"line 2, Transform: field scale: .* 1e\+200, outside the supported"
     ):
         sg.load(scene(tmp_path, body))
 
