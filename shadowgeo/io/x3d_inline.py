@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import limits
 from . import meshes, x3d_parse
 from .x3d_fields import Context
 from .x3d_geometry import Instance, Mesh
@@ -24,7 +25,7 @@ from .x3d_geometry import Instance, Mesh
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 X3D_SUFFIXES = {".x3d", ".x3dz"}
 GLTF_SUFFIXES = {".gltf", ".glb"}
-MAX_INLINE_DEPTH = 16
+MAX_INLINE_DEPTH = limits.MAX_INLINE_DEPTH  # see shadowgeo.limits
 
 
 def resolve_url(reader, context: Context, element, url: str) -> Path | str:

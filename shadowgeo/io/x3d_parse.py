@@ -14,10 +14,11 @@ from pathlib import Path
 
 from lxml import etree
 
+from .. import limits
 from ..errors import SceneError
 
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).
-MAX_BYTES = 512 * 1024 * 1024
+MAX_BYTES = limits.MAX_DOCUMENT_BYTES  # see shadowgeo.limits
 
 
 def _parser() -> etree.XMLParser:
