@@ -96,12 +96,14 @@ def check_coordinates(points, what: str) -> None:
         return
     index = int(np.flatnonzero(bad)[0])
     row = flat[index]
-    value = row[np.argmax(~np.isfinite(row) | (np.abs(np.nan_to_num(row)) > LARGEST_COORDINATE))]
+    value = float(
+        row[np.argmax(~np.isfinite(row) | (np.abs(np.nan_to_num(row)) > LARGEST_COORDINATE))]
+    )
     label = f"{what} point {index}" if values.ndim > 1 else what
     if not math.isfinite(value):
         raise GeometryError(f"{label} has a coordinate that is not finite ({value!r})")
     raise GeometryError(
-        f"{label} has coordinate {value:g}, outside the supported range +-{LARGEST_COORDINATE:g}"
+        f"{label} has coordinate {value!r}, outside the supported range +-{LARGEST_COORDINATE:g}"
     )
 
 
@@ -127,12 +129,12 @@ def check_length(value: float, what: str, *, infinite: bool = False) -> float:
         raise GeometryError(f"{what} must be finite and > 0, got {value!r}")
     if value < SMALLEST_LENGTH:
         raise GeometryError(
-            f"{what} {value:g} is below the smallest supported length {SMALLEST_LENGTH:g}"
+            f"{what} {value!r} is below the smallest supported length {SMALLEST_LENGTH:g}"
         )
     if value > LARGEST_COORDINATE:
         hint = " (use inf for no limit)" if infinite else ""
         raise GeometryError(
-            f"{what} {value:g} is above the largest supported length {LARGEST_COORDINATE:g}{hint}"
+            f"{what} {value!r} is above the largest supported length {LARGEST_COORDINATE:g}{hint}"
         )
     return value
 

@@ -227,7 +227,7 @@ def _numbers(text: str, kind: str) -> np.ndarray:
     if numbers.size and float(np.abs(numbers).max()) > LARGEST_COORDINATE:
         value = float(numbers[np.argmax(np.abs(numbers))])
         raise ValueError(
-            f"has the value {value:g}, outside the supported range +-{LARGEST_COORDINATE:g} "
+            f"has the value {value!r}, outside the supported range +-{LARGEST_COORDINATE:g} "
             "(see shadowgeo.limits)"
         )
     return numbers
