@@ -29,6 +29,10 @@ name               meaning                                                defaul
 ``bound``          half-width of the square that bounds a shadow which     100
                    truly runs off to infinity, when no receiver bounds it  x scale
 =================  =====================================================  =========
+
+The range of coordinates and sizes these scale over (1e-75 to 1e75) is stated
+in :mod:`shadowgeo.limits`; :meth:`Tolerance.for_points` refuses a scene
+outside it.
 """
 
 from __future__ import annotations
