@@ -428,13 +428,14 @@ class _Projector:
             start, sweep = 0.0, 2 * math.pi  # the foot is in the rectangle
         else:
             # The rectangle subtends less than pi from the foot: cut only that arc.
-            toward = math.atan2(-nearest[1], -nearest[0]) + math.pi
+            toward = math.atan2(nearest[1], nearest[0])
             angles = np.arctan2(corners[:, 1], corners[:, 0]) - toward
             angles = (angles + math.pi) % (2 * math.pi) - math.pi
             start, sweep = toward + float(angles.min()), float(angles.max() - angles.min())
-        count = self.tol.segments(lit, sweep, minimum=2 if sweep < math.pi else 8)
+        count = self.tol.segments(lit, sweep, minimum=1 if sweep < math.pi else 8)
         closed = sweep >= 2 * math.pi
-        angles = start + np.linspace(0.0, sweep, count, endpoint=not closed)
+        # count segments: count points round a circle, count + 1 along an arc
+        angles = start + np.linspace(0.0, sweep, count + (not closed), endpoint=not closed)
         arc = lit * np.column_stack([np.cos(angles), np.sin(angles)])
         if not closed:
             arc = np.vstack([[0.0, 0.0], arc])  # a pie slice, convex: its sweep is below pi

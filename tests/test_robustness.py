@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+import shapely.affinity
 import trimesh
 from lxml import etree
 from reference import ray_plane
@@ -224,6 +225,48 @@ def test_a_range_disc_crossing_the_shadow_is_cut_exactly(centre):
         tolerance.chord_length * reference.length
     )
     assert shadow.area == pytest.approx(reference.area, rel=1e-2)
+
+
+def test_range_discs_in_every_position_match_shapely():
+    # The disc inside, across or beside the shadow, its foot in or far
+    # outside the receiver: the shadow is the projected plate cut by the
+    # lit disc, to within the chord tolerance along the boundary.
+    rng = np.random.default_rng(12)
+    for _ in range(40):
+        size = rng.uniform(0.2, 3)
+        centre = rng.normal(size=2) * rng.choice([1, 10, 1e4])
+        corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * size + centre
+        height = rng.uniform(0.5, 3)
+        plate = trimesh.Trimesh(
+            np.column_stack([corners[:, 0], np.full(4, height), corners[:, 1]]),
+            [[0, 2, 1], [0, 3, 2]],
+            process=False,
+        )
+        position = np.array([rng.normal(), height + rng.uniform(0.5, 4), rng.normal()])
+        image = ray_plane(plate.vertices, position, np.array([0.0, 1.0, 0.0]), 0.0)[:, [0, 2]]
+        square = shapely.MultiPoint(image).convex_hull
+        middle = np.array(square.centroid.coords[0])
+        distance = float(np.hypot(*(middle - position[[0, 2]])))
+        lit = distance + rng.uniform(-1, 1) * float(np.ptp(image, axis=0).max())
+        lit = max(lit, 0.1)
+        light = sg.PointLight(position, radius=math.hypot(lit, position[1]))
+        low, high = image.min(axis=0) - 1, image.max(axis=0) + 1
+        receiver = [[low[0], 0, low[1]], [high[0], 0, low[1]], [high[0], 0, high[1]]]
+        receiver.append([low[0], 0, high[1]])
+        shadow = sg.project_shadow(plate, light, FLOOR, receiver=receiver)
+        angles = np.linspace(0, 2 * np.pi, 1 << 16, endpoint=False)
+        disc = shapely.Polygon(lit * np.column_stack([np.cos(angles), np.sin(angles)]))
+        reference = square.intersection(shapely.affinity.translate(disc, *position[[0, 2]]))
+        reference2d = shapely.transform(
+            reference, lambda xy: FLOOR.to_2d(np.column_stack([xy[:, 0], 0 * xy[:, 0], xy[:, 1]]))
+        )
+        polygon = shapely.MultiPolygon(
+            [shapely.Polygon(loops[0], loops[1:]) for loops in shadow.polygons]
+        )
+        tolerance = sg.Tolerance.for_points(plate.bounds, position, receiver)
+        slack = tolerance.chord_length * (reference.length + 1e-9) + 1e-9
+        assert polygon.symmetric_difference(reference2d).area <= slack
+        assert shadow.area >= 0
 
 
 # -- never a negative area ------------------------------------------------------------------
