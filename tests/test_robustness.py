@@ -569,3 +569,14 @@ def test_finding_scripts_give_a_result_or_a_geometry_error(shared_dir, tmp_path,
     else:
         last = done.stderr.strip().splitlines()[-1]
         assert last.startswith("shadowgeo.errors.GeometryError:") and expected in last, last
+
+
+def test_add_shadows_checks_the_range_whatever_the_tolerance():
+    ground = sg.Shape([[-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]], [[0, 2, 1], [0, 3, 2]])
+    far = sg.Shape(unit_box().vertices + [1e80, 0, 0], unit_box().faces)
+    scene = sg.Scene([ground, far], [sg.SceneLight(sg.PointLight([1, 8, 1]), shadows=True)])
+    with pytest.raises(sg.GeometryError, match=r"scene bounds .* 1e\+80"):
+        sg.add_shadows(scene, tolerance=sg.Tolerance())
+    near = sg.Scene([ground], [sg.SceneLight(sg.PointLight([1, 8, 1], radius=1e80), name="lamp")])
+    with pytest.raises(sg.GeometryError, match=r"light 'lamp' radius 1e\+80 is above"):
+        sg.add_shadows(near)

@@ -52,7 +52,7 @@ import numpy as np
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
 from ..lights import SpotLight, is_positional
-from ..limits import check_light
+from ..limits import check_coordinates, check_light
 from ..plane import Plane
 from ..projection import project_shadow
 from ..tolerance import Tolerance
@@ -128,7 +128,8 @@ def add_shadows(
         A named light or receiver does not exist, no light is on, or no
         receiver is found.
     GeometryError
-        A named receiver is not planar.
+        A named receiver is not planar; a coordinate or light radius outside
+        the range of :mod:`shadowgeo.limits`.
 
     Examples
     --------
@@ -153,10 +154,9 @@ def add_shadows(
     for index, light in enumerate(chosen):
         check_light(light.light, f"light '{light.name or index}'")  # see shadowgeo.limits
     positions = [light.light.position for light in chosen if is_positional(light.light)]
+    bounds = dataclasses.replace(scene, shapes=geometry).bounds if geometry else np.zeros((0, 3))
+    check_coordinates(bounds, "scene bounds")  # whatever the tolerance: see shadowgeo.limits
     if not isinstance(tolerance, Tolerance):
-        bounds = (
-            dataclasses.replace(scene, shapes=geometry).bounds if geometry else np.zeros((0, 3))
-        )
         settings = {} if tolerance is None else {"chord": float(tolerance)}
         tolerance = Tolerance.for_points(bounds, *positions, **settings)
     lift = _DEFAULT_OFFSET * tolerance.scale if offset is None else float(offset)
