@@ -26,8 +26,10 @@ limit).
 Reader budgets
 --------------
 A hostile file stops at a budget with a ``SceneError`` naming it, in bounded
-time and memory. None has an option that raises it: they sit far above any
-real scene (edit the constant to go further).
+time and memory (the two segment caps are not errors: a curve simply gets no
+finer). None has an option that raises it: they sit far above any real scene
+(edit the constant to go further); ``--tolerance`` only moves the chord
+within the segment caps.
 
 =====================  ==============  =============================================
 budget                 value           where it is enforced
