@@ -61,7 +61,12 @@ def intersect(region: CrossSection, other: CrossSection) -> CrossSection:
 
 def components(region: CrossSection) -> list[list[np.ndarray]]:
     """Connected parts of ``region``, each ``[outer, hole, ...]``: outer loop
-    counter-clockwise, holes clockwise, as (k, 2) float64 arrays."""
+    counter-clockwise, holes clockwise, as (k, 2) float64 arrays.
+
+    Every part has a positive area. Clipper2 rounds to its fixed grid, and a
+    sliver thinner than the grid can come back inside out (a negative area):
+    such a part has no area worth the name and is dropped.
+    """
     parts = []
     for part in region.decompose():
         loops = [np.asarray(loop, dtype=np.float64) for loop in part.to_polygons()]
@@ -69,9 +74,16 @@ def components(region: CrossSection) -> list[list[np.ndarray]]:
         if not loops:
             continue
         areas = signed_areas(loops)
+        if areas.max() <= 0 or areas.sum() <= 0:
+            continue
         order = np.argsort(-areas)  # the outer loop has the largest (positive) area
         parts.append([loops[i] for i in order])
     return parts
+
+
+def parts_area(parts: list[list[np.ndarray]]) -> float:
+    """Area of :func:`components`' parts (outer loops minus holes), >= 0."""
+    return float(sum(signed_areas(loops).sum() for loops in parts))
 
 
 def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:

@@ -31,6 +31,7 @@ import trimesh
 from . import polygons as poly
 from .errors import GeometryError
 from .lights import Light, SpotLight, is_positional, require_light
+from .limits import check_coordinates, check_geometry
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
@@ -213,6 +214,8 @@ def project_shadow(
     ------
     GeometryError
         Invalid input (NaN, zero normal, faces indexing missing vertices), a
+        coordinate, plane offset or light radius outside the range float64
+        carries through the shadow formulas (:mod:`shadowgeo.limits`), a
         positional light on the plane, touching the caster, or inside a
         closed caster, a receiver point off the plane.
 
@@ -230,6 +233,7 @@ def project_shadow(
     caster = as_caster(caster)
     _check_types(light, plane)
     receiver_points = _receiver_points(receiver)
+    check_geometry(caster, light, plane)
     light_points = [light.position] if is_positional(light) else []
     if tolerance is None:
         scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
@@ -256,8 +260,7 @@ def _receiver_points(receiver) -> np.ndarray:
     points = np.asarray(receiver, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or len(points) < 3:
         raise GeometryError(f"receiver must be (n >= 3, 3) points, got shape {points.shape}")
-    if not np.all(np.isfinite(points)):
-        raise GeometryError("receiver has NaN or infinite coordinates")
+    check_coordinates(points, "receiver")
     return points
 
 
@@ -362,10 +365,13 @@ class _Projector:
             limit_regions.append(poly.fill([receiver2d * self.scale], "evenodd"))
             self.limits.append("receiver")
         if is_positional(self.light) and math.isfinite(self.light.radius):
-            disc = self._range_disc()
-            low, high = np.maximum(low, disc.min(axis=0)), np.minimum(high, disc.max(axis=0))
-            limit_regions.append(poly.fill([disc]))
-            self.limits.append("range")
+            disc = self._range_disc(low, high)
+            if disc is not None and len(disc) < 3:
+                return self.empty("the light's range does not reach the receiver or bound")
+            if disc is not None:
+                low, high = np.maximum(low, disc.min(axis=0)), np.minimum(high, disc.max(axis=0))
+                limit_regions.append(poly.fill([disc]))
+                self.limits.append("range")
         if isinstance(self.light, SpotLight):
             cone = self._spot_polygon(low, high)
             if cone is None:
@@ -396,13 +402,48 @@ class _Projector:
         relative = points - self.origin
         return np.column_stack([relative @ u, relative @ v])
 
-    def _range_disc(self) -> np.ndarray:
-        """The lit disc of a light with a finite radius, inscribed polygon, local units."""
-        radius = math.sqrt(self.light.radius**2 - self.height**2)
-        n = self.tol.segments(radius)
-        angles = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
-        circle = radius * np.column_stack([np.cos(angles), np.sin(angles)])
-        return (circle + self.foot2d) * self.scale
+    def _range_disc(self, low, high) -> np.ndarray | None:
+        """The lit disc of a light with a finite radius (an inscribed polygon)
+        clipped to the rectangle [low, high], in local units; None when the
+        disc covers the rectangle (it limits nothing), an empty array when
+        it misses it.
+
+        Only the arc facing the rectangle is cut into segments, and the result
+        never leaves the rectangle: a radius far larger than the scene costs
+        nothing and stays in the range the 2-D union accepts.
+        """
+        radius, height = self.light.radius, self.height
+        lit = math.sqrt((radius - height) * (radius + height))  # no square to overflow
+        corners = np.array(
+            [[low[0], low[1]], [high[0], low[1]], [high[0], high[1]], [low[0], high[1]]]
+        )
+        corners = corners / self.scale - self.foot2d  # scene units, relative to the foot
+        farthest = float(np.max(np.hypot(corners[:, 0], corners[:, 1])))
+        if farthest <= lit - self.tol.chord_length:
+            return None  # the inscribed polygon would cover the rectangle anyway
+        nearest = np.clip(np.zeros(2), corners.min(axis=0), corners.max(axis=0))
+        if float(np.hypot(*nearest)) >= lit:
+            return np.zeros((0, 2))
+        if np.all(nearest == 0.0):
+            start, sweep = 0.0, 2 * math.pi  # the foot is in the rectangle
+        else:
+            # The rectangle subtends less than pi from the foot: cut only that arc.
+            toward = math.atan2(nearest[1], nearest[0])
+            angles = np.arctan2(corners[:, 1], corners[:, 0]) - toward
+            angles = (angles + math.pi) % (2 * math.pi) - math.pi
+            start, sweep = toward + float(angles.min()), float(angles.max() - angles.min())
+        count = self.tol.segments(lit, sweep, minimum=1 if sweep < math.pi else 8)
+        closed = sweep >= 2 * math.pi
+        # count segments: count points round a circle, count + 1 along an arc
+        angles = start + np.linspace(0.0, sweep, count + (not closed), endpoint=not closed)
+        arc = lit * np.column_stack([np.cos(angles), np.sin(angles)])
+        if not closed:
+            arc = np.vstack([[0.0, 0.0], arc])  # a pie slice, convex: its sweep is below pi
+        shape = (arc + self.foot2d) * self.scale
+        clipped = _clip_convex(
+            np.column_stack([shape, np.ones(len(shape))]), _rectangle_planes(low, high)
+        )
+        return clipped[:, :2] / clipped[:, 2:3] if len(clipped) >= 3 else np.zeros((0, 2))
 
     def _spot_polygon(self, low, high) -> np.ndarray | None:
         """The spot light's cone on the plane (an inscribed pyramid), clipped to
@@ -479,11 +520,16 @@ class _Projector:
                 loops, loop_vertices = silhouette_loops(caster, front)
             else:
                 loops, loop_vertices = boundary_loops(caster, whole & front, front.astype(np.int64))
-        elif self.per_triangle:
-            loops, loop_vertices = _triangle_loops(caster, whole, facing)
         else:
-            orientation = np.sign(facing).astype(np.int64)
-            loops, loop_vertices = boundary_loops(caster, whole, orientation)
+            # An open caster unites its triangles: copies and zero-area faces
+            # add nothing but work (quadratic in the copies), so they go first.
+            distinct = caster.distinct
+            cut &= distinct
+            if self.per_triangle:
+                loops, loop_vertices = _triangle_loops(caster, whole & distinct, facing)
+            else:
+                orientation = np.sign(facing).astype(np.int64)
+                loops, loop_vertices = boundary_loops(caster, whole & distinct, orientation)
         if loop_vertices.size:
             image = homogeneous[loop_vertices] @ self.H.T
             if np.any(image[:, 2] <= 0):
@@ -520,7 +566,7 @@ class _Projector:
 
     def _result(self, region, n_loops: int) -> Shadow:
         parts = poly.components(region)
-        area = float(region.area()) / self.scale**2
+        area = poly.parts_area(parts) / self.scale / self.scale  # no square to over/underflow
         bounded = False
         if self.bound is not None and parts:
             reach = max(float(np.abs(np.concatenate([p[0] for p in parts])).max()), 0.0)

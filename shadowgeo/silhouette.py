@@ -20,6 +20,7 @@ import numpy as np
 
 from .errors import GeometryError
 from .lights import Light, is_positional, require_light
+from .limits import check_geometry
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 
@@ -79,6 +80,12 @@ def silhouette(mesh, light: Light) -> Silhouette:
         ``loops`` are closed: every loop vertex has as many outline edges in
         as out.
 
+    Raises
+    ------
+    GeometryError
+        A coordinate or light radius outside the supported range
+        (:mod:`shadowgeo.limits`).
+
     Examples
     --------
     A cube lit from straight above: the top face (two triangles) is front,
@@ -92,6 +99,7 @@ def silhouette(mesh, light: Light) -> Silhouette:
     (2, 4, [4])
     """
     caster = as_caster(mesh)
+    check_geometry(caster, require_light(light))
     front = caster.facing(light_homogeneous(caster, light)) > 0
     counts = caster.edge_face_count
     border = _directed_edges(caster, caster.edge_slots[caster.edge_slot_starts[:-1][counts == 1]])

@@ -29,6 +29,10 @@ name               meaning                                                defaul
 ``bound``          half-width of the square that bounds a shadow which     100
                    truly runs off to infinity, when no receiver bounds it  x scale
 =================  =====================================================  =========
+
+The range of coordinates and sizes these scale over (1e-75 to 1e75) is stated
+in :mod:`shadowgeo.limits`; :meth:`Tolerance.for_points` refuses a scene
+outside it.
 """
 
 from __future__ import annotations
@@ -39,12 +43,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .errors import GeometryError
+from .limits import MAX_CURVE_SEGMENTS, SMALLEST_LENGTH, check_coordinates
 
 # Units in the last place of float64 that a coordinate may carry after a few
 # arithmetic operations; the length tolerance never drops below this.
 _ULPS = 64.0
-# No curve is cut into more pieces than this, whatever the tolerance asks.
-_MAX_SEGMENTS = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -97,18 +100,33 @@ class Tolerance:
 
         Empty sets are ignored; a scene of one point gets scale 1.
         ``settings`` override the relative defaults (``relative``, ``chord``, ...).
+
+        Raises
+        ------
+        GeometryError
+            A coordinate outside ``+-limits.LARGEST_COORDINATE`` or a scene
+            smaller than ``limits.SMALLEST_LENGTH`` (see :mod:`shadowgeo.limits`).
         """
         chunks = [np.asarray(p, dtype=np.float64).reshape(-1, 3) for p in point_sets]
         chunks = [c for c in chunks if len(c)]
         if not chunks:
             return cls(**settings)
         points = np.concatenate(chunks)
-        if not np.all(np.isfinite(points)):
-            raise GeometryError("scene has NaN or infinite coordinates")
-        diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+        check_coordinates(points, "scene")
+        lower, upper = points.min(axis=0), points.max(axis=0)
+        # Normalised before squaring: the diagonal of a box near the range's
+        # ends neither overflows nor underflows.
+        side = upper - lower
+        largest = float(side.max())
+        diagonal = largest * float(np.linalg.norm(side / largest)) if largest > 0 else 0.0
         magnitude = float(np.abs(points).max())
-        if diagonal <= _ULPS * np.finfo(np.float64).eps * max(magnitude, 1e-300):
-            diagonal = max(magnitude, 1.0)
+        if diagonal <= _ULPS * np.finfo(np.float64).eps * magnitude or diagonal == 0.0:
+            diagonal = max(magnitude, 1.0)  # one point: no size of its own
+        elif diagonal < SMALLEST_LENGTH:
+            raise GeometryError(
+                f"the scene is {diagonal:g} across, below the smallest supported size "
+                f"{SMALLEST_LENGTH:g}"
+            )
         return cls(scale=diagonal, magnitude=magnitude, **settings)
 
     def with_settings(self, **settings) -> Tolerance:
@@ -142,5 +160,9 @@ class Tolerance:
         if radius <= 0 or not math.isfinite(radius):
             return minimum
         ratio = min(self.chord_length / radius, 1.0)
-        step = 2.0 * math.acos(1.0 - ratio)  # chord sagitta = r (1 - cos(step / 2))
-        return min(max(minimum, math.ceil(sweep / max(step, 1e-9))), _MAX_SEGMENTS)
+        # chord sagitta = r (1 - cos(step / 2)) = 2 r sin(step / 4)^2: the sine
+        # form keeps its precision when ``ratio`` is far below float64's epsilon
+        step = 4.0 * math.asin(math.sqrt(ratio / 2.0))
+        if step <= 0.0 or sweep / step >= MAX_CURVE_SEGMENTS:
+            return max(minimum, MAX_CURVE_SEGMENTS)
+        return max(minimum, math.ceil(sweep / step))

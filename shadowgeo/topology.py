@@ -120,6 +120,26 @@ class Caster:
         return self.face_normals @ light[:3] - self.face_offsets * light[3]
 
     @cached_property
+    def distinct(self) -> np.ndarray:
+        """(m,) bool: False for a face that covers no area (two corners at the
+        same point, or all three on a line) or repeats an earlier face's
+        corners (in any order or winding), points compared by coordinates.
+
+        The shadow of the faces left is the same region, and a 2-D union
+        whose cost grows with overlapping copies never sees them.
+        """
+        if self.n_faces == 0:
+            return np.zeros(0, dtype=bool)
+        _, point = np.unique(self.vertices, axis=0, return_inverse=True)
+        corners = np.sort(point.reshape(-1)[self.faces], axis=1)
+        keep = (corners[:, 0] != corners[:, 1]) & (corners[:, 1] != corners[:, 2])
+        keep &= np.any(self.face_normals != 0, axis=1)
+        _, first = np.unique(corners, axis=0, return_index=True)
+        unique = np.zeros(self.n_faces, dtype=bool)
+        unique[first] = True
+        return keep & unique
+
+    @cached_property
     def edge_face_slots(self) -> np.ndarray:
         """(e, 2) for a closed mesh: the two face corners ``3 * face + k`` whose
         edge (corner k to k + 1) is each edge, lower slot first."""

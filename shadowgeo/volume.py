@@ -25,6 +25,7 @@ import trimesh
 
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, is_positional, require_light
+from .limits import check_geometry, check_length
 from .silhouette import check_light_outside, light_homogeneous
 from .tolerance import Tolerance
 from .topology import Caster, as_caster, empty_mesh
@@ -92,7 +93,9 @@ def shadow_volume(
     Raises
     ------
     GeometryError
-        Invalid input, a positional light touching the caster, inside a
+        Invalid input, a coordinate, light radius or ``extent`` outside
+        the supported range (:mod:`shadowgeo.limits`), a positional light
+        touching the caster, inside a
         closed caster or so close to a lit face's plane that it sees the face
         across 180 degrees to within ``tolerance.relative``, edges used by
         more than two faces (named), an ``extent`` that does not reach past
@@ -110,10 +113,9 @@ def shadow_volume(
     """
     caster = as_caster(mesh)
     require_light(light)
+    check_geometry(caster, light)
     if extent is not None:
-        extent = float(extent)
-        if not math.isfinite(extent) or extent <= 0:
-            raise GeometryError(f"extent must be finite and > 0, got {extent!r}")
+        extent = check_length(extent, "extent")
     if caster.n_faces == 0:
         return empty_mesh()
     if tolerance is None:

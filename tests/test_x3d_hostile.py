@@ -372,10 +372,9 @@ def test_inlined_gltf_reaching_outside_the_folder_is_skipped(tmp_path, no_networ
 
 
 def test_transforms_overflowing_to_infinity(tmp_path):
-    body = (
-        '<Transform scale="1e200 1e200 1e200"><Transform scale="1e200 1e200 1e200">'
-        "<Shape><Box/></Shape></Transform></Transform>"
-    )
+    # Each scale is within shadowgeo.limits' range; their product is not finite.
+    level = '<Transform scale="1e70 1e70 1e70">'
+    body = level * 5 + "<Shape><Box/></Shape>" + "</Transform>" * 5
     with pytest.raises(
         sg.SceneError, match="line 2, Transform: the transforms down to here overflow"
     ):
@@ -389,6 +388,16 @@ def test_use_of_a_node_of_another_type_is_skipped(tmp_path):
     assert shape.n_faces > 12
     (warning,) = result.warnings
     assert "line 3, Box USE='T': USE='T' names a Transform (line 2), not a Box; skipped" in warning
+
+
+def test_a_number_outside_the_coordinate_range_is_a_bad_value(tmp_path):
+    body = '<Transform scale="1e200 1e200 1e200"><Shape><Box/></Shape></Transform>'
+    result = sg.load(scene(tmp_path, body))
+    (shape,) = result.shapes  # the field takes its default, as X3D browsers do
+    np.testing.assert_allclose(np.ptp(shape.world_vertices, axis=0), [2, 2, 2])
+    (warning,) = result.warnings
+    assert "line 2, Transform: field scale:" in warning
+    assert "1e+200, outside the supported range" in warning
 
 
 def test_angle_unit_overflowing_an_angle(tmp_path):

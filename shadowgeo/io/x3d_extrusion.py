@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..limits import MAX_EXTRUSION_POINTS as MAX_POINTS
 from ..polygons import polygon_triangles
 from .x3d_fields import Context, rotation_matrix
 
-# Vertices one Extrusion may make (spine x section): a few kilobytes of text
-# could otherwise ask for billions.
-MAX_POINTS = 20_000_000
+# MAX_POINTS: vertices one Extrusion may make (spine x section): a few
+# kilobytes of text could otherwise ask for billions.
 
 
 def _unit(vector: np.ndarray) -> np.ndarray | None:
@@ -83,8 +83,14 @@ def frames(spine: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-def _per_point(values: np.ndarray, n: int) -> np.ndarray:
-    """X3D: one value applies everywhere; a short list repeats its last."""
+def _per_point(context: Context, element, name: str, default: list[float], n: int) -> np.ndarray:
+    """Field ``name`` with one value per spine point. X3D: one value applies
+    everywhere; a short list repeats its last; an empty one (the spec gives
+    no meaning to it) is the field's default, with a note."""
+    values = context.field(element, name).reshape(-1, len(default))
+    if len(values) == 0:
+        context.warn(element, f"field {name} is empty; its default {default} is used")
+        values = np.array([default], dtype=np.float64)
     if len(values) >= n:
         return values[:n]
     return np.concatenate([values, np.repeat(values[-1:], n - len(values), axis=0)])
@@ -103,8 +109,8 @@ def extrusion(context: Context, element) -> tuple[np.ndarray, np.ndarray]:
             f"{len(spine)} spine points x {len(section)} section points is more than "
             f"{MAX_POINTS} vertices; refused",
         )
-    scale = _per_point(context.field(element, "scale").reshape(-1, 2), len(spine))
-    turns = _per_point(context.field(element, "orientation").reshape(-1, 4), len(spine))
+    scale = _per_point(context, element, "scale", [1.0, 1.0], len(spine))
+    turns = _per_point(context, element, "orientation", [0.0, 0.0, 1.0, 0.0], len(spine))
     axes = frames(spine)
     flat = np.column_stack([section[:, 0], np.zeros(len(section)), section[:, 1]])
     rings = []

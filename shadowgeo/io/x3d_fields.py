@@ -9,6 +9,8 @@ a warning naming the file, line, node and field: ``scene.x3d line 12,
 Transform DEF='arm': field translation: '1 abc 3' is not numbers (SFVec3f:
 'abc' is not a number); the default '0 0 0' is used``. A USE naming no DEF,
 or a node of another type, stands for no node, with a warning.
+Every number must be finite and within ``+-limits.LARGEST_COORDINATE``; one
+that is not is a value that cannot be read.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import numpy as np
 from lxml import etree
 
 from ..errors import SceneError
+from ..limits import LARGEST_COORDINATE
 from .x3d_defaults import DEFAULTS
 
 # VRML 97 / X3D 3.3 SpotLight defaults; X3D 4.0 changed both (the schema's
@@ -240,6 +243,12 @@ def _numbers(text: str, kind: str) -> np.ndarray:
         raise ValueError(f"is not numbers ({kind}: '{bad[:20]}' is not a number)") from None
     if not np.all(np.isfinite(numbers)):
         raise ValueError(f"has a value that is not finite ({kind})")
+    if numbers.size and float(np.abs(numbers).max()) > LARGEST_COORDINATE:
+        value = float(numbers[np.argmax(np.abs(numbers))])
+        raise ValueError(
+            f"has the value {value!r}, outside the supported range +-{LARGEST_COORDINATE:g} "
+            "(see shadowgeo.limits)"
+        )
     return numbers
 
 

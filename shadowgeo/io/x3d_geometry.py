@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import limits
+from ..errors import GeometryError
 from ..polygons import polygons_triangles
 from ..scene import primitives
 from .x3d_extrusion import extrusion
@@ -108,12 +110,21 @@ def _primitive(context: Context, element, tag: str, solid: bool) -> Primitive:
         value = context.field(element, name)
         if not value > 0:
             raise context.error(element, f"field {name}: {value!r} must be > 0")
-        return value
+        try:
+            return limits.check_length(value, f"field {name}:")
+        except GeometryError as problem:
+            raise context.error(element, str(problem)) from None
 
     if tag == "Box":
         size = context.field(element, "size")
         if not np.all(size > 0):
             raise context.error(element, f"field size: {size.tolist()} must be > 0")
+        if float(size.min()) < limits.SMALLEST_LENGTH:
+            raise context.error(
+                element,
+                f"field size: {float(size.min())!r} is below the smallest supported length "
+                f"{limits.SMALLEST_LENGTH:g}",
+            )
         return Primitive(tag, {"size": tuple(size)}, float(np.linalg.norm(size)) / 2, solid)
     if tag == "Sphere":
         radius = positive("radius")

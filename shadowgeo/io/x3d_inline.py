@@ -21,6 +21,7 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from .. import limits
 from ..errors import GeometryError, SceneError
 from . import gltf_read, outside_reason, x3d_parse
 from .gltf_layout import external_uris, json_document
@@ -33,7 +34,7 @@ X3D_SUFFIXES = {".x3d", ".x3dz", ".x3dv", ".x3dvz", ".wrl", ".wrz"}
 X3D_SUFFIXES |= {".x3d.gz", ".x3dv.gz", ".wrl.gz"}
 X3D_SUFFIXES |= set(x3d_parse.ENCODINGS)
 GLTF_SUFFIXES = {".gltf", ".glb"}
-MAX_INLINE_DEPTH = 16
+MAX_INLINE_DEPTH = limits.MAX_INLINE_DEPTH  # see shadowgeo.limits
 
 
 def resolve_url(reader, context: Context, url: str) -> Path | str:

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import GeometryError
 from ..lights import DirectionalLight, PointLight, SpotLight
+from ..limits import check_coordinates, check_length
 from ..scene import Material, SceneLight
 from .x3d_fields import Context, local_name
 
@@ -43,6 +44,7 @@ def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | N
             if not radius > 0:
                 context.warn(element, f"radius {field('radius')!r} lights nothing; skipped")
                 return None
+            _check_range(context, element, location, radius)
             if tag == "PointLight":
                 light = PointLight(location, radius)
             else:
@@ -74,6 +76,17 @@ def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | N
         shadow_intensity=float(field("shadowIntensity")),
         **extra,
     )
+
+
+def _check_range(context: Context, element, location, radius: float) -> None:
+    """SceneError unless the world location and radius are within the range
+    the geometry carries (:mod:`shadowgeo.limits`): a light is never
+    silently dropped for a number that is merely too large."""
+    try:
+        check_coordinates(location, "location (world)")
+        check_length(radius, "radius (world)")
+    except GeometryError as problem:
+        raise context.error(element, str(problem)) from None
 
 
 def material(context: Context, appearance) -> Material:

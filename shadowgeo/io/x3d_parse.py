@@ -15,13 +15,14 @@ from pathlib import Path
 
 from lxml import etree
 
+from .. import limits
 from ..errors import SceneError
 from . import x3d_classic_read
 
 # X3D encodings other than XML: extension -> module whose parse(path) gives the tree.
 ENCODINGS = {".x3dj": "x3d_json", ".json": "x3d_json"}
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).
-MAX_BYTES = 512 * 1024 * 1024
+MAX_BYTES = limits.MAX_DOCUMENT_BYTES  # see shadowgeo.limits
 
 
 def _parser() -> etree.XMLParser:

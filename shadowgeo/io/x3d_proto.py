@@ -15,11 +15,12 @@ import copy
 import itertools
 import re
 
+from .. import limits
 from .x3d_fields import local_name
 
 # Copies made per document at most: a prototype whose body holds an instance
 # of itself would otherwise expand for ever.
-MAX_EXPANSIONS = 10_000
+MAX_EXPANSIONS = limits.MAX_PROTO_EXPANSIONS  # see shadowgeo.limits
 _FIELD_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 

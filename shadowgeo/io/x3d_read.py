@@ -55,6 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import limits
 from ..errors import GeometryError, SceneError
 from ..scene import Scene, Shape
 from ..scene.model import MARK, Viewpoint, axis_angle
@@ -74,7 +75,7 @@ RENDERED_FIELDS = {"children", "choice", "level", "layers", "shape"}
 SILENT = {"WorldInfo", "ProtoDeclare", "ExternProtoDeclare", "IS", "connect", "field"}
 TEXTURES = {"ImageTexture", "MovieTexture", "ImageCubeMapTexture", "ImageTexture3D"}
 # Node instances visited at most: DEF/USE nesting can expand exponentially.
-MAX_NODES = 2_000_000
+MAX_NODES = limits.MAX_NODES  # every budget is stated in shadowgeo.limits
 # Why nodes of a kind are skipped, for the warnings.
 REASONS = [
     (("Sensor", "Interpolator", "Script", "ROUTE", "Trigger", "Sequencer", "Filter", "Follower",

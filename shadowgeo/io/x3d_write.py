@@ -8,8 +8,9 @@ Two cases:
 * The scene came from X3D (``scene.document`` is the reader's lxml tree): the
   output is that document, unchanged, with one ``<Group DEF="shadows_<light>">``
   per group of added shapes (role ``"shadow"`` or ``"volume"``) appended to
-  ``<Scene>``. Scripts, routes, viewpoints, metadata, comments, the DOCTYPE and
-  the ``version`` attribute stay as they were; the added nodes (Group, Shape,
+  ``<Scene>``. Scripts, routes, viewpoints, metadata, comments and the
+  ``version`` attribute stay as they were (but see *What is never copied*);
+  the added nodes (Group, Shape,
   Appearance, Material, IndexedTriangleSet, Coordinate) exist in every X3D
   version from 3.0, so the version stays valid. The added groups have
   ``class="shadowgeo-shadows"``: such a group whose shapes the scene no
@@ -25,6 +26,28 @@ Two cases:
 Added shapes are ``IndexedTriangleSet`` in world coordinates with
 ``solid="false"``; coordinates are written with Python's shortest round-trip
 float format, so reading back gives the same float64 values.
+
+What is never copied
+--------------------
+The reader follows no external reference, and the output must not make a
+later reader follow one either; nor may it carry a number X3D cannot hold.
+From the input document the writer leaves out, each with a note in
+``scene.warnings`` (printed by ``shadowgeo convert``):
+
+* a DOCTYPE other than the standard Web3D one (``<!DOCTYPE X3D PUBLIC
+  "ISO//Web3D//DTD X3D 3.x or 4.x//EN" "http(s)://www.web3d.org/specifications/
+  x3d-3.x or 4.x.dtd">``, which is written anew from the versions it names, never
+  copied): a SYSTEM id pointing at a local file, another PUBLIC id, an
+  internal subset;
+* processing instructions (``<?xml-stylesheet href=...?>``);
+* elements outside the X3D namespace (``xi:include`` and any other XInclude
+  or foreign element), with their content;
+* an attribute whose values are all numbers and one is not finite
+  (``position="0 inf 0"``, ``1e999``): the node then takes the field's
+  default, as the reader did.
+
+Shapes and lights the writer makes itself are finite: a non-finite number
+there raises :class:`~shadowgeo.SceneError`.
 """
 
 from __future__ import annotations
@@ -32,6 +55,7 @@ from __future__ import annotations
 import copy
 import gzip
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -59,18 +83,26 @@ def write(scene: Scene, path) -> None:
     Parameters
     ----------
     scene : Scene
-        Not modified (the document is copied before shapes are added).
+        Not modified (the document is copied before shapes are added),
+        except that what is left out of the document is noted in
+        ``scene.warnings`` (see *What is never copied*).
     path : str or Path
         Written atomically: a failure leaves no partial file.
 
     Raises
     ------
     SceneError
-        The scene's document has no ``<Scene>`` element; for JSON, a field
-        value that is not of its field's type (JSON types every value).
+        The scene's document has no ``<Scene>`` element; a shape or light to
+        write has a non-finite number; for JSON, a field value that is not of
+        its field's type (JSON types every value).
     """
     path = Path(path)
-    tree = _with_added(scene) if scene.document is not None else _fresh(scene)
+    doctype = None
+    if scene.document is not None:
+        tree = _with_added(scene)
+        doctype = _clean(tree, scene.warnings, Path(scene.path).name if scene.path else "input")
+    else:
+        tree = _fresh(scene)
     name = path.name.lower()
     if x3d_json.is_x3d_json(path):
         data = x3d_json.dumps(tree)
@@ -82,7 +114,8 @@ def write(scene: Scene, path) -> None:
             raise SceneError(problem.message, path=str(path)) from None
     else:
         declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
-        data = declaration + etree.tostring(tree, xml_declaration=False, encoding="UTF-8")
+        text = etree.tostring(tree, xml_declaration=False, encoding="UTF-8", doctype=doctype)
+        data = declaration + text
     if not data.endswith(b"\n"):
         data += b"\n"
     if name.endswith((".x3dz", ".x3dvz", ".wrz", ".gz")):
@@ -109,6 +142,97 @@ def _with_added(scene: Scene):
     if groups:
         _indent(body, groups)
     return tree
+
+
+# The standard DOCTYPE of X3D 3.0 to 4.1; only this is written, and anew.
+_STANDARD_DOCTYPE = re.compile(
+    r"ISO//Web3D//DTD X3D (?P<version>[34]\.[0-9])//EN\n"
+    r"https?://www\.web3d\.org/specifications/x3d-(?P=version)\.dtd"
+)
+# Attributes that hold names or text, never numbers, whatever they spell.
+_TEXT_ATTRIBUTES = {"DEF", "USE", "class", "id", "style", "name", "description", "containerField"}
+
+
+def _clean(tree, notes: list[str], source: str) -> str | None:
+    """Strip from ``tree`` (a copy) what must never be copied (see the module
+    notes), noting each; returns the DOCTYPE to write (None: none)."""
+    info = tree.docinfo
+    doctype = None
+    if info.doctype:
+        ids = f"{info.public_id or ''}\n{info.system_url or ''}"
+        subset = info.internalDTD
+        empty = subset is None or not (list(subset.iterelements()) or list(subset.entities()))
+        standard = _STANDARD_DOCTYPE.fullmatch(ids)
+        if standard and empty:
+            version = standard.group("version")
+            doctype = (
+                f'<!DOCTYPE X3D PUBLIC "ISO//Web3D//DTD X3D {version}//EN" '
+                f'"https://www.web3d.org/specifications/x3d-{version}.dtd">'
+            )
+        else:
+            shown = info.doctype if len(info.doctype) <= 80 else info.doctype[:77] + "..."
+            notes.append(f"{source}: {shown} not written (only the standard X3D DOCTYPE is)")
+        info.clear()
+    root = tree.getroot()
+    namespace = etree.QName(root).namespace
+    for instruction in [*root.itersiblings(preceding=True), *root.itersiblings(), *root.iter()]:
+        if isinstance(instruction, etree._ProcessingInstruction):
+            line = f" line {instruction.sourceline}" if instruction.sourceline else ""
+            notes.append(
+                f"{source}{line}: processing instruction <?{instruction.target} ...?> not written"
+            )
+    etree.strip_elements(tree, etree.PI, with_tail=False)
+    foreign = [
+        element
+        for element in root.iter(etree.Element)
+        if etree.QName(element).namespace != namespace
+    ]
+    for element in foreign:
+        if element.getparent() is None or any(a in foreign for a in element.iterancestors()):
+            continue
+        notes.append(
+            f"{source} line {element.sourceline}: <{element.prefix or ''}"
+            f"{':' if element.prefix else ''}{etree.QName(element).localname}> is not X3D "
+            "(never followed); not written"
+        )
+        _drop(element)
+    etree.cleanup_namespaces(tree)
+    for element in root.iter(etree.Element):
+        for name, value in list(element.attrib.items()):
+            if name not in _TEXT_ATTRIBUTES and _non_finite(value):
+                shown = value if len(value) <= 40 else value[:37] + "..."
+                notes.append(
+                    f"{source} line {element.sourceline}, {etree.QName(element).localname}: "
+                    f"{name}='{shown}' is not finite; not written (the field's default applies)"
+                )
+                del element.attrib[name]
+    return doctype
+
+
+def _drop(node) -> None:
+    """Remove ``node`` from its tree, keeping the text after it."""
+    parent = node.getparent()
+    previous = node.getprevious()
+    before = previous.tail if previous is not None else parent.text
+    # indentation before the node gives way to the text after it
+    after = node.tail if before is None or not before.strip() else before + (node.tail or "")
+    if previous is not None:
+        previous.tail = after
+    else:
+        parent.text = after
+    parent.remove(node)
+
+
+def _non_finite(value: str) -> bool:
+    """All the words of ``value`` are numbers and one is not finite."""
+    words = value.replace(",", " ").split()
+    if not words:
+        return False
+    try:
+        numbers = [float(word) for word in words]
+    except ValueError:
+        return False
+    return not all(math.isfinite(number) for number in numbers)
 
 
 # What the added nodes need beyond the Core profile (Interchange and up have it).
@@ -188,7 +312,10 @@ def _indent(body, groups) -> None:
 
 
 def _numbers(values) -> str:
-    return " ".join(map(repr, np.asarray(values, dtype=np.float64).ravel().tolist()))
+    values = np.asarray(values, dtype=np.float64).ravel()
+    if not np.all(np.isfinite(values)):
+        raise SceneError(f"cannot write a non-finite number in X3D: {values.tolist()[:8]}")
+    return " ".join(map(repr, values.tolist()))
 
 
 def _bool(value: bool) -> str:

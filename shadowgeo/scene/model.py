@@ -123,9 +123,10 @@ class Shape:
 
     @property
     def world_vertices(self) -> np.ndarray:
-        """(n, 3) vertices in world coordinates."""
-        homogeneous = self.vertices @ self.transform[:3, :3].T + self.transform[:3, 3]
-        return homogeneous
+        """(n, 3) vertices in world coordinates (inf where they overflow float64:
+        the geometry's range check names them)."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            return self.vertices @ self.transform[:3, :3].T + self.transform[:3, 3]
 
     @property
     def n_faces(self) -> int:

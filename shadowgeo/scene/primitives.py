@@ -17,11 +17,12 @@ import math
 import numpy as np
 
 from ..errors import GeometryError
+from ..limits import MAX_SPHERE_SEGMENTS, check_length
 from ..tolerance import Tolerance
 
-# A sphere gets at most this many segments around (8.4 million triangles): a
-# chord below about 1e-6 of its radius is then not met (the reader warns).
-MAX_SPHERE_SEGMENTS = 2048
+# A sphere gets at most MAX_SPHERE_SEGMENTS segments around (8.4 million
+# triangles): a chord below about 1e-6 of its radius is then not met (the
+# reader warns). Sizes must lie in shadowgeo.limits' range.
 
 
 def _segments(radius: float, chord: float, sweep: float = 2 * math.pi, minimum: int = 8) -> int:
@@ -32,10 +33,7 @@ def _segments(radius: float, chord: float, sweep: float = 2 * math.pi, minimum: 
 
 
 def _positive(value: float, name: str) -> float:
-    value = float(value)
-    if not (value > 0 and math.isfinite(value)):
-        raise GeometryError(f"{name} must be finite and > 0, got {value!r}")
-    return value
+    return check_length(value, name)
 
 
 def box(size=(2.0, 2.0, 2.0)) -> tuple[np.ndarray, np.ndarray]:
@@ -179,13 +177,17 @@ def sphere(radius: float = 1.0, chord: float = 1e-3) -> tuple[np.ndarray, np.nda
     (True, 1980)
     """
     radius = _positive(radius, "Sphere radius")
+    _segments(radius, chord)  # checks the chord
+    # Work on the unit sphere: the counts depend on chord / radius alone, so
+    # the cost is bounded by the tolerance, whatever the numbers in the file.
+    relative = chord / radius
     # a quad dips by about the sum of its two edges' sagittas: start at half the chord
-    around = min(_segments(radius, chord / 2), MAX_SPHERE_SEGMENTS)
+    around = min(_segments(1.0, relative / 2), MAX_SPHERE_SEGMENTS)
     while True:
         rings = max(2, math.ceil(around / 2))
-        vertices, faces = _uv_sphere(radius, around, rings)
-        if inscribed_deviation(vertices, faces, radius) <= chord or around >= MAX_SPHERE_SEGMENTS:
-            return vertices, faces
+        vertices, faces = _uv_sphere(1.0, around, rings)
+        if inscribed_deviation(vertices, faces, 1.0) <= relative or around >= MAX_SPHERE_SEGMENTS:
+            return vertices * radius, faces
         around = min(math.ceil(around * 1.05), MAX_SPHERE_SEGMENTS)
 
 
@@ -217,12 +219,13 @@ def _uv_sphere(radius: float, around: int, rings: int) -> tuple[np.ndarray, np.n
 
 def inscribed_deviation(vertices: np.ndarray, faces: np.ndarray, radius: float) -> float:
     """Upper bound of how far the triangles of a sphere mesh centred on the
-    origin dip inside the sphere of ``radius``."""
-    corners = vertices[faces]
+    origin dip inside the sphere of ``radius`` (computed on the unit sphere:
+    no product of three coordinates to underflow)."""
+    corners = vertices[faces] / radius
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     lengths = np.linalg.norm(normals, axis=1)
     distances = np.einsum("ij,ij->i", normals, corners[:, 0]) / lengths
-    return float(radius - distances.min())
+    return float(radius * (1.0 - distances.min()))
 
 
 def _compact(vertices: np.ndarray, parts: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:

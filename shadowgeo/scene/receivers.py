@@ -91,7 +91,7 @@ def patches(shape: Shape, tolerance: Tolerance) -> list[tuple[Plane, np.ndarray,
     triangles = shape.world_vertices[shape.faces]
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     doubled = np.linalg.norm(normals, axis=1)
-    valid = doubled > 2 * tolerance.length**2
+    valid = doubled / tolerance.length > 2 * tolerance.length  # no square to overflow
     unit = np.zeros_like(normals)
     unit[valid] = normals[valid] / doubled[valid, None]
     assigned = ~valid

@@ -55,6 +55,7 @@ import numpy as np
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
 from ..lights import DirectionalLight, SpotLight, is_positional
+from ..limits import check_coordinates, check_light
 from ..plane import Plane
 from ..projection import project_shadow
 from ..tolerance import Tolerance
@@ -135,7 +136,8 @@ def add_shadows(
     SceneError
         A named light or receiver does not exist, or a named light is off.
     GeometryError
-        A named receiver is not planar.
+        A named receiver is not planar; a coordinate or light radius outside
+        the range of :mod:`shadowgeo.limits`.
 
     Examples
     --------
@@ -157,14 +159,15 @@ def add_shadows(
     kept = _without_baked(scene, notes)
     geometry = [s for s in kept if s.role == "geometry" and s.n_faces]
     chosen = _select_lights(scene, lights, notes, extra_lights)
+    for index, light in enumerate(chosen):
+        check_light(light.light, f"light '{light.name or index}'")  # see shadowgeo.limits
     if not geometry and receivers is None:
         notes.append("shadows: the scene has no geometry, so nothing casts or receives")
         return dataclasses.replace(scene, shapes=kept, warnings=[*scene.warnings, *notes])
     positions = [light.light.position for light in chosen if is_positional(light.light)]
+    bounds = dataclasses.replace(scene, shapes=geometry).bounds if geometry else np.zeros((0, 3))
+    check_coordinates(bounds, "scene bounds")  # whatever the tolerance: see shadowgeo.limits
     if not isinstance(tolerance, Tolerance):
-        bounds = (
-            dataclasses.replace(scene, shapes=geometry).bounds if geometry else np.zeros((0, 3))
-        )
         settings = {} if tolerance is None else {"chord": float(tolerance)}
         tolerance = Tolerance.for_points(bounds, *positions, **settings)
     lift = _DEFAULT_OFFSET * tolerance.scale if offset is None else float(offset)

@@ -1,0 +1,163 @@
+"""What shadowgeo accepts: the range of numbers its geometry carries, and the
+budgets of its readers. Every limit is stated here, once.
+
+Coordinate range
+----------------
+The shadow formulas multiply coordinates: a face normal is a product of two
+edge vectors, the facing test and the winding number products of three
+lengths, the shadow matrix applied to a point a product of four. Float64
+holds magnitudes from about 2.2e-308 to 1.8e308, so a product of four numbers
+each within ``[1e-75, 1e75]`` (with room for the constant factors) neither
+overflows nor underflows to zero:
+
+``LARGEST_COORDINATE = 1e75``
+    The largest absolute coordinate, light position, plane offset, finite
+    light radius, primitive size or number in a scene file.
+``SMALLEST_LENGTH = 1e-75``
+    The smallest scene size (bounding-box diagonal) and primitive size.
+
+That is 150 orders of magnitude; a scene in metres from a proton (1e-15) to
+the observable universe (9e26) fits with room to spare. Past either end the
+geometry raises :class:`~shadowgeo.GeometryError` and the readers
+:class:`~shadowgeo.SceneError`, naming the value: there is no result that
+float64 could be trusted to compute. A light radius may also be ``inf`` (no
+limit).
+
+Reader budgets
+--------------
+A hostile file stops at a budget with a ``SceneError`` naming it, in bounded
+time and memory (the two segment caps are not errors: a curve simply gets no
+finer). None has an option that raises it: they sit far above any real scene
+(edit the constant to go further); ``--tolerance`` only moves the chord
+within the segment caps.
+
+=====================  ==============  =============================================
+budget                 value           where it is enforced
+=====================  ==============  =============================================
+document size          512 MiB         X3D after inflating ``.x3dz`` (an inflation
+                                       bomb stops there)
+XML depth              256 elements    libxml2's limit for untrusted input
+XML text or attribute  10 MB           libxml2's limit for untrusted input
+nodes                  2,000,000       X3D nodes after DEF/USE, Inline and PROTO
+                                       expansion, counted over every copy
+PROTO expansions       10,000          ProtoInstance copies per document
+Inline depth           16              nested X3D Inlines
+Extrusion              20,000,000      vertices (spine points x cross-section
+                                       points) of one Extrusion
+sphere segments        2,048           segments around one tessellated Sphere
+                                       (a finer chord is not met; the reader notes
+                                       it)
+curve segments         65,536          segments of any other tessellated curve
+=====================  ==============  =============================================
+
+There is no separate triangle budget: triangles come from the nodes above and
+cost linear memory. Duplicate and zero-area triangles cost nothing in the
+shadow's 2-D union (:func:`shadowgeo.project_shadow` drops them first).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import GeometryError
+
+LARGEST_COORDINATE = 1e75
+SMALLEST_LENGTH = 1e-75
+
+MAX_DOCUMENT_BYTES = 512 * 1024 * 1024
+MAX_XML_DEPTH = 256
+MAX_NODES = 2_000_000
+MAX_PROTO_EXPANSIONS = 10_000
+MAX_INLINE_DEPTH = 16
+MAX_EXTRUSION_POINTS = 20_000_000
+MAX_SPHERE_SEGMENTS = 2048
+MAX_CURVE_SEGMENTS = 1 << 16
+
+
+def check_coordinates(points, what: str) -> None:
+    """Raise :class:`GeometryError` unless every value of ``points`` is finite
+    and within ``+-LARGEST_COORDINATE``; the message names ``what``, the
+    offending point and its value.
+
+    Examples
+    --------
+    >>> check_coordinates([[0, 1, 2]], "caster")
+    >>> check_coordinates([[0, 1e80, 2]], "caster")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    shadowgeo.errors.GeometryError: caster point 0 has coordinate 1e+80, outside ... +-1e+75
+    """
+    values = np.asarray(points, dtype=np.float64)
+    if values.size == 0:
+        return
+    flat = values.reshape(len(values), -1) if values.ndim > 1 else values.reshape(-1, 1)
+    bad = ~np.all(np.isfinite(flat) & (np.abs(flat) <= LARGEST_COORDINATE), axis=1)
+    if not bad.any():
+        return
+    index = int(np.flatnonzero(bad)[0])
+    row = flat[index]
+    value = float(
+        row[np.argmax(~np.isfinite(row) | (np.abs(np.nan_to_num(row)) > LARGEST_COORDINATE))]
+    )
+    label = f"{what} point {index}" if values.ndim > 1 else what
+    if not math.isfinite(value):
+        raise GeometryError(f"{label} has a coordinate that is not finite ({value!r})")
+    raise GeometryError(
+        f"{label} has coordinate {value!r}, outside the supported range +-{LARGEST_COORDINATE:g}"
+    )
+
+
+def check_length(value: float, what: str, *, infinite: bool = False) -> float:
+    """``value`` as a float if it is a length shadowgeo can carry: finite (or
+    ``inf`` when ``infinite``), > 0, and within
+    ``[SMALLEST_LENGTH, LARGEST_COORDINATE]``; else :class:`GeometryError`
+    naming ``what`` and the value.
+
+    Examples
+    --------
+    >>> check_length(2, "Sphere radius")
+    2.0
+    >>> check_length(1e-80, "Sphere radius")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    shadowgeo.errors.GeometryError: Sphere radius 1e-80 is below the smallest ... 1e-75
+    """
+    value = float(value)
+    if infinite and value == math.inf:
+        return value
+    if not (value > 0 and math.isfinite(value)):
+        raise GeometryError(f"{what} must be finite and > 0, got {value!r}")
+    if value < SMALLEST_LENGTH:
+        raise GeometryError(
+            f"{what} {value!r} is below the smallest supported length {SMALLEST_LENGTH:g}"
+        )
+    if value > LARGEST_COORDINATE:
+        hint = " (use inf for no limit)" if infinite else ""
+        raise GeometryError(
+            f"{what} {value!r} is above the largest supported length {LARGEST_COORDINATE:g}{hint}"
+        )
+    return value
+
+
+def check_light(light, what: str = "light") -> None:
+    """Raise :class:`GeometryError` when a light's position or finite radius
+    is outside the supported range (a direction is a unit vector: always fine)."""
+    position = getattr(light, "position", None)
+    if position is not None:
+        check_coordinates(position, f"{what} position")
+    radius = getattr(light, "radius", math.inf)
+    check_length(radius, f"{what} radius", infinite=True)
+
+
+def check_geometry(caster, light, plane=None) -> None:
+    """Raise :class:`GeometryError` unless a caster's coordinates (a
+    :class:`~shadowgeo.Caster`), a light's position and radius, and a
+    plane's offset are all within the supported range: the check at the
+    entry of every shadow computation."""
+    if caster.n_faces:
+        check_coordinates(caster.bounds, "caster bounds")
+    check_light(light)
+    if plane is not None:
+        check_coordinates([plane.offset], "plane offset")
