@@ -18,13 +18,13 @@ from __future__ import annotations
 
 import http.server
 import os
-import shutil
 import subprocess
 import threading
 from pathlib import Path
 
 import numpy as np
-import pytest
+import shapely
+from needs import need
 from reference import ray_plane
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -82,17 +82,8 @@ PAGE = f"""<!DOCTYPE html>
 """
 
 
-def chromium() -> str:
-    for name in ("chromium", "chromium-browser"):
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run does)")
-
-
 def reference_shadow():
     """shapely Polygon of the box's shadow on y = 0, in (x, z)."""
-    shapely = pytest.importorskip("shapely")
     corners = np.array([[x, y, z] for x in BOX[:, 0] for y in BOX[:, 1] for z in BOX[:, 2]])
     landed = ray_plane(corners, LIGHT, np.array([0.0, 1.0, 0.0]), 0.0)
     return shapely.MultiPoint(landed[:, [0, 2]]).convex_hull
@@ -190,15 +181,11 @@ def screenshot(folder: Path, browser: str) -> np.ndarray:
 
 
 def test_x_ite_shows_the_baked_shadow(tmp_path):
-    browser = chromium()
-    if not (X_ITE / "x_ite.min.js").is_file():
-        pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
-    shapely = pytest.importorskip("shapely")
-
     convert(tmp_path)
     (tmp_path / "index.html").write_text(PAGE)
+    need("x_ite")
     (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
-    image = screenshot(tmp_path, browser)
+    image = screenshot(tmp_path, str(need("chromium")))
     assert image.shape[:2] == (PIXELS, PIXELS)
 
     # Pixel centres -> world (x, z): looking down -y with screen-up = -z.
