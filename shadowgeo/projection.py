@@ -158,8 +158,16 @@ class Shadow:
         return self.area == 0.0
 
     def to_shapely(self):
-        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates."""
-        import shapely
+        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates.
+
+        Needs shapely, the ``shapely`` extra: ``pip install "shadowgeo[shapely]"``.
+        """
+        try:
+            import shapely
+        except ImportError:
+            raise ImportError(
+                'Shadow.to_shapely needs shapely: pip install "shadowgeo[shapely]"'
+            ) from None
 
         parts = [shapely.Polygon(loops[0], loops[1:]) for loops in self.polygons]
         return shapely.MultiPolygon(parts)
