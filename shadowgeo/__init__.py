@@ -7,14 +7,14 @@ from __future__ import annotations
 
 from .errors import GeometryError, SceneError
 from .io import load, save
-from .lights import DirectionalLight, PointLight, SpotLight
+from .lights import DirectionalLight, Light, PointLight, SpotLight
 from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, MeshLike, as_caster
 from .viz import plot
 from .volume import shadow_volume
 
@@ -22,7 +22,9 @@ __all__ = [
     "Caster",
     "DirectionalLight",
     "GeometryError",
+    "Light",
     "Material",
+    "MeshLike",
     "Plane",
     "PointLight",
     "Scene",

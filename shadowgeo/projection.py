@@ -24,9 +24,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike
 
 from . import polygons as poly
 from .errors import GeometryError
@@ -34,7 +36,10 @@ from .lights import Light, SpotLight, is_positional, require_light
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, MeshLike, as_caster
+
+if TYPE_CHECKING:
+    import shapely
 
 
 def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
@@ -157,7 +162,7 @@ class Shadow:
     def is_empty(self) -> bool:
         return self.area == 0.0
 
-    def to_shapely(self):
+    def to_shapely(self) -> shapely.MultiPolygon:
         """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates.
 
         Needs shapely, the ``shapely`` extra: ``pip install "shadowgeo[shapely]"``.
@@ -174,14 +179,14 @@ class Shadow:
 
 
 def project_shadow(
-    caster,
+    caster: MeshLike,
     light: Light,
     plane: Plane,
     *,
-    receiver=None,
+    receiver: ArrayLike | None = None,
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
-    method: str = "auto",
+    method: Literal["auto", "triangles"] = "auto",
 ) -> Shadow:
     """The exact shadow of ``caster`` cast by ``light`` on ``plane``.
 
@@ -252,13 +257,13 @@ def project_shadow(
     return projector.run()
 
 
-def _check_types(light, plane) -> None:
+def _check_types(light: object, plane: object) -> None:
     require_light(light)
     if not isinstance(plane, Plane):
         raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
 
 
-def _receiver_points(receiver) -> np.ndarray:
+def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
     if receiver is None:
         return np.zeros((0, 3))
     points = np.asarray(receiver, dtype=np.float64)

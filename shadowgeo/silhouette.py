@@ -18,10 +18,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .deprecation import renamed_keyword
 from .errors import GeometryError
 from .lights import Light, is_positional, require_light
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, MeshLike, as_caster
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,13 +61,14 @@ class Silhouette:
     is_closed: bool
 
 
-def silhouette(mesh, light: Light) -> Silhouette:
-    """Front faces, silhouette edges, their loops and the border of ``mesh``
+@renamed_keyword("mesh", "caster")
+def silhouette(caster: MeshLike, light: Light) -> Silhouette:
+    """Front faces, silhouette edges, their loops and the border of ``caster``
     seen from ``light``.
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, Caster or (vertices, faces)
+    caster : trimesh.Trimesh, Caster or (vertices, faces)
         The topology is cached on the mesh (see :func:`shadowgeo.as_caster`),
         so a second light costs only the per-light work.
     light : PointLight, SpotLight or DirectionalLight
@@ -91,7 +93,7 @@ def silhouette(mesh, light: Light) -> Silhouette:
     >>> int(outline.front.sum()), len(outline.edges), [len(loop) for loop in outline.loops]
     (2, 4, [4])
     """
-    caster = as_caster(mesh)
+    caster = as_caster(caster)
     front = caster.facing(light_homogeneous(caster, light)) > 0
     counts = caster.edge_face_count
     border = _directed_edges(caster, caster.edge_slots[caster.edge_slot_starts[:-1][counts == 1]])

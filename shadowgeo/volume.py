@@ -23,17 +23,23 @@ import math
 import numpy as np
 import trimesh
 
+from .deprecation import renamed_keyword
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, is_positional, require_light
 from .silhouette import check_light_outside, light_homogeneous
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, MeshLike, as_caster
 
 
+@renamed_keyword("mesh", "caster")
 def shadow_volume(
-    mesh, light: Light, *, extent: float | None = None, tolerance: Tolerance | None = None
+    caster: MeshLike,
+    light: Light,
+    *,
+    extent: float | None = None,
+    tolerance: Tolerance | None = None,
 ) -> trimesh.Trimesh:
-    """The closed region ``mesh`` hides from ``light``, as a triangle mesh.
+    """The closed region ``caster`` hides from ``light``, as a triangle mesh.
 
     A point is inside (winding number >= 1) when the segment from it to the
     light crosses the caster and the point lies before the far cap. The
@@ -41,7 +47,7 @@ def shadow_volume(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, Caster or (vertices, faces)
+    caster : trimesh.Trimesh, Caster or (vertices, faces)
         A closed, 2-manifold, consistently wound mesh casts from its outer
         side. Any other mesh (open, with holes, inconsistently wound, an X3D
         ``solid="false"`` surface) is treated as two-sided: every face that is
@@ -108,7 +114,7 @@ def shadow_volume(
     >>> volume.is_watertight, volume.is_winding_consistent, round(float(volume.volume), 12)
     (True, True, 2.0)
     """
-    caster = as_caster(mesh)
+    caster = as_caster(caster)
     require_light(light)
     if extent is not None:
         extent = float(extent)

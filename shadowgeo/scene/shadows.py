@@ -46,8 +46,10 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
+from typing import Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
@@ -74,10 +76,10 @@ Progress = Callable[[int, int], None]
 def add_shadows(
     scene: Scene,
     *,
-    method: str = "planar",
+    method: Literal["planar", "volume"] = "planar",
     lights: Sequence[str] | None = None,
     receivers: Sequence[str] | None = None,
-    plane=None,
+    plane: Plane | ArrayLike | None = None,
     tolerance: Tolerance | float | None = None,
     offset: float | None = None,
     progress: Progress | None = None,
