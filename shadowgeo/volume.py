@@ -188,7 +188,8 @@ def _check_edge_manifold(caster: Caster) -> None:
 def _oriented_faces(caster: Caster, cap: np.ndarray, orientation: np.ndarray) -> np.ndarray:
     """(c, 3) cap faces wound to face the light (faces with orientation -1 reversed)."""
     faces = caster.faces[cap]
-    return np.where(orientation[:, None] > 0, faces, faces[:, [0, 2, 1]])
+    oriented: np.ndarray = np.where(orientation[:, None] > 0, faces, faces[:, [0, 2, 1]])
+    return oriented
 
 
 def _original_vertex(caster: Caster, cap: np.ndarray, orientation: np.ndarray) -> np.ndarray:
@@ -260,8 +261,13 @@ def _cap_corners(
 
 
 def _far_points(
-    caster: Caster, light: Light, relative: np.ndarray, faces, extent, tolerance: Tolerance
-) -> tuple[np.ndarray, dict]:
+    caster: Caster,
+    light: Light,
+    relative: np.ndarray,
+    faces: np.ndarray,
+    extent: float | None,
+    tolerance: Tolerance,
+) -> tuple[np.ndarray, dict[str, object]]:
     """Far copies of the cap vertices (in the caster's centred frame) and
     what decided the far distance."""
     if isinstance(light, DirectionalLight):
