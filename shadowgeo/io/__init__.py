@@ -25,7 +25,10 @@ from __future__ import annotations
 
 import importlib
 import math
+import os
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 from ..errors import SceneError
 from ..scene import Scene, Shape
@@ -55,11 +58,11 @@ WRITERS = {
 }
 
 
-def _suffix(path) -> str:
+def _suffix(path: str | os.PathLike[str]) -> str:
     return Path(path).suffix.lower()
 
 
-def _module(table: dict[str, str], path, verb: str):
+def _module(table: dict[str, str], path: str | os.PathLike[str], verb: str) -> ModuleType:
     suffix = _suffix(path)
     if suffix not in table:
         known = ", ".join(sorted(table))
@@ -92,7 +95,9 @@ def check_face_indices(shape: Shape) -> None:
         )
 
 
-def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: str) -> None:
+def refuse_outside(
+    reference: str, target: Path, folder: Path, *, path: str | os.PathLike[str], where: str
+) -> None:
     """Raise a SceneError unless ``reference`` (a URI or asset path a file
     names) is relative and ``target`` (what it resolves to) is inside
     ``folder``: readers open nothing remote, absolute or in a parent folder."""
@@ -102,7 +107,7 @@ def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: s
         raise SceneError("refused: it leaves the file's folder", path=str(path), node=where)
 
 
-def load(path, **options) -> Scene:
+def load(path: str | os.PathLike[str], **options: Any) -> Scene:
     """Read a scene from ``path``; the format comes from the extension.
 
     Raises
@@ -115,16 +120,17 @@ def load(path, **options) -> Scene:
     module = _module(READERS, path, "read")
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
-    return module.read(path, **options)
+    scene: Scene = module.read(path, **options)
+    return scene
 
 
-def check_writable(path) -> None:
+def check_writable(path: str | os.PathLike[str]) -> None:
     """SceneError, naming the known extensions, unless :func:`save` can write
     a file named ``path``: for callers that check before long work."""
     _module(WRITERS, path, "write")
 
 
-def save(scene: Scene, path, **options) -> None:
+def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
     """Write ``scene`` to ``path`` atomically; the format comes from the extension."""
     module = _module(WRITERS, path, "write")
     module.write(scene, Path(path), **options)
