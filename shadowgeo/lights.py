@@ -9,13 +9,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TypeGuard
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
 from .plane import _vector
+
+if TYPE_CHECKING:  # annotations only: no runtime dependency on typing_extensions
+    from typing_extensions import TypeIs
 
 
 def _unit(vector: ArrayLike, name: str) -> NDArray[np.float64]:
@@ -117,7 +120,7 @@ class SpotLight:
 Light = PointLight | DirectionalLight | SpotLight
 
 
-def is_positional(light: Light) -> TypeGuard[PointLight | SpotLight]:
+def is_positional(light: Light) -> TypeIs[PointLight | SpotLight]:
     """True for lights with a position (point and spot lights)."""
     return not isinstance(light, DirectionalLight)
 

@@ -28,11 +28,12 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import trimesh
+from manifold3d import CrossSection
 from numpy.typing import ArrayLike
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lights import Light, SpotLight, is_positional, require_light
+from .lights import Light, PointLight, SpotLight, is_positional, require_light
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
@@ -278,7 +279,14 @@ class _Projector:
     """One call of :func:`project_shadow`; holds the per-call frame."""
 
     def __init__(
-        self, caster: Caster, light, plane: Plane, receiver, offset, tol, per_triangle: bool
+        self,
+        caster: Caster,
+        light: Light,
+        plane: Plane,
+        receiver: np.ndarray,
+        offset: float,
+        tol: Tolerance,
+        per_triangle: bool,
     ) -> None:
         self.caster = caster
         self.light = light
@@ -375,12 +383,12 @@ class _Projector:
             limit_regions.append(poly.fill([receiver2d * self.scale], "evenodd"))
             self.limits.append("receiver")
         if is_positional(self.light) and math.isfinite(self.light.radius):
-            disc = self._range_disc()
+            disc = self._range_disc(self.light)
             low, high = np.maximum(low, disc.min(axis=0)), np.minimum(high, disc.max(axis=0))
             limit_regions.append(poly.fill([disc]))
             self.limits.append("range")
         if isinstance(self.light, SpotLight):
-            cone = self._spot_polygon(low, high)
+            cone = self._spot_polygon(self.light, low, high)
             if cone is None:
                 return self.empty("the spot light's cone misses the receiver")
             low, high = np.maximum(low, cone.min(axis=0)), np.minimum(high, cone.max(axis=0))
@@ -409,18 +417,19 @@ class _Projector:
         relative = points - self.origin
         return np.column_stack([relative @ u, relative @ v])
 
-    def _range_disc(self) -> np.ndarray:
+    def _range_disc(self, light: PointLight | SpotLight) -> np.ndarray:
         """The lit disc of a light with a finite radius, inscribed polygon, local units."""
-        radius = math.sqrt(self.light.radius**2 - self.height**2)
+        radius = math.sqrt(light.radius**2 - self.height**2)
         n = self.tol.segments(radius)
         angles = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
         circle = radius * np.column_stack([np.cos(angles), np.sin(angles)])
         return (circle + self.foot2d) * self.scale
 
-    def _spot_polygon(self, low, high) -> np.ndarray | None:
+    def _spot_polygon(
+        self, light: SpotLight, low: np.ndarray, high: np.ndarray
+    ) -> np.ndarray | None:
         """The spot light's cone on the plane (an inscribed pyramid), clipped to
         the rectangle [low, high] in local units; None when they miss."""
-        light = self.light
         axis = light.direction
         side, up = Plane(axis, 0.0).basis  # across the axis; the rim's winding is fixed below
         rectangle_planes = _rectangle_planes(low, high)
@@ -451,9 +460,10 @@ class _Projector:
         points = clipped[:, :2] / clipped[:, 2:3]
         if poly.signed_areas([points])[0] < 0:
             points = points[::-1]
-        return points
+        cone: np.ndarray = points
+        return cone
 
-    def _shadow_loops(self, low, high) -> list[np.ndarray]:
+    def _shadow_loops(self, low: np.ndarray, high: np.ndarray) -> list[np.ndarray]:
         """Closed 2-D loops (local units) whose positive-winding region is the
         shadow within the rectangle [low, high]."""
         caster = self.caster
@@ -520,7 +530,9 @@ class _Projector:
             loops.append(loop if area > 0 else loop[::-1])
         return loops
 
-    def _count_clipped(self, homogeneous, faces, outside) -> None:
+    def _count_clipped(
+        self, homogeneous: np.ndarray, faces: np.ndarray, outside: np.ndarray
+    ) -> None:
         """Per-reason counts over the faces that are not whole."""
         self.clipped["below_plane"] = int(np.any(outside[:, :, 0], axis=1).sum())
         outside_key = "outside_receiver" if len(self.receiver) else "outside_bound"
@@ -531,7 +543,7 @@ class _Projector:
             beyond_bound &= weight > 0
         self.clipped[outside_key] = int(np.any(beyond_bound, axis=1).sum())
 
-    def _result(self, region, n_loops: int) -> Shadow:
+    def _result(self, region: CrossSection, n_loops: int) -> Shadow:
         parts = poly.components(region)
         area = float(region.area()) / self.scale**2
         bounded = False
@@ -564,7 +576,7 @@ def _empty_mesh() -> trimesh.Trimesh:
     return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)
 
 
-def _rectangle_planes(low, high) -> np.ndarray:
+def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(4, 3) homogeneous 2-D half-planes ``l . (U, V, W) >= 0`` of the
     rectangle [low, high] (points (U / W, V / W) with W > 0)."""
     return np.array(

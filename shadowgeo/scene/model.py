@@ -124,7 +124,7 @@ class Shape:
     @property
     def world_vertices(self) -> np.ndarray:
         """(n, 3) vertices in world coordinates."""
-        homogeneous = self.vertices @ self.transform[:3, :3].T + self.transform[:3, 3]
+        homogeneous: np.ndarray = self.vertices @ self.transform[:3, :3].T + self.transform[:3, 3]
         return homogeneous
 
     @property
