@@ -32,6 +32,7 @@ REQUIRE_ALL = os.environ.get("SHADOWGEO_REQUIRE_ALL", "") == "1"
 
 def absent(reason: str) -> NoReturn:
     """Skip the calling test here with ``reason``; fail it under SHADOWGEO_REQUIRE_ALL=1."""
+    __tracebackhide__ = True  # report the test's line, not this one
     if REQUIRE_ALL:
         pytest.fail(f"{reason} (SHADOWGEO_REQUIRE_ALL=1: every test must run)", pytrace=False)
     pytest.skip(reason)
@@ -91,6 +92,7 @@ TOOLS: dict[str, tuple[Callable[[], Path | None], str]] = {
 
 def need(tool: str) -> Path:
     """The path of ``tool`` (a key of :data:`TOOLS`), or :func:`absent`."""
+    __tracebackhide__ = True
     find, how = TOOLS[tool]
     found = find()
     if found is None:

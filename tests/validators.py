@@ -84,12 +84,14 @@ def gltf_report(path) -> dict:
     RuntimeError
         The validator could not run at all (the file is not glTF or GLB).
     """
+    __tracebackhide__ = True  # an absent validator is reported at the test's line
     return gltf_reports([path])[0]
 
 
 def gltf_reports(paths) -> list[dict]:
     """:func:`gltf_report` for many files in one run of node (it takes about
     half a second to start), in the order given."""
+    __tracebackhide__ = True
     need("gltf-validator")
     node = str(need("node"))
     paths = [str(Path(path).resolve()) for path in paths]
