@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from .errors import GeometryError, SceneError
 from .io import load, save
-from .lights import DirectionalLight, PointLight, SpotLight
+from .lights import DirectionalLight, Light, PointLight, SpotLight
 from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape, Viewpoint
@@ -16,7 +16,7 @@ from .silhouette import Silhouette, silhouette
 from .sun import sun_direction
 from .sunstudy import SunStudies, SunStudy, sun_study, sun_study_by_day
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, MeshLike, as_caster
 from .viz import plot
 from .volume import shadow_volume
 
@@ -24,7 +24,9 @@ __all__ = [
     "Caster",
     "DirectionalLight",
     "GeometryError",
+    "Light",
     "Material",
+    "MeshLike",
     "Plane",
     "PointLight",
     "Scene",

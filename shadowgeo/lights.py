@@ -9,14 +9,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
 from .plane import _vector
 
+if TYPE_CHECKING:  # annotations only: no runtime dependency on typing_extensions
+    from typing_extensions import TypeIs
 
-def _unit(vector, name: str) -> np.ndarray:
+
+def _unit(vector: ArrayLike, name: str) -> NDArray[np.float64]:
     vector = _vector(vector, name)
     length = float(np.linalg.norm(vector))
     if length == 0.0 or not math.isfinite(length):
@@ -26,7 +31,7 @@ def _unit(vector, name: str) -> np.ndarray:
     return unit
 
 
-def _radius(radius) -> float:
+def _radius(radius: float) -> float:
     radius = float(radius)
     if math.isnan(radius) or radius <= 0:
         raise GeometryError(f"light radius must be > 0 (or inf), got {radius!r}")
@@ -38,15 +43,15 @@ class PointLight:
     """A light at ``position`` shining in every direction, up to ``radius``
     (X3D's range; ``inf`` for no limit)."""
 
-    position: np.ndarray
+    position: NDArray[np.float64]
     radius: float = math.inf
 
-    def __init__(self, position, radius: float = math.inf) -> None:
+    def __init__(self, position: ArrayLike, radius: float = math.inf) -> None:
         object.__setattr__(self, "position", _vector(position, "light position"))
         object.__setattr__(self, "radius", _radius(radius))
 
     @property
-    def homogeneous(self) -> np.ndarray:
+    def homogeneous(self) -> NDArray[np.float64]:
         """``(x, y, z, 1)``."""
         return np.append(self.position, 1.0)
 
@@ -59,13 +64,13 @@ class DirectionalLight:
     """A light infinitely far away whose rays travel along ``direction``
     (X3D's convention: the way the light goes, not where it comes from)."""
 
-    direction: np.ndarray
+    direction: NDArray[np.float64]
 
-    def __init__(self, direction) -> None:
+    def __init__(self, direction: ArrayLike) -> None:
         object.__setattr__(self, "direction", _unit(direction, "light direction"))
 
     @property
-    def homogeneous(self) -> np.ndarray:
+    def homogeneous(self) -> NDArray[np.float64]:
         """``(-direction, 0)``: the point at infinity the light comes from."""
         return np.append(-self.direction, 0.0)
 
@@ -78,13 +83,17 @@ class SpotLight:
     """A light at ``position`` lighting the cone of half-angle ``cut_off_angle``
     (radians, in (0, pi/2]) around ``direction``, up to ``radius``."""
 
-    position: np.ndarray
-    direction: np.ndarray
+    position: NDArray[np.float64]
+    direction: NDArray[np.float64]
     cut_off_angle: float = math.pi / 4
     radius: float = math.inf
 
     def __init__(
-        self, position, direction, cut_off_angle: float = math.pi / 4, radius: float = math.inf
+        self,
+        position: ArrayLike,
+        direction: ArrayLike,
+        cut_off_angle: float = math.pi / 4,
+        radius: float = math.inf,
     ) -> None:
         cut_off_angle = float(cut_off_angle)
         if not 0 < cut_off_angle <= math.pi / 2:
@@ -97,7 +106,7 @@ class SpotLight:
         object.__setattr__(self, "radius", _radius(radius))
 
     @property
-    def homogeneous(self) -> np.ndarray:
+    def homogeneous(self) -> NDArray[np.float64]:
         """``(x, y, z, 1)``."""
         return np.append(self.position, 1.0)
 
@@ -111,12 +120,12 @@ class SpotLight:
 Light = PointLight | DirectionalLight | SpotLight
 
 
-def is_positional(light: Light) -> bool:
+def is_positional(light: Light) -> TypeIs[PointLight | SpotLight]:
     """True for lights with a position (point and spot lights)."""
     return not isinstance(light, DirectionalLight)
 
 
-def require_light(light) -> Light:
+def require_light(light: object) -> Light:
     """``light`` itself, or :class:`GeometryError` when it is not a light."""
     if not isinstance(light, PointLight | DirectionalLight | SpotLight):
         raise GeometryError(

@@ -5,11 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
 
 
-def _vector(value, name: str, size: int = 3) -> np.ndarray:
+def _vector(value: ArrayLike, name: str, size: int = 3) -> NDArray[np.float64]:
     array = np.asarray(value, dtype=np.float64).reshape(-1)
     if array.shape != (size,):
         raise GeometryError(f"{name} must have {size} components, got {np.shape(value)}")
@@ -52,10 +53,10 @@ class Plane:
     [[3.0, -4.0]]
     """
 
-    normal: np.ndarray
+    normal: NDArray[np.float64]
     offset: float
 
-    def __init__(self, normal, offset: float = 0.0) -> None:
+    def __init__(self, normal: ArrayLike, offset: float = 0.0) -> None:
         normal = _vector(normal, "plane normal")
         length = float(np.linalg.norm(normal))
         if not np.isfinite(offset):
@@ -68,14 +69,14 @@ class Plane:
         object.__setattr__(self, "offset", float(offset) / length)
 
     @classmethod
-    def from_point_normal(cls, point, normal) -> Plane:
+    def from_point_normal(cls, point: ArrayLike, normal: ArrayLike) -> Plane:
         """The plane through ``point`` with ``normal``."""
         point = _vector(point, "plane point")
         normal = _vector(normal, "plane normal")
         return cls(normal, -float(np.dot(normal, point)))
 
     @classmethod
-    def from_coefficients(cls, coefficients) -> Plane:
+    def from_coefficients(cls, coefficients: ArrayLike) -> Plane:
         """The plane ``a x + b y + c z + d = 0`` from ``(a, b, c, d)``."""
         a, b, c, d = _vector(coefficients, "plane coefficients", 4)
         return cls([a, b, c], d)
@@ -83,7 +84,7 @@ class Plane:
     def __repr__(self) -> str:
         return f"Plane(normal={self.normal.tolist()}, offset={self.offset!r})"
 
-    def __eq__(self, other) -> bool:
+    def __eq__(self, other: object) -> bool:
         if not isinstance(other, Plane):
             return NotImplemented
         return bool(np.array_equal(self.normal, other.normal)) and self.offset == other.offset
@@ -98,17 +99,17 @@ class Plane:
         return (a, b, c, self.offset)
 
     @property
-    def vector(self) -> np.ndarray:
+    def vector(self) -> NDArray[np.float64]:
         """The plane as a homogeneous 4-vector ``(a, b, c, d)``, for ``P . X = 0``."""
         return np.array(self.coefficients)
 
     @property
-    def origin(self) -> np.ndarray:
+    def origin(self) -> NDArray[np.float64]:
         """The point of the plane closest to the world origin."""
         return -self.offset * self.normal
 
     @property
-    def basis(self) -> tuple[np.ndarray, np.ndarray]:
+    def basis(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """The in-plane unit vectors ``(u, v)`` with ``u x v = normal``."""
         axis = np.zeros(3)
         axis[int(np.argmin(np.abs(self.normal)))] = 1.0
@@ -121,17 +122,17 @@ class Plane:
         """The same plane facing the other way."""
         return Plane(-self.normal, -self.offset)
 
-    def signed_distance(self, points) -> np.ndarray:
+    def signed_distance(self, points: ArrayLike) -> NDArray[np.float64]:
         """Signed distances of (n, 3) points, positive in front."""
         points = np.asarray(points, dtype=np.float64)
         return points @ self.normal + self.offset
 
-    def project(self, points) -> np.ndarray:
+    def project(self, points: ArrayLike) -> NDArray[np.float64]:
         """Orthogonal projection of (n, 3) points onto the plane."""
         points = np.asarray(points, dtype=np.float64)
         return points - np.outer(self.signed_distance(points), self.normal)
 
-    def to_2d(self, points) -> np.ndarray:
+    def to_2d(self, points: ArrayLike) -> NDArray[np.float64]:
         """(n, 3) points to (n, 2) plane coordinates (points off the plane are
         projected orthogonally)."""
         points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
@@ -139,7 +140,7 @@ class Plane:
         relative = points - self.origin
         return np.column_stack([relative @ u, relative @ v])
 
-    def to_3d(self, uv) -> np.ndarray:
+    def to_3d(self, uv: ArrayLike) -> NDArray[np.float64]:
         """(n, 2) plane coordinates to (n, 3) points on the plane."""
         uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
         u, v = self.basis

@@ -24,9 +24,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 import trimesh
+from manifold3d import CrossSection
+from numpy.typing import ArrayLike
 
 from . import polygons as poly
 from .errors import GeometryError
@@ -35,7 +38,10 @@ from .limits import check_coordinates, check_geometry
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
-from .topology import Caster, as_caster, empty_mesh
+from .topology import Caster, MeshLike, as_caster, empty_mesh
+
+if TYPE_CHECKING:
+    import shapely
 
 
 def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
@@ -158,23 +164,31 @@ class Shadow:
     def is_empty(self) -> bool:
         return self.area == 0.0
 
-    def to_shapely(self):
-        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates."""
-        import shapely
+    def to_shapely(self) -> shapely.MultiPolygon:
+        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates.
+
+        Needs shapely, the ``shapely`` extra: ``pip install "shadowgeo[shapely]"``.
+        """
+        try:
+            import shapely
+        except ImportError:
+            raise ImportError(
+                'Shadow.to_shapely needs shapely: pip install "shadowgeo[shapely]"'
+            ) from None
 
         parts = [shapely.Polygon(loops[0], loops[1:]) for loops in self.polygons]
         return shapely.MultiPolygon(parts)
 
 
 def project_shadow(
-    caster,
+    caster: MeshLike,
     light: Light,
     plane: Plane,
     *,
-    receiver=None,
+    receiver: ArrayLike | None = None,
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
-    method: str = "auto",
+    method: Literal["auto", "triangles"] = "auto",
 ) -> Shadow:
     """The exact shadow of ``caster`` cast by ``light`` on ``plane``.
 
@@ -248,13 +262,13 @@ def project_shadow(
     return projector.run()
 
 
-def _check_types(light, plane) -> None:
+def _check_types(light: object, plane: object) -> None:
     require_light(light)
     if not isinstance(plane, Plane):
         raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
 
 
-def _receiver_points(receiver) -> np.ndarray:
+def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
     if receiver is None:
         return np.zeros((0, 3))
     points = np.asarray(receiver, dtype=np.float64)
@@ -268,7 +282,14 @@ class _Projector:
     """One call of :func:`project_shadow`; holds the per-call frame."""
 
     def __init__(
-        self, caster: Caster, light, plane: Plane, receiver, offset, tol, per_triangle: bool
+        self,
+        caster: Caster,
+        light: Light,
+        plane: Plane,
+        receiver: np.ndarray,
+        offset: float,
+        tol: Tolerance,
+        per_triangle: bool,
     ) -> None:
         self.caster = caster
         self.light = light
@@ -373,7 +394,7 @@ class _Projector:
                 limit_regions.append(poly.fill([disc]))
                 self.limits.append("range")
         if isinstance(self.light, SpotLight):
-            cone = self._spot_polygon(low, high)
+            cone = self._spot_polygon(self.light, low, high)
             if cone is None:
                 return self.empty("the spot light's cone misses the receiver")
             low, high = np.maximum(low, cone.min(axis=0)), np.minimum(high, cone.max(axis=0))
@@ -402,7 +423,7 @@ class _Projector:
         relative = points - self.origin
         return np.column_stack([relative @ u, relative @ v])
 
-    def _range_disc(self, low, high) -> np.ndarray | None:
+    def _range_disc(self, low: np.ndarray, high: np.ndarray) -> np.ndarray | None:
         """The lit disc of a light with a finite radius (an inscribed polygon)
         clipped to the rectangle [low, high], in local units; None when the
         disc covers the rectangle (it limits nothing), an empty array when
@@ -445,10 +466,11 @@ class _Projector:
         )
         return clipped[:, :2] / clipped[:, 2:3] if len(clipped) >= 3 else np.zeros((0, 2))
 
-    def _spot_polygon(self, low, high) -> np.ndarray | None:
+    def _spot_polygon(
+        self, light: SpotLight, low: np.ndarray, high: np.ndarray
+    ) -> np.ndarray | None:
         """The spot light's cone on the plane (an inscribed pyramid), clipped to
         the rectangle [low, high] in local units; None when they miss."""
-        light = self.light
         axis = light.direction
         side, up = Plane(axis, 0.0).basis  # across the axis; the rim's winding is fixed below
         rectangle_planes = _rectangle_planes(low, high)
@@ -479,9 +501,10 @@ class _Projector:
         points = clipped[:, :2] / clipped[:, 2:3]
         if poly.signed_areas([points])[0] < 0:
             points = points[::-1]
-        return points
+        cone: np.ndarray = points
+        return cone
 
-    def _shadow_loops(self, low, high) -> list[np.ndarray]:
+    def _shadow_loops(self, low: np.ndarray, high: np.ndarray) -> list[np.ndarray]:
         """Closed 2-D loops (local units) whose positive-winding region is the
         shadow within the rectangle [low, high]."""
         caster = self.caster
@@ -553,7 +576,9 @@ class _Projector:
             loops.append(loop if area > 0 else loop[::-1])
         return loops
 
-    def _count_clipped(self, homogeneous, faces, outside) -> None:
+    def _count_clipped(
+        self, homogeneous: np.ndarray, faces: np.ndarray, outside: np.ndarray
+    ) -> None:
         """Per-reason counts over the faces that are not whole."""
         self.clipped["below_plane"] = int(np.any(outside[:, :, 0], axis=1).sum())
         outside_key = "outside_receiver" if len(self.receiver) else "outside_bound"
@@ -564,7 +589,7 @@ class _Projector:
             beyond_bound &= weight > 0
         self.clipped[outside_key] = int(np.any(beyond_bound, axis=1).sum())
 
-    def _result(self, region, n_loops: int) -> Shadow:
+    def _result(self, region: CrossSection, n_loops: int) -> Shadow:
         parts = poly.components(region)
         area = poly.parts_area(parts) / self.scale / self.scale  # no square to over/underflow
         bounded = False
@@ -593,7 +618,7 @@ class _Projector:
         return Shadow(self.plane, self.light, mesh, polygons, area, info)
 
 
-def _rectangle_planes(low, high) -> np.ndarray:
+def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(4, 3) homogeneous 2-D half-planes ``l . (U, V, W) >= 0`` of the
     rectangle [low, high] (points (U / W, V / W) with W > 0)."""
     return np.array(

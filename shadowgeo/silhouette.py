@@ -18,11 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .deprecation import renamed_keyword
 from .errors import GeometryError
-from .lights import Light, is_positional, require_light
+from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, MeshLike, as_caster
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,13 +62,14 @@ class Silhouette:
     is_closed: bool
 
 
-def silhouette(mesh, light: Light) -> Silhouette:
-    """Front faces, silhouette edges, their loops and the border of ``mesh``
+@renamed_keyword("mesh", "caster")
+def silhouette(caster: MeshLike, light: Light) -> Silhouette:
+    """Front faces, silhouette edges, their loops and the border of ``caster``
     seen from ``light``.
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, Caster or (vertices, faces)
+    caster : trimesh.Trimesh, Caster or (vertices, faces)
         The topology is cached on the mesh (see :func:`shadowgeo.as_caster`),
         so a second light costs only the per-light work.
     light : PointLight, SpotLight or DirectionalLight
@@ -98,7 +100,7 @@ def silhouette(mesh, light: Light) -> Silhouette:
     >>> int(outline.front.sum()), len(outline.edges), [len(loop) for loop in outline.loops]
     (2, 4, [4])
     """
-    caster = as_caster(mesh)
+    caster = as_caster(caster)
     check_geometry(caster, require_light(light))
     front = caster.facing(light_homogeneous(caster, light)) > 0
     counts = caster.edge_face_count
@@ -129,9 +131,10 @@ def silhouette(mesh, light: Light) -> Silhouette:
 def light_homogeneous(caster: Caster, light: Light) -> np.ndarray:
     """(4,) the light as a homogeneous vector in the caster's centred frame
     (:attr:`Caster.centered`)."""
-    if is_positional(require_light(light)):
-        return np.append(light.position - caster.center, 1.0)
-    return np.append(-light.direction, 0.0)
+    light = require_light(light)
+    if isinstance(light, DirectionalLight):
+        return np.append(-light.direction, 0.0)
+    return np.append(light.position - caster.center, 1.0)
 
 
 def front_boundary(caster: Caster, front: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -172,7 +175,9 @@ def silhouette_loops(caster: Caster, front: np.ndarray) -> tuple[list[np.ndarray
     return _loops_and_vertices(*front_boundary(caster, front))
 
 
-def _loops_and_vertices(starts, ends) -> tuple[list[np.ndarray], np.ndarray]:
+def _loops_and_vertices(
+    starts: np.ndarray, ends: np.ndarray
+) -> tuple[list[np.ndarray], np.ndarray]:
     if len(starts) == 0:
         return [], np.zeros(0, dtype=np.int64)
     return chain(starts, ends), np.unique(np.concatenate([starts, ends]))
@@ -243,7 +248,9 @@ def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
     return loops
 
 
-def _chain_cycles(starts, ends, order, sorted_starts) -> list[np.ndarray]:
+def _chain_cycles(
+    starts: np.ndarray, ends: np.ndarray, order: np.ndarray, sorted_starts: np.ndarray
+) -> list[np.ndarray]:
     """:func:`chain` when every vertex starts one edge: the loops are the cycles
     of the successor permutation, found by pointer jumping in O(k log k) numpy
     steps instead of a Python walk (the common case: a silhouette whose loops
@@ -320,13 +327,15 @@ def point_triangle_distance(point: np.ndarray, triangles: np.ndarray) -> np.ndar
         plane_distance = np.abs(np.einsum("ij,ij->i", unit, point - a[proper]))
         face = np.where(inside, plane_distance, np.inf)
         nearest[proper] = np.minimum(nearest[proper], face)
-    return nearest
+    distances: np.ndarray = nearest
+    return distances
 
 
-def _point_segment_distance(point, start, end) -> np.ndarray:
+def _point_segment_distance(point: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
     direction = end - start
     length2 = np.einsum("ij,ij->i", direction, direction)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = np.where(length2 > 0, np.einsum("ij,ij->i", point - start, direction) / length2, 0.0)
     t = np.clip(t, 0.0, 1.0)
-    return np.linalg.norm(start + t[:, None] * direction - point, axis=1)
+    distances: np.ndarray = np.linalg.norm(start + t[:, None] * direction - point, axis=1)
+    return distances

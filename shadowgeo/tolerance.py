@@ -41,6 +41,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import GeometryError
 from .limits import MAX_CURVE_SEGMENTS, SMALLEST_LENGTH, check_coordinates
@@ -95,7 +96,7 @@ class Tolerance:
             raise GeometryError(f"tolerance scale={self.scale!r} must be > 0")
 
     @classmethod
-    def for_points(cls, *point_sets, **settings) -> Tolerance:
+    def for_points(cls, *point_sets: ArrayLike, **settings: float) -> Tolerance:
         """Tolerance for a scene made of these point sets ((n, 3) arrays).
 
         Empty sets are ignored; a scene of one point gets scale 1.
@@ -129,7 +130,7 @@ class Tolerance:
             )
         return cls(scale=diagonal, magnitude=magnitude, **settings)
 
-    def with_settings(self, **settings) -> Tolerance:
+    def with_settings(self, **settings: float) -> Tolerance:
         """A copy with some relative settings changed."""
         return replace(self, **settings)
 

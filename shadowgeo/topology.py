@@ -9,11 +9,16 @@ costs only the per-light work.
 from __future__ import annotations
 
 from functools import cached_property
+from typing import TYPE_CHECKING, TypeAlias, Union
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
+
+if TYPE_CHECKING:
+    import trimesh
 
 _CACHE_KEY = "shadowgeo_caster"
 
@@ -34,7 +39,10 @@ class Caster:
         that index missing vertices.
     """
 
-    def __init__(self, vertices, faces) -> None:
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+
+    def __init__(self, vertices: ArrayLike, faces: ArrayLike) -> None:
         vertices = np.array(vertices, dtype=np.float64, copy=True)
         faces = np.array(faces, copy=True)
         if vertices.size == 0:
@@ -97,7 +105,9 @@ class Caster:
     @cached_property
     def center(self) -> np.ndarray:
         """(3,) centre of :attr:`bounds`: the origin of :attr:`centered`."""
-        return 0.5 * (self.bounds[0] + self.bounds[1])
+        low, high = self.bounds
+        center: np.ndarray = 0.5 * (low + high)
+        return center
 
     @cached_property
     def centered(self) -> np.ndarray:
@@ -111,13 +121,17 @@ class Caster:
     def face_offsets(self) -> np.ndarray:
         """(m,) ``face_normals . (first corner - center)``: with
         :attr:`face_normals`, each face's plane in the :attr:`centered` frame."""
-        return np.einsum("ij,ij->i", self.face_normals, self.centered[self.faces[:, 0], :3])
+        offsets: np.ndarray = np.einsum(
+            "ij,ij->i", self.face_normals, self.centered[self.faces[:, 0], :3]
+        )
+        return offsets
 
-    def facing(self, light_homogeneous) -> np.ndarray:
+    def facing(self, light_homogeneous: ArrayLike) -> np.ndarray:
         """(m,) positive where a face turns its front to the light given as a
         homogeneous 4-vector in the :attr:`centered` frame (zero edge-on)."""
         light = np.asarray(light_homogeneous, dtype=np.float64)
-        return self.face_normals @ light[:3] - self.face_offsets * light[3]
+        facing: np.ndarray = self.face_normals @ light[:3] - self.face_offsets * light[3]
+        return facing
 
     @cached_property
     def distinct(self) -> np.ndarray:
@@ -233,7 +247,7 @@ class Caster:
         points = self.vertices if used.all() else self.vertices[used]
         return np.array([points.min(axis=0), points.max(axis=0)])
 
-    def winding_number(self, point) -> float:
+    def winding_number(self, point: ArrayLike) -> float:
         """Generalised winding number of the mesh around ``point`` (1 inside a
         closed outward-wound mesh, 0 outside), by the solid angle of every face
         (Van Oosterom and Strackee)."""
@@ -250,11 +264,19 @@ class Caster:
         return float(np.sum(2.0 * np.arctan2(numerator, denominator)) / (4.0 * np.pi))
 
 
-def as_caster(caster) -> Caster:
+# What every geometry function takes as its caster.
+MeshLike: TypeAlias = Union["trimesh.Trimesh", tuple[ArrayLike, ArrayLike], Caster]  # noqa: UP007
+
+
+def as_caster(caster: MeshLike) -> Caster:
     """A :class:`Caster` from a ``Caster``, a ``trimesh.Trimesh`` (cached on the
     mesh) or a ``(vertices, faces)`` pair."""
     if isinstance(caster, Caster):
         return caster
+    if isinstance(caster, tuple | list):
+        if len(caster) == 2:
+            return Caster(caster[0], caster[1])
+        raise _not_a_caster(caster)
     cache = getattr(caster, "_cache", None)
     if cache is not None and hasattr(caster, "vertices") and hasattr(caster, "faces"):
         try:
@@ -269,11 +291,14 @@ def as_caster(caster) -> Caster:
         except (KeyError, TypeError):
             pass
         return result
-    if isinstance(caster, tuple | list) and len(caster) == 2:
-        return Caster(caster[0], caster[1])
-    raise GeometryError(
+    raise _not_a_caster(caster)
+
+
+def _not_a_caster(caster: object) -> GeometryError:
+    return GeometryError(
         "caster must be a trimesh.Trimesh, a shadowgeo Caster or a (vertices, faces) pair, "
         f"got {type(caster).__name__}"
+        + (f" of {len(caster)} items" if isinstance(caster, tuple | list) else "")
     )
 
 

@@ -29,15 +29,25 @@ import math
 import os
 import sys
 from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, TypeAlias, Union
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
 from .io.atomic import atomic_path
-from .lights import DirectionalLight, PointLight, SpotLight
+from .lights import DirectionalLight, Light, PointLight, SpotLight
 from .projection import Shadow
 from .scene.model import Scene, SceneLight, Shape, Viewpoint
+
+if TYPE_CHECKING:
+    import pyvista as pv
+
+# What plot() draws: a scene, shape, shadow or mesh, or any nesting of lists of them.
+Plottable: TypeAlias = Union[Scene, Shape, Shadow, trimesh.Trimesh, Iterable["Plottable"]]  # noqa: UP007
+# A light as plot() takes it: bare, or with its scene colour and intensity.
+AnyLight: TypeAlias = Light | SceneLight
 
 SHADOW_COLOR = (0.06, 0.06, 0.08)
 VOLUME_COLOR = (0.25, 0.45, 0.95)
@@ -52,7 +62,14 @@ VIEWS = {"iso": (1.0, 0.8, 1.2), "top": (0.0, 1.0, 0.0), "front": (0.0, 0.0, 1.0
 class _Item:
     """One mesh to draw: world vertices, faces, role and look."""
 
-    def __init__(self, vertices, faces, role: str, color=(0.8, 0.8, 0.8), opacity=1.0) -> None:
+    def __init__(
+        self,
+        vertices: ArrayLike,
+        faces: ArrayLike,
+        role: str,
+        color: Sequence[float] = (0.8, 0.8, 0.8),
+        opacity: float = 1.0,
+    ) -> None:
         self.vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
         self.faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
         self.role = role
@@ -60,7 +77,9 @@ class _Item:
         self.opacity = float(opacity)
 
 
-def _collect(things, role: str, items: list[_Item], lights: list) -> None:
+def _collect(
+    things: Plottable | None, role: str, items: list[_Item], lights: list[AnyLight]
+) -> None:
     """Flatten scenes, shapes, meshes and shadows into ``items`` and ``lights``."""
     if things is None:
         return
@@ -91,15 +110,16 @@ def _collect(things, role: str, items: list[_Item], lights: list) -> None:
         )
 
 
-def _bare(light):
+def _bare(light: AnyLight) -> Light:
     """The PointLight, SpotLight or DirectionalLight, unwrapped from a SceneLight."""
     return light.light if isinstance(light, SceneLight) else light
 
 
-def _unique_lights(lights: list) -> list:
+def _unique_lights(lights: list[AnyLight]) -> list[AnyLight]:
     """``lights`` without repeats: a scene's light and the same light carried by
     a Shadow of it are drawn and lit once (the scene's, with its colour)."""
-    seen, unique = set(), []
+    seen: set[tuple[object, ...]] = set()
+    unique: list[AnyLight] = []
     for light in sorted(lights, key=lambda light: not isinstance(light, SceneLight)):
         geometry = _bare(light)
         # Position and direction both: two spots at one place may aim different ways.
@@ -111,14 +131,14 @@ def _unique_lights(lights: list) -> list:
     return unique
 
 
-def _polydata(item: _Item):
+def _polydata(item: _Item) -> pv.PolyData:
     import pyvista as pv
 
     cells = np.column_stack([np.full(len(item.faces), 3), item.faces]).ravel()
     return pv.PolyData(item.vertices, cells)
 
 
-def _bounds(items: list[_Item], lights: list) -> tuple[np.ndarray, float]:
+def _bounds(items: list[_Item], lights: list[AnyLight]) -> tuple[np.ndarray, float]:
     """Centre and diagonal of the drawn geometry (lights excluded unless alone)."""
     points = [item.vertices for item in items if len(item.vertices)]
     if not points:
@@ -264,11 +284,12 @@ def _camera(plotter, view, center: np.ndarray, scale: float, z_up: bool, framed)
         up = np.array([0.0, 1.0, 0.0]) if z_up else np.array([0.0, 0.0, -1.0])
     plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
     frame = np.column_stack([framed.min(axis=0), framed.max(axis=0)]).ravel()
-    plotter.reset_camera(bounds=frame)
+    # pyvista's keyword-deprecation wrapper hides these signatures from mypy.
+    plotter.reset_camera(bounds=frame)  # type: ignore[call-arg]
     _fit(plotter, framed)
 
 
-def _fit(plotter, points: np.ndarray, fill: float = 0.9) -> None:
+def _fit(plotter: pv.Plotter, points: np.ndarray, fill: float = 0.9) -> None:
     """Pan and zoom so ``points`` (n, 3) fill ``fill`` of the picture
     (reset_camera fits a bounding sphere, which leaves wide margins)."""
     camera = plotter.camera
@@ -294,20 +315,20 @@ def _fit(plotter, points: np.ndarray, fill: float = 0.9) -> None:
     camera.position, camera.focal_point = tuple(position + shift), tuple(focal + shift)
     half = max(np.ptp(screen_x), np.ptp(screen_y)) / 2
     if half > 0:
-        camera.zoom(fill / half)
+        camera.zoom(fill / half)  # type: ignore[no-untyped-call]
 
 
 def scene_plotter(
-    scene_or_meshes,
+    scene_or_meshes: Plottable,
     *,
-    shadows=None,
-    volumes=None,
-    lights=True,
+    shadows: Plottable | None = None,
+    volumes: Plottable | None = None,
+    lights: bool | Iterable[AnyLight] = True,
     off_screen: bool = False,
     window_size: Sequence[int] = (1024, 768),
-    view=None,
+    view: str | ArrayLike | None = None,
     pbr: bool = False,
-):
+) -> pv.Plotter:
     """A ``pyvista.Plotter`` holding the picture :func:`plot` draws, not yet shown.
 
     Parameters are those of :func:`plot`. Use it to add to the picture or to
@@ -317,11 +338,11 @@ def scene_plotter(
     import pyvista as pv
 
     items: list[_Item] = []
-    scene_lights: list = []
+    scene_lights: list[AnyLight] = []
     _collect(scene_or_meshes, "geometry", items, scene_lights)
     _collect(shadows, "shadow", items, scene_lights)
     _collect(volumes, "volume", items, scene_lights)
-    if lights is not True and lights is not False:
+    if not isinstance(lights, bool):
         scene_lights = list(lights)
     scene_lights = _unique_lights(scene_lights)
     z_up = isinstance(scene_or_meshes, Scene) and (scene_or_meshes.up_axis or "Y").upper() == "Z"
@@ -331,8 +352,8 @@ def scene_plotter(
         # falling back to EGL; go to EGL directly (a user's own choice stands).
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     width, height = (int(v) for v in window_size)
-    plotter = pv.Plotter(off_screen=off_screen, window_size=(width, height), lighting="none")
-    plotter.set_background(BACKGROUND)
+    plotter = pv.Plotter(off_screen=off_screen, window_size=[width, height], lighting="none")
+    plotter.set_background(BACKGROUND)  # type: ignore[arg-type]
     center, scale = _bounds(items, scene_lights)
     for scene_light in scene_lights:
         plotter.add_light(_vtk_light(scene_light, center, scale))
@@ -396,17 +417,17 @@ def scene_plotter(
 
 
 def plot(
-    scene_or_meshes,
+    scene_or_meshes: Plottable,
     *,
-    shadows=None,
-    volumes=None,
-    lights=True,
+    shadows: Plottable | None = None,
+    volumes: Plottable | None = None,
+    lights: bool | Iterable[AnyLight] = True,
     off_screen: bool = False,
-    screenshot=None,
+    screenshot: str | os.PathLike[str] | None = None,
     window_size: Sequence[int] = (1024, 768),
-    view=None,
+    view: str | ArrayLike | None = None,
     pbr: bool = False,
-):
+) -> NDArray[np.uint8] | pv.Plotter:
     """Draw a scene, its shadows and shadow volumes with pyvista.
 
     Parameters
@@ -503,7 +524,7 @@ def no_display_reason() -> str | None:
     return "neither DISPLAY nor WAYLAND_DISPLAY is set"
 
 
-def _write_png(image: np.ndarray, path) -> None:
+def _write_png(image: np.ndarray, path: str | os.PathLike[str]) -> None:
     import vtk
     from vtk.util.numpy_support import numpy_to_vtk
 

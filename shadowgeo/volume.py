@@ -23,18 +23,24 @@ import math
 import numpy as np
 import trimesh
 
+from .deprecation import renamed_keyword
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, is_positional, require_light
 from .limits import check_geometry, check_length
 from .silhouette import check_light_outside, light_homogeneous
 from .tolerance import Tolerance
-from .topology import Caster, as_caster, empty_mesh
+from .topology import Caster, MeshLike, as_caster, empty_mesh
 
 
+@renamed_keyword("mesh", "caster")
 def shadow_volume(
-    mesh, light: Light, *, extent: float | None = None, tolerance: Tolerance | None = None
+    caster: MeshLike,
+    light: Light,
+    *,
+    extent: float | None = None,
+    tolerance: Tolerance | None = None,
 ) -> trimesh.Trimesh:
-    """The closed region ``mesh`` hides from ``light``, as a triangle mesh.
+    """The closed region ``caster`` hides from ``light``, as a triangle mesh.
 
     A point is inside (winding number >= 1) when the segment from it to the
     light crosses the caster and the point lies before the far cap. The
@@ -42,7 +48,7 @@ def shadow_volume(
 
     Parameters
     ----------
-    mesh : trimesh.Trimesh, Caster or (vertices, faces)
+    caster : trimesh.Trimesh, Caster or (vertices, faces)
         A closed, 2-manifold, consistently wound mesh casts from its outer
         side. Any other mesh (open, with holes, inconsistently wound, an X3D
         ``solid="false"`` surface) is treated as two-sided: every face that is
@@ -111,7 +117,7 @@ def shadow_volume(
     >>> volume.is_watertight, volume.is_winding_consistent, round(float(volume.volume), 12)
     (True, True, 2.0)
     """
-    caster = as_caster(mesh)
+    caster = as_caster(caster)
     require_light(light)
     check_geometry(caster, light)
     if extent is not None:
@@ -180,7 +186,8 @@ def _check_edge_manifold(caster: Caster) -> None:
 def _oriented_faces(caster: Caster, cap: np.ndarray, orientation: np.ndarray) -> np.ndarray:
     """(c, 3) cap faces wound to face the light (faces with orientation -1 reversed)."""
     faces = caster.faces[cap]
-    return np.where(orientation[:, None] > 0, faces, faces[:, [0, 2, 1]])
+    oriented: np.ndarray = np.where(orientation[:, None] > 0, faces, faces[:, [0, 2, 1]])
+    return oriented
 
 
 def _original_vertex(caster: Caster, cap: np.ndarray, orientation: np.ndarray) -> np.ndarray:
@@ -252,8 +259,13 @@ def _cap_corners(
 
 
 def _far_points(
-    caster: Caster, light: Light, relative: np.ndarray, faces, extent, tolerance: Tolerance
-) -> tuple[np.ndarray, dict]:
+    caster: Caster,
+    light: Light,
+    relative: np.ndarray,
+    faces: np.ndarray,
+    extent: float | None,
+    tolerance: Tolerance,
+) -> tuple[np.ndarray, dict[str, object]]:
     """Far copies of the cap vertices (in the caster's centred frame) and
     what decided the far distance."""
     if isinstance(light, DirectionalLight):

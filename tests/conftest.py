@@ -1,39 +1,35 @@
-"""Shared fixtures: where the optional outside material lives.
+"""Shared fixtures for outside material, and the rule that CI runs every test.
 
-``../shared`` (seeds, corpus, X3D schema) sits beside the repository on the
-project's machines and CI, not in a user's clone; tests that need it skip with
-a reason when it is absent. The node tools (glTF validator, X_ITE) are
-installed by ``npm ci --prefix tests/node``; tests that need them skip when
-they are not installed.
+``../shared`` (seeds, corpus) sits beside the repository on the project's
+machines and CI, not in a user's clone. The node tools (glTF validator, X_ITE)
+are installed by ``npm ci --prefix tests/node``. The X3D 4.0 schema is committed
+under ``tests/data/x3d-schema``. What is absent skips only the test or
+assertion that needs it (see ``needs.py``); with ``SHADOWGEO_REQUIRE_ALL=1``
+(set by ``.ci/run``) it fails instead, and a run in which anything skipped
+fails at the end, after printing how many tests ran.
 """
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
+from needs import REQUIRE_ALL, absent, need
 
 ROOT = Path(__file__).resolve().parents[1]
-SHARED = ROOT.parent / "shared"
-NODE_TOOLS = ROOT / "tests" / "node" / "node_modules"
+X3D_SCHEMA = ROOT / "tests" / "data" / "x3d-schema" / "x3d-4.0.xsd.gz"
 
 
 @pytest.fixture(scope="session")
 def shared_dir() -> Path:
     """``../shared``, or skip."""
-    if not SHARED.is_dir():
-        pytest.skip(f"{SHARED} is absent (it exists on the project's machines, not in a clone)")
-    return SHARED
+    return need("shared")
 
 
 @pytest.fixture(scope="session")
-def corpus_dir(shared_dir) -> Path:
+def corpus_dir() -> Path:
     """The shared corpus of real X3D scenes, or skip."""
-    corpus = shared_dir / "corpus" / "castle-demo-models"
-    if not corpus.is_dir():
-        pytest.skip(f"{corpus} is absent")
-    return corpus
+    return need("corpus")
 
 
 @pytest.fixture(scope="session")
@@ -41,24 +37,48 @@ def classic_corpus_dir(shared_dir) -> Path:
     """The shared corpus of ClassicVRML and VRML 97 scenes, or skip."""
     corpus = shared_dir / "corpus" / "castle-demo-models-classic"
     if not corpus.is_dir():
-        pytest.skip(f"{corpus} is absent")
+        absent(f"{corpus} is absent")
     return corpus
 
 
 @pytest.fixture(scope="session")
-def x3d_schema(shared_dir) -> Path:
-    """The X3D 4.0 XML Schema file, or skip."""
-    schema = shared_dir / "schemas" / "x3d" / "x3d-4.0.xsd"
-    if not schema.is_file():
-        pytest.skip(f"{schema} is absent")
-    return schema
+def x3d_schema() -> Path:
+    """The X3D 4.0 XML Schema (committed, gzipped; lxml reads it as it is)."""
+    return X3D_SCHEMA
 
 
 @pytest.fixture(scope="session")
 def node_tools() -> Path:
     """tests/node/node_modules with node on PATH, or skip."""
-    if shutil.which("node") is None:
-        pytest.skip("node is not installed")
-    if not NODE_TOOLS.is_dir():
-        pytest.skip("node tools are not installed: run npm ci --prefix tests/node")
-    return NODE_TOOLS
+    return need("gltf-validator").parent
+
+
+# -- every test ran ----------------------------------------------------------------------
+
+_skipped: list[str] = []
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    if report.skipped and not hasattr(report, "wasxfail"):
+        _skipped.append(report.nodeid)
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    if REQUIRE_ALL and _skipped and session.exitstatus == pytest.ExitCode.OK:
+        session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config) -> None:
+    stats = terminalreporter.stats
+    ran = sum(
+        1
+        for key in ("passed", "failed", "xfailed", "xpassed")
+        for report in stats.get(key, [])
+        if report.when == "call"
+    )
+    terminalreporter.write_line(f"shadowgeo: {ran} tests ran, {len(_skipped)} skipped")
+    if REQUIRE_ALL and _skipped:
+        terminalreporter.write_line(
+            "SHADOWGEO_REQUIRE_ALL=1: a skipped test fails the run: " + ", ".join(_skipped[:20]),
+            red=True,
+        )

@@ -20,13 +20,14 @@ import http.server
 import math
 import os
 import re
-import shutil
 import subprocess
 import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
+import shapely
+from needs import need
 from reference import ray_plane
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -94,17 +95,8 @@ PAGE = f"""<!DOCTYPE html>
 """
 
 
-def chromium() -> str:
-    for name in ("chromium", "chromium-browser"):
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run does)")
-
-
 def reference_shadow():
     """shapely Polygon of the box's shadow on y = 0, in (x, z)."""
-    shapely = pytest.importorskip("shapely")
     corners = np.array([[x, y, z] for x in BOX[:, 0] for y in BOX[:, 1] for z in BOX[:, 2]])
     landed = ray_plane(corners, LIGHT, np.array([0.0, 1.0, 0.0]), 0.0)
     return shapely.MultiPoint(landed[:, [0, 2]]).convex_hull
@@ -204,15 +196,11 @@ def screenshot(folder: Path, browser: str) -> np.ndarray:
 # every X3D encoding shadowgeo writes: XML, ClassicVRML, VRML 97
 @pytest.mark.parametrize("suffix", [".x3d", ".x3dv", ".wrl"])
 def test_x_ite_shows_the_baked_shadow(tmp_path, suffix):
-    browser = chromium()
-    if not (X_ITE / "x_ite.min.js").is_file():
-        pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
-    shapely = pytest.importorskip("shapely")
-
     convert(tmp_path, suffix)
     (tmp_path / "index.html").write_text(PAGE.replace("converted.x3d", f"converted{suffix}"))
+    need("x_ite")
     (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
-    image = screenshot(tmp_path, browser)
+    image = screenshot(tmp_path, str(need("chromium")))
     assert image.shape[:2] == (PIXELS, PIXELS)
 
     # Pixel centres -> world (x, z): looking down -y with screen-up = -z.
@@ -239,10 +227,6 @@ def test_x_ite_opens_a_converted_gltf_looking_at_its_shadow(tmp_path):
     """A glTF with no light of its own, converted with no flags: X_ITE opens
     the X3D at the Viewpoint shadowgeo wrote, and the default sun's shadow is
     dark where that camera, projected here by hand, puts it."""
-    browser = chromium()
-    if not (X_ITE / "x_ite.min.js").is_file():
-        pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
-    shapely = pytest.importorskip("shapely")
     import trimesh
 
     import shadowgeo as sg
@@ -261,8 +245,9 @@ def test_x_ite_opens_a_converted_gltf_looking_at_its_shadow(tmp_path):
     assert main(["convert", str(tmp_path / "scene.glb"), str(tmp_path / "converted.x3d")]) == 0
     (view,) = sg.load(tmp_path / "converted.x3d").viewpoints
     (tmp_path / "index.html").write_text(PAGE)
+    need("x_ite")
     (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
-    image = screenshot(tmp_path, browser)
+    image = screenshot(tmp_path, str(need("chromium")))
 
     # The default sun travels along (0.3, -1, 0.2): the box's corners land on y = 0.
     corners = np.array([[x, y, z] for x in BOX[:, 0] for y in BOX[:, 1] for z in BOX[:, 2]])

@@ -21,6 +21,7 @@ import shapely
 import shapely.affinity
 import trimesh
 from lxml import etree
+from needs import absent
 from reference import ray_plane
 
 import shadowgeo as sg
@@ -507,7 +508,7 @@ CLI_RUNS = {
 def test_finding_files_give_an_output_or_one_clear_error(shared_dir, tmp_path, capsys, name):
     path = shared_dir / "findings" / "robustness" / "cli" / name
     if not path.exists():
-        pytest.skip(f"{path} is absent")
+        absent(f"{path} is absent")
     how, shown = CLI_RUNS[name]
     out = tmp_path / ("out.glb" if how == "convert-sun" else "out.x3d")
     extra = {
@@ -529,7 +530,7 @@ def test_finding_files_give_an_output_or_one_clear_error(shared_dir, tmp_path, c
 def test_finding_duplicate_faces_generator(shared_dir, tmp_path, capsys):
     generator = shared_dir / "findings" / "robustness" / "cli" / "r7_dup_faces_gen.py"
     if not generator.exists():
-        pytest.skip(f"{generator} is absent")
+        absent(f"{generator} is absent")
     source = tmp_path / "copies.x3d"
     made = subprocess.run(
         [sys.executable, str(generator), "30000"], capture_output=True, text=True, check=True
@@ -560,7 +561,7 @@ def test_finding_scripts_give_a_result_or_a_geometry_error(shared_dir, tmp_path,
     folder = shared_dir / "findings" / "robustness" / "api"
     found = sorted(folder.glob(f"a{number}_*.py"))
     if not found:
-        pytest.skip(f"a{number}_*.py is absent from {folder}")
+        absent(f"a{number}_*.py is absent from {folder}")
     script = found[0]
     environment = {**os.environ, "PYTHONPATH": str(ROOT)}
     done = subprocess.run(

@@ -15,8 +15,6 @@ from shadowgeo import GeometryError, Plane
 from shadowgeo.sun import frame, hourly, sun_direction, sun_lights, sun_position
 from shadowgeo.sunstudy import sun_study, sun_study_by_day
 
-pytest.importorskip("astral", reason="the sun extra: pip install 'shadowgeo[sun]'")
-
 UTC = dt.UTC
 LONDON = dict(latitude=51.5, longitude=-0.12)
 GROUND = Plane([0, 1, 0], 0)
@@ -139,7 +137,6 @@ def test_levels_agree_with_rays_to_the_sun(equinox_study):
 
 
 def test_days_on_dask_equal_the_serial_run():
-    pytest.importorskip("dask.distributed", reason="the dask extra")
     box = _floating_box([0.0, 1.5, 0.0], [1.0, 1.0, 1.0])
     times = hourly(dt.datetime(2026, 6, 20, tzinfo=UTC), dt.datetime(2026, 6, 22, tzinfo=UTC))
     serial = sun_study_by_day(box, GROUND, PLOT, times, **LONDON)

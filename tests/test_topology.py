@@ -93,3 +93,11 @@ def test_face_normals_and_bounds_against_direct_formulas():
     expected = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     assert np.allclose(caster.face_normals, expected, rtol=0, atol=1e-15)
     assert np.allclose(caster.bounds, [mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)])
+
+
+def test_a_sequence_that_is_not_a_pair_is_refused_by_name():
+    mesh = trimesh.creation.box()
+    with pytest.raises(GeometryError, match=r"\(vertices, faces\) pair, got tuple of 3 items"):
+        as_caster((mesh.vertices, mesh.faces, mesh.faces))
+    with pytest.raises(GeometryError, match="got str"):
+        as_caster("box")

@@ -10,12 +10,10 @@ import pytest
 import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux
 from validators import usd_errors
 
 import shadowgeo as sg
-
-pxr = pytest.importorskip("pxr")
-from pxr import Gf, Sdf, Usd, UsdGeom, UsdLux  # noqa: E402
 
 
 def test_validator_flags_missing_stage_metadata(tmp_path):
@@ -406,12 +404,11 @@ def test_any_scene_round_trips_exactly(tmp_path_factory, shapes, binary):
         assert read.solid == original.solid
 
 
-def test_corpus_scenes_write_valid_gltf_and_usd(tmp_path, corpus_dir, node_tools):
+def test_corpus_scenes_write_valid_gltf_and_usd(tmp_path, corpus_dir):
     """Every real X3D scene the reader accepts writes a .glb and a .usdc that
     their validators pass and that read back with the same triangles and lights."""
     from validators import gltf_problems, gltf_reports
 
-    pytest.importorskip("shadowgeo.io.x3d_read")
     written = []
     for source in sorted(corpus_dir.rglob("*.x3d")):
         try:

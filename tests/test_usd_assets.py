@@ -7,12 +7,10 @@ import os
 import shutil
 
 import pytest
-
-import shadowgeo as sg
-
-pxr = pytest.importorskip("pxr")
+from needs import absent
 from pxr import Sdf, Usd  # noqa: E402
 
+import shadowgeo as sg
 from shadowgeo.io.usd_assets import layer_assets  # noqa: E402
 
 # Its points come from the value clip.
@@ -168,7 +166,7 @@ def test_an_asset_path_outside_the_folder_is_refused_before_usd_opens_it(tmp_pat
 def test_the_value_clip_finding_is_refused(shared_dir):
     path = shared_dir / "findings/robustness/hostile/scene/usd_valueclip_outside.usda"
     if not path.is_file():
-        pytest.skip(f"{path} is absent")
+        absent(f"{path} is absent")
     with pytest.raises(sg.SceneError) as caught:
         sg.load(path)
     message = str(caught.value)
@@ -214,7 +212,7 @@ def test_a_template_match_that_links_outside_is_refused(tmp_path, opened):
     try:
         os.symlink(outside / "secret.1.usda", scene / "clip.1.usda")
     except OSError:
-        pytest.skip("symbolic links are not available")
+        absent("symbolic links are not available")
     path = scene / "main.usda"
     path.write_text(_template("clip.#.usda"))
     with pytest.raises(sg.SceneError, match="clip.1.usda leaves the file's folder"):

@@ -10,7 +10,6 @@ import http.server
 import math
 import os
 import re
-import shutil
 import socket
 import subprocess
 import threading
@@ -19,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from lxml import etree
+from needs import need
 
 import shadowgeo as sg
 from shadowgeo.io import x3d_classic_read, x3d_fields, x3d_parse
@@ -454,11 +454,8 @@ PAGE = """<!DOCTYPE html><html><head><meta charset="utf-8">
 
 def x_ite_xml(folder: Path, names: list[str]) -> dict[str, str]:
     """X_ITE's toXMLString() of each file in ``folder``, read in headless Chromium."""
-    browser = shutil.which("chromium") or shutil.which("chromium-browser")
-    if browser is None:
-        pytest.skip("Chromium is not installed (apt-get install chromium; .ci/run does)")
-    if not (X_ITE / "x_ite.min.js").is_file():
-        pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
+    browser = str(need("chromium"))
+    need("x_ite")
     (folder / "x_ite").symlink_to(X_ITE, target_is_directory=True)
     (folder / "index.html").write_text(PAGE)
     (folder / "files.txt").write_text("\n".join(names))

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from lxml import etree
+from needs import absent, need
 from x3d_schema import x3d_schema_errors
 
 import shadowgeo as sg
@@ -245,10 +246,11 @@ def json_schema(shared_dir):
     unless the validator asserts it; we assert its two formats, ``iri`` (the
     schema location) and ``iri-reference`` (every url), with RFC 3987's
     characters: jsonschema's own checker for them needs rfc3987 (GPL)."""
-    jsonschema = pytest.importorskip("jsonschema")
+    import jsonschema
+
     path = shared_dir / "schemas" / "x3d" / "x3d-4.0-JSONSchema.json"
     if not path.is_file():
-        pytest.skip(f"{path} is absent")
+        absent(f"{path} is absent")
     schema = json.loads(path.read_text())
     validator = jsonschema.validators.validator_for(schema)
     assert validator is jsonschema.Draft202012Validator  # what the schema's $schema says
@@ -292,7 +294,7 @@ def schema_errors(validator, path: Path) -> list[str]:
 def pairs_dir(shared_dir) -> Path:
     folder = shared_dir / "corpus" / "web3d-json-pairs"
     if not folder.is_dir():
-        pytest.skip(f"{folder} is absent")
+        absent(f"{folder} is absent")
     return folder
 
 
@@ -658,6 +660,7 @@ def test_inlines_of_json_and_from_json_follow_the_xml_rules(tmp_path):
 def test_x_ite_shows_the_shadow_of_an_x3dj_output(tmp_path):
     """X_ITE loads the JSON ``shadowgeo convert`` writes and draws its baked
     shadow: the scene, server and pixel check of test_browser, in JSON."""
+    import shapely
     from test_browser import (
         BOX,
         HALF_VIEW,
@@ -665,17 +668,12 @@ def test_x_ite_shows_the_shadow_of_an_x3dj_output(tmp_path):
         PIXELS,
         SCENE,
         X_ITE,
-        chromium,
         reference_shadow,
         screenshot,
     )
 
     from cli.main import main
 
-    browser = chromium()
-    if not (X_ITE / "x_ite.min.js").is_file():
-        pytest.skip("X_ITE is not installed: run npm ci --prefix tests/node")
-    shapely = pytest.importorskip("shapely")
     (tmp_path / "scene.x3d").write_text(SCENE)
     target = tmp_path / "converted.x3dj"
     assert main(["convert", str(tmp_path / "scene.x3d"), str(target)]) == 0
@@ -683,8 +681,9 @@ def test_x_ite_shows_the_shadow_of_an_x3dj_output(tmp_path):
     (tmp_path / "index.html").write_text(
         PAGE.replace('src="converted.x3d"', 'src="converted.x3dj"')
     )
+    need("x_ite")
     (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
-    image = screenshot(tmp_path, browser)
+    image = screenshot(tmp_path, str(need("chromium")))
 
     centres = (np.arange(PIXELS) + 0.5) / PIXELS * 2 * HALF_VIEW - HALF_VIEW
     x, z = np.meshgrid(centres, centres)  # rows run along +z, columns along +x

@@ -655,22 +655,32 @@ def test_defaults_match_the_specification(node, field, value):
 # -- the corpus -----------------------------------------------------------------------
 
 
+# Corpus files with no geometry the reader models: HAnim motion, metadata, only
+# Text (skipped with a warning), a stray Coordinate, nothing but a unit.
+CORPUS_WITHOUT_GEOMETRY = {
+    "x3d/hanimmotion_containerfield.x3d", "x3d/metadata_containerfield_x3d_3.x3d",
+    "x3d/metadata_containerfield_x3d_4.x3d", "x3d/test_mfstring_quotes.x3d",
+    "x3d/warnings/backslashes.x3d", "x3d/warnings/invalid_container_field_on_use.x3d",
+    "x3d/warnings/units_invalid.x3d",
+}  # fmt: skip
+
+
 def test_corpus(corpus_dir):
-    """Every file reads or fails with a SceneError naming the file; the number of
-    rendered Shapes matches an independent count where one is easy."""
+    """Every file reads (the deliberately wrong ones with warnings), with finite,
+    in-range geometry; every file outside CORPUS_WITHOUT_GEOMETRY has some."""
     files = sorted(corpus_dir.rglob("*.x3d"))
     assert len(files) >= 20
+    empty = set()
     for path in files:
-        try:
-            scene = sg.load(path)
-        except sg.SceneError as error:
-            assert str(path) in str(error)
-            continue
+        scene = sg.load(path)
+        if not scene.shapes:
+            empty.add(path.relative_to(corpus_dir).as_posix())
         for shape in scene.shapes:
             assert shape.n_faces > 0
             assert np.all(np.isfinite(shape.world_vertices))
             assert shape.faces.min() >= 0 and shape.faces.max() < len(shape.vertices)
         assert all(isinstance(warning, str) for warning in scene.warnings)
+    assert empty == CORPUS_WITHOUT_GEOMETRY
 
 
 def test_corpus_matrix_transform_spheres(corpus_dir):

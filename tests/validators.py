@@ -12,20 +12,20 @@ through node and ``tests/node/validate_gltf.mjs``) and returns its report;
 from the spec, for tests that validate, read or break it.
 ``usd_errors(path)`` runs every validator usd-core registers
 (``pxr.UsdValidation``; ``UsdUtils.ComplianceChecker`` on usd-core older than
-24.11) and returns the errors as lines. Each skips the calling test (via
-``pytest.skip``) when its tool is not installed, never passes silently.
+24.11) and returns the errors as lines. The glTF validator skips the calling
+test at that point when it is not installed (``needs.need``: a failure under
+SHADOWGEO_REQUIRE_ALL=1), never passes silently; usd-core is a dependency.
 """
 
 from __future__ import annotations
 
 import base64
 import json
-import shutil
 import struct
 import subprocess
 from pathlib import Path
 
-import pytest
+from needs import need
 
 NODE_DIR = Path(__file__).resolve().parent / "node"
 GLTF_SCRIPT = NODE_DIR / "validate_gltf.mjs"
@@ -62,15 +62,6 @@ def one_triangle_gltf(accessor_count: int = 3) -> dict:
 GLTF_ERROR, GLTF_WARNING, GLTF_INFO, GLTF_HINT = 0, 1, 2, 3
 
 
-def _require_gltf_validator() -> str:
-    node = shutil.which("node")
-    if node is None:
-        pytest.skip("node is not installed")
-    if not (NODE_DIR / "node_modules" / "gltf-validator").is_dir():
-        pytest.skip("gltf-validator is not installed: run npm ci --prefix tests/node")
-    return node
-
-
 def gltf_report(path) -> dict:
     """The Khronos glTF validator's report on a .gltf or .glb file.
 
@@ -93,13 +84,16 @@ def gltf_report(path) -> dict:
     RuntimeError
         The validator could not run at all (the file is not glTF or GLB).
     """
+    __tracebackhide__ = True  # an absent validator is reported at the test's line
     return gltf_reports([path])[0]
 
 
 def gltf_reports(paths) -> list[dict]:
     """:func:`gltf_report` for many files in one run of node (it takes about
     half a second to start), in the order given."""
-    node = _require_gltf_validator()
+    __tracebackhide__ = True
+    need("gltf-validator")
+    node = str(need("node"))
     paths = [str(Path(path).resolve()) for path in paths]
     completed = subprocess.run(
         [node, str(GLTF_SCRIPT), *paths],
@@ -134,7 +128,6 @@ def usd_errors(path, *, warnings: bool = False) -> list[str]:
     Uses ``pxr.UsdValidation`` (a ``ValidationContext`` over every validator in
     the registry); on usd-core without it, ``UsdUtils.ComplianceChecker``.
     """
-    pytest.importorskip("pxr", reason="usd-core is not installed")
     from pxr import Usd
 
     try:
@@ -163,7 +156,7 @@ def _compliance_errors(path, *, warnings: bool) -> list[str]:
     from pxr import UsdUtils
 
     if not hasattr(UsdUtils, "ComplianceChecker"):
-        pytest.skip("this usd-core has neither UsdValidation nor UsdUtils.ComplianceChecker")
+        raise RuntimeError("this usd-core has neither UsdValidation nor UsdUtils.ComplianceChecker")
     checker = UsdUtils.ComplianceChecker()
     checker.CheckCompliance(str(path))
     lines = list(checker.GetErrors()) + list(checker.GetFailedChecks())

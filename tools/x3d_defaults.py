@@ -1,9 +1,10 @@
 """Regenerate ``shadowgeo/io/x3d_defaults.py``: field types and defaults of the
 X3D nodes the reader models, taken from the X3D 4.0 XML Schema.
 
-The schema (``../shared/schemas/x3d/x3d-4.0.xsd``) declares every field of every
-node as an attribute with its X3D type and default, inherited through
-``xs:extension`` from abstract types such as ``X3DLightNode``. The npm package
+The schema (committed gzipped as ``tests/data/x3d-schema/x3d-4.0.xsd.gz``)
+declares every field of every node as an attribute with its X3D type and
+default, inherited through ``xs:extension`` from abstract types such as
+``X3DLightNode``. The npm package
 x_ite's ``dist/X3DUOM.xml`` was meant to be the source, but the copy it ships is
 only X_ITE's extension of the object model (45 nodes, none of Transform, Box or
 the lights), so the schema is the complete reference here. Users need neither:
@@ -23,7 +24,7 @@ from pathlib import Path
 from lxml import etree
 
 ROOT = Path(__file__).resolve().parents[1]
-SCHEMA = ROOT.parent / "shared" / "schemas" / "x3d" / "x3d-4.0.xsd"
+SCHEMA = ROOT / "tests" / "data" / "x3d-schema" / "x3d-4.0.xsd.gz"
 OUTPUT = ROOT / "shadowgeo" / "io" / "x3d_defaults.py"
 XS = "{http://www.w3.org/2001/XMLSchema}"
 

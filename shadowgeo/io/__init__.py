@@ -43,7 +43,10 @@ from __future__ import annotations
 
 import importlib
 import math
+import os
 from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 
@@ -82,7 +85,7 @@ WRITERS = {
 }
 
 
-def _suffix(path) -> str:
+def _suffix(path: str | os.PathLike[str]) -> str:
     """The extension, with the one before it for gzip (``.x3dv.gz``)."""
     path = Path(path)
     if path.suffix.lower() == ".gz":
@@ -90,7 +93,7 @@ def _suffix(path) -> str:
     return path.suffix.lower()
 
 
-def _module(table: dict[str, str], path, verb: str):
+def _module(table: dict[str, str], path: str | os.PathLike[str], verb: str) -> ModuleType:
     suffix = _suffix(path)
     if suffix not in table:
         known = ", ".join(sorted(table))
@@ -167,7 +170,7 @@ def look_rotation(direction) -> np.ndarray:
     return np.eye(3) + cross + cross @ cross / (1.0 + cosine)
 
 
-def load(path, **options) -> Scene:
+def load(path: str | os.PathLike[str], **options: Any) -> Scene:
     """Read a scene from ``path``; the format comes from the extension.
 
     Raises
@@ -180,16 +183,17 @@ def load(path, **options) -> Scene:
     module = _module(READERS, path, "read")
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
-    return module.read(path, **options)
+    scene: Scene = module.read(path, **options)
+    return scene
 
 
-def check_writable(path) -> None:
+def check_writable(path: str | os.PathLike[str]) -> None:
     """SceneError, naming the known extensions, unless :func:`save` can write
     a file named ``path``: for callers that check before long work."""
     _module(WRITERS, path, "write")
 
 
-def save(scene: Scene, path, **options) -> None:
+def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
     """Write ``scene`` to ``path`` atomically; the format comes from the extension."""
     module = _module(WRITERS, path, "write")
     module.write(scene, Path(path), **options)

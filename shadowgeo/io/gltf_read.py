@@ -81,7 +81,7 @@ def _check_compression(document: dict, path: Path) -> None:
             import DracoPy  # noqa: F401  (trimesh decodes Draco through it)
         except ImportError:
             raise SceneError(
-                "KHR_draco_mesh_compression needs the DracoPy package (pip install DracoPy)",
+                'KHR_draco_mesh_compression needs DracoPy: pip install "shadowgeo[draco]"',
                 path=str(path),
             ) from None
 

@@ -13,6 +13,7 @@ never a fixed number.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -36,7 +37,7 @@ def _positive(value: float, name: str) -> float:
     return check_length(value, name)
 
 
-def box(size=(2.0, 2.0, 2.0)) -> tuple[np.ndarray, np.ndarray]:
+def box(size: Sequence[float] = (2.0, 2.0, 2.0)) -> tuple[np.ndarray, np.ndarray]:
     """X3D Box: 8 corners at ``+-size / 2``, 12 triangles.
 
     Examples

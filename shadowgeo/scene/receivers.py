@@ -26,11 +26,13 @@ shape receives on whichever side a light is on.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import GeometryError, SceneError
-from ..lights import is_positional
+from ..lights import Light, is_positional
 from ..plane import Plane
 from ..tolerance import Tolerance
 from .model import Scene, Shape, safe_name
@@ -67,7 +69,7 @@ class Receiver:
     two_sided: bool = True
     area: float = float("inf")
 
-    def facing(self, light, tolerance: Tolerance) -> Plane | None:
+    def facing(self, light: Light, tolerance: Tolerance) -> Plane | None:
         """The plane turned towards ``light``; None when the light lies in it,
         or behind a one-sided patch."""
         plane = self.plane
@@ -95,7 +97,7 @@ def patches(shape: Shape, tolerance: Tolerance) -> list[tuple[Plane, np.ndarray,
     unit = np.zeros_like(normals)
     unit[valid] = normals[valid] / doubled[valid, None]
     assigned = ~valid
-    found = []
+    found: list[tuple[Plane, np.ndarray, float]] = []
     limit = tolerance.coplanar_length
     for seed in np.argsort(-doubled, kind="stable"):
         if len(found) >= _MAX_PATCHES or assigned.all():
@@ -134,7 +136,12 @@ def ground(scene: Scene, geometry: list[Shape], notes: list[str]) -> Receiver:
 
 
 def select(
-    scene: Scene, geometry: list[Shape], names, plane, tolerance: Tolerance, notes: list[str]
+    scene: Scene,
+    geometry: list[Shape],
+    names: Sequence[str] | None,
+    plane: Plane | ArrayLike | None,
+    tolerance: Tolerance,
+    notes: list[str],
 ) -> list[Receiver]:
     """The receivers for :func:`shadowgeo.add_shadows` (see the module notes)."""
     if plane is not None:
@@ -142,7 +149,9 @@ def select(
             plane = Plane.from_coefficients(plane)
         return [Receiver(plane, "plane")]
 
-    def receiver(shape, fitted, member, area, count) -> Receiver:
+    def receiver(
+        shape: Shape, fitted: Plane, member: np.ndarray, area: float, count: int
+    ) -> Receiver:
         name = safe_name(shape.name) if shape.name else "shape"
         return Receiver(
             fitted,

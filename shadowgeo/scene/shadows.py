@@ -49,12 +49,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
+from typing import Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
-from ..lights import DirectionalLight, SpotLight, is_positional
+from ..lights import DirectionalLight, Light, SpotLight, is_positional
 from ..limits import check_coordinates, check_light
 from ..plane import Plane
 from ..projection import project_shadow
@@ -84,10 +86,10 @@ Progress = Callable[[int, int], None]
 def add_shadows(
     scene: Scene,
     *,
-    method: str = "planar",
+    method: Literal["planar", "volume"] = "planar",
     lights: Sequence[str] | None = None,
     receivers: Sequence[str] | None = None,
-    plane=None,
+    plane: Plane | ArrayLike | None = None,
     tolerance: Tolerance | float | None = None,
     offset: float | None = None,
     progress: Progress | None = None,
@@ -259,7 +261,12 @@ def default_sun(up_axis: str = "Y") -> SceneLight:
     return SceneLight(DirectionalLight(direction), name="sun", shadows=True)
 
 
-def _select_lights(scene: Scene, names, notes: list[str], extra=()) -> list[SceneLight]:
+def _select_lights(
+    scene: Scene,
+    names: Sequence[str] | None,
+    notes: list[str],
+    extra: Sequence[SceneLight] = (),
+) -> list[SceneLight]:
     extra = list(extra)
     for light in extra:
         if not isinstance(light, SceneLight):
@@ -327,7 +334,7 @@ class _Caster:
         return self._cut[key]
 
 
-def _lit(caster: _Caster, light) -> bool:
+def _lit(caster: _Caster, light: Light) -> bool:
     """False when no part of the caster is within the light's radius or, for a
     spot light, its cone (bounding box and sphere tests)."""
     if not is_positional(light):
@@ -348,7 +355,13 @@ def _lit(caster: _Caster, light) -> bool:
     return True
 
 
-def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Tolerance) -> bool:
+def _may_shadow(
+    caster: _Caster,
+    light: Light,
+    plane: Plane,
+    box2d: tuple[np.ndarray, np.ndarray] | None,
+    tolerance: Tolerance,
+) -> bool:
     """False when the caster certainly casts nothing on the receiver's box."""
     distance = plane.signed_distance(caster.vertices)
     if distance.max() <= tolerance.length:
@@ -376,7 +389,16 @@ def _may_shadow(caster: _Caster, light, plane: Plane, box2d, tolerance: Toleranc
     return bool(np.all(image2d.max(axis=0) >= low) and np.all(image2d.min(axis=0) <= high))
 
 
-def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_name, step):
+def _shadow_on(
+    receiver: Receiver,
+    scene_light: SceneLight,
+    casters: list[_Caster],
+    tolerance: Tolerance,
+    lift: float,
+    notes: list[str],
+    light_name: str,
+    step: Callable[[int], None],
+) -> Shape | None:
     """The united shadow of the casters on one receiver as a shape, or None."""
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
@@ -438,7 +460,15 @@ def _shadow_on(receiver, scene_light, casters, tolerance, lift, notes, light_nam
     )
 
 
-def _volumes(scene, geometry, chosen, tolerance, names, notes, progress) -> list[Shape]:
+def _volumes(
+    scene: Scene,
+    geometry: list[Shape],
+    chosen: list[SceneLight],
+    tolerance: Tolerance,
+    names: _Names,
+    notes: list[str],
+    progress: Progress | None,
+) -> list[Shape]:
     """Shadow volumes of every shape for every light, ending one scene size past
     the farthest corner of the scene (a sweep of twice its size for a sun)."""
     bounds = scene.bounds
