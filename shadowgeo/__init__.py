@@ -13,6 +13,7 @@ from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
+from .surface import SurfaceShadow, shadow_on_surface
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 from .viz import plot
@@ -33,6 +34,7 @@ __all__ = [
     "Shape",
     "Silhouette",
     "SpotLight",
+    "SurfaceShadow",
     "Tolerance",
     "add_shadows",
     "as_caster",
@@ -41,6 +43,7 @@ __all__ = [
     "project_shadow",
     "save",
     "shadow_matrix",
+    "shadow_on_surface",
     "shadow_volume",
     "silhouette",
 ]

@@ -1,0 +1,626 @@
+"""Shadows on every surface: the exact shadow on each face of a triangle mesh.
+
+For every face of the receiving surface that turns its front to the light, the
+shadow is the union of what every caster triangle strictly between the face
+and the light hides, clipped to the face. :func:`shadow_on_surface` computes it
+face by face, with the same clipping before the divide as
+:func:`shadowgeo.project_shadow`:
+
+1. **Index** (:mod:`shadowgeo.lightframe`): the bounding boxes of receiver
+   faces and caster triangles *seen from the light* pair each face with the
+   few triangles whose images overlap it.
+2. **Clip**: each candidate triangle is cut, in homogeneous coordinates, to
+   the region between the face and the light: the front of the face's plane
+   and the three planes joining the light to the face's edges. That region
+   holds no point with ``w <= 0`` but the light, so there are no anti-shadows
+   and no division by zero, and what survives projects inside the face.
+3. **Project and unite**: the clipped pieces are projected onto the face's
+   plane, in its own 2-D frame, and united by winding number (Clipper2 through
+   :mod:`shadowgeo.polygons`); spot cones and a light's range are applied as
+   exact 2-D intersections.
+4. **Stitch** (:mod:`shadowgeo.seams`): region corners on a face edge are
+   snapped to one parameter along that edge, shared by both faces, and every
+   such point is inserted on both sides, so the triangulated shadow has no
+   cracks or T-junctions where the surface has none.
+
+Closed casters (the light outside them) contribute their light-facing
+triangles only: every blocked ray leaves the caster through one of them last.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+import trimesh
+
+from . import polygons as poly
+from .errors import GeometryError
+from .lightframe import candidate_pairs, clip_batch, make_outline
+from .lights import Light, SpotLight, is_positional, require_light
+from .seams import stitch
+from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
+from .tolerance import Tolerance
+from .topology import Caster, as_caster
+
+# Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
+_BATCH = 200_000
+
+
+@dataclass(frozen=True)
+class SurfaceDiagnostics:
+    """What :func:`shadow_on_surface` did.
+
+    Attributes
+    ----------
+    n_surface_faces : int
+    n_lit_faces : int
+        Surface faces that turn their front to the light (and that it reaches).
+    n_caster_triangles : int
+        Caster triangles considered (for a closed caster, its light-facing ones).
+    n_candidate_pairs : int
+        (face, triangle) pairs whose images overlap seen from the light.
+    n_clipped_pairs : int
+        Those with the triangle partly strictly in front of the face: clipped
+        and projected.
+    n_shadowed_faces : int
+        Faces with a non-empty shadow.
+    n_outlined_casters : int
+        Closed casters handled by their outline seen from the light (for the
+        faces they lie wholly in front of) rather than triangle by triangle.
+    n_full_faces : int
+        Faces found wholly inside such an outline.
+    limits : tuple[str, ...]
+        ``"spot_cone"``, ``"range"``: limits of the light applied per face.
+    """
+
+    n_surface_faces: int = 0
+    n_lit_faces: int = 0
+    n_caster_triangles: int = 0
+    n_candidate_pairs: int = 0
+    n_clipped_pairs: int = 0
+    n_shadowed_faces: int = 0
+    n_outlined_casters: int = 0
+    n_full_faces: int = 0
+    limits: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class SurfaceShadow:
+    """The shadow cast on a triangle mesh.
+
+    Attributes
+    ----------
+    light : Light
+    mesh : trimesh.Trimesh
+        The shadowed parts of the light-facing faces, as triangles lying in
+        those faces (moved ``offset`` along each face's normal towards the
+        light), wound as their faces, with no overlaps. With ``offset=0`` the
+        triangles of neighbouring faces share their vertices on the shared edge.
+    face_index : (t,) int64
+        For each triangle of ``mesh``, the surface face it lies in.
+    fraction : (m,) float64
+        The shadowed fraction of every surface face: the cast shadow on faces
+        that turn their front to the light, 1.0 on faces turned away from it
+        (or edge-on). Parts of a face the light does not reach (outside a spot
+        light's cone, beyond its range) count as unshadowed, as in
+        :func:`shadowgeo.project_shadow`.
+    area : float
+        Total area of the shadow.
+    diagnostics : SurfaceDiagnostics
+    """
+
+    light: Light
+    mesh: trimesh.Trimesh
+    face_index: np.ndarray
+    fraction: np.ndarray
+    area: float
+    diagnostics: SurfaceDiagnostics
+
+    @property
+    def is_empty(self) -> bool:
+        return self.area == 0.0
+
+
+def shadow_on_surface(
+    casters,
+    light: Light,
+    surface,
+    *,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+) -> SurfaceShadow:
+    """The exact shadow that ``casters`` cast on every face of ``surface``.
+
+    Parameters
+    ----------
+    casters : mesh or list of meshes
+        Each a ``trimesh.Trimesh``, :class:`~shadowgeo.Caster` or
+        ``(vertices, faces)``. Pass ``surface`` among them for it to shadow
+        itself (a hill its valley, a torus its far side).
+    light : PointLight, SpotLight or DirectionalLight
+    surface : trimesh.Trimesh, Caster or (vertices, faces)
+        Any triangle mesh: open or closed, flat, curved or jagged. Each face's
+        winding gives its front.
+    offset : float
+        Lift of each shadow triangle along its face's normal, towards the
+        light, so that it does not z-fight the surface.
+    tolerance : Tolerance, optional
+        Defaults to ``Tolerance.for_points`` of the casters, surface and light.
+
+    Returns
+    -------
+    SurfaceShadow
+        Finite; for each light-facing face, the region hidden by caster
+        triangles strictly between the face and the light, clipped to the
+        face, triangulated without overlaps and without cracks along edges
+        the faces share.
+
+    Raises
+    ------
+    GeometryError
+        Invalid input, a positional light touching a caster or inside a
+        closed caster.
+
+    Examples
+    --------
+    A unit square on the ground, half shadowed by a wall standing on it:
+
+    >>> import numpy as np
+    >>> from shadowgeo import DirectionalLight
+    >>> ground = ([[0, 0, 0], [1, 0, 0], [1, 0, -1], [0, 0, -1]], [[0, 1, 2], [0, 2, 3]])
+    >>> wall = ([[0.5, 0, 1], [0.5, 0, -2], [0.5, 9, -2], [0.5, 9, 1]], [[0, 1, 2], [0, 2, 3]])
+    >>> shadow = shadow_on_surface(wall, DirectionalLight([1, -1, 0]), ground)
+    >>> round(shadow.area, 12), np.round(shadow.fraction, 12).tolist()
+    (0.5, [0.75, 0.25])
+    """
+    require_light(light)
+    receiver = as_caster(surface)
+    caster_list = [as_caster(caster) for caster in _as_list(casters)]
+    offset = float(offset)
+    if not math.isfinite(offset):
+        raise GeometryError(f"offset must be finite, got {offset!r}")
+    positional = is_positional(light)
+    if tolerance is None:
+        points = [c.bounds for c in caster_list if c.n_faces]
+        points += [receiver.bounds] if receiver.n_faces else []
+        points += [light.position[None]] if positional else []
+        tolerance = Tolerance.for_points(*points)
+    if positional:
+        for caster in caster_list:
+            if caster.n_faces:
+                check_light_outside(caster, light.position, tolerance)
+    return _SurfaceProjector(caster_list, light, receiver, offset, tolerance).run()
+
+
+def _as_list(casters) -> list:
+    """A single mesh as a list of one; a list of meshes as it is."""
+    if isinstance(casters, Caster) or hasattr(casters, "faces"):
+        return [casters]
+    if isinstance(casters, tuple | list) and len(casters) == 2:
+        first = casters[0]
+        if not (isinstance(first, Caster | tuple | list) or hasattr(first, "faces")):
+            return [casters]  # (vertices array, faces)
+        try:
+            array = np.asarray(first, dtype=np.float64)
+        except (TypeError, ValueError):
+            array = None
+        if array is not None and array.ndim == 2 and array.shape[1] == 3:
+            return [casters]  # (vertices as nested lists, faces)
+    if isinstance(casters, tuple | list):
+        return list(casters)
+    raise GeometryError(
+        "casters must be a mesh (trimesh.Trimesh, Caster or (vertices, faces)) or a list "
+        f"of meshes, got {type(casters).__name__}"
+    )
+
+
+class _SurfaceProjector:
+    """One call of :func:`shadow_on_surface`."""
+
+    def __init__(self, casters: list[Caster], light, surface: Caster, offset, tol) -> None:
+        self.casters = casters
+        self.light = light
+        self.surface = surface
+        self.offset = offset
+        self.tol = tol
+        self.limits: list[str] = []
+
+    def run(self) -> SurfaceShadow:
+        surface, tol, light = self.surface, self.tol, self.light
+        n_faces = surface.n_faces
+        bounds = [c.bounds for c in self.casters if c.n_faces] + [surface.bounds]
+        stacked = np.concatenate(bounds)
+        self.center = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
+        # One index per position: faces that share a corner position share an edge.
+        positions, inverse = np.unique(surface.vertices, axis=0, return_inverse=True)
+        self.vertices = positions - self.center
+        self.faces = inverse.reshape(-1)[surface.faces]
+        corners = self.vertices[self.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        length = np.linalg.norm(normals, axis=1)
+        self.face_area = 0.5 * length
+        proper = length > tol.length**2
+        unit = np.zeros_like(normals)
+        unit[proper] = normals[proper] / length[proper, None]
+        self.unit = unit
+        if is_positional(light):
+            self.light_point = light.position - self.center
+            height = np.einsum("ij,ij->i", unit, self.light_point - corners[:, 0])
+            facing = proper & (height > tol.length)
+            lit = facing & (height < light.radius)
+            if math.isfinite(light.radius):
+                self.limits.append("range")
+            self.height = height
+        else:
+            self.light_point = None
+            cosine = -(unit @ light.direction)
+            facing = proper & (cosine > tol.angle)
+            lit = facing
+            self.cosine = cosine
+        if isinstance(light, SpotLight):
+            self.limits.append("spot_cone")
+        lit_faces = np.flatnonzero(lit)
+
+        self.origin = corners.mean(axis=1)
+        self.u, self.v = _frames(unit)
+        caster_triangles, outlined = self._caster_triangles()
+        direction = None if is_positional(light) else light.direction
+        pad = 1e-9 if is_positional(light) else tol.length
+        receivers, triangles = candidate_pairs(
+            corners[lit_faces], caster_triangles, self.light_point, direction, pad
+        )
+        receivers = [lit_faces[receivers]]
+        triangles = [triangles]
+        # Closed casters wholly in front of a face: their outline, not their triangles.
+        full = np.zeros(n_faces, dtype=bool)
+        extra: dict[int, list[np.ndarray]] = {}
+        all_triangles = [caster_triangles]
+        base = len(caster_triangles)
+        for outline, front_triangles, box in outlined:
+            eligible = self._outline_faces(outline, box, corners, lit)
+            self._apply_outline(outline, np.flatnonzero(eligible), corners, full, extra)
+            others = np.flatnonzero(lit & ~eligible)
+            found, their = candidate_pairs(
+                corners[others], front_triangles, self.light_point, direction, pad
+            )
+            receivers.append(others[found])
+            triangles.append(their + base)
+            all_triangles.append(front_triangles)
+            base += len(front_triangles)
+        receivers, triangles = np.concatenate(receivers), np.concatenate(triangles)
+        caster_triangles = np.concatenate(all_triangles)
+        order = np.argsort(receivers, kind="stable")
+        receivers, triangles = receivers[order], triangles[order]
+        n_candidates = len(receivers)
+        # Only triangles with a corner strictly in front of the face's plane,
+        # and only for faces not already wholly in shadow.
+        heights = np.einsum(
+            "pkd,pd->pk",
+            caster_triangles[triangles] - corners[receivers, :1],
+            unit[receivers],
+        )
+        front = (heights.max(axis=1) > tol.length) & ~full[receivers]
+        receivers, triangles = receivers[front], triangles[front]
+
+        regions, region_faces = self._regions(
+            receivers, triangles, caster_triangles, corners, full, extra
+        )
+        points, shadow_faces, face_index = stitch(
+            self.vertices,
+            self.faces,
+            region_faces,
+            (self.origin, self.u, self.v),
+            regions,
+            tol.length,
+        )
+        mesh = self._mesh(points, shadow_faces, face_index)
+        areas = mesh.area_faces if len(shadow_faces) else np.zeros(0)
+        shadowed = np.bincount(face_index, weights=areas, minlength=n_faces)
+        fraction = np.ones(n_faces)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fraction[facing] = np.minimum(shadowed[facing] / self.face_area[facing], 1.0)
+        info = SurfaceDiagnostics(
+            n_surface_faces=n_faces,
+            n_lit_faces=len(lit_faces),
+            n_caster_triangles=len(caster_triangles),
+            n_outlined_casters=len(outlined),
+            n_full_faces=int(full.sum()),
+            n_candidate_pairs=n_candidates,
+            n_clipped_pairs=len(receivers),
+            n_shadowed_faces=len(np.unique(face_index)),
+            limits=tuple(self.limits),
+        )
+        return SurfaceShadow(light, mesh, face_index, fraction, float(areas.sum()), info)
+
+    def _caster_triangles(self):
+        """(t, 3, 3) caster triangles handled one by one, in the centred frame
+        (a closed caster's light-facing ones only), and for each closed caster
+        with an outline: (outline, its light-facing triangles, its box corners)."""
+        chunks, outlined = [], []
+        direction = None if self.light_point is not None else self.light.direction
+        for caster in self.casters:
+            if caster.n_faces == 0:
+                continue
+            faces = caster.faces
+            if caster.is_closed:
+                front = caster.facing(light_homogeneous(caster, self.light)) > 0
+                loops, _ = silhouette_loops(caster, front)
+                vertices = caster.vertices - self.center
+                outline = make_outline(
+                    vertices, loops, vertices, self.light_point, direction, self.tol.length
+                )
+                if outline is not None:
+                    low, high = caster.bounds - self.center
+                    box = np.array(
+                        [
+                            [x, y, z]
+                            for x in (low[0], high[0])
+                            for y in (low[1], high[1])
+                            for z in (low[2], high[2])
+                        ]
+                    )
+                    outlined.append((outline, vertices[faces[front]], box))
+                    continue
+                faces = faces[front]
+            chunks.append(caster.vertices[faces] - self.center)
+        if not chunks:
+            return np.zeros((0, 3, 3)), outlined
+        return np.concatenate(chunks), outlined
+
+    def _outline_faces(self, outline, box, corners, lit) -> np.ndarray:
+        """(m,) bool: lit faces that the caster lies wholly in front of (its box
+        does) and whose corners lie ahead of the light in the outline's frame."""
+        unit = self.unit
+        offsets = -np.einsum("ij,ij->i", unit, corners[:, 0])
+        in_front = (box @ unit.T + offsets).min(axis=0) > self.tol.length
+        ahead = outline.ahead(corners).min(axis=1) > self.tol.length
+        return lit & in_front & ahead
+
+    def _apply_outline(self, outline, faces, corners, full, extra) -> None:
+        """Mark faces wholly inside the outline as full; add the outline's part
+        of the others, mapped onto each face, to ``extra``."""
+        if len(faces) == 0:
+            return
+        images = outline.to_frame(corners[faces])  # (f, 3, 2)
+        low, high = np.array(outline.region.bounds[:2]), np.array(outline.region.bounds[2:])
+        near = ~np.any((images.min(axis=1) > high) | (images.max(axis=1) < low), axis=1)
+        faces, images = faces[near], images[near]
+        triangles = shapely.polygons(images)
+        covered = shapely.covers(outline.region, triangles)
+        full[faces[covered]] = True
+        touched = shapely.intersects(outline.region, triangles) & ~covered
+        for face, image in zip(faces[touched], images[touched], strict=True):
+            x, y = image[:, 0], image[:, 1]
+            if np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) < 0:
+                image = image[::-1]
+            piece = poly.intersect(outline.cross_section, poly.fill([image * outline.scale]))
+            loops = [np.asarray(loop) / outline.scale for loop in piece.to_polygons()]
+            if not loops:
+                continue
+            normal = self.unit[face]
+            offset = -float(normal @ corners[face, 0])
+            mapped = []
+            for loop in loops:
+                points = outline.onto_plane(loop, normal, offset) - self.origin[face]
+                mapped.append(np.column_stack([points @ self.u[face], points @ self.v[face]]))
+            if poly.signed_areas(mapped).sum() < 0:
+                mapped = [loop[::-1] for loop in mapped]
+            extra.setdefault(int(face), []).extend(mapped)
+
+    def _side_planes(self, faces: np.ndarray, corners: np.ndarray) -> np.ndarray:
+        """(f, 4, 4) unit half-spaces of the region between each face and the
+        light: the face's front, and the three planes joining the light to its
+        edges (the face's side of each)."""
+        triangle = corners[faces]
+        normal = self.unit[faces]
+        planes = np.empty((len(faces), 4, 4))
+        planes[:, 0, :3] = normal
+        planes[:, 0, 3] = -np.einsum("ij,ij->i", normal, triangle[:, 0])
+        for k in range(3):
+            a, b, c = triangle[:, k], triangle[:, (k + 1) % 3], triangle[:, (k + 2) % 3]
+            if self.light_point is not None:
+                side = np.cross(a - self.light_point, b - self.light_point)
+            else:
+                side = np.cross(b - a, np.broadcast_to(self.light.direction, a.shape))
+            side /= np.linalg.norm(side, axis=1, keepdims=True)
+            offset = -np.einsum("ij,ij->i", side, a)
+            sign = np.sign(np.einsum("ij,ij->i", side, c) + offset)
+            planes[:, k + 1, :3] = side * sign[:, None]
+            planes[:, k + 1, 3] = offset * sign
+        return planes
+
+    def _project(self, points: np.ndarray, faces: np.ndarray, planes: np.ndarray, origin, u, v):
+        """(n, k, 2) face-frame coordinates of clipped points (n, k, 4) of the
+        pairs' faces, projected from the light onto each face's plane."""
+        height = np.einsum("nkd,nd->nk", points, planes[:, 0])
+        position = points[:, :, :3]
+        if self.light_point is not None:
+            light_height = self.height[faces][:, None]
+            scale = light_height / (light_height - height)
+            image = self.light_point + (position - self.light_point) * scale[:, :, None]
+        else:
+            along = height / self.cosine[faces][:, None]
+            image = position + along[:, :, None] * self.light.direction
+        relative = image - origin[faces][:, None, :]
+        return np.stack(
+            [
+                np.einsum("nkd,nd->nk", relative, u[faces]),
+                np.einsum("nkd,nd->nk", relative, v[faces]),
+            ],
+            axis=2,
+        )
+
+    def _regions(self, receivers, triangles, caster_triangles, corners, full, extra):
+        """The shadow region of each face that has one: loops in the face's
+        frame, and the faces."""
+        origin, u, v = self.origin, self.u, self.v
+        flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
+        faces_with = np.unique(
+            np.concatenate([owner, np.flatnonzero(full), np.fromiter(extra, np.int64)])
+        )
+        lit = self._lit_polygons(faces_with, corners, origin, u, v)
+        starts = np.searchsorted(owner, faces_with, side="left")
+        stops = np.searchsorted(owner, faces_with, side="right")
+        regions, region_faces = [], []
+        for face, first, stop, outline in zip(faces_with, starts, stops, lit, strict=True):
+            if outline is None:
+                continue
+            disc = self._range_disc(face)
+            if full[face] and disc is None:
+                loops = [outline]
+            else:
+                extent = float(np.abs(outline).max()) * 2.0
+                scale = poly.local_scale(extent)
+                if full[face]:
+                    region = poly.fill([outline * scale])
+                else:
+                    pieces = list(flat[first:stop] * scale)
+                    pieces += [loop * scale for loop in extra.get(int(face), [])]
+                    region = poly.intersect(poly.fill(pieces), poly.fill([outline * scale]))
+                if disc is not None:
+                    region = poly.intersect(region, poly.fill([disc * scale]))
+                loops = [np.asarray(loop) / scale for loop in region.to_polygons()]
+                loops = [loop for loop in loops if len(loop) >= 3]
+            if loops:
+                regions.append(loops)
+                region_faces.append(face)
+        return regions, np.array(region_faces, dtype=np.int64)
+
+    def _pieces(self, receivers, triangles, caster_triangles, corners):
+        """Each pair's triangle clipped to the region between its face and the
+        light and projected onto the face: (n, k, 2) counter-clockwise polygons
+        in the face frames (padded by repeating the last corner), and (n,) faces,
+        sorted by face."""
+        if len(receivers) == 0:
+            return np.zeros((0, 3, 2)), np.zeros(0, np.int64)
+        shadowed = np.unique(receivers)
+        slot = np.searchsorted(shadowed, receivers)
+        planes = self._side_planes(shadowed, corners)
+        pieces: list[np.ndarray] = []
+        owners: list[np.ndarray] = []
+        for start in range(0, len(receivers), _BATCH):
+            part = slice(start, start + _BATCH)
+            faces, pair_slot = receivers[part], slot[part]
+            homogeneous = np.concatenate(
+                [caster_triangles[triangles[part]], np.ones((len(faces), 3, 1))], axis=2
+            )
+            # A triangle within a length tolerance of outside one plane casts
+            # nothing there (at most a sliver that thin): drop it unclipped.
+            sides = np.einsum("nkd,npd->nkp", homogeneous, planes[pair_slot])
+            keep = ~np.any(np.all(sides < self.tol.length, axis=1), axis=1)
+            homogeneous, faces, pair_slot = homogeneous[keep], faces[keep], pair_slot[keep]
+            clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes[pair_slot])
+            keep = counts >= 3
+            clipped, counts, faces, pair_slot = (
+                clipped[keep],
+                counts[keep],
+                faces[keep],
+                pair_slot[keep],
+            )
+            flat = self._project(clipped, faces, planes[pair_slot], self.origin, self.u, self.v)
+            # Pad each polygon with its last corner: repeated points add no edges.
+            slots = np.arange(flat.shape[1])
+            last = np.minimum(slots[None, :], counts[:, None] - 1)
+            flat = np.take_along_axis(flat, last[:, :, None], axis=1)
+            x, y = flat[:, :, 0], flat[:, :, 1]
+            area = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1)
+            flat = np.where((area < 0)[:, None, None], flat[:, ::-1], flat)
+            nonzero = area != 0
+            pieces.append(flat[nonzero])
+            owners.append(faces[nonzero])
+        width = max(p.shape[1] for p in pieces)
+        pieces = [np.pad(p, ((0, 0), (0, width - p.shape[1]), (0, 0)), mode="edge") for p in pieces]
+        return np.concatenate(pieces), np.concatenate(owners)
+
+    def _lit_polygons(self, faces, corners, origin, u, v) -> list[np.ndarray | None]:
+        """Each face's part that the light reaches, in the face's frame (the
+        whole face unless a spot cone or range limits it); None where empty."""
+        triangle = corners[faces]
+        relative = triangle - origin[faces][:, None, :]
+        flat = np.stack(
+            [
+                np.einsum("nkd,nd->nk", relative, u[faces]),
+                np.einsum("nkd,nd->nk", relative, v[faces]),
+            ],
+            axis=2,
+        )
+        planes = self._limit_planes(faces)
+        if planes is None:
+            return list(flat)
+        homogeneous = np.concatenate([triangle, np.ones((len(faces), 3, 1))], axis=2)
+        clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes)
+        out: list[np.ndarray | None] = []
+        for face, polygon, count in zip(faces, clipped, counts, strict=True):
+            if count < 3:
+                out.append(None)
+                continue
+            rel = polygon[:count, :3] - origin[face]
+            out.append(np.column_stack([rel @ u[face], rel @ v[face]]))
+        return out
+
+    def _range_disc(self, face: int) -> np.ndarray | None:
+        """The light's lit disc on a face's plane (an inscribed polygon, as
+        :func:`shadowgeo.project_shadow` makes it) in the face frame, or None
+        for a light without a range."""
+        light = self.light
+        if not (is_positional(light) and math.isfinite(light.radius)):
+            return None
+        height = self.height[face]
+        radius = math.sqrt(max(light.radius**2 - height**2, 0.0))
+        count = self.tol.segments(radius)
+        angles = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
+        foot = self.light_point - height * self.unit[face] - self.origin[face]
+        center = np.array([foot @ self.u[face], foot @ self.v[face]])
+        return center + radius * np.column_stack([np.cos(angles), np.sin(angles)])
+
+    def _limit_planes(self, faces) -> np.ndarray | None:
+        """(f, p, 4) half-spaces of the spot cone (an inscribed pyramid), or None."""
+        light, tol = self.light, self.tol
+        chunks = []
+        if isinstance(light, SpotLight):
+            axis = light.direction
+            if light.cut_off_angle >= math.pi / 2 - 1e-6:
+                planes = np.append(axis, -axis @ self.light_point)[None]
+            else:
+                count = tol.segments(tol.scale)
+                angles = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
+                side, up = _frames(axis[None])
+                radius = math.tan(light.cut_off_angle)
+                rim = axis + radius * (
+                    np.outer(np.cos(angles), side[0]) + np.outer(np.sin(angles), up[0])
+                )
+                normal = np.cross(rim, np.roll(rim, -1, axis=0))
+                normal *= np.sign(normal @ axis)[:, None]
+                planes = np.column_stack([normal, -normal @ self.light_point])
+            chunks.append(np.broadcast_to(planes, (len(faces), *planes.shape)))
+        if not chunks:
+            return None
+        return np.concatenate(chunks, axis=1)
+
+    def _mesh(self, points, faces, face_index) -> trimesh.Trimesh:
+        if len(faces) == 0:
+            return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), process=False)
+        if self.offset == 0.0:
+            used, inverse = np.unique(faces, return_inverse=True)
+            vertices = points[used] + self.center
+            return trimesh.Trimesh(vertices, inverse.reshape(-1, 3), process=False)
+        # Each face's copy of its points, moved along its own normal; coplanar
+        # faces (the same unit normal) keep sharing theirs.
+        normals, group = np.unique(self.unit[face_index], axis=0, return_inverse=True)
+        keys = faces * np.int64(len(normals)) + group.reshape(-1)[:, None]
+        used, inverse = np.unique(keys, return_inverse=True)
+        ids, groups = used // len(normals), used % len(normals)
+        vertices = points[ids] + self.offset * normals[groups] + self.center
+        return trimesh.Trimesh(vertices, inverse.reshape(-1, 3), process=False)
+
+
+def _frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3) unit ``u`` and ``v`` with ``u x v = normal`` for unit normals."""
+    axis = np.zeros_like(normals)
+    axis[np.arange(len(normals)), np.argmin(np.abs(normals), axis=1)] = 1.0
+    u = axis - np.einsum("ij,ij->i", axis, normals)[:, None] * normals
+    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
+    return u, np.cross(normals, u)
