@@ -202,7 +202,8 @@ def candidate_pairs(
         keys.append(have_mine[found[0]] * n_casters + have_theirs[found[1]])
     if not keys:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    unique = np.unique(np.concatenate(keys))
+    unique = np.sort(np.concatenate(keys))
+    unique = unique[np.append(True, unique[1:] != unique[:-1])[: len(unique)]]
     return unique // n_casters, unique % n_casters
 
 

@@ -134,45 +134,44 @@ def stitch(
     inner_points = frame_origin + flat[inner, :1] * frame_u + flat[inner, 1:] * frame_v
     points = np.concatenate([vertices, edge_points, inner_points])
 
-    # Each edge's points sorted by parameter, for the insertions.
-    edge_keys, edge_start = np.unique(cluster_key, return_index=True)
-    edge_stop = np.append(edge_start[1:], len(cluster_key))
-    by_key = {
-        int(k): (cluster_t[s:e], n_vertices + np.arange(s, e))
-        for k, s, e in zip(edge_keys, edge_start, edge_stop, strict=True)
-    }
+    # Each point's canonical parameter on its edge: the cluster's, exactly.
+    canonical = param.copy()
+    canonical[on] = np.where(a == low, cluster_t[point_cluster], 1.0 - cluster_t[point_cluster])
+    loop_of = np.repeat(np.arange(len(loop_sizes)), loop_sizes)
+    ids, loop_of, point_face, edge_of, canonical, corner = _drop_repeats(
+        loop_of, ids, point_face, edge_of, canonical, corner
+    )
+    sequence, sequence_loop = _insert_edge_points(
+        ids,
+        loop_of,
+        faces[point_face],
+        edge_of,
+        canonical,
+        corner,
+        (cluster_key, cluster_t),
+        n_vertices,
+    )
+    sequence_face = face_ids[loop_region[sequence_loop]]
+    relative = points[sequence] - origin[sequence_face]
+    flat2d = np.column_stack(
+        [
+            np.einsum("ij,ij->i", relative, u[sequence_face]),
+            np.einsum("ij,ij->i", relative, v[sequence_face]),
+        ]
+    )
+    sizes = np.bincount(sequence_loop, minlength=len(loop_sizes))
+    loop_starts = np.concatenate([[0], np.cumsum(sizes)])
+    region_loops = np.split(np.arange(len(loop_sizes)), np.cumsum([len(r) for r in regions])[:-1])
 
     triangles, owners = [], []
-    splits = np.cumsum(loop_sizes)[:-1]
-    loop_ids = np.split(ids, splits)
-    loop_edge = np.split(edge_of, splits)
-    loop_param = np.split(param, splits)
-    loop_corner = np.split(corner, splits)
-    loop_index = 0
-    for region_index, region in enumerate(regions):
-        face = int(face_ids[region_index])
-        corners_ids = faces[face]
-        loops = []
-        for _ in region:
-            loop = _with_edge_points(
-                loop_ids[loop_index],
-                loop_edge[loop_index],
-                loop_param[loop_index],
-                loop_corner[loop_index],
-                corners_ids,
-                n_vertices,
-                by_key,
-            )
-            loop_index += 1
-            if len(loop) >= 3:
-                loops.append(loop)
-        if not loops:
+    for region_index, members in enumerate(region_loops):
+        members = members[sizes[members] >= 3]
+        if len(members) == 0:
             continue
-        relative = points[np.concatenate(loops)] - origin[face]
-        flat2d = np.column_stack([relative @ u[face], relative @ v[face]])
-        pieces = np.split(flat2d, np.cumsum([len(loop) for loop in loops])[:-1])
+        pieces = [flat2d[loop_starts[m] : loop_starts[m + 1]] for m in members]
+        chain = np.concatenate([sequence[loop_starts[m] : loop_starts[m + 1]] for m in members])
         local = np.asarray(triangulate(pieces), dtype=np.int64).reshape(-1, 3)
-        found = np.concatenate(loops)[local]
+        found = chain[local]
         # A loop that touches itself names one point twice: drop the slivers
         # between its two copies.
         found = found[
@@ -182,10 +181,84 @@ def stitch(
         ]
         if len(found):
             triangles.append(found)
-            owners.append(np.full(len(found), face, dtype=np.int64))
+            owners.append(np.full(len(found), face_ids[region_index], dtype=np.int64))
     if not triangles:
         return points, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
     return points, np.concatenate(triangles), np.concatenate(owners)
+
+
+def _drop_repeats(loop_of, ids, *others):
+    """Drop each point equal to the one before it in its (cyclic) loop."""
+    count = len(ids)
+    if count == 0:
+        return (ids, loop_of, *others)
+    first = np.ones(count, dtype=bool)
+    first[1:] = loop_of[1:] != loop_of[:-1]
+    starts = np.flatnonzero(first)
+    ends = np.append(starts[1:], count) - 1
+    previous = np.arange(count) - 1
+    previous[starts] = ends
+    keep = ids != ids[previous]
+    return (ids[keep], loop_of[keep], *(other[keep] for other in others))
+
+
+def _insert_edge_points(ids, loop_of, corner_ids, edge_of, canonical, corner, clusters, n_vertices):
+    """The loops with, after each point whose segment to the next runs along a
+    face edge, the edge's shared points strictly between the two, in order.
+    Returns the new point sequence and the loop of each entry."""
+    cluster_key, cluster_t = clusters
+    count = len(ids)
+    if count == 0 or len(cluster_key) == 0:
+        return ids, loop_of
+    first = np.ones(count, dtype=bool)
+    first[1:] = loop_of[1:] != loop_of[:-1]
+    starts = np.flatnonzero(first)
+    following = np.arange(count) + 1
+    following[np.append(starts[1:], count) - 1] = starts
+    # Parameter along face edge j (corner j to j + 1) of each point on it.
+    along = np.full((count, 3), np.nan)
+    rows = np.flatnonzero(edge_of >= 0)
+    along[rows, edge_of[rows]] = canonical[rows]
+    rows = np.flatnonzero(corner >= 0)
+    along[rows, corner[rows]] = 0.0
+    along[rows, (corner[rows] - 1) % 3] = 1.0
+    shared = ~np.isnan(along) & ~np.isnan(along[following])
+    segment = np.flatnonzero(shared.any(axis=1))
+    if len(segment) == 0:
+        return ids, loop_of
+    j = np.argmax(shared[segment], axis=1)
+    a = corner_ids[segment, j]
+    b = corner_ids[segment, (j + 1) % 3]
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    forward = a == low
+    s_from, s_to = along[segment, j], along[following[segment], j]
+    t_from = np.where(forward, s_from, 1.0 - s_from)
+    t_to = np.where(forward, s_to, 1.0 - s_to)
+    # One sorted scale over all edges: rank * 4 + t (t in [0, 1]).
+    edge_keys = unique_integers(cluster_key)
+    cluster_value = np.searchsorted(edge_keys, cluster_key) * 4.0 + cluster_t
+    key = low * n_vertices + high
+    rank = np.searchsorted(edge_keys, key)
+    known = (rank < len(edge_keys)) & (edge_keys[np.minimum(rank, len(edge_keys) - 1)] == key)
+    lower = rank * 4.0 + np.minimum(t_from, t_to)
+    upper = rank * 4.0 + np.maximum(t_from, t_to)
+    first_in = np.searchsorted(cluster_value, lower, side="right")
+    stop_in = np.searchsorted(cluster_value, upper, side="left")
+    added = np.where(known, np.maximum(stop_in - first_in, 0), 0)
+    extra = np.zeros(count, dtype=np.int64)
+    extra[segment] = added
+    block = np.concatenate([[0], np.cumsum(1 + extra)])
+    sequence = np.empty(block[-1], dtype=np.int64)
+    sequence[block[:-1]] = ids
+    sequence_loop = np.repeat(loop_of, 1 + extra)
+    total = int(added.sum())
+    if total:
+        owner = np.repeat(np.arange(len(segment)), added)
+        k = np.arange(total) - np.repeat(np.cumsum(added) - added, added)
+        ascending = t_to >= t_from
+        cluster = np.where(ascending[owner], first_in[owner] + k, stop_in[owner] - 1 - k)
+        sequence[block[segment[owner]] + 1 + k] = n_vertices + cluster
+    return sequence, sequence_loop
 
 
 def _corners_2d(vertices, faces, origin, u, v, face_ids) -> np.ndarray:
@@ -199,60 +272,17 @@ def _corners_2d(vertices, faces, origin, u, v, face_ids) -> np.ndarray:
     )
 
 
-def _with_edge_points(ids, edge_of, param, corner, corner_ids, n_vertices, by_key) -> np.ndarray:
-    """A loop of point ids with the repeated ids dropped and, where it runs
-    along a face edge, the edge's other points inserted in order."""
-    keep = np.ones(len(ids), dtype=bool)
-    keep[1:] = ids[1:] != ids[:-1]
-    if len(ids) > 1 and ids[-1] == ids[0]:
-        keep[-1] = False
-    ids, edge_of, param, corner = ids[keep], edge_of[keep], param[keep], corner[keep]
-    if len(ids) < 3:
-        return ids
-    if not np.any((edge_of >= 0) | (corner >= 0)):
-        return ids
-    out = []
-    count = len(ids)
-    for i in range(count):
-        out.append(int(ids[i]))
-        k = (i + 1) % count
-        shared = _shared_edge(edge_of[i], param[i], corner[i], edge_of[k], param[k], corner[k])
-        if shared is None:
-            continue
-        j, s_from, s_to = shared
-        a, b = int(corner_ids[j]), int(corner_ids[(j + 1) % 3])
-        low, high = min(a, b), max(a, b)
-        entry = by_key.get(low * int(n_vertices) + high)
-        if entry is None:
-            continue
-        t_values, point_ids = entry
-        s_values = t_values if a == low else 1.0 - t_values
-        lo, hi = min(s_from, s_to), max(s_from, s_to)
-        between = np.flatnonzero((s_values > lo) & (s_values < hi))
-        if len(between) == 0:
-            continue
-        between = between[np.argsort(s_values[between])]
-        if s_to < s_from:
-            between = between[::-1]
-        out.extend(int(p) for p in point_ids[between] if p != ids[i] and p != ids[k])
-    return np.array(out, dtype=np.int64)
-
-
-def _edge_params(edge_of, param, corner) -> dict[int, float]:
-    """The face edges a loop point lies on, with its parameter along each."""
-    if corner >= 0:
-        return {int(corner): 0.0, int((corner - 1) % 3): 1.0}
-    if edge_of >= 0:
-        return {int(edge_of): float(param)}
-    return {}
-
-
-def _shared_edge(edge_a, param_a, corner_a, edge_b, param_b, corner_b):
-    first = _edge_params(edge_a, param_a, corner_a)
-    if not first:
-        return None
-    second = _edge_params(edge_b, param_b, corner_b)
-    for j, s in first.items():
-        if j in second:
-            return j, s, second[j]
-    return None
+def unique_integers(values: np.ndarray, return_inverse: bool = False):
+    """``np.unique`` of a 1-D integer array by one sort (numpy's hash-based
+    unique is many times slower on large arrays)."""
+    values = np.asarray(values).reshape(-1)
+    order = np.argsort(values, kind="stable")
+    ordered = values[order]
+    first = np.ones(len(ordered), dtype=bool)
+    first[1:] = ordered[1:] != ordered[:-1]
+    unique = ordered[first]
+    if not return_inverse:
+        return unique
+    inverse = np.empty(len(values), dtype=np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    return unique, inverse

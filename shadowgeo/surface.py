@@ -40,7 +40,7 @@ from . import polygons as poly
 from .errors import GeometryError
 from .lightframe import candidate_pairs, clip_batch, make_outline
 from .lights import Light, SpotLight, is_positional, require_light
-from .seams import stitch
+from .seams import stitch, unique_integers
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
@@ -235,7 +235,7 @@ class _SurfaceProjector:
         stacked = np.concatenate(bounds)
         self.center = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
         # One index per position: faces that share a corner position share an edge.
-        positions, inverse = np.unique(surface.vertices, axis=0, return_inverse=True)
+        positions, inverse = _merge_positions(surface.vertices)
         self.vertices = positions - self.center
         self.faces = inverse.reshape(-1)[surface.faces]
         corners = self.vertices[self.faces]
@@ -330,7 +330,7 @@ class _SurfaceProjector:
             n_full_faces=int(full.sum()),
             n_candidate_pairs=n_candidates,
             n_clipped_pairs=len(receivers),
-            n_shadowed_faces=len(np.unique(face_index)),
+            n_shadowed_faces=len(unique_integers(face_index)),
             limits=tuple(self.limits),
         )
         return SurfaceShadow(light, mesh, face_index, fraction, float(areas.sum()), info)
@@ -458,7 +458,7 @@ class _SurfaceProjector:
         frame, and the faces."""
         origin, u, v = self.origin, self.u, self.v
         flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
-        faces_with = np.unique(
+        faces_with = unique_integers(
             np.concatenate([owner, np.flatnonzero(full), np.fromiter(extra, np.int64)])
         )
         lit = self._lit_polygons(faces_with, corners, origin, u, v)
@@ -496,7 +496,7 @@ class _SurfaceProjector:
         sorted by face."""
         if len(receivers) == 0:
             return np.zeros((0, 3, 2)), np.zeros(0, np.int64)
-        shadowed = np.unique(receivers)
+        shadowed = unique_integers(receivers)
         slot = np.searchsorted(shadowed, receivers)
         planes = self._side_planes(shadowed, corners)
         pieces: list[np.ndarray] = []
@@ -604,17 +604,28 @@ class _SurfaceProjector:
         if len(faces) == 0:
             return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), process=False)
         if self.offset == 0.0:
-            used, inverse = np.unique(faces, return_inverse=True)
+            used, inverse = unique_integers(faces, return_inverse=True)
             vertices = points[used] + self.center
             return trimesh.Trimesh(vertices, inverse.reshape(-1, 3), process=False)
         # Each face's copy of its points, moved along its own normal; coplanar
         # faces (the same unit normal) keep sharing theirs.
         normals, group = np.unique(self.unit[face_index], axis=0, return_inverse=True)
         keys = faces * np.int64(len(normals)) + group.reshape(-1)[:, None]
-        used, inverse = np.unique(keys, return_inverse=True)
+        used, inverse = unique_integers(keys, return_inverse=True)
         ids, groups = used // len(normals), used % len(normals)
         vertices = points[ids] + self.offset * normals[groups] + self.center
         return trimesh.Trimesh(vertices, inverse.reshape(-1, 3), process=False)
+
+
+def _merge_positions(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unique vertex positions and the index of each vertex among them."""
+    order = np.lexsort(vertices.T[::-1])
+    ordered = vertices[order]
+    first = np.ones(len(ordered), dtype=bool)
+    first[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    inverse = np.empty(len(vertices), dtype=np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    return ordered[first], inverse
 
 
 def _frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
