@@ -97,8 +97,12 @@ class SurfaceShadow:
     mesh : trimesh.Trimesh
         The shadowed parts of the light-facing faces, as triangles lying in
         those faces (moved ``offset`` along each face's normal towards the
-        light), wound as their faces, with no overlaps. With ``offset=0`` the
-        triangles of neighbouring faces share their vertices on the shared edge.
+        light), wound as their faces, with no overlaps. Triangles of
+        neighbouring faces share their vertices on the shared edge. With an
+        offset, a point on an edge of two faces moves to where both faces'
+        offset planes meet; at a mesh vertex where three or more faces meet
+        at an angle, the triangles leave their offset planes by at most about
+        ``offset`` times the square of the angle between the faces.
     face_index : (t,) int64
         For each triangle of ``mesh``, the surface face it lies in.
     fraction : (m,) float64
@@ -603,18 +607,32 @@ class _SurfaceProjector:
     def _mesh(self, points, faces, face_index) -> trimesh.Trimesh:
         if len(faces) == 0:
             return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), process=False)
-        if self.offset == 0.0:
-            used, inverse = unique_integers(faces, return_inverse=True)
-            vertices = points[used] + self.center
-            return trimesh.Trimesh(vertices, inverse.reshape(-1, 3), process=False)
-        # Each face's copy of its points, moved along its own normal; coplanar
-        # faces (the same unit normal) keep sharing theirs.
-        normals, group = np.unique(self.unit[face_index], axis=0, return_inverse=True)
-        keys = faces * np.int64(len(normals)) + group.reshape(-1)[:, None]
-        used, inverse = unique_integers(keys, return_inverse=True)
-        ids, groups = used // len(normals), used % len(normals)
-        vertices = points[ids] + self.offset * normals[groups] + self.center
-        return trimesh.Trimesh(vertices, inverse.reshape(-1, 3), process=False)
+        used, inverse = unique_integers(faces, return_inverse=True)
+        vertices = points[used]
+        if self.offset != 0.0:
+            vertices = vertices + self.offset * _lift_directions(
+                inverse.reshape(-1, 3), self.unit[face_index], len(used)
+            )
+        return trimesh.Trimesh(vertices + self.center, inverse.reshape(-1, 3), process=False)
+
+
+def _lift_directions(triangles: np.ndarray, normals: np.ndarray, n_points: int) -> np.ndarray:
+    """(p, 3) the direction ``m`` to move each point by ``offset * m``: the
+    least-squares solution of ``n . m = 1`` over the unit normals of the
+    triangles that use it. A point inside one face moves along its normal; a
+    point on an edge two faces share lands on both faces' offset planes (the
+    miter), so the lifted shadow keeps its shared vertices and has no cracks;
+    at a mesh vertex of three or more faces it is the closest compromise."""
+    corners = triangles.reshape(-1)
+    each = np.repeat(normals, 3, axis=0)
+    moments = np.zeros((n_points, 3, 3))
+    np.add.at(moments, corners, each[:, :, None] * each[:, None, :])
+    sums = np.zeros((n_points, 3))
+    np.add.at(sums, corners, each)
+    direction = np.einsum("pij,pj->pi", np.linalg.pinv(moments, rcond=1e-10), sums)
+    # A sharp concave crease would push its miter far out: keep it bounded.
+    length = np.linalg.norm(direction, axis=1, keepdims=True)
+    return direction * np.minimum(1.0, 4.0 / np.maximum(length, 1e-300))
 
 
 def _merge_positions(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

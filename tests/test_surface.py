@@ -447,19 +447,25 @@ def test_flat_grid_equals_project_shadow_clipped_to_the_grid(light):
     check_seamless(shadow, floor)
 
 
-def test_offset_lifts_along_each_face_normal():
+def test_offset_lifts_along_each_face_normal_without_opening_cracks():
     ground, casters = terrain_scene()
     light = PointLight([1.0, 6.0, 0.5])
     flat = shadow_on_surface(casters, light, ground)
     lifted = shadow_on_surface(casters, light, ground, offset=0.01)
+    np.testing.assert_array_equal(lifted.face_index, flat.face_index)
+    np.testing.assert_array_equal(lifted.mesh.faces, flat.mesh.faces)  # still shared
     normals = ground.face_normals[lifted.face_index]
     corners = ground.vertices[ground.faces[lifted.face_index, 0]]
-    heights = np.einsum(
-        "ijk,ik->ij", lifted.mesh.vertices[lifted.mesh.faces] - corners[:, None], normals
-    )
-    np.testing.assert_allclose(heights, 0.01, atol=1e-9)
-    assert lifted.area == pytest.approx(flat.area, rel=1e-12)
-    np.testing.assert_array_equal(lifted.face_index, flat.face_index)
+    triangles = lifted.mesh.vertices[lifted.mesh.faces]
+    heights = np.einsum("ijk,ik->ij", triangles - corners[:, None], normals)
+    # Points inside a face or on an edge of two faces sit exactly on the offset
+    # planes; only mesh vertices of three or more faces may compromise.
+    on_plane = np.abs(heights - 0.01) < 1e-9
+    gaps = np.linalg.norm(flat.mesh.vertices[:, None] - ground.vertices[None], axis=2)
+    at_corner = gaps.min(axis=1) < 1e-12
+    assert np.all(on_plane[~at_corner[lifted.mesh.faces]])
+    assert np.all(np.abs(heights - 0.01) < 0.01 * 0.25)
+    assert lifted.area == pytest.approx(flat.area, rel=1e-2)  # lifting bends corners a little
 
 
 def test_spot_cone_and_range_limit_the_shadow():
