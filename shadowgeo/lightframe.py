@@ -98,8 +98,10 @@ def _clip_rows(points, counts, side, valid) -> tuple[np.ndarray, np.ndarray]:
     return out, counts
 
 
-def _directional_boxes(triangles: np.ndarray, direction: np.ndarray) -> list[np.ndarray]:
-    """One frame: the plane across the rays. (n, 4) boxes."""
+def _directional_boxes(
+    triangles: np.ndarray, direction: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """One frame, the plane across the rays: every triangle and its (n, 4) box."""
     axis = np.zeros(3)
     axis[int(np.argmin(np.abs(direction)))] = 1.0
     first = np.cross(direction, axis)
@@ -107,52 +109,62 @@ def _directional_boxes(triangles: np.ndarray, direction: np.ndarray) -> list[np.
     second = np.cross(direction, first)
     x = triangles @ first
     y = triangles @ second
-    return [np.column_stack([x.min(1), y.min(1), x.max(1), y.max(1)])]
+    boxes = np.column_stack([x.min(1), y.min(1), x.max(1), y.max(1)])
+    return [(np.arange(len(triangles)), boxes)]
 
 
-def _cube_boxes(triangles: np.ndarray) -> list[np.ndarray]:
-    """Six frames around a light at the origin: for each cube side, (n, 4)
-    boxes of each triangle's image (NaN where the triangle misses the side)."""
+def _cube_boxes(triangles: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Six frames around a light at the origin: for each cube side, the
+    triangles whose image reaches it and (k, 4) boxes of their images there."""
+    # Each corner's side: its largest coordinate. A triangle with all three
+    # corners on one side lies inside that side's pyramid (it is convex).
+    largest = np.argmax(np.abs(triangles), axis=2)
+    positive = np.take_along_axis(triangles, largest[:, :, None], axis=2)[:, :, 0] > 0
+    side_of = 2 * largest + np.where(positive, 0, 1)  # index into _CUBE_SIDES
+    whole = np.all(side_of == side_of[:, :1], axis=1)
+    spanning = np.flatnonzero(~whole)
     out = []
-    for axis, sign in _CUBE_SIDES:
+    for index, (axis, sign) in enumerate(_CUBE_SIDES):
         across = [a for a in range(3) if a != axis]
-        w = sign * triangles[:, :, axis]
-        x, y = triangles[:, :, across[0]], triangles[:, :, across[1]]
-        # The side's pyramid of rays: |x| <= w, |y| <= w.
-        sides = np.stack([w - x, w + x, w - y, w + y], axis=2)  # (n, 3, 4)
-        inside = np.all(sides >= 0, axis=2) & (w > 0)
-        whole = inside.all(axis=1)
-        missed = np.any(np.all(sides < 0, axis=1), axis=1)
-        boxes = np.full((len(triangles), 4), np.nan)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u, v = x / w, y / w
-        if whole.any():
-            boxes[whole] = np.column_stack(
-                [u[whole].min(1), v[whole].min(1), u[whole].max(1), v[whole].max(1)]
-            )
-        partial = np.flatnonzero(~whole & ~missed)
-        if len(partial):
-            homogeneous = np.stack([x[partial], y[partial], w[partial]], axis=2)
-            planes = np.array([[-1.0, 0, 1], [1.0, 0, 1], [0, -1.0, 1], [0, 1.0, 1]])
-            clipped, counts = clip_batch(homogeneous, np.full(len(partial), 3), planes)
-            slots = np.arange(clipped.shape[1])[None, :] < counts[:, None]
-            weight = clipped[:, :, 2]
-            # Only the light itself projects from w = 0; a box of the whole side covers it.
-            finite = slots & (weight > 0)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                cu = np.where(finite, clipped[:, :, 0] / weight, np.nan)
-                cv = np.where(finite, clipped[:, :, 1] / weight, np.nan)
-            touches_apex = np.any(slots & (weight <= 0), axis=1)
-            has = counts > 0
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows: clipped away
-                box = np.column_stack(
-                    [np.nanmin(cu, 1), np.nanmin(cv, 1), np.nanmax(cu, 1), np.nanmax(cv, 1)]
-                )
-            box[touches_apex] = [-1.0, -1.0, 1.0, 1.0]
-            boxes[partial[has]] = box[has]
-        out.append(boxes)
+        mine = np.flatnonzero(whole & (side_of[:, 0] == index))
+        chunk = triangles[mine]
+        w = sign * chunk[:, :, axis]
+        u, v = chunk[:, :, across[0]] / w, chunk[:, :, across[1]] / w
+        boxes = [np.column_stack([u.min(1), v.min(1), u.max(1), v.max(1)])]
+        members = [mine]
+        if len(spanning):
+            found, box = _clipped_boxes(triangles[spanning], axis, sign, across)
+            boxes.append(box)
+            members.append(spanning[found])
+        out.append((np.concatenate(members), np.concatenate(boxes)))
     return out
+
+
+def _clipped_boxes(triangles, axis, sign, across) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes of the triangles' images clipped to one cube side's pyramid of
+    rays ``|x| <= w, |y| <= w``: the indices that reach it, and their boxes."""
+    w = sign * triangles[:, :, axis]
+    x, y = triangles[:, :, across[0]], triangles[:, :, across[1]]
+    homogeneous = np.stack([x, y, w], axis=2)
+    planes = np.array([[-1.0, 0, 1], [1.0, 0, 1], [0, -1.0, 1], [0, 1.0, 1]])
+    clipped, counts = clip_batch(homogeneous, np.full(len(triangles), 3), planes)
+    has = np.flatnonzero(counts > 0)
+    clipped, counts = clipped[has], counts[has]
+    slots = np.arange(clipped.shape[1])[None, :] < counts[:, None]
+    weight = clipped[:, :, 2]
+    # Only the light itself projects from w = 0; a box of the whole side covers it.
+    finite = slots & (weight > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cu = np.where(finite, clipped[:, :, 0] / weight, np.nan)
+        cv = np.where(finite, clipped[:, :, 1] / weight, np.nan)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows: the apex alone
+        box = np.column_stack(
+            [np.nanmin(cu, 1), np.nanmin(cv, 1), np.nanmax(cu, 1), np.nanmax(cv, 1)]
+        )
+    touches_apex = np.any(slots & (weight <= 0), axis=1)
+    box[touches_apex] = [-1.0, -1.0, 1.0, 1.0]
+    return has, box
 
 
 def candidate_pairs(
@@ -191,14 +203,13 @@ def candidate_pairs(
         caster_boxes = _cube_boxes(casters - light_position)
     keys = []
     n_casters = np.int64(len(casters))
-    for mine, theirs in zip(receiver_boxes, caster_boxes, strict=True):
-        have_mine = np.flatnonzero(~np.isnan(mine[:, 0]))
-        have_theirs = np.flatnonzero(~np.isnan(theirs[:, 0]))
+    grow = np.array([-pad, -pad, pad, pad])
+    for (have_mine, mine), (have_theirs, theirs) in zip(receiver_boxes, caster_boxes, strict=True):
         if len(have_mine) == 0 or len(have_theirs) == 0:
             continue
-        grow = np.array([-pad, -pad, pad, pad])
-        tree = shapely.STRtree(shapely.box(*(theirs[have_theirs] + grow).T))
-        found = tree.query(shapely.box(*(mine[have_mine] + grow).T), predicate="intersects")
+        tree = shapely.STRtree(shapely.box(*(theirs + grow).T))
+        # The geometries are their own envelopes: the tree's box test is the whole test.
+        found = tree.query(shapely.box(*(mine + grow).T))
         keys.append(have_mine[found[0]] * n_casters + have_theirs[found[1]])
     if not keys:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
