@@ -445,6 +445,10 @@ def test_flat_grid_equals_project_shadow_clipped_to_the_grid(light):
     theirs = shapely.union_all([shapely.Polygon(t[:, [0, 2]]) for t in planar.mesh.triangles])
     assert ours.symmetric_difference(theirs).area < 1e-9 * planar.area
     check_seamless(shadow, floor)
+    # The sphere and box went by their outlines, covering some faces whole.
+    assert shadow.diagnostics.n_outlined_casters == 2
+    if isinstance(light, PointLight):
+        assert shadow.diagnostics.n_full_faces > 0
 
 
 def test_offset_lifts_along_each_face_normal_without_opening_cracks():
@@ -466,6 +470,22 @@ def test_offset_lifts_along_each_face_normal_without_opening_cracks():
     assert np.all(on_plane[~at_corner[lifted.mesh.faces]])
     assert np.all(np.abs(heights - 0.01) < 0.01 * 0.25)
     assert lifted.area == pytest.approx(flat.area, rel=1e-2)  # lifting bends corners a little
+
+
+@pytest.mark.parametrize("shift, scale", [(1e6, 1.0), (0.0, 1e-3), (-3e4, 1e3)])
+def test_moving_or_scaling_the_scene_changes_nothing(shift, scale):
+    ground, casters = terrain_scene()
+    light = PointLight([1.0, 6.0, 0.5])
+    reference = shadow_on_surface(casters, light, ground)
+
+    def moved(mesh):
+        return trimesh.Trimesh(mesh.vertices * scale + shift, mesh.faces, process=False)
+
+    ground2 = moved(ground)
+    casters2 = [ground2, *(moved(c) for c in casters[1:])]
+    shadow = shadow_on_surface(casters2, PointLight(light.position * scale + shift), ground2)
+    assert shadow.area == pytest.approx(reference.area * scale**2, rel=1e-8)
+    np.testing.assert_allclose(shadow.fraction, reference.fraction, atol=1e-8)
 
 
 def test_spot_cone_and_range_limit_the_shadow():
