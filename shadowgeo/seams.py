@@ -21,6 +21,8 @@ from __future__ import annotations
 import numpy as np
 from manifold3d import triangulate
 
+from .polygons import MAX_COORDINATE
+
 
 def stitch(
     vertices: np.ndarray,
@@ -160,31 +162,38 @@ def stitch(
         ]
     )
     sizes = np.bincount(sequence_loop, minlength=len(loop_sizes))
-    loop_starts = np.concatenate([[0], np.cumsum(sizes)])
-    region_loops = np.split(np.arange(len(loop_sizes)), np.cumsum([len(r) for r in regions])[:-1])
-
-    triangles, owners = [], []
-    for region_index, members in enumerate(region_loops):
-        members = members[sizes[members] >= 3]
-        if len(members) == 0:
-            continue
-        pieces = [flat2d[loop_starts[m] : loop_starts[m + 1]] for m in members]
-        chain = np.concatenate([sequence[loop_starts[m] : loop_starts[m + 1]] for m in members])
-        local = np.asarray(triangulate(pieces), dtype=np.int64).reshape(-1, 3)
-        found = chain[local]
-        # A loop that touches itself names one point twice: drop the slivers
-        # between its two copies.
-        found = found[
-            (found[:, 0] != found[:, 1])
-            & (found[:, 1] != found[:, 2])
-            & (found[:, 2] != found[:, 0])
-        ]
-        if len(found):
-            triangles.append(found)
-            owners.append(np.full(len(found), face_ids[region_index], dtype=np.int64))
-    if not triangles:
+    keep = sizes[sequence_loop] >= 3
+    sequence, sequence_loop, flat2d = sequence[keep], sequence_loop[keep], flat2d[keep]
+    if len(sequence) == 0:
         return points, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
-    return points, np.concatenate(triangles), np.concatenate(owners)
+    # Every region triangulated in one call: each in its own cell of one
+    # column (an affine stretch, which keeps a valid triangulation valid).
+    region_of = loop_region[sequence_loop]
+    n_regions = len(regions)
+    cell = 2.0 * MAX_COORDINATE / n_regions
+    low = np.full((n_regions, 2), np.inf)
+    high = np.full((n_regions, 2), -np.inf)
+    np.minimum.at(low, region_of, flat2d)
+    np.maximum.at(high, region_of, flat2d)
+    unused = np.isinf(low[:, 0])  # every loop of the region dropped
+    low[unused], high[unused] = 0.0, 0.0
+    middle = 0.5 * (low + high)
+    reach = np.maximum(0.5 * (high - low).max(axis=1), 1e-300)
+    stretch = np.column_stack([0.5 * MAX_COORDINATE / reach, 0.25 * cell / reach])
+    centre = np.column_stack(
+        [np.zeros(n_regions), -MAX_COORDINATE + cell * (np.arange(n_regions) + 0.5)]
+    )
+    tiled = (flat2d - middle[region_of]) * stretch[region_of] + centre[region_of]
+    bounds = np.flatnonzero(np.diff(sequence_loop)) + 1
+    local = np.asarray(triangulate(np.split(tiled, bounds)), dtype=np.int64).reshape(-1, 3)
+    found = sequence[local]
+    owners = face_ids[region_of[local[:, 0]]]
+    # A loop that touches itself names one point twice: drop the slivers
+    # between its two copies.
+    proper = (
+        (found[:, 0] != found[:, 1]) & (found[:, 1] != found[:, 2]) & (found[:, 2] != found[:, 0])
+    )
+    return points, found[proper], owners[proper]
 
 
 def _drop_repeats(loop_of, ids, *others):
