@@ -13,7 +13,8 @@ The scene: a hilly terrain (a 100 x 100 grid, 20,000 faces) under an icosphere
 * the peer for the *sphere's planar shadow alone* on the terrain's mean plane,
   as benchmarks/bench_planar.py times it: manifold3d's perspective ``warp`` and
   ``project()`` (mesh ingested once), and with the ingest;
-* ``shadowgeo.project_shadow`` of the sphere on that plane, for scale.
+* ``shadow_on_surface`` with the sphere alone as caster (no self-shadowing),
+  and ``shadowgeo.project_shadow`` of the sphere on that plane, for scale.
 
 The ratio column divides each time by manifold3d's warp + project measured in
 the same run. A flat-grid row checks the result against ``project_shadow``
@@ -89,6 +90,10 @@ def comparison(quick: bool, repeat: int) -> list[dict]:
                 lambda light=light: shadow_on_surface([ground, ball], light, ground),
             ),
             (
+                "shadowgeo shadow_on_surface (sphere alone on the terrain)",
+                lambda light=light: shadow_on_surface(ball, light, ground),
+            ),
+            (
                 "shadowgeo project_shadow (sphere on the plane)",
                 lambda light=light: project_shadow(ball, light, GROUND),
             ),
@@ -119,7 +124,7 @@ def comparison(quick: bool, repeat: int) -> list[dict]:
         for method, function in entries:
             seconds, _ = median_time(function, repeat)
             rows.append({"light": name, "method": method, "seconds": seconds})
-        rows[-4]["detail"] = (
+        rows[-5]["detail"] = (
             f"{shadow.diagnostics.n_shadowed_faces:,} faces shadowed, "
             f"{shadow.diagnostics.n_full_faces:,} wholly; "
             f"{shadow.diagnostics.n_clipped_pairs:,} triangle pairs clipped"

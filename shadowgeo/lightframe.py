@@ -12,6 +12,9 @@ The triangles are clipped to each cube side in homogeneous coordinates by
 :func:`clip_batch`, a Sutherland-Hodgman clipper that works on many convex
 polygons at once; :mod:`shadowgeo.surface` uses the same clipper to cut
 casters to the slab between a face and the light.
+
+:class:`Outline` is a closed caster's silhouette in such a frame, computed
+once per light: its shadow on every face wholly behind it.
 """
 
 from __future__ import annotations

@@ -16,7 +16,8 @@ face by face, with the same clipping before the divide as
    and no division by zero, and what survives projects inside the face.
 3. **Project and unite**: the clipped pieces are projected onto the face's
    plane, in its own 2-D frame, and united by winding number (Clipper2 through
-   :mod:`shadowgeo.polygons`); spot cones and a light's range are applied as
+   :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
+   own cell of one plane); spot cones and a light's range are applied as
    exact 2-D intersections.
 4. **Stitch** (:mod:`shadowgeo.seams`): region corners on a face edge are
    snapped to one parameter along that edge, shared by both faces, and every
@@ -25,6 +26,16 @@ face by face, with the same clipping before the divide as
 
 Closed casters (the light outside them) contribute their light-facing
 triangles only: every blocked ray leaves the caster through one of them last.
+A closed caster wholly in front of a face needs no triangles at all: its
+silhouette, projected once into the light's frame
+(:class:`shadowgeo.lightframe.Outline`), is cut to the face's image there and
+mapped back; faces wholly inside it are shadowed whole.
+
+Cost: the index is O((F + T) log(F + T)) for F surface faces and T caster
+triangles; the clipping is linear in the candidate pairs, about F times the
+number of caster triangles whose images overlap one face's (for a surface
+shadowing itself, its neighbours); the union and the stitching are linear in
+the size of the shadow's outline.
 """
 
 from __future__ import annotations
@@ -233,8 +244,46 @@ class _SurfaceProjector:
         self.limits: list[str] = []
 
     def run(self) -> SurfaceShadow:
+        corners, facing, lit = self._faces()
+        receivers, triangles, caster_triangles, full, extra, counts = self._pairs(corners, lit)
+        regions, region_faces = self._regions(
+            receivers, triangles, caster_triangles, corners, full, extra
+        )
+        points, shadow_faces, face_index = stitch(
+            self.vertices,
+            self.faces,
+            region_faces,
+            (self.origin, self.u, self.v),
+            regions,
+            self.tol.length,
+        )
+        mesh = self._mesh(points, shadow_faces, face_index)
+        # Areas from the triangles in their faces, before any lift.
+        flat = points[shadow_faces]
+        areas = 0.5 * np.linalg.norm(
+            np.cross(flat[:, 1] - flat[:, 0], flat[:, 2] - flat[:, 0]), axis=1
+        )
+        n_faces = self.surface.n_faces
+        shadowed = np.bincount(face_index, weights=areas, minlength=n_faces)
+        fraction = np.ones(n_faces)
+        fraction[facing] = np.minimum(shadowed[facing] / self.face_area[facing], 1.0)
+        info = SurfaceDiagnostics(
+            n_surface_faces=n_faces,
+            n_lit_faces=int(lit.sum()),
+            n_caster_triangles=len(caster_triangles),
+            n_candidate_pairs=counts[0],
+            n_clipped_pairs=len(receivers),
+            n_shadowed_faces=len(unique_integers(face_index)),
+            n_outlined_casters=counts[1],
+            n_full_faces=int(full.sum()),
+            limits=tuple(self.limits),
+        )
+        return SurfaceShadow(self.light, mesh, face_index, fraction, float(areas.sum()), info)
+
+    def _faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The surface in the centred frame, with vertices merged by position:
+        (m, 3, 3) corners, the faces turned to the light, and those it reaches."""
         surface, tol, light = self.surface, self.tol, self.light
-        n_faces = surface.n_faces
         bounds = [c.bounds for c in self.casters if c.n_faces] + [surface.bounds]
         stacked = np.concatenate(bounds)
         self.center = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
@@ -260,16 +309,21 @@ class _SurfaceProjector:
             self.height = height
         else:
             self.light_point = None
-            cosine = -(unit @ light.direction)
-            facing = proper & (cosine > tol.angle)
+            self.cosine = -(unit @ light.direction)
+            facing = proper & (self.cosine > tol.angle)
             lit = facing
-            self.cosine = cosine
         if isinstance(light, SpotLight):
             self.limits.append("spot_cone")
-        lit_faces = np.flatnonzero(lit)
-
         self.origin = corners.mean(axis=1)
         self.u, self.v = _frames(unit)
+        return corners, facing, lit
+
+    def _pairs(self, corners, lit):
+        """(face, caster triangle) pairs to clip, sorted by face; the caster
+        triangles; faces wholly inside an outline; outline parts per face;
+        and (candidate pairs, outlined casters) counts."""
+        tol, light = self.tol, self.light
+        lit_faces = np.flatnonzero(lit)
         caster_triangles, outlined = self._caster_triangles()
         direction = None if is_positional(light) else light.direction
         pad = 1e-9 if is_positional(light) else tol.length
@@ -279,7 +333,7 @@ class _SurfaceProjector:
         receivers = [lit_faces[receivers]]
         triangles = [triangles]
         # Closed casters wholly in front of a face: their outline, not their triangles.
-        full = np.zeros(n_faces, dtype=bool)
+        full = np.zeros(len(corners), dtype=bool)
         extra: dict[int, list[np.ndarray]] = {}
         all_triangles = [caster_triangles]
         base = len(caster_triangles)
@@ -304,40 +358,11 @@ class _SurfaceProjector:
         heights = np.einsum(
             "pkd,pd->pk",
             caster_triangles[triangles] - corners[receivers, :1],
-            unit[receivers],
+            self.unit[receivers],
         )
         front = (heights.max(axis=1) > tol.length) & ~full[receivers]
-        receivers, triangles = receivers[front], triangles[front]
-
-        regions, region_faces = self._regions(
-            receivers, triangles, caster_triangles, corners, full, extra
-        )
-        points, shadow_faces, face_index = stitch(
-            self.vertices,
-            self.faces,
-            region_faces,
-            (self.origin, self.u, self.v),
-            regions,
-            tol.length,
-        )
-        mesh = self._mesh(points, shadow_faces, face_index)
-        areas = mesh.area_faces if len(shadow_faces) else np.zeros(0)
-        shadowed = np.bincount(face_index, weights=areas, minlength=n_faces)
-        fraction = np.ones(n_faces)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            fraction[facing] = np.minimum(shadowed[facing] / self.face_area[facing], 1.0)
-        info = SurfaceDiagnostics(
-            n_surface_faces=n_faces,
-            n_lit_faces=len(lit_faces),
-            n_caster_triangles=len(caster_triangles),
-            n_outlined_casters=len(outlined),
-            n_full_faces=int(full.sum()),
-            n_candidate_pairs=n_candidates,
-            n_clipped_pairs=len(receivers),
-            n_shadowed_faces=len(unique_integers(face_index)),
-            limits=tuple(self.limits),
-        )
-        return SurfaceShadow(light, mesh, face_index, fraction, float(areas.sum()), info)
+        counts = (n_candidates, len(outlined))
+        return receivers[front], triangles[front], caster_triangles, full, extra, counts
 
     def _caster_triangles(self):
         """(t, 3, 3) caster triangles handled one by one, in the centred frame

@@ -469,7 +469,7 @@ def test_offset_lifts_along_each_face_normal_without_opening_cracks():
     at_corner = gaps.min(axis=1) < 1e-12
     assert np.all(on_plane[~at_corner[lifted.mesh.faces]])
     assert np.all(np.abs(heights - 0.01) < 0.01 * 0.25)
-    assert lifted.area == pytest.approx(flat.area, rel=1e-2)  # lifting bends corners a little
+    assert lifted.area == pytest.approx(flat.area, rel=1e-12)  # measured in the faces
 
 
 @pytest.mark.parametrize("shift, scale", [(1e6, 1.0), (0.0, 1e-3), (-3e4, 1e3)])
