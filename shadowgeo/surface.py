@@ -52,7 +52,7 @@ from .errors import GeometryError
 from .lightframe import candidate_pairs, clip_batch, make_outline
 from .lights import Light, SpotLight, is_positional, require_light
 from .seams import stitch, unique_integers
-from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
+from .silhouette import chain, check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
 from .topology import Caster, as_caster
 
@@ -394,6 +394,10 @@ class _SurfaceProjector:
                     outlined.append((outline, vertices[faces[front]], box))
                     continue
                 faces = faces[front]
+            elif caster is self.surface and _single_sheet(caster):
+                # Seen from the surface itself, a blocked ray enters the sheet's
+                # back side first, through a face turned away from the light.
+                faces = faces[caster.facing(light_homogeneous(caster, self.light)) <= 0]
             chunks.append(caster.vertices[faces] - self.center)
         if not chunks:
             return np.zeros((0, 3, 3)), outlined
@@ -715,6 +719,58 @@ def _lift_directions(triangles: np.ndarray, normals: np.ndarray, n_points: int) 
     # A sharp concave crease would push its miter far out: keep it bounded.
     length = np.linalg.norm(direction, axis=1, keepdims=True)
     return direction * np.minimum(1.0, 4.0 / np.maximum(length, 1e-300))
+
+
+def _single_sheet(caster: Caster) -> bool:
+    """True for an open mesh that is one sheet over a convex region: every
+    face turns to one direction ``up`` and the border is a single loop that
+    runs once around a convex region, seen along ``up``. ``up`` is tried as
+    the world axis nearest the mean normal (a terrain's), then that normal.
+
+    Then every line along ``up`` meets the sheet at most once, so it splits the
+    space over the region into a front and a back side; a ray from a point of
+    the sheet, leaving on its front side, can only reach the back side by
+    crossing a face from front to back -- one turned away from the ray's end.
+    """
+    if caster.is_closed or caster.n_faces < 2 or np.any(caster.edge_face_count > 2):
+        return False
+    normals = caster.face_normals
+    mean = normals.sum(axis=0)
+    if not np.linalg.norm(mean) > 0:
+        return False
+    border = caster.edge_face_count[caster.face_edges] == 1  # (m, 3) face edges
+    face, corner = np.nonzero(border)
+    try:
+        loops = chain(caster.faces[face, corner], caster.faces[face, (corner + 1) % 3])
+    except GeometryError:
+        return False
+    if len(loops) != 1:
+        return False
+    axis = np.zeros(3)
+    axis[int(np.argmax(np.abs(mean)))] = np.sign(mean[int(np.argmax(np.abs(mean)))])
+    points = caster.vertices[loops[0]]
+    return any(_sheet_along(up, normals, points) for up in (axis, mean / np.linalg.norm(mean)))
+
+
+def _sheet_along(up: np.ndarray, normals: np.ndarray, border: np.ndarray) -> bool:
+    """Every face turns to ``up`` and the border loop, seen along ``up``, turns
+    left or goes straight on at every corner and winds once."""
+    length = np.linalg.norm(normals, axis=1)
+    proper = length > 0
+    if np.any(normals[proper] @ up <= 1e-9 * length[proper]):
+        return False
+    first, second = _frames(up[None])
+    flat = np.column_stack([border @ first[0], border @ second[0]])
+    steps = np.roll(flat, -1, axis=0) - flat
+    following = np.roll(steps, -1, axis=0)
+    turn = steps[:, 0] * following[:, 1] - steps[:, 1] * following[:, 0]
+    ahead = np.einsum("ij,ij->i", steps, following)
+    scale = np.linalg.norm(steps, axis=1) * np.linalg.norm(following, axis=1)
+    if np.any(scale == 0):
+        return False
+    if np.any(turn < -1e-12 * scale) or np.any((np.abs(turn) <= 1e-12 * scale) & (ahead <= 0)):
+        return False
+    return bool(abs(np.arctan2(turn, ahead).sum() - 2 * np.pi) < 1e-6)
 
 
 def _merge_positions(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

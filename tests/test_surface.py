@@ -368,6 +368,23 @@ def test_low_sun_long_shadows_and_hills_shadowing_valleys():
     check_seamless(shadow, ground)
 
 
+def test_l_shaped_terrain_under_a_low_sun():
+    """A sheet over a region that is not convex: rays may pass under its
+    border and meet it from below, so every face of it may cast."""
+    full = heightfield(seed=5, n=10, half=3.0)
+    centres = full.triangles_center
+    keep = ~((centres[:, 0] > 0) & (centres[:, 2] > 0))
+    ground = trimesh.Trimesh(full.vertices, full.faces[keep], process=False)
+    ground.remove_unreferenced_vertices()
+    casters = [ground, box([1.5, 1.0, -1.5], [0.6, 1.2, 0.6])]
+    light = DirectionalLight([-0.8, -0.35, -0.9])
+    shadow = shadow_on_surface(casters, light, ground)
+    assert shadow.area > 0
+    check_against_textbook(shadow, ground, casters, light, 9.0)
+    check_rays(shadow, ground, casters, light, 2000, 7, 9.0)
+    check_seamless(shadow, ground)
+
+
 def test_post_piercing_the_ground():
     ground = grid(6, 3.0)
     post = box([0.2, 0.5, 0.1], [0.4, 3.0, 0.4])  # from y = -1 to 2
