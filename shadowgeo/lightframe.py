@@ -170,6 +170,74 @@ def _clipped_boxes(triangles, axis, sign, across) -> tuple[np.ndarray, np.ndarra
     return has, box
 
 
+def overlapping_boxes(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(i, j) index arrays of every box ``first[i]`` that overlaps ``second[j]``;
+    boxes are (n, 4) ``(xmin, ymin, xmax, ymax)``.
+
+    Two sets of very different sizes (a terrain against a few hundred caster
+    triangles) go through a uniform grid in numpy; similar sizes through
+    shapely's STRtree, whose cost is mostly making one box geometry per box.
+    """
+    if 8 * min(len(first), len(second)) < max(len(first), len(second)):
+        return _grid_pairs(first, second)
+    tree = shapely.STRtree(shapely.box(*second.T))
+    # The geometries are their own envelopes: the tree's box test is the whole test.
+    found = tree.query(shapely.box(*first.T))
+    return found[0], found[1]
+
+
+def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every (i, j) with box ``first[i]`` overlapping box ``second[j]``, by a
+    uniform grid with cells twice a typical box: each box is listed in the
+    cells it covers, boxes sharing a cell are paired, and the pairs are checked
+    and made unique. Boxes covering very many cells meet every other box."""
+    sizes = np.concatenate([first[:, 2:] - first[:, :2], second[:, 2:] - second[:, :2]])
+    low = np.minimum(first[:, :2].min(axis=0), second[:, :2].min(axis=0))
+    high = np.maximum(first[:, 2:].max(axis=0), second[:, 2:].max(axis=0))
+    cell = np.maximum(np.median(sizes, axis=0) * 2.0, (high - low) / 4096)
+    cell = np.maximum(cell, 1e-300)
+    columns = int(np.ceil((high[0] - low[0]) / cell[0])) + 1
+
+    def cells(boxes):
+        start = np.floor((boxes[:, :2] - low) / cell).astype(np.int64)
+        stop = np.floor((boxes[:, 2:] - low) / cell).astype(np.int64)
+        span = stop - start + 1
+        count = span[:, 0] * span[:, 1]
+        big = count > 64
+        ids = np.flatnonzero(~big)
+        count = count[ids]
+        owner = np.repeat(ids, count)
+        k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+        width = span[owner, 0]
+        return (
+            owner,
+            (start[owner, 1] + k // width) * columns + start[owner, 0] + k % width,
+            np.flatnonzero(big),
+        )
+
+    owner_a, cell_a, big_a = cells(first)
+    owner_b, cell_b, big_b = cells(second)
+    order = np.argsort(cell_b, kind="stable")
+    owner_b, cell_b = owner_b[order], cell_b[order]
+    begin = np.searchsorted(cell_b, cell_a, side="left")
+    count = np.searchsorted(cell_b, cell_a, side="right") - begin
+    i = np.repeat(owner_a, count)
+    k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    j = owner_b[np.repeat(begin, count) + k]
+    i = np.concatenate(
+        [i, np.repeat(big_a, len(second)), np.tile(np.arange(len(first)), len(big_b))]
+    )
+    j = np.concatenate(
+        [j, np.tile(np.arange(len(second)), len(big_a)), np.repeat(big_b, len(first))]
+    )
+    overlap = np.all(first[i, :2] <= second[j, 2:], axis=1) & np.all(
+        second[j, :2] <= first[i, 2:], axis=1
+    )
+    key = np.sort(i[overlap] * np.int64(len(second)) + j[overlap])
+    key = key[np.append(True, key[1:] != key[:-1])[: len(key)]]
+    return key // len(second), key % len(second)
+
+
 def candidate_pairs(
     receivers: np.ndarray,
     casters: np.ndarray,
@@ -210,9 +278,7 @@ def candidate_pairs(
     for (have_mine, mine), (have_theirs, theirs) in zip(receiver_boxes, caster_boxes, strict=True):
         if len(have_mine) == 0 or len(have_theirs) == 0:
             continue
-        tree = shapely.STRtree(shapely.box(*(theirs + grow).T))
-        # The geometries are their own envelopes: the tree's box test is the whole test.
-        found = tree.query(shapely.box(*(mine + grow).T))
+        found = overlapping_boxes(mine + grow, theirs + grow)
         keys.append(have_mine[found[0]] * n_casters + have_theirs[found[1]])
     if not keys:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
