@@ -338,16 +338,17 @@ class Outline:
         depth = relative @ self.axis
         return np.stack([relative @ self.first / depth, relative @ self.second / depth], axis=-1)
 
-    def onto_plane(self, flat: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
-        """(n, 2) frame points to (n, 3) points where their rays meet the plane
-        ``normal . x + offset = 0``."""
+    def onto_planes(self, flat: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """(n, 2) frame points to (n, 3) points where their rays meet the planes
+        ``normals[i] . x + offsets[i] = 0``, one plane per point."""
         if self.light_point is None:
             base = np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
-            along = -(base @ normal + offset) / (self.direction @ normal)
-            return base + along[:, None] * self.direction
+            height = np.einsum("ij,ij->i", base, normals) + offsets
+            return base - (height / (normals @ self.direction))[:, None] * self.direction
         rays = self.axis + np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
-        height = self.light_point @ normal + offset
-        return self.light_point + rays * (-height / (rays @ normal))[:, None]
+        height = normals @ self.light_point + offsets
+        along = -height / np.einsum("ij,ij->i", rays, normals)
+        return self.light_point + rays * along[:, None]
 
 
 def make_outline(

@@ -337,8 +337,8 @@ class _SurfaceProjector:
         extra: dict[int, list[np.ndarray]] = {}
         all_triangles = [caster_triangles]
         base = len(caster_triangles)
-        for outline, front_triangles, box in outlined:
-            eligible = self._outline_faces(outline, box, corners, lit)
+        for outline, front_triangles, bound in outlined:
+            eligible = self._outline_faces(outline, bound, corners, lit)
             self._apply_outline(outline, np.flatnonzero(eligible), corners, full, extra)
             others = np.flatnonzero(lit & ~eligible)
             found, their = candidate_pairs(
@@ -367,7 +367,8 @@ class _SurfaceProjector:
     def _caster_triangles(self):
         """(t, 3, 3) caster triangles handled one by one, in the centred frame
         (a closed caster's light-facing ones only), and for each closed caster
-        with an outline: (outline, its light-facing triangles, its box corners)."""
+        with an outline: (outline, its light-facing triangles, (its box corners,
+        bounding ball centre, radius)))."""
         chunks, outlined = [], []
         direction = None if self.light_point is not None else self.light.direction
         for caster in self.casters:
@@ -391,7 +392,9 @@ class _SurfaceProjector:
                             for z in (low[2], high[2])
                         ]
                     )
-                    outlined.append((outline, vertices[faces[front]], box))
+                    centre = 0.5 * (low + high)
+                    radius = float(np.linalg.norm(vertices - centre, axis=1).max())
+                    outlined.append((outline, vertices[faces[front]], (box, centre, radius)))
                     continue
                 faces = faces[front]
             elif caster is self.surface and _single_sheet(caster):
@@ -403,12 +406,15 @@ class _SurfaceProjector:
             return np.zeros((0, 3, 3)), outlined
         return np.concatenate(chunks), outlined
 
-    def _outline_faces(self, outline, box, corners, lit) -> np.ndarray:
+    def _outline_faces(self, outline, bound, corners, lit) -> np.ndarray:
         """(m,) bool: lit faces that the caster lies wholly in front of (its box
-        does) and whose corners lie ahead of the light in the outline's frame."""
+        or its bounding ball does) and whose corners lie ahead of the light in
+        the outline's frame."""
+        box, centre, radius = bound
         unit = self.unit
         offsets = -np.einsum("ij,ij->i", unit, corners[:, 0])
         in_front = (box @ unit.T + offsets).min(axis=0) > self.tol.length
+        in_front |= unit @ centre + offsets - radius > self.tol.length
         ahead = outline.ahead(corners).min(axis=1) > self.tol.length
         return lit & in_front & ahead
 
@@ -425,23 +431,36 @@ class _SurfaceProjector:
         covered = shapely.covers(outline.region, triangles)
         full[faces[covered]] = True
         touched = shapely.intersects(outline.region, triangles) & ~covered
-        for face, image in zip(faces[touched], images[touched], strict=True):
-            x, y = image[:, 0], image[:, 1]
-            if np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) < 0:
-                image = image[::-1]
+        faces, images = faces[touched], images[touched]
+        if len(faces) == 0:
+            return
+        x, y = images[:, :, 0], images[:, :, 1]
+        # The map from the frame back to a face keeps or flips orientation as
+        # the face's image does (the face runs counter-clockwise in its frame).
+        flips = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
+        images = np.where(flips[:, None, None], images[:, ::-1], images)
+        loops, owners = [], []
+        for k, image in enumerate(images):
             piece = poly.intersect(outline.cross_section, poly.fill([image * outline.scale]))
-            loops = [np.asarray(loop) / outline.scale for loop in piece.to_polygons()]
-            if not loops:
-                continue
-            normal = self.unit[face]
-            offset = -float(normal @ corners[face, 0])
-            mapped = []
-            for loop in loops:
-                points = outline.onto_plane(loop, normal, offset) - self.origin[face]
-                mapped.append(np.column_stack([points @ self.u[face], points @ self.v[face]]))
-            if poly.signed_areas(mapped).sum() < 0:
-                mapped = [loop[::-1] for loop in mapped]
-            extra.setdefault(int(face), []).extend(mapped)
+            for loop in piece.to_polygons():
+                loops.append(np.asarray(loop) / outline.scale)
+                owners.append(k)
+        if not loops:
+            return
+        sizes = np.array([len(loop) for loop in loops])
+        point_face = faces[np.repeat(owners, sizes)]
+        normal = self.unit[point_face]
+        offset = -np.einsum("ij,ij->i", normal, corners[point_face, 0])
+        points = outline.onto_planes(np.concatenate(loops), normal, offset)
+        points -= self.origin[point_face]
+        flat = np.column_stack(
+            [
+                np.einsum("ij,ij->i", points, self.u[point_face]),
+                np.einsum("ij,ij->i", points, self.v[point_face]),
+            ]
+        )
+        for k, loop in zip(owners, np.split(flat, np.cumsum(sizes)[:-1]), strict=True):
+            extra.setdefault(int(faces[k]), []).append(loop[::-1] if flips[k] else loop)
 
     def _side_planes(self, faces: np.ndarray, corners: np.ndarray) -> np.ndarray:
         """(f, 4, 4) unit half-spaces of the region between each face and the
