@@ -330,6 +330,22 @@ class Outline:
             return np.full(points.shape[:-1], np.inf)
         return (points - self.light_point) @ self.axis
 
+    def may_reach(self, triangles: np.ndarray) -> np.ndarray:
+        """(n,) bool for (n, 3, 3) triangles: False where the caster surely
+        casts nothing on it -- the triangle lies ahead of the light and its
+        image misses the outline's box (the caster's image lies in it)."""
+        if len(triangles) == 0:
+            return np.zeros(0, dtype=bool)
+        ahead = self.ahead(triangles).min(axis=1) > 0
+        out = np.ones(len(triangles), dtype=bool)
+        if not ahead.any():
+            return out
+        images = self.to_frame(triangles[ahead])
+        low, high = np.array(self.region.bounds[:2]), np.array(self.region.bounds[2:])
+        misses = np.any((images.min(axis=1) > high) | (images.max(axis=1) < low), axis=1)
+        out[np.flatnonzero(ahead)[misses]] = False
+        return out
+
     def to_frame(self, points: np.ndarray) -> np.ndarray:
         """(..., 3) points to (..., 2) frame coordinates (their rays)."""
         if self.light_point is None:

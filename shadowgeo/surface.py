@@ -341,6 +341,7 @@ class _SurfaceProjector:
             eligible = self._outline_faces(outline, bound, corners, lit)
             self._apply_outline(outline, np.flatnonzero(eligible), corners, full, extra)
             others = np.flatnonzero(lit & ~eligible)
+            others = others[outline.may_reach(corners[others])]
             found, their = candidate_pairs(
                 corners[others], front_triangles, self.light_point, direction, pad
             )
