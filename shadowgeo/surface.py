@@ -49,7 +49,7 @@ import trimesh
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lightframe import candidate_pairs, clip_batch, make_outline
+from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min, make_outline
 from .lights import Light, SpotLight, is_positional, require_light
 from .seams import stitch, unique_integers
 from .silhouette import chain, check_light_outside, light_homogeneous, silhouette_loops
@@ -314,7 +314,7 @@ class _SurfaceProjector:
             lit = facing
         if isinstance(light, SpotLight):
             self.limits.append("spot_cone")
-        self.origin = corners.mean(axis=1)
+        self.origin = (corners[:, 0] + corners[:, 1] + corners[:, 2]) / 3.0
         self.u, self.v = _frames(unit)
         return corners, facing, lit
 
@@ -361,7 +361,7 @@ class _SurfaceProjector:
             caster_triangles[triangles] - corners[receivers, :1],
             self.unit[receivers],
         )
-        front = (heights.max(axis=1) > tol.length) & ~full[receivers]
+        front = (corner_max(heights) > tol.length) & ~full[receivers]
         counts = (n_candidates, len(outlined))
         return receivers[front], triangles[front], caster_triangles, full, extra, counts
 
@@ -414,9 +414,9 @@ class _SurfaceProjector:
         box, centre, radius = bound
         unit = self.unit
         offsets = -np.einsum("ij,ij->i", unit, corners[:, 0])
-        in_front = (box @ unit.T + offsets).min(axis=0) > self.tol.length
+        in_front = np.minimum.reduce(box @ unit.T + offsets) > self.tol.length
         in_front |= unit @ centre + offsets - radius > self.tol.length
-        ahead = outline.ahead(corners).min(axis=1) > self.tol.length
+        ahead = corner_min(outline.ahead(corners)) > self.tol.length
         return lit & in_front & ahead
 
     def _apply_outline(self, outline, faces, corners, full, extra) -> None:
@@ -426,7 +426,7 @@ class _SurfaceProjector:
             return
         images = outline.to_frame(corners[faces])  # (f, 3, 2)
         low, high = np.array(outline.region.bounds[:2]), np.array(outline.region.bounds[2:])
-        near = ~np.any((images.min(axis=1) > high) | (images.max(axis=1) < low), axis=1)
+        near = ~np.any((corner_min(images) > high) | (corner_max(images) < low), axis=1)
         faces, images = faces[near], images[near]
         triangles = shapely.polygons(images)
         covered = shapely.covers(outline.region, triangles)
