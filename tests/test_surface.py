@@ -385,6 +385,24 @@ def test_l_shaped_terrain_under_a_low_sun():
     check_seamless(shadow, ground)
 
 
+def test_single_sheet_is_recognised_only_where_it_holds():
+    from shadowgeo.sheets import single_sheet
+    from shadowgeo.topology import as_caster
+
+    assert single_sheet(as_caster(heightfield()))
+    assert single_sheet(as_caster(stairs()))  # a graph along a slanted direction
+    full = grid(6, 1.0)
+    keep = ~((full.triangles_center[:, 0] > 0) & (full.triangles_center[:, 2] > 0))
+    assert not single_sheet(as_caster((full.vertices, full.faces[keep])))  # L-shaped
+    assert not single_sheet(as_caster(sphere([0, 0, 0], 1.0)))  # closed
+    # A sheet folded back over itself: its upper layer lies above its lower one.
+    fold = grid(6, 1.0)
+    bent = fold.vertices.copy()
+    bent[:, 1] = np.where(fold.vertices[:, 0] > 0, 0.5, 0.0)
+    bent[:, 0] = -np.abs(fold.vertices[:, 0])
+    assert not single_sheet(as_caster((bent, fold.faces)))
+
+
 def test_post_piercing_the_ground():
     ground = grid(6, 3.0)
     post = box([0.2, 0.5, 0.1], [0.4, 3.0, 0.4])  # from y = -1 to 2
