@@ -15,6 +15,7 @@ from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
 from .sun import sun_direction
 from .sunstudy import SunStudies, SunStudy, sun_study, sun_study_by_day
+from .surface import SurfaceShadow, shadow_on_surface
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
 from .viz import plot
@@ -39,6 +40,7 @@ __all__ = [
     "SpotLight",
     "SunStudies",
     "SunStudy",
+    "SurfaceShadow",
     "Tolerance",
     "Viewpoint",
     "add_shadows",
@@ -48,6 +50,7 @@ __all__ = [
     "project_shadow",
     "save",
     "shadow_matrix",
+    "shadow_on_surface",
     "shadow_volume",
     "silhouette",
     "sun_direction",

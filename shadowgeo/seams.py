@@ -1,0 +1,297 @@
+"""Seamless triangulation of per-face regions on a triangle mesh.
+
+Each receiver face's shadow region is computed in that face's own 2-D frame,
+so the point where a shadow edge crosses a mesh edge comes out a few units in
+the last place apart from the two faces' sides. :func:`stitch` makes the two
+sides agree exactly:
+
+1. region corners within ``eps`` of a face corner become that mesh vertex;
+   those within ``eps`` of a face edge become a point of that edge, given by
+   one parameter along the edge from its lower vertex index to its higher one;
+2. the parameters found on an edge, from both faces, are merged where they
+   lie within ``eps`` of each other, and each cluster gets one 3-D point;
+3. where a region's boundary runs along an edge, every point of that edge
+   between its two ends is inserted, so neither side leaves a T-junction.
+
+The regions are then triangulated with those shared points, face by face.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from manifold3d import triangulate
+
+from .polygons import MAX_COORDINATE
+
+
+def stitch(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    face_ids: np.ndarray,
+    frames: tuple[np.ndarray, np.ndarray, np.ndarray],
+    regions: list[list[np.ndarray]],
+    eps: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triangulate regions given per face so shared edges split identically.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+        Mesh vertices, merged (one index per position).
+    faces : (m, 3) int64
+        Mesh faces, wound counter-clockwise about their frame normal.
+    face_ids : (r,) int64
+        The face of each region.
+    frames : three (m, 3) float64
+        Each face's frame: origin, ``u``, ``v`` (``u x v`` its normal).
+    regions : list of r lists of (k, 2) float64
+        Each region's loops in its face's frame (outer loops counter-clockwise,
+        holes clockwise), lying in the face.
+    eps : float
+        Distance below which a point is on an edge or two points are one.
+
+    Returns
+    -------
+    points : (p, 3) float64
+        Mesh vertices first, then edge points, then interior points.
+    triangles : (t, 3) int64
+        Into ``points``, counter-clockwise about their face's normal.
+    face_index : (t,) int64
+        The face each triangle lies in.
+    """
+    origin, u, v = frames
+    if not regions:
+        return vertices.copy(), np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
+    loop_sizes = np.array([len(loop) for region in regions for loop in region], dtype=np.int64)
+    loop_region = np.repeat(np.arange(len(regions)), [len(region) for region in regions])
+    flat = np.concatenate([loop for region in regions for loop in region])
+    point_face = np.repeat(face_ids[loop_region], loop_sizes)
+    corners = _corners_2d(vertices, faces, origin, u, v, face_ids)  # (r, 3, 2)
+    point_corners = np.repeat(corners[loop_region], loop_sizes, axis=0)  # (P, 3, 2)
+
+    # Distance of each point to each face edge j (corner j to j + 1), inside positive.
+    start = point_corners
+    edge = np.roll(point_corners, -1, axis=1) - start
+    length = np.linalg.norm(edge, axis=2)
+    relative = flat[:, None, :] - start
+    distance = (edge[..., 0] * relative[..., 1] - edge[..., 1] * relative[..., 0]) / length
+    on_edge = np.abs(distance) <= eps
+    along = np.einsum("pjk,pjk->pj", relative, edge) / length**2
+
+    n_points = len(flat)
+    edge_of = np.full(n_points, -1, dtype=np.int64)
+    param = np.zeros(n_points)
+    # A face corner first: near two edge lines is not enough in a sliver.
+    corner_distance = np.linalg.norm(flat[:, None, :] - point_corners, axis=2)
+    nearest_corner = np.argmin(corner_distance, axis=1)
+    at_corner = corner_distance[np.arange(n_points), nearest_corner] <= eps
+    corner = np.where(at_corner, nearest_corner, -1)
+    inside = (along > 0) & (along < 1)
+    closeness = np.where(on_edge & inside, np.abs(distance), np.inf)
+    nearest_edge = np.argmin(closeness, axis=1)
+    one = np.flatnonzero(~at_corner & np.isfinite(closeness.min(axis=1)))
+    edge_of[one] = nearest_edge[one]
+    param[one] = along[one, nearest_edge[one]]
+
+    face_vertices = faces[point_face]  # (P, 3)
+    n_vertices = np.int64(len(vertices))
+    ids = np.full(n_points, -1, dtype=np.int64)
+    is_corner = corner >= 0
+    ids[is_corner] = face_vertices[is_corner, corner[is_corner]]
+
+    # Edge points: one canonical parameter per cluster, from the lower index.
+    on = np.flatnonzero(edge_of >= 0)
+    j = edge_of[on]
+    a = face_vertices[on, j]
+    b = face_vertices[on, (j + 1) % 3]
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    t = np.where(a == low, param[on], 1.0 - param[on])
+    key = low * n_vertices + high
+    order = np.lexsort((t, key))
+    key_sorted, t_sorted = key[order], t[order]
+    span = np.linalg.norm(vertices[high] - vertices[low], axis=1)[order]
+    new = np.ones(len(order), dtype=bool)
+    new[1:] = (key_sorted[1:] != key_sorted[:-1]) | (
+        (t_sorted[1:] - t_sorted[:-1]) * span[1:] > eps
+    )
+    cluster = np.cumsum(new) - 1
+    cluster_t = t_sorted[new]
+    cluster_key = key_sorted[new]
+    cluster_low, cluster_high = cluster_key // n_vertices, cluster_key % n_vertices
+    edge_points = vertices[cluster_low] + cluster_t[:, None] * (
+        vertices[cluster_high] - vertices[cluster_low]
+    )
+    point_cluster = np.empty(len(on), dtype=np.int64)
+    point_cluster[order] = cluster
+    ids[on] = n_vertices + point_cluster
+
+    inner = np.flatnonzero(ids < 0)
+    base = n_vertices + len(cluster_t)
+    ids[inner] = base + np.arange(len(inner))
+    frame_origin, frame_u, frame_v = (
+        origin[point_face[inner]],
+        u[point_face[inner]],
+        v[point_face[inner]],
+    )
+    inner_points = frame_origin + flat[inner, :1] * frame_u + flat[inner, 1:] * frame_v
+    points = np.concatenate([vertices, edge_points, inner_points])
+
+    # Each point's canonical parameter on its edge: the cluster's, exactly.
+    canonical = param.copy()
+    canonical[on] = np.where(a == low, cluster_t[point_cluster], 1.0 - cluster_t[point_cluster])
+    loop_of = np.repeat(np.arange(len(loop_sizes)), loop_sizes)
+    ids, loop_of, point_face, edge_of, canonical, corner = _drop_repeats(
+        loop_of, ids, point_face, edge_of, canonical, corner
+    )
+    sequence, sequence_loop = _insert_edge_points(
+        ids,
+        loop_of,
+        faces[point_face],
+        edge_of,
+        canonical,
+        corner,
+        (cluster_key, cluster_t),
+        n_vertices,
+    )
+    sequence_face = face_ids[loop_region[sequence_loop]]
+    relative = points[sequence] - origin[sequence_face]
+    flat2d = np.column_stack(
+        [
+            np.einsum("ij,ij->i", relative, u[sequence_face]),
+            np.einsum("ij,ij->i", relative, v[sequence_face]),
+        ]
+    )
+    sizes = np.bincount(sequence_loop, minlength=len(loop_sizes))
+    keep = sizes[sequence_loop] >= 3
+    sequence, sequence_loop, flat2d = sequence[keep], sequence_loop[keep], flat2d[keep]
+    if len(sequence) == 0:
+        return points, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
+    # Every region triangulated in one call: each in its own cell of one
+    # column (an affine stretch, which keeps a valid triangulation valid).
+    region_of = loop_region[sequence_loop]
+    n_regions = len(regions)
+    cell = 2.0 * MAX_COORDINATE / n_regions
+    low = np.full((n_regions, 2), np.inf)
+    high = np.full((n_regions, 2), -np.inf)
+    np.minimum.at(low, region_of, flat2d)
+    np.maximum.at(high, region_of, flat2d)
+    unused = np.isinf(low[:, 0])  # every loop of the region dropped
+    low[unused], high[unused] = 0.0, 0.0
+    middle = 0.5 * (low + high)
+    reach = np.maximum(0.5 * (high - low).max(axis=1), 1e-300)
+    stretch = np.column_stack([0.5 * MAX_COORDINATE / reach, 0.25 * cell / reach])
+    centre = np.column_stack(
+        [np.zeros(n_regions), -MAX_COORDINATE + cell * (np.arange(n_regions) + 0.5)]
+    )
+    tiled = (flat2d - middle[region_of]) * stretch[region_of] + centre[region_of]
+    bounds = np.flatnonzero(np.diff(sequence_loop)) + 1
+    local = np.asarray(triangulate(np.split(tiled, bounds)), dtype=np.int64).reshape(-1, 3)
+    found = sequence[local]
+    owners = face_ids[region_of[local[:, 0]]]
+    # A loop that touches itself names one point twice: drop the slivers
+    # between its two copies.
+    proper = (
+        (found[:, 0] != found[:, 1]) & (found[:, 1] != found[:, 2]) & (found[:, 2] != found[:, 0])
+    )
+    return points, found[proper], owners[proper]
+
+
+def _drop_repeats(loop_of, ids, *others):
+    """Drop each point equal to the one before it in its (cyclic) loop."""
+    count = len(ids)
+    if count == 0:
+        return (ids, loop_of, *others)
+    first = np.ones(count, dtype=bool)
+    first[1:] = loop_of[1:] != loop_of[:-1]
+    starts = np.flatnonzero(first)
+    ends = np.append(starts[1:], count) - 1
+    previous = np.arange(count) - 1
+    previous[starts] = ends
+    keep = ids != ids[previous]
+    return (ids[keep], loop_of[keep], *(other[keep] for other in others))
+
+
+def _insert_edge_points(ids, loop_of, corner_ids, edge_of, canonical, corner, clusters, n_vertices):
+    """The loops with, after each point whose segment to the next runs along a
+    face edge, the edge's shared points strictly between the two, in order.
+    Returns the new point sequence and the loop of each entry."""
+    cluster_key, cluster_t = clusters
+    count = len(ids)
+    if count == 0 or len(cluster_key) == 0:
+        return ids, loop_of
+    first = np.ones(count, dtype=bool)
+    first[1:] = loop_of[1:] != loop_of[:-1]
+    starts = np.flatnonzero(first)
+    following = np.arange(count) + 1
+    following[np.append(starts[1:], count) - 1] = starts
+    # Parameter along face edge j (corner j to j + 1) of each point on it.
+    along = np.full((count, 3), np.nan)
+    rows = np.flatnonzero(edge_of >= 0)
+    along[rows, edge_of[rows]] = canonical[rows]
+    rows = np.flatnonzero(corner >= 0)
+    along[rows, corner[rows]] = 0.0
+    along[rows, (corner[rows] - 1) % 3] = 1.0
+    shared = ~np.isnan(along) & ~np.isnan(along[following])
+    segment = np.flatnonzero(shared.any(axis=1))
+    if len(segment) == 0:
+        return ids, loop_of
+    j = np.argmax(shared[segment], axis=1)
+    a = corner_ids[segment, j]
+    b = corner_ids[segment, (j + 1) % 3]
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    forward = a == low
+    s_from, s_to = along[segment, j], along[following[segment], j]
+    t_from = np.where(forward, s_from, 1.0 - s_from)
+    t_to = np.where(forward, s_to, 1.0 - s_to)
+    # One sorted scale over all edges: rank * 4 + t (t in [0, 1]).
+    edge_keys = unique_integers(cluster_key)
+    cluster_value = np.searchsorted(edge_keys, cluster_key) * 4.0 + cluster_t
+    key = low * n_vertices + high
+    rank = np.searchsorted(edge_keys, key)
+    known = (rank < len(edge_keys)) & (edge_keys[np.minimum(rank, len(edge_keys) - 1)] == key)
+    lower = rank * 4.0 + np.minimum(t_from, t_to)
+    upper = rank * 4.0 + np.maximum(t_from, t_to)
+    first_in = np.searchsorted(cluster_value, lower, side="right")
+    stop_in = np.searchsorted(cluster_value, upper, side="left")
+    added = np.where(known, np.maximum(stop_in - first_in, 0), 0)
+    extra = np.zeros(count, dtype=np.int64)
+    extra[segment] = added
+    block = np.concatenate([[0], np.cumsum(1 + extra)])
+    sequence = np.empty(block[-1], dtype=np.int64)
+    sequence[block[:-1]] = ids
+    sequence_loop = np.repeat(loop_of, 1 + extra)
+    total = int(added.sum())
+    if total:
+        owner = np.repeat(np.arange(len(segment)), added)
+        k = np.arange(total) - np.repeat(np.cumsum(added) - added, added)
+        ascending = t_to >= t_from
+        cluster = np.where(ascending[owner], first_in[owner] + k, stop_in[owner] - 1 - k)
+        sequence[block[segment[owner]] + 1 + k] = n_vertices + cluster
+    return sequence, sequence_loop
+
+
+def _corners_2d(vertices, faces, origin, u, v, face_ids) -> np.ndarray:
+    corners = vertices[faces[face_ids]] - origin[face_ids][:, None, :]
+    return np.stack(
+        [
+            np.einsum("rkd,rd->rk", corners, u[face_ids]),
+            np.einsum("rkd,rd->rk", corners, v[face_ids]),
+        ],
+        axis=2,
+    )
+
+
+def unique_integers(values: np.ndarray, return_inverse: bool = False):
+    """``np.unique`` of a 1-D integer array by one sort (numpy's hash-based
+    unique is many times slower on large arrays)."""
+    values = np.asarray(values).reshape(-1)
+    order = np.argsort(values, kind="stable")
+    ordered = values[order]
+    first = np.ones(len(ordered), dtype=bool)
+    first[1:] = ordered[1:] != ordered[:-1]
+    unique = ordered[first]
+    if not return_inverse:
+        return unique
+    inverse = np.empty(len(values), dtype=np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    return unique, inverse

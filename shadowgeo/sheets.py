@@ -1,0 +1,110 @@
+"""Mesh helpers for shadows on a surface: its shape, not its shadows.
+
+* :func:`merge_positions` -- one index per vertex position, so faces that
+  share a corner position share their edge;
+* :func:`face_frames` -- an in-plane basis for every face;
+* :func:`single_sheet` -- whether an open mesh is one sheet over a convex
+  region, which lets a surface shadow itself through its faces turned away
+  from the light only;
+* :func:`lift_directions` -- how to move shadow points off the surface so
+  that neighbouring faces' lifted shadows still meet.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import GeometryError
+from .silhouette import chain
+from .topology import Caster
+
+
+def lift_directions(triangles: np.ndarray, normals: np.ndarray, n_points: int) -> np.ndarray:
+    """(p, 3) the direction ``m`` to move each point by ``offset * m``: the
+    least-squares solution of ``n . m = 1`` over the unit normals of the
+    triangles that use it. A point inside one face moves along its normal; a
+    point on an edge two faces share lands on both faces' offset planes (the
+    miter), so the lifted shadow keeps its shared vertices and has no cracks;
+    at a mesh vertex of three or more faces it is the closest compromise."""
+    corners = triangles.reshape(-1)
+    each = np.repeat(normals, 3, axis=0)
+    moments = np.zeros((n_points, 3, 3))
+    np.add.at(moments, corners, each[:, :, None] * each[:, None, :])
+    sums = np.zeros((n_points, 3))
+    np.add.at(sums, corners, each)
+    direction = np.einsum("pij,pj->pi", np.linalg.pinv(moments, rcond=1e-10), sums)
+    # A sharp concave crease would push its miter far out: keep it bounded.
+    length = np.linalg.norm(direction, axis=1, keepdims=True)
+    return direction * np.minimum(1.0, 4.0 / np.maximum(length, 1e-300))
+
+
+def single_sheet(caster: Caster) -> bool:
+    """True for an open mesh that is one sheet over a convex region: every
+    face turns to one direction ``up`` and the border is a single loop that
+    runs once around a convex region, seen along ``up``. ``up`` is tried as
+    the world axis nearest the mean normal (a terrain's), then that normal.
+
+    Then every line along ``up`` meets the sheet at most once, so it splits the
+    space over the region into a front and a back side; a ray from a point of
+    the sheet, leaving on its front side, can only reach the back side by
+    crossing a face from front to back -- one turned away from the ray's end.
+    """
+    if caster.is_closed or caster.n_faces < 2 or np.any(caster.edge_face_count > 2):
+        return False
+    normals = caster.face_normals
+    mean = normals.sum(axis=0)
+    if not np.linalg.norm(mean) > 0:
+        return False
+    border = caster.edge_face_count[caster.face_edges] == 1  # (m, 3) face edges
+    face, corner = np.nonzero(border)
+    try:
+        loops = chain(caster.faces[face, corner], caster.faces[face, (corner + 1) % 3])
+    except GeometryError:
+        return False
+    if len(loops) != 1:
+        return False
+    axis = np.zeros(3)
+    axis[int(np.argmax(np.abs(mean)))] = np.sign(mean[int(np.argmax(np.abs(mean)))])
+    points = caster.vertices[loops[0]]
+    return any(_sheet_along(up, normals, points) for up in (axis, mean / np.linalg.norm(mean)))
+
+
+def _sheet_along(up: np.ndarray, normals: np.ndarray, border: np.ndarray) -> bool:
+    """Every face turns to ``up`` and the border loop, seen along ``up``, turns
+    left or goes straight on at every corner and winds once."""
+    length = np.linalg.norm(normals, axis=1)
+    proper = length > 0
+    if np.any(normals[proper] @ up <= 1e-9 * length[proper]):
+        return False
+    first, second = face_frames(up[None])
+    flat = np.column_stack([border @ first[0], border @ second[0]])
+    steps = np.roll(flat, -1, axis=0) - flat
+    following = np.roll(steps, -1, axis=0)
+    turn = steps[:, 0] * following[:, 1] - steps[:, 1] * following[:, 0]
+    ahead = np.einsum("ij,ij->i", steps, following)
+    scale = np.linalg.norm(steps, axis=1) * np.linalg.norm(following, axis=1)
+    if np.any(scale == 0):
+        return False
+    if np.any(turn < -1e-12 * scale) or np.any((np.abs(turn) <= 1e-12 * scale) & (ahead <= 0)):
+        return False
+    return bool(abs(np.arctan2(turn, ahead).sum() - 2 * np.pi) < 1e-6)
+
+
+def merge_positions(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unique vertex positions and the index of each vertex among them."""
+    order = np.lexsort(vertices.T[::-1])
+    ordered = vertices[order]
+    first = np.ones(len(ordered), dtype=bool)
+    first[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    inverse = np.empty(len(vertices), dtype=np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    return ordered[first], inverse
+
+
+def face_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3) unit ``u`` and ``v`` with ``u x v = normal`` for unit normals."""
+    axis = np.zeros_like(normals)
+    axis[np.arange(len(normals)), np.argmin(np.abs(normals), axis=1)] = 1.0
+    u = axis - np.einsum("ij,ij->i", axis, normals)[:, None] * normals
+    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
+    return u, np.cross(normals, u)

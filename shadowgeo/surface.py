@@ -1,0 +1,723 @@
+"""Shadows on every surface: the exact shadow on each face of a triangle mesh.
+
+For every face of the receiving surface that turns its front to the light, the
+shadow is the union of what every caster triangle strictly between the face
+and the light hides, clipped to the face. :func:`shadow_on_surface` computes it
+face by face, with the same clipping before the divide as
+:func:`shadowgeo.project_shadow`:
+
+1. **Index** (:mod:`shadowgeo.lightframe`): the bounding boxes of receiver
+   faces and caster triangles *seen from the light* pair each face with the
+   few triangles whose images overlap it.
+2. **Clip**: each candidate triangle is cut, in homogeneous coordinates, to
+   the region between the face and the light: the front of the face's plane
+   and the three planes joining the light to the face's edges. That region
+   holds no point with ``w <= 0`` but the light, so there are no anti-shadows
+   and no division by zero, and what survives projects inside the face.
+3. **Project and unite**: the clipped pieces are projected onto the face's
+   plane, in its own 2-D frame, and united by winding number (Clipper2 through
+   :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
+   own cell of one plane); spot cones and a light's range are applied as
+   exact 2-D intersections.
+4. **Stitch** (:mod:`shadowgeo.seams`): region corners on a face edge are
+   snapped to one parameter along that edge, shared by both faces, and every
+   such point is inserted on both sides, so the triangulated shadow has no
+   cracks or T-junctions where the surface has none.
+
+Closed casters (the light outside them) contribute their light-facing
+triangles only: every blocked ray leaves the caster through one of them last.
+A closed caster wholly in front of a face needs no triangles at all: its
+silhouette, projected once into the light's frame
+(:class:`shadowgeo.lightframe.Outline`), is cut to the face's image there and
+mapped back; faces wholly inside it are shadowed whole.
+
+Cost: the index is O((F + T) log(F + T)) for F surface faces and T caster
+triangles; the clipping is linear in the candidate pairs, about F times the
+number of caster triangles whose images overlap one face's (for a surface
+shadowing itself, its neighbours); the union and the stitching are linear in
+the size of the shadow's outline.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+import trimesh
+
+from . import polygons as poly
+from .errors import GeometryError
+from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min, make_outline
+from .lights import Light, SpotLight, is_positional, require_light
+from .seams import stitch, unique_integers
+from .sheets import face_frames, lift_directions, merge_positions, single_sheet
+from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
+from .tolerance import Tolerance
+from .topology import Caster, as_caster
+
+# Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
+_BATCH = 200_000
+
+
+@dataclass(frozen=True)
+class SurfaceDiagnostics:
+    """What :func:`shadow_on_surface` did.
+
+    Attributes
+    ----------
+    n_surface_faces : int
+    n_lit_faces : int
+        Surface faces that turn their front to the light (and that it reaches).
+    n_caster_triangles : int
+        Caster triangles considered (for a closed caster, its light-facing ones).
+    n_candidate_pairs : int
+        (face, triangle) pairs whose images overlap seen from the light.
+    n_clipped_pairs : int
+        Those with the triangle partly strictly in front of the face: clipped
+        and projected.
+    n_shadowed_faces : int
+        Faces with a non-empty shadow.
+    n_outlined_casters : int
+        Closed casters handled by their outline seen from the light (for the
+        faces they lie wholly in front of) rather than triangle by triangle.
+    n_full_faces : int
+        Faces found wholly inside such an outline.
+    limits : tuple[str, ...]
+        ``"spot_cone"``, ``"range"``: limits of the light applied per face.
+    """
+
+    n_surface_faces: int = 0
+    n_lit_faces: int = 0
+    n_caster_triangles: int = 0
+    n_candidate_pairs: int = 0
+    n_clipped_pairs: int = 0
+    n_shadowed_faces: int = 0
+    n_outlined_casters: int = 0
+    n_full_faces: int = 0
+    limits: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class SurfaceShadow:
+    """The shadow cast on a triangle mesh.
+
+    Attributes
+    ----------
+    light : Light
+    mesh : trimesh.Trimesh
+        The shadowed parts of the light-facing faces, as triangles lying in
+        those faces (moved ``offset`` along each face's normal towards the
+        light), wound as their faces, with no overlaps. Triangles of
+        neighbouring faces share their vertices on the shared edge. With an
+        offset, a point on an edge of two faces moves to where both faces'
+        offset planes meet; at a mesh vertex where three or more faces meet
+        at an angle, the triangles leave their offset planes by at most about
+        ``offset`` times the square of the angle between the faces.
+    face_index : (t,) int64
+        For each triangle of ``mesh``, the surface face it lies in.
+    fraction : (m,) float64
+        The shadowed fraction of every surface face: the cast shadow on faces
+        that turn their front to the light, 1.0 on faces turned away from it
+        (or edge-on). Parts of a face the light does not reach (outside a spot
+        light's cone, beyond its range) count as unshadowed, as in
+        :func:`shadowgeo.project_shadow`.
+    area : float
+        Total area of the shadow.
+    diagnostics : SurfaceDiagnostics
+    """
+
+    light: Light
+    mesh: trimesh.Trimesh
+    face_index: np.ndarray
+    fraction: np.ndarray
+    area: float
+    diagnostics: SurfaceDiagnostics
+
+    @property
+    def is_empty(self) -> bool:
+        return self.area == 0.0
+
+
+def shadow_on_surface(
+    casters,
+    light: Light,
+    surface,
+    *,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+) -> SurfaceShadow:
+    """The exact shadow that ``casters`` cast on every face of ``surface``.
+
+    Parameters
+    ----------
+    casters : mesh or list of meshes
+        Each a ``trimesh.Trimesh``, :class:`~shadowgeo.Caster` or
+        ``(vertices, faces)``. Pass ``surface`` among them for it to shadow
+        itself (a hill its valley, a torus its far side).
+    light : PointLight, SpotLight or DirectionalLight
+    surface : trimesh.Trimesh, Caster or (vertices, faces)
+        Any triangle mesh: open or closed, flat, curved or jagged. Each face's
+        winding gives its front.
+    offset : float
+        Lift of each shadow triangle along its face's normal, towards the
+        light, so that it does not z-fight the surface.
+    tolerance : Tolerance, optional
+        Defaults to ``Tolerance.for_points`` of the casters, surface and light.
+
+    Returns
+    -------
+    SurfaceShadow
+        Finite; for each light-facing face, the region hidden by caster
+        triangles strictly between the face and the light, clipped to the
+        face, triangulated without overlaps and without cracks along edges
+        the faces share.
+
+    Raises
+    ------
+    GeometryError
+        Invalid input, a positional light touching a caster or inside a
+        closed caster.
+
+    Examples
+    --------
+    A unit square on the ground, half shadowed by a wall standing on it:
+
+    >>> import numpy as np
+    >>> from shadowgeo import DirectionalLight
+    >>> ground = ([[0, 0, 0], [1, 0, 0], [1, 0, -1], [0, 0, -1]], [[0, 1, 2], [0, 2, 3]])
+    >>> wall = ([[0.5, 0, 1], [0.5, 0, -2], [0.5, 9, -2], [0.5, 9, 1]], [[0, 1, 2], [0, 2, 3]])
+    >>> shadow = shadow_on_surface(wall, DirectionalLight([1, -1, 0]), ground)
+    >>> round(shadow.area, 12), np.round(shadow.fraction, 12).tolist()
+    (0.5, [0.75, 0.25])
+    """
+    require_light(light)
+    receiver = as_caster(surface)
+    caster_list = [as_caster(caster) for caster in _as_list(casters)]
+    offset = float(offset)
+    if not math.isfinite(offset):
+        raise GeometryError(f"offset must be finite, got {offset!r}")
+    positional = is_positional(light)
+    if tolerance is None:
+        points = [c.bounds for c in caster_list if c.n_faces]
+        points += [receiver.bounds] if receiver.n_faces else []
+        points += [light.position[None]] if positional else []
+        tolerance = Tolerance.for_points(*points)
+    if positional:
+        for caster in caster_list:
+            if caster.n_faces:
+                check_light_outside(caster, light.position, tolerance)
+    return _SurfaceProjector(caster_list, light, receiver, offset, tolerance).run()
+
+
+def _as_list(casters) -> list:
+    """A single mesh as a list of one; a list of meshes as it is."""
+    if isinstance(casters, Caster) or hasattr(casters, "faces"):
+        return [casters]
+    if isinstance(casters, tuple | list) and len(casters) == 2:
+        first = casters[0]
+        if not (isinstance(first, Caster | tuple | list) or hasattr(first, "faces")):
+            return [casters]  # (vertices array, faces)
+        try:
+            array = np.asarray(first, dtype=np.float64)
+        except (TypeError, ValueError):
+            array = None
+        if array is not None and array.ndim == 2 and array.shape[1] == 3:
+            return [casters]  # (vertices as nested lists, faces)
+    if isinstance(casters, tuple | list):
+        return list(casters)
+    raise GeometryError(
+        "casters must be a mesh (trimesh.Trimesh, Caster or (vertices, faces)) or a list "
+        f"of meshes, got {type(casters).__name__}"
+    )
+
+
+class _SurfaceProjector:
+    """One call of :func:`shadow_on_surface`."""
+
+    def __init__(self, casters: list[Caster], light, surface: Caster, offset, tol) -> None:
+        self.casters = casters
+        self.light = light
+        self.surface = surface
+        self.offset = offset
+        self.tol = tol
+        self.limits: list[str] = []
+
+    def run(self) -> SurfaceShadow:
+        corners, facing, lit = self._faces()
+        receivers, triangles, caster_triangles, full, extra, counts = self._pairs(corners, lit)
+        regions, region_faces = self._regions(
+            receivers, triangles, caster_triangles, corners, full, extra
+        )
+        points, shadow_faces, face_index = stitch(
+            self.vertices,
+            self.faces,
+            region_faces,
+            (self.origin, self.u, self.v),
+            regions,
+            self.tol.length,
+        )
+        mesh = self._mesh(points, shadow_faces, face_index)
+        # Areas from the triangles in their faces, before any lift.
+        flat = points[shadow_faces]
+        areas = 0.5 * np.linalg.norm(
+            np.cross(flat[:, 1] - flat[:, 0], flat[:, 2] - flat[:, 0]), axis=1
+        )
+        n_faces = self.surface.n_faces
+        shadowed = np.bincount(face_index, weights=areas, minlength=n_faces)
+        fraction = np.ones(n_faces)
+        fraction[facing] = np.minimum(shadowed[facing] / self.face_area[facing], 1.0)
+        info = SurfaceDiagnostics(
+            n_surface_faces=n_faces,
+            n_lit_faces=int(lit.sum()),
+            n_caster_triangles=len(caster_triangles),
+            n_candidate_pairs=counts[0],
+            n_clipped_pairs=len(receivers),
+            n_shadowed_faces=len(unique_integers(face_index)),
+            n_outlined_casters=counts[1],
+            n_full_faces=int(full.sum()),
+            limits=tuple(self.limits),
+        )
+        return SurfaceShadow(self.light, mesh, face_index, fraction, float(areas.sum()), info)
+
+    def _faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The surface in the centred frame, with vertices merged by position:
+        (m, 3, 3) corners, the faces turned to the light, and those it reaches."""
+        surface, tol, light = self.surface, self.tol, self.light
+        bounds = [c.bounds for c in self.casters if c.n_faces] + [surface.bounds]
+        stacked = np.concatenate(bounds)
+        self.center = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
+        # One index per position: faces that share a corner position share an edge.
+        positions, inverse = merge_positions(surface.vertices)
+        self.vertices = positions - self.center
+        self.faces = inverse.reshape(-1)[surface.faces]
+        corners = self.vertices[self.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        length = np.linalg.norm(normals, axis=1)
+        self.face_area = 0.5 * length
+        proper = length > tol.length**2
+        unit = np.zeros_like(normals)
+        unit[proper] = normals[proper] / length[proper, None]
+        self.unit = unit
+        if is_positional(light):
+            self.light_point = light.position - self.center
+            height = np.einsum("ij,ij->i", unit, self.light_point - corners[:, 0])
+            facing = proper & (height > tol.length)
+            lit = facing & (height < light.radius)
+            if math.isfinite(light.radius):
+                self.limits.append("range")
+            self.height = height
+        else:
+            self.light_point = None
+            self.cosine = -(unit @ light.direction)
+            facing = proper & (self.cosine > tol.angle)
+            lit = facing
+        if isinstance(light, SpotLight):
+            self.limits.append("spot_cone")
+        self.origin = (corners[:, 0] + corners[:, 1] + corners[:, 2]) / 3.0
+        self.u, self.v = face_frames(unit)
+        return corners, facing, lit
+
+    def _pairs(self, corners, lit):
+        """(face, caster triangle) pairs to clip, sorted by face; the caster
+        triangles; faces wholly inside an outline; outline parts per face;
+        and (candidate pairs, outlined casters) counts."""
+        tol, light = self.tol, self.light
+        lit_faces = np.flatnonzero(lit)
+        caster_triangles, outlined = self._caster_triangles()
+        direction = None if is_positional(light) else light.direction
+        pad = 1e-9 if is_positional(light) else tol.length
+        receivers, triangles = candidate_pairs(
+            corners[lit_faces], caster_triangles, self.light_point, direction, pad
+        )
+        receivers = [lit_faces[receivers]]
+        triangles = [triangles]
+        # Closed casters wholly in front of a face: their outline, not their triangles.
+        full = np.zeros(len(corners), dtype=bool)
+        extra: dict[int, list[np.ndarray]] = {}
+        all_triangles = [caster_triangles]
+        base = len(caster_triangles)
+        for outline, front_triangles, bound in outlined:
+            eligible = self._outline_faces(outline, bound, corners, lit)
+            self._apply_outline(outline, np.flatnonzero(eligible), corners, full, extra)
+            others = np.flatnonzero(lit & ~eligible)
+            others = others[outline.may_reach(corners[others])]
+            found, their = candidate_pairs(
+                corners[others], front_triangles, self.light_point, direction, pad
+            )
+            receivers.append(others[found])
+            triangles.append(their + base)
+            all_triangles.append(front_triangles)
+            base += len(front_triangles)
+        receivers, triangles = np.concatenate(receivers), np.concatenate(triangles)
+        caster_triangles = np.concatenate(all_triangles)
+        order = np.argsort(receivers, kind="stable")
+        receivers, triangles = receivers[order], triangles[order]
+        n_candidates = len(receivers)
+        # Only triangles with a corner strictly in front of the face's plane,
+        # and only for faces not already wholly in shadow.
+        heights = np.einsum(
+            "pkd,pd->pk",
+            caster_triangles[triangles] - corners[receivers, :1],
+            self.unit[receivers],
+        )
+        front = (corner_max(heights) > tol.length) & ~full[receivers]
+        counts = (n_candidates, len(outlined))
+        return receivers[front], triangles[front], caster_triangles, full, extra, counts
+
+    def _caster_triangles(self):
+        """(t, 3, 3) caster triangles handled one by one, in the centred frame
+        (a closed caster's light-facing ones only), and for each closed caster
+        with an outline: (outline, its light-facing triangles, (its box corners,
+        bounding ball centre, radius)))."""
+        chunks, outlined = [], []
+        direction = None if self.light_point is not None else self.light.direction
+        for caster in self.casters:
+            if caster.n_faces == 0:
+                continue
+            faces = caster.faces
+            if caster.is_closed:
+                front = caster.facing(light_homogeneous(caster, self.light)) > 0
+                loops, _ = silhouette_loops(caster, front)
+                vertices = caster.vertices - self.center
+                outline = make_outline(
+                    vertices, loops, vertices, self.light_point, direction, self.tol.length
+                )
+                if outline is not None:
+                    low, high = caster.bounds - self.center
+                    box = np.array(
+                        [
+                            [x, y, z]
+                            for x in (low[0], high[0])
+                            for y in (low[1], high[1])
+                            for z in (low[2], high[2])
+                        ]
+                    )
+                    centre = 0.5 * (low + high)
+                    radius = float(np.linalg.norm(vertices - centre, axis=1).max())
+                    outlined.append((outline, vertices[faces[front]], (box, centre, radius)))
+                    continue
+                faces = faces[front]
+            elif caster is self.surface and single_sheet(caster):
+                # Seen from the surface itself, a blocked ray enters the sheet's
+                # back side first, through a face turned away from the light.
+                faces = faces[caster.facing(light_homogeneous(caster, self.light)) <= 0]
+            chunks.append(caster.vertices[faces] - self.center)
+        if not chunks:
+            return np.zeros((0, 3, 3)), outlined
+        return np.concatenate(chunks), outlined
+
+    def _outline_faces(self, outline, bound, corners, lit) -> np.ndarray:
+        """(m,) bool: lit faces that the caster lies wholly in front of (its box
+        or its bounding ball does) and whose corners lie ahead of the light in
+        the outline's frame."""
+        box, centre, radius = bound
+        unit = self.unit
+        offsets = -np.einsum("ij,ij->i", unit, corners[:, 0])
+        in_front = np.minimum.reduce(box @ unit.T + offsets) > self.tol.length
+        in_front |= unit @ centre + offsets - radius > self.tol.length
+        ahead = corner_min(outline.ahead(corners)) > self.tol.length
+        return lit & in_front & ahead
+
+    def _apply_outline(self, outline, faces, corners, full, extra) -> None:
+        """Mark faces wholly inside the outline as full; add the outline's part
+        of the others, mapped onto each face, to ``extra``."""
+        if len(faces) == 0:
+            return
+        images = outline.to_frame(corners[faces])  # (f, 3, 2)
+        low, high = np.array(outline.region.bounds[:2]), np.array(outline.region.bounds[2:])
+        near = ~np.any((corner_min(images) > high) | (corner_max(images) < low), axis=1)
+        faces, images = faces[near], images[near]
+        triangles = shapely.polygons(images)
+        covered = shapely.covers(outline.region, triangles)
+        full[faces[covered]] = True
+        touched = shapely.intersects(outline.region, triangles) & ~covered
+        faces, images = faces[touched], images[touched]
+        if len(faces) == 0:
+            return
+        x, y = images[:, :, 0], images[:, :, 1]
+        # The map from the frame back to a face keeps or flips orientation as
+        # the face's image does (the face runs counter-clockwise in its frame).
+        flips = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
+        images = np.where(flips[:, None, None], images[:, ::-1], images)
+        loops, owners = [], []
+        for k, image in enumerate(images):
+            piece = poly.intersect(outline.cross_section, poly.fill([image * outline.scale]))
+            for loop in piece.to_polygons():
+                loops.append(np.asarray(loop) / outline.scale)
+                owners.append(k)
+        if not loops:
+            return
+        sizes = np.array([len(loop) for loop in loops])
+        point_face = faces[np.repeat(owners, sizes)]
+        normal = self.unit[point_face]
+        offset = -np.einsum("ij,ij->i", normal, corners[point_face, 0])
+        points = outline.onto_planes(np.concatenate(loops), normal, offset)
+        points -= self.origin[point_face]
+        flat = np.column_stack(
+            [
+                np.einsum("ij,ij->i", points, self.u[point_face]),
+                np.einsum("ij,ij->i", points, self.v[point_face]),
+            ]
+        )
+        for k, loop in zip(owners, np.split(flat, np.cumsum(sizes)[:-1]), strict=True):
+            extra.setdefault(int(faces[k]), []).append(loop[::-1] if flips[k] else loop)
+
+    def _side_planes(self, faces: np.ndarray, corners: np.ndarray) -> np.ndarray:
+        """(f, 4, 4) unit half-spaces of the region between each face and the
+        light: the face's front, and the three planes joining the light to its
+        edges (the face's side of each)."""
+        triangle = corners[faces]
+        normal = self.unit[faces]
+        planes = np.empty((len(faces), 4, 4))
+        planes[:, 0, :3] = normal
+        planes[:, 0, 3] = -np.einsum("ij,ij->i", normal, triangle[:, 0])
+        for k in range(3):
+            a, b, c = triangle[:, k], triangle[:, (k + 1) % 3], triangle[:, (k + 2) % 3]
+            if self.light_point is not None:
+                side = np.cross(a - self.light_point, b - self.light_point)
+            else:
+                side = np.cross(b - a, np.broadcast_to(self.light.direction, a.shape))
+            side /= np.linalg.norm(side, axis=1, keepdims=True)
+            offset = -np.einsum("ij,ij->i", side, a)
+            sign = np.sign(np.einsum("ij,ij->i", side, c) + offset)
+            planes[:, k + 1, :3] = side * sign[:, None]
+            planes[:, k + 1, 3] = offset * sign
+        return planes
+
+    def _project(self, points: np.ndarray, faces: np.ndarray, planes: np.ndarray, origin, u, v):
+        """(n, k, 2) face-frame coordinates of clipped points (n, k, 4) of the
+        pairs' faces, projected from the light onto each face's plane."""
+        height = np.einsum("nkd,nd->nk", points, planes[:, 0])
+        position = points[:, :, :3]
+        if self.light_point is not None:
+            light_height = self.height[faces][:, None]
+            scale = light_height / (light_height - height)
+            image = self.light_point + (position - self.light_point) * scale[:, :, None]
+        else:
+            along = height / self.cosine[faces][:, None]
+            image = position + along[:, :, None] * self.light.direction
+        relative = image - origin[faces][:, None, :]
+        return np.stack(
+            [
+                np.einsum("nkd,nd->nk", relative, u[faces]),
+                np.einsum("nkd,nd->nk", relative, v[faces]),
+            ],
+            axis=2,
+        )
+
+    def _regions(self, receivers, triangles, caster_triangles, corners, full, extra):
+        """The shadow region of each face that has one: loops in the face's
+        frame, and the faces."""
+        origin, u, v = self.origin, self.u, self.v
+        flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
+        faces_with = unique_integers(
+            np.concatenate([owner, np.flatnonzero(full), np.fromiter(extra, np.int64)])
+        )
+        lit = self._lit_polygons(faces_with, corners, origin, u, v)
+        if is_positional(self.light) and math.isfinite(self.light.radius):
+            return self._regions_one_by_one(faces_with, lit, flat, owner, full, extra)
+        return self._regions_tiled(faces_with, lit, flat, owner, full, extra)
+
+    def _regions_tiled(self, faces_with, lit, flat, owner, full, extra):
+        """All faces' unions in one Clipper2 call: each face's frame is mapped
+        (by an affine stretch, which keeps unions and intersections) into its
+        own cell of one large plane, so no two faces' pieces meet, and the
+        result is cut back into faces by cell. Faces span a quarter of their
+        cell's height: with n faces, rounding on Clipper2's 1e-8 grid stays
+        near n * 1e-16 of a face."""
+        regions: dict[int, list[np.ndarray]] = {}
+        partial = []
+        for face, outline in zip(faces_with.tolist(), lit, strict=True):
+            if outline is None:
+                continue
+            if full[face]:
+                regions[face] = [outline]
+            else:
+                partial.append(face)
+        if partial:
+            partial = np.array(partial, dtype=np.int64)
+            outlines = [lit[i] for i in np.searchsorted(faces_with, partial)]
+            # One column of cells: Clipper2 sweeps along y, so its scanlines
+            # meet one face at a time. x is stretched to the full width.
+            cell = 2.0 * poly.MAX_COORDINATE / len(partial)
+            slot = np.arange(len(partial))
+            centers = np.column_stack(
+                [np.zeros(len(partial)), -poly.MAX_COORDINATE + cell * (slot + 0.5)]
+            )
+            extents = np.array([float(np.abs(o).max()) for o in outlines])
+            scales = np.column_stack([0.5 * poly.MAX_COORDINATE / extents, 0.25 * cell / extents])
+            index = np.full(len(full), -1, dtype=np.int64)
+            index[partial] = slot
+            rows = np.flatnonzero(index[owner] >= 0)
+            mine = index[owner[rows]]
+            pieces = flat[rows] * scales[mine, None, :] + centers[mine, None, :]
+            loops = list(pieces)
+            for face, more in extra.items():
+                k = index[face]
+                if k >= 0:
+                    loops += [loop * scales[k] + centers[k] for loop in more]
+            limits = [o * scales[k] + centers[k] for k, o in enumerate(outlines)]
+            region = poly.intersect(poly.fill(loops), poly.fill(limits))
+            for loop in region.to_polygons():
+                loop = np.asarray(loop)
+                if len(loop) < 3:
+                    continue
+                k = int(np.floor((loop[0, 1] + poly.MAX_COORDINATE) / cell))
+                k = min(max(k, 0), len(partial) - 1)
+                face = int(partial[k])
+                regions.setdefault(face, []).append((loop - centers[k]) / scales[k])
+        region_faces = np.array(sorted(regions), dtype=np.int64)
+        return [regions[face] for face in region_faces.tolist()], region_faces
+
+    def _regions_one_by_one(self, faces_with, lit, flat, owner, full, extra):
+        """Each face's union on its own, cut to the light's range on the face."""
+        starts = np.searchsorted(owner, faces_with, side="left")
+        stops = np.searchsorted(owner, faces_with, side="right")
+        regions, region_faces = [], []
+        for face, first, stop, outline in zip(faces_with, starts, stops, lit, strict=True):
+            if outline is None:
+                continue
+            disc = self._range_disc(face)
+            if full[face] and disc is None:
+                loops = [outline]
+            else:
+                extent = float(np.abs(outline).max()) * 2.0
+                scale = poly.local_scale(extent)
+                if full[face]:
+                    region = poly.fill([outline * scale])
+                else:
+                    pieces = list(flat[first:stop] * scale)
+                    pieces += [loop * scale for loop in extra.get(int(face), [])]
+                    region = poly.intersect(poly.fill(pieces), poly.fill([outline * scale]))
+                if disc is not None:
+                    region = poly.intersect(region, poly.fill([disc * scale]))
+                loops = [np.asarray(loop) / scale for loop in region.to_polygons()]
+                loops = [loop for loop in loops if len(loop) >= 3]
+            if loops:
+                regions.append(loops)
+                region_faces.append(face)
+        return regions, np.array(region_faces, dtype=np.int64)
+
+    def _pieces(self, receivers, triangles, caster_triangles, corners):
+        """Each pair's triangle clipped to the region between its face and the
+        light and projected onto the face: (n, k, 2) counter-clockwise polygons
+        in the face frames (padded by repeating the last corner), and (n,) faces,
+        sorted by face."""
+        if len(receivers) == 0:
+            return np.zeros((0, 3, 2)), np.zeros(0, np.int64)
+        shadowed = unique_integers(receivers)
+        slot = np.searchsorted(shadowed, receivers)
+        planes = self._side_planes(shadowed, corners)
+        pieces: list[np.ndarray] = []
+        owners: list[np.ndarray] = []
+        for start in range(0, len(receivers), _BATCH):
+            part = slice(start, start + _BATCH)
+            faces, pair_slot = receivers[part], slot[part]
+            homogeneous = np.concatenate(
+                [caster_triangles[triangles[part]], np.ones((len(faces), 3, 1))], axis=2
+            )
+            # A triangle within a length tolerance of outside one plane casts
+            # nothing there (at most a sliver that thin): drop it unclipped.
+            sides = np.einsum("nkd,npd->nkp", homogeneous, planes[pair_slot])
+            keep = ~np.any(np.all(sides < self.tol.length, axis=1), axis=1)
+            homogeneous, faces, pair_slot = homogeneous[keep], faces[keep], pair_slot[keep]
+            clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes[pair_slot])
+            keep = counts >= 3
+            clipped, counts, faces, pair_slot = (
+                clipped[keep],
+                counts[keep],
+                faces[keep],
+                pair_slot[keep],
+            )
+            flat = self._project(clipped, faces, planes[pair_slot], self.origin, self.u, self.v)
+            # Pad each polygon with its last corner: repeated points add no edges.
+            slots = np.arange(flat.shape[1])
+            last = np.minimum(slots[None, :], counts[:, None] - 1)
+            flat = np.take_along_axis(flat, last[:, :, None], axis=1)
+            x, y = flat[:, :, 0], flat[:, :, 1]
+            area = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1)
+            flat = np.where((area < 0)[:, None, None], flat[:, ::-1], flat)
+            nonzero = area != 0
+            pieces.append(flat[nonzero])
+            owners.append(faces[nonzero])
+        width = max(p.shape[1] for p in pieces)
+        pieces = [np.pad(p, ((0, 0), (0, width - p.shape[1]), (0, 0)), mode="edge") for p in pieces]
+        return np.concatenate(pieces), np.concatenate(owners)
+
+    def _lit_polygons(self, faces, corners, origin, u, v) -> list[np.ndarray | None]:
+        """Each face's part that the light reaches, in the face's frame (the
+        whole face unless a spot cone or range limits it); None where empty."""
+        triangle = corners[faces]
+        relative = triangle - origin[faces][:, None, :]
+        flat = np.stack(
+            [
+                np.einsum("nkd,nd->nk", relative, u[faces]),
+                np.einsum("nkd,nd->nk", relative, v[faces]),
+            ],
+            axis=2,
+        )
+        planes = self._limit_planes(faces)
+        if planes is None:
+            return list(flat)
+        homogeneous = np.concatenate([triangle, np.ones((len(faces), 3, 1))], axis=2)
+        clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes)
+        out: list[np.ndarray | None] = []
+        for face, polygon, count in zip(faces, clipped, counts, strict=True):
+            if count < 3:
+                out.append(None)
+                continue
+            rel = polygon[:count, :3] - origin[face]
+            out.append(np.column_stack([rel @ u[face], rel @ v[face]]))
+        return out
+
+    def _range_disc(self, face: int) -> np.ndarray | None:
+        """The light's lit disc on a face's plane (an inscribed polygon, as
+        :func:`shadowgeo.project_shadow` makes it) in the face frame, or None
+        for a light without a range."""
+        light = self.light
+        if not (is_positional(light) and math.isfinite(light.radius)):
+            return None
+        height = self.height[face]
+        radius = math.sqrt(max(light.radius**2 - height**2, 0.0))
+        count = self.tol.segments(radius)
+        angles = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
+        foot = self.light_point - height * self.unit[face] - self.origin[face]
+        center = np.array([foot @ self.u[face], foot @ self.v[face]])
+        return center + radius * np.column_stack([np.cos(angles), np.sin(angles)])
+
+    def _limit_planes(self, faces) -> np.ndarray | None:
+        """(f, p, 4) half-spaces of the spot cone (an inscribed pyramid), or None."""
+        light, tol = self.light, self.tol
+        chunks = []
+        if isinstance(light, SpotLight):
+            axis = light.direction
+            if light.cut_off_angle >= math.pi / 2 - 1e-6:
+                planes = np.append(axis, -axis @ self.light_point)[None]
+            else:
+                count = tol.segments(tol.scale)
+                angles = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
+                side, up = face_frames(axis[None])
+                radius = math.tan(light.cut_off_angle)
+                rim = axis + radius * (
+                    np.outer(np.cos(angles), side[0]) + np.outer(np.sin(angles), up[0])
+                )
+                normal = np.cross(rim, np.roll(rim, -1, axis=0))
+                normal *= np.sign(normal @ axis)[:, None]
+                planes = np.column_stack([normal, -normal @ self.light_point])
+            chunks.append(np.broadcast_to(planes, (len(faces), *planes.shape)))
+        if not chunks:
+            return None
+        return np.concatenate(chunks, axis=1)
+
+    def _mesh(self, points, faces, face_index) -> trimesh.Trimesh:
+        if len(faces) == 0:
+            return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), process=False)
+        used, inverse = unique_integers(faces, return_inverse=True)
+        vertices = points[used]
+        if self.offset != 0.0:
+            vertices = vertices + self.offset * lift_directions(
+                inverse.reshape(-1, 3), self.unit[face_index], len(used)
+            )
+        return trimesh.Trimesh(vertices + self.center, inverse.reshape(-1, 3), process=False)
