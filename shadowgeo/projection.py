@@ -165,16 +165,8 @@ class Shadow:
         return self.area == 0.0
 
     def to_shapely(self) -> shapely.MultiPolygon:
-        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates.
-
-        Needs shapely, the ``shapely`` extra: ``pip install "shadowgeo[shapely]"``.
-        """
-        try:
-            import shapely
-        except ImportError:
-            raise ImportError(
-                'Shadow.to_shapely needs shapely: pip install "shadowgeo[shapely]"'
-            ) from None
+        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates."""
+        import shapely
 
         parts = [shapely.Polygon(loops[0], loops[1:]) for loops in self.polygons]
         return shapely.MultiPolygon(parts)
