@@ -48,14 +48,7 @@ class InlineReader(Protocol):
     inline_stack: list[Path]
     inline_files: dict[Path, Any]  # each Inline file read once: tree, Scene or why not
 
-    def document(
-        self,
-        tree: Tree,
-        path: Path,
-        matrix: np.ndarray,
-        scene: Scene | None = None,
-        name: str | None = None,
-    ) -> None: ...
+    def document(self, tree: Tree, path: Path, matrix: np.ndarray, *, name: str | None) -> None: ...
 
 
 def resolve_url(reader: InlineReader, context: Context, url: str) -> Path | str:
