@@ -15,14 +15,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
-from .plane import _vector
+from .plane import finite_vector
 
 if TYPE_CHECKING:  # annotations only: no runtime dependency on typing_extensions
     from typing_extensions import TypeIs
 
 
 def _unit(vector: ArrayLike, name: str) -> NDArray[np.float64]:
-    vector = _vector(vector, name)
+    vector = finite_vector(vector, name)
     length = float(np.linalg.norm(vector))
     if length == 0.0 or not math.isfinite(length):
         raise GeometryError(f"{name} must be a non-zero vector, got {vector.tolist()}")
@@ -47,7 +47,7 @@ class PointLight:
     radius: float = math.inf
 
     def __init__(self, position: ArrayLike, radius: float = math.inf) -> None:
-        object.__setattr__(self, "position", _vector(position, "light position"))
+        object.__setattr__(self, "position", finite_vector(position, "light position"))
         object.__setattr__(self, "radius", _radius(radius))
 
     @property
@@ -100,7 +100,7 @@ class SpotLight:
             raise GeometryError(
                 f"spot light cut_off_angle must be in (0, pi/2], got {cut_off_angle!r}"
             )
-        object.__setattr__(self, "position", _vector(position, "light position"))
+        object.__setattr__(self, "position", finite_vector(position, "light position"))
         object.__setattr__(self, "direction", _unit(direction, "light direction"))
         object.__setattr__(self, "cut_off_angle", cut_off_angle)
         object.__setattr__(self, "radius", _radius(radius))

@@ -58,10 +58,17 @@ shadow's 2-D union (:func:`shadowgeo.project_shadow` drops them first).
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from .errors import GeometryError
+
+if TYPE_CHECKING:
+    from .lights import Light
+    from .plane import Plane
+    from .topology import Caster
 
 LARGEST_COORDINATE = 1e75
 SMALLEST_LENGTH = 1e-75
@@ -76,7 +83,7 @@ MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
 
 
-def check_coordinates(points, what: str) -> None:
+def check_coordinates(points: ArrayLike, what: str) -> None:
     """Raise :class:`GeometryError` unless every value of ``points`` is finite
     and within ``+-LARGEST_COORDINATE``; the message names ``what``, the
     offending point and its value.
@@ -141,7 +148,7 @@ def check_length(value: float, what: str, *, infinite: bool = False) -> float:
     return value
 
 
-def check_light(light, what: str = "light") -> None:
+def check_light(light: Light, what: str = "light") -> None:
     """Raise :class:`GeometryError` when a light's position or finite radius
     is outside the supported range (a direction is a unit vector: always fine)."""
     position = getattr(light, "position", None)
@@ -151,7 +158,7 @@ def check_light(light, what: str = "light") -> None:
     check_length(radius, f"{what} radius", infinite=True)
 
 
-def check_geometry(caster, light, plane=None) -> None:
+def check_geometry(caster: Caster, light: Light, plane: Plane | None = None) -> None:
     """Raise :class:`GeometryError` unless a caster's coordinates (a
     :class:`~shadowgeo.Caster`), a light's position and radius, and a
     plane's offset are all within the supported range: the check at the

@@ -10,7 +10,14 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import GeometryError
 
 
-def _vector(value: ArrayLike, name: str, size: int = 3) -> NDArray[np.float64]:
+def finite_vector(value: ArrayLike, name: str, size: int = 3) -> NDArray[np.float64]:
+    """``value`` as a read-only float64 vector of ``size`` finite components;
+    a GeometryError naming ``name`` otherwise (the check planes and lights
+    make on what they are given).
+
+    >>> finite_vector([0, 1, 0], "normal").tolist()
+    [0.0, 1.0, 0.0]
+    """
     array = np.asarray(value, dtype=np.float64).reshape(-1)
     if array.shape != (size,):
         raise GeometryError(f"{name} must have {size} components, got {np.shape(value)}")
@@ -57,7 +64,7 @@ class Plane:
     offset: float
 
     def __init__(self, normal: ArrayLike, offset: float = 0.0) -> None:
-        normal = _vector(normal, "plane normal")
+        normal = finite_vector(normal, "plane normal")
         length = float(np.linalg.norm(normal))
         if not np.isfinite(offset):
             raise GeometryError(f"plane offset must be finite, got {offset!r}")
@@ -71,14 +78,14 @@ class Plane:
     @classmethod
     def from_point_normal(cls, point: ArrayLike, normal: ArrayLike) -> Plane:
         """The plane through ``point`` with ``normal``."""
-        point = _vector(point, "plane point")
-        normal = _vector(normal, "plane normal")
+        point = finite_vector(point, "plane point")
+        normal = finite_vector(normal, "plane normal")
         return cls(normal, -float(np.dot(normal, point)))
 
     @classmethod
     def from_coefficients(cls, coefficients: ArrayLike) -> Plane:
         """The plane ``a x + b y + c z + d = 0`` from ``(a, b, c, d)``."""
-        a, b, c, d = _vector(coefficients, "plane coefficients", 4)
+        a, b, c, d = finite_vector(coefficients, "plane coefficients", 4)
         return cls([a, b, c], d)
 
     def __repr__(self) -> str:

@@ -140,7 +140,10 @@ def is_convex(corners: np.ndarray) -> np.ndarray:
     cosine = np.einsum("mkd,mkd->mk", edges, np.roll(edges, -1, axis=1))
     scale = np.linalg.norm(normal, axis=1)[:, None]
     angles = np.arctan2(sine, cosine * scale)
-    return np.all(angles >= -_CONVEX_TURN, axis=1) & np.isclose(angles.sum(axis=1), 2 * np.pi)
+    convex: np.ndarray = np.all(angles >= -_CONVEX_TURN, axis=1) & np.isclose(
+        angles.sum(axis=1), 2 * np.pi
+    )
+    return convex
 
 
 def fan(block: np.ndarray) -> np.ndarray:

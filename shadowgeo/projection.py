@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, cast
 
 import numpy as np
 import trimesh
@@ -42,6 +42,8 @@ from .topology import Caster, MeshLike, as_caster, empty_mesh
 
 if TYPE_CHECKING:
     import shapely
+
+    from .lights import PointLight
 
 
 def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
@@ -425,7 +427,9 @@ class _Projector:
         never leaves the rectangle: a radius far larger than the scene costs
         nothing and stays in the range the 2-D union accepts.
         """
-        radius, height = self.light.radius, self.height
+        # called only for a light with a finite radius: a point or spot light
+        radius = cast("PointLight | SpotLight", self.light).radius
+        height = self.height
         lit = math.sqrt((radius - height) * (radius + height))  # no square to overflow
         corners = np.array(
             [[low[0], low[1]], [high[0], low[1]], [high[0], high[1]], [low[0], high[1]]]

@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -28,7 +29,7 @@ _UP = {"Y": np.array([0.0, 1.0, 0.0]), "Z": np.array([0.0, 0.0, 1.0])}
 _NORTH = {"Y": np.array([0.0, 0.0, -1.0]), "Z": np.array([0.0, 1.0, 0.0])}
 
 
-def _astral():
+def _astral() -> tuple[Any, Callable[..., float], Callable[..., float]]:
     try:
         from astral import Observer
         from astral.sun import azimuth, elevation
@@ -37,7 +38,9 @@ def _astral():
     return Observer, azimuth, elevation
 
 
-def frame(up: str = "Y", north: ArrayLike | None = None) -> tuple[NDArray, NDArray, NDArray]:
+def frame(
+    up: str = "Y", north: ArrayLike | None = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Unit (east, north, up) vectors of a scene whose up axis is ``up``.
 
     ``north`` defaults to -Z for a Y-up scene and +Y for a Z-up scene; any

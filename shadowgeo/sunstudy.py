@@ -324,7 +324,9 @@ def sun_study_by_day(
     """
     caster = _one_caster(casters)
     groups = days(times, tz)
-    options = dict(latitude=latitude, longitude=longitude, step=step, up=up, north=north)
+    options: dict[str, Any] = dict(
+        latitude=latitude, longitude=longitude, step=step, up=up, north=north
+    )
     chosen = {day: [times[i] for i in indices] for day, indices in groups.items()}
     total = len(chosen)
     if scheduler is None:

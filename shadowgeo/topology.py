@@ -151,7 +151,8 @@ class Caster:
         _, first = np.unique(corners, axis=0, return_index=True)
         unique = np.zeros(self.n_faces, dtype=bool)
         unique[first] = True
-        return keep & unique
+        valid: np.ndarray = keep & unique
+        return valid
 
     @cached_property
     def edge_face_slots(self) -> np.ndarray:

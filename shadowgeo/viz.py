@@ -29,7 +29,7 @@ import math
 import os
 import sys
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING, TypeAlias, Union
+from typing import TYPE_CHECKING, Any, TypeAlias, Union
 
 import numpy as np
 import trimesh
@@ -151,7 +151,9 @@ def _bounds(items: list[_Item], lights: list[AnyLight]) -> tuple[np.ndarray, flo
     return (low + high) / 2, max(float(np.linalg.norm(high - low)), 1e-12)
 
 
-def _light_glyph(light, center: np.ndarray, size: float, start=None):
+def _light_glyph(
+    light: Light, center: np.ndarray, size: float, start: np.ndarray | None = None
+) -> pv.PolyData:
     """A mesh marking ``light``: sphere (point), cone (spot) or arrow
     (directional, from ``start`` when given)."""
     import pyvista as pv
@@ -178,7 +180,9 @@ def _light_glyph(light, center: np.ndarray, size: float, start=None):
     return pv.Arrow(start=start, direction=light.direction, scale=length)
 
 
-def _arrow_start(direction, length: float, camera, points: np.ndarray, margin: float):
+def _arrow_start(
+    direction: ArrayLike, length: float, camera: Any, points: np.ndarray, margin: float
+) -> np.ndarray | None:
     """Where an arrow along ``direction`` starts so that, seen from ``camera``,
     it lies right of every point of ``points`` (in perspective), halfway up,
     at the depth of their middle; None when the camera is among the points."""
@@ -203,10 +207,11 @@ def _arrow_start(direction, length: float, camera, points: np.ndarray, margin: f
     if np.any(ends_depth <= 0):
         return None
     needed = (slope_x.max() + margin / middle) * ends_depth - ends @ right
-    return start + right * float(needed.max())
+    beside: np.ndarray = start + right * float(needed.max())
+    return beside
 
 
-def _vtk_light(scene_light, center: np.ndarray, scale: float):
+def _vtk_light(scene_light: AnyLight, center: np.ndarray, scale: float) -> pv.Light:
     """A pyvista light matching a shadowgeo light (or a scene light)."""
     import pyvista as pv
 
@@ -246,7 +251,9 @@ def view_angle(field_of_view: float, width: int, height: int) -> float:
     return math.degrees(2 * math.atan(math.tan(field_of_view / 2) * height / width))
 
 
-def _viewpoint_camera(plotter, viewpoint: Viewpoint, center: np.ndarray, scale: float) -> None:
+def _viewpoint_camera(
+    plotter: pv.Plotter, viewpoint: Viewpoint, center: np.ndarray, scale: float
+) -> None:
     """The camera of an X3D Viewpoint: its position, looking along its
     orientation's -Z with its +Y up, and its field of view."""
     position = np.asarray(viewpoint.position, dtype=np.float64)
@@ -259,7 +266,14 @@ def _viewpoint_camera(plotter, viewpoint: Viewpoint, center: np.ndarray, scale: 
     plotter.renderer.ResetCameraClippingRange()
 
 
-def _camera(plotter, view, center: np.ndarray, scale: float, z_up: bool, framed) -> None:
+def _camera(
+    plotter: pv.Plotter,
+    view: str | ArrayLike | Viewpoint | None,
+    center: np.ndarray,
+    scale: float,
+    z_up: bool,
+    framed: np.ndarray,
+) -> None:
     """Point the camera at ``center`` from the direction ``view`` names, or
     place it where a Viewpoint says."""
     if isinstance(view, Viewpoint):
@@ -284,8 +298,10 @@ def _camera(plotter, view, center: np.ndarray, scale: float, z_up: bool, framed)
         up = np.array([0.0, 1.0, 0.0]) if z_up else np.array([0.0, 0.0, -1.0])
     plotter.camera_position = [tuple(center + direction * 3 * scale), tuple(center), tuple(up)]
     frame = np.column_stack([framed.min(axis=0), framed.max(axis=0)]).ravel()
-    # pyvista's keyword-deprecation wrapper hides these signatures from mypy.
-    plotter.reset_camera(bounds=frame)  # type: ignore[call-arg]
+    # pyvista's keyword-deprecation wrapper hides this signature from mypy in
+    # some releases and not in others: call it untyped.
+    reset_camera: Any = plotter.reset_camera
+    reset_camera(bounds=frame)
     _fit(plotter, framed)
 
 
@@ -318,25 +334,14 @@ def _fit(plotter: pv.Plotter, points: np.ndarray, fill: float = 0.9) -> None:
         camera.zoom(fill / half)  # type: ignore[no-untyped-call]
 
 
-def scene_plotter(
+def _gather(
     scene_or_meshes: Plottable,
-    *,
-    shadows: Plottable | None = None,
-    volumes: Plottable | None = None,
-    lights: bool | Iterable[AnyLight] = True,
-    off_screen: bool = False,
-    window_size: Sequence[int] = (1024, 768),
-    view: str | ArrayLike | None = None,
-    pbr: bool = False,
-) -> pv.Plotter:
-    """A ``pyvista.Plotter`` holding the picture :func:`plot` draws, not yet shown.
-
-    Parameters are those of :func:`plot`. Use it to add to the picture or to
-    read the camera (``plotter.renderer``) before ``plotter.show()`` or
-    ``plotter.screenshot()``.
-    """
-    import pyvista as pv
-
+    shadows: Plottable | None,
+    volumes: Plottable | None,
+    lights: bool | Iterable[AnyLight],
+) -> tuple[list[_Item], list[AnyLight]]:
+    """The meshes to draw and the lights to draw them by (each light once):
+    the scene's own, or ``lights`` when it is a list."""
     items: list[_Item] = []
     scene_lights: list[AnyLight] = []
     _collect(scene_or_meshes, "geometry", items, scene_lights)
@@ -344,8 +349,12 @@ def scene_plotter(
     _collect(volumes, "volume", items, scene_lights)
     if not isinstance(lights, bool):
         scene_lights = list(lights)
-    scene_lights = _unique_lights(scene_lights)
-    z_up = isinstance(scene_or_meshes, Scene) and (scene_or_meshes.up_axis or "Y").upper() == "Z"
+    return items, _unique_lights(scene_lights)
+
+
+def _new_plotter(off_screen: bool, window_size: Sequence[int]) -> pv.Plotter:
+    """An empty plotter with the background set and VTK's own lights off."""
+    import pyvista as pv
 
     if off_screen and no_display_reason() is not None:
         # VTK would try X first and print "bad X server connection" before
@@ -354,7 +363,15 @@ def scene_plotter(
     width, height = (int(v) for v in window_size)
     plotter = pv.Plotter(off_screen=off_screen, window_size=[width, height], lighting="none")
     plotter.set_background(BACKGROUND)  # type: ignore[arg-type]
-    center, scale = _bounds(items, scene_lights)
+    return plotter
+
+
+def _add_lights(
+    plotter: pv.Plotter, scene_lights: list[AnyLight], center: np.ndarray, scale: float
+) -> None:
+    """Light the picture by ``scene_lights`` and a dim headlight."""
+    import pyvista as pv
+
     for scene_light in scene_lights:
         plotter.add_light(_vtk_light(scene_light, center, scale))
     # A dim headlight keeps faces turned from every light readable; alone, it is
@@ -362,6 +379,10 @@ def scene_plotter(
     headlight = pv.Light(light_type="headlight", intensity=0.35 if scene_lights else 0.75)
     plotter.add_light(headlight)
 
+
+def _add_meshes(plotter: pv.Plotter, items: list[_Item], pbr: bool) -> None:
+    """Add each item with the look of its role: shadows unlit, volumes flat,
+    the rest Phong-shaded (or physically based with ``pbr``)."""
     for item in items:
         if not len(item.faces):
             continue
@@ -384,32 +405,79 @@ def scene_plotter(
                 specular=0.3,
                 specular_power=20,
             )
+
+
+def _framed_points(
+    drawn: list[np.ndarray], glyph_lights: list[Light], center: np.ndarray, scale: float
+) -> np.ndarray:
+    """(n, 3) points the automatic camera frames: the ``drawn`` geometry and
+    its shadows, and the positional lights near them (a far lamp would shrink
+    the scene to a dot); not the directional arrows."""
+    near = [
+        np.reshape(light.position, (1, 3))
+        for light in glyph_lights
+        if not isinstance(light, DirectionalLight)
+        and (not drawn or np.linalg.norm(light.position - center) <= scale)
+    ]
+    return np.concatenate(drawn + near) if drawn + near else np.zeros((1, 3))
+
+
+def _add_light_glyphs(
+    plotter: pv.Plotter,
+    glyph_lights: list[Light],
+    center: np.ndarray,
+    scale: float,
+    framed: np.ndarray,
+    beside: bool,
+) -> list[np.ndarray]:
+    """Mark each light; a directional light's arrow goes beside the
+    ``framed`` points when ``beside`` (there is geometry to go beside).
+    Returns the (2, 3) ends of the arrows placed so."""
+    size = 0.02 * scale
+    arrows = []
+    for light in glyph_lights:
+        start = None
+        if isinstance(light, DirectionalLight) and beside:
+            start = _arrow_start(light.direction, 12 * size, plotter.camera, framed, 2 * size)
+            if start is not None:
+                arrows.append(np.array([start, start + light.direction * 12 * size]))
+        glyph = _light_glyph(light, center, size, start)
+        plotter.add_mesh(glyph, color=LIGHT_COLOR, lighting=False)
+    return arrows
+
+
+def scene_plotter(
+    scene_or_meshes: Plottable,
+    *,
+    shadows: Plottable | None = None,
+    volumes: Plottable | None = None,
+    lights: bool | Iterable[AnyLight] = True,
+    off_screen: bool = False,
+    window_size: Sequence[int] = (1024, 768),
+    view: str | ArrayLike | Viewpoint | None = None,
+    pbr: bool = False,
+) -> pv.Plotter:
+    """A ``pyvista.Plotter`` holding the picture :func:`plot` draws, not yet shown.
+
+    Parameters are those of :func:`plot`. Use it to add to the picture or to
+    read the camera (``plotter.renderer``) before ``plotter.show()`` or
+    ``plotter.screenshot()``.
+    """
+    items, scene_lights = _gather(scene_or_meshes, shadows, volumes, lights)
+    z_up = isinstance(scene_or_meshes, Scene) and (scene_or_meshes.up_axis or "Y").upper() == "Z"
+    plotter = _new_plotter(off_screen, window_size)
+    center, scale = _bounds(items, scene_lights)
+    _add_lights(plotter, scene_lights, center, scale)
+    _add_meshes(plotter, items, pbr)
     glyph_lights = [_bare(light) for light in scene_lights] if lights is not False else []
     # No depth peeling: with EGL off-screen it renders a blank picture, and a few
     # convex translucent volumes sort well enough without it.
     if view is None and isinstance(scene_or_meshes, Scene) and scene_or_meshes.viewpoints:
         view = scene_or_meshes.viewpoints[0]  # what the author framed
     drawn = [item.vertices for item in items if len(item.faces)]
-    # Frame the geometry and its shadows, and the positional lights near them
-    # (a far lamp would shrink the scene to a dot); not the directional arrows.
-    near = [
-        np.reshape(light.position, (1, 3))
-        for light in glyph_lights
-        if hasattr(light, "position")
-        and (not drawn or np.linalg.norm(light.position - center) <= scale)
-    ]
-    framed = np.concatenate(drawn + near) if drawn + near else np.zeros((1, 3))
+    framed = _framed_points(drawn, glyph_lights, center, scale)
     _camera(plotter, view, center, scale, z_up, framed)
-    size = 0.02 * scale
-    arrows = []
-    for light in glyph_lights:
-        start = None
-        if isinstance(light, DirectionalLight) and drawn:
-            start = _arrow_start(light.direction, 12 * size, plotter.camera, framed, 2 * size)
-            if start is not None:
-                arrows.append([start, start + light.direction * 12 * size])
-        glyph = _light_glyph(light, center, size, start)
-        plotter.add_mesh(glyph, color=LIGHT_COLOR, lighting=False)
+    arrows = _add_light_glyphs(plotter, glyph_lights, center, scale, framed, bool(drawn))
     if arrows and not isinstance(view, Viewpoint):
         _fit(plotter, np.concatenate([framed, *arrows]))  # room for the arrows beside
         plotter.renderer.ResetCameraClippingRange()
@@ -425,7 +493,7 @@ def plot(
     off_screen: bool = False,
     screenshot: str | os.PathLike[str] | None = None,
     window_size: Sequence[int] = (1024, 768),
-    view: str | ArrayLike | None = None,
+    view: str | ArrayLike | Viewpoint | None = None,
     pbr: bool = False,
 ) -> NDArray[np.uint8] | pv.Plotter:
     """Draw a scene, its shadows and shadow volumes with pyvista.

@@ -16,6 +16,7 @@ green CI run means every test ran.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 from collections.abc import Callable
@@ -45,6 +46,14 @@ def _executable(*names: str) -> Callable[[], Path | None]:
             if found:
                 return Path(found)
         return None
+
+    return find
+
+
+def _module(name: str) -> Callable[[], Path | None]:
+    def find() -> Path | None:
+        spec = importlib.util.find_spec(name)
+        return Path(spec.origin) if spec is not None and spec.origin else None
 
     return find
 
@@ -83,6 +92,7 @@ TOOLS: dict[str, tuple[Callable[[], Path | None], str]] = {
         _executable("chromium", "chromium-browser"),
         "Chromium is not installed (apt-get install chromium; .ci/run does)",
     ),
+    "mypy": (_module("mypy"), 'mypy is not installed: pip install ".[test]"'),
     "shadowgeo-script": (
         _executable("shadowgeo"),
         'the shadowgeo console script is not on PATH: pip install ".[test]"',

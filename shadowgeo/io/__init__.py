@@ -44,11 +44,13 @@ from __future__ import annotations
 import importlib
 import math
 import os
+from collections.abc import Iterable
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import SceneError
 from ..scene import Scene, Shape
@@ -83,6 +85,12 @@ WRITERS = {
     ".usdc": "usd_write",
     ".usd": "usd_write",
 }
+
+
+def float_triple(values: Iterable[Any]) -> tuple[float, float, float]:
+    """``tuple(float(v) for v in values)``, typed as the three it holds (an
+    ``(x, y, z)`` or an ``(r, g, b)``)."""
+    return cast("tuple[float, float, float]", tuple(float(v) for v in values))
 
 
 def _suffix(path: str | os.PathLike[str]) -> str:
@@ -138,7 +146,9 @@ def outside_reason(reference: str, target: Path, folder: Path) -> str | None:
     return None
 
 
-def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: str) -> None:
+def refuse_outside(
+    reference: str, target: Path, folder: Path, *, path: str | os.PathLike[str], where: str
+) -> None:
     """Raise a SceneError naming ``path`` and ``where`` unless ``reference``
     is relative and ``target`` (what it resolves to) is inside ``folder``
     (:func:`outside_reason`): readers open nothing remote, absolute or in a
@@ -148,7 +158,7 @@ def refuse_outside(reference: str, target: Path, folder: Path, *, path, where: s
         raise SceneError(f"refused: {reason}", path=str(path), node=where)
 
 
-def look_rotation(direction) -> np.ndarray:
+def look_rotation(direction: ArrayLike) -> np.ndarray:
     """(3, 3) rotation turning -Z onto ``direction`` (the convention of glTF
     and USD lights), by the shortest arc.
 
@@ -167,7 +177,8 @@ def look_rotation(direction) -> np.ndarray:
         return np.diag([1.0, -1.0, -1.0])
     # Rodrigues' formula for the rotation by the angle between source and target.
     cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + cross + cross @ cross / (1.0 + cosine)
+    rotation: np.ndarray = np.eye(3) + cross + cross @ cross / (1.0 + cosine)
+    return rotation
 
 
 def load(path: str | os.PathLike[str], **options: Any) -> Scene:

@@ -21,13 +21,14 @@ import json
 import math
 import struct
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import SceneError
-from ..lights import DirectionalLight, PointLight, SpotLight
+from ..lights import DirectionalLight, Light, PointLight, SpotLight
 from ..scene import SceneLight, Shape
-from . import look_rotation
+from . import float_triple, look_rotation
 
 GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = b"glTF", 0x4E4F534A, 0x004E4942
 LIGHTS = "KHR_lights_punctual"
@@ -64,7 +65,7 @@ def glb_chunks(data: bytes, path: Path) -> tuple[bytes, bytes]:
     return data[20 : 20 + length], binary
 
 
-def json_document(path: Path) -> tuple[dict, bytes | None]:
+def json_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
     """The JSON document of a ``.gltf`` or ``.glb`` file, checked to be a JSON
     object, and a GLB's binary chunk (None for ``.gltf``)."""
     try:
@@ -85,7 +86,7 @@ def json_document(path: Path) -> tuple[dict, bytes | None]:
     return document, binary
 
 
-def external_uris(document: dict) -> list[tuple[str, str]]:
+def external_uris(document: dict[str, Any]) -> list[tuple[str, str]]:
     """``(where, uri)`` of each buffer and image that names a file (not a
     ``data:`` URI), ``where`` as in ``"buffers[0] uri 'a.bin'"``."""
     found = []
@@ -100,16 +101,16 @@ def external_uris(document: dict) -> list[tuple[str, str]]:
 # -- extras["shadowgeo"] ------------------------------------------------------------------
 
 
-def shadowgeo_extras(node) -> dict:
+def shadowgeo_extras(node: Any) -> dict[str, Any]:
     """``node["extras"]["shadowgeo"]`` where both are objects, else ``{}``."""
     extras = node.get("extras") if isinstance(node, dict) else None
     found = extras.get("shadowgeo") if isinstance(extras, dict) else None
     return found if isinstance(found, dict) else {}
 
 
-def shape_extras(shape: Shape) -> dict:
+def shape_extras(shape: Shape) -> dict[str, Any]:
     """A shape node's ``extras`` (see the module's docstring)."""
-    extras = {"role": shape.role}
+    extras: dict[str, Any] = {"role": shape.role}
     if shape.group:
         extras["group"] = shape.group
     if not shape.casts_shadow or shape.receives_shadow:
@@ -118,7 +119,7 @@ def shape_extras(shape: Shape) -> dict:
     return {"shadowgeo": extras}
 
 
-def shape_fields(extras: dict) -> dict:
+def shape_fields(extras: dict[str, Any]) -> dict[str, Any]:
     """The :class:`Shape` keyword arguments a shape node's
     ``extras["shadowgeo"]`` holds, with their defaults."""
     return {
@@ -156,7 +157,7 @@ def unit_float(value: float) -> float:
     return min(max(float(value), 0.0), 1.0)
 
 
-def light_entry(light: SceneLight, index: int) -> tuple[dict, dict]:
+def light_entry(light: SceneLight, index: int) -> tuple[dict[str, Any], dict[str, Any]]:
     """The ``KHR_lights_punctual`` entry of ``light`` and the node that places
     it and refers to the entry by ``index``.
 
@@ -167,11 +168,11 @@ def light_entry(light: SceneLight, index: int) -> tuple[dict, dict]:
     requires. The node's ``extras`` keep what glTF has no field for.
     """
     geometry = light.light
-    entry: dict = {
+    entry: dict[str, Any] = {
         "color": [unit_float(c) for c in light.color],
         "intensity": max(float(light.intensity), 0.0) if light.on else 0.0,
     }
-    node: dict = {}
+    node: dict[str, Any] = {}
     if isinstance(geometry, DirectionalLight):
         entry["type"] = "directional"
     else:
@@ -204,13 +205,16 @@ def light_entry(light: SceneLight, index: int) -> tuple[dict, dict]:
     return entry, node
 
 
-def scene_light(entry: dict, world: np.ndarray, name: str | None, extras: dict) -> SceneLight:
+def scene_light(
+    entry: dict[str, Any], world: np.ndarray, name: str | None, extras: dict[str, Any]
+) -> SceneLight:
     """A SceneLight from a ``KHR_lights_punctual`` entry placed by ``world``
     (4, 4), the node's ``name`` and its ``extras["shadowgeo"]``."""
     kind = entry.get("type")
     position = world[:3, 3]
     direction = world[:3, :3] @ [0.0, 0.0, -1.0]
     radius = float(entry.get("range", math.inf))
+    light: Light
     if kind == "directional":
         light = DirectionalLight(direction)
     elif kind == "point":
@@ -228,10 +232,10 @@ def scene_light(entry: dict, world: np.ndarray, name: str | None, extras: dict) 
     return SceneLight(
         light,
         name=name if name is not None else entry.get("name"),
-        color=tuple(float(c) for c in entry.get("color", [1, 1, 1])[:3]),
+        color=float_triple(entry.get("color", [1, 1, 1])[:3]),
         intensity=float(extras.get("intensity", entry.get("intensity", 1.0))),
         ambient_intensity=float(extras.get("ambientIntensity", 0.0)),
-        attenuation=tuple(float(a) for a in extras.get("attenuation", (1.0, 0.0, 0.0))),
+        attenuation=float_triple(extras.get("attenuation", (1.0, 0.0, 0.0))),
         beam_width=float(beam),
         on=bool(extras.get("on", True)),
         global_=bool(extras.get("global", True)),

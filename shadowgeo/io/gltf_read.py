@@ -21,14 +21,17 @@ glTF is Y-up in metres, so a glTF scene reads as ``up_axis="Y"``,
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
+from typing import Any
 from urllib.parse import unquote
 
 import numpy as np
+import trimesh
 
 from ..errors import SceneError
 from ..scene import Material, Scene, Shape
-from . import refuse_outside
+from . import float_triple, refuse_outside
 from .gltf_layout import (
     LIGHTS,
     external_uris,
@@ -41,7 +44,7 @@ from .gltf_layout import (
 from .trimesh_formats import MALFORMED, load_scene, mesh_shape, triangle_meshes
 
 
-def _gltf_document(path: Path) -> tuple[dict, bytes | None]:
+def _gltf_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
     """The JSON document of a .gltf or .glb file, checked to be glTF 2.x with
     node references that exist and geometry trimesh decodes correctly, and a
     GLB's binary chunk (None for .gltf)."""
@@ -56,7 +59,7 @@ def _gltf_document(path: Path) -> tuple[dict, bytes | None]:
     return document, binary
 
 
-def _check_compression(document: dict, path: Path) -> None:
+def _check_compression(document: dict[str, Any], path: Path) -> None:
     """Refuse geometry trimesh would decode wrongly without an error: compressed
     primitives (it reads placeholder zeros and only logs that) and normalized
     integer positions (it ignores ``normalized``)."""
@@ -86,7 +89,7 @@ def _check_compression(document: dict, path: Path) -> None:
             ) from None
 
 
-def _check_references(document: dict, path: Path) -> None:
+def _check_references(document: dict[str, Any], path: Path) -> None:
     """Node references to meshes and nodes must exist (trimesh skips a missing
     mesh silently, which would lose geometry without a word)."""
     nodes = document.get("nodes") or []
@@ -105,7 +108,7 @@ def _check_references(document: dict, path: Path) -> None:
                 raise SceneError(message, path=str(path), node=where)
 
 
-def _check_uris(document: dict, path: Path) -> list[str]:
+def _check_uris(document: dict[str, Any], path: Path) -> list[str]:
     """Refuse resources that are remote or outside the file's folder, and
     missing buffers; return warnings for missing images (textures, which
     shadowgeo does not use)."""
@@ -122,7 +125,7 @@ def _check_uris(document: dict, path: Path) -> list[str]:
     return warnings
 
 
-def _for_trimesh(document: dict, binary: bytes | None) -> tuple[bytes, dict[str, int]]:
+def _for_trimesh(document: dict[str, Any], binary: bytes | None) -> tuple[bytes, dict[str, int]]:
     """The file trimesh reads, and its frame name -> glTF node index.
 
     Nodes and meshes are renamed ``node<i>`` and ``mesh<i>``: trimesh renames
@@ -157,7 +160,7 @@ def _for_trimesh(document: dict, binary: bytes | None) -> tuple[bytes, dict[str,
     return (text if binary is None else glb_container(text, binary)), frames
 
 
-def _untextured(material):
+def _untextured(material: Any) -> Any:
     """A glTF material without its texture references (and extensions, which
     may hold more)."""
     if not isinstance(material, dict):
@@ -176,14 +179,14 @@ def _untextured(material):
     return plain
 
 
-def _material_from_gltf(entry: dict) -> tuple[Material, bool]:
+def _material_from_gltf(entry: dict[str, Any]) -> tuple[Material, bool]:
     """(Material, solid) from a glTF material object."""
     pbr = entry.get("pbrMetallicRoughness") or {}
     red, green, blue, alpha = (list(pbr.get("baseColorFactor", [1, 1, 1, 1])) + [1.0] * 4)[:4]
     alpha = float(alpha) if entry.get("alphaMode", "OPAQUE") == "BLEND" else 1.0
     material = Material(
         diffuse_color=(float(red), float(green), float(blue)),
-        emissive_color=tuple(float(c) for c in (entry.get("emissiveFactor") or [0, 0, 0])[:3]),
+        emissive_color=float_triple((entry.get("emissiveFactor") or [0, 0, 0])[:3]),
         shininess=1.0 - float(pbr.get("roughnessFactor", 1.0)),
         transparency=1.0 - alpha,
         name=entry.get("name"),
@@ -191,7 +194,7 @@ def _material_from_gltf(entry: dict) -> tuple[Material, bool]:
     return material, not entry.get("doubleSided", False)
 
 
-def read(path, **options) -> Scene:
+def read(path: str | os.PathLike[str], **options: Any) -> Scene:
     """Read a glTF 2.0 file into a :class:`Scene`.
 
     Parameters
@@ -235,7 +238,7 @@ def read(path, **options) -> Scene:
     return scene
 
 
-def _look(document: dict, node: dict) -> dict:
+def _look(document: dict[str, Any], node: dict[str, Any]) -> dict[str, Any]:
     """``material`` and ``solid`` from the glTF material of a node whose mesh
     is one primitive with a material (exact float factors); else ``{}``, and
     trimesh's 8-bit colours serve."""
@@ -247,14 +250,21 @@ def _look(document: dict, node: dict) -> dict:
     return {}
 
 
-def _node_index(graph, frame: str, frames: dict[str, int]) -> int | None:
+def _node_index(graph: Any, frame: str, frames: dict[str, int]) -> int | None:
     """The glTF node of a frame (a primitive's frame hangs under its node's)."""
     while frame is not None and frame not in frames:
         frame = graph.transforms.parents.get(frame)
     return frames.get(frame)
 
 
-def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
+def _read_shapes(
+    scene: Scene,
+    loaded: trimesh.Scene,
+    path: Path,
+    frames: dict[str, int],
+    nodes: list[dict[str, Any]],
+    document: dict[str, Any],
+) -> None:
     graph = loaded.graph
     indices = {frame: _node_index(graph, frame, frames) for frame in graph.nodes_geometry}
     # In the file's node order (trimesh's graph order is not).
@@ -269,7 +279,13 @@ def _read_shapes(scene, loaded, path, frames, nodes, document) -> None:
     _read_empty_shapes(scene, graph, frames, nodes, keys)
 
 
-def _read_empty_shapes(scene, graph, frames, nodes, keys) -> None:
+def _read_empty_shapes(
+    scene: Scene,
+    graph: Any,
+    frames: dict[str, int],
+    nodes: list[dict[str, Any]],
+    keys: list[int],
+) -> None:
     """Shapes shadowgeo wrote without triangles are nodes without a mesh
     (glTF forbids empty accessors); put them back in node order."""
     for frame, index in frames.items():
@@ -292,7 +308,13 @@ def _read_empty_shapes(scene, graph, frames, nodes, keys) -> None:
     scene.shapes = [scene.shapes[i] for i in order]
 
 
-def _read_lights(scene, graph, frames, nodes, document) -> None:
+def _read_lights(
+    scene: Scene,
+    graph: Any,
+    frames: dict[str, int],
+    nodes: list[dict[str, Any]],
+    document: dict[str, Any],
+) -> None:
     entries = ((document.get("extensions") or {}).get(LIGHTS) or {}).get("lights") or []
     for frame, index in frames.items():
         node = nodes[index]

@@ -33,7 +33,9 @@ from __future__ import annotations
 
 import base64
 import json
+import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -82,14 +84,14 @@ class _Builder:
     """Accumulates the glTF JSON and its one binary buffer."""
 
     def __init__(self) -> None:
-        self.gltf: dict = {
+        self.gltf: dict[str, Any] = {
             "asset": {"version": "2.0", "generator": "shadowgeo"},
             "scene": 0,
             "scenes": [{"nodes": []}],
             "nodes": [],
         }
         self.binary = bytearray()
-        self.materials: dict[tuple, int] = {}
+        self.materials: dict[tuple[Any, ...], int] = {}
 
     def _view(self, data: bytes, target: int) -> int:
         self.binary.extend(b"\0" * (-len(self.binary) % 4))
@@ -100,12 +102,12 @@ class _Builder:
         self.binary.extend(data)
         return len(views) - 1
 
-    def _accessor(self, **accessor) -> int:
+    def _accessor(self, **accessor: Any) -> int:
         accessors = self.gltf.setdefault("accessors", [])
         accessors.append(accessor)
         return len(accessors) - 1
 
-    def node(self, node: dict) -> int:
+    def node(self, node: dict[str, Any]) -> int:
         self.gltf["nodes"].append(node)
         return len(self.gltf["nodes"]) - 1
 
@@ -141,7 +143,7 @@ class _Builder:
             self.materials[key] = len(materials) - 1
         return self.materials[key]
 
-    def light(self, light: SceneLight) -> dict:
+    def light(self, light: SceneLight) -> dict[str, Any]:
         """Add the light's KHR_lights_punctual entry; return the node placing it."""
         lights = self.gltf.setdefault("extensions", {}).setdefault(LIGHTS, {"lights": []})
         entry, node = light_entry(light, len(lights["lights"]))
@@ -186,8 +188,8 @@ class _Builder:
         return len(meshes) - 1
 
 
-def _shape_node(builder: _Builder, shape: Shape) -> dict:
-    node: dict = {}
+def _shape_node(builder: _Builder, shape: Shape) -> dict[str, Any]:
+    node: dict[str, Any] = {}
     if shape.name:
         node["name"] = shape.name
     transform = shape.transform
@@ -204,7 +206,7 @@ def _shape_node(builder: _Builder, shape: Shape) -> dict:
     return node
 
 
-def build(scene: Scene) -> tuple[dict, bytes]:
+def build(scene: Scene) -> tuple[dict[str, Any], bytes]:
     """The glTF JSON document and its binary buffer for ``scene``.
 
     Returns
@@ -253,20 +255,20 @@ def build(scene: Scene) -> tuple[dict, bytes]:
     return builder.gltf, bytes(builder.binary)
 
 
-def _glb(gltf: dict, binary: bytes) -> bytes:
+def _glb(gltf: dict[str, Any], binary: bytes) -> bytes:
     if binary:
         gltf["buffers"] = [{"byteLength": len(binary)}]
     return glb_container(json.dumps(gltf, separators=(",", ":"), allow_nan=False).encode(), binary)
 
 
-def _embedded(gltf: dict, binary: bytes) -> bytes:
+def _embedded(gltf: dict[str, Any], binary: bytes) -> bytes:
     if binary:
         uri = "data:application/octet-stream;base64," + base64.b64encode(binary).decode()
         gltf["buffers"] = [{"byteLength": len(binary), "uri": uri}]
     return json.dumps(gltf, indent=1, allow_nan=False).encode()
 
 
-def write(scene: Scene, path, **options) -> None:
+def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
     """Write ``scene`` as glTF 2.0: ``.glb`` binary or ``.gltf`` JSON with the
     buffer embedded as a data URI (one file, so the write stays atomic).
 

@@ -10,10 +10,14 @@ graph. These formats carry no units: a scene reads as Y-up with
 from __future__ import annotations
 
 import io
+import os
+from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike
 
 from ..errors import SceneError
 from ..scene import Material, Scene, Shape
@@ -44,7 +48,7 @@ def load_scene(path: Path, data: bytes | None = None) -> trimesh.Scene:
     return loaded
 
 
-def trimesh_material(geometry) -> tuple[Material, bool]:
+def trimesh_material(geometry: Any) -> tuple[Material, bool]:
     """(Material, solid) from a trimesh visual (8-bit colours)."""
     visual = getattr(geometry, "visual", None)
     material = getattr(visual, "material", None)
@@ -65,7 +69,9 @@ def trimesh_material(geometry) -> tuple[Material, bool]:
     return Material(diffuse_color=tuple(rgba[:3]), transparency=1.0 - alpha, name=name), solid
 
 
-def triangle_meshes(loaded: trimesh.Scene, path: Path, warnings: list[str], frames):
+def triangle_meshes(
+    loaded: trimesh.Scene, path: Path, warnings: list[str], frames: Iterable[str]
+) -> Iterator[tuple[str, np.ndarray, Any, trimesh.Trimesh]]:
     """``(frame, transform, geometry name, Trimesh)`` of each of ``frames``
     (frames of ``loaded``'s graph that hold geometry), skipping points and
     lines with a warning."""
@@ -78,7 +84,9 @@ def triangle_meshes(loaded: trimesh.Scene, path: Path, warnings: list[str], fram
         yield frame, transform, geometry_name, geometry
 
 
-def mesh_shape(geometry, transform, name: str | None, path: Path, **fields) -> Shape:
+def mesh_shape(
+    geometry: trimesh.Trimesh, transform: ArrayLike, name: str | None, path: Path, **fields: Any
+) -> Shape:
     """The :class:`Shape` of a ``trimesh.Trimesh`` placed by ``transform``
     (4, 4), named ``name`` in the file ``path``; its material and solidity
     come from trimesh unless ``fields`` (other Shape arguments) give them."""
@@ -93,7 +101,7 @@ def mesh_shape(geometry, transform, name: str | None, path: Path, **fields) -> S
     )
 
 
-def read(path, **options) -> Scene:
+def read(path: str | os.PathLike[str], **options: Any) -> Scene:
     """Read an OBJ, STL, PLY or OFF file into a :class:`Scene`.
 
     Parameters

@@ -31,6 +31,7 @@ import glob
 import re
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from ..errors import SceneError
 from . import outside_reason, refuse_outside
@@ -89,7 +90,9 @@ def check_assets(path: Path, notes: list[str] | None = None) -> None:
                 pending.append(target)
 
 
-def _checked_target(kind, asset: str, base: Path, folder: Path, path: Path, where: str) -> Path:
+def _checked_target(
+    kind: str, asset: str, base: Path, folder: Path, path: Path, where: str
+) -> Path:
     """Where ``asset`` (anchored at ``base``) leads, after refusing it unless
     it is a plain relative path inside ``folder``."""
     if asset.startswith("`"):
@@ -102,8 +105,11 @@ def _checked_target(kind, asset: str, base: Path, folder: Path, path: Path, wher
     return target
 
 
-def _note_outside(asset: str, base: Path, folder: Path, path: Path, where: str, notes) -> None:
+def _note_outside(
+    asset: str, base: Path, folder: Path, path: Path, where: str, notes: list[str] | None
+) -> None:
     """A note, not a refusal, for an asset that is never opened (a texture)."""
+    reason: str | None
     if asset.startswith("`"):
         reason = "a variable expression"
     else:
@@ -129,7 +135,7 @@ def _template_files(pattern: Path, folder: Path, path: Path, where: str) -> list
     return files
 
 
-def layer_assets(layer) -> list[tuple[str, str]]:
+def layer_assets(layer: Any) -> list[tuple[str, str]]:
     """Every ``(kind, asset path)`` an ``Sdf.Layer`` holds, as authored.
 
     The layer must be a throwaway copy (opened anonymously): its ``clips``
@@ -147,13 +153,18 @@ def layer_assets(layer) -> list[tuple[str, str]]:
         for variant_set in prim.variantSets.values():
             prims.extend(variant.primSpec for variant in variant_set.variants.values())
     labelled = {asset for _, asset in found}
-    others = []
-    UsdUtils.ModifyAssetPaths(layer, lambda asset: others.append(asset) or asset)
+    others: list[str] = []
+
+    def note(asset: str) -> str:
+        others.append(asset)
+        return asset
+
+    UsdUtils.ModifyAssetPaths(layer, note)
     found.extend(("asset", asset) for asset in others if asset not in labelled)
     return found
 
 
-def _arcs_and_clips(spec) -> Iterator[tuple[str, str]]:
+def _arcs_and_clips(spec: Any) -> Iterator[tuple[str, str]]:
     """A prim's or variant's references, payloads and value clips, labelled;
     its ``clips`` are cleared once read (see :func:`layer_assets`)."""
     for key, kind in (("references", "reference"), ("payload", "payload")):
@@ -167,7 +178,7 @@ def _arcs_and_clips(spec) -> Iterator[tuple[str, str]]:
             yield from _clip_assets(clips)
 
 
-def _list_op_items(list_op) -> list:
+def _list_op_items(list_op: Any) -> list[Any]:
     """The items a list op adds, in any of its forms (deleted ones open nothing)."""
     return [
         *list_op.explicitItems,
@@ -178,7 +189,7 @@ def _list_op_items(list_op) -> list:
     ]
 
 
-def _clip_assets(clips: dict) -> Iterator[tuple[str, str]]:
+def _clip_assets(clips: dict[str, Any]) -> Iterator[tuple[str, str]]:
     """Asset paths of the value-clip sets in a prim's ``clips`` metadata."""
     for clip_set in clips.values():
         if not isinstance(clip_set, dict):
@@ -197,7 +208,7 @@ def _clip_assets(clips: dict) -> Iterator[tuple[str, str]]:
                 yield kind, asset
 
 
-def _asset_values(value) -> Iterator[str]:
+def _asset_values(value: Any) -> Iterator[str]:
     """The asset paths in a field value: an asset, an asset array, or any
     dictionary or list holding them (time samples, custom data)."""
     Sdf = pxr()[1]
@@ -214,7 +225,8 @@ def _asset_values(value) -> Iterator[str]:
             yield from _asset_values(item)
 
 
-def _authored(asset) -> str:
+def _authored(asset: Any) -> str:
     """An ``Sdf.AssetPath`` as written in the file (before any expression is
     evaluated; usd-core before 25 keeps only ``path``)."""
-    return getattr(asset, "authoredPath", None) or asset.path
+    authored: str = getattr(asset, "authoredPath", None) or asset.path
+    return authored

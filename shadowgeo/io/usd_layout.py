@@ -38,7 +38,9 @@ leaves the copy stale is still obeyed), which makes round trips exact.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from ..errors import SceneError
 
@@ -46,7 +48,7 @@ PREFIX = "shadowgeo:"
 
 
 @functools.cache
-def pxr():
+def pxr() -> tuple[Any, ...]:
     """usd-core's modules ``Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt``,
     imported when first needed (it is slow to load)."""
     from pxr import Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
@@ -54,7 +56,7 @@ def pxr():
     return Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt
 
 
-def opened(opener, path: Path, failure: str):
+def opened(opener: Callable[[str], Any], path: Path, failure: str) -> Any:
     """``opener(path)`` (a layer or a stage); a SceneError saying ``failure``
     and usd-core's last message line when it raises or returns None."""
     from pxr import Tf
@@ -76,12 +78,12 @@ def usd_text(name: str) -> str:
     return "".join("\ufffd" if 0xD800 <= ord(c) <= 0xDFFF else c for c in name)
 
 
-def set_custom(prim, name: str, type_name, value) -> None:
+def set_custom(prim: Any, name: str, type_name: Any, value: Any) -> None:
     """Author the custom attribute ``shadowgeo:<name>`` on ``prim``."""
     prim.CreateAttribute(PREFIX + name, type_name, custom=True).Set(value)
 
 
-def custom(prim, name: str, default=None):
+def custom(prim: Any, name: str, default: Any = None) -> Any:
     """The authored value of ``shadowgeo:<name>`` on ``prim``, else ``default``."""
     attribute = prim.GetAttribute(PREFIX + name)
     if attribute and attribute.HasAuthoredValue():
@@ -89,10 +91,10 @@ def custom(prim, name: str, default=None):
     return default
 
 
-def stored_name(prim, marker: str) -> str | None:
+def stored_name(prim: Any, marker: str) -> str | None:
     """The original name: the displayName; for an unnamed shape or light that
     shadowgeo wrote (it has the ``shadowgeo:<marker>`` attribute), None;
     otherwise the prim's name."""
     if prim.GetDisplayName():
-        return prim.GetDisplayName()
-    return None if prim.GetAttribute(PREFIX + marker) else prim.GetName()
+        return str(prim.GetDisplayName())
+    return None if prim.GetAttribute(PREFIX + marker) else str(prim.GetName())

@@ -17,24 +17,29 @@ refused.
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..errors import SceneError
-from ..lights import DirectionalLight, PointLight, SpotLight
+from ..lights import DirectionalLight, Light, PointLight, SpotLight
 from ..polygons import polygons_triangles
 from ..scene import Material, Scene, SceneLight, Shape
+from . import float_triple
 from .usd_assets import check_assets
 from .usd_layout import custom, opened, pxr, stored_name
 
 
-def _world(xformable, time) -> np.ndarray:
+def _world(xformable: Any, time: Any) -> np.ndarray:
     """(4, 4) column-vector local-to-world transform of a prim."""
     return np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
 
 
-def _triangles(points: np.ndarray, counts: np.ndarray, indices: np.ndarray, holes):
+def _triangles(
+    points: np.ndarray, counts: np.ndarray, indices: np.ndarray, holes: Any
+) -> tuple[np.ndarray, int]:
     """Triangulate USD polygons.
 
     Returns (m, 3) triangles in the file's polygon order and the number of
@@ -59,7 +64,7 @@ def _triangles(points: np.ndarray, counts: np.ndarray, indices: np.ndarray, hole
     return np.concatenate(pieces).astype(np.int64)[order], dropped
 
 
-def _points(mesh, time) -> np.ndarray:
+def _points(mesh: Any, time: Any) -> np.ndarray:
     """(n, 3) float64 points: the writer's exact ``shadowgeo:points`` while
     they still match ``points`` (what other tools see and may have edited)."""
     points = np.array(mesh.GetPointsAttr().Get(time) or [], dtype=np.float64).reshape(-1, 3)
@@ -71,7 +76,9 @@ def _points(mesh, time) -> np.ndarray:
     return points
 
 
-def _polygons(mesh, time, n_points: int, path: Path, where: str):
+def _polygons(
+    mesh: Any, time: Any, n_points: int, path: Path, where: str
+) -> tuple[np.ndarray, np.ndarray]:
     """``faceVertexCounts`` and ``faceVertexIndices`` as int64 arrays, checked
     to agree with each other and with the ``n_points`` points."""
     counts = np.array(mesh.GetFaceVertexCountsAttr().Get(time) or [], dtype=np.int64)
@@ -94,14 +101,14 @@ def _polygons(mesh, time, n_points: int, path: Path, where: str):
     return counts, indices
 
 
-def _material(mesh, time) -> Material:
+def _material(mesh: Any, time: Any) -> Material:
     """The display colour and opacity, refined by a bound UsdPreviewSurface's
     emissive colour and roughness and the material's name."""
     UsdShade = pxr()[6]
     opacity = mesh.GetDisplayOpacityPrimvar().Get(time)
     color = mesh.GetDisplayColorPrimvar().Get(time)
     material = Material(
-        diffuse_color=tuple(float(c) for c in color[0]) if color else Material().diffuse_color,
+        diffuse_color=float_triple(color[0]) if color else Material().diffuse_color,
         transparency=1.0 - float(opacity[0]) if opacity else 0.0,
     )
     bound, _ = UsdShade.MaterialBindingAPI(mesh.GetPrim()).ComputeBoundMaterial()
@@ -109,7 +116,7 @@ def _material(mesh, time) -> Material:
         shader = bound.ComputeSurfaceSource()[0]
         emissive = shader.GetInput("emissiveColor") if shader else None
         if emissive and emissive.Get() is not None:
-            material.emissive_color = tuple(float(c) for c in emissive.Get())
+            material.emissive_color = float_triple(emissive.Get())
         roughness = shader.GetInput("roughness") if shader else None
         if roughness and roughness.Get() is not None:
             material.shininess = 1.0 - float(roughness.Get())
@@ -117,7 +124,7 @@ def _material(mesh, time) -> Material:
     return material
 
 
-def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
+def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
     """Append the shape of the ``UsdGeom.Mesh`` at ``prim``: its points,
     triangulated polygons, material, world transform and shadowgeo fields."""
     UsdGeom = pxr()[4]
@@ -149,7 +156,7 @@ def _read_mesh(scene: Scene, prim, path: Path, time) -> None:
     )
 
 
-def _read_light(scene: Scene, prim, time) -> bool:
+def _read_light(scene: Scene, prim: Any, time: Any) -> bool:
     """Append the light at ``prim``; False when it is no light shadowgeo models."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     if prim.IsA(UsdLux.DistantLight):
@@ -162,6 +169,7 @@ def _read_light(scene: Scene, prim, time) -> bool:
     direction = world[:3, :3] @ [0.0, 0.0, -1.0]
     radius = float(custom(prim, "range", math.inf))
     beam = custom(prim, "beamWidth")
+    light: Light
     if isinstance(usd_light, UsdLux.DistantLight):
         light = DirectionalLight(direction)
     else:
@@ -186,10 +194,10 @@ def _read_light(scene: Scene, prim, time) -> bool:
         SceneLight(
             light,
             name=stored_name(prim, "global"),
-            color=tuple(float(c) for c in (usd_light.GetColorAttr().Get(time) or (1, 1, 1))),
+            color=float_triple(usd_light.GetColorAttr().Get(time) or (1, 1, 1)),
             intensity=float(usd_light.GetIntensityAttr().Get(time) or 0.0),
             ambient_intensity=float(custom(prim, "ambientIntensity", 0.0)),
-            attenuation=tuple(float(a) for a in custom(prim, "attenuation", (1.0, 0.0, 0.0))),
+            attenuation=float_triple(custom(prim, "attenuation", (1.0, 0.0, 0.0))),
             beam_width=float(beam if beam is not None else math.pi / 4),
             on=visibility != UsdGeom.Tokens.invisible,
             global_=bool(custom(prim, "global", True)),
@@ -200,7 +208,7 @@ def _read_light(scene: Scene, prim, time) -> bool:
     return True
 
 
-def read(path, **options) -> Scene:
+def read(path: str | os.PathLike[str], **options: Any) -> Scene:
     """Read a USD file into a :class:`Scene`.
 
     Parameters

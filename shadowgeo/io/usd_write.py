@@ -7,7 +7,9 @@ The layout written, which :mod:`.usd_read` reads back, is described in
 from __future__ import annotations
 
 import math
+import os
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -48,7 +50,7 @@ def _face_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return np.repeat(normals, 3, axis=0).astype(np.float32)
 
 
-def _matrix(transform: np.ndarray):
+def _matrix(transform: np.ndarray) -> Any:
     """Gf.Matrix4d of a (4, 4) column-vector transform (USD uses row vectors)."""
     from pxr import Gf
 
@@ -67,7 +69,7 @@ class _Writer:
         self.stage.SetDefaultPrim(world.GetPrim())
         self.names = _Names()
         self.names.taken["/World"] = {"Looks"}
-        self.looks: dict[tuple, object] = {}
+        self.looks: dict[tuple[Any, ...], object] = {}
         self.groups: dict[object, str] = {}
 
     def write_shapes(self) -> None:
@@ -95,7 +97,7 @@ class _Writer:
             self.groups[key] = path
         return self.groups[key]
 
-    def _mesh(self, shape: Shape, path: str):
+    def _mesh(self, shape: Shape, path: str) -> Any:
         """Define the shape's Mesh prim at ``path`` and return the prim."""
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         vertices = np.ascontiguousarray(shape.vertices, dtype=np.float64)
@@ -141,7 +143,7 @@ class _Writer:
         UsdShade.MaterialBindingAPI.Apply(prim).Bind(self._look(look))
         return prim
 
-    def _look(self, look: Material):
+    def _look(self, look: Material) -> Any:
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
         key = (
             look.diffuse_color,
@@ -217,7 +219,7 @@ class _Writer:
                 usd_light.AddTransformOp(UsdGeom.XformOp.PrecisionDouble).Set(_matrix(transform))
 
 
-def write(scene: Scene, path, **options) -> None:
+def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
     """Write ``scene`` as USD; ``.usda`` is text, ``.usdc`` and ``.usd`` binary.
 
     Parameters

@@ -35,6 +35,7 @@ from lxml import etree
 from ..errors import SceneError
 from .x3d_classic_tokens import Token, is_number, number_text, quote, tokens
 from .x3d_field_types import CONTAINER_FIELDS, field_type
+from .x3d_fields import Element
 
 MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000
@@ -108,11 +109,13 @@ def parse_bytes(data: bytes, path: str) -> etree._ElementTree:
 
 
 class _Parser:
-    def __init__(self, found: list[Token], path: str, vrml97: bool):
+    def __init__(self, found: list[Token], path: str, vrml97: bool) -> None:
         self.tokens, self.path, self.vrml97 = found, path, vrml97
         self.position = 0
         self.comments: list[Token] = []
-        self.scopes: list[dict] = [{}]  # DEF name -> tag, per PROTO body
+        self.scopes: list[dict[str, tuple[str, str | None]]] = [
+            {}
+        ]  # DEF name -> tag, per PROTO body
         self.protos: dict[str, dict[str, str]] = {}  # name -> field -> type
         self.elements = 0
         self.depth = 0
@@ -158,7 +161,7 @@ class _Parser:
         line = token.line if token else (self.tokens[-1].line if self.tokens else 1)
         return SceneError(message, path=self.path, line=line)
 
-    def flush_comments(self, parent) -> None:
+    def flush_comments(self, parent: Element) -> None:
         self.peek()  # comments before the next token are collected by take()
         while self.position < len(self.tokens) and self.tokens[self.position].kind == "comment":
             self.comments.append(self.tokens[self.position])
@@ -169,7 +172,7 @@ class _Parser:
             parent.append(node)
         self.comments = []
 
-    def element(self, parent, tag: str, line: int, **attributes):
+    def element(self, parent: Element | None, tag: str, line: int, **attributes: str) -> Element:
         self.elements += 1
         if self.elements > MAX_ELEMENTS:
             raise SceneError(f"more than {MAX_ELEMENTS} nodes; refused", path=self.path, line=line)
@@ -182,7 +185,7 @@ class _Parser:
         element.sourceline = line
         return element
 
-    def set(self, element, name: str, value: str, line: int) -> None:
+    def set(self, element: Element, name: str, value: str | None, line: int) -> None:
         try:
             element.set(name, value)
         except ValueError as problem:
@@ -202,7 +205,7 @@ class _Parser:
         self.statements(scene, None)
         return etree.ElementTree(root)
 
-    def head(self, root, head) -> None:
+    def head(self, root: Element, head: Element) -> None:
         token = self.peek()
         if token is not None and token.text == "PROFILE" and token.kind == "word":
             self.take()
@@ -224,10 +227,10 @@ class _Parser:
                     conversionFactor=number_text(words[2]),
                 )  # fmt: skip
             else:
-                name, content = self.take("a META name"), self.take("a META content")
-                self.element(head, "meta", token.line, name=name.text, content=content.text)
+                meta_name, content = self.take("a META name"), self.take("a META content")
+                self.element(head, "meta", token.line, name=meta_name.text, content=content.text)
 
-    def statements(self, parent, end: str | None) -> None:
+    def statements(self, parent: Element, end: str | None) -> None:
         while True:
             self.flush_comments(parent)
             token = self.peek()
@@ -242,7 +245,7 @@ class _Parser:
             else:
                 self.node_statement(parent, None)
 
-    def statement(self, parent) -> None:
+    def statement(self, parent: Element) -> None:
         keyword = self.take()
         if keyword.text == "ROUTE":
             source, to, target = self.word("a route source"), self.word("TO"), self.word("a node")
@@ -274,7 +277,7 @@ class _Parser:
             self.proto(parent, keyword)
 
     # -- prototypes --------------------------------------------------------------
-    def proto(self, parent, keyword: Token) -> None:
+    def proto(self, parent: Element, keyword: Token) -> None:
         external = keyword.text == "EXTERNPROTO"
         name = self.word("a prototype name").text
         tag = "ExternProtoDeclare" if external else "ProtoDeclare"
@@ -300,13 +303,14 @@ class _Parser:
             self.set(declaration, "url", url, keyword.line)
             return
         self.expect("{")
-        body = self.element(declaration, "ProtoBody", self.peek().line if self.peek() else 1)
+        next_token = self.peek()
+        body = self.element(declaration, "ProtoBody", next_token.line if next_token else 1)
         self.scopes.append({})
         self.statements(body, "}")
         self.scopes.pop()
         self.expect("}")
 
-    def interface(self, parent, external: bool, in_proto: bool):
+    def interface(self, parent: Element, external: bool, in_proto: bool) -> Element:
         """One ``accessType type name [value | IS name]`` declaration as a ``<field>``."""
         access = self.word("an access type")
         if access.text not in ACCESS:
@@ -328,7 +332,7 @@ class _Parser:
             self.field_value(field, "value", None, name, kind, access)
         return field
 
-    def connect(self, node, node_field: str, proto_field: str, line: int) -> None:
+    def connect(self, node: Element, node_field: str, proto_field: str, line: int) -> None:
         holder = next((child for child in node if child.tag == "IS"), None)
         if holder is None:
             holder = self.element(node, "IS", line)
@@ -343,7 +347,7 @@ class _Parser:
             return True
         return after is not None and after.kind == "punct" and after.text == "{"
 
-    def node_statement(self, parent, field: str | None):
+    def node_statement(self, parent: Element, field: str | None) -> Element:
         token = self.word("a node")
         if token.text == "USE":
             name = self.word("a DEF name").text
@@ -364,7 +368,7 @@ class _Parser:
             element.set("containerField", field)
         return element
 
-    def node(self, parent, kind: Token, name: str | None):
+    def node(self, parent: Element, kind: Token, name: str | None) -> Element:
         if not _NAME.fullmatch(kind.text):
             raise self.error(f"{kind.text!r} is not a node type", [kind])
         self.expect("{")
@@ -383,7 +387,7 @@ class _Parser:
         self.depth -= 1
         return element
 
-    def body(self, element, kind: str, instance: bool) -> None:
+    def body(self, element: Element, kind: str, instance: bool) -> None:
         while True:
             self.flush_comments(element)
             token = self.peek()
@@ -414,7 +418,15 @@ class _Parser:
             else:
                 self.field_value(element, field, kind, field, field_type(kind, field), token)
 
-    def field_value(self, holder, attribute, kind, field, declared, token: Token) -> None:
+    def field_value(
+        self,
+        holder: Element,
+        attribute: str,
+        kind: str | None,
+        field: str,
+        declared: str | None,
+        token: Token,
+    ) -> None:
         """Parse a field's value into ``holder``: attribute ``attribute``, or child
         nodes (with ``containerField`` unless ``kind`` is None: prototype values)."""
         container = None if kind is None else field
@@ -422,7 +434,15 @@ class _Parser:
         if value is not None:
             self.set(holder, attribute, value, token.line)
 
-    def value(self, kind, field, declared, token, holder=None, container=None):
+    def value(
+        self,
+        kind: str | None,
+        field: str,
+        declared: str | None,
+        token: Token,
+        holder: Element | None = None,
+        container: str | None = None,
+    ) -> str | None:
         """The XML attribute text of the next field value, or None when it was
         nodes (appended to ``holder``) or NULL."""
         following = self.peek()
@@ -443,9 +463,9 @@ class _Parser:
             items: list[Token] = []
             nodes = len(holder) if holder is not None else 0
             while not self.at("]"):
-                if self.peek() is None:
-                    raise self.error(f"the file ends inside field {field}'s [ ]", [token])
                 following = self.peek()
+                if following is None:
+                    raise self.error(f"the file ends inside field {field}'s [ ]", [token])
                 if following.kind == "word" and following.text in STATEMENTS and holder is not None:
                     self.statement(holder)  # ROUTE and PROTO may stand among nodes
                 elif self.starts_node():
@@ -454,8 +474,8 @@ class _Parser:
                     self.node_statement(holder, container)
                 elif following.text == "NULL":
                     self.take()
-                elif self.peek().kind == "punct":
-                    raise self.error(f"unexpected {self.peek().text!r} in field {field}")
+                elif following.kind == "punct":
+                    raise self.error(f"unexpected {following.text!r} in field {field}")
                 else:
                     items.append(self.take())
             self.take()

@@ -11,7 +11,7 @@ keyword, ``TRUE``/``FALSE``/``NULL``, or a number such as ``1e-3``, ``.5``,
 from __future__ import annotations
 
 import re
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 from ..errors import SceneError
 
@@ -60,7 +60,8 @@ def tokens(text: str, path: str) -> list[Token]:
     found: list[Token] = []
     line = 1
     for match in _TOKEN.finditer(text):
-        kind, value = match.lastgroup, match.group()
+        # every alternative of _TOKEN is a named group
+        kind, value = cast(str, match.lastgroup), match.group()
         if kind == "open":
             raise SceneError(
                 "a string is not closed before the end of the file", path=path, line=line

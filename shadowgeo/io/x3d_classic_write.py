@@ -28,7 +28,7 @@ from .x3d_classic_read import classic_comment
 from .x3d_classic_tokens import is_number, quote
 from .x3d_defaults import DEFAULTS
 from .x3d_field_types import CONTAINER_FIELDS, field_type
-from .x3d_fields import local_name
+from .x3d_fields import Element, Tree, local_name
 from .x3d_fields import parse as parse_field
 
 INDENT = "  "
@@ -46,7 +46,7 @@ VRML97_ACCESS = {
 }  # fmt: skip
 
 
-def classic_text(tree, vrml97: bool = False) -> str:
+def classic_text(tree: Tree | Element, vrml97: bool = False) -> str:
     """The ClassicVRML text of an X3D XML tree (``lxml`` tree or root element),
     or with ``vrml97`` its VRML 97 translation (see :data:`VRML97_FIELDS`).
 
@@ -91,7 +91,7 @@ def classic_text(tree, vrml97: bool = False) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _vrml97_length(root) -> float:
+def _vrml97_length(root: Element) -> float:
     """The length unit's factor, for VRML 97 (which has no units); SceneError
     for an angle unit, which would change the meaning of every angle field."""
     factors = {}
@@ -110,7 +110,7 @@ def _vrml97_length(root) -> float:
     return length
 
 
-def _scaled(writer, children: list, length: float) -> list[str]:
+def _scaled(writer: _Writer, children: list[Element], length: float) -> list[str]:
     """The scene inside a Transform scaled to metres: VRML 97 has no length
     unit. Prototypes come first, routes last (VRML 97 allows neither among nodes)."""
     statements = ("ProtoDeclare", "ExternProtoDeclare", "ROUTE", "IMPORT", "EXPORT")
@@ -134,7 +134,7 @@ class _Writer:
         self.explicit = X3D4_DEFAULTS if vrml97 and x3d4 else {}
         self.protos: dict[str, dict[str, str]] = {}  # prototype name -> field -> type
 
-    def head(self, entry) -> list[str]:
+    def head(self, entry: Element) -> list[str]:
         tag = local_name(entry)
         lines = []
         if tag == "component":
@@ -150,7 +150,7 @@ class _Writer:
         return [f"# {line}" for line in lines] if self.vrml97 else lines
 
     # -- statements --------------------------------------------------------------
-    def statement(self, element, depth: int) -> list[str]:
+    def statement(self, element: Element, depth: int) -> list[str]:
         pad = INDENT * depth
         if isinstance(element, etree._Comment):
             text = classic_comment(element.text or "")
@@ -172,7 +172,7 @@ class _Writer:
             return self.proto(element, depth)
         return self.node(element, depth, pad)
 
-    def proto(self, element, depth: int) -> list[str]:
+    def proto(self, element: Element, depth: int) -> list[str]:
         pad, name = INDENT * depth, element.get("name", "")
         external = local_name(element) == "ExternProtoDeclare"
         interface = element if external else _child(element, "ProtoInterface")
@@ -191,7 +191,9 @@ class _Writer:
             lines += self.statement(child, depth + 1)
         return lines + [f"{pad}}}"]
 
-    def declaration(self, field, depth: int, with_value: bool, connected=None) -> list[str]:
+    def declaration(
+        self, field: Element, depth: int, with_value: bool, connected: str | None = None
+    ) -> list[str]:
         """``accessType type name [value | IS name]`` of a ``<field>``."""
         pad = INDENT * depth
         kind, access = field.get("type", ""), field.get("accessType", "initializeOnly")
@@ -207,7 +209,7 @@ class _Writer:
         return [f"{start} {self.value(field.get('value', ''), kind)}"]
 
     # -- nodes -------------------------------------------------------------------
-    def node(self, element, depth: int, start: str) -> list[str]:
+    def node(self, element: Element, depth: int, start: str) -> list[str]:
         if element.get("USE") is not None:
             return [f"{start}USE {element.get('USE')}"]
         tag = local_name(element)
@@ -222,7 +224,7 @@ class _Writer:
             return [f"{start}{kind} {{ }}"]
         return [f"{start}{kind} {{", *body, INDENT * depth + "}"]
 
-    def body(self, element, tag: str, kind: str, instance: bool, depth: int) -> list[str]:
+    def body(self, element: Element, tag: str, kind: str, instance: bool, depth: int) -> list[str]:
         pad = INDENT * depth
         connects = {
             c.get("nodeField"): c.get("protoField")
@@ -254,8 +256,8 @@ class _Writer:
         for name, proto_field in connects.items():
             if name not in declared:
                 lines.append(f"{pad}{name} IS {proto_field}")
-        groups: dict[str, list] = {}
-        pending: list = []  # comments go with the node after them
+        groups: dict[str, list[Element]] = {}
+        pending: list[Element] = []  # comments go with the node after them
         for child in element:
             child_tag = local_name(child)
             if isinstance(child, etree._Comment):
@@ -269,8 +271,11 @@ class _Writer:
                 pending = []
                 lines += self.statement(child, depth)
             elif child_tag and child_tag != "IS":
-                default = "children" if child_tag == "ProtoInstance" else None
-                default = default or CONTAINER_FIELDS.get(child_tag, "children")
+                default = (
+                    "children"
+                    if child_tag == "ProtoInstance"
+                    else CONTAINER_FIELDS.get(child_tag, "children")
+                )
                 groups.setdefault(child.get("containerField") or default, []).extend(
                     [*pending, child]
                 )
@@ -283,7 +288,7 @@ class _Writer:
         lines += [line for c in pending for line in self.statement(c, depth)]
         return lines
 
-    def nodes(self, start: str, items: list, depth: int, many: bool) -> list[str]:
+    def nodes(self, start: str, items: list[Element], depth: int, many: bool) -> list[str]:
         """``field Node { }`` or ``field [ ... ]`` (comments among the nodes kept)."""
         nodes = [item for item in items if isinstance(item.tag, str)]
         if not nodes:
@@ -296,7 +301,7 @@ class _Writer:
             lines += self.statement(item, depth + 1)
         return lines + [INDENT * depth + "]"]
 
-    def field_value(self, holder, proto: str, depth: int) -> list[str]:
+    def field_value(self, holder: Element, proto: str, depth: int) -> list[str]:
         pad, name = INDENT * depth, holder.get("name")
         kind = self.protos.get(proto, {}).get(name)
         nodes = [child for child in holder if isinstance(child.tag, str)]
@@ -331,7 +336,7 @@ def _faces(index: str) -> str:
     return " -1 ".join(triangles) + (" -1" if triangles else "")
 
 
-def _child(element, tag: str):
+def _child(element: Element, tag: str) -> Element | None:
     return next((child for child in element if local_name(child) == tag), None)
 
 

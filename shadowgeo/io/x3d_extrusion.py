@@ -17,7 +17,7 @@ import numpy as np
 
 from ..limits import MAX_EXTRUSION_POINTS as MAX_POINTS
 from ..polygons import polygon_triangles
-from .x3d_fields import Context, rotation_matrix
+from .x3d_fields import Context, Element, rotation_matrix
 
 # MAX_POINTS: vertices one Extrusion may make (spine x section): a few
 # kilobytes of text could otherwise ask for billions.
@@ -46,7 +46,8 @@ def frames(spine: np.ndarray) -> np.ndarray:
     """(n, 3, 3) SCP axes per spine point: columns X, Y, Z (world)."""
     n = len(spine)
     closed = _is_closed(spine)
-    ys, zs = [], []
+    ys: list[np.ndarray | None] = []
+    zs: list[np.ndarray | None] = []
     for i in range(n):
         if closed and i in (0, n - 1):
             y = spine[1] - spine[n - 2]
@@ -65,25 +66,28 @@ def frames(spine: np.ndarray) -> np.ndarray:
     # a spine with repeated points: borrow the nearest defined direction
     known = [y for y in ys if y is not None]
     fallback = known[0] if known else np.array([0.0, 1.0, 0.0])
-    ys = [fallback if y is None else y for y in ys]
+    axes_y = [fallback if y is None else y for y in ys]
     if all(z is None for z in zs):  # a straight spine: turn +Y onto it
-        turn = _turn(np.array([0.0, 1.0, 0.0]), ys[0])
+        turn = _turn(np.array([0.0, 1.0, 0.0]), axes_y[0])
         return np.repeat(turn[None], n, axis=0)
     first = next(z for z in zs if z is not None)
-    out, previous = [], first
-    for y, z in zip(ys, zs, strict=True):
-        z = previous if z is None else z
+    out: list[np.ndarray] = []
+    previous = first
+    for axis_y, found_z in zip(axes_y, zs, strict=True):
+        z = previous if found_z is None else found_z
         if np.dot(z, previous) < 0:
             z = -z
-        x = _unit(np.cross(y, z))
+        x = _unit(np.cross(axis_y, z))
         if x is None:
-            x = np.cross(y, previous)
-        out.append(np.column_stack([x, y, z]))
+            x = np.cross(axis_y, previous)
+        out.append(np.column_stack([x, axis_y, z]))
         previous = z
     return np.array(out)
 
 
-def _per_point(context: Context, element, name: str, default: list[float], n: int) -> np.ndarray:
+def _per_point(
+    context: Context, element: Element, name: str, default: list[float], n: int
+) -> np.ndarray:
     """Field ``name`` with one value per spine point. X3D: one value applies
     everywhere; a short list repeats its last; an empty one (the spec gives
     no meaning to it) is the field's default, with a note."""
@@ -92,11 +96,12 @@ def _per_point(context: Context, element, name: str, default: list[float], n: in
         context.warn(element, f"field {name} is empty; its default {default} is used")
         values = np.array([default], dtype=np.float64)
     if len(values) >= n:
-        return values[:n]
+        first_n: np.ndarray = values[:n]
+        return first_n
     return np.concatenate([values, np.repeat(values[-1:], n - len(values), axis=0)])
 
 
-def extrusion(context: Context, element) -> tuple[np.ndarray, np.ndarray]:
+def extrusion(context: Context, element: Element) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (n, 3) float64 and faces (m, 3) int64 of an Extrusion element
     (a concave cap is triangulated in its plane)."""
     spine = context.field(element, "spine").reshape(-1, 3)

@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Collection
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 from lxml import etree
@@ -25,6 +27,13 @@ from lxml import etree
 from ..errors import SceneError
 from ..limits import LARGEST_COORDINATE
 from .x3d_defaults import DEFAULTS
+
+if TYPE_CHECKING:
+    from .x3d_proto import Prototypes
+
+# lxml ships no type information: to mypy both are Any, named for the reader.
+Element: TypeAlias = etree._Element
+Tree: TypeAlias = etree._ElementTree
 
 # VRML 97 / X3D 3.3 SpotLight defaults; X3D 4.0 changed both (the schema's
 # 0.589049 = 3 pi / 16 and 1.570796 = pi / 2).
@@ -46,11 +55,12 @@ ANGLE_FIELDS = {"cutOffAngle", "beamWidth", "creaseAngle", "fieldOfView"}
 _STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
 
 
-def local_name(element) -> str:
+def local_name(element: Element) -> str:
     """Tag without namespace; '' for comments and processing instructions."""
     if not isinstance(element.tag, str):
         return ""
-    return etree.QName(element).localname
+    name: str = etree.QName(element).localname
+    return name
 
 
 @dataclass
@@ -61,12 +71,12 @@ class Context:
     version: tuple[int, int] = (4, 0)
     angle_factor: float = 1.0
     warnings: list[str] = field(default_factory=list)
-    defs: dict = field(default_factory=dict)  # DEF name -> [elements, in document order]
-    _order: dict = field(default_factory=dict)  # element -> index in its own tree
-    prototypes: object = None  # x3d_proto.Prototypes of the document
-    _said: set = field(default_factory=set)  # warnings given once (fields read again)
+    defs: dict[str, list[Element]] = field(default_factory=dict)  # DEF name -> [elements, in order]
+    _order: dict[Element, int] = field(default_factory=dict)  # element -> index in its own tree
+    prototypes: Prototypes | None = None  # of the document
+    _said: set[str] = field(default_factory=set)  # warnings given once (fields read again)
 
-    def definition(self, element):
+    def definition(self, element: Element) -> Element | None:
         """The element a ``USE`` names: the latest DEF of that name before it in
         the document (X3D lets a later DEF rebind a name), or None."""
         found = self.defs.get(element.get("USE"), [])
@@ -82,7 +92,7 @@ class Context:
         before = [node for node in found if self._order.get(node, here) < here]
         return before[-1] if before else found[0]
 
-    def resolve(self, element):
+    def resolve(self, element: Element) -> Element | None:
         """The node a ``USE`` names (the same element, not a copy), or ``element``;
         None, with a warning, when the USE names no DEF or a node of another type
         (X3D browsers skip such a node)."""
@@ -102,7 +112,7 @@ class Context:
             return None
         return target
 
-    def node(self, element):
+    def node(self, element: Element) -> Element | None:
         """The node ``element`` stands for: itself, the DEF a USE names, or the
         copy of a prototype's body a ProtoInstance stands for (None if none)."""
         element = self.resolve(element)
@@ -110,7 +120,7 @@ class Context:
             return None if self.prototypes is None else self.prototypes.expand(self, element)
         return element
 
-    def children(self, element, tags=None):
+    def children(self, element: Element, tags: Collection[str] | None = None) -> list[Element]:
         """Child nodes (see :meth:`node`), optionally only those whose tag is in ``tags``."""
         out = []
         for child in element:
@@ -120,25 +130,25 @@ class Context:
                     out.append(child)
         return out
 
-    def describe(self, element) -> str:
+    def describe(self, element: Element) -> str:
         name = local_name(element)
         for attribute in ("DEF", "USE"):
             if element.get(attribute):
                 return f"{name} {attribute}='{element.get(attribute)}'"
         return name
 
-    def where(self, element) -> str:
+    def where(self, element: Element) -> str:
         return f"{self.path} line {element.sourceline}, {self.describe(element)}"
 
-    def error(self, element, message: str) -> SceneError:
+    def error(self, element: Element, message: str) -> SceneError:
         return SceneError(
             message, path=self.path, line=element.sourceline, node=self.describe(element)
         )
 
-    def warn(self, element, message: str) -> None:
+    def warn(self, element: Element, message: str) -> None:
         self.warnings.append(f"{self.where(element)}: {message}")
 
-    def warn_once(self, element, message: str) -> None:
+    def warn_once(self, element: Element, message: str) -> None:
         """:meth:`warn`, once per element and message (a node used again is
         read again)."""
         text = f"{self.where(element)}: {message}"
@@ -146,7 +156,7 @@ class Context:
             self._said.add(text)
             self.warnings.append(text)
 
-    def _radians(self, kind: str, value):
+    def _radians(self, kind: str, value: Any) -> Any:
         if kind in ("SFRotation", "MFRotation"):
             value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
         else:
@@ -155,7 +165,7 @@ class Context:
             raise ValueError("is not finite in radians")
         return value
 
-    def field(self, element, name: str, kind: str | None = None):
+    def field(self, element: Element, name: str, kind: str | None = None) -> Any:
         """The value of field ``name`` of ``element``, or its default (also,
         with a warning, when the value written cannot be read).
 
@@ -186,7 +196,7 @@ class Context:
         return parse(default, kind)
 
 
-def parse(text: str, kind: str):
+def parse(text: str, kind: str) -> Any:
     """Parse ``text`` as X3D field type ``kind``; ValueError says why not.
 
     Examples

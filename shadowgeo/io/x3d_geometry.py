@@ -9,16 +9,18 @@ counter-clockwise (``ccw="false"`` is flipped here).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from .. import limits
 from ..errors import GeometryError
 from ..polygons import polygons_triangles
-from ..scene import primitives
+from ..scene import Material, primitives
 from .x3d_extrusion import extrusion
-from .x3d_fields import Context, local_name
+from .x3d_fields import Context, Element, local_name
 
 PRIMITIVES = {"Box", "Sphere", "Cone", "Cylinder"}
 MESHES = {
@@ -52,7 +54,7 @@ class Instance:
 
     geometry: Mesh | Primitive
     transform: np.ndarray
-    material: object
+    material: Material
     name: str | None
     source: str
     role: str = "geometry"
@@ -65,12 +67,12 @@ class Primitive:
     :mod:`shadowgeo.scene.primitives`; ``radius`` bounds it around the origin."""
 
     kind: str
-    parameters: dict
+    parameters: dict[str, Any]
     radius: float
     solid: bool = True
 
     @property
-    def key(self) -> tuple:
+    def key(self) -> tuple[Any, ...]:
         """Equal for equal primitives (which share one tessellation)."""
         return (self.kind, tuple(sorted(self.parameters.items())))
 
@@ -78,10 +80,13 @@ class Primitive:
         if self.kind == "Box":
             vertices, faces = primitives.box(**self.parameters)
         else:
-            make = {"Sphere": primitives.sphere, "Cone": primitives.cone}
-            vertices, faces = make.get(self.kind, primitives.cylinder)(
-                chord=chord, **self.parameters
-            )
+            make: dict[str, Callable[..., tuple[np.ndarray, np.ndarray]]] = {
+                "Sphere": primitives.sphere,
+                "Cone": primitives.cone,
+            }
+            build: Callable[..., tuple[np.ndarray, np.ndarray]]
+            build = make.get(self.kind, primitives.cylinder)
+            vertices, faces = build(chord=chord, **self.parameters)
         notes = []
         if self.kind == "Sphere":
             reached = primitives.inscribed_deviation(vertices, faces, self.radius)
@@ -90,7 +95,7 @@ class Primitive:
         return Mesh(vertices, faces, self.solid, notes)
 
 
-def geometry(context: Context, element) -> Mesh | Primitive:
+def geometry(context: Context, element: Element) -> Mesh | Primitive:
     """Geometry of one X3D geometry element (USE already resolved)."""
     tag = local_name(element)
     solid = context.field(element, "solid")
@@ -105,7 +110,7 @@ def geometry(context: Context, element) -> Mesh | Primitive:
     return mesh
 
 
-def _primitive(context: Context, element, tag: str, solid: bool) -> Primitive:
+def _primitive(context: Context, element: Element, tag: str, solid: bool) -> Primitive:
     def positive(name: str) -> float:
         value = context.field(element, name)
         if not value > 0:
@@ -141,7 +146,7 @@ def _primitive(context: Context, element, tag: str, solid: bool) -> Primitive:
     return Primitive(tag, parameters, float(np.hypot(radius, height / 2)), solid)
 
 
-def coordinates(context: Context, element) -> np.ndarray:
+def coordinates(context: Context, element: Element) -> np.ndarray:
     """(n, 3) points of the element's Coordinate or CoordinateDouble child."""
     nodes = context.children(element, COORDINATES)
     if not nodes:
@@ -149,10 +154,13 @@ def coordinates(context: Context, element) -> np.ndarray:
     node = nodes[0]
     if local_name(node) == "GeoCoordinate":
         raise context.error(node, "GeoCoordinate is not supported (no geospatial frames)")
-    return context.field(node, "point").reshape(-1, 3)
+    points: np.ndarray = context.field(node, "point").reshape(-1, 3)
+    return points
 
 
-def _checked(context: Context, element, name: str, indices: np.ndarray, n_points: int):
+def _checked(
+    context: Context, element: Element, name: str, indices: np.ndarray, n_points: int
+) -> np.ndarray:
     bad = (indices >= n_points) | (indices < -1)
     if np.any(bad):
         first = int(indices[np.argmax(bad)])
@@ -181,7 +189,7 @@ def _polygon_blocks(indices: np.ndarray) -> dict[int, np.ndarray]:
     }
 
 
-def _indexed_face_set(context: Context, element) -> Mesh:
+def _indexed_face_set(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     indices = _checked(
         context, element, "coordIndex", context.field(element, "coordIndex"), len(points)
@@ -203,21 +211,21 @@ def _stack(faces: list[np.ndarray]) -> np.ndarray:
     return np.concatenate(faces).astype(np.int64) if faces else np.zeros((0, 3), np.int64)
 
 
-def _indexed_triangle_set(context: Context, element) -> Mesh:
+def _indexed_triangle_set(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     index = _checked(context, element, "index", context.field(element, "index"), len(points))
     notes = [f"{len(index) % 3} trailing index value(s) ignored"] if len(index) % 3 else []
     return Mesh(points, index[: len(index) // 3 * 3].reshape(-1, 3), notes=notes)
 
 
-def _triangle_set(context: Context, element) -> Mesh:
+def _triangle_set(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     count = len(points) // 3 * 3
     notes = [f"{len(points) - count} trailing point(s) ignored"] if len(points) - count else []
     return Mesh(points, np.arange(count, dtype=np.int64).reshape(-1, 3), notes=notes)
 
 
-def _indexed_quad_set(context: Context, element) -> Mesh:
+def _indexed_quad_set(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     index = _checked(context, element, "index", context.field(element, "index"), len(points))
     notes = [f"{len(index) % 4} trailing index value(s) ignored"] if len(index) % 4 else []
@@ -225,7 +233,7 @@ def _indexed_quad_set(context: Context, element) -> Mesh:
     return Mesh(points, primitives.quads_to_triangles(quads), notes=notes)
 
 
-def _quad_set(context: Context, element) -> Mesh:
+def _quad_set(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     count = len(points) // 4 * 4
     notes = [f"{len(points) - count} trailing point(s) ignored"] if len(points) - count else []
@@ -253,7 +261,9 @@ def _strips(runs: list[np.ndarray]) -> np.ndarray:
     return _stack(out)
 
 
-def _runs_from_counts(context: Context, element, name: str, n_points: int) -> list[np.ndarray]:
+def _runs_from_counts(
+    context: Context, element: Element, name: str, n_points: int
+) -> list[np.ndarray]:
     counts = context.field(element, name)
     if np.any(counts < 3) or counts.sum() > n_points:
         raise context.error(
@@ -262,7 +272,7 @@ def _runs_from_counts(context: Context, element, name: str, n_points: int) -> li
     return np.split(np.arange(int(counts.sum())), np.cumsum(counts)[:-1])
 
 
-def _indexed_fan_or_strip(context: Context, element) -> Mesh:
+def _indexed_fan_or_strip(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     index = _checked(context, element, "index", context.field(element, "index"), len(points))
     runs = _polygons(index)
@@ -270,17 +280,17 @@ def _indexed_fan_or_strip(context: Context, element) -> Mesh:
     return Mesh(points, _fans(runs) if fan else _strips(runs))
 
 
-def _fan_set(context: Context, element) -> Mesh:
+def _fan_set(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     return Mesh(points, _fans(_runs_from_counts(context, element, "fanCount", len(points))))
 
 
-def _strip_set(context: Context, element) -> Mesh:
+def _strip_set(context: Context, element: Element) -> Mesh:
     points = coordinates(context, element)
     return Mesh(points, _strips(_runs_from_counts(context, element, "stripCount", len(points))))
 
 
-def _elevation_grid(context: Context, element) -> Mesh:
+def _elevation_grid(context: Context, element: Element) -> Mesh:
     nx, nz = context.field(element, "xDimension"), context.field(element, "zDimension")
     heights = context.field(element, "height")
     if nx < 0 or nz < 0 or len(heights) < nx * nz:
@@ -298,7 +308,7 @@ def _elevation_grid(context: Context, element) -> Mesh:
     return Mesh(vertices, primitives.quads_to_triangles(quads).astype(np.int64))
 
 
-def _extrusion(context: Context, element) -> Mesh:
+def _extrusion(context: Context, element: Element) -> Mesh:
     return Mesh(*extrusion(context, element))
 
 

@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any, Protocol
 from urllib.parse import unquote
 
 import numpy as np
 
 from .. import limits
 from ..errors import GeometryError, SceneError
+from ..scene import Scene
 from . import gltf_read, outside_reason, x3d_parse
 from .gltf_layout import external_uris, json_document
-from .x3d_fields import Context, local_name
+from .x3d_fields import Context, Element, Tree, local_name
 from .x3d_geometry import Instance, Mesh
 
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
@@ -37,7 +39,19 @@ GLTF_SUFFIXES = {".gltf", ".glb"}
 MAX_INLINE_DEPTH = limits.MAX_INLINE_DEPTH  # see shadowgeo.limits
 
 
-def resolve_url(reader, context: Context, url: str) -> Path | str:
+class InlineReader(Protocol):
+    """What reading an Inline needs of the X3D reader (:mod:`.x3d_read`'s)."""
+
+    root_folder: Path
+    warnings: list[str]
+    instances: list[Instance]
+    inline_stack: list[Path]
+    inline_files: dict[Path, Any]  # each Inline file read once: tree, Scene or why not
+
+    def document(self, tree: Tree, path: Path, matrix: np.ndarray, *, name: str | None) -> None: ...
+
+
+def resolve_url(reader: InlineReader, context: Context, url: str) -> Path | str:
     """The local file ``url`` names, or a string saying why there is none
     (nothing outside the scene's folder is looked at)."""
     if URL_SCHEME.match(url):
@@ -54,7 +68,9 @@ def resolve_url(reader, context: Context, url: str) -> Path | str:
     return candidate
 
 
-def load_inline(reader, context: Context, element, matrix: np.ndarray, name) -> None:
+def load_inline(
+    reader: InlineReader, context: Context, element: Element, matrix: np.ndarray, name: str | None
+) -> None:
     if not context.field(element, "load"):
         return
     urls = [url.strip() for url in context.field(element, "url") if url.strip()]
@@ -87,7 +103,14 @@ def _is_vrml1(path: Path) -> bool:
         return False  # _x3d says why it cannot be read
 
 
-def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> str | None:
+def _x3d(
+    reader: InlineReader,
+    context: Context,
+    element: Element,
+    path: Path,
+    matrix: np.ndarray,
+    name: str | None,
+) -> str | None:
     """Read an inlined X3D file into ``reader``; None, or why it cannot be read."""
     if path in reader.inline_stack:
         raise context.error(element, f"Inline cycle: {path.name} includes itself")
@@ -109,7 +132,7 @@ def _x3d(reader, context: Context, element, path: Path, matrix: np.ndarray, name
     return None
 
 
-def _read_gltf(reader, context: Context, element, path: Path):
+def _read_gltf(reader: InlineReader, context: Context, element: Element, path: Path) -> Scene | str:
     """The glTF file read as a Scene, or why it is not read."""
     try:
         document, _ = json_document(path)
@@ -130,7 +153,14 @@ def _read_gltf(reader, context: Context, element, path: Path):
     return loaded
 
 
-def _gltf(reader, context: Context, element, path: Path, matrix: np.ndarray, name) -> str | None:
+def _gltf(
+    reader: InlineReader,
+    context: Context,
+    element: Element,
+    path: Path,
+    matrix: np.ndarray,
+    name: str | None,
+) -> str | None:
     """Add an inlined glTF's shapes to ``reader``; None, or why it cannot be read."""
     if path not in reader.inline_files:
         reader.inline_files[path] = _read_gltf(reader, context, element, path)

@@ -30,15 +30,19 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import re
+from collections.abc import Collection
 from decimal import Decimal
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from lxml import etree
 
 from ..errors import SceneError
 from . import x3d_parse
+from .x3d_fields import Element, Tree
 from .x3d_json_fields import NODES
 
 JSON_SUFFIXES = {".x3dj", ".json"}
@@ -76,7 +80,7 @@ _OPEN, _CLOSE, _QUOTE, _BACKSLASH = (ord(mark) for mark in '{}"\\')
 _QUOTED = re.compile(r'"((?:[^"\\]|\\.)*)"', re.DOTALL)
 
 
-def is_x3d_json(path) -> bool:
+def is_x3d_json(path: str | os.PathLike[str]) -> bool:
     """Whether ``path``'s extension is one of the JSON encoding's."""
     return Path(path).suffix.lower() in JSON_SUFFIXES
 
@@ -140,7 +144,7 @@ class _Lines:
     object created is the one whose ``{`` is the k-th closed. Braces and
     quotes are found with numpy; only they are walked, to skip strings."""
 
-    def __init__(self, text: str, objects: list[dict]):
+    def __init__(self, text: str, objects: list[dict[str, Any]]) -> None:
         raw = np.frombuffer(text.encode("utf-8", "surrogatepass"), dtype=np.uint8)
         marks = np.flatnonzero((raw == _OPEN) | (raw == _CLOSE) | (raw == _QUOTE))
         opened, closed, in_string = [], [], False
@@ -159,7 +163,7 @@ class _Lines:
         lines = (np.searchsorted(newlines, closed) + 1).tolist()
         self.lines = {id(body): line for body, line in zip(objects, lines, strict=True)}
 
-    def of(self, body) -> int | None:
+    def of(self, body: object) -> int | None:
         return self.lines.get(id(body))
 
 
@@ -171,16 +175,16 @@ def _escaped(raw: np.ndarray, position: int) -> bool:
     return (position - start) % 2 == 1
 
 
-def _decode(data: bytes, path: Path):
+def _decode(data: bytes, path: Path) -> tuple[Any, _Lines]:
     try:
         text = data.decode(json.detect_encoding(data))
     except UnicodeDecodeError as problem:
         raise SceneError(f"not UTF-8, -16 or -32 text: {problem}", path=str(path)) from None
     if text.startswith("\ufeff"):
         text = text[1:]
-    objects: list[dict] = []
+    objects: list[dict[str, Any]] = []
 
-    def created(pairs):
+    def created(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
         body = dict(pairs)
         objects.append(body)
         return body
@@ -201,17 +205,17 @@ def _decode(data: bytes, path: Path):
 
 
 class _Builder:
-    def __init__(self, path: str, lines: _Lines):
+    def __init__(self, path: str, lines: _Lines) -> None:
         self.path = path
         self.lines = lines
 
-    def error(self, body, where: str, message: str) -> SceneError:
+    def error(self, body: Any, where: str, message: str) -> SceneError:
         line = self.lines.of(body) if body is not None else None
         steps = where.split("/")
         shown = where if len(steps) <= 8 else ".../" + "/".join(steps[-8:])
         return SceneError(message, path=self.path, line=line, node=shown)
 
-    def element(self, tag: str, body, where: str, depth: int):
+    def element(self, tag: str, body: Any, where: str, depth: int) -> Element:
         if depth > MAX_DEPTH:
             raise self.error(body, where, f"nodes nested more than {MAX_DEPTH} deep; refused")
         if not isinstance(body, dict):
@@ -244,7 +248,7 @@ class _Builder:
                     element.append(self.element(key, item, f"{here}[{index}]", depth + 1))
         return element
 
-    def attribute(self, element, name: str, value, body, where: str) -> None:
+    def attribute(self, element: Element, name: str, value: Any, body: Any, where: str) -> None:
         if name.startswith("xmlns"):
             return  # namespaces are declared by the tree itself
         text = self.text(value, body, where)
@@ -255,7 +259,7 @@ class _Builder:
         except ValueError as problem:
             raise self.error(body, where, f"cannot be an X3D field: {problem}") from None
 
-    def text(self, value, body, where: str) -> str:
+    def text(self, value: Any, body: Any, where: str) -> str:
         """The XML attribute text of a JSON field value."""
         if not isinstance(value, list):
             return self.scalar(value, body, where)
@@ -269,7 +273,7 @@ class _Builder:
             return " ".join('"' + _escape(item) + '"' for item in flat)
         return " ".join(self.scalar(item, body, where) for item in flat)
 
-    def scalar(self, value, body, where: str) -> str:
+    def scalar(self, value: Any, body: Any, where: str) -> str:
         if isinstance(value, bool):
             return "true" if value else "false"
         if isinstance(value, str):
@@ -278,7 +282,7 @@ class _Builder:
             return str(value).replace("E", "e")  # Decimal writes 1e-7 as 1E-7
         raise self.error(body, where, f"a field value cannot be {_kind(value)}")
 
-    def nodes(self, element, field: str, value, where: str, depth: int) -> None:
+    def nodes(self, element: Element, field: str, value: Any, where: str, depth: int) -> None:
         if isinstance(value, dict):
             items = [value]
         elif isinstance(value, list):
@@ -299,14 +303,14 @@ class _Builder:
                     child.set("containerField", field)
                 element.append(child)
 
-    def comment(self, text, body, where: str):
+    def comment(self, text: Any, body: Any, where: str) -> Element:
         if not isinstance(text, str):
             raise self.error(body, where, f"#comment must be a string, not {_kind(text)}")
         # XML comments cannot hold "--" or end in "-"
         text = re.sub("-(?=-)", "- ", text)
         return etree.Comment(text + " " if text.endswith("-") else text)
 
-    def source_code(self, element, value, body, where: str) -> None:
+    def source_code(self, element: Element, value: Any, body: Any, where: str) -> None:
         lines = value if isinstance(value, list) else [value]
         if not all(isinstance(line, str) for line in lines):
             raise self.error(body, where, "#sourceCode must be a string or strings")
@@ -317,18 +321,19 @@ class _Builder:
             raise self.error(body, where, f"#sourceCode: {problem}") from None
 
 
-def _kind(value) -> str:
+def _kind(value: object) -> str:
     names = {dict: "an object", list: "an array", str: "a string", bool: "a boolean"}
     if value is None:
         return "null"
     return names.get(type(value), "a number")
 
 
-def _flatten(values: list) -> list:
+def _flatten(values: list[Any]) -> list[Any]:
     """The scalars of nested arrays, in order (iteratively: no recursion limit)."""
     if list not in set(map(type, values)):
         return values
-    flat, stack = [], [iter(values)]
+    flat: list[Any] = []
+    stack = [iter(values)]
     while stack:
         for item in stack[-1]:
             if isinstance(item, list):
@@ -347,7 +352,7 @@ def _escape(text: str) -> str:
 # -- writing --------------------------------------------------------------------------------
 
 
-def dumps(tree) -> bytes:
+def dumps(tree: Tree | Element) -> bytes:
     """An lxml X3D tree (as the reader or writer holds it) as X3D JSON text.
 
     Raises
@@ -370,7 +375,7 @@ def dumps(tree) -> bytes:
     """
     root = tree.getroot() if isinstance(tree, etree._ElementTree) else tree
     writer = _Writer(root)
-    body = {"encoding": "UTF-8"}
+    body: dict[str, Any] = {"encoding": "UTF-8"}
     body["@profile"] = root.get("profile") or "Full"
     body["@version"] = root.get("version") or "4.0"
     if root.get(SCHEMA_LOCATION):
@@ -388,15 +393,15 @@ def dumps(tree) -> bytes:
     return ("".join(chunks) + "\n").encode("utf-8")
 
 
-def _is_comment(node) -> bool:
+def _is_comment(node: Element) -> bool:
     return node.tag is etree.Comment
 
 
-def _local(element) -> str:
+def _local(element: Element) -> str:
     return etree.QName(element).localname if isinstance(element.tag, str) else ""
 
 
-def _declared_fields(root) -> dict[str, dict[str, str]]:
+def _declared_fields(root: Element) -> dict[str, dict[str, str]]:
     """prototype name -> {field name: type}, for typing fieldValue values."""
     out: dict[str, dict[str, str]] = {}
     for declaration in root.iter("ProtoDeclare", "ExternProtoDeclare"):
@@ -407,10 +412,10 @@ def _declared_fields(root) -> dict[str, dict[str, str]]:
     return out
 
 
-def _first_nodes(root) -> dict[str, str]:
+def _first_nodes(root: Element) -> dict[str, str]:
     """prototype name -> the type of its ProtoBody's first node, whose
     containerField an instance without one takes."""
-    out = {}
+    out: dict[str, str] = {}
     for body in root.iter("ProtoBody"):
         nodes = [_local(child) for child in body if _local(child) not in IN_CHILDREN | {""}]
         if nodes:
@@ -419,18 +424,20 @@ def _first_nodes(root) -> dict[str, str]:
 
 
 class _Writer:
-    def __init__(self, root):
+    def __init__(self, root: Element) -> None:
         self.prototypes = _declared_fields(root)
         self.first_nodes = _first_nodes(root)
         # X3D 3 put metadata nodes in "metadata" by default, X3D 4 in "value"
         self.version_3 = (root.get("version") or "4.0").startswith("3")
 
-    def object(self, element) -> dict:
-        body: dict = {}
+    def object(self, element: Element) -> dict[str, Any]:
+        body: dict[str, Any] = {}
         self.fill(element, body)
         return body
 
-    def fill(self, element, body: dict, skip=frozenset()) -> None:
+    def fill(
+        self, element: Element, body: dict[str, Any], skip: Collection[str] = frozenset()
+    ) -> None:
         tag = _local(element)
         for name, text in element.attrib.items():
             if name in skip or name == "containerField" or name.startswith("{"):
@@ -463,9 +470,9 @@ class _Writer:
             if source:
                 body["#sourceCode"] = source.split("\n")
 
-    def node(self, tag: str, body: dict, name: str, child) -> None:
+    def node(self, tag: str, body: dict[str, Any], name: str, child: Element) -> None:
         kind = self.first_nodes.get(child.get("name", "")) if name == "ProtoInstance" else name
-        default = FIELDS.get(kind, ("children",))[0]
+        default = FIELDS.get(kind or "", ("children", {}))[0]
         if self.version_3 and kind and kind.startswith("Metadata"):
             default = "metadata"
         fields = FIELDS.get(tag, ("", {}))[1]
@@ -482,7 +489,7 @@ class _Writer:
         else:
             body.setdefault(key, []).append(entry)
 
-    def value(self, element, tag: str, name: str, text: str):
+    def value(self, element: Element, tag: str, name: str, text: str) -> Any:
         if tag == "field" and name == "value":
             kind = element.get("type", "SFString")
         elif tag == "fieldValue" and name == "value":
@@ -500,7 +507,7 @@ class _Writer:
             raise SceneError(f"{line}{tag} field {name}: {problem}") from None
 
 
-def typed(kind: str, text: str):
+def typed(kind: str, text: str) -> Any:
     """The JSON value of XML attribute ``text`` of X3D field type ``kind``.
 
     Examples
@@ -514,6 +521,7 @@ def typed(kind: str, text: str):
         found = [_unescape(match) for match in _QUOTED.findall(text)]
         return found if found or not text.strip() else [text]
     tokens = text.replace(",", " ").split()
+    values: list[Any]
     if kind in ("SFBool", "MFBool"):
         values = [_boolean(token) for token in tokens]
     else:
@@ -563,7 +571,7 @@ def _number(token: str) -> int | float:
     return value
 
 
-def _emit(value, indent: str, chunks: list[str]) -> None:
+def _emit(value: Any, indent: str, chunks: list[str]) -> None:
     """JSON text: objects and arrays of objects one entry a line, arrays of
     numbers, strings and booleans on one line (as X3dToJson writes them)."""
     inner = indent + "  "

@@ -8,31 +8,34 @@ the transform's mean scale ``|det M|^(1/3)`` (exact for uniform scaling).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
 from ..errors import GeometryError
-from ..lights import DirectionalLight, PointLight, SpotLight
+from ..lights import DirectionalLight, Light, PointLight, SpotLight
 from ..limits import check_coordinates, check_length
 from ..scene import Material, SceneLight
-from .x3d_fields import Context, local_name
+from . import float_triple
+from .x3d_fields import Context, Element, local_name
 
 LIGHTS = {"PointLight", "SpotLight", "DirectionalLight"}
 MATERIALS = {"Material", "PhysicalMaterial", "UnlitMaterial", "TwoSidedMaterial"}
 
 
-def _color(value) -> tuple[float, float, float]:
-    return tuple(float(c) for c in np.clip(value, 0.0, 1.0))
+def _color(value: Any) -> tuple[float, float, float]:
+    return float_triple(np.clip(value, 0.0, 1.0))
 
 
-def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | None:
+def scene_light(context: Context, element: Element, matrix: np.ndarray) -> SceneLight | None:
     """The light of ``element`` under the world ``matrix`` (4x4, column
     vectors); None, with a warning, for a light that lights nothing."""
     tag = local_name(element)
 
-    def field(name):
+    def field(name: str) -> Any:
         return context.field(element, name)
 
+    light: Light
     linear = matrix[:3, :3]
     scale = float(np.cbrt(abs(np.linalg.det(linear))))
     try:
@@ -59,7 +62,7 @@ def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | N
     except GeometryError as problem:
         context.warn(element, f"light skipped: {problem}")
         return None
-    extra = {}
+    extra: dict[str, Any] = {}
     if tag != "DirectionalLight":
         extra["attenuation"] = tuple(float(a) for a in field("attenuation"))
     if tag == "SpotLight":
@@ -78,7 +81,7 @@ def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | N
     )
 
 
-def _check_range(context: Context, element, location, radius: float) -> None:
+def _check_range(context: Context, element: Element, location: np.ndarray, radius: float) -> None:
     """SceneError unless the world location and radius are within the range
     the geometry carries (:mod:`shadowgeo.limits`): a light is never
     silently dropped for a number that is merely too large."""
@@ -89,7 +92,7 @@ def _check_range(context: Context, element, location, radius: float) -> None:
         raise context.error(element, str(problem)) from None
 
 
-def material(context: Context, appearance) -> Material:
+def material(context: Context, appearance: Element | None) -> Material:
     """The Material of an Appearance element (USE resolved), or X3D's rule
     for a Shape without one: unlit white (emissive 1 1 1, diffuse 0 0 0)."""
     unlit = Material(diffuse_color=(0.0, 0.0, 0.0), emissive_color=(1.0, 1.0, 1.0))
@@ -105,7 +108,7 @@ def material(context: Context, appearance) -> Material:
     node = nodes[0]
     tag = local_name(node)
 
-    def field(name):
+    def field(name: str) -> Any:
         return context.field(node, name)
 
     name = node.get("DEF")

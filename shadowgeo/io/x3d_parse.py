@@ -110,5 +110,5 @@ def parse(path: Path) -> etree._ElementTree:
     return tree
 
 
-def _has_entity_references(tree) -> bool:
+def _has_entity_references(tree: etree._ElementTree) -> bool:
     return any(True for _ in tree.iter(etree.Entity))

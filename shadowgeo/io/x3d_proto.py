@@ -14,9 +14,13 @@ from __future__ import annotations
 import copy
 import itertools
 import re
+from typing import TYPE_CHECKING
 
 from .. import limits
-from .x3d_fields import local_name
+from .x3d_fields import Element, local_name
+
+if TYPE_CHECKING:
+    from .x3d_fields import Context
 
 # Copies made per document at most: a prototype whose body holds an instance
 # of itself would otherwise expand for ever.
@@ -27,15 +31,15 @@ _FIELD_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 class Prototypes:
     """The ProtoDeclare elements of one document and the copies made of them."""
 
-    def __init__(self, root):
-        self.declarations = {}
+    def __init__(self, root: Element) -> None:
+        self.declarations: dict[str, Element] = {}
         for element in root.iter():
             if local_name(element) == "ProtoDeclare" and element.get("name"):
                 self.declarations.setdefault(element.get("name"), element)
-        self.copies: dict = {}
+        self.copies: dict[Element, Element | None] = {}
         self.serial = itertools.count()
 
-    def expand(self, context, instance):
+    def expand(self, context: Context, instance: Element) -> Element | None:
         """The node ``instance`` (a ProtoInstance element) stands for, or None
         with a warning. The same instance always gives the same copy."""
         if instance in self.copies:
@@ -54,15 +58,15 @@ class Prototypes:
                 instance, f"prototypes expand more than {MAX_EXPANSIONS} times (one inside itself?)"
             )
         values, node_values = _field_values(declaration, instance)
-        body = copy.deepcopy(body)
+        copied: Element = copy.deepcopy(body)
         # names first: the nodes IS brings in keep the names of the scope they come from
-        self._private_names(context, body)
-        _connect(context, body, values, node_values)
-        first = next(node for node in body if local_name(node))
+        self._private_names(context, copied)
+        _connect(context, copied, values, node_values)
+        first = next(node for node in copied if local_name(node))
         self.copies[instance] = first
         return first
 
-    def _private_names(self, context, body) -> None:
+    def _private_names(self, context: Context, body: Element) -> None:
         """Rename the copy's DEF/USE names apart and register its DEFs."""
         prefix = f"{next(self.serial)}#"
         for element in body.iter():
@@ -75,14 +79,17 @@ class Prototypes:
                 context.defs.setdefault(element.get("DEF"), []).append(element)
 
 
-def _child(element, tag: str):
+def _child(element: Element, tag: str) -> Element | None:
     return next((child for child in element if local_name(child) == tag), None)
 
 
-def _field_values(declaration, instance) -> tuple[dict, dict]:
+def _field_values(
+    declaration: Element, instance: Element
+) -> tuple[dict[str, str], dict[str, list[Element]]]:
     """Attribute values and node values of the prototype's fields: the
     interface's defaults overridden by the instance's fieldValue elements."""
-    values, node_values = {}, {}
+    values: dict[str, str] = {}
+    node_values: dict[str, list[Element]] = {}
     interface = _child(declaration, "ProtoInterface")
     for source in [interface, instance]:
         if source is None:
@@ -98,7 +105,12 @@ def _field_values(declaration, instance) -> tuple[dict, dict]:
     return values, node_values
 
 
-def _connect(context, body, values: dict, node_values: dict) -> None:
+def _connect(
+    context: Context,
+    body: Element,
+    values: dict[str, str],
+    node_values: dict[str, list[Element]],
+) -> None:
     for holder in [e for e in body.iter() if local_name(e) == "IS"]:
         node = holder.getparent()
         for connect in holder:

@@ -50,19 +50,21 @@ Rules the reader follows, where X3D leaves a choice:
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .. import limits
 from ..errors import GeometryError, SceneError
-from ..scene import Scene, Shape
+from ..scene import Material, Scene, SceneLight, Shape
 from ..scene.model import MARK, Viewpoint, axis_angle
 from ..tolerance import Tolerance
-from . import x3d_parse
+from . import float_triple, x3d_parse
 from .x3d_defaults import DEFAULTS
-from .x3d_fields import Context, local_name, rotation_matrix
+from .x3d_fields import Context, Element, Tree, local_name, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
 from .x3d_inline import URL_SCHEME, load_inline
 from .x3d_lights import LIGHTS, material, scene_light
@@ -88,25 +90,32 @@ REASONS = [
 
 
 class _Reader:
-    def __init__(self, root_folder: Path, warnings: list[str]):
+    def __init__(self, root_folder: Path, warnings: list[str]) -> None:
         self.root_folder = root_folder
         self.warnings = warnings
         self.instances: list[Instance] = []
-        self.lights = []
+        self.lights: list[SceneLight] = []
         self.viewpoints: list[Viewpoint] = []  # the top document's, in traversal order
-        self.skipped: dict[tuple, list] = {}  # (tag, why) -> [first place, count]
-        self.textures_seen: set = set()
-        self.geometry_cache: dict = {}
-        self.material_cache: dict = {}
+        self.skipped: dict[tuple[str, str], list[Any]] = {}  # (tag, why) -> [first place, count]
+        self.textures_seen: set[Element] = set()
+        self.geometry_cache: dict[Element, Mesh | Primitive | None] = {}
+        self.material_cache: dict[Element | None, Material] = {}
         self.inline_stack: list[Path] = []
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
         self.baked: list[str] = []  # DEFs of the enclosing groups of shadows shadowgeo added
         self.expanded = 0  # nodes the documents and prototype copies read so far expand to
-        self.sizes: dict = {}  # element -> its expanded size (see _expanded_size)
-        self.inline_files: dict[Path, object] = {}  # each Inline file read once: tree or Scene
+        self.sizes: dict[Element, int] = {}  # element -> its expanded size (see _expanded_size)
+        self.inline_files: dict[Path, Any] = {}  # each Inline file read once: tree or Scene
 
     # -- documents ---------------------------------------------------------------
-    def document(self, tree, path: Path, matrix, scene=None, name=None):
+    def document(
+        self,
+        tree: Tree,
+        path: Path,
+        matrix: np.ndarray,
+        scene: Scene | None = None,
+        name: str | None = None,
+    ) -> None:
         root = tree.getroot()
         display = str(path)
         context = Context(display, _version(root, display, self.warnings), warnings=self.warnings)
@@ -123,7 +132,7 @@ class _Reader:
         finally:
             self.inline_stack.pop()
 
-    def _count(self, context: Context, element, at=None) -> None:
+    def _count(self, context: Context, element: Element, at: Element | None = None) -> None:
         """Add the nodes ``element`` expands to to the budget, counted over every
         document and prototype copy read (Inlines and prototypes used again
         multiply too); refuse the scene beyond :data:`MAX_NODES`, naming ``at``."""
@@ -135,7 +144,7 @@ class _Reader:
                 f"{MAX_NODES} nodes",
             )
 
-    def _units(self, context: Context, root, scene) -> None:
+    def _units(self, context: Context, root: Element, scene: Scene | None) -> None:
         for unit in (e for e in root.iter() if local_name(e) == "unit"):
             category, factor = unit.get("category"), unit.get("conversionFactor", "")
             try:
@@ -152,7 +161,9 @@ class _Reader:
                 scene.meters_per_unit = value
 
     # -- traversal ---------------------------------------------------------------
-    def children(self, context: Context, element, matrix, name):
+    def children(
+        self, context: Context, element: Element, matrix: np.ndarray, name: str | None
+    ) -> None:
         tag = local_name(element)
         nodes = [child for child in element if local_name(child)]
         rendered = [
@@ -168,7 +179,9 @@ class _Reader:
         for child in rendered:
             self.node(context, child, matrix, name)
 
-    def node(self, context: Context, written, matrix, name):
+    def node(
+        self, context: Context, written: Element, matrix: np.ndarray, name: str | None
+    ) -> None:
         element = context.node(written)
         if element is None:  # a prototype instance that could not be expanded
             return
@@ -217,11 +230,15 @@ class _Reader:
         else:
             self._skip(context, element, tag, _why(tag))
 
-    def _skip(self, context: Context, element, tag: str, why: str = "not modelled") -> None:
+    def _skip(
+        self, context: Context, element: Element, tag: str, why: str = "not modelled"
+    ) -> None:
         entry = self.skipped.setdefault((tag, why), [context.where(element), 0])
         entry[1] += 1
 
-    def shape(self, context: Context, element, matrix, name):
+    def shape(
+        self, context: Context, element: Element, matrix: np.ndarray, name: str | None
+    ) -> None:
         geometry_nodes = context.children(element, GEOMETRY | UNMODELLED_GEOMETRY)
         if not geometry_nodes:
             context.warn(element, "Shape without geometry; skipped")
@@ -231,6 +248,7 @@ class _Reader:
         if tag in UNMODELLED_GEOMETRY:
             self._skip(context, node, tag, "geometry not modelled (no area or not supported)")
             return
+        built: Mesh | Primitive | None
         if node not in self.geometry_cache:
             try:
                 built = geometry(context, node)
@@ -264,7 +282,7 @@ class _Reader:
             )
         )
 
-    def _added_role(self, element) -> tuple[str, str | None]:
+    def _added_role(self, element: Element) -> tuple[str, str | None]:
         """Shapes in a group of shadows shadowgeo added read back as role
         "shadow" (or "volume"), not as geometry that casts."""
         if not self.baked:
@@ -272,7 +290,7 @@ class _Reader:
         volume = f"{MARK}-volume" in (element.get("class") or "").split()
         return ("volume" if volume else "shadow"), self.baked[-1]
 
-    def _textures(self, context: Context, appearance) -> None:
+    def _textures(self, context: Context, appearance: Element) -> None:
         for texture in (e for e in appearance.iter() if local_name(e) in TEXTURES):
             texture = context.resolve(texture)
             if texture is None or texture in self.textures_seen:
@@ -294,7 +312,7 @@ class _Reader:
             more = f" ({count} such nodes)" if count > 1 else ""
             self.warnings.append(f"{where}: skipped, {why}{more}")
         tolerance = self._tolerance(tolerance, chord)
-        tessellated: dict = {}
+        tessellated: dict[tuple[Any, ...], Mesh] = {}
         for instance in self.instances:
             built = instance.geometry
             if isinstance(built, Primitive):
@@ -347,7 +365,7 @@ def _public(name: str | None) -> str | None:
     return name.split("#", 1)[1] if name and re.match(r"\d+#", name) else name
 
 
-def _viewpoint(context: Context, element, matrix: np.ndarray) -> Viewpoint:
+def _viewpoint(context: Context, element: Element, matrix: np.ndarray) -> Viewpoint:
     """A Viewpoint in world coordinates (the transforms' scale does not
     change its field of view)."""
     rotation = rotation_matrix(context.field(element, "orientation"))
@@ -357,7 +375,7 @@ def _viewpoint(context: Context, element, matrix: np.ndarray) -> Viewpoint:
         context.warn_once(element, f"fieldOfView {field_of_view:g} is not in (0, pi); pi/4 used")
         field_of_view = np.pi / 4
     return Viewpoint(
-        tuple(float(v) for v in position),
+        float_triple(position),
         axis_angle(matrix[:3, :3] @ rotation),
         float(field_of_view),
         context.field(element, "description"),
@@ -372,7 +390,7 @@ def _why(tag: str) -> str:
     return "not modelled"
 
 
-def _expanded_size(context: Context, element, sizes: dict) -> int:
+def _expanded_size(context: Context, element: Element, sizes: dict[Element, int]) -> int:
     """Number of nodes the subtree stands for once every USE is expanded,
     counted in linear time (each DEF'd node once); a cycle counts 0 here and
     is reported by the traversal."""
@@ -387,7 +405,7 @@ def _expanded_size(context: Context, element, sizes: dict) -> int:
     return sizes[target]
 
 
-def _version(root, display: str, warnings: list[str]) -> tuple[int, int]:
+def _version(root: Element, display: str, warnings: list[str]) -> tuple[int, int]:
     text = root.get("version", "4.0")
     match = re.fullmatch(r"\s*(\d+)\.(\d+)\s*", text)
     if not match:
@@ -396,10 +414,10 @@ def _version(root, display: str, warnings: list[str]) -> tuple[int, int]:
     return int(match.group(1)), int(match.group(2))
 
 
-def _definitions(context: Context, root) -> dict:
+def _definitions(context: Context, root: Element) -> dict[str, list[Element]]:
     """DEF name -> elements in document order, outside prototype declarations
     (their names are local)."""
-    defs: dict = {}
+    defs: dict[str, list[Element]] = {}
     for element in root.iter():
         if not isinstance(element.tag, str) or element.get("DEF") is None:
             continue
@@ -414,7 +432,7 @@ def _definitions(context: Context, root) -> dict:
     return defs
 
 
-def _local_matrix(context: Context, element, tag: str) -> np.ndarray:
+def _local_matrix(context: Context, element: Element, tag: str) -> np.ndarray:
     """4x4 local-to-parent matrix of a grouping node (identity for plain groups)."""
     local = np.eye(4)
     if tag == "MatrixTransform":
@@ -431,7 +449,9 @@ def _local_matrix(context: Context, element, tag: str) -> np.ndarray:
     return local
 
 
-def read(path, *, tolerance: Tolerance | None = None, chord: float | None = None) -> Scene:
+def read(
+    path: str | os.PathLike[str], *, tolerance: Tolerance | None = None, chord: float | None = None
+) -> Scene:
     """Read an X3D file: XML (``.x3d``), JSON (``.x3dj``, ``.json``), ClassicVRML
     (``.x3dv``) or VRML 97 (``.wrl``), the XML and Classic ones also gzip-compressed.
 

@@ -55,11 +55,13 @@ from __future__ import annotations
 import copy
 import gzip
 import math
+import os
 import re
 from pathlib import Path
 
 import numpy as np
 from lxml import etree
+from numpy.typing import ArrayLike
 
 from ..errors import SceneError
 from ..lights import DirectionalLight, SpotLight
@@ -67,6 +69,7 @@ from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
+from .x3d_fields import Element, Tree
 
 ADDED_ROLES = ("shadow", "volume")
 # Written in the ClassicVRML encoding (the same tree, another syntax).
@@ -76,7 +79,7 @@ VRML97_SUFFIXES = (".wrl", ".wrz", ".wrl.gz")
 _UNLIMITED_RADIUS = 1e30
 
 
-def write(scene: Scene, path) -> None:
+def write(scene: Scene, path: str | os.PathLike[str]) -> None:
     """Write ``scene`` as X3D to ``path``: XML, gzip when it ends in ``.x3dz``,
     the JSON encoding when in ``.x3dj`` or ``.json``.
 
@@ -124,7 +127,7 @@ def write(scene: Scene, path) -> None:
         temporary.write_bytes(data)
 
 
-def _with_added(scene: Scene):
+def _with_added(scene: Scene) -> Tree:
     tree = copy.deepcopy(scene.document)
     if not isinstance(tree, etree._ElementTree):
         tree = etree.ElementTree(tree)
@@ -153,7 +156,7 @@ _STANDARD_DOCTYPE = re.compile(
 _TEXT_ATTRIBUTES = {"DEF", "USE", "class", "id", "style", "name", "description", "containerField"}
 
 
-def _clean(tree, notes: list[str], source: str) -> str | None:
+def _clean(tree: Tree, notes: list[str], source: str) -> str | None:
     """Strip from ``tree`` (a copy) what must never be copied (see the module
     notes), noting each; returns the DOCTYPE to write (None: none)."""
     info = tree.docinfo
@@ -209,7 +212,7 @@ def _clean(tree, notes: list[str], source: str) -> str | None:
     return doctype
 
 
-def _drop(node) -> None:
+def _drop(node: Element) -> None:
     """Remove ``node`` from its tree, keeping the text after it."""
     parent = node.getparent()
     previous = node.getprevious()
@@ -239,7 +242,7 @@ def _non_finite(value: str) -> bool:
 _COMPONENTS = {"Grouping": 1, "Rendering": 3, "Shape": 1}
 
 
-def _require_components(root, namespace: str) -> None:
+def _require_components(root: Element, namespace: str) -> None:
     """Declare the components the added nodes use in a ``profile="Core"``
     document's ``<head>`` (components come first in it)."""
     head = root.find(f"{namespace}head")
@@ -257,7 +260,7 @@ def _require_components(root, namespace: str) -> None:
             position += 1
 
 
-def _remove_marked(tree) -> None:
+def _remove_marked(tree: Tree) -> None:
     """Drop the groups an earlier run added, keeping the whitespace around
     them: the reader gave their shapes back as role "shadow"/"volume", so the
     scene's added shapes are what is written (the same ones, or new ones
@@ -273,7 +276,9 @@ def _remove_marked(tree) -> None:
         parent.remove(group)
 
 
-def _add_groups(parent, shapes: list[Shape], used: set[str], namespace: str = "") -> list:
+def _add_groups(
+    parent: Element, shapes: list[Shape], used: set[str], namespace: str = ""
+) -> list[Element]:
     """Append one Group per ``shape.group`` holding those shapes; returns them."""
     groups: dict[str, etree._Element] = {}
     for shape in shapes:
@@ -288,7 +293,7 @@ def _add_groups(parent, shapes: list[Shape], used: set[str], namespace: str = ""
     return list(groups.values())
 
 
-def _indent(body, groups) -> None:
+def _indent(body: Element, groups: list[Element]) -> None:
     """Indent the added groups like ``<Scene>``'s other children, and leave the
     whitespace of everything else as it was."""
     children = list(body)
@@ -311,7 +316,7 @@ def _indent(body, groups) -> None:
     groups[-1].tail = closing
 
 
-def _numbers(values) -> str:
+def _numbers(values: ArrayLike) -> str:
     values = np.asarray(values, dtype=np.float64).ravel()
     if not np.all(np.isfinite(values)):
         raise SceneError(f"cannot write a non-finite number in X3D: {values.tolist()[:8]}")
@@ -322,7 +327,7 @@ def _bool(value: bool) -> str:
     return "true" if value else "false"
 
 
-def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: bool):
+def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: bool) -> Element:
     """A ``<Shape>``: vertices in world coordinates when ``world``, else local."""
     element = etree.Element(f"{namespace}Shape")
     if shape.name:
@@ -352,7 +357,7 @@ def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: 
 # -- a fresh X3D 4.0 document ----------------------------------------------------------------
 
 
-def _fresh(scene: Scene):
+def _fresh(scene: Scene) -> Tree:
     up, meters = up_and_units(scene)
     xsd = "http://www.w3.org/2001/XMLSchema-instance"
     root = etree.Element("X3D", profile="Immersive", version="4.0", nsmap={"xsd": xsd})
@@ -397,7 +402,7 @@ def _fresh(scene: Scene):
     return etree.ElementTree(root)
 
 
-def _viewpoint_element(viewpoint: Viewpoint, used: set[str]):
+def _viewpoint_element(viewpoint: Viewpoint, used: set[str]) -> Element:
     element = etree.Element(
         "Viewpoint",
         position=_numbers(viewpoint.position),
@@ -411,7 +416,7 @@ def _viewpoint_element(viewpoint: Viewpoint, used: set[str]):
     return element
 
 
-def _light_element(scene_light: SceneLight, used: set[str]):
+def _light_element(scene_light: SceneLight, used: set[str]) -> Element:
     light = scene_light.light
     if isinstance(light, DirectionalLight):
         element = etree.Element("DirectionalLight", direction=_numbers(light.direction))

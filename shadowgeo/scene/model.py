@@ -10,9 +10,10 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..lights import DirectionalLight, PointLight, SpotLight
 
@@ -126,35 +127,38 @@ class Shape:
         """(n, 3) vertices in world coordinates (inf where they overflow float64:
         the geometry's range check names them)."""
         with np.errstate(over="ignore", invalid="ignore"):
-            return self.vertices @ self.transform[:3, :3].T + self.transform[:3, 3]
+            world: np.ndarray = self.vertices @ self.transform[:3, :3].T + self.transform[:3, 3]
+        return world
 
     @property
     def n_faces(self) -> int:
         return len(self.faces)
 
 
-def rotate(axis_angle, vector) -> np.ndarray:
+def rotate(axis_angle: ArrayLike, vector: ArrayLike) -> np.ndarray:
     """``vector`` (3,) turned by the rotation ``(x, y, z, angle)`` (right-hand
     rule about the axis; a zero axis turns nothing), by Rodrigues' formula.
 
     >>> rotate((0, 1, 0, math.pi / 2), (0, 0, -1)).round(12).tolist()
     [-1.0, 0.0, -0.0]
     """
-    axis = np.asarray(axis_angle[:3], dtype=np.float64)
-    angle = float(axis_angle[3])
-    vector = np.asarray(vector, dtype=np.float64)
+    rotation = np.asarray(axis_angle)
+    axis = np.asarray(rotation[:3], dtype=np.float64)
+    angle = float(rotation[3])
+    turned = np.asarray(vector, dtype=np.float64)
     length = float(np.linalg.norm(axis))
     if length == 0.0:
-        return vector.copy()
+        return turned.copy()
     axis = axis / length
-    return (
-        vector * math.cos(angle)
-        + np.cross(axis, vector) * math.sin(angle)
-        + axis * float(axis @ vector) * (1.0 - math.cos(angle))
+    result: np.ndarray = (
+        turned * math.cos(angle)
+        + np.cross(axis, turned) * math.sin(angle)
+        + axis * float(axis @ turned) * (1.0 - math.cos(angle))
     )
+    return result
 
 
-def axis_angle(matrix) -> tuple[float, float, float, float]:
+def axis_angle(matrix: ArrayLike) -> tuple[float, float, float, float]:
     """The rotation ``(x, y, z, angle)`` nearest to the 3x3 ``matrix`` (its
     polar factor: scale and shear dropped, a mirror undone), with a unit axis
     and ``0 <= angle <= pi``; ``(0, 0, 1, 0)`` for no rotation.
@@ -303,7 +307,7 @@ def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
     right /= np.linalg.norm(right)
     frame = np.column_stack([right, np.cross(away, right), away])
     return Viewpoint(
-        tuple(float(v) for v in position),
+        cast("tuple[float, float, float]", tuple(float(v) for v in position)),
         axis_angle(frame),
         field_of_view,
         "shadowgeo: the scene and its shadows",

@@ -49,7 +49,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
-from typing import Literal
+from typing import Literal, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -196,7 +196,14 @@ def add_shadows(
                         progress(start + count, total)
 
                 shape = _shadow_on(
-                    receiver, light, casters, tolerance, height, notes, light_name, step
+                    receiver,
+                    light,
+                    casters=casters,
+                    tolerance=tolerance,
+                    lift=height,
+                    notes=notes,
+                    light_name=light_name,
+                    step=step,
                 )
                 done += len(casters)
                 if shape is None:
@@ -288,7 +295,8 @@ def _select_lights(
     if not lit:
         sun = default_sun(scene.up_axis)
         what = "no lights" if not scene.lights else "no light that is on"
-        direction = ", ".join(f"{value:.3g}" for value in sun.light.direction)
+        sun_direction = cast(DirectionalLight, sun.light).direction
+        direction = ", ".join(f"{value:.3g}" for value in sun_direction)
         notes.append(
             f"shadows: the scene has {what}; a default sun casts, travelling along "
             f"({direction}), {DEFAULT_SUN_ELEVATION:.0f} degrees above the horizon "
@@ -392,6 +400,7 @@ def _may_shadow(
 def _shadow_on(
     receiver: Receiver,
     scene_light: SceneLight,
+    *,
     casters: list[_Caster],
     tolerance: Tolerance,
     lift: float,
@@ -399,7 +408,9 @@ def _shadow_on(
     light_name: str,
     step: Callable[[int], None],
 ) -> Shape | None:
-    """The united shadow of the casters on one receiver as a shape, or None."""
+    """The united shadow of the casters on one receiver as a shape, or None:
+    raised ``lift`` off the receiver's plane, ``step(count)`` called after each
+    caster, and a note in ``notes`` for a caster that cannot cast."""
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
     if plane is None:
