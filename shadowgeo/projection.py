@@ -23,7 +23,9 @@ light's range are then applied as exact 2-D intersections.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -144,7 +146,9 @@ class Shadow:
     mesh : trimesh.Trimesh
         The shadow region triangulated on the plane (lifted by ``offset``
         towards the light), with no overlapping triangles, wound
-        counter-clockwise seen from the light's side.
+        counter-clockwise seen from the light's side. A property, computed
+        on first use from ``mesh_source`` (a mesh, or a function that builds
+        it).
     polygons : list of list of (k, 2) float64
         The region in ``plane.to_2d`` coordinates: one ``[outer, hole, ...]``
         list per connected part, outer loops counter-clockwise.
@@ -155,10 +159,22 @@ class Shadow:
 
     plane: Plane
     light: Light
-    mesh: trimesh.Trimesh
+    mesh_source: trimesh.Trimesh | Callable[[], trimesh.Trimesh] = field(repr=False)
     polygons: list[list[np.ndarray]]
     area: float
     diagnostics: ShadowDiagnostics
+
+    @property
+    def mesh(self) -> trimesh.Trimesh:
+        """The region triangulated, built on first use: a caller that needs
+        only ``polygons`` or ``area`` (a sun study, a union of many
+        buildings) never pays for the triangulation."""
+        source = self.mesh_source
+        if isinstance(source, trimesh.Trimesh):
+            return source
+        mesh = source()
+        object.__setattr__(self, "mesh_source", mesh)
+        return mesh
 
     @property
     def is_empty(self) -> bool:
@@ -607,15 +623,23 @@ class _Projector:
         )
         if not parts:
             return Shadow(self.plane, self.light, empty_mesh(), [], 0.0, info)
-        u, v = self.plane.basis
         origin2d = self.plane.to_2d(self.origin + self.center)[0]
         polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
-        flat, faces = poly.triangulate_parts(parts)
-        flat = flat / self.scale
-        lift = self.origin + self.offset * self.plane.normal
-        points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v) + self.center
-        mesh = trimesh.Trimesh(points, faces, process=False)
-        return Shadow(self.plane, self.light, mesh, polygons, area, info)
+        lift = self.origin + self.offset * self.plane.normal + self.center
+        build = partial(_triangulated, parts, self.scale, lift, self.plane)
+        return Shadow(self.plane, self.light, build, polygons, area, info)
+
+
+def _triangulated(
+    parts: list[list[np.ndarray]], scale: float, lift: np.ndarray, plane: Plane
+) -> trimesh.Trimesh:
+    """The mesh of a shadow's parts (local units) on ``plane``, ``lift`` being
+    the scene point of the local origin."""
+    u, v = plane.basis
+    flat, faces = poly.triangulate_parts(parts)
+    flat = flat / scale
+    points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v)
+    return trimesh.Trimesh(points, faces, process=False)
 
 
 def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:
