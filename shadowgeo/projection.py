@@ -420,6 +420,10 @@ class _Projector:
             return self.empty("the lit part of the plane misses the receiver")
 
         loops = self._shadow_loops(low, high)
+        if not limit_regions:
+            # Whole faces may project past the bound: cut them there.
+            corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
+            limit_regions.append(poly.fill([corners]))
         region = poly.fill(loops)
         for limit in limit_regions:
             region = poly.intersect(region, limit)
@@ -522,75 +526,53 @@ class _Projector:
 
     def _shadow_loops(self, low: np.ndarray, high: np.ndarray) -> list[np.ndarray]:
         """Closed 2-D loops (local units) whose positive-winding region is the
-        shadow within the rectangle [low, high]."""
+        shadow within the rectangle [low, high].
+
+        Steps: sort the faces (:meth:`_sort_faces`), chain the outline of the
+        faces that project whole (:func:`_outline`), project it, then clip the
+        few faces that need it one by one (:func:`_clipped_loops`).
+        """
         caster = self.caster
-        faces = caster.faces
-        homogeneous = caster.centered
-        planes = np.vstack(
-            [np.append(self.plane.normal, self.d), _rectangle_planes(low, high) @ self.H]
-        )
-        planes /= np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
-        vertex_out = np.any((homogeneous @ planes.T) < 0, axis=1)
+        size = high - low
+        reach = self._clip_planes(low - _REACH * size, high + _REACH * size, lowered=True)
+        whole, cut = self._sort_faces(self._clip_planes(low, high, lowered=True), reach)
+        tight = self._clip_planes(low, high)
         # facing > 0: the face turns its front to the light. For a face whose
         # corners all project (w > 0) this is also the sign of its image's area.
         facing = caster.facing(self._light_h)
-        self.culled = 0
-        if not vertex_out.any():
-            whole = np.ones(len(faces), dtype=bool)
-            cut = np.zeros(len(faces), dtype=bool)
-        else:
-            whole = ~np.any(vertex_out[faces], axis=1)
-            # Only the few faces that are not whole need the per-plane test.
-            others = np.flatnonzero(~whole)
-            outside = (homogeneous[faces[others]] @ planes.T) < 0  # (k, 3, 5)
-            culled = np.all(outside, axis=1).any(axis=1)
-            cut = np.zeros(len(faces), dtype=bool)
-            cut[others[~culled]] = True
-            self.culled = int(culled.sum())
-            self._count_clipped(homogeneous, faces[others], outside)
-        if caster.is_closed:
-            # With the light outside a closed caster every shadow ray first
-            # meets a face turned to the light: the others add nothing.
-            front = facing > 0
-            cut &= front
-            if self.per_triangle:
-                loops, loop_vertices = _triangle_loops(caster, whole & front, facing)
-            elif whole.all():
-                loops, loop_vertices = silhouette_loops(caster, front)
-            else:
-                loops, loop_vertices = boundary_loops(caster, whole & front, front.astype(np.int64))
-        else:
-            # An open caster unites its triangles: copies and zero-area faces
-            # add nothing but work (quadratic in the copies), so they go first.
-            distinct = caster.distinct
-            cut &= distinct
-            if self.per_triangle:
-                loops, loop_vertices = _triangle_loops(caster, whole & distinct, facing)
-            else:
-                orientation = np.sign(facing).astype(np.int64)
-                loops, loop_vertices = boundary_loops(caster, whole & distinct, orientation)
-        if loop_vertices.size:
-            image = homogeneous[loop_vertices] @ self.H.T
-            if np.any(image[:, 2] <= 0):
-                raise GeometryError("the light touches the caster (a vertex projects to infinity)")
-            points = np.zeros((len(homogeneous), 2))
-            points[loop_vertices] = image[:, :2] / image[:, 2:3]
-            loops = [points[loop] for loop in loops]
-        for index in np.flatnonzero(cut):
-            polygon = _clip_convex(homogeneous[faces[index]], planes)
-            if len(polygon) < 3:
-                continue
-            image = polygon @ self.H.T
-            if np.any(image[:, 2] <= 0):
-                raise GeometryError(
-                    "the light touches the caster (a clipped point projects to infinity)"
-                )
-            loop = image[:, :2] / image[:, 2:3]
-            area = poly.signed_areas([loop])[0]
-            if area == 0:
-                continue
-            loops.append(loop if area > 0 else loop[::-1])
-        return loops
+        loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
+        projected = _project_loops(caster.centered, loops, loop_vertices, self.H)
+        return projected + _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
+
+    def _clip_planes(self, low: np.ndarray, high: np.ndarray, lowered: bool = False) -> np.ndarray:
+        """(5, 4) unit half-spaces ``planes @ x >= 0`` of the caster's centred
+        frame: the receiving plane and the four planes joining the light to
+        the rectangle [low, high] of the plane's local frame. ``lowered``
+        moves the receiving plane down by the coplanar tolerance: for sorting
+        faces, so that a caster standing on the plane is not sent to
+        clipping by corners that rounding put a hair below it."""
+        drop = self.tol.coplanar_length if lowered else 0.0
+        ground = np.append(self.plane.normal, self.d + drop)
+        planes = np.vstack([ground, _rectangle_planes(low, high) @ self.H])
+        return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+
+    def _sort_faces(self, tight: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(m,) bool ``whole`` (every corner above the plane and projecting
+        within the wide ``reach`` rectangle: the outline may take the face as
+        it is, the 2-D limits cut it) and ``cut`` (the other faces that reach
+        the ``tight`` rectangle: they are clipped one by one). Sets the
+        per-reason counts of faces leaving the tight rectangle and the
+        number culled."""
+        homogeneous, faces = self.caster.centered, self.caster.faces
+        whole = ~np.any(np.any(homogeneous @ reach.T < 0, axis=1)[faces], axis=1)
+        touched = np.flatnonzero(np.any(np.any(homogeneous @ tight.T < 0, axis=1)[faces], axis=1))
+        outside = (homogeneous[faces[touched]] @ tight.T) < 0  # (k, 3, 5)
+        culled = np.all(outside, axis=1).any(axis=1)
+        self.culled = int(culled.sum())
+        self._count_clipped(homogeneous, faces[touched], outside)
+        cut = ~whole
+        cut[touched[culled]] = False
+        return whole, cut
 
     def _count_clipped(
         self, homogeneous: np.ndarray, faces: np.ndarray, outside: np.ndarray
@@ -640,6 +622,80 @@ def _triangulated(
     flat = flat / scale
     points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v)
     return trimesh.Trimesh(points, faces, process=False)
+
+
+# Faces whose corners project within the rectangle widened by this many times
+# its size on each side are projected whole and cut in 2-D: a building whose
+# shadow runs past the receiver's edge takes the outline path, not the
+# per-triangle clipping. The widened rectangle stays far inside the range the
+# 2-D union accepts (9 * MAX_COORDINATE).
+_REACH = 4.0
+
+
+def _outline(
+    caster: Caster, whole: np.ndarray, cut: np.ndarray, facing: np.ndarray, per_triangle: bool
+) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """Loops of vertex indices whose positive winding is the shadow of the
+    ``whole`` faces, the vertices they use, and ``cut`` narrowed to the faces
+    that can add to the shadow."""
+    if caster.is_closed:
+        # With the light outside a closed caster every shadow ray first
+        # meets a face turned to the light: the others add nothing.
+        front = facing > 0
+        cut = cut & front
+        if per_triangle:
+            loops, vertices = _triangle_loops(caster, whole & front, facing)
+        elif whole.all():
+            loops, vertices = silhouette_loops(caster, front)
+        else:
+            loops, vertices = boundary_loops(caster, whole & front, front.astype(np.int64))
+        return loops, vertices, cut
+    # An open caster unites its triangles: copies and zero-area faces add
+    # nothing but work (quadratic in the copies), so they go first.
+    distinct = caster.distinct
+    cut = cut & distinct
+    if per_triangle:
+        loops, vertices = _triangle_loops(caster, whole & distinct, facing)
+    else:
+        orientation = np.sign(facing).astype(np.int64)
+        loops, vertices = boundary_loops(caster, whole & distinct, orientation)
+    return loops, vertices, cut
+
+
+def _project_loops(
+    homogeneous: np.ndarray, loops: list[np.ndarray], vertices: np.ndarray, H: np.ndarray
+) -> list[np.ndarray]:
+    """Loops of vertex indices -> (k, 2) loops of their images under ``H``."""
+    if not vertices.size:
+        return []
+    image = homogeneous[vertices] @ H.T
+    if np.any(image[:, 2] <= 0):
+        raise GeometryError("the light touches the caster (a vertex projects to infinity)")
+    points = np.zeros((len(homogeneous), 2))
+    points[vertices] = image[:, :2] / image[:, 2:3]
+    return [points[loop] for loop in loops]
+
+
+def _clipped_loops(
+    homogeneous: np.ndarray, faces: np.ndarray, planes: np.ndarray, H: np.ndarray
+) -> list[np.ndarray]:
+    """Each face clipped to ``planes`` and projected, turned counter-clockwise."""
+    loops = []
+    for face in faces:
+        polygon = _clip_convex(homogeneous[face], planes)
+        if len(polygon) < 3:
+            continue
+        image = polygon @ H.T
+        if np.any(image[:, 2] <= 0):
+            raise GeometryError(
+                "the light touches the caster (a clipped point projects to infinity)"
+            )
+        loop = image[:, :2] / image[:, 2:3]
+        area = poly.signed_areas([loop])[0]
+        if area == 0:
+            continue
+        loops.append(loop if area > 0 else loop[::-1])
+    return loops
 
 
 def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:

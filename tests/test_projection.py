@@ -523,3 +523,55 @@ def test_outline_path_matches_the_triangle_union(closed, light, height):
     assert fast.diagnostics.n_loops <= union.diagnostics.n_loops
     if not any(fast.diagnostics.clipped.values()):
         assert fast.diagnostics.n_loops < union.diagnostics.n_loops / 20
+
+
+# -- casters standing on the receiver ----------------------------------------------------
+
+
+def _boxes_on_the_ground(count: int, seed: int, sink: float = 0.0) -> trimesh.Trimesh:
+    """``count`` boxes standing on y = 0 (their bases lowered by ``sink``, as
+    rounding in a scene's transforms would), turned at random, some overlapping."""
+    rng = np.random.default_rng(seed)
+    boxes = []
+    for _ in range(count):
+        width, height, depth = rng.uniform(1, 3), rng.uniform(1, 6), rng.uniform(1, 3)
+        box = trimesh.creation.box([width, height, depth])
+        box.apply_transform(trimesh.transformations.rotation_matrix(rng.uniform(0, 3), [0, 1, 0]))
+        box.apply_translation([*rng.uniform(-8, 8, 1), height / 2, *rng.uniform(-8, 8, 1)])
+        box.vertices[box.vertices[:, 1] < 1e-9, 1] = -sink
+        boxes.append(box)
+    return trimesh.util.concatenate(boxes)
+
+
+def _hull_union(mesh: trimesh.Trimesh, light, count: int) -> shapely.Geometry:
+    """Exact reference for directional light: each box's shadow is the hull of its
+    eight projected corners."""
+    corners = mesh.vertices.reshape(count, 8, 3)
+    direction = light.direction
+    flat = corners - (corners[..., 1:2] / direction[1]) * direction
+    return shapely.union_all(shapely.convex_hull(shapely.multipoints(flat[..., [0, 2]])))
+
+
+@pytest.mark.parametrize("sink", [0.0, 1e-13])
+@pytest.mark.parametrize(
+    "light",
+    [
+        DirectionalLight([0.7, -0.35, 0.2]),
+        DirectionalLight([-0.3, -1, -0.5]),
+        PointLight([3, 9, 2]),
+    ],
+)
+def test_buildings_on_the_ground_take_the_outline_path_and_match_the_triangles(light, sink):
+    mesh = _boxes_on_the_ground(40, seed=5, sink=sink)
+    receiver = np.array([[-6.0, 0, -6], [6, 0, -6], [6, 0, 6], [-6, 0, 6]])  # shadows run past it
+    fast = project_shadow(mesh, light, GROUND, receiver=receiver)
+    slow = project_shadow(mesh, light, GROUND, receiver=receiver, method="triangles")
+    assert fast.diagnostics.clipped["below_plane"] == 0
+    assert fast.diagnostics.n_loops < len(mesh.faces) / 4  # outlines, not triangles
+    assert fast.area == pytest.approx(slow.area, rel=1e-9)
+    assert fast.to_shapely().symmetric_difference(slow.to_shapely()).area < 1e-9 * slow.area
+    if isinstance(light, DirectionalLight):
+        square = shapely.box(-6, -6, 6, 6)
+        expected = _hull_union(mesh, light, 40).intersection(square)
+        # plane 2-D coordinates of the ground are (z, x) or (x, z): compare areas
+        assert fast.area == pytest.approx(expected.area, rel=1e-9)
