@@ -23,10 +23,10 @@ light's range are then applied as exact 2-D intersections.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import partial
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Literal, overload
 
 import numpy as np
 import trimesh
@@ -36,7 +36,7 @@ from numpy.typing import ArrayLike
 from . import polygons as poly
 from .errors import GeometryError
 from .lights import Light, SpotLight, is_positional, require_light
-from .limits import check_coordinates, check_geometry
+from .limits import check_coordinates, check_light
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
@@ -196,6 +196,7 @@ class Shadow:
         return shapely.MultiPolygon(parts)
 
 
+@overload
 def project_shadow(
     caster: MeshLike,
     light: Light,
@@ -205,7 +206,32 @@ def project_shadow(
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
     method: Literal["auto", "triangles"] = "auto",
-) -> Shadow:
+) -> Shadow: ...
+
+
+@overload
+def project_shadow(
+    caster: MeshLike,
+    light: Sequence[Light],
+    plane: Plane,
+    *,
+    receiver: ArrayLike | None = None,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+    method: Literal["auto", "triangles"] = "auto",
+) -> list[Shadow]: ...
+
+
+def project_shadow(
+    caster: MeshLike,
+    light: Light | Sequence[Light],
+    plane: Plane,
+    *,
+    receiver: ArrayLike | None = None,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+    method: Literal["auto", "triangles"] = "auto",
+) -> Shadow | list[Shadow]:
     """The exact shadow of ``caster`` cast by ``light`` on ``plane``.
 
     Parameters
@@ -213,7 +239,10 @@ def project_shadow(
     caster : trimesh.Trimesh, Caster or (vertices, faces)
         Any triangle mesh: closed or open, concave, with degenerate faces or
         duplicate vertices. Open meshes cast from both sides.
-    light : PointLight, SpotLight or DirectionalLight
+    light : PointLight, SpotLight or DirectionalLight, or a sequence of them
+        A sequence gives one shadow per light, in order, each equal to what
+        the call with that light alone returns; the caster is checked and
+        prepared (topology, bounds) once for all of them.
     plane : Plane
         The receiving plane. Its normal gives the lit side: a light behind it
         casts no shadow on it.
@@ -233,7 +262,7 @@ def project_shadow(
 
     Returns
     -------
-    Shadow
+    Shadow, or list of Shadow for a sequence of lights
         Guaranteed finite (no NaN or inf), non-overlapping, within the
         receiver if one is given, else within the default bound (a square of
         half-width ``tolerance.bound_length`` centred on the foot of a
@@ -247,7 +276,8 @@ def project_shadow(
         coordinate, plane offset or light radius outside the range float64
         carries through the shadow formulas (:mod:`shadowgeo.limits`), a
         positional light on the plane, touching the caster, or inside a
-        closed caster, a receiver point off the plane.
+        closed caster, a receiver point off the plane. For a sequence of
+        lights the message starts with the index of the light at fault.
 
     Examples
     --------
@@ -261,27 +291,54 @@ def project_shadow(
     31.5
     """
     caster = as_caster(caster)
-    _check_types(light, plane)
+    if not isinstance(plane, Plane):
+        raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
     receiver_points = _receiver_points(receiver)
-    check_geometry(caster, light, plane)
-    light_points = [light.position] if is_positional(light) else []
-    if tolerance is None:
-        scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
-        tolerance = Tolerance.for_points(*scene, *light_points, receiver_points)
     offset = float(offset)
     if not math.isfinite(offset):
         raise GeometryError(f"offset must be finite, got {offset!r}")
     if method not in ("auto", "triangles"):
         raise GeometryError(f"method must be 'auto' or 'triangles', got {method!r}")
-    per_triangle = method == "triangles"
-    projector = _Projector(caster, light, plane, receiver_points, offset, tolerance, per_triangle)
-    return projector.run()
+    if caster.n_faces:
+        check_coordinates(caster.bounds, "caster bounds")
+    check_coordinates([plane.offset], "plane offset")
+    call = partial(
+        _one_light,
+        caster,
+        plane=plane,
+        receiver=receiver_points,
+        offset=offset,
+        tolerance=tolerance,
+        per_triangle=method == "triangles",
+    )
+    if not isinstance(light, Sequence):
+        return call(light)
+    shadows = []
+    for index, each in enumerate(light):
+        try:
+            shadows.append(call(each))
+        except GeometryError as error:
+            raise GeometryError(f"light {index}: {error}") from error
+    return shadows
 
 
-def _check_types(light: object, plane: object) -> None:
-    require_light(light)
-    if not isinstance(plane, Plane):
-        raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
+def _one_light(
+    caster: Caster,
+    light: Light,
+    *,
+    plane: Plane,
+    receiver: np.ndarray,
+    offset: float,
+    tolerance: Tolerance | None,
+    per_triangle: bool,
+) -> Shadow:
+    """The shadow of one light, the caster, plane and options already checked."""
+    check_light(require_light(light))
+    if tolerance is None:
+        light_points = [light.position] if is_positional(light) else []
+        scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
+        tolerance = Tolerance.for_points(*scene, *light_points, receiver)
+    return _Projector(caster, light, plane, receiver, offset, tolerance, per_triangle).run()
 
 
 def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
@@ -564,6 +621,15 @@ class _Projector:
         per-reason counts of faces leaving the tight rectangle and the
         number culled."""
         homogeneous, faces = self.caster.centered, self.caster.faces
+        box = self.caster.bounds - self.caster.center
+        corners = np.array(
+            [[x, y, z, 1.0] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]]
+        )
+        if np.all(corners @ tight.T > 0):
+            # The caster's box lies inside every half-space, so does each vertex.
+            self.culled = 0
+            self._count_clipped(homogeneous, faces[:0], np.zeros((0, 3, 5), dtype=bool))
+            return np.ones(len(faces), dtype=bool), np.zeros(len(faces), dtype=bool)
         whole = ~np.any(np.any(homogeneous @ reach.T < 0, axis=1)[faces], axis=1)
         touched = np.flatnonzero(np.any(np.any(homogeneous @ tight.T < 0, axis=1)[faces], axis=1))
         outside = (homogeneous[faces[touched]] @ tight.T) < 0  # (k, 3, 5)
