@@ -477,10 +477,12 @@ class _Projector:
             return self.empty("the lit part of the plane misses the receiver")
 
         loops = self._shadow_loops(low, high)
-        if not limit_regions:
-            # Whole faces may project past the bound: cut them there.
-            corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
-            limit_regions.append(poly.fill([corners]))
+        if not limit_regions and loops:
+            points = np.concatenate(loops)
+            if np.any(points < low) or np.any(points > high):
+                # Whole faces project past the bound: cut them there.
+                corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
+                limit_regions.append(poly.fill([corners]))
         region = poly.fill(loops)
         for limit in limit_regions:
             region = poly.intersect(region, limit)
