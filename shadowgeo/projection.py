@@ -613,7 +613,8 @@ class _Projector:
         drop = self.tol.coplanar_length if lowered else 0.0
         ground = np.append(self.plane.normal, self.d + drop)
         planes = np.vstack([ground, _rectangle_planes(low, high) @ self.H])
-        return planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+        unit: np.ndarray = planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+        return unit
 
     def _sort_faces(self, tight: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(m,) bool ``whole`` (every corner above the plane and projecting
