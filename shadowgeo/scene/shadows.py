@@ -47,6 +47,7 @@ the scene.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable, Sequence
 from typing import Literal
@@ -313,10 +314,15 @@ class _Caster:
     def __init__(self, shape: Shape) -> None:
         self.shape = shape
         self.vertices = shape.world_vertices
-        self.caster = Caster(self.vertices, shape.faces)
         self.low, self.high = self.vertices.min(axis=0), self.vertices.max(axis=0)
         self.name = shape.name or shape.source or "unnamed shape"
         self._cut: dict[int, Caster | None] = {}
+
+    @functools.cached_property
+    def caster(self) -> Caster:
+        """The whole shape as a caster, made when first needed: in one call
+        for all casters only the arrays are used."""
+        return Caster(self.vertices, self.shape.faces)
 
     def off_plane(self, receiver: Receiver, tolerance: Tolerance) -> Caster | None:
         """The caster without its triangles that lie in the receiver's plane
