@@ -8,6 +8,8 @@ then costs about 1e-16 of the region's size.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
@@ -66,39 +68,122 @@ def components(region: CrossSection) -> list[list[np.ndarray]]:
     Every part has a positive area. Clipper2 rounds to its fixed grid, and a
     sliver thinner than the grid can come back inside out (a negative area):
     such a part has no area worth the name and is dropped.
+
+    The loops come from one flat ``to_polygons`` and each hole goes to the
+    smallest outer loop around it (:func:`nest`): Clipper2's own
+    ``decompose`` is quadratic in the holes of a part, and a city's shadow
+    is one part with thousands of courtyards.
     """
+    loops = [np.asarray(loop, dtype=np.float64) for loop in region.to_polygons()]
+    return nest([loop for loop in loops if len(loop) >= 3])
+
+
+def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
+    """Group the loops of a region without crossings (outer loops
+    counter-clockwise, holes clockwise) into ``[outer, hole, ...]`` parts.
+
+    Each hole belongs to the smallest outer loop that contains it. Candidates
+    are outer loops whose bounding box holds the hole's; only a hole with more
+    than one candidate is tested, at the midpoint of its first edge (in a
+    region without crossings or overlapping edges that point lies on no other
+    loop). Parts are ordered by their outer loop, holes from the smallest.
+    """
+    if not loops:
+        return []
+    areas = signed_areas(loops)
+    outers = np.flatnonzero(areas > 0)
+    holes = np.flatnonzero(areas < 0)
+    if len(outers) == 0:
+        return []
+    low = np.array([loop.min(axis=0) for loop in loops])
+    high = np.array([loop.max(axis=0) for loop in loops])
+    parent = np.full(len(holes), -1, dtype=np.int64)
+    by_size = outers[np.argsort(areas[outers], kind="stable")]  # smallest first
+    chunk = max(1, 4_000_000 // len(outers))
+    for start in range(0, len(holes), chunk):
+        rows = holes[start : start + chunk]
+        around = np.all(low[by_size][None] <= low[rows][:, None], axis=2) & np.all(
+            high[by_size][None] >= high[rows][:, None], axis=2
+        )
+        count = around.sum(axis=1)
+        single = count == 1
+        parent[start : start + chunk][single] = by_size[np.argmax(around[single], axis=1)]
+        for row in np.flatnonzero(count > 1):
+            hole = loops[rows[row]]
+            point = 0.5 * (hole[0] + hole[1])
+            for candidate in by_size[around[row]]:
+                if _contains(loops[candidate], point):
+                    parent[start + row] = candidate
+                    break
     parts = []
-    for part in region.decompose():
-        loops = [np.asarray(loop, dtype=np.float64) for loop in part.to_polygons()]
-        loops = [loop for loop in loops if len(loop) >= 3]
-        if not loops:
+    for outer in outers:
+        own = holes[parent == outer]
+        own = own[np.argsort(-areas[own], kind="stable")]
+        if areas[outer] + areas[own].sum() <= 0:
             continue
-        areas = signed_areas(loops)
-        if areas.max() <= 0 or areas.sum() <= 0:
-            continue
-        order = np.argsort(-areas)  # the outer loop has the largest (positive) area
-        parts.append([loops[i] for i in order])
+        parts.append([loops[outer]] + [loops[i] for i in own])
     return parts
+
+
+def _contains(loop: np.ndarray, point: np.ndarray) -> bool:
+    """Crossing-number test: ``point`` strictly inside the closed ``loop``."""
+    start, end = loop, np.roll(loop, -1, axis=0)
+    straddle = (start[:, 1] > point[1]) != (end[:, 1] > point[1])
+    start, end = start[straddle], end[straddle]
+    crossing = start[:, 0] + (point[1] - start[:, 1]) * (end[:, 0] - start[:, 0]) / (
+        end[:, 1] - start[:, 1]
+    )
+    return bool(np.count_nonzero(crossing > point[0]) % 2)
 
 
 def parts_area(parts: list[list[np.ndarray]]) -> float:
     """Area of :func:`components`' parts (outer loops minus holes), >= 0."""
-    return float(sum(signed_areas(loops).sum() for loops in parts))
+    return float(signed_areas([loop for loops in parts for loop in loops]).sum())
+
+
+# A part with more loops than this is cut into tiles before triangulation:
+# ear clipping with holes is quadratic in the holes.
+_TILE_LOOPS = 64
 
 
 def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
     """Triangulate polygons with holes into non-overlapping counter-clockwise
-    triangles. Returns (n, 2) vertices and (m, 3) faces."""
+    triangles. Returns (n, 2) vertices and (m, 3) faces.
+
+    A part with many holes is first cut along a grid into pieces of a few
+    holes each (exact cuts by Clipper2, whose new vertices on the grid lines
+    are rounded to its 1e-8 grid), so the cost stays near linear.
+    """
     vertices, faces, base = [], [], 0
-    for loops in parts:
-        tris = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
-        points = np.concatenate(loops)
-        vertices.append(points)
-        faces.append(tris + base)
-        base += len(points)
+    for part in parts:
+        for loops in _tiles(part) if len(part) > _TILE_LOOPS else [part]:
+            tris = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
+            points = np.concatenate(loops)
+            vertices.append(points)
+            faces.append(tris + base)
+            base += len(points)
     if not vertices:
         return np.zeros((0, 2)), np.zeros((0, 3), dtype=np.int64)
     return np.concatenate(vertices), np.concatenate(faces)
+
+
+def _tiles(part: list[np.ndarray]) -> list[list[np.ndarray]]:
+    """``part`` cut by a square grid into pieces of about 16 loops each."""
+    region = fill(part)
+    points = part[0]
+    low, high = points.min(axis=0), points.max(axis=0)
+    count = math.ceil(math.sqrt(len(part) / 16))
+    xs = np.linspace(low[0], high[0], count + 1)
+    ys = np.linspace(low[1], high[1], count + 1)
+    xs[0], ys[0], xs[-1], ys[-1] = xs[0] - 1, ys[0] - 1, xs[-1] + 1, ys[-1] + 1
+    pieces = []
+    for i in range(count):
+        for j in range(count):
+            box = np.array(
+                [[xs[i], ys[j]], [xs[i + 1], ys[j]], [xs[i + 1], ys[j + 1]], [xs[i], ys[j + 1]]]
+            )
+            pieces.extend(components(intersect(region, CrossSection([box]))))
+    return pieces
 
 
 def polygon_triangles(points: np.ndarray) -> np.ndarray:

@@ -23,8 +23,10 @@ light's range are then applied as exact 2-D intersections.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal, cast
+from functools import partial
+from typing import TYPE_CHECKING, Literal, cast, overload
 
 import numpy as np
 import trimesh
@@ -34,7 +36,7 @@ from numpy.typing import ArrayLike
 from . import polygons as poly
 from .errors import GeometryError
 from .lights import Light, SpotLight, is_positional, require_light
-from .limits import check_coordinates, check_geometry
+from .limits import check_coordinates, check_light
 from .plane import Plane
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
@@ -146,7 +148,9 @@ class Shadow:
     mesh : trimesh.Trimesh
         The shadow region triangulated on the plane (lifted by ``offset``
         towards the light), with no overlapping triangles, wound
-        counter-clockwise seen from the light's side.
+        counter-clockwise seen from the light's side. A property, computed
+        on first use from ``mesh_source`` (a mesh, or a function that builds
+        it).
     polygons : list of list of (k, 2) float64
         The region in ``plane.to_2d`` coordinates: one ``[outer, hole, ...]``
         list per connected part, outer loops counter-clockwise.
@@ -157,10 +161,22 @@ class Shadow:
 
     plane: Plane
     light: Light
-    mesh: trimesh.Trimesh
+    mesh_source: trimesh.Trimesh | Callable[[], trimesh.Trimesh] = field(repr=False)
     polygons: list[list[np.ndarray]]
     area: float
     diagnostics: ShadowDiagnostics
+
+    @property
+    def mesh(self) -> trimesh.Trimesh:
+        """The region triangulated, built on first use: a caller that needs
+        only ``polygons`` or ``area`` (a sun study, a union of many
+        buildings) never pays for the triangulation."""
+        source = self.mesh_source
+        if isinstance(source, trimesh.Trimesh):
+            return source
+        mesh = source()
+        object.__setattr__(self, "mesh_source", mesh)
+        return mesh
 
     @property
     def is_empty(self) -> bool:
@@ -174,6 +190,7 @@ class Shadow:
         return shapely.MultiPolygon(parts)
 
 
+@overload
 def project_shadow(
     caster: MeshLike,
     light: Light,
@@ -183,7 +200,32 @@ def project_shadow(
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
     method: Literal["auto", "triangles"] = "auto",
-) -> Shadow:
+) -> Shadow: ...
+
+
+@overload
+def project_shadow(
+    caster: MeshLike,
+    light: Sequence[Light],
+    plane: Plane,
+    *,
+    receiver: ArrayLike | None = None,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+    method: Literal["auto", "triangles"] = "auto",
+) -> list[Shadow]: ...
+
+
+def project_shadow(
+    caster: MeshLike,
+    light: Light | Sequence[Light],
+    plane: Plane,
+    *,
+    receiver: ArrayLike | None = None,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+    method: Literal["auto", "triangles"] = "auto",
+) -> Shadow | list[Shadow]:
     """The exact shadow of ``caster`` cast by ``light`` on ``plane``.
 
     Parameters
@@ -191,7 +233,10 @@ def project_shadow(
     caster : trimesh.Trimesh, Caster or (vertices, faces)
         Any triangle mesh: closed or open, concave, with degenerate faces or
         duplicate vertices. Open meshes cast from both sides.
-    light : PointLight, SpotLight or DirectionalLight
+    light : PointLight, SpotLight or DirectionalLight, or a sequence of them
+        A sequence gives one shadow per light, in order, each equal to what
+        the call with that light alone returns; the caster is checked and
+        prepared (topology, bounds) once for all of them.
     plane : Plane
         The receiving plane. Its normal gives the lit side: a light behind it
         casts no shadow on it.
@@ -211,7 +256,7 @@ def project_shadow(
 
     Returns
     -------
-    Shadow
+    Shadow, or list of Shadow for a sequence of lights
         Guaranteed finite (no NaN or inf), non-overlapping, within the
         receiver if one is given, else within the default bound (a square of
         half-width ``tolerance.bound_length`` centred on the foot of a
@@ -225,7 +270,8 @@ def project_shadow(
         coordinate, plane offset or light radius outside the range float64
         carries through the shadow formulas (:mod:`shadowgeo.limits`), a
         positional light on the plane, touching the caster, or inside a
-        closed caster, a receiver point off the plane.
+        closed caster, a receiver point off the plane. For a sequence of
+        lights the message starts with the index of the light at fault.
 
     Examples
     --------
@@ -239,27 +285,54 @@ def project_shadow(
     31.5
     """
     caster = as_caster(caster)
-    _check_types(light, plane)
+    if not isinstance(plane, Plane):
+        raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
     receiver_points = _receiver_points(receiver)
-    check_geometry(caster, light, plane)
-    light_points = [light.position] if is_positional(light) else []
-    if tolerance is None:
-        scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
-        tolerance = Tolerance.for_points(*scene, *light_points, receiver_points)
     offset = float(offset)
     if not math.isfinite(offset):
         raise GeometryError(f"offset must be finite, got {offset!r}")
     if method not in ("auto", "triangles"):
         raise GeometryError(f"method must be 'auto' or 'triangles', got {method!r}")
-    per_triangle = method == "triangles"
-    projector = _Projector(caster, light, plane, receiver_points, offset, tolerance, per_triangle)
-    return projector.run()
+    if caster.n_faces:
+        check_coordinates(caster.bounds, "caster bounds")
+    check_coordinates([plane.offset], "plane offset")
+    call = partial(
+        _one_light,
+        caster,
+        plane=plane,
+        receiver=receiver_points,
+        offset=offset,
+        tolerance=tolerance,
+        per_triangle=method == "triangles",
+    )
+    if not isinstance(light, Sequence):
+        return call(light)
+    shadows = []
+    for index, each in enumerate(light):
+        try:
+            shadows.append(call(each))
+        except GeometryError as error:
+            raise GeometryError(f"light {index}: {error}") from error
+    return shadows
 
 
-def _check_types(light: object, plane: object) -> None:
-    require_light(light)
-    if not isinstance(plane, Plane):
-        raise GeometryError(f"plane must be a shadowgeo.Plane, got {plane!r}")
+def _one_light(
+    caster: Caster,
+    light: Light,
+    *,
+    plane: Plane,
+    receiver: np.ndarray,
+    offset: float,
+    tolerance: Tolerance | None,
+    per_triangle: bool,
+) -> Shadow:
+    """The shadow of one light, the caster, plane and options already checked."""
+    check_light(require_light(light))
+    if tolerance is None:
+        light_points = [light.position] if is_positional(light) else []
+        scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
+        tolerance = Tolerance.for_points(*scene, *light_points, receiver)
+    return _Projector(caster, light, plane, receiver, offset, tolerance, per_triangle).run()
 
 
 def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
@@ -398,6 +471,12 @@ class _Projector:
             return self.empty("the lit part of the plane misses the receiver")
 
         loops = self._shadow_loops(low, high)
+        if not limit_regions and loops:
+            points = np.concatenate(loops)
+            if np.any(points < low) or np.any(points > high):
+                # Whole faces project past the bound: cut them there.
+                corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
+                limit_regions.append(poly.fill([corners]))
         region = poly.fill(loops)
         for limit in limit_regions:
             region = poly.intersect(region, limit)
@@ -502,75 +581,63 @@ class _Projector:
 
     def _shadow_loops(self, low: np.ndarray, high: np.ndarray) -> list[np.ndarray]:
         """Closed 2-D loops (local units) whose positive-winding region is the
-        shadow within the rectangle [low, high]."""
+        shadow within the rectangle [low, high].
+
+        Steps: sort the faces (:meth:`_sort_faces`), chain the outline of the
+        faces that project whole (:func:`_outline`), project it, then clip the
+        few faces that need it one by one (:func:`_clipped_loops`).
+        """
         caster = self.caster
-        faces = caster.faces
-        homogeneous = caster.centered
-        planes = np.vstack(
-            [np.append(self.plane.normal, self.d), _rectangle_planes(low, high) @ self.H]
-        )
-        planes /= np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
-        vertex_out = np.any((homogeneous @ planes.T) < 0, axis=1)
+        size = high - low
+        reach = self._clip_planes(low - _REACH * size, high + _REACH * size, lowered=True)
+        whole, cut = self._sort_faces(self._clip_planes(low, high, lowered=True), reach)
+        tight = self._clip_planes(low, high)
         # facing > 0: the face turns its front to the light. For a face whose
         # corners all project (w > 0) this is also the sign of its image's area.
         facing = caster.facing(self._light_h)
-        self.culled = 0
-        if not vertex_out.any():
-            whole = np.ones(len(faces), dtype=bool)
-            cut = np.zeros(len(faces), dtype=bool)
-        else:
-            whole = ~np.any(vertex_out[faces], axis=1)
-            # Only the few faces that are not whole need the per-plane test.
-            others = np.flatnonzero(~whole)
-            outside = (homogeneous[faces[others]] @ planes.T) < 0  # (k, 3, 5)
-            culled = np.all(outside, axis=1).any(axis=1)
-            cut = np.zeros(len(faces), dtype=bool)
-            cut[others[~culled]] = True
-            self.culled = int(culled.sum())
-            self._count_clipped(homogeneous, faces[others], outside)
-        if caster.is_closed:
-            # With the light outside a closed caster every shadow ray first
-            # meets a face turned to the light: the others add nothing.
-            front = facing > 0
-            cut &= front
-            if self.per_triangle:
-                loops, loop_vertices = _triangle_loops(caster, whole & front, facing)
-            elif whole.all():
-                loops, loop_vertices = silhouette_loops(caster, front)
-            else:
-                loops, loop_vertices = boundary_loops(caster, whole & front, front.astype(np.int64))
-        else:
-            # An open caster unites its triangles: copies and zero-area faces
-            # add nothing but work (quadratic in the copies), so they go first.
-            distinct = caster.distinct
-            cut &= distinct
-            if self.per_triangle:
-                loops, loop_vertices = _triangle_loops(caster, whole & distinct, facing)
-            else:
-                orientation = np.sign(facing).astype(np.int64)
-                loops, loop_vertices = boundary_loops(caster, whole & distinct, orientation)
-        if loop_vertices.size:
-            image = homogeneous[loop_vertices] @ self.H.T
-            if np.any(image[:, 2] <= 0):
-                raise GeometryError("the light touches the caster (a vertex projects to infinity)")
-            points = np.zeros((len(homogeneous), 2))
-            points[loop_vertices] = image[:, :2] / image[:, 2:3]
-            loops = [points[loop] for loop in loops]
-        for index in np.flatnonzero(cut):
-            polygon = _clip_convex(homogeneous[faces[index]], planes)
-            if len(polygon) < 3:
-                continue
-            image = polygon @ self.H.T
-            if np.any(image[:, 2] <= 0):
-                raise GeometryError(
-                    "the light touches the caster (a clipped point projects to infinity)"
-                )
-            loop = image[:, :2] / image[:, 2:3]
-            area = poly.signed_areas([loop])[0]
-            if area == 0:
-                continue
-            loops.append(loop if area > 0 else loop[::-1])
-        return loops
+        loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
+        projected = _project_loops(caster.centered, loops, loop_vertices, self.H)
+        return projected + _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
+
+    def _clip_planes(self, low: np.ndarray, high: np.ndarray, lowered: bool = False) -> np.ndarray:
+        """(5, 4) unit half-spaces ``planes @ x >= 0`` of the caster's centred
+        frame: the receiving plane and the four planes joining the light to
+        the rectangle [low, high] of the plane's local frame. ``lowered``
+        moves the receiving plane down by the coplanar tolerance: for sorting
+        faces, so that a caster standing on the plane is not sent to
+        clipping by corners that rounding put a hair below it."""
+        drop = self.tol.coplanar_length if lowered else 0.0
+        ground = np.append(self.plane.normal, self.d + drop)
+        planes = np.vstack([ground, _rectangle_planes(low, high) @ self.H])
+        unit: np.ndarray = planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+        return unit
+
+    def _sort_faces(self, tight: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(m,) bool ``whole`` (every corner above the plane and projecting
+        within the wide ``reach`` rectangle: the outline may take the face as
+        it is, the 2-D limits cut it) and ``cut`` (the other faces that reach
+        the ``tight`` rectangle: they are clipped one by one). Sets the
+        per-reason counts of faces leaving the tight rectangle and the
+        number culled."""
+        homogeneous, faces = self.caster.centered, self.caster.faces
+        box = self.caster.bounds - self.caster.center
+        corners = np.array(
+            [[x, y, z, 1.0] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]]
+        )
+        if np.all(corners @ tight.T > 0):
+            # The caster's box lies inside every half-space, so does each vertex.
+            self.culled = 0
+            self._count_clipped(homogeneous, faces[:0], np.zeros((0, 3, 5), dtype=bool))
+            return np.ones(len(faces), dtype=bool), np.zeros(len(faces), dtype=bool)
+        whole = ~np.any(np.any(homogeneous @ reach.T < 0, axis=1)[faces], axis=1)
+        touched = np.flatnonzero(np.any(np.any(homogeneous @ tight.T < 0, axis=1)[faces], axis=1))
+        outside = (homogeneous[faces[touched]] @ tight.T) < 0  # (k, 3, 5)
+        culled = np.all(outside, axis=1).any(axis=1)
+        self.culled = int(culled.sum())
+        self._count_clipped(homogeneous, faces[touched], outside)
+        cut = ~whole
+        cut[touched[culled]] = False
+        return whole, cut
 
     def _count_clipped(
         self, homogeneous: np.ndarray, faces: np.ndarray, outside: np.ndarray
@@ -603,15 +670,97 @@ class _Projector:
         )
         if not parts:
             return Shadow(self.plane, self.light, empty_mesh(), [], 0.0, info)
-        u, v = self.plane.basis
         origin2d = self.plane.to_2d(self.origin + self.center)[0]
         polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
-        flat, faces = poly.triangulate_parts(parts)
-        flat = flat / self.scale
-        lift = self.origin + self.offset * self.plane.normal
-        points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v) + self.center
-        mesh = trimesh.Trimesh(points, faces, process=False)
-        return Shadow(self.plane, self.light, mesh, polygons, area, info)
+        lift = self.origin + self.offset * self.plane.normal + self.center
+        build = partial(_triangulated, parts, self.scale, lift, self.plane)
+        return Shadow(self.plane, self.light, build, polygons, area, info)
+
+
+def _triangulated(
+    parts: list[list[np.ndarray]], scale: float, lift: np.ndarray, plane: Plane
+) -> trimesh.Trimesh:
+    """The mesh of a shadow's parts (local units) on ``plane``, ``lift`` being
+    the scene point of the local origin."""
+    u, v = plane.basis
+    flat, faces = poly.triangulate_parts(parts)
+    flat = flat / scale
+    points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v)
+    return trimesh.Trimesh(points, faces, process=False)
+
+
+# Faces whose corners project within the rectangle widened by this many times
+# its size on each side are projected whole and cut in 2-D: a building whose
+# shadow runs past the receiver's edge takes the outline path, not the
+# per-triangle clipping. The widened rectangle stays far inside the range the
+# 2-D union accepts (9 * MAX_COORDINATE).
+_REACH = 4.0
+
+
+def _outline(
+    caster: Caster, whole: np.ndarray, cut: np.ndarray, facing: np.ndarray, per_triangle: bool
+) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+    """Loops of vertex indices whose positive winding is the shadow of the
+    ``whole`` faces, the vertices they use, and ``cut`` narrowed to the faces
+    that can add to the shadow."""
+    if caster.is_closed:
+        # With the light outside a closed caster every shadow ray first
+        # meets a face turned to the light: the others add nothing.
+        front = facing > 0
+        cut = cut & front
+        if per_triangle:
+            loops, vertices = _triangle_loops(caster, whole & front, facing)
+        elif whole.all():
+            loops, vertices = silhouette_loops(caster, front)
+        else:
+            loops, vertices = boundary_loops(caster, whole & front, front.astype(np.int64))
+        return loops, vertices, cut
+    # An open caster unites its triangles: copies and zero-area faces add
+    # nothing but work (quadratic in the copies), so they go first.
+    distinct = caster.distinct
+    cut = cut & distinct
+    if per_triangle:
+        loops, vertices = _triangle_loops(caster, whole & distinct, facing)
+    else:
+        orientation = np.sign(facing).astype(np.int64)
+        loops, vertices = boundary_loops(caster, whole & distinct, orientation)
+    return loops, vertices, cut
+
+
+def _project_loops(
+    homogeneous: np.ndarray, loops: list[np.ndarray], vertices: np.ndarray, H: np.ndarray
+) -> list[np.ndarray]:
+    """Loops of vertex indices -> (k, 2) loops of their images under ``H``."""
+    if not vertices.size:
+        return []
+    image = homogeneous[vertices] @ H.T
+    if np.any(image[:, 2] <= 0):
+        raise GeometryError("the light touches the caster (a vertex projects to infinity)")
+    points = np.zeros((len(homogeneous), 2))
+    points[vertices] = image[:, :2] / image[:, 2:3]
+    return [points[loop] for loop in loops]
+
+
+def _clipped_loops(
+    homogeneous: np.ndarray, faces: np.ndarray, planes: np.ndarray, H: np.ndarray
+) -> list[np.ndarray]:
+    """Each face clipped to ``planes`` and projected, turned counter-clockwise."""
+    loops = []
+    for face in faces:
+        polygon = _clip_convex(homogeneous[face], planes)
+        if len(polygon) < 3:
+            continue
+        image = polygon @ H.T
+        if np.any(image[:, 2] <= 0):
+            raise GeometryError(
+                "the light touches the caster (a clipped point projects to infinity)"
+            )
+        loop = image[:, :2] / image[:, 2:3]
+        area = poly.signed_areas([loop])[0]
+        if area == 0:
+            continue
+        loops.append(loop if area > 0 else loop[::-1])
+    return loops
 
 
 def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:

@@ -70,3 +70,71 @@ def test_empty_mesh_has_nothing():
     mesh = empty_mesh()
     assert mesh.vertices.shape == (0, 3) and mesh.faces.shape == (0, 3)
     assert mesh.faces.dtype == np.int64
+
+
+def _random_outlines(count: int, seed: int) -> list[np.ndarray]:
+    """``count`` random overlapping convex outlines (counter-clockwise) in a
+    square that holds about four of them per side: unions with holes,
+    islands in holes and one big part."""
+    rng = np.random.default_rng(seed)
+    outlines = []
+    for centre in rng.uniform(0, 40, (count, 2)):
+        angles = np.sort(rng.uniform(0, 2 * np.pi, rng.integers(3, 9)))
+        radius = rng.uniform(1, 6)
+        outlines.append(centre + radius * np.column_stack([np.cos(angles), np.sin(angles)]))
+    return outlines
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_parts_match_clipper_decompose_and_shapely(seed):
+    from shadowgeo.polygons import components, fill, parts_area
+
+    outlines = _random_outlines(300, seed)
+    region = fill([loop * 1e6 for loop in outlines])
+    parts = components(region)
+    reference = shapely.union_all([shapely.Polygon(loop * 1e6) for loop in outlines])
+    assert parts_area(parts) == pytest.approx(reference.area, rel=1e-12)
+
+    # each part is one of shapely's connected polygons: same outer area, same holes
+    def areas(loops):  # rounded to a millionth of the unit: far above Clipper's grid
+        return round(shapely.Polygon(loops[0]).area, -6), sorted(
+            round(shapely.Polygon(hole).area, -6) for hole in loops[1:]
+        )
+
+    expected = sorted(
+        areas([p.exterior, *p.interiors]) for p in getattr(reference, "geoms", [reference])
+    )
+    got = sorted(areas(loops) for loops in parts)
+    assert got == expected
+    assert len(parts) == len(region.decompose())
+
+
+def test_nest_puts_an_island_in_a_hole_in_its_own_part():
+    from shadowgeo.polygons import nest
+
+    outer = np.array([[0.0, 0], [10, 0], [10, 10], [0, 10]])
+    hole = np.array([[2.0, 2], [2, 8], [8, 8], [8, 2]])  # clockwise
+    island = np.array([[4.0, 4], [6, 4], [6, 6], [4, 6]])
+    parts = nest([island, hole, outer])
+    assert sorted(len(part) for part in parts) == [1, 2]
+    big = next(part for part in parts if len(part) == 2)
+    assert big[0] is outer and big[1] is hole
+
+
+def test_a_part_with_many_holes_is_triangulated_in_tiles_with_its_exact_area():
+    from shadowgeo.polygons import components, fill, parts_area, triangulate_parts
+
+    grid = np.arange(20) * 3.0
+    square = np.array([[0.0, 0], [0, 1], [1, 1], [1, 0]])  # clockwise: holes
+    holes = [square + [x, y] for x in grid for y in grid]
+    outer = np.array([[-1.0, -1], [60, -1], [60, 60], [-1, 60]])
+    parts = components(fill([outer * 1e6] + [hole * 1e6 for hole in holes]))
+    assert len(parts) == 1 and len(parts[0]) == 401
+    points, faces = triangulate_parts(parts)
+    corners = points[faces]
+    first, second = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    doubled = first[:, 0] * second[:, 1] - first[:, 1] * second[:, 0]
+    assert np.all(doubled > 0)
+    expected = (61.0 * 61.0 - 400.0) * 1e12
+    assert doubled.sum() / 2 == pytest.approx(expected, rel=1e-12)
+    assert parts_area(parts) == pytest.approx(expected, rel=1e-12)

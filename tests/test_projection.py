@@ -523,3 +523,104 @@ def test_outline_path_matches_the_triangle_union(closed, light, height):
     assert fast.diagnostics.n_loops <= union.diagnostics.n_loops
     if not any(fast.diagnostics.clipped.values()):
         assert fast.diagnostics.n_loops < union.diagnostics.n_loops / 20
+
+
+# -- casters standing on the receiver ----------------------------------------------------
+
+
+def _boxes_on_the_ground(count: int, seed: int, sink: float = 0.0) -> trimesh.Trimesh:
+    """``count`` boxes standing on y = 0 (their bases lowered by ``sink``, as
+    rounding in a scene's transforms would), turned at random, some overlapping."""
+    rng = np.random.default_rng(seed)
+    boxes = []
+    for _ in range(count):
+        width, height, depth = rng.uniform(1, 3), rng.uniform(1, 6), rng.uniform(1, 3)
+        box = trimesh.creation.box([width, height, depth])
+        box.apply_transform(trimesh.transformations.rotation_matrix(rng.uniform(0, 3), [0, 1, 0]))
+        box.apply_translation([*rng.uniform(-8, 8, 1), height / 2, *rng.uniform(-8, 8, 1)])
+        box.vertices[box.vertices[:, 1] < 1e-9, 1] = -sink
+        boxes.append(box)
+    return trimesh.util.concatenate(boxes)
+
+
+def _hull_union(mesh: trimesh.Trimesh, light, count: int) -> shapely.Geometry:
+    """Exact reference for directional light: each box's shadow is the hull of its
+    eight projected corners."""
+    corners = mesh.vertices.reshape(count, 8, 3)
+    direction = light.direction
+    flat = corners - (corners[..., 1:2] / direction[1]) * direction
+    return shapely.union_all(shapely.convex_hull(shapely.multipoints(flat[..., [0, 2]])))
+
+
+@pytest.mark.parametrize("sink", [0.0, 1e-13])
+@pytest.mark.parametrize(
+    "light",
+    [
+        DirectionalLight([0.7, -0.35, 0.2]),
+        DirectionalLight([-0.3, -1, -0.5]),
+        PointLight([3, 9, 2]),
+    ],
+)
+def test_buildings_on_the_ground_take_the_outline_path_and_match_the_triangles(light, sink):
+    mesh = _boxes_on_the_ground(40, seed=5, sink=sink)
+    receiver = np.array([[-6.0, 0, -6], [6, 0, -6], [6, 0, 6], [-6, 0, 6]])  # shadows run past it
+    fast = project_shadow(mesh, light, GROUND, receiver=receiver)
+    slow = project_shadow(mesh, light, GROUND, receiver=receiver, method="triangles")
+    assert fast.diagnostics.clipped["below_plane"] == 0
+    assert fast.diagnostics.n_loops < len(mesh.faces) / 4  # outlines, not triangles
+    assert fast.area == pytest.approx(slow.area, rel=1e-9)
+    assert fast.to_shapely().symmetric_difference(slow.to_shapely()).area < 1e-9 * slow.area
+    if isinstance(light, DirectionalLight):
+        square = shapely.box(-6, -6, 6, 6)
+        expected = _hull_union(mesh, light, 40).intersection(square)
+        # plane 2-D coordinates of the ground are (z, x) or (x, z): compare areas
+        assert fast.area == pytest.approx(expected.area, rel=1e-9)
+
+
+# -- many lights in one call -------------------------------------------------------------
+
+
+BATCH_LIGHTS = [
+    PointLight([8, 9, 10]),
+    PointLight([1.5, 2.5, 0.2]),  # at the height of caster vertices: clipped
+    PointLight([0, 3, 0], radius=4.0),  # a range that cuts the shadow
+    PointLight([0, -3, 0]),  # behind the plane: empty
+    SpotLight([1, 6, 1], [0, -1, 0.2], 0.4),
+    SpotLight([0, 3, 0], [0, 1, 0], 0.5),  # pointing away: empty
+    DirectionalLight([0.3, -1, 0.2]),
+    DirectionalLight([1, 0, 0]),  # parallel to the plane: empty
+    DirectionalLight([1, -0.05, 0]),  # grazing: a long shadow past the bound
+]
+
+
+@pytest.mark.parametrize("with_receiver", [False, True])
+@pytest.mark.parametrize("method", ["auto", "triangles"])
+def test_a_sequence_of_lights_gives_each_lights_own_shadow_exactly(with_receiver, method):
+    caster = trimesh.creation.icosphere(subdivisions=2)
+    caster.apply_translation([0, 2, 0])  # from y = 1 to y = 3, the second light inside its span
+    caster.vertices[caster.vertices[:, 1] > 2.9] += [0, -0.5, 0]  # dent: not convex
+    receiver = (
+        np.array([[-4.0, 0, -4], [4, 0, -4], [4, 0, 4], [-4, 0, 4]]) if with_receiver else None
+    )
+    batch = project_shadow(caster, BATCH_LIGHTS, GROUND, receiver=receiver, method=method)
+    assert isinstance(batch, list) and len(batch) == len(BATCH_LIGHTS)
+    empty = 0
+    for light, shadow in zip(BATCH_LIGHTS, batch, strict=True):
+        single = project_shadow(caster, light, GROUND, receiver=receiver, method=method)
+        assert shadow.light is light
+        assert shadow.area == single.area
+        assert shadow.diagnostics == single.diagnostics
+        assert len(shadow.polygons) == len(single.polygons)
+        for part, other in zip(shadow.polygons, single.polygons, strict=True):
+            assert all(np.array_equal(a, b) for a, b in zip(part, other, strict=True))
+        np.testing.assert_array_equal(shadow.mesh.vertices, single.mesh.vertices)
+        empty += shadow.is_empty
+    assert 3 <= empty < len(BATCH_LIGHTS)  # the hard cases are there, and not all empty
+
+
+def test_a_bad_light_in_a_sequence_is_named_by_its_index():
+    caster = trimesh.creation.box()
+    caster.apply_translation([0, 2, 0])
+    with pytest.raises(GeometryError, match="light 1: .*on the receiving plane"):
+        project_shadow(caster, [PointLight([0, 5, 0]), PointLight([3, 0, 0])], GROUND)
+    assert project_shadow(caster, [], GROUND) == []

@@ -394,3 +394,36 @@ def test_running_twice_replaces_the_first_shadows():
     twice = sg.add_shadows(once)
     assert [s.name for s in twice.shapes] == [s.name for s in once.shapes]
     assert np.array_equal(twice.shapes[-1].vertices, once.shapes[-1].vertices)
+
+
+def test_receiver_search_never_looks_inside_shapes_smaller_than_a_receiver(monkeypatch):
+    from shadowgeo.scene import receivers
+
+    looked_at = []
+    original = receivers.patches
+
+    def spy(shape, tolerance, world_vertices=None):
+        looked_at.append(shape.name)
+        return original(shape, tolerance, world_vertices)
+
+    monkeypatch.setattr(receivers, "patches", spy)
+    boxes = [
+        box([x, 0, z], [x + 0.5, 0.5, z + 0.5], f"b{x}_{z}") for x in (-3, 0, 3) for z in (-3, 3)
+    ]
+    result = sg.add_shadows(sg.Scene([ground(), *boxes], [light([0, 4, 0])]))
+    assert looked_at == ["ground"]  # the boxes' diagonals are far below a quarter of the scene's
+    # the found receiver is the ground, and each box shadow is the hand-derived hull
+    (shadow,) = shadows(result)
+    region, _ = xz_union(shadow)
+    lamp = np.array([0, 4, 0])
+    expected = shapely.union_all(
+        [
+            hull_xz(
+                ray_plane(
+                    box_corners(b.vertices.min(0), b.vertices.max(0)), lamp, np.array([0, 1, 0]), 0
+                )
+            )
+            for b in boxes
+        ]
+    )
+    assert region.area == pytest.approx(expected.area, rel=1e-9)

@@ -86,11 +86,16 @@ class Receiver:
         return plane.flipped() if self.two_sided else None
 
 
-def patches(shape: Shape, tolerance: Tolerance) -> list[tuple[Plane, np.ndarray, float]]:
+def patches(
+    shape: Shape, tolerance: Tolerance, world_vertices: np.ndarray | None = None
+) -> list[tuple[Plane, np.ndarray, float]]:
     """The flat patches of a shape: ``(plane, faces mask (m,) bool, area)``,
     largest first. Triangles facing either way join a patch; its plane faces
-    the way most of its area does."""
-    triangles = shape.world_vertices[shape.faces]
+    the way most of its area does. ``world_vertices``, when the caller has
+    them, saves computing them again."""
+    if world_vertices is None:
+        world_vertices = shape.world_vertices
+    triangles = world_vertices[shape.faces]
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     doubled = np.linalg.norm(normals, axis=1)
     valid = doubled / tolerance.length > 2 * tolerance.length  # no square to overflow
@@ -143,57 +148,94 @@ def select(
     tolerance: Tolerance,
     notes: list[str],
 ) -> list[Receiver]:
-    """The receivers for :func:`shadowgeo.add_shadows` (see the module notes)."""
+    """The receivers for :func:`shadowgeo.add_shadows` (see the module notes):
+    a given plane, the named shapes' patches, or the patches found."""
     if plane is not None:
-        if not isinstance(plane, Plane):
-            plane = Plane.from_coefficients(plane)
-        return [Receiver(plane, "plane")]
-
-    def receiver(
-        shape: Shape, fitted: Plane, member: np.ndarray, area: float, count: int
-    ) -> Receiver:
-        name = safe_name(shape.name) if shape.name else "shape"
-        return Receiver(
-            fitted,
-            name if count == 0 else f"{name}_{count + 1}",
-            shape.world_vertices[shape.faces[member]],
-            two_sided=not shape.solid,
-            area=area,
-        )
-
-    found = []
+        return [given_plane(plane)]
     if names is not None:
-        by_name: dict[str, list[Shape]] = {}
-        for shape in geometry:
-            if shape.name:
-                by_name.setdefault(shape.name, []).append(shape)  # USEd: every instance
-        for name in names:
-            if name not in by_name:
-                raise SceneError(f"no shape named '{name}' to receive shadows", path=scene.path)
-            count = 0
-            for shape in by_name[name]:
-                flat = patches(shape, tolerance)
-                total = sum(area for _, _, area in flat)
-                if not flat or flat[0][2] < NAMED_FRACTION * total:
-                    share = flat[0][2] / total if flat and total else 0.0
-                    raise GeometryError(
-                        f"receiver '{name}' is not planar: its largest flat part is "
-                        f"{100 * share:.3g}% of its area (tolerance "
-                        f"{tolerance.coplanar_length:.3g}); give a plane instead"
-                    )
-                for patch in flat:
-                    if patch[2] >= AREA_FRACTION * flat[0][2]:
-                        found.append(receiver(shape, *patch, count))
-                        count += 1
-        return found
+        return named(scene, geometry, names, tolerance)
+    return found(scene, geometry, tolerance, notes)
 
+
+def given_plane(plane: Plane | ArrayLike) -> Receiver:
+    """An unbounded plane, lit from either side."""
+    if not isinstance(plane, Plane):
+        plane = Plane.from_coefficients(plane)
+    return Receiver(plane, "plane")
+
+
+def _patch_receiver(
+    shape: Shape,
+    world_vertices: np.ndarray,
+    fitted: Plane,
+    member: np.ndarray,
+    area: float,
+    count: int,
+) -> Receiver:
+    name = safe_name(shape.name) if shape.name else "shape"
+    return Receiver(
+        fitted,
+        name if count == 0 else f"{name}_{count + 1}",
+        world_vertices[shape.faces[member]],
+        two_sided=not shape.solid,
+        area=area,
+    )
+
+
+def named(
+    scene: Scene, geometry: list[Shape], names: Sequence[str], tolerance: Tolerance
+) -> list[Receiver]:
+    """The patches of the named shapes (every instance of a USEd one) of at
+    least ``AREA_FRACTION`` of each shape's largest patch."""
+    by_name: dict[str, list[Shape]] = {}
+    for shape in geometry:
+        if shape.name:
+            by_name.setdefault(shape.name, []).append(shape)  # USEd: every instance
+    result = []
+    for name in names:
+        if name not in by_name:
+            raise SceneError(f"no shape named '{name}' to receive shadows", path=scene.path)
+        count = 0
+        for shape in by_name[name]:
+            world_vertices = shape.world_vertices
+            flat = patches(shape, tolerance, world_vertices)
+            total = sum(area for _, _, area in flat)
+            if not flat or flat[0][2] < NAMED_FRACTION * total:
+                share = flat[0][2] / total if flat and total else 0.0
+                raise GeometryError(
+                    f"receiver '{name}' is not planar: its largest flat part is "
+                    f"{100 * share:.3g}% of its area (tolerance "
+                    f"{tolerance.coplanar_length:.3g}); give a plane instead"
+                )
+            for patch in flat:
+                if patch[2] >= AREA_FRACTION * flat[0][2]:
+                    result.append(_patch_receiver(shape, world_vertices, *patch, count))
+                    count += 1
+    return result
+
+
+def found(
+    scene: Scene, geometry: list[Shape], tolerance: Tolerance, notes: list[str]
+) -> list[Receiver]:
+    """The patches found automatically (see the module notes), or the ground.
+
+    World vertices are computed once per shape, and a shape whose bounding
+    box is smaller than a found receiver must be (``SIZE_FRACTION`` of the
+    scene's diagonal) is skipped before any per-triangle work: its patches,
+    subsets of its vertices, cannot be larger than its box.
+    """
     bounds = scene.bounds
     scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
-    everything = np.concatenate([shape.world_vertices for shape in geometry] or [np.zeros((0, 3))])
+    world = [shape.world_vertices for shape in geometry]
+    everything = np.concatenate(world or [np.zeros((0, 3))])
     candidates = []
-    for shape in geometry:
-        for fitted, member, area in patches(shape, tolerance):
-            points = shape.world_vertices[np.unique(shape.faces[member])]
+    for shape, world_vertices in zip(geometry, world, strict=True):
+        if len(world_vertices) and len(shape.faces):
+            box = world_vertices.max(axis=0) - world_vertices.min(axis=0)
+            if float(np.linalg.norm(box)) < SIZE_FRACTION * scene_size:
+                continue
+        for fitted, member, area in patches(shape, tolerance, world_vertices):
+            points = world_vertices[np.unique(shape.faces[member])]
             size = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
             if size < SIZE_FRACTION * scene_size:
                 continue
@@ -201,15 +243,16 @@ def select(
             if not shape.solid:
                 height = np.abs(height)
             if np.any(height > tolerance.coplanar_length):
-                candidates.append((shape, fitted, member, area))
+                candidates.append((shape, world_vertices, fitted, member, area))
     largest = max((area for *_, area in candidates), default=0.0)
     counts: dict[int, int] = {}
-    for shape, fitted, member, area in candidates:
+    result = []
+    for shape, world_vertices, fitted, member, area in candidates:
         if area >= AREA_FRACTION * largest:
             count = counts.get(id(shape), 0)
             counts[id(shape)] = count + 1
-            found.append(receiver(shape, fitted, member, area, count))
-    if not found:
+            result.append(_patch_receiver(shape, world_vertices, fitted, member, area, count))
+    if not result:
         return [ground(scene, geometry, notes)]
-    notes.append("shadows: receivers found: " + ", ".join(r.name for r in found))
-    return found
+    notes.append("shadows: receivers found: " + ", ".join(r.name for r in result))
+    return result

@@ -1,0 +1,127 @@
+"""Many buildings under the sun: shadowgeo against per-building polygons + GEOS.
+
+Run from the repository root::
+
+    python benchmarks/bench_buildings.py                 # 1,000 and 10,000 buildings
+    python benchmarks/bench_buildings.py --sizes 1000    # one size
+
+The city is ``n`` random boxes (8-16 m wide, 3-40 m tall, turned at random)
+standing on the ground y = 0, scattered over a square whose side grows with
+``sqrt(n)`` so the density (and the overlap between shadows) stays the same.
+One sun direction lights them all. Methods, on the same input, same process:
+
+* ``shadowgeo.project_shadow`` of all boxes as one caster (its result is the
+  union, holes and all);
+* the method of pybdshadow (Yu et al. 2023), reproduced: each building's shadow
+  is the convex hull of its base and its projected roof, then
+  ``shapely.union_all`` (GEOS). pybdshadow itself is not installed: it pulls
+  in geopandas and its own data stack, and its method is the few lines here.
+
+Area error is relative to an exact reference: the union, by shapely, of each
+box's exact shadow (the convex hull of its eight projected corners, exact for
+a convex box standing on the ground), computed with GEOS's
+``union_all`` in float64. Times are medians of ``--repeat`` runs. The last
+column, time / (n log n), should stay flat if the cost grows as n log n.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+import shapely
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from common import median_time  # noqa: E402
+
+from shadowgeo import DirectionalLight, Plane, project_shadow  # noqa: E402
+
+SUN = DirectionalLight([0.45, -0.75, 0.3])
+GROUND = Plane([0, 1, 0], 0)
+
+# The eight corners and twelve triangles of the unit box [0, 1]^3, outward wound.
+_CORNERS = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+_FACES = np.array(
+    [
+        [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5],  # x = 0, x = 1
+        [0, 4, 5], [0, 5, 1], [2, 3, 7], [2, 7, 6],  # y = 0, y = 1
+        [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3],  # z = 0, z = 1
+    ]
+)  # fmt: skip
+
+
+def buildings(n: int, seed: int = 7) -> np.ndarray:
+    """(n, 8, 3) corners of ``n`` random boxes standing on y = 0."""
+    rng = np.random.default_rng(seed)
+    side = 25.0 * math.sqrt(n)
+    size = np.column_stack([rng.uniform(8, 16, n), rng.uniform(3, 40, n), rng.uniform(8, 16, n)])
+    angle = rng.uniform(0, math.pi, n)
+    cosine, sine = np.cos(angle), np.sin(angle)
+    local = (_CORNERS - [0.5, 0.0, 0.5])[None] * size[:, None]
+    x = cosine[:, None] * local[..., 0] - sine[:, None] * local[..., 2]
+    z = sine[:, None] * local[..., 0] + cosine[:, None] * local[..., 2]
+    centre = rng.uniform(-side / 2, side / 2, (n, 2))
+    return np.stack([x + centre[:, :1], local[..., 1], z + centre[:, 1:]], axis=-1)
+
+
+def as_mesh(corners: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All boxes as one (vertices, faces) mesh."""
+    n = len(corners)
+    faces = (_FACES[None] + 8 * np.arange(n)[:, None, None]).reshape(-1, 3)
+    return corners.reshape(-1, 3), faces
+
+
+def ground_points(points: np.ndarray) -> np.ndarray:
+    """Points projected along the sun onto y = 0, as plane 2-D coordinates."""
+    direction = SUN.direction
+    flat = points - (points[..., 1:2] / direction[1]) * direction
+    return GROUND.to_2d(flat.reshape(-1, 3)).reshape(*points.shape[:-1], 2)
+
+
+def per_building_union(corners: np.ndarray) -> shapely.Geometry:
+    """pybdshadow's way: hull of base and projected roof per building, union_all."""
+    base = GROUND.to_2d(corners[:, [0, 1, 5, 4]].reshape(-1, 3)).reshape(-1, 4, 2)
+    roof = ground_points(corners[:, [2, 3, 7, 6]])
+    hulls = shapely.convex_hull(shapely.multipoints(np.concatenate([base, roof], axis=1)))
+    return shapely.union_all(hulls)
+
+
+def exact_area(corners: np.ndarray) -> float:
+    """Reference: union of each box's exact shadow, the hull of its eight images."""
+    images = ground_points(corners)
+    return float(shapely.union_all(shapely.convex_hull(shapely.multipoints(images))).area)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000])
+    parser.add_argument("--repeat", type=int, default=3)
+    args = parser.parse_args()
+    print(
+        "| buildings | shadowgeo s | per-building + GEOS s | ratio | rel. area error "
+        "shadowgeo | rel. area error GEOS | shadowgeo s / (n log n) x 1e6 |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for n in args.sizes:
+        corners = buildings(n)
+        mesh = as_mesh(corners)
+        ours, shadow = median_time(partial(project_shadow, mesh, SUN, GROUND), args.repeat)
+        theirs, union = median_time(partial(per_building_union, corners), args.repeat)
+        reference = exact_area(corners)
+        error = abs(shadow.area - reference) / reference  # type: ignore[attr-defined]
+        geos_error = abs(union.area - reference) / reference  # type: ignore[attr-defined]
+        per = ours / (n * math.log(n)) * 1e6
+        print(
+            f"| {n:,} | {ours:.3f} | {theirs:.3f} | {ours / theirs:.2f} | {error:.1e} "
+            f"| {geos_error:.1e} | {per:.2f} |"
+        )
+
+
+if __name__ == "__main__":
+    main()
