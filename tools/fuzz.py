@@ -133,7 +133,7 @@ MAX_MUTANT = 4 << 20
 # ---------------------------------------------------------------------------------------------
 
 
-def collect_seeds(pool: Pool, max_bytes: int) -> dict[str, list[tuple[str, bytes]]]:
+def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, list]:
     """Seed files per encoding: (name, content). Missing folders are skipped.
     glb, glTF and USD seeds are the X3D ones written by shadowgeo, in a worker
     (the parent never starts USD's threads, so forking stays safe)."""
@@ -152,6 +152,7 @@ def collect_seeds(pool: Pool, max_bytes: int) -> dict[str, list[tuple[str, bytes
         {"kind": "seed", "path": name, "suffix": ENCODINGS[encoding], "encoding": encoding}
         for name, _ in seeds["x3d"]
         for encoding in ("glb", "gltf", "usda")
+        if encoding in encodings
     ]
     for task, result in pool.run(tasks):
         if result.get("data"):
@@ -1412,7 +1413,7 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     pool = Pool(args.jobs, args.time_budget, int(args.memory_budget * (1 << 30)))
     try:
-        seeds = collect_seeds(pool, args.max_seed_bytes) if args.inputs else {}
+        seeds = collect_seeds(pool, args.max_seed_bytes, encodings) if args.inputs else {}
         return campaign(args, encodings, seeds, pool)
     finally:
         pool.close()
