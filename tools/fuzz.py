@@ -33,7 +33,8 @@ Usage::
     python tools/fuzz.py --inputs 2000 --seed 1 --out /tmp/fuzz --jobs 2
     python tools/fuzz.py --inputs 0 --geometry 5000 --seed 1 --out /tmp/fuzz-geo
 
-Exit status 1 when any run failed.
+Exit status 1 when any run failed. ``kill -USR1`` the campaign to stop starting
+runs early and go on to shrinking and the summary.
 """
 
 from __future__ import annotations
@@ -1496,6 +1497,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"unknown encodings {unknown}; known: {', '.join(ENCODINGS)}")
     args.out.mkdir(parents=True, exist_ok=True)
     pool = Pool(args.jobs, args.time_budget, int(args.memory_budget * (1 << 30)))
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(143))  # so the pool closes
     try:
         seeds = collect_seeds(pool, args.max_seed_bytes, encodings) if args.inputs else {}
         return campaign(args, encodings, seeds, pool)
@@ -1539,11 +1541,16 @@ def campaign(args, encodings, seeds, pool: Pool) -> int:
                 flush=True,
             )
 
-    deadline = started + 60 * args.max_minutes if args.max_minutes else math.inf
+    deadline = [started + 60 * args.max_minutes if args.max_minutes else math.inf]
+
+    def stop_now(signum, frame):  # SIGUSR1: start no more runs, shrink and summarise
+        deadline[0] = 0.0
+
+    signal.signal(signal.SIGUSR1, stop_now)
 
     def until_deadline(tasks):
         for task in tasks:
-            if time.monotonic() > deadline:
+            if time.monotonic() > deadline[0]:
                 return
             yield task
 
