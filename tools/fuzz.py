@@ -1217,9 +1217,14 @@ def geometry_reproducer(case: dict) -> str:
         "L = (DirectionalLight(light['direction']) if kind == 'sun' else SpotLight("
         "light['position'], light['direction'], light['angle'], radius) if kind == 'spot' "
         "else PointLight(light['position'], radius))\n"
-        "print(project_shadow((vertices, faces), L, plane).area)\n"
-        "print(silhouette((vertices, faces), L).loops)\n"
-        "print(shadow_volume((vertices, faces), L))\n"
+        "print('area', project_shadow((vertices, faces), L, plane).area)\n"
+        "print('loops', [len(loop) for loop in silhouette((vertices, faces), L).loops])\n"
+        "volume = shadow_volume((vertices, faces), L)\n"
+        "import trimesh\n"
+        "if len(volume.faces):\n"
+        "    centred = volume.vertices - volume.vertices.mean(axis=0)\n"
+        "    unit = trimesh.Trimesh(centred / abs(centred).max(), volume.faces, process=False)\n"
+        "    print('watertight', volume.is_watertight, 'normalised volume', unit.volume)\n"
     )
 
 
