@@ -1425,27 +1425,35 @@ def shrink_case(pool: Pool, case: dict, signature: str, tries: int) -> dict:
 
 
 def converter_tasks(seeds, encodings, count: int, seed: int):
-    """``count`` mutants per encoding, interleaved, reproducible from (seed, encoding, i)."""
+    """``count`` mutants per encoding, interleaved."""
     plans = [e for e in encodings if seeds.get(e)]
     for index in range(count):
         for encoding in plans:
-            rng = random.Random(f"{seed}:{encoding}:{index}")
-            pool = seeds[encoding]
-            name, data = pool[rng.randrange(len(pool))]
-            others = [d for _, d in rng.sample(pool, min(3, len(pool)))]
-            mutant, ops = mutate(data, encoding, rng, others)
-            template = rng.randrange(len(TEMPLATES))
-            yield {
-                "kind": "convert",
-                "encoding": encoding,
-                "index": index,
-                "seed_file": name,
-                "ops": ops,
-                "data": mutant,
-                "suffix": ENCODINGS[encoding],
-                "argv": list(TEMPLATES[template]),
-                "reference": template == REFERENCE_TEMPLATE,
-            }
+            yield converter_task(seeds, encoding, index, seed)
+
+
+def converter_task(seeds, encoding: str, index: int, seed: int) -> dict:
+    """Mutant ``index`` of ``encoding``: the same for the same seed files and ``seed``."""
+    rng = random.Random(f"{seed}:{encoding}:{index}")
+    pool = seeds[encoding]
+    name, data = pool[rng.randrange(len(pool))]
+    others = [d for _, d in rng.sample(pool, min(3, len(pool)))]
+    try:
+        mutant, ops = mutate(data, encoding, rng, others)
+    except Exception as error:  # noqa: BLE001 - a mutator's own limit must not end the campaign
+        mutant, ops = data[: len(data) // 2], [f"bytes:truncate (mutator: {type(error).__name__})"]
+    template = rng.randrange(len(TEMPLATES))
+    return {
+        "kind": "convert",
+        "encoding": encoding,
+        "index": index,
+        "seed_file": name,
+        "ops": ops,
+        "data": mutant,
+        "suffix": ENCODINGS[encoding],
+        "argv": list(TEMPLATES[template]),
+        "reference": template == REFERENCE_TEMPLATE,
+    }
 
 
 def known_signatures(pool: Pool) -> dict[str, list[str]]:
@@ -1493,6 +1501,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--max-minutes", type=float, default=0, help="stop starting runs after this (0: never)"
     )
+    parser.add_argument(
+        "--replay",
+        type=Path,
+        metavar="RESULTS",
+        help="no new runs: re-create the first failing run of each signature in a results.jsonl "
+        "made with the same --seed, and shrink those",
+    )
     parser.add_argument("--no-known", action="store_true", help="skip matching known findings")
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
@@ -1510,7 +1525,43 @@ def main(argv: list[str] | None = None) -> int:
         pool.close()
 
 
+def replay(args, seeds, pool: Pool) -> int:
+    """Shrink the failures a results.jsonl recorded (e.g. of a campaign that was stopped)."""
+    first: dict[str, dict] = {}
+    by_signature: Counter = Counter()
+    counts: dict[str, Counter] = defaultdict(Counter)
+    for line in args.replay.read_text().splitlines():
+        entry = json.loads(line)
+        group = entry.get("encoding", "geometry")
+        counts[group]["runs"] += 1
+        counts[group][f"exit {entry.get('code')}" if entry["ok"] else "FAIL"] += 1
+        if entry["ok"]:
+            continue
+        signature = entry["signature"]
+        by_signature[signature] += 1
+        counts[group][signature] += 1
+        if signature in first:
+            continue
+        if "case" in entry:
+            task = {"kind": "geometry", "case": geometry_case(args.seed, entry["case"])}
+        else:
+            task = converter_task(seeds, entry["encoding"], entry["index"], args.seed)
+        result = pool.map([dict(task)])[0]
+        if result.get("signature") != signature:
+            print(f"not reproduced: {signature} (now {result.get('signature')})", file=sys.stderr)
+        task.pop("slot", None)
+        first[signature] = dict(task, result=dict(result, detail=entry.get("detail", "")))
+    known = {} if args.no_known else known_signatures(pool)
+    rows = write_failures(args, pool, first, by_signature, known)
+    summary = summary_table(counts, rows, 0.0, args)
+    (args.out / "summary.md").write_text(summary)
+    print(summary)
+    return 1 if by_signature else 0
+
+
 def campaign(args, encodings, seeds, pool: Pool) -> int:
+    if args.replay:
+        return replay(args, seeds, pool)
     started = time.monotonic()
     known = {} if args.no_known else known_signatures(pool)
     counts: dict[str, Counter] = defaultdict(Counter)
