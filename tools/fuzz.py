@@ -159,6 +159,8 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
     for task, result in pool.run(tasks):
         if result.get("data"):
             seeds[task["encoding"]].append((f"{task['path']} as {task['suffix']}", result["data"]))
+    for encoding in ("glb", "gltf", "usda"):  # made in completion order: sort, to replay
+        seeds[encoding] = sorted(seeds[encoding])
     return dict(seeds)
 
 
