@@ -152,7 +152,7 @@ documents = st.lists(children(2), min_size=1, max_size=4).map(
 )
 
 
-@settings(max_examples=120, **SETTINGS)
+@settings(max_examples=80, **SETTINGS)
 @given(document=documents, cut=st.integers(0, 10_000), mutation=st.integers(0, 2**32 - 1))
 def test_a_mutated_x3d_document_gives_a_scene_or_a_scene_error(document, cut, mutation):
     data = document.encode()
@@ -184,7 +184,7 @@ def test_a_mutated_x3d_document_gives_a_scene_or_a_scene_error(document, cut, mu
 MODEST = st.sampled_from(["0", "1", "-1", "2.5", "0.001", "1000", "-3", "1e-6", "1e6"])
 
 
-@settings(max_examples=40, **SETTINGS)
+@settings(max_examples=30, **SETTINGS)
 @given(
     light=st.sampled_from(["PointLight", "SpotLight", "DirectionalLight"]),
     location=st.lists(MODEST, min_size=3, max_size=3).map(" ".join),
