@@ -81,6 +81,9 @@ MAX_INLINE_DEPTH = 16
 MAX_EXTRUSION_POINTS = 20_000_000
 MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
+# Faces that receive through shadow_on_surface in add_shadows (beyond the planar
+# receivers), per light; a bigger scene bakes planar shadows only, with a note.
+MAX_SURFACE_FACES = 20_000
 
 
 def check_coordinates(points: ArrayLike, what: str) -> None:

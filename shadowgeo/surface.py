@@ -579,7 +579,9 @@ class _SurfaceProjector:
         for face, first, stop, outline in zip(faces_with, starts, stops, lit, strict=True):
             if outline is None:
                 continue
-            disc = self._range_disc(face)
+            disc = _disc_near(self._range_disc(face), outline)
+            if disc is not None and len(disc) < 3:
+                continue  # the light's range misses the face
             if full[face] and disc is None:
                 loops = [outline]
             else:
@@ -721,3 +723,21 @@ class _SurfaceProjector:
                 inverse.reshape(-1, 3), self.unit[face_index], len(used)
             )
         return trimesh.Trimesh(vertices + self.center, inverse.reshape(-1, 3), process=False)
+
+
+def _disc_near(disc: np.ndarray | None, outline: np.ndarray) -> np.ndarray | None:
+    """The lit disc cut to the bounding box of a face's ``outline``: None when
+    it covers the box (it limits nothing), an empty array when it misses it.
+    A disc far larger than the face would otherwise leave the range the 2-D
+    union accepts once scaled to the face."""
+    if disc is None:
+        return None
+    low, high = outline.min(axis=0), outline.max(axis=0)
+    box = shapely.box(low[0], low[1], high[0], high[1])
+    region = shapely.Polygon(disc)
+    if region.contains(box):
+        return None
+    cut = region.intersection(box)
+    if cut.is_empty or cut.area == 0.0 or not isinstance(cut, shapely.Polygon):
+        return np.zeros((0, 2))
+    return np.asarray(cut.exterior.coords, dtype=np.float64)[:-1]

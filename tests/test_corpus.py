@@ -43,7 +43,9 @@ def check_shadows(result) -> None:
     for shape in result.shapes_with_role("shadow"):
         points = shape.world_vertices
         assert np.all(np.isfinite(points)) and len(shape.faces)
-        # Flat: every shadow lies in one plane (its receiver's, lifted).
+        if shape.name.endswith("_surfaces"):
+            continue  # on every other surface: tests/test_surfaces_baked.py checks those
+        # Flat: every planar shadow lies in one plane (its receiver's, lifted).
         centered = points - points.mean(axis=0)
         thickness = np.linalg.svd(centered, compute_uv=False)[-1] if len(points) > 3 else 0.0
         assert thickness <= 1e-9 * max(1.0, float(np.abs(points).max())) * np.sqrt(len(points))

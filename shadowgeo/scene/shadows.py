@@ -55,6 +55,7 @@ from typing import Literal, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import limits
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
 from ..lights import DirectionalLight, Light, SpotLight, is_positional
@@ -67,6 +68,7 @@ from ..volume import shadow_volume
 from .model import Material, Scene, SceneLight, Shape, safe_name, unique_name
 from .receivers import Receiver
 from .receivers import select as select_receivers
+from .surfaces import receiving_faces, surface_shadow
 
 # Receivers found automatically: at least this fraction of the largest planar
 # shape's area and of the scene's bounding-box diagonal.
@@ -95,6 +97,7 @@ def add_shadows(
     offset: float | None = None,
     progress: Progress | None = None,
     extra_lights: Sequence[SceneLight] = (),
+    surfaces: bool | None = None,
 ) -> Scene:
     """The scene with the shadows of its lights added as shapes.
 
@@ -118,6 +121,11 @@ def add_shadows(
         Lift of the shadows off their receiver (scene units).
     progress : callable, optional
         Called as ``progress(done, total)`` as casters are processed.
+    surfaces : bool, optional
+        Also shadow every other face of the geometry (terrain, steps, walls,
+        the casters themselves) exactly, through
+        :func:`shadowgeo.shadow_on_surface` (:mod:`.surfaces`). Default: when
+        neither ``receivers`` nor ``plane`` narrows the receivers.
     extra_lights : sequence of SceneLight
         Lights that cast shadows but are not added to the scene, e.g. a sun
         for a scene with no light of its own. When given, they cast together
@@ -184,6 +192,16 @@ def add_shadows(
         own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
         found = select_receivers(own, geometry, receivers, plane, tolerance, notes)
         casters = [_Caster(shape) for shape in geometry]
+        if surfaces is None:
+            surfaces = receivers is None and plane is None
+        surface = receiving_faces(geometry, found, tolerance) if surfaces else None
+        if surface is not None and len(surface[1]) > limits.MAX_SURFACE_FACES:
+            notes.append(
+                f"shadows: {len(surface[1])} faces besides the planar receivers, more than "
+                f"{limits.MAX_SURFACE_FACES} (shadowgeo.limits.MAX_SURFACE_FACES): shadows "
+                "on the planar receivers only"
+            )
+            surface = None
         added = []
         total, done = len(chosen) * len(found) * len(casters), 0
         for index, light in enumerate(chosen):
@@ -212,6 +230,14 @@ def add_shadows(
                 shape.name = names.unique(f"shadow_{light_name}_{receiver.name}")
                 shape.group = group
                 added.append(shape)
+            if surface is not None:
+                shape = surface_shadow(
+                    surface, geometry, light, tolerance, height, notes, light_name
+                )
+                if shape is not None:
+                    shape.name = names.unique(f"shadow_{light_name}_surfaces")
+                    shape.group = group
+                    added.append(shape)
         if progress is not None:
             progress(total, total)
         if not added:

@@ -1,0 +1,95 @@
+"""Shadows on every surface of a scene, for :func:`~shadowgeo.add_shadows`.
+
+The planar receivers (:mod:`.receivers`: grounds, floors, walls, slab tops)
+keep the fast planar path. Every other face of the scene's geometry (terrain,
+steps, the sides of a box, a sphere, the casters themselves) receives through
+:func:`shadowgeo.shadow_on_surface`, all shapes of the scene at once: one
+surface made of those faces, every shape a caster. A face of a planar receiver
+is left out of that surface, so no face is shadowed twice.
+
+A solid shape (X3D ``solid="true"``, the default) receives on the front of its
+faces only; an open one (``solid="false"``) on both sides, as X3D browsers draw
+it: its faces go in once each way round.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import GeometryError
+from ..surface import shadow_on_surface
+from ..tolerance import Tolerance
+from .model import Material, SceneLight, Shape
+from .receivers import Receiver
+
+
+def _receiver_centroids(found: list[Receiver]) -> np.ndarray:
+    patches = [receiver.triangles for receiver in found if receiver.triangles is not None]
+    if not patches:
+        return np.zeros((0, 3))
+    return np.concatenate(patches).mean(axis=1)
+
+
+def receiving_faces(
+    geometry: list[Shape], found: list[Receiver], tolerance: Tolerance
+) -> tuple[np.ndarray, np.ndarray]:
+    """The faces of ``geometry`` that no planar receiver covers, as one
+    (vertices, faces) surface in world coordinates (open shapes' faces twice,
+    once each way round)."""
+    planar = _receiver_centroids(found)
+    keys = {tuple(key) for key in np.round(planar / tolerance.length).astype(np.int64)}
+    vertices, faces, base = [], [], 0
+    for shape in geometry:
+        world = shape.world_vertices
+        triangles = shape.faces
+        if keys and len(triangles):
+            centroids = world[triangles].mean(axis=1)
+            rounded = np.round(centroids / tolerance.length).astype(np.int64)
+            covered = np.array([tuple(key) in keys for key in rounded], dtype=bool)
+            triangles = triangles[~covered]
+        if not len(triangles):
+            continue
+        if not shape.solid:
+            triangles = np.concatenate([triangles, triangles[:, ::-1]])
+        vertices.append(world)
+        faces.append(triangles + base)
+        base += len(world)
+    if not faces:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    return np.concatenate(vertices), np.concatenate(faces)
+
+
+def surface_shadow(
+    surface: tuple[np.ndarray, np.ndarray],
+    geometry: list[Shape],
+    scene_light: SceneLight,
+    tolerance: Tolerance,
+    lift: float,
+    notes: list[str],
+    light_name: str,
+) -> Shape | None:
+    """The shadow of every shape of ``geometry`` on ``surface`` as one shape
+    (role ``"shadow"``), or None when no shadow falls on it."""
+    vertices, faces = surface
+    if not len(faces):
+        return None
+    casters = [(shape.world_vertices, shape.faces) for shape in geometry if shape.n_faces]
+    try:
+        result = shadow_on_surface(
+            casters, scene_light.light, (vertices, faces), offset=lift, tolerance=tolerance
+        )
+    except GeometryError as error:
+        notes.append(f"shadows: no shadows on the surfaces for light {light_name}: {error}")
+        return None
+    if not len(result.mesh.faces):
+        return None
+    transparency = float(np.clip(1.0 - scene_light.shadow_intensity, 0.0, 1.0))
+    return Shape(
+        np.asarray(result.mesh.vertices, dtype=np.float64),
+        np.asarray(result.mesh.faces, dtype=np.int64),
+        material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=transparency),
+        solid=False,
+        role="shadow",
+        source=f"shadow of light {light_name} on the scene's surfaces",
+        casts_shadow=False,
+    )
