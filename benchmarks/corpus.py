@@ -44,6 +44,7 @@ import argparse
 import contextlib
 import io
 import re
+import shutil
 import signal
 import sys
 import tempfile
@@ -190,8 +191,10 @@ def validate(path: Path, out: Path, row: dict, scratch: Path) -> tuple[str, list
         before = json_schema_errors(validator, path) if encoding(path) == ".json" else []
         return "JSON schema", new_schema_errors(before, json_schema_errors(validator, out))
     # ClassicVRML / VRML 97: read back, then its XML translation against the XSD.
-    problems = []
-    source = sg.load(path)
+    # The input copied beside the output, so both miss the same Inline files.
+    problems, copy = [], scratch / ("input" + encoding(path))
+    shutil.copyfile(path, copy)
+    source = sg.load(copy)
     written = row["written"]
     n_geometry, n_shadows = (len(written.shapes_with_role(r)) for r in ("geometry", "shadow"))
     if n_geometry != len(source.shapes):
