@@ -268,14 +268,6 @@ def schema_errors(validator, path: Path) -> list[str]:
     return json_schema_errors(validator, path)
 
 
-@pytest.fixture(scope="session")
-def pairs_dir(shared_dir) -> Path:
-    folder = shared_dir / "corpus" / "web3d-json-pairs"
-    if not folder.is_dir():
-        absent(f"{folder} is absent")
-    return folder
-
-
 # -- reading ------------------------------------------------------------------------------
 
 
