@@ -279,7 +279,7 @@ class _Parser:
     def attempt(self, parent, top: bool = False, container: str | None = None) -> None:
         """Read one statement or node into ``parent``; one that cannot be read is
         skipped with a note (at the top level even one the file ends inside)."""
-        start, kept, state = self.position, len(parent), self.state()
+        start, state = self.position, self.state(parent)
         try:
             token = self.peek()
             if token.kind == "word" and token.text in STATEMENTS:
@@ -291,16 +291,19 @@ class _Parser:
         except _Truncated as error:
             if not top:
                 raise
-            self.skip(parent, kept, start, state, error, "the statement")
+            self.skip(parent, start, state, error, "the statement")
         except SceneError as error:
-            self.skip(parent, kept, start, state, error, "the statement")
+            self.skip(parent, start, state, error, "the statement")
 
-    def state(self) -> tuple:
-        return self.depth, len(self.scopes), list(self.protos)
+    def state(self, parent) -> tuple:
+        """What :meth:`skip` restores: depth, scopes, prototypes and the last
+        child of ``parent`` (in constant time: lxml's ``len`` counts children)."""
+        last = _last_child(parent)
+        return self.depth, len(self.scopes), len(self.protos), last
 
-    def skip(self, parent, kept, start, state, error, what, fields=False) -> None:
+    def skip(self, parent, start, state, error, what, fields=False) -> None:
         """Undo a statement or field that failed at ``error``: drop what it added
-        to ``parent`` after child ``kept``, move past its tokens to the next
+        to ``parent`` since ``state`` was taken, move past its tokens to the next
         statement (or field) at the depth it started, and note it."""
         self.first_error = self.first_error or error
         if len(self.notes) >= MAX_SKIPPED:
@@ -310,11 +313,12 @@ class _Parser:
                 path=self.path,
                 line=error.line,
             )
-        for child in list(parent)[kept:]:
+        self.depth, scopes, protos, last = state
+        added = list(parent) if last is None else list(last.itersiblings())
+        for child in added:
             parent.remove(child)
-        self.depth, scopes, protos = state
         del self.scopes[scopes:]
-        for name in set(self.protos) - set(protos):
+        for name in list(self.protos)[protos:]:
             del self.protos[name]
         self.comments = []
         self.resync(start, self.position, fields)
@@ -516,14 +520,14 @@ class _Parser:
                 raise self.error(f"the file ends inside {kind} {{ }}", None, _Truncated)
             if token.kind == "punct" and token.text == "}":
                 return
-            start, kept, state = self.position, len(element), self.state()
+            start, state = self.position, self.state(element)
             try:
                 self.field(element, kind, instance)
             except (_Refused, _Truncated):
                 raise
             except SceneError as error:
                 what = f"field {token.text} of {kind}"
-                self.skip(element, kept, start, state, error, what, fields=True)
+                self.skip(element, start, state, error, what, fields=True)
 
     def field(self, element, kind: str, instance: bool) -> None:
         """One field of a node (or an interface declaration or statement in it)."""
@@ -616,6 +620,11 @@ class _Parser:
             found = "the end of the file" if following is None else repr(following.text)
             raise self.error(f"field {field} of {kind}: no value (found {found})", [token])
         return _text(items, declared, False)
+
+
+def _last_child(parent):
+    """The last child of ``parent`` (element or comment), or None."""
+    return next(parent.iterchildren(reversed=True), None)
 
 
 def _shown(token: Token) -> str:
