@@ -23,6 +23,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
+from lxml import etree
 
 import shadowgeo as sg
 from cli.main import main
@@ -260,3 +261,13 @@ def test_the_mutations_reach_the_recovery_and_the_refusals(tmp_path):
     path.write_text(CLASSIC[: CLASSIC.index("scale 1 1 1")])
     scene = sg.load(path)
     assert len(scene.shapes) == 2 and any("the file ends" in note for note in scene.warnings)
+
+
+def test_characters_xml_cannot_hold_in_a_comment_are_replaced(tmp_path):
+    # Found by a longer run of the mutations above: a NUL inside a comment.
+    path = tmp_path / "nul.x3dv"
+    path.write_bytes(b"#X3D V4.0 utf8\n# a \x00 and \x1f comment\nShape { geometry Box { } }\n")
+    scene = sg.load(path)
+    assert len(scene.shapes) == 1
+    comments = [c.text for c in scene.document.getroot().iter(etree.Comment)]
+    assert " a \ufffd and \ufffd comment" in comments

@@ -69,13 +69,17 @@ _NAME = re.compile(
     r"[^\x00-\x20\x22\x23\x27\x2c\x2e\x5b-\x5d\x7b\x7d\x7f]*"
 )
 ZERO_WIDTH = "\u200b"
+# Characters XML 1.0 cannot hold.
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
 XSD = "http://www.w3.org/2001/XMLSchema-instance"
 
 
 def xml_comment(text: str) -> str:
     """``text`` as an XML comment can hold it: a zero-width space between dashes
-    (XML forbids ``--`` and a final ``-``); :func:`classic_comment` undoes it."""
-    return re.sub(r"-(?=-|\Z)", "-" + ZERO_WIDTH, text)
+    (XML forbids ``--`` and a final ``-``), which :func:`classic_comment` undoes,
+    and U+FFFD for each character XML cannot hold (NUL, control characters,
+    lone surrogates), which it does not."""
+    return re.sub(r"-(?=-|\Z)", "-" + ZERO_WIDTH, _NOT_XML.sub("\ufffd", text))
 
 
 def classic_comment(text: str) -> str:
