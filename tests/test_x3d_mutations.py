@@ -271,3 +271,12 @@ def test_characters_xml_cannot_hold_in_a_comment_are_replaced(tmp_path):
     assert len(scene.shapes) == 1
     comments = [c.text for c in scene.document.getroot().iter(etree.Comment)]
     assert " a \ufffd and \ufffd comment" in comments
+    # In a name (a field holding a node, a DEF): that field or node is skipped with a note.
+    path.write_bytes(
+        b"#X3D V4.0 utf8\nTransform { child\x00ren Shape { geometry Box { } } }\n"
+        b"DEF a\x01b Shape { geometry Box { } }\nShape { geometry Sphere { } }\n"
+    )
+    scene = sg.load(path)
+    assert [shape.n_faces for shape in scene.shapes] == [scene.shapes[0].n_faces]
+    assert scene.shapes[0].n_faces > 12  # the sphere alone
+    assert sum("skipped" in note for note in scene.warnings) == 2

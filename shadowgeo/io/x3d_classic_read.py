@@ -246,7 +246,8 @@ class _Parser:
         token = self.peek()
         if token is not None and token.text == "PROFILE" and token.kind == "word":
             self.take()
-            root.set("profile", self.word("a profile name").text)
+            profile = self.word("a profile name")
+            self.set(root, "profile", profile.text, profile.line)
         while (token := self.peek()) is not None and token.text in ("COMPONENT", "UNIT", "META"):
             self.take()
             if token.text == "COMPONENT":
@@ -391,14 +392,14 @@ class _Parser:
             )
             if (token := self.peek()) is not None and token.text == "AS":
                 self.take()
-                imported.set("AS", self.word("a name").text)
+                self.set(imported, "AS", self.word("a name").text, keyword.line)
         elif keyword.text == "EXPORT":
             exported = self.element(
                 parent, "EXPORT", keyword.line, localDEF=self.word("a DEF").text
             )
             if (token := self.peek()) is not None and token.text == "AS":
                 self.take()
-                exported.set("AS", self.word("a name").text)
+                self.set(exported, "AS", self.word("a name").text, keyword.line)
         else:
             self.proto(parent, keyword)
 
@@ -494,7 +495,7 @@ class _Parser:
             tag, proto = element.tag, element.get("name")
         default = CONTAINER_FIELDS.get(tag, "children") if proto is None else "children"
         if field is not None and field != default:
-            element.set("containerField", field)
+            self.set(element, "containerField", field, token.line)
         return element
 
     def node(self, parent, kind: Token, name: str | None):
@@ -507,10 +508,10 @@ class _Parser:
         instance = kind.text in self.protos
         element = self.element(parent, "ProtoInstance" if instance else kind.text, kind.line)
         if name is not None:
-            element.set("DEF", name)
+            self.set(element, "DEF", name, kind.line)
             self.scopes[-1][name] = (element.tag, kind.text if instance else None)
         if instance:
-            element.set("name", kind.text)
+            self.set(element, "name", kind.text, kind.line)
         self.body(element, kind.text, instance)
         self.expect("}")
         self.depth -= 1
