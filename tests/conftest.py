@@ -42,6 +42,15 @@ def classic_corpus_dir(shared_dir) -> Path:
 
 
 @pytest.fixture(scope="session")
+def pairs_dir(shared_dir) -> Path:
+    """The shared corpus of X3D JSON files, each beside its XML twin, or skip."""
+    folder = shared_dir / "corpus" / "web3d-json-pairs"
+    if not folder.is_dir():
+        absent(f"{folder} is absent")
+    return folder
+
+
+@pytest.fixture(scope="session")
 def x3d_schema() -> Path:
     """The X3D 4.0 XML Schema (committed, gzipped; lxml reads it as it is)."""
     return X3D_SCHEMA

@@ -105,18 +105,49 @@ def test_tokens_numbers_strings_and_comments_follow_the_grammar(tmp_path):
     [
         ('Transform { children [ WorldInfo { title "open } ] }', "string is not closed", 2),
         ("Transform {\n translation 1 2 3\n", "ends inside Transform", 3),
-        ("Transform {\n translation\n}", "field translation of Transform: no value", 3),
-        ("Shape { geometry USE box }", "USE 'box' names no DEF before it", 2),
         ("ROUTE a TO b.c", "expected ROUTE node.field TO node.field", 2),
-        ("Transform { ] }", "expected a field of Transform", 2),
+        ("}\n{ ] [", "expected a node, found '}'", 2),
     ],
 )
-def test_syntax_errors_name_their_line(tmp_path, text, message, line):
+def test_files_with_nothing_readable_are_one_error_naming_their_line(tmp_path, text, message, line):
     path = tmp_path / "bad.x3dv"
     path.write_text("#X3D V4.0 utf8\n" + text)
     with pytest.raises(sg.SceneError, match=message) as raised:
         sg.load(path)
-    assert raised.value.line == line
+    assert raised.value.line == line and "\n" not in str(raised.value)
+
+
+BOX = "DEF kept Transform { translation 0 1 0 children Shape { geometry Box { } } }\n"
+
+
+@pytest.mark.parametrize(
+    "text, message, line, skipped",
+    [
+        # A field that cannot be read: the field is skipped, its node kept.
+        ("Transform {\n translation\n}", "field translation of Transform: no value", 3, "field"),
+        ("Shape { geometry USE box }", "USE 'box' names no DEF before it", 2, "field geometry"),
+        ("Transform { ] scale 2 2 2 }", "expected a field of Transform, found ']'", 2, "field"),
+        # A statement that cannot be read: skipped to the next one at its depth.
+        ("}", "expected a node, found '}'", 2, "the statement"),
+        ("DEF name {\n}", "expected a node type, found '{'", 2, "the statement"),
+        ("PROTO [ ] { }", "expected a prototype name", 2, "the statement"),
+        ("Group { children [ Shape { ] } ] }", "expected a field of Shape", 2, "field"),
+        # The last statement cut short: the ones before it are kept.
+        ("DEF cut Shape {\n geometry Box {", "the file ends inside Box", 4, "the statement"),
+    ],
+)
+def test_what_cannot_be_read_is_skipped_with_a_note(tmp_path, text, message, line, skipped):
+    path = tmp_path / "skips.x3dv"
+    path.write_text("#X3D V4.0 utf8\n" + BOX + text + "\n" + BOX.replace("kept", "after"))
+    scene = sg.load(path)
+    # Both boxes around the bad text are read, each one unit up (12 triangles).
+    boxes = [shape for shape in scene.shapes if shape.name in ("kept", "after")]
+    assert len(boxes) == 2 or (text.startswith("DEF cut") and len(boxes) == 1)
+    for shape in boxes:
+        assert shape.n_faces == 12 and np.allclose(shape.world_vertices[:, 1].min(), 0.0)
+    notes = [note for note in scene.warnings if "skipped" in note and message in note]
+    assert len(notes) == 1, scene.warnings
+    assert notes[0].startswith(f"{path} line {line + 1}: ") and skipped in notes[0]
 
 
 def test_vrml_1_is_refused_with_one_line(tmp_path):

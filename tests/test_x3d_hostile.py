@@ -218,7 +218,9 @@ def test_inline_outside_the_scene_folder_is_skipped_and_never_read(tmp_path, mon
     scene(tmp_path, "<Shape><Box/></Shape>", "outside.x3d")
     opened = []
     real_parse = x3d_parse.parse
-    monkeypatch.setattr(x3d_parse, "parse", lambda path: opened.append(path) or real_parse(path))
+    monkeypatch.setattr(
+        x3d_parse, "parse", lambda path, *notes: opened.append(path) or real_parse(path, *notes)
+    )
     path = scene(folder, '<Inline url=\'"../outside.x3d" "/etc/passwd"\'/>\n<Shape><Box/></Shape>')
     result = sg.load(path)
     assert len(result.shapes) == 1 and result.shapes[0].source.startswith("scene.x3d line 3")

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from lxml import etree
 from needs import absent, need
+from x3d_json_schema import json_schema_errors, json_validator
 from x3d_schema import x3d_schema_errors
 
 import shadowgeo as sg
@@ -240,37 +241,15 @@ def added_groups(document: dict) -> list[dict]:
 
 @pytest.fixture(scope="session")
 def json_schema(shared_dir):
-    """A validator of the X3D 4.0 JSON schema, or skip.
-
-    The schema is draft 2020-12, where ``format`` is only an annotation
-    unless the validator asserts it; we assert its two formats, ``iri`` (the
-    schema location) and ``iri-reference`` (every url), with RFC 3987's
-    characters: jsonschema's own checker for them needs rfc3987 (GPL)."""
+    """A validator of the X3D 4.0 JSON schema (see ``x3d_json_schema``), or skip."""
     import jsonschema
 
     path = shared_dir / "schemas" / "x3d" / "x3d-4.0-JSONSchema.json"
     if not path.is_file():
         absent(f"{path} is absent")
-    schema = json.loads(path.read_text())
-    validator = jsonschema.validators.validator_for(schema)
-    assert validator is jsonschema.Draft202012Validator  # what the schema's $schema says
-    validator.check_schema(schema)
-    formats = jsonschema.FormatChecker()
-    formats.checks("iri-reference")(iri_reference)
-    formats.checks("iri")(lambda text: iri_reference(text) and IRI_SCHEME.match(text) is not None)
-    return validator(schema, format_checker=formats)
-
-
-# Characters no IRI holds (RFC 3987: outside ucschar, iprivate and the ASCII it allows).
-IRI_FORBIDDEN = re.compile(r'[\x00-\x20"<>\\^`{|}\x7f-\x9f]')
-IRI_SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]*:")
-
-
-def iri_reference(text) -> bool:
-    if not isinstance(text, str):
-        return True
-    percent_ok = all(re.fullmatch(r"%[0-9A-Fa-f]{2}", m) for m in re.findall(r"%..?", text))
-    return IRI_FORBIDDEN.search(text) is None and percent_ok
+    validator = json_validator(str(path))
+    assert type(validator) is jsonschema.Draft202012Validator  # what the schema's $schema says
+    return validator
 
 
 def test_the_schema_check_asserts_urls_and_types(json_schema):
@@ -286,16 +265,7 @@ def test_the_schema_check_asserts_urls_and_types(json_schema):
 
 
 def schema_errors(validator, path: Path) -> list[str]:
-    errors = validator.iter_errors(json.loads(path.read_text()))
-    return [f"{'/'.join(map(str, error.absolute_path))}: {error.message[:200]}" for error in errors]
-
-
-@pytest.fixture(scope="session")
-def pairs_dir(shared_dir) -> Path:
-    folder = shared_dir / "corpus" / "web3d-json-pairs"
-    if not folder.is_dir():
-        absent(f"{folder} is absent")
-    return folder
+    return json_schema_errors(validator, path)
 
 
 # -- reading ------------------------------------------------------------------------------

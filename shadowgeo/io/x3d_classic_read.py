@@ -22,6 +22,17 @@ VRML 97 (``#VRML V2.0 utf8``) is read as X3D 3.0: ``exposedField``,
 fields X3D renamed (Collision ``collide``, LOD ``level``, Switch ``choice``)
 get their X3D names. VRML 1.0 is refused with a SceneError.
 
+Where X3D browsers recover, so does this parser (as Castle Game Engine and
+FreeWRL do): a statement or node that cannot be read (a stray ``}``, ``DEF``
+without a node type, a PROTO without a name, a USE naming no DEF) is skipped
+to the next node or statement at the same bracket depth, a field that cannot
+be read to the next field of its node, each with a note naming the file, line
+and what was skipped (``notes``). A file whose last statement is cut short
+keeps the statements before it. What is not a scene at all stays one
+SceneError: a bad header, a string never closed, a file in which no statement
+can be read, nesting or size beyond the limits, more than :data:`MAX_SKIPPED`
+skips.
+
 Parsing is bounded: nesting depth :data:`MAX_DEPTH`, :data:`MAX_ELEMENTS`
 elements; nothing is fetched (EXTERNPROTO and Inline are left to the reader).
 """
@@ -39,6 +50,8 @@ from .x3d_fields import Element
 
 MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000
+# Statements and fields skipped at most before the file is refused as unreadable.
+MAX_SKIPPED = 100
 ACCESS = {
     "field": "initializeOnly", "exposedField": "inputOutput", "eventIn": "inputOnly",
     "eventOut": "outputOnly", "initializeOnly": "initializeOnly", "inputOutput": "inputOutput",
@@ -48,6 +61,7 @@ ACCESS = {
 VRML97_FIELDS = {("Collision", "collide"): "enabled", ("LOD", "level"): "children"}
 VRML97_FIELDS[("Switch", "choice")] = "children"
 STATEMENTS = ("ROUTE", "PROTO", "EXTERNPROTO", "IMPORT", "EXPORT")
+_BRACKETS = {"{": 1, "[": 1, "}": -1, "]": -1}
 _HEADER = re.compile(rb"\A(?:\xef\xbb\xbf)?#(X3D|VRML) V(\d+)\.(\d+)")
 # An X3D name (node type, DEF): no control characters, quotes, '#', ',', '.', brackets,
 # braces or backslash; it does not start with a digit, '+' or '-'.
@@ -56,13 +70,17 @@ _NAME = re.compile(
     r"[^\x00-\x20\x22\x23\x27\x2c\x2e\x5b-\x5d\x7b\x7d\x7f]*"
 )
 ZERO_WIDTH = "\u200b"
+# Characters XML 1.0 cannot hold.
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
 XSD = "http://www.w3.org/2001/XMLSchema-instance"
 
 
 def xml_comment(text: str) -> str:
     """``text`` as an XML comment can hold it: a zero-width space between dashes
-    (XML forbids ``--`` and a final ``-``); :func:`classic_comment` undoes it."""
-    return re.sub(r"-(?=-|\Z)", "-" + ZERO_WIDTH, text)
+    (XML forbids ``--`` and a final ``-``), which :func:`classic_comment` undoes,
+    and U+FFFD for each character XML cannot hold (NUL, control characters,
+    lone surrogates), which it does not."""
+    return re.sub(r"-(?=-|\Z)", "-" + ZERO_WIDTH, _NOT_XML.sub("\ufffd", text))
 
 
 def classic_comment(text: str) -> str:
@@ -75,15 +93,27 @@ def is_classic(data: bytes) -> bool:
     return data.lstrip(b"\xef\xbb\xbf")[:5] in (b"#X3D ", b"#VRML")
 
 
-def parse_bytes(data: bytes, path: str) -> etree._ElementTree:
+class _Refused(SceneError):
+    """An error no skipping recovers from: a limit reached."""
+
+
+class _Truncated(SceneError):
+    """The file ends inside a statement: only the top level skips it."""
+
+
+def parse_bytes(data: bytes, path: str, notes: list[str] | None = None) -> etree._ElementTree:
     """The X3D XML tree of a ClassicVRML or VRML 97 document.
+
+    Statements and fields that cannot be read are skipped, each with a line
+    appended to ``notes`` (see the module notes).
 
     Raises
     ------
     SceneError
         VRML 1.0, a header that is not ``#X3D V3.x`` / ``V4.x`` or ``#VRML
-        V2.0``, a syntax error (with its line), nesting or size beyond the
-        limits.
+        V2.0``, a string never closed, a file in which no statement can be
+        read, nesting or size beyond the limits, more than
+        :data:`MAX_SKIPPED` skips.
     """
     header = _HEADER.match(data)
     first = data.split(b"\n", 1)[0][:40].decode("latin-1").strip()
@@ -105,12 +135,18 @@ def parse_bytes(data: bytes, path: str) -> etree._ElementTree:
         text = data.decode("latin-1")  # older VRML files are often Latin-1
     vrml97 = encoding == b"VRML"
     version = "3.0" if vrml97 else f"{major}.{minor}"
-    return _Parser(tokens(text, path)[1:], path, vrml97).document(version)
+    parser = _Parser(tokens(text, path)[1:], path, vrml97)
+    tree = parser.document(version)
+    if notes is not None:
+        notes.extend(parser.notes)
+    return tree
 
 
 class _Parser:
     def __init__(self, found: list[Token], path: str, vrml97: bool) -> None:
         self.tokens, self.path, self.vrml97 = found, path, vrml97
+        self.notes: list[str] = []
+        self.first_error: SceneError | None = None
         self.position = 0
         self.comments: list[Token] = []
         self.scopes: list[dict[str, tuple[str, str | None]]] = [
@@ -136,30 +172,32 @@ class _Parser:
             self.comments.append(self.tokens[self.position])
             self.position += 1
         if self.position >= len(self.tokens):
-            raise self.error(f"the file ends where {what} was expected", self.tokens[-1:])
+            raise self.error(
+                f"the file ends where {what} was expected", self.tokens[-1:], _Truncated
+            )
         self.position += 1
         return self.tokens[self.position - 1]
 
     def word(self, what: str) -> Token:
         token = self.take(what)
         if token.kind != "word":
-            raise self.error(f"expected {what}, found {token.text!r}", [token])
+            raise self.error(f"expected {what}, found {_shown(token)}", [token])
         return token
 
     def expect(self, punct: str) -> Token:
         token = self.take(f"'{punct}'")
         if token.kind != "punct" or token.text != punct:
-            raise self.error(f"expected '{punct}', found {token.text!r}", [token])
+            raise self.error(f"expected '{punct}', found {_shown(token)}", [token])
         return token
 
     def at(self, punct: str) -> bool:
         token = self.peek()
         return token is not None and token.kind == "punct" and token.text == punct
 
-    def error(self, message: str, at: list[Token] | None = None) -> SceneError:
+    def error(self, message: str, at: list[Token] | None = None, kind=SceneError) -> SceneError:
         token = at[0] if at else self.peek()
         line = token.line if token else (self.tokens[-1].line if self.tokens else 1)
-        return SceneError(message, path=self.path, line=line)
+        return kind(message, path=self.path, line=line)
 
     def flush_comments(self, parent: Element) -> None:
         self.peek()  # comments before the next token are collected by take()
@@ -175,7 +213,7 @@ class _Parser:
     def element(self, parent: Element | None, tag: str, line: int, **attributes: str) -> Element:
         self.elements += 1
         if self.elements > MAX_ELEMENTS:
-            raise SceneError(f"more than {MAX_ELEMENTS} nodes; refused", path=self.path, line=line)
+            raise _Refused(f"more than {MAX_ELEMENTS} nodes; refused", path=self.path, line=line)
         try:
             element = etree.Element(tag) if parent is None else etree.SubElement(parent, tag)
             for name, value in attributes.items():
@@ -203,13 +241,16 @@ class _Parser:
         if len(head) == 0:
             root.remove(head)
         self.statements(scene, None)
+        if self.first_error is not None and not any(isinstance(c.tag, str) for c in scene):
+            raise self.first_error  # nothing could be read: not a scene
         return etree.ElementTree(root)
 
     def head(self, root: Element, head: Element) -> None:
         token = self.peek()
         if token is not None and token.text == "PROFILE" and token.kind == "word":
             self.take()
-            root.set("profile", self.word("a profile name").text)
+            profile = self.word("a profile name")
+            self.set(root, "profile", profile.text, profile.line)
         while (token := self.peek()) is not None and token.text in ("COMPONENT", "UNIT", "META"):
             self.take()
             if token.text == "COMPONENT":
@@ -236,14 +277,103 @@ class _Parser:
             token = self.peek()
             if token is None:
                 if end is not None:
-                    raise self.error(f"the file ends before '{end}'")
+                    raise self.error(f"the file ends before '{end}'", None, _Truncated)
                 return
             if end is not None and token.kind == "punct" and token.text == end:
                 return
+            self.attempt(parent, top=end is None and parent.tag == "Scene")
+
+    # -- skipping what cannot be read -------------------------------------------------
+    def attempt(self, parent, top: bool = False, container: str | None = None) -> None:
+        """Read one statement or node into ``parent``; one that cannot be read is
+        skipped with a note (at the top level even one the file ends inside)."""
+        start, state = self.position, self.state(parent)
+        try:
+            token = self.peek()
             if token.kind == "word" and token.text in STATEMENTS:
                 self.statement(parent)
             else:
-                self.node_statement(parent, None)
+                self.node_statement(parent, container)
+        except _Refused:
+            raise
+        except _Truncated as error:
+            if not top:
+                raise
+            self.skip(parent, start, state, error, "the statement")
+        except SceneError as error:
+            self.skip(parent, start, state, error, "the statement")
+
+    def state(self, parent) -> tuple:
+        """What :meth:`skip` restores: depth, scopes, prototypes and the last
+        child of ``parent`` (in constant time: lxml's ``len`` counts children)."""
+        last = _last_child(parent)
+        return self.depth, len(self.scopes), len(self.protos), last
+
+    def skip(self, parent, start, state, error, what, fields=False) -> None:
+        """Undo a statement or field that failed at ``error``: drop what it added
+        to ``parent`` since ``state`` was taken, move past its tokens to the next
+        statement (or field) at the depth it started, and note it."""
+        self.first_error = self.first_error or error
+        if len(self.notes) >= MAX_SKIPPED:
+            raise _Refused(
+                f"more than {MAX_SKIPPED} statements or fields cannot be read (the first: "
+                f"line {self.first_error.line}, {self.first_error.message}); refused",
+                path=self.path,
+                line=error.line,
+            )
+        self.depth, scopes, protos, last = state
+        added = list(parent) if last is None else list(last.itersiblings())
+        for child in added:
+            parent.remove(child)
+        del self.scopes[scopes:]
+        for name in list(self.protos)[protos:]:
+            del self.protos[name]
+        self.comments = []
+        self.resync(start, self.position, fields)
+        first = self.tokens[start].line if start < len(self.tokens) else error.line
+        last = self.tokens[self.position - 1].line if self.position > start else first
+        lines = f"line {first}" if last == first else f"lines {first}-{last}"
+        self.notes.append(
+            f"{self.path} line {error.line}: {error.message}; {what} ({lines}) skipped"
+        )
+
+    def resync(self, start: int, failed: int, fields: bool) -> None:
+        """Move to the first token after ``failed`` (and after ``start``) that
+        can begin a statement (or, with ``fields``, a field) at the bracket
+        depth of ``start``, or to the bracket that closes that depth."""
+        depth = 0
+        for index in range(start, min(failed, len(self.tokens))):
+            depth += _BRACKETS.get(self.tokens[index].text, 0) * (
+                self.tokens[index].kind == "punct"
+            )
+            if depth < 0:  # the failed read took the enclosing closing bracket
+                self.position = max(index, start + 1)
+                return
+        self.position = max(failed, start + 1)
+        while self.position < len(self.tokens):
+            token = self.tokens[self.position]
+            if token.kind == "punct":
+                if depth == 0 and token.text in "}]":
+                    return
+                depth += _BRACKETS[token.text]
+            elif depth == 0 and token.kind == "word" and self.resumes(fields):
+                return
+            self.position += 1
+
+    def resumes(self, fields: bool) -> bool:
+        """Whether the word at the current position can begin a statement or node
+        (with ``fields``: a field) in a file being resynchronised."""
+        token, before = self.tokens[self.position], self.tokens[self.position - 1]
+        if before.kind == "word" and before.text in ("DEF", "USE", "IS", "TO", "AS"):
+            return False  # a name
+        if token.text in STATEMENTS:
+            return True
+        following = self.tokens[self.position + 1] if self.position + 1 < len(self.tokens) else None
+        opens = following is not None and following.kind == "punct" and following.text == "{"
+        if not fields:
+            return opens or token.text in ("DEF", "USE")
+        names = ("DEF", "USE", "NULL", "IS", "TO")
+        return not opens and not _is_scalar(token) and token.text not in names
 
     def statement(self, parent: Element) -> None:
         keyword = self.take()
@@ -265,14 +395,14 @@ class _Parser:
             )
             if (token := self.peek()) is not None and token.text == "AS":
                 self.take()
-                imported.set("AS", self.word("a name").text)
+                self.set(imported, "AS", self.word("a name").text, keyword.line)
         elif keyword.text == "EXPORT":
             exported = self.element(
                 parent, "EXPORT", keyword.line, localDEF=self.word("a DEF").text
             )
             if (token := self.peek()) is not None and token.text == "AS":
                 self.take()
-                exported.set("AS", self.word("a name").text)
+                self.set(exported, "AS", self.word("a name").text, keyword.line)
         else:
             self.proto(parent, keyword)
 
@@ -306,7 +436,11 @@ class _Parser:
         next_token = self.peek()
         body = self.element(declaration, "ProtoBody", next_token.line if next_token else 1)
         self.scopes.append({})
+        self.depth += 1
+        if self.depth > MAX_DEPTH:
+            raise self.error(f"PROTOs nested more than {MAX_DEPTH} deep; refused", None, _Refused)
         self.statements(body, "}")
+        self.depth -= 1
         self.scopes.pop()
         self.expect("}")
 
@@ -352,8 +486,8 @@ class _Parser:
         if token.text == "USE":
             name = self.word("a DEF name").text
             found = self.scopes[-1].get(name)
-            if found is None:
-                raise self.error(f"USE '{name}' names no DEF before it", [token])
+            if found is None:  # e.g. a DEF outside the PROTO body it is used in
+                raise self.error(f"USE '{name}' names no DEF before it in its scope", [token])
             tag, proto = found
             element = self.element(parent, tag, token.line, USE=name)
         else:
@@ -365,7 +499,7 @@ class _Parser:
             tag, proto = element.tag, element.get("name")
         default = CONTAINER_FIELDS.get(tag, "children") if proto is None else "children"
         if field is not None and field != default:
-            element.set("containerField", field)
+            self.set(element, "containerField", field, token.line)
         return element
 
     def node(self, parent: Element, kind: Token, name: str | None) -> Element:
@@ -374,14 +508,14 @@ class _Parser:
         self.expect("{")
         self.depth += 1
         if self.depth > MAX_DEPTH:
-            raise self.error(f"nodes nested more than {MAX_DEPTH} deep; refused", [kind])
+            raise self.error(f"nodes nested more than {MAX_DEPTH} deep; refused", [kind], _Refused)
         instance = kind.text in self.protos
         element = self.element(parent, "ProtoInstance" if instance else kind.text, kind.line)
         if name is not None:
-            element.set("DEF", name)
+            self.set(element, "DEF", name, kind.line)
             self.scopes[-1][name] = (element.tag, kind.text if instance else None)
         if instance:
-            element.set("name", kind.text)
+            self.set(element, "name", kind.text, kind.line)
         self.body(element, kind.text, instance)
         self.expect("}")
         self.depth -= 1
@@ -392,31 +526,43 @@ class _Parser:
             self.flush_comments(element)
             token = self.peek()
             if token is None:
-                raise self.error(f"the file ends inside {kind} {{ }}")
+                raise self.error(f"the file ends inside {kind} {{ }}", None, _Truncated)
             if token.kind == "punct" and token.text == "}":
                 return
-            if token.kind != "word":
-                raise self.error(f"expected a field of {kind}, found {token.text!r}", [token])
-            if token.text in STATEMENTS:
-                self.statement(element)
-                continue
-            after = self.peek(1)
-            if token.text in ACCESS and after is not None and after.text[:2] in ("SF", "MF"):
-                self.interface(element, False, in_proto=False)
-                continue
+            start, state = self.position, self.state(element)
+            try:
+                self.field(element, kind, instance)
+            except (_Refused, _Truncated):
+                raise
+            except SceneError as error:
+                what = f"field {token.text} of {kind}"
+                self.skip(element, start, state, error, what, fields=True)
+
+    def field(self, element, kind: str, instance: bool) -> None:
+        """One field of a node (or an interface declaration or statement in it)."""
+        token = self.peek()
+        if token.kind != "word":
+            raise self.error(f"expected a field of {kind}, found {_shown(token)}", [token])
+        if token.text in STATEMENTS:
+            self.statement(element)
+            return
+        after = self.peek(1)
+        if token.text in ACCESS and after is not None and after.text[:2] in ("SF", "MF"):
+            self.interface(element, False, in_proto=False)
+            return
+        self.take()
+        field = token.text
+        if self.vrml97:
+            field = VRML97_FIELDS.get((kind, field), field)
+        if (following := self.peek()) is not None and following.text == "IS":
             self.take()
-            field = token.text
-            if self.vrml97:
-                field = VRML97_FIELDS.get((kind, field), field)
-            if (following := self.peek()) is not None and following.text == "IS":
-                self.take()
-                self.connect(element, field, self.word("a prototype field").text, token.line)
-            elif instance:
-                holder = self.element(element, "fieldValue", token.line, name=field)
-                declared = self.protos[kind].get(field)
-                self.field_value(holder, "value", None, field, declared, token)
-            else:
-                self.field_value(element, field, kind, field, field_type(kind, field), token)
+            self.connect(element, field, self.word("a prototype field").text, token.line)
+        elif instance:
+            holder = self.element(element, "fieldValue", token.line, name=field)
+            declared = self.protos[kind].get(field)
+            self.field_value(holder, "value", None, field, declared, token)
+        else:
+            self.field_value(element, field, kind, field, field_type(kind, field), token)
 
     def field_value(
         self,
@@ -465,13 +611,13 @@ class _Parser:
             while not self.at("]"):
                 following = self.peek()
                 if following is None:
-                    raise self.error(f"the file ends inside field {field}'s [ ]", [token])
-                if following.kind == "word" and following.text in STATEMENTS and holder is not None:
-                    self.statement(holder)  # ROUTE and PROTO may stand among nodes
+                    raise self.error(
+                        f"the file ends inside field {field}'s [ ]", [token], _Truncated
+                    )
+                if holder is not None and (following.text in STATEMENTS or self.starts_node()):
+                    self.attempt(holder, container=container)  # ROUTE, PROTO may stand among nodes
                 elif self.starts_node():
-                    if holder is None:
-                        raise self.error(f"field {field} cannot hold nodes", [token])
-                    self.node_statement(holder, container)
+                    raise self.error(f"field {field} cannot hold nodes", [token])
                 elif following.text == "NULL":
                     self.take()
                 elif following.kind == "punct":
@@ -499,6 +645,16 @@ class _Parser:
             found = "the end of the file" if following is None else repr(following.text)
             raise self.error(f"field {field} of {kind}: no value (found {found})", [token])
         return _text(items, declared, False)
+
+
+def _last_child(parent):
+    """The last child of ``parent`` (element or comment), or None."""
+    return next(parent.iterchildren(reversed=True), None)
+
+
+def _shown(token: Token) -> str:
+    """``token`` as the file has it, for messages."""
+    return f"[{token.text}]" if token.kind == "numbers" else repr(token.text)
 
 
 def _is_scalar(token: Token) -> bool:

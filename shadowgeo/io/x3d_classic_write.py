@@ -267,6 +267,9 @@ class _Writer:
             elif child_tag == "fieldValue":
                 lines += self.field_value(child, kind, depth)
             elif child_tag in ("ROUTE", "IMPORT", "EXPORT", "ProtoDeclare", "ExternProtoDeclare"):
+                # After the nodes before it (it may USE their DEFs), before those after it.
+                lines += self.groups(groups, tag, depth)
+                groups = {}
                 lines += [line for c in pending for line in self.statement(c, depth)]
                 pending = []
                 lines += self.statement(child, depth)
@@ -280,12 +283,18 @@ class _Writer:
                     [*pending, child]
                 )
                 pending = []
+        lines += self.groups(groups, tag, depth)
+        lines += [line for c in pending for line in self.statement(c, depth)]
+        return lines
+
+    def groups(self, groups: dict[str, list], tag: str, depth: int) -> list[str]:
+        """Node-valued fields: ``field`` and its nodes, per field."""
+        lines = []
         for field, items in groups.items():
             if self.vrml97:
                 field = VRML97_FIELDS.get((tag, field), field)
             many = sum(isinstance(item.tag, str) for item in items) > 1
-            lines += self.nodes(f"{pad}{field}", items, depth, many)
-        lines += [line for c in pending for line in self.statement(c, depth)]
+            lines += self.nodes(f"{INDENT * depth}{field}", items, depth, many)
         return lines
 
     def nodes(self, start: str, items: list[Element], depth: int, many: bool) -> list[str]:

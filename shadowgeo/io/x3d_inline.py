@@ -118,7 +118,7 @@ def _x3d(
         raise context.error(element, f"Inlines nested more than {MAX_INLINE_DEPTH} deep")
     if path not in reader.inline_files:
         try:
-            tree = x3d_parse.parse(path)
+            tree = x3d_parse.parse(path, reader.warnings)
         except SceneError as error:
             tree = f"cannot be read: {error}"
         else:

@@ -55,13 +55,14 @@ def read_bytes(path: Path) -> bytes:
     return data
 
 
-def parse(path: Path) -> etree._ElementTree:
+def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
     """Parse ``path`` (``.x3d`` or gzip ``.x3dz``) into an lxml tree, comments kept;
     a file of another encoding (:data:`ENCODINGS`) is parsed by its module into
     the same tree.
 
     ClassicVRML and VRML 97 files (known by their ``#X3D`` / ``#VRML`` header,
-    whatever the extension) give the same tree, from :mod:`.x3d_classic_read`.
+    whatever the extension) give the same tree, from :mod:`.x3d_classic_read`;
+    what it skips is noted in ``notes``.
 
     Raises
     ------
@@ -74,7 +75,7 @@ def parse(path: Path) -> etree._ElementTree:
         return importlib.import_module(f"{__package__}.{encoding}").parse(Path(path))
     data = read_bytes(path)
     if x3d_classic_read.is_classic(data):
-        return x3d_classic_read.parse_bytes(data, str(path))
+        return x3d_classic_read.parse_bytes(data, str(path), notes)
     try:
         tree = etree.parse(io.BytesIO(data), _parser())
     except etree.XMLSyntaxError as problem:

@@ -500,8 +500,9 @@ def read(
     'skipped, view, sound and environment settings cast no shadow'
     """
     path = Path(path)
-    tree = x3d_parse.parse(path)
-    scene = Scene(path=str(path), document=tree)
+    notes: list[str] = []  # what the ClassicVRML parser skipped
+    tree = x3d_parse.parse(path, notes)
+    scene = Scene(path=str(path), document=tree, warnings=notes)
     reader = _Reader(path.resolve().parent, scene.warnings)
     try:
         reader.document(tree, path, np.eye(4), scene)
