@@ -20,6 +20,7 @@ once per light: its shadow on every face wholly behind it.
 from __future__ import annotations
 
 import warnings
+from typing import cast
 
 import numpy as np
 import shapely
@@ -33,12 +34,14 @@ _CUBE_SIDES = [(axis, sign) for axis in range(3) for sign in (1.0, -1.0)]
 def corner_min(values: np.ndarray) -> np.ndarray:
     """``values.min(axis=1)`` for (n, 3, ...) triangle corners, as two
     element-wise minima (numpy's reduction over a length-3 axis is slow)."""
-    return np.minimum(np.minimum(values[:, 0], values[:, 1]), values[:, 2])
+    low: np.ndarray = np.minimum(np.minimum(values[:, 0], values[:, 1]), values[:, 2])
+    return low
 
 
 def corner_max(values: np.ndarray) -> np.ndarray:
     """``values.max(axis=1)`` for (n, 3, ...) triangle corners."""
-    return np.maximum(np.maximum(values[:, 0], values[:, 1]), values[:, 2])
+    high: np.ndarray = np.maximum(np.maximum(values[:, 0], values[:, 1]), values[:, 2])
+    return high
 
 
 def clip_batch(
@@ -89,7 +92,9 @@ def clip_batch(
     return out[:, :used], counts
 
 
-def _clip_rows(points, counts, side, valid) -> tuple[np.ndarray, np.ndarray]:
+def _clip_rows(
+    points: np.ndarray, counts: np.ndarray, side: np.ndarray, valid: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """One Sutherland-Hodgman step on rows that the plane cuts: (r, k', d)."""
     rows, width, size = points.shape
     inside = (side >= 0) & valid
@@ -154,7 +159,9 @@ def _cube_boxes(triangles: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
-def _clipped_boxes(triangles, axis, sign, across) -> tuple[np.ndarray, np.ndarray]:
+def _clipped_boxes(
+    triangles: np.ndarray, axis: int, sign: float, across: list[int]
+) -> tuple[np.ndarray, np.ndarray]:
     """Boxes of the triangles' images clipped to one cube side's pyramid of
     rays ``|x| <= w, |y| <= w``: the indices that reach it, and their boxes."""
     w = sign * triangles[:, :, axis]
@@ -209,7 +216,7 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     cell = np.maximum(cell, 1e-300)
     columns = int(np.ceil((high[0] - low[0]) / cell[0])) + 1
 
-    def cells(boxes):
+    def cells(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         start = np.floor((boxes[:, :2] - low) / cell).astype(np.int64)
         stop = np.floor((boxes[:, 2:] - low) / cell).astype(np.int64)
         span = stop - start + 1
@@ -278,8 +285,9 @@ def candidate_pairs(
     if len(receivers) == 0 or len(casters) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     if light_position is None:
-        receiver_boxes = _directional_boxes(receivers, direction)
-        caster_boxes = _directional_boxes(casters, direction)
+        # A directional light: the caller passes its direction.
+        receiver_boxes = _directional_boxes(receivers, cast(np.ndarray, direction))
+        caster_boxes = _directional_boxes(casters, cast(np.ndarray, direction))
     else:
         receiver_boxes = _cube_boxes(receivers - light_position)
         caster_boxes = _cube_boxes(casters - light_position)
@@ -314,7 +322,14 @@ class Outline:
         The same, scaled by ``scale`` for Clipper2.
     """
 
-    def __init__(self, light_point, axis, first, second, direction) -> None:
+    def __init__(
+        self,
+        light_point: np.ndarray | None,
+        axis: np.ndarray,
+        first: np.ndarray,
+        second: np.ndarray,
+        direction: np.ndarray | None,
+    ) -> None:
         self.light_point = light_point
         self.axis, self.first, self.second = axis, first, second
         self.direction = direction
@@ -339,7 +354,8 @@ class Outline:
         (positive for a directional light)."""
         if self.light_point is None:
             return np.full(points.shape[:-1], np.inf)
-        return (points - self.light_point) @ self.axis
+        distance: np.ndarray = (points - self.light_point) @ self.axis
+        return distance
 
     def may_reach(self, triangles: np.ndarray) -> np.ndarray:
         """(n,) bool for (n, 3, 3) triangles: False where the caster surely
@@ -371,11 +387,15 @@ class Outline:
         if self.light_point is None:
             base = np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
             height = np.einsum("ij,ij->i", base, normals) + offsets
-            return base - (height / (normals @ self.direction))[:, None] * self.direction
+            # Without a light point the outline is a directional light's: it has a direction.
+            direction = cast(np.ndarray, self.direction)
+            lowered: np.ndarray = base - (height / (normals @ direction))[:, None] * direction
+            return lowered
         rays = self.axis + np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
         height = normals @ self.light_point + offsets
         along = -height / np.einsum("ij,ij->i", rays, normals)
-        return self.light_point + rays * along[:, None]
+        met: np.ndarray = self.light_point + rays * along[:, None]
+        return met
 
 
 def make_outline(
@@ -392,8 +412,10 @@ def make_outline(
     projection needs."""
     if not loops:
         return None
+    axis: np.ndarray
     if light_point is None:
-        axis = direction
+        # A directional light: the caller passes its direction.
+        axis = cast(np.ndarray, direction)
     else:
         axis = all_vertices.mean(axis=0) - light_point
         axis = axis / np.linalg.norm(axis)

@@ -18,6 +18,8 @@ The regions are then triangulated with those shared points, face by face.
 
 from __future__ import annotations
 
+from typing import Literal, overload
+
 import numpy as np
 from manifold3d import triangulate
 
@@ -196,7 +198,9 @@ def stitch(
     return points, found[proper], owners[proper]
 
 
-def _drop_repeats(loop_of, ids, *others):
+def _drop_repeats(
+    loop_of: np.ndarray, ids: np.ndarray, *others: np.ndarray
+) -> tuple[np.ndarray, ...]:
     """Drop each point equal to the one before it in its (cyclic) loop."""
     count = len(ids)
     if count == 0:
@@ -211,7 +215,16 @@ def _drop_repeats(loop_of, ids, *others):
     return (ids[keep], loop_of[keep], *(other[keep] for other in others))
 
 
-def _insert_edge_points(ids, loop_of, corner_ids, edge_of, canonical, corner, clusters, n_vertices):
+def _insert_edge_points(
+    ids: np.ndarray,
+    loop_of: np.ndarray,
+    corner_ids: np.ndarray,
+    edge_of: np.ndarray,
+    canonical: np.ndarray,
+    corner: np.ndarray,
+    clusters: tuple[np.ndarray, np.ndarray],
+    n_vertices: np.int64,
+) -> tuple[np.ndarray, np.ndarray]:
     """The loops with, after each point whose segment to the next runs along a
     face edge, the edge's shared points strictly between the two, in order.
     Returns the new point sequence and the loop of each entry."""
@@ -270,7 +283,14 @@ def _insert_edge_points(ids, loop_of, corner_ids, edge_of, canonical, corner, cl
     return sequence, sequence_loop
 
 
-def _corners_2d(vertices, faces, origin, u, v, face_ids) -> np.ndarray:
+def _corners_2d(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    origin: np.ndarray,
+    u: np.ndarray,
+    v: np.ndarray,
+    face_ids: np.ndarray,
+) -> np.ndarray:
     corners = vertices[faces[face_ids]] - origin[face_ids][:, None, :]
     return np.stack(
         [
@@ -281,7 +301,19 @@ def _corners_2d(vertices, faces, origin, u, v, face_ids) -> np.ndarray:
     )
 
 
-def unique_integers(values: np.ndarray, return_inverse: bool = False):
+@overload
+def unique_integers(values: np.ndarray, return_inverse: Literal[False] = False) -> np.ndarray: ...
+
+
+@overload
+def unique_integers(
+    values: np.ndarray, return_inverse: Literal[True]
+) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+def unique_integers(
+    values: np.ndarray, return_inverse: bool = False
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """``np.unique`` of a 1-D integer array by one sort (numpy's hash-based
     unique is many times slower on large arrays)."""
     values = np.asarray(values).reshape(-1)

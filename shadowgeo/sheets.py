@@ -35,7 +35,8 @@ def lift_directions(triangles: np.ndarray, normals: np.ndarray, n_points: int) -
     direction = np.einsum("pij,pj->pi", np.linalg.pinv(moments, rcond=1e-10), sums)
     # A sharp concave crease would push its miter far out: keep it bounded.
     length = np.linalg.norm(direction, axis=1, keepdims=True)
-    return direction * np.minimum(1.0, 4.0 / np.maximum(length, 1e-300))
+    lifted: np.ndarray = direction * np.minimum(1.0, 4.0 / np.maximum(length, 1e-300))
+    return lifted
 
 
 def single_sheet(caster: Caster) -> bool:

@@ -41,7 +41,9 @@ the size of the shadow's outline.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 import shapely
@@ -49,16 +51,27 @@ import trimesh
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min, make_outline
-from .lights import Light, SpotLight, is_positional, require_light
+from .lightframe import (
+    Outline,
+    candidate_pairs,
+    clip_batch,
+    corner_max,
+    corner_min,
+    make_outline,
+)
+from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .seams import stitch, unique_integers
 from .sheets import face_frames, lift_directions, merge_positions, single_sheet
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
-from .topology import Caster, as_caster
+from .topology import Caster, MeshLike, as_caster
 
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000
+
+# A closed caster's outline, its light-facing triangles, and (its box corners,
+# bounding ball centre, radius).
+_Outlined = tuple[Outline, np.ndarray, tuple[np.ndarray, np.ndarray, float]]
 
 
 @dataclass(frozen=True)
@@ -141,9 +154,9 @@ class SurfaceShadow:
 
 
 def shadow_on_surface(
-    casters,
+    casters: MeshLike | Sequence[MeshLike],
     light: Light,
-    surface,
+    surface: MeshLike,
     *,
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
@@ -202,29 +215,30 @@ def shadow_on_surface(
     if tolerance is None:
         points = [c.bounds for c in caster_list if c.n_faces]
         points += [receiver.bounds] if receiver.n_faces else []
-        points += [light.position[None]] if positional else []
+        points += [cast("PointLight | SpotLight", light).position[None]] if positional else []
         tolerance = Tolerance.for_points(*points)
     if positional:
         for caster in caster_list:
             if caster.n_faces:
-                check_light_outside(caster, light.position, tolerance)
+                position = cast("PointLight | SpotLight", light).position
+                check_light_outside(caster, position, tolerance)
     return _SurfaceProjector(caster_list, light, receiver, offset, tolerance).run()
 
 
-def _as_list(casters) -> list:
+def _as_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
     """A single mesh as a list of one; a list of meshes as it is."""
     if isinstance(casters, Caster) or hasattr(casters, "faces"):
-        return [casters]
+        return [cast("MeshLike", casters)]
     if isinstance(casters, tuple | list) and len(casters) == 2:
         first = casters[0]
         if not (isinstance(first, Caster | tuple | list) or hasattr(first, "faces")):
-            return [casters]  # (vertices array, faces)
+            return [cast("MeshLike", casters)]  # (vertices array, faces)
         try:
             array = np.asarray(first, dtype=np.float64)
         except (TypeError, ValueError):
             array = None
         if array is not None and array.ndim == 2 and array.shape[1] == 3:
-            return [casters]  # (vertices as nested lists, faces)
+            return [cast("MeshLike", casters)]  # (vertices as nested lists, faces)
     if isinstance(casters, tuple | list):
         return list(casters)
     raise GeometryError(
@@ -236,7 +250,22 @@ def _as_list(casters) -> list:
 class _SurfaceProjector:
     """One call of :func:`shadow_on_surface`."""
 
-    def __init__(self, casters: list[Caster], light, surface: Caster, offset, tol) -> None:
+    # Set by _faces, in the frame centred on the scene's bounds.
+    center: np.ndarray
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_area: np.ndarray
+    unit: np.ndarray
+    light_point: np.ndarray | None  # None for a directional light
+    height: np.ndarray  # positional lights only
+    cosine: np.ndarray  # directional lights only
+    origin: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+
+    def __init__(
+        self, casters: list[Caster], light: Light, surface: Caster, offset: float, tol: Tolerance
+    ) -> None:
         self.casters = casters
         self.light = light
         self.surface = surface
@@ -319,7 +348,11 @@ class _SurfaceProjector:
         self.u, self.v = face_frames(unit)
         return corners, facing, lit
 
-    def _pairs(self, corners, lit):
+    def _pairs(
+        self, corners: np.ndarray, lit: np.ndarray
+    ) -> tuple[
+        np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[int, list[np.ndarray]], tuple[int, int]
+    ]:
         """(face, caster triangle) pairs to clip, sorted by face; the caster
         triangles; faces wholly inside an outline; outline parts per face;
         and (candidate pairs, outlined casters) counts."""
@@ -328,11 +361,11 @@ class _SurfaceProjector:
         caster_triangles, outlined = self._caster_triangles()
         direction = None if is_positional(light) else light.direction
         pad = 1e-9 if is_positional(light) else tol.length
-        receivers, triangles = candidate_pairs(
+        found_faces, found_triangles = candidate_pairs(
             corners[lit_faces], caster_triangles, self.light_point, direction, pad
         )
-        receivers = [lit_faces[receivers]]
-        triangles = [triangles]
+        receiver_parts = [lit_faces[found_faces]]
+        triangle_parts = [found_triangles]
         # Closed casters wholly in front of a face: their outline, not their triangles.
         full = np.zeros(len(corners), dtype=bool)
         extra: dict[int, list[np.ndarray]] = {}
@@ -346,11 +379,11 @@ class _SurfaceProjector:
             found, their = candidate_pairs(
                 corners[others], front_triangles, self.light_point, direction, pad
             )
-            receivers.append(others[found])
-            triangles.append(their + base)
+            receiver_parts.append(others[found])
+            triangle_parts.append(their + base)
             all_triangles.append(front_triangles)
             base += len(front_triangles)
-        receivers, triangles = np.concatenate(receivers), np.concatenate(triangles)
+        receivers, triangles = np.concatenate(receiver_parts), np.concatenate(triangle_parts)
         caster_triangles = np.concatenate(all_triangles)
         order = np.argsort(receivers, kind="stable")
         receivers, triangles = receivers[order], triangles[order]
@@ -366,13 +399,17 @@ class _SurfaceProjector:
         counts = (n_candidates, len(outlined))
         return receivers[front], triangles[front], caster_triangles, full, extra, counts
 
-    def _caster_triangles(self):
+    def _caster_triangles(self) -> tuple[np.ndarray, list[_Outlined]]:
         """(t, 3, 3) caster triangles handled one by one, in the centred frame
         (a closed caster's light-facing ones only), and for each closed caster
         with an outline: (outline, its light-facing triangles, (its box corners,
         bounding ball centre, radius)))."""
-        chunks, outlined = [], []
-        direction = None if self.light_point is not None else self.light.direction
+        chunks: list[np.ndarray] = []
+        outlined: list[_Outlined] = []
+        # Without a light point the light is directional.
+        direction = (
+            None if self.light_point is not None else cast(DirectionalLight, self.light).direction
+        )
         for caster in self.casters:
             if caster.n_faces == 0:
                 continue
@@ -408,7 +445,13 @@ class _SurfaceProjector:
             return np.zeros((0, 3, 3)), outlined
         return np.concatenate(chunks), outlined
 
-    def _outline_faces(self, outline, bound, corners, lit) -> np.ndarray:
+    def _outline_faces(
+        self,
+        outline: Outline,
+        bound: tuple[np.ndarray, np.ndarray, float],
+        corners: np.ndarray,
+        lit: np.ndarray,
+    ) -> np.ndarray:
         """(m,) bool: lit faces that the caster lies wholly in front of (its box
         or its bounding ball does) and whose corners lie ahead of the light in
         the outline's frame."""
@@ -418,9 +461,17 @@ class _SurfaceProjector:
         in_front = np.minimum.reduce(box @ unit.T + offsets) > self.tol.length
         in_front |= unit @ centre + offsets - radius > self.tol.length
         ahead = corner_min(outline.ahead(corners)) > self.tol.length
-        return lit & in_front & ahead
+        eligible: np.ndarray = lit & in_front & ahead
+        return eligible
 
-    def _apply_outline(self, outline, faces, corners, full, extra) -> None:
+    def _apply_outline(
+        self,
+        outline: Outline,
+        faces: np.ndarray,
+        corners: np.ndarray,
+        full: np.ndarray,
+        extra: dict[int, list[np.ndarray]],
+    ) -> None:
         """Mark faces wholly inside the outline as full; add the outline's part
         of the others, mapped onto each face, to ``extra``."""
         if len(faces) == 0:
@@ -441,7 +492,8 @@ class _SurfaceProjector:
         # the face's image does (the face runs counter-clockwise in its frame).
         flips = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
         images = np.where(flips[:, None, None], images[:, ::-1], images)
-        loops, owners = [], []
+        loops: list[np.ndarray] = []
+        owners: list[int] = []
         for k, image in enumerate(images):
             piece = poly.intersect(outline.cross_section, poly.fill([image * outline.scale]))
             for loop in piece.to_polygons():
@@ -478,7 +530,9 @@ class _SurfaceProjector:
             if self.light_point is not None:
                 side = np.cross(a - self.light_point, b - self.light_point)
             else:
-                side = np.cross(b - a, np.broadcast_to(self.light.direction, a.shape))
+                # Without a light point the light is directional.
+                direction = cast(DirectionalLight, self.light).direction
+                side = np.cross(b - a, np.broadcast_to(direction, a.shape))
             side /= np.linalg.norm(side, axis=1, keepdims=True)
             offset = -np.einsum("ij,ij->i", side, a)
             sign = np.sign(np.einsum("ij,ij->i", side, c) + offset)
@@ -486,7 +540,15 @@ class _SurfaceProjector:
             planes[:, k + 1, 3] = offset * sign
         return planes
 
-    def _project(self, points: np.ndarray, faces: np.ndarray, planes: np.ndarray, origin, u, v):
+    def _project(
+        self,
+        points: np.ndarray,
+        faces: np.ndarray,
+        planes: np.ndarray,
+        origin: np.ndarray,
+        u: np.ndarray,
+        v: np.ndarray,
+    ) -> np.ndarray:
         """(n, k, 2) face-frame coordinates of clipped points (n, k, 4) of the
         pairs' faces, projected from the light onto each face's plane."""
         height = np.einsum("nkd,nd->nk", points, planes[:, 0])
@@ -497,7 +559,9 @@ class _SurfaceProjector:
             image = self.light_point + (position - self.light_point) * scale[:, :, None]
         else:
             along = height / self.cosine[faces][:, None]
-            image = position + along[:, :, None] * self.light.direction
+            # Without a light point the light is directional.
+            direction = cast(DirectionalLight, self.light).direction
+            image = position + along[:, :, None] * direction
         relative = image - origin[faces][:, None, :]
         return np.stack(
             [
@@ -507,7 +571,15 @@ class _SurfaceProjector:
             axis=2,
         )
 
-    def _regions(self, receivers, triangles, caster_triangles, corners, full, extra):
+    def _regions(
+        self,
+        receivers: np.ndarray,
+        triangles: np.ndarray,
+        caster_triangles: np.ndarray,
+        corners: np.ndarray,
+        full: np.ndarray,
+        extra: dict[int, list[np.ndarray]],
+    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
         """The shadow region of each face that has one: loops in the face's
         frame, and the faces."""
         origin, u, v = self.origin, self.u, self.v
@@ -520,7 +592,15 @@ class _SurfaceProjector:
             return self._regions_one_by_one(faces_with, lit, flat, owner, full, extra)
         return self._regions_tiled(faces_with, lit, flat, owner, full, extra)
 
-    def _regions_tiled(self, faces_with, lit, flat, owner, full, extra):
+    def _regions_tiled(
+        self,
+        faces_with: np.ndarray,
+        lit: list[np.ndarray | None],
+        flat: np.ndarray,
+        owner: np.ndarray,
+        full: np.ndarray,
+        extra: dict[int, list[np.ndarray]],
+    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
         """All faces' unions in one Clipper2 call: each face's frame is mapped
         (by an affine stretch, which keeps unions and intersections) into its
         own cell of one large plane, so no two faces' pieces meet, and the
@@ -528,17 +608,18 @@ class _SurfaceProjector:
         cell's height: with n faces, rounding on Clipper2's 1e-8 grid stays
         near n * 1e-16 of a face."""
         regions: dict[int, list[np.ndarray]] = {}
-        partial = []
+        partial_faces: list[int] = []
         for face, outline in zip(faces_with.tolist(), lit, strict=True):
             if outline is None:
                 continue
             if full[face]:
                 regions[face] = [outline]
             else:
-                partial.append(face)
-        if partial:
-            partial = np.array(partial, dtype=np.int64)
-            outlines = [lit[i] for i in np.searchsorted(faces_with, partial)]
+                partial_faces.append(face)
+        if partial_faces:
+            partial = np.array(partial_faces, dtype=np.int64)
+            # Those faces' outlines, none of them None.
+            outlines = [cast(np.ndarray, lit[i]) for i in np.searchsorted(faces_with, partial)]
             # One column of cells: Clipper2 sweeps along y, so its scanlines
             # meet one face at a time. x is stretched to the full width.
             cell = 2.0 * poly.MAX_COORDINATE / len(partial)
@@ -571,11 +652,20 @@ class _SurfaceProjector:
         region_faces = np.array(sorted(regions), dtype=np.int64)
         return [regions[face] for face in region_faces.tolist()], region_faces
 
-    def _regions_one_by_one(self, faces_with, lit, flat, owner, full, extra):
+    def _regions_one_by_one(
+        self,
+        faces_with: np.ndarray,
+        lit: list[np.ndarray | None],
+        flat: np.ndarray,
+        owner: np.ndarray,
+        full: np.ndarray,
+        extra: dict[int, list[np.ndarray]],
+    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
         """Each face's union on its own, cut to the light's range on the face."""
         starts = np.searchsorted(owner, faces_with, side="left")
         stops = np.searchsorted(owner, faces_with, side="right")
-        regions, region_faces = [], []
+        regions: list[list[np.ndarray]] = []
+        region_faces: list[int] = []
         for face, first, stop, outline in zip(faces_with, starts, stops, lit, strict=True):
             if outline is None:
                 continue
@@ -602,7 +692,13 @@ class _SurfaceProjector:
                 region_faces.append(face)
         return regions, np.array(region_faces, dtype=np.int64)
 
-    def _pieces(self, receivers, triangles, caster_triangles, corners):
+    def _pieces(
+        self,
+        receivers: np.ndarray,
+        triangles: np.ndarray,
+        caster_triangles: np.ndarray,
+        corners: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Each pair's triangle clipped to the region between its face and the
         light and projected onto the face: (n, k, 2) counter-clockwise polygons
         in the face frames (padded by repeating the last corner), and (n,) faces,
@@ -648,7 +744,14 @@ class _SurfaceProjector:
         pieces = [np.pad(p, ((0, 0), (0, width - p.shape[1]), (0, 0)), mode="edge") for p in pieces]
         return np.concatenate(pieces), np.concatenate(owners)
 
-    def _lit_polygons(self, faces, corners, origin, u, v) -> list[np.ndarray | None]:
+    def _lit_polygons(
+        self,
+        faces: np.ndarray,
+        corners: np.ndarray,
+        origin: np.ndarray,
+        u: np.ndarray,
+        v: np.ndarray,
+    ) -> list[np.ndarray | None]:
         """Each face's part that the light reaches, in the face's frame (the
         whole face unless a spot cone or range limits it); None where empty."""
         triangle = corners[faces]
@@ -689,14 +792,15 @@ class _SurfaceProjector:
         center = np.array([foot @ self.u[face], foot @ self.v[face]])
         return center + radius * np.column_stack([np.cos(angles), np.sin(angles)])
 
-    def _limit_planes(self, faces) -> np.ndarray | None:
+    def _limit_planes(self, faces: np.ndarray) -> np.ndarray | None:
         """(f, p, 4) half-spaces of the spot cone (an inscribed pyramid), or None."""
         light, tol = self.light, self.tol
-        chunks = []
+        chunks: list[np.ndarray] = []
         if isinstance(light, SpotLight):
             axis = light.direction
+            apex = cast(np.ndarray, self.light_point)  # a spot light is positional
             if light.cut_off_angle >= math.pi / 2 - 1e-6:
-                planes = np.append(axis, -axis @ self.light_point)[None]
+                planes = np.append(axis, -axis @ apex)[None]
             else:
                 count = tol.segments(tol.scale)
                 angles = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
@@ -707,13 +811,15 @@ class _SurfaceProjector:
                 )
                 normal = np.cross(rim, np.roll(rim, -1, axis=0))
                 normal *= np.sign(normal @ axis)[:, None]
-                planes = np.column_stack([normal, -normal @ self.light_point])
+                planes = np.column_stack([normal, -normal @ apex])
             chunks.append(np.broadcast_to(planes, (len(faces), *planes.shape)))
         if not chunks:
             return None
         return np.concatenate(chunks, axis=1)
 
-    def _mesh(self, points, faces, face_index) -> trimesh.Trimesh:
+    def _mesh(
+        self, points: np.ndarray, faces: np.ndarray, face_index: np.ndarray
+    ) -> trimesh.Trimesh:
         if len(faces) == 0:
             return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), process=False)
         used, inverse = unique_integers(faces, return_inverse=True)

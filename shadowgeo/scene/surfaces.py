@@ -27,7 +27,8 @@ def _receiver_centroids(found: list[Receiver]) -> np.ndarray:
     patches = [receiver.triangles for receiver in found if receiver.triangles is not None]
     if not patches:
         return np.zeros((0, 3))
-    return np.concatenate(patches).mean(axis=1)
+    centroids: np.ndarray = np.concatenate(patches).mean(axis=1)
+    return centroids
 
 
 def receiving_faces(
