@@ -40,6 +40,7 @@ elements; nothing is fetched (EXTERNPROTO and Inline are left to the reader).
 from __future__ import annotations
 
 import re
+from typing import cast
 
 from lxml import etree
 
@@ -194,7 +195,9 @@ class _Parser:
         token = self.peek()
         return token is not None and token.kind == "punct" and token.text == punct
 
-    def error(self, message: str, at: list[Token] | None = None, kind=SceneError) -> SceneError:
+    def error(
+        self, message: str, at: list[Token] | None = None, kind: type[SceneError] = SceneError
+    ) -> SceneError:
         token = at[0] if at else self.peek()
         line = token.line if token else (self.tokens[-1].line if self.tokens else 1)
         return kind(message, path=self.path, line=line)
@@ -284,12 +287,12 @@ class _Parser:
             self.attempt(parent, top=end is None and parent.tag == "Scene")
 
     # -- skipping what cannot be read -------------------------------------------------
-    def attempt(self, parent, top: bool = False, container: str | None = None) -> None:
+    def attempt(self, parent: Element, top: bool = False, container: str | None = None) -> None:
         """Read one statement or node into ``parent``; one that cannot be read is
         skipped with a note (at the top level even one the file ends inside)."""
         start, state = self.position, self.state(parent)
         try:
-            token = self.peek()
+            token = cast(Token, self.peek())  # every caller has seen a token here
             if token.kind == "word" and token.text in STATEMENTS:
                 self.statement(parent)
             else:
@@ -303,13 +306,21 @@ class _Parser:
         except SceneError as error:
             self.skip(parent, start, state, error, "the statement")
 
-    def state(self, parent) -> tuple:
+    def state(self, parent: Element) -> tuple[int, int, int, Element | None]:
         """What :meth:`skip` restores: depth, scopes, prototypes and the last
         child of ``parent`` (in constant time: lxml's ``len`` counts children)."""
         last = _last_child(parent)
         return self.depth, len(self.scopes), len(self.protos), last
 
-    def skip(self, parent, start, state, error, what, fields=False) -> None:
+    def skip(
+        self,
+        parent: Element,
+        start: int,
+        state: tuple[int, int, int, Element | None],
+        error: SceneError,
+        what: str,
+        fields: bool = False,
+    ) -> None:
         """Undo a statement or field that failed at ``error``: drop what it added
         to ``parent`` since ``state`` was taken, move past its tokens to the next
         statement (or field) at the depth it started, and note it."""
@@ -538,9 +549,9 @@ class _Parser:
                 what = f"field {token.text} of {kind}"
                 self.skip(element, start, state, error, what, fields=True)
 
-    def field(self, element, kind: str, instance: bool) -> None:
+    def field(self, element: Element, kind: str, instance: bool) -> None:
         """One field of a node (or an interface declaration or statement in it)."""
-        token = self.peek()
+        token = cast(Token, self.peek())  # body() has seen a token here
         if token.kind != "word":
             raise self.error(f"expected a field of {kind}, found {_shown(token)}", [token])
         if token.text in STATEMENTS:
@@ -647,7 +658,7 @@ class _Parser:
         return _text(items, declared, False)
 
 
-def _last_child(parent):
+def _last_child(parent: Element) -> Element | None:
     """The last child of ``parent`` (element or comment), or None."""
     return next(parent.iterchildren(reversed=True), None)
 

@@ -287,7 +287,7 @@ class _Writer:
         lines += [line for c in pending for line in self.statement(c, depth)]
         return lines
 
-    def groups(self, groups: dict[str, list], tag: str, depth: int) -> list[str]:
+    def groups(self, groups: dict[str, list[Element]], tag: str, depth: int) -> list[str]:
         """Node-valued fields: ``field`` and its nodes, per field."""
         lines = []
         for field, items in groups.items():
