@@ -846,4 +846,6 @@ def _disc_near(disc: np.ndarray | None, outline: np.ndarray) -> np.ndarray | Non
     cut = region.intersection(box)
     if cut.is_empty or cut.area == 0.0 or not isinstance(cut, shapely.Polygon):
         return np.zeros((0, 2))
+    # counter-clockwise, as the positive fill rule keeps it (GEOS may return it clockwise)
+    cut = shapely.geometry.polygon.orient(cut, 1.0)
     return np.asarray(cut.exterior.coords, dtype=np.float64)[:-1]
