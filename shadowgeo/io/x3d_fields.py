@@ -21,7 +21,6 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from lxml import etree
 
 from ..errors import SceneError
 from ..limits import LARGEST_COORDINATE
@@ -49,9 +48,10 @@ _STRING = re.compile(r'"((?:[^"\\]|\\.)*)"')
 
 def local_name(element) -> str:
     """Tag without namespace; '' for comments and processing instructions."""
-    if not isinstance(element.tag, str):
+    tag = element.tag
+    if not isinstance(tag, str):
         return ""
-    return etree.QName(element).localname
+    return tag if tag[0] != "{" else tag[tag.index("}") + 1 :]
 
 
 @dataclass
@@ -187,8 +187,17 @@ class Context:
         return parse(default, kind)
 
 
+# Parsed values of short texts (defaults, colours, sizes: the same few strings
+# over and over in a scene of many shapes), by (text, kind); arrays are copied out.
+_SHORT = 64
+_CACHE_SIZE = 4096
+_parsed: dict = {}
+
+
 def parse(text: str, kind: str):
     """Parse ``text`` as X3D field type ``kind``; ValueError says why not.
+
+    Short texts are parsed once and remembered (a copy is returned).
 
     Examples
     --------
@@ -199,6 +208,24 @@ def parse(text: str, kind: str):
     >>> parse("1 2 3 -1", "MFInt32").tolist()
     [1, 2, 3, -1]
     """
+    if len(text) > _SHORT:
+        return _parse(text, kind)
+    key = (text, kind)
+    value = _parsed.get(key)
+    if value is None:
+        try:
+            value = _parse(text, kind)
+        except ValueError as problem:
+            value = problem
+        if len(_parsed) >= _CACHE_SIZE:
+            _parsed.clear()
+        _parsed[key] = value
+    if isinstance(value, ValueError):
+        raise ValueError(*value.args)
+    return value.copy() if isinstance(value, (np.ndarray, list)) else value
+
+
+def _parse(text: str, kind: str):
     if kind == "SFBool":
         word = text.strip().lower()
         if word not in ("true", "false"):
@@ -249,9 +276,12 @@ def _numbers(text: str, kind: str) -> np.ndarray:
     except ValueError:
         bad = next((word for word in text.split() if not _is_number(word)), text.strip())
         raise ValueError(f"is not numbers ({kind}: '{bad[:20]}' is not a number)") from None
-    if not np.all(np.isfinite(numbers)):
-        raise ValueError(f"has a value that is not finite ({kind})")
-    if numbers.size and float(np.abs(numbers).max()) > LARGEST_COORDINATE:
+    # two reductions; NaN fails both comparisons
+    if numbers.size and not (
+        -LARGEST_COORDINATE <= numbers.min() and numbers.max() <= LARGEST_COORDINATE
+    ):
+        if not np.all(np.isfinite(numbers)):
+            raise ValueError(f"has a value that is not finite ({kind})")
         value = float(numbers[np.argmax(np.abs(numbers))])
         raise ValueError(
             f"has the value {value!r}, outside the supported range +-{LARGEST_COORDINATE:g} "
@@ -307,6 +337,20 @@ def _bulk(text: str, dtype) -> np.ndarray:
             return np.fromstring(text, dtype=dtype, sep=" ")
         except DeprecationWarning:
             raise ValueError("unmatched data") from None
+
+
+def numbers_or_none(text: str) -> np.ndarray | None:
+    """The numbers of ``text`` (white space or commas between them), float64,
+    or None when a word is not a number; unlike field parsing, no range check
+    (``inf`` and ``nan`` are read as such)."""
+    if "," in text:
+        text = text.replace(",", " ")
+    if not text or text.isspace():
+        return np.empty(0)
+    try:
+        return _bulk(text, np.float64)
+    except ValueError:
+        return None
 
 
 def _is_number(word: str) -> bool:

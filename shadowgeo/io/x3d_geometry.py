@@ -153,6 +153,8 @@ def coordinates(context: Context, element) -> np.ndarray:
 
 
 def _checked(context: Context, element, name: str, indices: np.ndarray, n_points: int):
+    if not indices.size or (indices.max() < n_points and indices.min() >= -1):
+        return indices
     bad = (indices >= n_points) | (indices < -1)
     if np.any(bad):
         first = int(indices[np.argmax(bad)])

@@ -22,7 +22,8 @@ MATERIALS = {"Material", "PhysicalMaterial", "UnlitMaterial", "TwoSidedMaterial"
 
 
 def _color(value) -> tuple[float, float, float]:
-    return tuple(float(c) for c in np.clip(value, 0.0, 1.0))
+    """The colour clipped to [0, 1] (the values are finite: parsed fields)."""
+    return tuple(min(max(float(c), 0.0), 1.0) for c in value)
 
 
 def scene_light(context: Context, element, matrix: np.ndarray) -> SceneLight | None:

@@ -50,6 +50,7 @@ Rules the reader follows, where X3D leaves a choice:
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -259,7 +260,8 @@ class _Reader:
                 matrix,
                 self.material_cache[appearance],
                 _public(element.get("DEF") or node.get("DEF")) or name,
-                f"{Path(context.path).name} line {node.sourceline}, {context.describe(node)}",
+                f"{os.path.basename(context.path)} line {node.sourceline}, "
+                f"{context.describe(node)}",
                 *self._added_role(element),
             )
         )
@@ -338,8 +340,13 @@ class _Reader:
                 local = coarse[built.key]
             else:
                 local = built.vertices
-            points.append(local @ transform[:3, :3].T + transform[:3, 3])
+            if not np.array_equal(transform, _IDENTITY):
+                local = local @ transform[:3, :3].T + transform[:3, 3]
+            points.append(local)
         return Tolerance.for_points(*points, **settings)
+
+
+_IDENTITY = np.eye(4)
 
 
 def _public(name: str | None) -> str | None:

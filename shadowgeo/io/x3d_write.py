@@ -67,6 +67,7 @@ from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
+from .x3d_fields import numbers_or_none
 
 ADDED_ROLES = ("shadow", "volume")
 # Written in the ClassicVRML encoding (the same tree, another syntax).
@@ -225,14 +226,11 @@ def _drop(node) -> None:
 
 def _non_finite(value: str) -> bool:
     """All the words of ``value`` are numbers and one is not finite."""
-    words = value.replace(",", " ").split()
-    if not words:
+    # a word reads as inf or nan only if it spells one or overflows an exponent
+    if not any(letter in value for letter in "nNeE"):
         return False
-    try:
-        numbers = [float(word) for word in words]
-    except ValueError:
-        return False
-    return not all(math.isfinite(number) for number in numbers)
+    numbers = numbers_or_none(value)
+    return numbers is not None and not bool(np.isfinite(numbers).all())
 
 
 # What the added nodes need beyond the Core profile (Interchange and up have it).
@@ -318,6 +316,18 @@ def _numbers(values) -> str:
     return " ".join(map(repr, values.tolist()))
 
 
+def _points(vertices: np.ndarray) -> str:
+    """An MFVec3f's text, ``x y z, x y z, ...``, each number the shortest that
+    reads back as the same float64."""
+    values = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    finite = np.isfinite(values).all(axis=1)
+    if not finite.all():
+        bad = values[np.argmin(finite)].tolist()
+        raise SceneError(f"cannot write a non-finite number in X3D: {bad}")
+    words = list(map(repr, values.ravel().tolist()))
+    return ", ".join(map(" ".join, zip(words[0::3], words[1::3], words[2::3], strict=True)))
+
+
 def _bool(value: bool) -> str:
     return "true" if value else "false"
 
@@ -344,12 +354,15 @@ def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: 
         index=" ".join(map(str, shape.faces.ravel().tolist())),
         solid=_bool(shape.solid),
     )
-    points = ", ".join(map(_numbers, vertices))
+    points = _points(vertices)
     etree.SubElement(geometry, f"{namespace}Coordinate", point=points)
     return element
 
 
 # -- a fresh X3D 4.0 document ----------------------------------------------------------------
+
+
+_IDENTITY = np.eye(4)
 
 
 def _fresh(scene: Scene):
@@ -387,7 +400,7 @@ def _fresh(scene: Scene):
         if shape.role in ADDED_ROLES:
             continue
         node = _shape_element(shape, used, world=False)
-        if not np.allclose(shape.transform, np.eye(4), rtol=0, atol=0):
+        if not np.array_equal(shape.transform, _IDENTITY):
             transform = etree.SubElement(body, "Transform", _transform_fields(shape.transform))
             transform.append(node)
         else:
