@@ -106,23 +106,25 @@ def write(scene: Scene, path) -> None:
         tree = _fresh(scene)
     name = path.name.lower()
     if x3d_json.is_x3d_json(path):
-        data = x3d_json.dumps(tree)
+        parts = [x3d_json.dumps(tree)]
     elif name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
         vrml97 = name.endswith(VRML97_SUFFIXES)
         try:
-            data = x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")
+            parts = [x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")]
         except SceneError as problem:  # a document VRML 97 cannot say
             raise SceneError(problem.message, path=str(path)) from None
     else:
         declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
         text = etree.tostring(tree, xml_declaration=False, encoding="UTF-8", doctype=doctype)
-        data = declaration + text
-    if not data.endswith(b"\n"):
-        data += b"\n"
+        parts = [declaration, text]
+    # written part by part: a big document is not copied to join or end it
+    if not parts[-1].endswith(b"\n"):
+        parts.append(b"\n")
     if name.endswith((".x3dz", ".x3dvz", ".wrz", ".gz")):
-        data = gzip.compress(data, mtime=0)
-    with atomic_path(path) as temporary:
-        temporary.write_bytes(data)
+        parts = [gzip.compress(b"".join(parts), mtime=0)]
+    with atomic_path(path) as temporary, open(temporary, "wb") as handle:
+        for part in parts:
+            handle.write(part)
 
 
 def _with_added(scene: Scene):
