@@ -113,10 +113,16 @@ def write(scene: Scene, path) -> None:
             parts = [x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")]
         except SceneError as problem:  # a document VRML 97 cannot say
             raise SceneError(problem.message, path=str(path)) from None
+    elif not name.endswith((".x3dz", ".gz")):
+        # XML streamed into the file: a big document is never held as bytes
+        with atomic_path(path) as temporary, open(temporary, "wb") as handle:
+            handle.write(_DECLARATION)
+            tree.write(handle, xml_declaration=False, encoding="UTF-8", doctype=doctype)
+            handle.write(b"\n")
+        return
     else:
-        declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
         text = etree.tostring(tree, xml_declaration=False, encoding="UTF-8", doctype=doctype)
-        parts = [declaration, text]
+        parts = [_DECLARATION, text]
     # written part by part: a big document is not copied to join or end it
     if not parts[-1].endswith(b"\n"):
         parts.append(b"\n")
@@ -125,6 +131,9 @@ def write(scene: Scene, path) -> None:
     with atomic_path(path) as temporary, open(temporary, "wb") as handle:
         for part in parts:
             handle.write(part)
+
+
+_DECLARATION = b'<?xml version="1.0" encoding="UTF-8"?>\n'
 
 
 def _with_added(scene: Scene):
@@ -200,7 +209,9 @@ def _clean(tree, notes: list[str], source: str) -> str | None:
         )
         _drop(element)
     etree.cleanup_namespaces(tree)
-    for element in root.iter(etree.Element):
+    # only elements with an attribute that could spell inf or nan (or overflow
+    # an exponent) are looked at in Python: found by libxml2, in document order
+    for element in root.xpath(_MAY_BE_NON_FINITE):
         for name, value in list(element.attrib.items()):
             if name not in _TEXT_ATTRIBUTES and _non_finite(value):
                 shown = value if len(value) <= 40 else value[:37] + "..."
@@ -210,6 +221,12 @@ def _clean(tree, notes: list[str], source: str) -> str | None:
                 )
                 del element.attrib[name]
     return doctype
+
+
+_MAY_BE_NON_FINITE = (
+    "descendant-or-self::*[@*[contains(., 'n') or contains(., 'N') or contains(., 'e') "
+    "or contains(., 'E')]]"
+)
 
 
 def _drop(node) -> None:
