@@ -331,3 +331,31 @@ def test_fresh_document_states_a_unit_other_than_metres(tmp_path, x3d_schema):
     (unit,) = parse(out).getroot().findall("head/unit")
     assert unit.get("category") == "length" and float(unit.get("conversionFactor")) == 0.01
     assert x3d_schema_errors(out, x3d_schema) == []
+
+
+def test_non_finite_numbers_of_the_input_are_not_copied(tmp_path):
+    source = tmp_path / "in.x3d"
+    source.write_text(
+        '<X3D version="4.0"><Scene>\n'
+        '<Transform DEF="nan" translation="0 INF 0" scale="1e5 1E-5 2" rotation="0 1 0 -Infinity">'
+        '<Shape><Appearance><Material diffuseColor="NaN 0 0" emissiveColor="0.1 0.2 0.3"/>'
+        '</Appearance><TriangleSet><Coordinate point="0 0 0, 1 0 0, 0 1e999 0"/></TriangleSet>'
+        '</Shape></Transform>\n<WorldInfo title="inf and nan" info=\'"nan"\'/>\n'
+        "</Scene></X3D>"
+    )
+    scene = sg.load(source)
+    target = tmp_path / "out.x3d"
+    sg.save(scene, target)
+    transform = parse(target).find(".//Transform")
+    # non-finite values (spelled or overflowing) dropped; finite ones and text kept
+    assert "translation" not in transform.attrib and "rotation" not in transform.attrib
+    assert transform.get("scale") == "1e5 1E-5 2" and transform.get("DEF") == "nan"
+    material = transform.find(".//Material")
+    assert "diffuseColor" not in material.attrib
+    assert material.get("emissiveColor") == "0.1 0.2 0.3"
+    assert "point" not in transform.find(".//Coordinate").attrib
+    info = parse(target).find(".//WorldInfo")
+    assert info.get("title") == "inf and nan" and info.get("info") == '"nan"'
+    notes = [note for note in scene.warnings if "is not finite; not written" in note]
+    assert len(notes) == 4
+    assert "translation='0 INF 0'" in notes[0]  # in document order
