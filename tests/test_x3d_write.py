@@ -359,3 +359,23 @@ def test_non_finite_numbers_of_the_input_are_not_copied(tmp_path):
     notes = [note for note in scene.warnings if "is not finite; not written" in note]
     assert len(notes) == 4
     assert "translation='0 INF 0'" in notes[0]  # in document order
+
+
+@pytest.mark.parametrize("fast", [True, False])
+def test_point_and_index_text_reads_back_exactly(monkeypatch, fast):
+    from shadowgeo.io.x3d_fields import parse as parse_field
+
+    if not fast:
+        monkeypatch.setattr(x3d_write, "orjson", None)
+    elif x3d_write.orjson is None:
+        pytest.skip("orjson not installed: only the repr path exists")
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(500, 3)) * 10.0 ** rng.integers(-60, 60, size=(500, 3))
+    points[0] = [-0.0, 1 / 3, 2**-40]
+    text = x3d_write._points(points)
+    assert text.count(", ") == len(points) - 1  # one comma between points
+    read = parse_field(text, "MFVec3f")
+    assert np.array_equal(read, points) and np.signbit(read[0, 0])
+    faces = rng.integers(0, 2**31 - 1, size=(300, 3))
+    assert np.array_equal(parse_field(x3d_write._integers(faces), "MFInt32"), faces.ravel())
+    assert x3d_write._points(np.zeros((0, 3))) == "" and x3d_write._integers(np.zeros(0)) == ""
