@@ -14,7 +14,7 @@ trimesh):
   on a 100 x 100 grid.
 
 Each case -- ``.x3d`` or ``.glb`` in, ``.glb`` or ``.x3d`` out -- runs in a
-subprocess of its own (so that peak RSS, ``resource.getrusage``, is the
+subprocess of its own (so that peak RSS, the process's VmHWM, is the
 case's alone) and times ``shadowgeo.load``, ``add_shadows`` (the default sun
 onto the plane y = 0) and ``shadowgeo.save`` of the shadowed scene, and also
 the save of the scene without shadows. The peers run the same way on the same
@@ -93,6 +93,19 @@ def write_glb(meshes: list[trimesh.Trimesh], path: Path) -> None:
 # -- the cases, each run in a subprocess of its own ------------------------------------
 
 
+def peak_mb() -> float:
+    """This process's peak RSS in MB: VmHWM, which execve resets (Linux keeps
+    ``getrusage``'s ru_maxrss across exec, so a child would report its
+    parent's peak); ru_maxrss where /proc is missing."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
 def run_shadowgeo(source: str, target: str) -> dict:
     sys.path.insert(0, str(ROOT))
     import shadowgeo
@@ -101,14 +114,14 @@ def run_shadowgeo(source: str, target: str) -> dict:
     import shadowgeo.io.x3d_read  # noqa: F401
     import shadowgeo.io.x3d_write  # noqa: F401
 
-    times = {"base MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+    times = {"base MB": peak_mb()}
     start = time.perf_counter()
     scene = shadowgeo.load(source)
     times["load"] = time.perf_counter() - start
     start = time.perf_counter()
     shadowgeo.save(scene, target)
     times["save (no shadows)"] = time.perf_counter() - start
-    times["peak MB (no shadows)"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    times["peak MB (no shadows)"] = peak_mb()
     start = time.perf_counter()
     shadowed = shadowgeo.add_shadows(scene, plane=PLANE)
     times["add_shadows"] = time.perf_counter() - start
@@ -143,9 +156,9 @@ RUNNERS = {"shadowgeo": run_shadowgeo, "trimesh": run_trimesh, "lxml": run_lxml}
 def case(tool: str, source: Path, target: Path) -> dict:
     """Run one case in a fresh interpreter; its times and peak RSS (MB)."""
     code = (
-        "import json, resource, sys; sys.path.insert(0, sys.argv[1]); import bench_scale as b; "
+        "import json, sys; sys.path.insert(0, sys.argv[1]); import bench_scale as b; "
         "r = b.RUNNERS[sys.argv[2]](sys.argv[3], sys.argv[4]); "
-        "r['peak MB'] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024; "
+        "r['peak MB'] = b.peak_mb(); "
         "print(json.dumps(r))"
     )
     here = str(Path(__file__).resolve().parent)

@@ -9,7 +9,8 @@ Big meshes need attributes longer than libxml2's 10 MB limit for untrusted
 input, so the parser runs with ``huge_tree`` -- which also lifts libxml2's
 entity-amplification guard and its depth limit. Both are put back here: the
 bytes are scanned for ``<!ENTITY`` *before* libxml2 sees them (a declaration
-is refused before anything could be expanded), and the tree is refused past
+is refused before anything could be expanded -- even one inside a comment,
+which costs nothing real), and the tree is refused past
 :data:`~shadowgeo.limits.MAX_XML_DEPTH` elements deep. The scan is only
 conclusive for an ASCII-compatible encoding (UTF-8, ASCII, ISO-8859-x,
 windows-125x, declared or defaulted); a document in any other encoding (UTF-16,
