@@ -36,8 +36,15 @@ budget                 value           where it is enforced
 =====================  ==============  =============================================
 document size          512 MiB         X3D after inflating ``.x3dz`` (an inflation
                                        bomb stops there)
-XML depth              256 elements    libxml2's limit for untrusted input
-XML text or attribute  10 MB           libxml2's limit for untrusted input
+XML depth              256 elements    X3D, checked on the parsed tree (libxml2
+                                       stops at 2,048 while parsing)
+XML text or attribute  document size   X3D: one attribute may fill the document
+                                       budget (a 1.3M-triangle mesh is ~45 MB);
+                                       libxml2's 10 MB limit for untrusted input
+                                       stays for documents in an encoding other
+                                       than UTF-8 / ASCII / ISO-8859 / windows-125x
+entity declarations    none            X3D: ``<!ENTITY`` in the bytes is refused
+                                       before libxml2 parses anything
 nodes                  2,000,000       X3D nodes after DEF/USE, Inline and PROTO
                                        expansion, counted over every copy
 PROTO expansions       10,000          ProtoInstance copies per document

@@ -343,11 +343,70 @@ def test_deep_def_use_chain_is_an_error_not_a_crash(tmp_path):
         sg.load(scene(tmp_path, "\n".join(levels)))
 
 
-def test_over_long_attribute_is_refused_clearly(tmp_path):
-    points = " ".join(["1.25 2.5 3.75"] * 800_000)  # 11 MB in one attribute
+def test_an_attribute_over_libxml2s_10_mb_limit_is_read(tmp_path):
+    # 270,000 triangles of distinct points: 2.43M numbers, ~17 MB in one attribute
+    n_triangles = 270_000
+    values = np.arange(n_triangles * 9, dtype=np.float64) * 0.25 - 1000.0
+    points = " ".join(map(repr, values.tolist()))
+    assert len(points) > 10_000_000
     body = f'<Shape><TriangleSet><Coordinate point="{points}"/></TriangleSet></Shape>'
+    shapes = sg.load(scene(tmp_path, body)).shapes
+    assert len(shapes) == 1 and shapes[0].n_faces == n_triangles
+    # whatever the reader's vertex order, the points are the written ones
+    written = values.reshape(-1, 3)
+    triangles = shapes[0].vertices[shapes[0].faces].reshape(-1, 3)
+    assert np.array_equal(np.unique(triangles, axis=0), written)  # written is sorted
+
+
+def test_entity_declarations_are_refused_before_libxml2_parses(tmp_path, monkeypatch):
+    # with huge attributes allowed, libxml2's amplification guard is off: the
+    # bytes are refused before lxml is called at all
+    def never(*args, **kwargs):
+        raise AssertionError("libxml2 was given a document declaring entities")
+
+    monkeypatch.setattr(x3d_parse.etree, "parse", never)
+    text = (
+        '<?xml version="1.0"?>\n\n<!DOCTYPE X3D [ <!ENTITY a "aaaaaaaaaa"> ]>\n'
+        '<X3D version="4.0"><Scene><WorldInfo title="&a;"/></Scene></X3D>'
+    )
+    with pytest.raises(sg.SceneError, match="line 3: the DOCTYPE declares entities"):
+        sg.load(write(tmp_path, text))
+
+
+def test_an_encoding_the_scan_cannot_read_keeps_libxml2s_limits(tmp_path):
+    # UTF-16 hides "<!ENTITY" from a byte scan: libxml2 keeps its own guards,
+    # so a billion-laughs bomb and an over-long attribute are still refused
+    levels = ['<!ENTITY lol0 "lol">'] + [
+        f'<!ENTITY lol{i} "{("&lol" + str(i - 1) + ";") * 10}">' for i in range(1, 10)
+    ]
+    text = (
+        f'<?xml version="1.0" encoding="UTF-16"?>\n<!DOCTYPE X3D [ {" ".join(levels)} ]>\n'
+        '<X3D version="4.0"><Scene><WorldInfo title="&lol9;"/></Scene></X3D>'
+    )
+    path = tmp_path / "bomb.x3d"
+    path.write_bytes(text.encode("utf-16"))
+    with pytest.raises(sg.SceneError, match="entit"):
+        sg.load(path)
+    points = " ".join(["1.25 2.5 3.75"] * 800_000)  # 11 MB in one attribute
+    text = (
+        '<?xml version="1.0" encoding="UTF-16"?>\n<X3D version="4.0"><Scene><Shape>'
+        f'<TriangleSet><Coordinate point="{points}"/></TriangleSet></Shape></Scene></X3D>'
+    )
+    path.write_bytes(text.encode("utf-16"))
     with pytest.raises(sg.SceneError, match="longer than libxml2's 10 MB limit"):
+        sg.load(path)
+    # a declared encoding that is not ASCII-compatible keeps the limits too
+    assert not x3d_parse._ascii_compatible(b'<?xml version="1.0" encoding="UTF-7"?><X3D/>')
+    assert x3d_parse._ascii_compatible(b'<?xml version="1.0" encoding="iso-8859-1"?><X3D/>')
+
+
+def test_nesting_past_the_depth_budget_is_refused(tmp_path):
+    depth = x3d_parse.MAX_DEPTH  # <X3D><Scene> plus these Groups pass it by one
+    body = "<Group>" * (depth - 1) + "</Group>" * (depth - 1)
+    with pytest.raises(sg.SceneError, match=f"nested more than {depth} deep"):
         sg.load(scene(tmp_path, body))
+    body = "<Group>" * (depth - 2) + "</Group>" * (depth - 2)
+    assert sg.load(scene(tmp_path, body)).shapes == []
 
 
 @pytest.mark.parametrize("uri", ["../secret.bin", "https://example.com/buffer.bin"])

@@ -331,3 +331,51 @@ def test_fresh_document_states_a_unit_other_than_metres(tmp_path, x3d_schema):
     (unit,) = parse(out).getroot().findall("head/unit")
     assert unit.get("category") == "length" and float(unit.get("conversionFactor")) == 0.01
     assert x3d_schema_errors(out, x3d_schema) == []
+
+
+def test_non_finite_numbers_of_the_input_are_not_copied(tmp_path):
+    source = tmp_path / "in.x3d"
+    source.write_text(
+        '<X3D version="4.0"><Scene>\n'
+        '<Transform DEF="nan" translation="0 INF 0" scale="1e5 1E-5 2" rotation="0 1 0 -Infinity">'
+        '<Shape><Appearance><Material diffuseColor="NaN 0 0" emissiveColor="0.1 0.2 0.3"/>'
+        '</Appearance><TriangleSet><Coordinate point="0 0 0, 1 0 0, 0 1e999 0"/></TriangleSet>'
+        '</Shape></Transform>\n<WorldInfo title="inf and nan" info=\'"nan"\'/>\n'
+        "</Scene></X3D>"
+    )
+    scene = sg.load(source)
+    target = tmp_path / "out.x3d"
+    sg.save(scene, target)
+    transform = parse(target).find(".//Transform")
+    # non-finite values (spelled or overflowing) dropped; finite ones and text kept
+    assert "translation" not in transform.attrib and "rotation" not in transform.attrib
+    assert transform.get("scale") == "1e5 1E-5 2" and transform.get("DEF") == "nan"
+    material = transform.find(".//Material")
+    assert "diffuseColor" not in material.attrib
+    assert material.get("emissiveColor") == "0.1 0.2 0.3"
+    assert "point" not in transform.find(".//Coordinate").attrib
+    info = parse(target).find(".//WorldInfo")
+    assert info.get("title") == "inf and nan" and info.get("info") == '"nan"'
+    notes = [note for note in scene.warnings if "is not finite; not written" in note]
+    assert len(notes) == 4
+    assert "translation='0 INF 0'" in notes[0]  # in document order
+
+
+@pytest.mark.parametrize("fast", [True, False])
+def test_point_and_index_text_reads_back_exactly(monkeypatch, fast):
+    from shadowgeo.io.x3d_fields import parse as parse_field
+
+    if not fast:
+        monkeypatch.setattr(x3d_write, "orjson", None)
+    elif x3d_write.orjson is None:
+        pytest.skip("orjson not installed: only the repr path exists")
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(500, 3)) * 10.0 ** rng.integers(-60, 60, size=(500, 3))
+    points[0] = [-0.0, 1 / 3, 2**-40]
+    text = x3d_write._points(points)
+    assert text.count(", ") == len(points) - 1  # one comma between points
+    read = parse_field(text, "MFVec3f")
+    assert np.array_equal(read, points) and np.signbit(read[0, 0])
+    faces = rng.integers(0, 2**31 - 1, size=(300, 3))
+    assert np.array_equal(parse_field(x3d_write._integers(faces), "MFInt32"), faces.ravel())
+    assert x3d_write._points(np.zeros((0, 3))) == "" and x3d_write._integers(np.zeros(0)) == ""

@@ -159,14 +159,21 @@ class _Builder:
         check_face_indices(shape)
         if len(shape.faces) == 0:
             return None
-        used = np.unique(shape.faces)
-        # Only the vertices the faces use: glTF's validator flags unused ones.
-        remap = np.zeros(len(vertices), dtype=np.int64)
-        remap[used] = np.arange(len(used))
-        positions = np.ascontiguousarray(vertices[used], dtype="<f4")
+        # Only the vertices the faces use: glTF's validator flags unused ones
+        # (a mask, not np.unique: linear, and no copy when all are used).
+        in_use = np.zeros(len(vertices), dtype=bool)
+        in_use[shape.faces.ravel()] = True
+        if in_use.all():
+            positions = np.ascontiguousarray(vertices, dtype="<f4")
+            indices = np.ascontiguousarray(shape.faces, dtype="<u4")
+        else:
+            used = np.flatnonzero(in_use)
+            remap = np.zeros(len(vertices), dtype=np.int64)
+            remap[used] = np.arange(len(used))
+            positions = np.ascontiguousarray(vertices[used], dtype="<f4")
+            indices = np.ascontiguousarray(remap[shape.faces], dtype="<u4")
         if not np.all(np.isfinite(positions)):
             raise SceneError("non-finite vertex after float32 conversion", node=shape.name)
-        indices = np.ascontiguousarray(remap[shape.faces], dtype="<u4")
         position = self._accessor(
             bufferView=self._view(positions.tobytes(), _ARRAY_BUFFER),
             componentType=_FLOAT,

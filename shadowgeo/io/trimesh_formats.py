@@ -91,9 +91,10 @@ def mesh_shape(
     (4, 4), named ``name`` in the file ``path``; its material and solidity
     come from trimesh unless ``fields`` (other Shape arguments) give them."""
     material, solid = trimesh_material(geometry)
+    # trimesh's own arrays, not copies (the trimesh scene is dropped after reading)
     return Shape(
-        np.array(geometry.vertices, dtype=np.float64),
-        np.array(geometry.faces, dtype=np.int64),
+        np.asarray(geometry.vertices, dtype=np.float64),
+        np.asarray(geometry.faces, dtype=np.int64),
         np.array(transform, dtype=np.float64),
         name=name,
         source=f"{path.name}, node {name!r}" if name else path.name,

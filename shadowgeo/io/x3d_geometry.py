@@ -161,6 +161,8 @@ def coordinates(context: Context, element: Element) -> np.ndarray:
 def _checked(
     context: Context, element: Element, name: str, indices: np.ndarray, n_points: int
 ) -> np.ndarray:
+    if not indices.size or (indices.max() < n_points and indices.min() >= -1):
+        return indices
     bad = (indices >= n_points) | (indices < -1)
     if np.any(bad):
         first = int(indices[np.argmax(bad)])

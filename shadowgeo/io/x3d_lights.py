@@ -24,7 +24,8 @@ MATERIALS = {"Material", "PhysicalMaterial", "UnlitMaterial", "TwoSidedMaterial"
 
 
 def _color(value: Any) -> tuple[float, float, float]:
-    return float_triple(np.clip(value, 0.0, 1.0))
+    """The colour clipped to [0, 1] (the values are finite: parsed fields)."""
+    return float_triple(min(max(float(c), 0.0), 1.0) for c in value)
 
 
 def scene_light(context: Context, element: Element, matrix: np.ndarray) -> SceneLight | None:

@@ -4,6 +4,17 @@ lxml is told never to touch the network, never to load a DTD and never to
 expand entities; a document whose DOCTYPE declares entities at all (the shape
 of XXE and "billion laughs" attacks) is refused, and gzip input (``.x3dz``) is
 inflated only up to :data:`MAX_BYTES`.
+
+Big meshes need attributes longer than libxml2's 10 MB limit for untrusted
+input, so the parser runs with ``huge_tree`` -- which also lifts libxml2's
+entity-amplification guard and its depth limit. Both are put back here: the
+bytes are scanned for ``<!ENTITY`` *before* libxml2 sees them (a declaration
+is refused before anything could be expanded -- even one inside a comment,
+which costs nothing real), and the tree is refused past
+:data:`~shadowgeo.limits.MAX_XML_DEPTH` elements deep. The scan is only
+conclusive for an ASCII-compatible encoding (UTF-8, ASCII, ISO-8859-x,
+windows-125x, declared or defaulted); a document in any other encoding (UTF-16,
+say) is parsed with libxml2's own untrusted-input limits, as before.
 """
 
 from __future__ import annotations
@@ -11,6 +22,7 @@ from __future__ import annotations
 import gzip
 import importlib
 import io
+import re
 from pathlib import Path
 
 from lxml import etree
@@ -23,15 +35,19 @@ from . import x3d_classic_read
 ENCODINGS = {".x3dj": "x3d_json", ".json": "x3d_json"}
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).
 MAX_BYTES = limits.MAX_DOCUMENT_BYTES  # see shadowgeo.limits
+MAX_DEPTH = limits.MAX_XML_DEPTH
+# Encodings in which "<!ENTITY" can only be written as those ASCII bytes.
+_ASCII_COMPATIBLE = re.compile(rb"(utf-?8|us-ascii|ascii|iso[-_]?8859-\d+|latin-?1|windows-125\d)$")
+_DECLARED_ENCODING = re.compile(rb"""^<\?xml[^>]*?encoding\s*=\s*["']([A-Za-z0-9._-]+)["']""")
 
 
-def _parser() -> etree.XMLParser:
+def _parser(huge: bool = False) -> etree.XMLParser:
     return etree.XMLParser(
         resolve_entities=False,
         no_network=True,
         load_dtd=False,
         dtd_validation=False,
-        huge_tree=False,
+        huge_tree=huge,
         remove_comments=False,
         remove_blank_text=False,
     )
@@ -76,8 +92,16 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
     data = read_bytes(path)
     if x3d_classic_read.is_classic(data):
         return x3d_classic_read.parse_bytes(data, str(path), notes)
+    huge = _ascii_compatible(data)
+    if huge and b"<!ENTITY" in data:
+        raise SceneError(
+            "the DOCTYPE declares entities; entity declarations are refused "
+            "(external entities and entity expansion are an attack vector)",
+            path=str(path),
+            line=data.count(b"\n", 0, data.index(b"<!ENTITY")) + 1,
+        )
     try:
-        tree = etree.parse(io.BytesIO(data), _parser())
+        tree = etree.parse(io.BytesIO(data), _parser(huge))
     except etree.XMLSyntaxError as problem:
         message = (problem.msg or str(problem)).strip()
         if "limit" in message.lower() and "amplification" not in message.lower():
@@ -102,6 +126,14 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
     if _has_entity_references(tree):
         raise SceneError("the document uses entity references; refused", path=str(path))
     root = tree.getroot()
+    # one XPath step per level, each over the elements of that level: linear
+    too_deep = tree.xpath("/*" * (MAX_DEPTH + 1))
+    if too_deep:
+        raise SceneError(
+            f"malformed XML: elements nested more than {MAX_DEPTH} deep; refused",
+            path=str(path),
+            line=too_deep[0].sourceline,
+        )
     if not isinstance(root.tag, str) or etree.QName(root).localname != "X3D":
         raise SceneError(
             f"not an X3D document: the root element is <{root.tag}>, not <X3D>",
@@ -109,6 +141,20 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
             line=root.sourceline,
         )
     return tree
+
+
+def _ascii_compatible(data: bytes) -> bool:
+    """Whether ``data`` is in an encoding where a scan for ``<!ENTITY`` is
+    conclusive: no byte-order mark but UTF-8's, no NUL byte, and no declared
+    encoding outside :data:`_ASCII_COMPATIBLE`."""
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    if data[:1] != b"<" and data[:1].strip() != b"":
+        return False  # a BOM or first byte of UTF-16/32, EBCDIC, ...
+    if b"\x00" in data:
+        return False
+    declared = _DECLARED_ENCODING.match(data.lstrip()[:200])
+    return declared is None or bool(_ASCII_COMPATIBLE.match(declared.group(1).lower()))
 
 
 def _has_entity_references(tree: etree._ElementTree) -> bool:

@@ -277,7 +277,8 @@ class _Reader:
                 matrix,
                 self.material_cache[appearance],
                 _public(element.get("DEF") or node.get("DEF")) or name,
-                f"{Path(context.path).name} line {node.sourceline}, {context.describe(node)}",
+                f"{os.path.basename(context.path)} line {node.sourceline}, "
+                f"{context.describe(node)}",
                 *self._added_role(element),
             )
         )
@@ -356,8 +357,13 @@ class _Reader:
                 local = coarse[built.key]
             else:
                 local = built.vertices
-            points.append(local @ transform[:3, :3].T + transform[:3, 3])
+            if not np.array_equal(transform, _IDENTITY):
+                local = local @ transform[:3, :3].T + transform[:3, 3]
+            points.append(local)
         return Tolerance.for_points(*points, **settings)
+
+
+_IDENTITY = np.eye(4)
 
 
 def _public(name: str | None) -> str | None:

@@ -54,10 +54,12 @@ from __future__ import annotations
 
 import copy
 import gzip
+import importlib
 import math
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from lxml import etree
@@ -69,7 +71,20 @@ from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
-from .x3d_fields import Element, Tree
+from .x3d_fields import Element, Tree, numbers_or_none
+
+
+def _optional(name: str) -> Any:
+    """The module ``name``, or None when it is not installed."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:  # pragma: no cover - the repr fallback is tested by monkeypatching
+        return None
+
+
+# The shortest float64 text (as repr), ten times faster: the `speed` extra.
+orjson = _optional("orjson")
+
 
 ADDED_ROLES = ("shadow", "volume")
 # Written in the ClassicVRML encoding (the same tree, another syntax).
@@ -108,23 +123,34 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
         tree = _fresh(scene)
     name = path.name.lower()
     if x3d_json.is_x3d_json(path):
-        data = x3d_json.dumps(tree)
+        parts = [x3d_json.dumps(tree)]
     elif name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
         vrml97 = name.endswith(VRML97_SUFFIXES)
         try:
-            data = x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")
+            parts = [x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")]
         except SceneError as problem:  # a document VRML 97 cannot say
             raise SceneError(problem.message, path=str(path)) from None
+    elif not name.endswith((".x3dz", ".gz")):
+        # XML streamed into the file: a big document is never held as bytes
+        with atomic_path(path) as temporary, open(temporary, "wb") as handle:
+            handle.write(_DECLARATION)
+            tree.write(handle, xml_declaration=False, encoding="UTF-8", doctype=doctype)
+            handle.write(b"\n")
+        return
     else:
-        declaration = b'<?xml version="1.0" encoding="UTF-8"?>\n'
         text = etree.tostring(tree, xml_declaration=False, encoding="UTF-8", doctype=doctype)
-        data = declaration + text
-    if not data.endswith(b"\n"):
-        data += b"\n"
+        parts = [_DECLARATION, text]
+    # written part by part: a big document is not copied to join or end it
+    if not parts[-1].endswith(b"\n"):
+        parts.append(b"\n")
     if name.endswith((".x3dz", ".x3dvz", ".wrz", ".gz")):
-        data = gzip.compress(data, mtime=0)
-    with atomic_path(path) as temporary:
-        temporary.write_bytes(data)
+        parts = [gzip.compress(b"".join(parts), mtime=0)]
+    with atomic_path(path) as temporary, open(temporary, "wb") as handle:
+        for part in parts:
+            handle.write(part)
+
+
+_DECLARATION = b'<?xml version="1.0" encoding="UTF-8"?>\n'
 
 
 def _with_added(scene: Scene) -> Tree:
@@ -200,7 +226,9 @@ def _clean(tree: Tree, notes: list[str], source: str) -> str | None:
         )
         _drop(element)
     etree.cleanup_namespaces(tree)
-    for element in root.iter(etree.Element):
+    # only elements with an attribute that could spell inf or nan (or overflow
+    # an exponent) are looked at in Python: found by libxml2, in document order
+    for element in root.xpath(_MAY_BE_NON_FINITE):
         for name, value in list(element.attrib.items()):
             if name not in _TEXT_ATTRIBUTES and _non_finite(value):
                 shown = value if len(value) <= 40 else value[:37] + "..."
@@ -210,6 +238,12 @@ def _clean(tree: Tree, notes: list[str], source: str) -> str | None:
                 )
                 del element.attrib[name]
     return doctype
+
+
+_MAY_BE_NON_FINITE = (
+    "descendant-or-self::*[@*[contains(., 'n') or contains(., 'N') or contains(., 'e') "
+    "or contains(., 'E')]]"
+)
 
 
 def _drop(node: Element) -> None:
@@ -228,14 +262,11 @@ def _drop(node: Element) -> None:
 
 def _non_finite(value: str) -> bool:
     """All the words of ``value`` are numbers and one is not finite."""
-    words = value.replace(",", " ").split()
-    if not words:
+    # a word reads as inf or nan only if it spells one or overflows an exponent
+    if not any(letter in value for letter in "nNeE"):
         return False
-    try:
-        numbers = [float(word) for word in words]
-    except ValueError:
-        return False
-    return not all(math.isfinite(number) for number in numbers)
+    numbers = numbers_or_none(value)
+    return numbers is not None and not bool(np.isfinite(numbers).all())
 
 
 # What the added nodes need beyond the Core profile (Interchange and up have it).
@@ -323,6 +354,30 @@ def _numbers(values: ArrayLike) -> str:
     return " ".join(map(repr, values.tolist()))
 
 
+def _points(vertices: np.ndarray) -> str:
+    """An MFVec3f's text, ``x y z, x y z, ...``, each number the shortest that
+    reads back as the same float64."""
+    values = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    finite = np.isfinite(values).all(axis=1)
+    if not finite.all():
+        bad = values[np.argmin(finite)].tolist()
+        raise SceneError(f"cannot write a non-finite number in X3D: {bad}")
+    if orjson is not None and len(values):
+        text: str = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY).decode("ascii")
+        return text[2:-2].replace("],[", ";").replace(",", " ").replace(";", ", ")
+    words = list(map(repr, values.ravel().tolist()))
+    return ", ".join(map(" ".join, zip(words[0::3], words[1::3], words[2::3], strict=True)))
+
+
+def _integers(values: np.ndarray) -> str:
+    """Integers separated by single spaces."""
+    values = np.ascontiguousarray(values, dtype=np.int64).ravel()
+    if orjson is not None and len(values):
+        listed: str = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY).decode("ascii")
+        return listed[1:-1].replace(",", " ")
+    return " ".join(map(str, values.tolist()))
+
+
 def _bool(value: bool) -> str:
     return "true" if value else "false"
 
@@ -346,15 +401,18 @@ def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: 
     geometry = etree.SubElement(
         element,
         f"{namespace}IndexedTriangleSet",
-        index=" ".join(map(str, shape.faces.ravel().tolist())),
+        index=_integers(shape.faces),
         solid=_bool(shape.solid),
     )
-    points = ", ".join(map(_numbers, vertices))
+    points = _points(vertices)
     etree.SubElement(geometry, f"{namespace}Coordinate", point=points)
     return element
 
 
 # -- a fresh X3D 4.0 document ----------------------------------------------------------------
+
+
+_IDENTITY = np.eye(4)
 
 
 def _fresh(scene: Scene) -> Tree:
@@ -392,7 +450,7 @@ def _fresh(scene: Scene) -> Tree:
         if shape.role in ADDED_ROLES:
             continue
         node = _shape_element(shape, used, world=False)
-        if not np.allclose(shape.transform, np.eye(4), rtol=0, atol=0):
+        if not np.array_equal(shape.transform, _IDENTITY):
             transform = etree.SubElement(body, "Transform", _transform_fields(shape.transform))
             transform.append(node)
         else:

@@ -1,0 +1,297 @@
+"""Scenes at scale: reading, shadowing and writing big scenes, next to trimesh and lxml.
+
+Run from the repository root::
+
+    python benchmarks/bench_scale.py            # full size, writes its REPORT.md section
+    python benchmarks/bench_scale.py --quick    # small scenes, a smoke test (prints only)
+
+It generates two scenes into a temporary folder, each as ``.x3d`` (one
+IndexedTriangleSet per shape, written by lxml) and ``.glb`` (written by
+trimesh):
+
+* **one mesh**: an icosphere subdivided 8 times, 1,310,720 triangles;
+* **many shapes**: 10,000 cylinders of 104 triangles (1,040,000 triangles)
+  on a 100 x 100 grid.
+
+Each case -- ``.x3d`` or ``.glb`` in, ``.glb`` or ``.x3d`` out -- runs in a
+subprocess of its own (so that peak RSS, the process's VmHWM, is the
+case's alone) and times ``shadowgeo.load``, ``add_shadows`` (the default sun
+onto the plane y = 0) and ``shadowgeo.save`` of the shadowed scene, and also
+the save of the scene without shadows. The peers run the same way on the same
+files, in the same run:
+
+* **trimesh**: ``trimesh.load`` of the ``.glb`` + ``export`` to ``.glb`` --
+  the yardstick for the end-to-end time;
+* **lxml + numpy**: ``etree.parse`` of the ``.x3d`` (huge_tree) and every
+  number attribute converted by ``np.fromstring`` -- the yardstick for the
+  X3D load.
+
+Ratios are shadowgeo over peer, from one run: the machine may be shared, so
+absolute times are noisy but the ratios are measured side by side. The memory
+yardstick is the raw float64 vertex + int64 face arrays of the scene.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import trimesh
+from lxml import etree
+
+ROOT = Path(__file__).resolve().parents[1]
+REPORT = Path(__file__).resolve().parent / "REPORT.md"
+TITLE = "## Scenes at scale: big files in and out"
+PLANE = (0.0, 1.0, 0.0, 0.0)
+
+
+def scenes(quick: bool) -> dict[str, list[trimesh.Trimesh]]:
+    """The two scenes as lists of meshes in world coordinates."""
+    sphere = trimesh.creation.icosphere(subdivisions=5 if quick else 8, radius=1.0)
+    sphere.apply_translation([0.0, 2.0, 0.0])
+    side = 10 if quick else 100
+    cylinders = []
+    for index in range(side * side):
+        cylinder = trimesh.creation.cylinder(radius=0.3, height=1.0, sections=26)
+        cylinder.apply_translation([index % side, 1.0, index // side])
+        cylinders.append(cylinder)
+    return {"one mesh": [sphere], "many shapes": cylinders}
+
+
+def write_x3d(meshes: list[trimesh.Trimesh], path: Path) -> None:
+    """One Shape with an IndexedTriangleSet per mesh (text written by numpy)."""
+    root = etree.Element("X3D", version="4.0", profile="Interchange")
+    scene = etree.SubElement(root, "Scene")
+    for index, mesh in enumerate(meshes):
+        shape = etree.SubElement(scene, "Shape", DEF=f"shape{index}")
+        appearance = etree.SubElement(shape, "Appearance")
+        etree.SubElement(appearance, "Material", diffuseColor="0.8 0.6 0.4")
+        triangles = etree.SubElement(
+            shape, "IndexedTriangleSet", index=" ".join(map(str, mesh.faces.ravel().tolist()))
+        )
+        etree.SubElement(
+            triangles, "Coordinate", point=" ".join(map(repr, mesh.vertices.ravel().tolist()))
+        )
+    etree.ElementTree(root).write(str(path), xml_declaration=True, encoding="UTF-8")
+
+
+def write_glb(meshes: list[trimesh.Trimesh], path: Path) -> None:
+    scene = trimesh.Scene()
+    for index, mesh in enumerate(meshes):
+        scene.add_geometry(mesh, geom_name=f"shape{index}", node_name=f"shape{index}")
+    scene.export(str(path))
+
+
+# -- the cases, each run in a subprocess of its own ------------------------------------
+
+
+def peak_mb() -> float:
+    """This process's peak RSS in MB: VmHWM, which execve resets (Linux keeps
+    ``getrusage``'s ru_maxrss across exec, so a child would report its
+    parent's peak); ru_maxrss where /proc is missing."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def run_shadowgeo(source: str, target: str) -> dict:
+    sys.path.insert(0, str(ROOT))
+    import shadowgeo
+    import shadowgeo.io.gltf_read  # noqa: F401  (the readers and writers imported up front,
+    import shadowgeo.io.gltf_write  # noqa: F401  so that "base MB" holds all the code)
+    import shadowgeo.io.x3d_read  # noqa: F401
+    import shadowgeo.io.x3d_write  # noqa: F401
+
+    times = {"base MB": peak_mb()}
+    start = time.perf_counter()
+    scene = shadowgeo.load(source)
+    times["load"] = time.perf_counter() - start
+    start = time.perf_counter()
+    shadowgeo.save(scene, target)
+    times["save (no shadows)"] = time.perf_counter() - start
+    times["peak MB (no shadows)"] = peak_mb()
+    start = time.perf_counter()
+    shadowed = shadowgeo.add_shadows(scene, plane=PLANE)
+    times["add_shadows"] = time.perf_counter() - start
+    start = time.perf_counter()
+    shadowgeo.save(shadowed, target)
+    times["save"] = time.perf_counter() - start
+    times["shadow shapes"] = sum(shape.role == "shadow" for shape in shadowed.shapes)
+    return times
+
+
+def run_trimesh(source: str, target: str) -> dict:
+    start = time.perf_counter()
+    loaded = trimesh.load(source, force="scene")
+    loaded.export(target)
+    return {"load + export": time.perf_counter() - start}
+
+
+def run_lxml(source: str, target: str) -> dict:
+    start = time.perf_counter()
+    parser = etree.XMLParser(huge_tree=True, resolve_entities=False, no_network=True)
+    tree = etree.parse(source, parser)
+    count = 0
+    for element in tree.iter("Coordinate", "IndexedTriangleSet"):
+        text = element.get("point") if element.tag == "Coordinate" else element.get("index")
+        count += np.fromstring(text.replace(",", " "), sep=" ").size
+    return {"parse + numbers": time.perf_counter() - start, "numbers": count}
+
+
+RUNNERS = {"shadowgeo": run_shadowgeo, "trimesh": run_trimesh, "lxml": run_lxml}
+
+
+def case(tool: str, source: Path, target: Path) -> dict:
+    """Run one case in a fresh interpreter; its times and peak RSS (MB)."""
+    code = (
+        "import json, sys; sys.path.insert(0, sys.argv[1]); import bench_scale as b; "
+        "r = b.RUNNERS[sys.argv[2]](sys.argv[3], sys.argv[4]); "
+        "r['peak MB'] = b.peak_mb(); "
+        "print(json.dumps(r))"
+    )
+    here = str(Path(__file__).resolve().parent)
+    done = subprocess.run(
+        [sys.executable, "-c", code, here, tool, str(source), str(target)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def measure(quick: bool) -> list[dict]:
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        for name, meshes in scenes(quick).items():
+            stem = folder / name.replace(" ", "_")
+            write_x3d(meshes, stem.with_suffix(".x3d"))
+            write_glb(meshes, stem.with_suffix(".glb"))
+            raw = sum(mesh.vertices.nbytes + mesh.faces.astype(np.int64).nbytes for mesh in meshes)
+            facts = {
+                "scene": name,
+                "shapes": len(meshes),
+                "triangles": sum(len(mesh.faces) for mesh in meshes),
+                "raw MB": raw / 2**20,
+                "x3d MB": stem.with_suffix(".x3d").stat().st_size / 2**20,
+                "glb MB": stem.with_suffix(".glb").stat().st_size / 2**20,
+            }
+            peer = case("trimesh", stem.with_suffix(".glb"), folder / "peer.glb")
+            parse = case("lxml", stem.with_suffix(".x3d"), folder / "unused")
+            for source in (".x3d", ".glb"):
+                for target in (".glb", ".x3d"):
+                    ours = case("shadowgeo", stem.with_suffix(source), folder / f"out{target}")
+                    rows.append(
+                        {**facts, "in": source, "out": target, "ours": ours, "trimesh": peer,
+                         "lxml": parse}
+                    )  # fmt: skip
+                    print(_line(rows[-1]), flush=True)
+    return rows
+
+
+def _end_to_end(row: dict) -> float:
+    ours = row["ours"]
+    return ours["load"] + ours["add_shadows"] + ours["save"]
+
+
+def _line(row: dict) -> str:
+    ours = row["ours"]
+    return (
+        f"{row['scene']} {row['in']}->{row['out']}: load {ours['load']:.2f}s shadows "
+        f"{ours['add_shadows']:.2f}s save {ours['save']:.2f}s, peak {ours['peak MB']:.0f} MB; "
+        f"trimesh {row['trimesh']['load + export']:.2f}s, "
+        f"lxml {row['lxml']['parse + numbers']:.2f}s"
+    )
+
+
+def table(rows: list[dict]) -> str:
+    lines = [
+        "| scene | in → out | load (s) | add_shadows (s) | save (s) | end-to-end (s) "
+        "| without shadows (s) | trimesh load+export (s) | × trimesh | × trimesh, no shadows "
+        "| lxml parse+numbers (s) | X3D load × lxml | peak RSS (MB) | peak, no shadows (MB) "
+        "| no shadows, above imports (MB) | × raw arrays |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for row in rows:
+        ours, peer = row["ours"], row["trimesh"]["load + export"]
+        plain = ours["load"] + ours["save (no shadows)"]
+        parse = row["lxml"]["parse + numbers"]
+        above = ours["peak MB (no shadows)"] - ours["base MB"]
+        x3d_ratio = f"{ours['load'] / parse:.2f}" if row["in"] == ".x3d" else "—"
+        lines.append(
+            f"| {row['scene']} | {row['in']} → {row['out']} | {ours['load']:.2f} "
+            f"| {ours['add_shadows']:.2f} | {ours['save']:.2f} | {_end_to_end(row):.2f} "
+            f"| {plain:.2f} | {peer:.2f} | {_end_to_end(row) / peer:.2f} | {plain / peer:.2f} "
+            f"| {parse:.2f} | {x3d_ratio} | {ours['peak MB']:.0f} "
+            f"| {ours['peak MB (no shadows)']:.0f} | {above:.0f} | {above / row['raw MB']:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+def section(rows: list[dict], command: str) -> str:
+    facts = {}
+    for row in rows:
+        facts.setdefault(row["scene"], row)
+    scenes_text = "; ".join(
+        f"**{name}**: {row['shapes']:,} shape(s), {row['triangles']:,} triangles, "
+        f".x3d {row['x3d MB']:.0f} MB, .glb {row['glb MB']:.0f} MB, raw float64 vertices + "
+        f"int64 faces {row['raw MB']:.0f} MB; trimesh peak {row['trimesh']['peak MB']:.0f} MB, "
+        f"lxml peak {row['lxml']['peak MB']:.0f} MB"
+        for name, row in facts.items()
+    )
+    return (
+        f"{TITLE}\n\n"
+        f"`{command}` (Python {platform.python_version()}, numpy {np.__version__}, "
+        f"trimesh {trimesh.__version__}, lxml {etree.__version__}; each case in a subprocess "
+        "of its own, peers in the same run; the machine is shared, so read the ratios). "
+        f"{scenes_text}.\n\n"
+        "End-to-end = load + add_shadows (default sun onto y = 0) + save of the shadowed "
+        "scene; *without shadows* = load + save of the scene as read. The trimesh peer is "
+        "`trimesh.load` + `export` of the same geometry's .glb; the X3D yardstick is lxml's "
+        "parse (huge_tree) plus `np.fromstring` of every number attribute. Peak RSS is the "
+        "shadowgeo subprocess's: overall, and up to the save without shadows; *above imports* "
+        "subtracts the RSS once shadowgeo and its readers and writers are imported, and "
+        "*× raw arrays* divides that by the raw float64 vertex + int64 face arrays.\n\n"
+        f"{table(rows)}\n"
+    )
+
+
+def write_section(text: str) -> None:
+    """Put ``text`` in REPORT.md in place of the section with the same title
+    (up to the next ``## `` heading), or at the end."""
+    report = REPORT.read_text()
+    start = report.find(TITLE)
+    if start < 0:
+        report = report.rstrip("\n") + "\n\n" + text
+    else:
+        end = report.find("\n## ", start + len(TITLE))
+        report = report[:start] + text + ("" if end < 0 else report[end:])
+    REPORT.write_text(report)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small scenes; print only")
+    arguments = parser.parse_args()
+    rows = measure(arguments.quick)
+    command = "python benchmarks/bench_scale.py" + (" --quick" if arguments.quick else "")
+    text = section(rows, command)
+    print(text)
+    if not arguments.quick:
+        write_section(text)
+
+
+if __name__ == "__main__":
+    main()
