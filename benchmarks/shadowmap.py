@@ -42,16 +42,49 @@ class LightCamera:
         return pixels, depth
 
 
-def depth_map(camera: LightCamera, triangles: np.ndarray) -> np.ndarray:
+class OrthographicCamera:
+    """A camera looking along ``direction`` (a directional light) at ``target``,
+    its square image ``half_width`` either side of the target; depth is measured
+    from ``position``, which the caller puts behind everything drawn."""
+
+    orthographic = True
+
+    def __init__(self, direction, target, half_width: float, resolution: int) -> None:
+        forward = np.asarray(direction, dtype=float)
+        self.forward = forward / np.linalg.norm(forward)
+        self.position = np.asarray(target, dtype=float) - self.forward * half_width * 10
+        helper = np.array([0.0, 0.0, 1.0]) if abs(self.forward[2]) < 0.9 else np.array([1.0, 0, 0])
+        self.right = np.cross(self.forward, helper)
+        self.right /= np.linalg.norm(self.right)
+        self.up = np.cross(self.right, self.forward)
+        self.target = np.asarray(target, dtype=float)
+        self.half = half_width
+        self.resolution = resolution
+
+    def view(self, points):
+        """(n, 3) -> pixel coordinates (n, 2) and depth along the light (n,)."""
+        points = np.asarray(points, dtype=float)
+        depth = (points - self.position) @ self.forward
+        rel = points - self.target
+        scale = self.resolution / (2 * self.half)
+        pixels = np.column_stack(
+            [(rel @ self.right + self.half) * scale, (rel @ self.up + self.half) * scale]
+        )
+        return pixels, depth
+
+
+def depth_map(camera, triangles: np.ndarray) -> np.ndarray:
     """Z-buffer of (m, 3, 3) triangles: nearest view depth per pixel (inf where empty).
 
-    Depth is interpolated perspective-correctly (1 / depth is linear in screen space).
+    Depth is interpolated perspective-correctly (1 / depth is linear in screen
+    space), or linearly for an orthographic camera.
     """
+    perspective = not getattr(camera, "orthographic", False)
     size = camera.resolution
     buffer = np.full((size, size), np.inf)
     pixels, depth = camera.view(triangles.reshape(-1, 3))
     pixels = pixels.reshape(-1, 3, 2)
-    inverse_depth = (1.0 / depth).reshape(-1, 3)
+    inverse_depth = (1.0 / depth if perspective else depth).reshape(-1, 3)
     in_front = np.all(depth.reshape(-1, 3) > 0, axis=1)
     for corners, inv in zip(pixels[in_front], inverse_depth[in_front], strict=True):
         low = np.maximum(np.floor(corners.min(axis=0) - 0.5).astype(int), 0)
@@ -71,7 +104,9 @@ def depth_map(camera: LightCamera, triangles: np.ndarray) -> np.ndarray:
         inside = (w0 >= 0) & (w1 >= 0) & (w2 >= 0)
         if not inside.any():
             continue
-        z = 1.0 / (w0 * inv[0] + w1 * inv[1] + w2 * inv[2])
+        z = w0 * inv[0] + w1 * inv[1] + w2 * inv[2]
+        if perspective:
+            z = 1.0 / z
         rows = (gy[inside] - 0.5).astype(int)
         cols = (gx[inside] - 0.5).astype(int)
         np.minimum.at(buffer, (rows, cols), z[inside])
