@@ -212,8 +212,9 @@ def run(args) -> int:
     added = [s for s in result.shapes if s.role in ("shadow", "volume")]
     groups = sorted({s.group for s in added if s.group})
     triangles = sum(s.n_faces for s in added)
+    kind = "shadow volume" if args.method == "volume" else "shadow"
     print(
-        f"wrote {target}: {len(added)} {args.method} shadow shape(s), {triangles} triangles, "
+        f"wrote {target}: {len(added)} {kind} shape(s), {triangles} triangles, "
         f"in {len(groups)} group(s){': ' + ', '.join(groups) if groups else ''}"
     )
     return 0
