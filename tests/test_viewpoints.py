@@ -160,3 +160,57 @@ def test_a_fresh_document_keeps_the_scenes_viewpoints(tmp_path):
         np.testing.assert_allclose(back.direction, written.direction, atol=1e-12)
         np.testing.assert_allclose(back.up, written.up, atol=1e-12)
         assert back.field_of_view == written.field_of_view
+
+
+def test_gltf_cameras_become_viewpoints_of_the_fresh_x3d(tmp_path):
+    """A glTF camera node turned 90 degrees about +X (looking straight down)
+    at (1, 5, 2), under a parent translated by (0, 1, 0): the Viewpoint is at
+    (1, 6, 2), looks along -Y with -Z up; a portrait aspect makes the smaller
+    angle the horizontal one, 2 atan(tan(yfov / 2) aspect)."""
+    import json
+
+    from validators import one_triangle_gltf
+
+    document = one_triangle_gltf()
+    half = math.sqrt(0.5)
+    document["nodes"] += [
+        {"name": "rig", "translation": [0, 1, 0], "children": [2]},
+        {"name": "top", "camera": 0, "translation": [1, 5, 2], "rotation": [-half, 0, 0, half]},
+    ]
+    document["scenes"][0]["nodes"] = [0, 1]
+    document["cameras"] = [
+        {"name": "from above", "type": "perspective",
+         "perspective": {"yfov": 0.8, "aspectRatio": 0.5, "znear": 0.1}},
+    ]  # fmt: skip
+    path = tmp_path / "camera.gltf"
+    path.write_text(json.dumps(document))
+    (view,) = sg.load(path).viewpoints
+    np.testing.assert_allclose(view.position, [1, 6, 2], atol=1e-12)
+    np.testing.assert_allclose(view.direction, [0, -1, 0], atol=1e-12)
+    np.testing.assert_allclose(view.up, [0, 0, -1], atol=1e-12)
+    assert view.field_of_view == pytest.approx(2 * math.atan(math.tan(0.4) * 0.5))
+    assert view.description == "from above" and view.name == "top"
+    out = tmp_path / "camera.x3d"
+    sg.save(sg.load(path), out)
+    (again,) = sg.load(out).viewpoints
+    np.testing.assert_allclose(again.position, view.position, atol=1e-12)
+    np.testing.assert_allclose(again.direction, view.direction, atol=1e-12)
+    assert again.field_of_view == pytest.approx(view.field_of_view)
+
+
+def test_a_cyclic_gltf_node_graph_with_a_camera_ends(tmp_path):
+    import json
+
+    from validators import one_triangle_gltf
+
+    document = one_triangle_gltf()
+    document["nodes"] += [{"camera": 0, "children": [2]}, {"children": [1]}]
+    document["scenes"][0]["nodes"] = [0, 1]
+    document["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.1}}]
+    path = tmp_path / "cycle.gltf"
+    path.write_text(json.dumps(document))
+    try:
+        scene = sg.load(path)
+    except sg.SceneError:
+        return  # refused as malformed: also an answer
+    assert len(scene.viewpoints) == 1

@@ -21,6 +21,7 @@ glTF is Y-up in metres, so a glTF scene reads as ``up_axis="Y"``,
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -31,6 +32,7 @@ import trimesh
 
 from ..errors import SceneError
 from ..scene import Material, Scene, Shape
+from ..scene.model import Viewpoint, axis_angle
 from . import float_triple, refuse_outside
 from .gltf_layout import (
     LIGHTS,
@@ -207,8 +209,9 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
     Scene
         One shape per mesh instance (glTF node), with its world transform,
         material, name and, for glTF written by shadowgeo, its role and light
-        group; the ``KHR_lights_punctual`` lights. Points and lines are
-        skipped with a warning.
+        group; the ``KHR_lights_punctual`` lights; the perspective cameras,
+        as Viewpoints (a glTF camera, like X3D's, looks along its -Z with +Y
+        up). Points and lines are skipped with a warning.
 
     Raises
     ------
@@ -229,6 +232,7 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
     try:
         _read_shapes(scene, loaded, path, frames, nodes, document)
         _read_lights(scene, loaded.graph, frames, nodes, document)
+        _read_cameras(scene, document)
     except MALFORMED as error:
         if isinstance(error, SceneError):
             raise
@@ -325,4 +329,77 @@ def _read_lights(
         extras = shadowgeo_extras(node)
         scene.lights.append(
             scene_light(entries[reference["light"]], np.asarray(world), node.get("name"), extras)
+        )
+
+
+def _local(node: dict[str, Any]) -> np.ndarray:
+    """A glTF node's 4x4 local transform: its column-major ``matrix``, or
+    translation * rotation (x, y, z, w quaternion) * scale."""
+    if "matrix" in node:
+        return np.asarray(node["matrix"], dtype=np.float64).reshape(4, 4).T
+    x, y, z, w = (float(v) for v in node.get("rotation", (0, 0, 0, 1)))
+    rotation = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+    local = np.eye(4)
+    local[:3, :3] = rotation * np.asarray(node.get("scale", (1, 1, 1)), dtype=np.float64)
+    local[:3, 3] = np.asarray(node.get("translation", (0, 0, 0)), dtype=np.float64)
+    return local
+
+
+def _camera_worlds(document: dict[str, Any]) -> list[tuple[int, np.ndarray]]:
+    """(node index, world transform) of every camera node of the default
+    scene, in the file's node order (trimesh re-parents camera nodes)."""
+    nodes = document.get("nodes") or []
+    scenes = document.get("scenes") or [{"nodes": list(range(len(nodes)))}]
+    roots = scenes[int(document.get("scene", 0))].get("nodes") or []
+    found: dict[int, np.ndarray] = {}
+    pending = [(int(index), np.eye(4)) for index in roots]
+    seen: set[int] = set()
+    while pending:
+        index, parent = pending.pop()
+        if index in seen:
+            continue  # a node graph with a cycle (glTF allows only trees)
+        seen.add(index)
+        world = parent @ _local(nodes[index])
+        if "camera" in nodes[index]:
+            found[index] = world
+        pending.extend((int(child), world) for child in nodes[index].get("children") or [])
+    return sorted(found.items(), key=lambda item: item[0])
+
+
+def _read_cameras(scene: Scene, document: dict[str, Any]) -> None:
+    """Each perspective camera as a Viewpoint, in the file's node order."""
+    cameras = document.get("cameras") or []
+    nodes = document.get("nodes") or []
+    for index, world in _camera_worlds(document):
+        node = nodes[index]
+        camera = cameras[node["camera"]]
+        perspective = camera.get("perspective") if camera.get("type") == "perspective" else None
+        if not isinstance(perspective, dict):
+            scene.warnings.append(
+                f"{scene.path}: camera {node['camera']} skipped: only perspective cameras are read"
+            )
+            continue
+        vertical = float(perspective["yfov"])
+        aspect = float(perspective.get("aspectRatio") or 1.0)
+        # X3D's fieldOfView is the smaller of the two angles; glTF gives the vertical one.
+        smaller = vertical if aspect >= 1 else 2 * math.atan(math.tan(vertical / 2) * aspect)
+        if not (np.all(np.isfinite(world)) and 0 < smaller < math.pi):
+            scene.warnings.append(f"{scene.path}: camera {node['camera']} skipped: not finite")
+            continue
+        name = node.get("name")
+        description = camera.get("name")
+        scene.viewpoints.append(
+            Viewpoint(
+                float_triple(world[:3, 3]),
+                axis_angle(world[:3, :3]),
+                smaller,
+                description=description if isinstance(description, str) else "",
+                name=name if isinstance(name, str) else None,
+            )
         )
