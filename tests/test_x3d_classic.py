@@ -650,3 +650,11 @@ def test_vrml97_has_no_units_so_lengths_are_scaled_and_angles_refused(tmp_path):
     with pytest.raises(sg.SceneError, match="VRML 97 has no angle unit") as raised:
         sg.save(sg.load(tmp_path / "deg.x3dv"), tmp_path / "deg.wrl")
     assert raised.value.path == str(tmp_path / "deg.wrl") and not (tmp_path / "deg.wrl").exists()
+
+
+def test_nodes_past_line_65535_are_read(tmp_path):
+    # lxml keeps line numbers in 16 bits: setting a larger one overflowed.
+    path = tmp_path / "long.wrl"
+    path.write_text("#VRML V2.0 utf8\n" + "\n" * 70_000 + "Shape { geometry Box { } }\n")
+    (shape,) = sg.load(path).shapes
+    assert shape.n_faces == 12

@@ -223,7 +223,8 @@ class _Parser:
                 element.set(name, value)
         except ValueError as problem:
             raise SceneError(f"{tag}: {problem}", path=self.path, line=line) from None
-        element.sourceline = line
+        if line < 65535:  # lxml keeps lines in 16 bits; past that, messages name the node
+            element.sourceline = line
         return element
 
     def set(self, element: Element, name: str, value: str | None, line: int) -> None:
