@@ -807,6 +807,8 @@ def non_finite_in_output(path: Path) -> str | None:
     data = path.read_bytes()
     if suffix in (".x3d", ".x3dz"):
         text = _gunzip(data).decode("utf-8", "replace")
+        # A comment's text is no field value (a commented-out node may say "nan").
+        text = re.sub(r"<!--.*?-->", "", text, flags=re.S)
         for match in _ATTRIBUTE.finditer(text):
             name, value = match.group(1), match.group(3) or match.group(4) or ""
             if name in _SKIPPED_ATTRIBUTES:
