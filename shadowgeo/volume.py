@@ -28,7 +28,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, is_positional, require_light
 from .limits import check_geometry, check_length
 from .silhouette import check_light_outside, light_homogeneous
-from .tolerance import Tolerance
+from .tolerance import Tolerance, below_resolution
 from .topology import Caster, MeshLike, as_caster, empty_mesh
 
 
@@ -105,7 +105,8 @@ def shadow_volume(
         closed caster or so close to a lit face's plane that it sees the face
         across 180 degrees to within ``tolerance.relative``, edges used by
         more than two faces (named), an ``extent`` that does not reach past
-        the caster.
+        the caster, a caster no larger than float64's resolution where it
+        sits (its volume would be zero).
 
     Examples
     --------
@@ -124,6 +125,12 @@ def shadow_volume(
         extent = check_length(extent, "extent")
     if caster.n_faces == 0:
         return empty_mesh()
+    if below_resolution(caster.bounds):
+        low, high = caster.bounds
+        raise GeometryError(
+            f"caster from {low.tolist()} to {high.tolist()} is below float64 resolution "
+            "where it sits: its volume would be zero (move the scene nearer the origin)"
+        )
     if tolerance is None:
         tolerance = Tolerance.for_points(
             caster.bounds, *([light.position] if is_positional(light) else [])

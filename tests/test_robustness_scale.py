@@ -6,7 +6,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
+import shadowgeo as sg
 from cli.main import main
 from shadowgeo.io import x3d_extrusion
 from shadowgeo.scene import Shape, receivers
@@ -82,3 +84,61 @@ def test_c13_patches_of_a_face_written_1000_times_weigh_every_copy():
     assert math.isclose(area, 1000 * 6.0)
     # (0, 2, 1): (v2 - v0) x (v1 - v0) = (2, 0, 3) x (2, 0, 0) = (0, 6, 0): +y
     assert np.allclose(plane.normal, [0, 1, 0]) and abs(plane.offset) < 1e-12
+
+
+# g7, shrunk by the fuzzer: 8 faces of an icosphere of size ~2 at 1.6e15, where
+# float64's spacing is 0.25; a sun at 55 degrees gave an area of -2.06e7.
+G7_VERTICES = [
+    [-754504918379336.1, 1574836923801528.2, 314530175229224.25],
+    [-754504918379336.6, 1574836923801527.0, 314530175229223.4],
+    [-754504918379336.6, 1574836923801528.0, 314530175229223.4],
+    [-754504918379337.5, 1574836923801527.5, 314530175229223.75],
+    [-754504918379337.0, 1574836923801526.8, 314530175229224.75],
+    [-754504918379337.0, 1574836923801526.8, 314530175229223.75],
+    [-754504918379336.6, 1574836923801527.5, 314530175229223.25],
+    [-754504918379335.9, 1574836923801528.0, 314530175229223.94],
+    [-754504918379336.1, 1574836923801527.2, 314530175229223.44],
+    [-754504918379336.1, 1574836923801527.8, 314530175229223.44],
+    [-754504918379335.9, 1574836923801528.0, 314530175229224.56],
+    [-754504918379335.6, 1574836923801527.5, 314530175229224.25],
+    [-754504918379337.5, 1574836923801527.0, 314530175229223.94],
+    [-754504918379337.1, 1574836923801527.2, 314530175229223.44],
+    [-754504918379337.5, 1574836923801527.0, 314530175229224.56],
+    [-754504918379337.1, 1574836923801527.2, 314530175229225.06],
+]
+G7_FACES = [[4, 15, 14], [1, 5, 13], [13, 12, 3], [5, 12, 13], [8, 1, 6], [9, 6, 2]]
+G7_FACES += [[10, 7, 0], [11, 7, 10]]
+G7_SUN = sg.DirectionalLight([0.5667685136841292, 0.803401797988215, -0.18253493606865123])
+
+
+def test_g7_a_caster_below_resolution_never_has_a_negative_area():
+    plane = sg.Plane(
+        [-0.8209726300315444, 0.5693218935396711, -0.043318844346226126], -1502391942985547.0
+    )
+    area = sg.project_shadow((G7_VERTICES, G7_FACES), G7_SUN, plane).area
+    assert area >= 0.0 and math.isfinite(area)
+
+
+def test_g2_g7_a_volume_below_resolution_is_an_error_naming_the_caster():
+    with pytest.raises(sg.GeometryError, match="below float64 resolution"):
+        sg.shadow_volume((G7_VERTICES, G7_FACES), G7_SUN)
+    # g2: one triangle 1.6e-6 across at 1e9 (float64's spacing there is 1.2e-7)
+    triangle = [
+        [-882007972.6267308, 372565350.14264107, 473053340.7483034],
+        [-882007972.6267301, 372565350.1426403, 473053340.7483046],
+        [-882007972.6267315, 372565350.1426413, 473053340.7483053],
+    ]
+    sun = sg.DirectionalLight([-0.9999973670663042, -5.660407150257637e-11, -0.0022947462733868456])
+    with pytest.raises(sg.GeometryError, match="-882007972"):
+        sg.shadow_volume((triangle, [[2, 0, 1]]), sun)
+
+
+@pytest.mark.parametrize("scale", [1e9, 1e15])
+def test_g2_control_the_same_caster_nearer_the_origin_has_a_positive_volume(scale):
+    """The resolution check refuses only what rounding has flattened: a unit
+    tetrahedron 1e4 units out at the same scales keeps its volume, closed and
+    outward (a sweep of 1 unit, so the volume is at least the tetrahedron's)."""
+    tetra = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * scale / 1e6
+    faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    volume = sg.shadow_volume((tetra + scale / 1e3, faces), sg.DirectionalLight([0, -1, 0]))
+    assert volume.is_watertight and volume.volume > (scale / 1e6) ** 3 / 6 * 0.999
