@@ -142,3 +142,28 @@ def test_g2_control_the_same_caster_nearer_the_origin_has_a_positive_volume(scal
     faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
     volume = sg.shadow_volume((tetra + scale / 1e3, faces), sg.DirectionalLight([0, -1, 0]))
     assert volume.is_watertight and volume.volume > (scale / 1e6) ** 3 / 6 * 0.999
+
+
+def test_c8_a_sphere_radius_past_the_range_is_named_not_tessellated(tmp_path, capsys):
+    path = tmp_path / "sphere.x3d"
+    path.write_text('<X3D><Scene><Shape><Sphere radius="1e155"/></Shape></Scene></X3D>')
+    code, out, err = run(capsys, "info", path)
+    assert code == 0 and "Traceback" not in err
+    assert "radius" in out and "1e+155" in out
+
+
+def test_c9_materials_the_writer_does_not_model_lose_their_non_finite_fields(tmp_path, capsys):
+    path = tmp_path / "scene.x3d"
+    path.write_text(
+        "<X3D><Scene><Shape><Appearance>"
+        '<Material diffuseColor="1 0 0"/><Material diffuseColor="nan 0 0"/>'
+        '<PhysicalMaterial roughness="inf" baseColor="0.5 0.5 0.5"/>'
+        '</Appearance><Box/></Shape><UnlitMaterial emissiveColor="1 -inf -1"/></Scene></X3D>'
+    )
+    out = tmp_path / "out.x3d"
+    code, _, err = run(capsys, "convert", path, out, "--sun", "0.3,-1,0.2", "--plane", "0,1,0,2")
+    assert code == 0 and "Traceback" not in err
+    text = out.read_text().lower()
+    assert "inf" not in text and "nan" not in text
+    # the finite fields of the same nodes are kept
+    assert 'baseColor="0.5 0.5 0.5"'.lower() in text and "<unlitmaterial" in text
