@@ -77,7 +77,8 @@ def shadow_volume(
         (``"sweep"``, directional), the face counts of the light cap and the
         sides (``"n_cap_faces"``, ``"n_side_faces"``), and whether the caster
         was treated as two-sided (``"two_sided"``). Empty (no faces) when no
-        face casts: an empty caster, or a flat one edge-on to the light.
+        face casts: an empty caster, a flat one edge-on to the light, or one
+        whose faces have no height at ``tolerance.length`` (degenerate).
 
         Where the volume ends. Point and spot lights: it holds every
         shadowed point within a distance D of the light, and its far vertices
@@ -139,6 +140,19 @@ def shadow_volume(
         check_light_outside(caster, light.position, tolerance)
 
     facing = caster.facing(light_homogeneous(caster, light))
+    # A face with no height at the length tolerance (two corners at one point,
+    # or all three on a line) is edge-on to every light: the sign of its
+    # facing is rounding, and a cap of such faces would enclose no volume.
+    triangles = caster.triangles
+    longest = np.abs(triangles - triangles[:, [1, 2, 0]]).max(axis=(1, 2))
+    doubled = np.abs(caster.face_normals).max(axis=1)
+    edge_on = doubled <= tolerance.length * longest
+    if isinstance(light, DirectionalLight):
+        # a sun within ``tolerance.angle`` of a face's plane grazes it: edge-on
+        scale = np.where(doubled > 0, doubled, 1.0)
+        lengths = doubled * np.linalg.norm(caster.face_normals / scale[:, None], axis=1)
+        edge_on |= np.abs(facing) <= tolerance.angle * lengths * np.linalg.norm(light.direction)
+    facing = np.where(edge_on, 0.0, facing)
     two_sided = not caster.is_closed
     if two_sided:
         _check_edge_manifold(caster)

@@ -167,3 +167,36 @@ def test_c9_materials_the_writer_does_not_model_lose_their_non_finite_fields(tmp
     assert "inf" not in text and "nan" not in text
     # the finite fields of the same nodes are kept
     assert 'baseColor="0.5 0.5 0.5"'.lower() in text and "<unlitmaterial" in text
+
+
+def test_g2_faces_without_height_cast_no_volume():
+    """A face with two corners at one point and one with its corners on a
+    line (the midpoint, to rounding) enclose nothing: the volume is empty, not
+    a closed mesh of zero volume. A real triangle beside them still casts."""
+    a, b = np.array([-0.0848, 5.8865, 4.0723]), np.array([0.2976, 5.2228, 3.6563])
+    p, q = np.array([-0.0200, 4.3073, 4.9963]), np.array([-0.0594, 4.1951, -0.0528])
+    vertices = [a, b, a, p, (p + q) / 2, q]
+    spot = sg.SpotLight([1.2894, 8.6925, 9.9643], [-0.4163, -0.4875, -1.1830], 0.2140)
+    assert len(sg.shadow_volume((vertices, [[0, 1, 2], [3, 4, 5]]), spot).faces) == 0
+    real = sg.shadow_volume((vertices, [[0, 1, 2], [3, 4, 5], [1, 3, 5]]), spot)
+    assert real.is_watertight and real.volume > 0
+
+
+@pytest.mark.parametrize("grazing", [6.8e-13, 5.1e-10])
+def test_g2_a_grazing_sun_casts_the_prism_or_nothing(grazing):
+    """A unit right triangle (area 1/2) on y = 3.2 under a sun whose
+    direction is ``grazing`` below the horizontal. Within the angle tolerance
+    (1e-12) it is edge-on: empty. Past it, the volume is the prism's,
+    area * sweep * cos, however thin, and positive."""
+    y = 3.2259775439249836
+    triangle = [[-0.417, y, -0.243], [0.583, y, -0.243], [0.583, y, 0.757]]
+    horizontal = np.array([-0.97, 0.0, -0.2426])
+    direction = horizontal / np.linalg.norm(horizontal) * math.sqrt(1 - grazing**2)
+    direction[1] = -grazing
+    volume = sg.shadow_volume((triangle, [[0, 1, 2]]), sg.DirectionalLight(direction))
+    if grazing < 1e-12:
+        assert len(volume.faces) == 0
+    else:
+        sweep = volume.metadata["shadowgeo"]["sweep"]
+        assert volume.is_watertight
+        assert math.isclose(volume.volume, 0.5 * sweep * grazing, rel_tol=1e-3)
