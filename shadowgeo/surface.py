@@ -435,11 +435,16 @@ class _SurfaceProjector:
                     radius = float(np.linalg.norm(vertices - centre, axis=1).max())
                     outlined.append((outline, vertices[faces[front]], (box, centre, radius)))
                     continue
-                faces = faces[front]
+                keep = front
             elif caster is self.surface and single_sheet(caster):
                 # Seen from the surface itself, a blocked ray enters the sheet's
                 # back side first, through a face turned away from the light.
-                faces = faces[caster.facing(light_homogeneous(caster, self.light)) <= 0]
+                keep = caster.facing(light_homogeneous(caster, self.light)) <= 0
+            else:
+                keep = np.ones(caster.n_faces, dtype=bool)
+            # Repeated and zero-area faces cast nothing more: each would be
+            # one more candidate pair per face it covers.
+            faces = faces[keep & caster.distinct]
             chunks.append(caster.vertices[faces] - self.center)
         if not chunks:
             return np.zeros((0, 3, 3)), outlined

@@ -167,3 +167,22 @@ class Tolerance:
         if step <= 0.0 or sweep / step >= MAX_CURVE_SEGMENTS:
             return max(minimum, MAX_CURVE_SEGMENTS)
         return max(minimum, math.ceil(sweep / step))
+
+
+def below_resolution(bounds: np.ndarray) -> bool:
+    """True when a box ``bounds`` ((2, 3): low, high) is no larger than
+    float64's resolution where it sits (``_ULPS`` units in the last place of
+    its largest coordinate): its points differ by rounding alone, and
+    nothing computed from their differences (normals, volumes) has meaning.
+
+    >>> below_resolution(np.array([[1e9, 0, 0], [1e9 + 1e-6, 1e-6, 0]]))
+    True
+    >>> below_resolution(np.array([[1e9, 0, 0], [1e9 + 1.0, 1.0, 0]]))
+    False
+    """
+    bounds = np.asarray(bounds, dtype=np.float64)
+    side = bounds[1] - bounds[0]
+    largest = float(np.abs(side).max())
+    diagonal = largest * float(np.linalg.norm(side / largest)) if largest > 0 else 0.0
+    magnitude = float(np.abs(bounds).max())
+    return diagonal <= _ULPS * float(np.finfo(np.float64).eps) * magnitude

@@ -28,7 +28,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, is_positional, require_light
 from .limits import check_geometry, check_length
 from .silhouette import check_light_outside, light_homogeneous
-from .tolerance import Tolerance
+from .tolerance import Tolerance, below_resolution
 from .topology import Caster, MeshLike, as_caster, empty_mesh
 
 
@@ -77,7 +77,8 @@ def shadow_volume(
         (``"sweep"``, directional), the face counts of the light cap and the
         sides (``"n_cap_faces"``, ``"n_side_faces"``), and whether the caster
         was treated as two-sided (``"two_sided"``). Empty (no faces) when no
-        face casts: an empty caster, or a flat one edge-on to the light.
+        face casts: an empty caster, a flat one edge-on to the light, or one
+        whose faces have no height at ``tolerance.length`` (degenerate).
 
         Where the volume ends. Point and spot lights: it holds every
         shadowed point within a distance D of the light, and its far vertices
@@ -105,7 +106,8 @@ def shadow_volume(
         closed caster or so close to a lit face's plane that it sees the face
         across 180 degrees to within ``tolerance.relative``, edges used by
         more than two faces (named), an ``extent`` that does not reach past
-        the caster.
+        the caster, a caster no larger than float64's resolution where it
+        sits (its volume would be zero).
 
     Examples
     --------
@@ -124,6 +126,12 @@ def shadow_volume(
         extent = check_length(extent, "extent")
     if caster.n_faces == 0:
         return empty_mesh()
+    if below_resolution(caster.bounds):
+        low, high = caster.bounds
+        raise GeometryError(
+            f"caster from {low.tolist()} to {high.tolist()} is below float64 resolution "
+            "where it sits: its volume would be zero (move the scene nearer the origin)"
+        )
     if tolerance is None:
         tolerance = Tolerance.for_points(
             caster.bounds, *([light.position] if is_positional(light) else [])
@@ -132,6 +140,19 @@ def shadow_volume(
         check_light_outside(caster, light.position, tolerance)
 
     facing = caster.facing(light_homogeneous(caster, light))
+    # A face with no height at the length tolerance (two corners at one point,
+    # or all three on a line) is edge-on to every light: the sign of its
+    # facing is rounding, and a cap of such faces would enclose no volume.
+    triangles = caster.triangles
+    longest = np.abs(triangles - triangles[:, [1, 2, 0]]).max(axis=(1, 2))
+    doubled = np.abs(caster.face_normals).max(axis=1)
+    edge_on = doubled <= tolerance.length * longest
+    if isinstance(light, DirectionalLight):
+        # a sun within ``tolerance.angle`` of a face's plane grazes it: edge-on
+        scale = np.where(doubled > 0, doubled, 1.0)
+        lengths = doubled * np.linalg.norm(caster.face_normals / scale[:, None], axis=1)
+        edge_on |= np.abs(facing) <= tolerance.angle * lengths * np.linalg.norm(light.direction)
+    facing = np.where(edge_on, 0.0, facing)
     two_sided = not caster.is_closed
     if two_sided:
         _check_edge_manifold(caster)

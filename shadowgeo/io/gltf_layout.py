@@ -98,6 +98,121 @@ def external_uris(document: dict[str, Any]) -> list[tuple[str, str]]:
     return found
 
 
+# -- JSON types ---------------------------------------------------------------------------
+
+# The parts of a glTF document shadowgeo reads, by type: ``str``, ``int``,
+# ``bool``, ``float`` (any finite JSON number), ``[spec]`` (an array of spec,
+# ``(length, spec)`` for a fixed length), ``{key: spec}`` (an object; ``"*"``
+# for every member). Other members are not checked.
+_NUMBER, _INDICES = float, [int]
+_SHADOWGEO = {
+    "role": str,
+    "group": str,
+    "castsShadow": bool,
+    "receivesShadow": bool,
+    "on": bool,
+    "intensity": _NUMBER,
+    "shadows": bool,
+    "shadowIntensity": _NUMBER,
+    "ambientIntensity": _NUMBER,
+    "attenuation": (3, _NUMBER),
+    "beamWidth": _NUMBER,
+    "global": bool,
+}
+_LIGHT = {
+    "type": str,
+    "name": str,
+    "color": (3, _NUMBER),
+    "intensity": _NUMBER,
+    "range": _NUMBER,
+    "spot": {"innerConeAngle": _NUMBER, "outerConeAngle": _NUMBER},
+}
+_MATERIAL = {
+    "name": str,
+    "pbrMetallicRoughness": {
+        "baseColorFactor": (4, _NUMBER),
+        "roughnessFactor": _NUMBER,
+        "metallicFactor": _NUMBER,
+    },
+    "emissiveFactor": (3, _NUMBER),
+    "alphaMode": str,
+    "doubleSided": bool,
+}
+_PRIMITIVE = {"attributes": {"*": int}, "indices": int, "material": int, "mode": int}
+_NODE = {
+    "name": str,
+    "mesh": int,
+    "children": _INDICES,
+    "matrix": (16, _NUMBER),
+    "translation": (3, _NUMBER),
+    "rotation": (4, _NUMBER),
+    "scale": (3, _NUMBER),
+    "extensions": {LIGHTS: {"light": int}},
+}
+SCHEMA: dict[str, Any] = {
+    "asset": {"version": str},
+    "scene": int,
+    "scenes": [{"nodes": _INDICES}],
+    "nodes": [_NODE],
+    "meshes": [{"name": str, "primitives": [_PRIMITIVE]}],
+    "materials": [_MATERIAL],
+    "accessors": [{"bufferView": int, "count": int, "normalized": bool}],
+    "bufferViews": [{"buffer": int}],
+    "buffers": [{"uri": str, "byteLength": int}],
+    "images": [{"uri": str}],
+    "textures": [dict],
+    "samplers": [dict],
+    "extensionsUsed": [str],
+    "extensionsRequired": [str],
+    "extensions": {LIGHTS: {"lights": [_LIGHT]}},
+}
+_NAMES = {str: "a string", int: "an integer", bool: "true or false", float: "a finite number"}
+
+
+def check_types(document: dict[str, Any], path: Path) -> None:
+    """Refuse a document whose members shadowgeo reads (:data:`SCHEMA`, and
+    a node's ``extras["shadowgeo"]`` when it is an object) have the wrong JSON
+    type, with a SceneError naming the JSON pointer (``/nodes/3/name``)."""
+    _check(document, SCHEMA, "", path)
+    for index, node in enumerate(document.get("nodes") or []):
+        _check(shadowgeo_extras(node), _SHADOWGEO, f"/nodes/{index}/extras/shadowgeo", path)
+
+
+def _check(value: Any, spec: Any, pointer: str, path: Path) -> None:
+    """Check ``value`` against ``spec`` (see :data:`SCHEMA`) at ``pointer``."""
+    if isinstance(spec, dict):
+        if not isinstance(value, dict):
+            _refuse(pointer, "an object", value, path)
+        for key, member in value.items() if "*" in spec else ():
+            _check(member, spec["*"], f"{pointer}/{key}", path)
+        for key, sub in spec.items():
+            if key != "*" and key in value:
+                _check(value[key], sub, f"{pointer}/{key}", path)
+    elif isinstance(spec, (list, tuple)):
+        length, sub = spec if isinstance(spec, tuple) else (None, spec[0])
+        if not isinstance(value, list):
+            _refuse(pointer, "an array", value, path)
+        if length is not None and len(value) != length:
+            _refuse(pointer, f"an array of {length}", value, path)
+        for index, item in enumerate(value):
+            _check(item, sub, f"{pointer}/{index}", path)
+    elif spec is dict:
+        if not isinstance(value, dict):
+            _refuse(pointer, "an object", value, path)
+    elif spec is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            _refuse(pointer, _NAMES[float], value, path)
+        if not math.isfinite(value):
+            _refuse(pointer, _NAMES[float], value, path)
+    elif isinstance(value, bool) != (spec is bool) or not isinstance(value, spec):
+        _refuse(pointer, _NAMES[spec], value, path)
+
+
+def _refuse(pointer: str, wanted: str, value: Any, path: Path) -> None:
+    shown = repr(value) if len(repr(value)) <= 40 else repr(value)[:37] + "..."
+    raise SceneError(f"malformed glTF: {pointer or '/'} is {shown}, not {wanted}", path=str(path))
+
+
 # -- extras["shadowgeo"] ------------------------------------------------------------------
 
 

@@ -36,6 +36,7 @@ from ..scene.model import Viewpoint, axis_angle
 from . import float_triple, refuse_outside
 from .gltf_layout import (
     LIGHTS,
+    check_types,
     external_uris,
     glb_container,
     json_document,
@@ -56,6 +57,7 @@ def _gltf_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
     version = str(document["asset"].get("version", ""))
     if not version.startswith("2."):
         raise SceneError(f"glTF version {version!r} is not supported (2.x)", path=str(path))
+    check_types(document, path)
     _check_references(document, path)
     _check_compression(document, path)
     return document, binary

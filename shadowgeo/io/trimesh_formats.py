@@ -89,12 +89,24 @@ def mesh_shape(
 ) -> Shape:
     """The :class:`Shape` of a ``trimesh.Trimesh`` placed by ``transform``
     (4, 4), named ``name`` in the file ``path``; its material and solidity
-    come from trimesh unless ``fields`` (other Shape arguments) give them."""
+    come from trimesh unless ``fields`` (other Shape arguments) give them.
+
+    A face that refers to a vertex the mesh does not have (trimesh keeps the
+    file's indices as they are) is a SceneError naming the node."""
     material, solid = trimesh_material(geometry)
     # trimesh's own arrays, not copies (the trimesh scene is dropped after reading)
+    points = np.asarray(geometry.vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.asarray(geometry.faces, dtype=np.int64).reshape(-1, 3)
+    if len(faces) and (faces.min() < 0 or faces.max() >= len(points)):
+        bad = int(faces.max()) if faces.max() >= len(points) else int(faces.min())
+        raise SceneError(
+            f"a face refers to vertex {bad} of {len(points)}",
+            path=str(path),
+            node=f"node {name!r}" if name else None,
+        )
     return Shape(
-        np.asarray(geometry.vertices, dtype=np.float64),
-        np.asarray(geometry.faces, dtype=np.int64),
+        points,
+        faces,
         np.array(transform, dtype=np.float64),
         name=name,
         source=f"{path.name}, node {name!r}" if name else path.name,

@@ -64,12 +64,30 @@ def opened(opener: Callable[[str], Any], path: Path, failure: str) -> Any:
     try:
         result = opener(str(path))
     except Tf.ErrorException as error:
-        lines = [line.strip() for line in str(error).splitlines() if line.strip()]
-        reason = lines[-1] if lines else type(error).__name__
-        raise SceneError(f"{failure}: {reason}", path=str(path)) from None
+        raise SceneError(f"{failure}: {error_text(error)}", path=str(path)) from None
     if result is None:
         raise SceneError(failure, path=str(path))
     return result
+
+
+def error_text(error: Exception, first: bool = False) -> str:
+    """The last (or ``first``) line of a ``Tf.ErrorException``'s messages.
+
+    ``str(error)`` itself raises UnicodeDecodeError when usd-core quotes bytes
+    of a file that are not UTF-8, so each message is decoded with
+    replacement characters instead.
+    """
+    lines: list[str] = []
+    for item in error.args:
+        try:
+            text = str(getattr(item, "commentary", item))
+        except UnicodeDecodeError as problem:
+            raw = problem.object
+            text = bytes(raw).decode("utf-8", "replace")
+        lines.extend(line.strip() for line in text.splitlines() if line.strip())
+    if not lines:
+        return type(error).__name__
+    return lines[0] if first else lines[-1]
 
 
 def usd_text(name: str) -> str:

@@ -29,12 +29,37 @@ from ..polygons import polygons_triangles
 from ..scene import Material, Scene, SceneLight, Shape
 from . import float_triple
 from .usd_assets import check_assets
-from .usd_layout import custom, opened, pxr, stored_name
+from .usd_layout import custom, error_text, opened, pxr, stored_name
 
 
-def _world(xformable: Any, time: Any) -> np.ndarray:
-    """(4, 4) column-vector local-to-world transform of a prim."""
-    return np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
+def _world(xformable: Any, time: Any, path: Path) -> np.ndarray:
+    """(4, 4) column-vector local-to-world transform of a prim; a SceneError
+    naming the prim when usd-core cannot compute it (an unknown xformOp) or it
+    is not finite."""
+    Tf = pxr()[2]
+    prim = xformable.GetPrim()
+    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+    try:
+        world = np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
+    except Tf.ErrorException as error:
+        raise SceneError(
+            f"bad transform: {error_text(error, first=True)}", path=str(path), node=where
+        ) from None
+    if not np.isfinite(world).all():
+        raise SceneError("transform is not finite", path=str(path), node=where)
+    return world
+
+
+def _finite(value: Any, what: str, path: Path, where: str) -> Any:
+    """``value`` (a number or a tuple) unchanged when every component is finite;
+    otherwise a SceneError: a float32 attribute overflows to inf past ~3.4e38."""
+    try:
+        finite = bool(np.isfinite(np.asarray(value, dtype=np.float64)).all())
+    except (TypeError, ValueError):
+        finite = False
+    if not finite:
+        raise SceneError(f"{what} {value} is not a finite number", path=str(path), node=where)
+    return value
 
 
 def _triangles(
@@ -143,7 +168,7 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
         Shape(
             points,
             faces,
-            _world(mesh, time),
+            _world(mesh, time, path),
             material=_material(mesh, time),
             name=stored_name(prim, "role"),
             solid=not mesh.GetDoubleSidedAttr().Get(time),
@@ -156,7 +181,7 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
     )
 
 
-def _read_light(scene: Scene, prim: Any, time: Any) -> bool:
+def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
     """Append the light at ``prim``; False when it is no light shadowgeo models."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     if prim.IsA(UsdLux.DistantLight):
@@ -165,7 +190,7 @@ def _read_light(scene: Scene, prim: Any, time: Any) -> bool:
         usd_light = UsdLux.SphereLight(prim)
     else:
         return False
-    world = _world(usd_light, time)
+    world = _world(usd_light, time, path)
     direction = world[:3, :3] @ [0.0, 0.0, -1.0]
     radius = float(custom(prim, "range", math.inf))
     beam = custom(prim, "beamWidth")
@@ -190,14 +215,19 @@ def _read_light(scene: Scene, prim: Any, time: Any) -> bool:
             light = PointLight(world[:3, 3], radius)
     shadow = UsdLux.ShadowAPI(prim).GetShadowEnableAttr().Get(time)
     visibility = usd_light.ComputeVisibility(time)
+    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+    color = _finite(usd_light.GetColorAttr().Get(time) or (1, 1, 1), "color", path, where)
+    intensity = _finite(usd_light.GetIntensityAttr().Get(time) or 0.0, "intensity", path, where)
+    ambient = _finite(custom(prim, "ambientIntensity", 0.0), "ambientIntensity", path, where)
+    attenuation = custom(prim, "attenuation", (1.0, 0.0, 0.0))
     scene.lights.append(
         SceneLight(
             light,
             name=stored_name(prim, "global"),
-            color=float_triple(usd_light.GetColorAttr().Get(time) or (1, 1, 1)),
-            intensity=float(usd_light.GetIntensityAttr().Get(time) or 0.0),
-            ambient_intensity=float(custom(prim, "ambientIntensity", 0.0)),
-            attenuation=float_triple(custom(prim, "attenuation", (1.0, 0.0, 0.0))),
+            color=float_triple(color),
+            intensity=float(intensity),
+            ambient_intensity=float(ambient),
+            attenuation=float_triple(_finite(attenuation, "attenuation", path, where)),
             beam_width=float(beam if beam is not None else math.pi / 4),
             on=visibility != UsdGeom.Tokens.invisible,
             global_=bool(custom(prim, "global", True)),
@@ -263,7 +293,7 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
         elif prim.IsA(UsdGeom.Gprim):
             scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
         elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
-            if not _read_light(scene, prim, time):
+            if not _read_light(scene, prim, time, path):
                 scene.warnings.append(f"{path.name}: skipped {where}: not a point, spot or sun")
     # Shapes shadowgeo wrote carry their place in the scene; others follow in file order.
     keys = [(0, index) if index is not None else (1, 0) for index in indices]

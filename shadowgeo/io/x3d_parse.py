@@ -23,6 +23,7 @@ import gzip
 import importlib
 import io
 import re
+import zlib
 from pathlib import Path
 
 from lxml import etree
@@ -64,7 +65,7 @@ def read_bytes(path: Path) -> bytes:
                     data = inflated.read(MAX_BYTES + 1)
             else:
                 data = handle.read(MAX_BYTES + 1)
-    except (OSError, EOFError, gzip.BadGzipFile) as problem:
+    except (OSError, EOFError, gzip.BadGzipFile, zlib.error) as problem:
         raise SceneError(f"cannot read: {problem}", path=str(path)) from None
     if len(data) > MAX_BYTES:
         raise SceneError(f"document larger than {MAX_BYTES} bytes; refused", path=str(path))

@@ -86,6 +86,31 @@ class Receiver:
         return plane.flipped() if self.two_sided else None
 
 
+def repeated_faces(
+    vertices: np.ndarray, faces: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct faces of (m, 3) ``faces`` over ``vertices``: corners
+    compared by coordinates, and a face and its turns (``(a, b, c)``,
+    ``(b, c, a)``, ``(c, a, b)``) being one.
+
+    Returns ``(first, inverse, counts)``: the index of each distinct face's
+    first copy, the (m,) index mapping every face to its distinct one, and
+    how many copies each has.
+    """
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if not len(faces):
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, empty
+    _, point = np.unique(vertices, axis=0, return_inverse=True)
+    corners = point.reshape(-1)[faces]
+    turn = np.argmin(corners, axis=1)
+    turned = corners[np.arange(len(corners))[:, None], (turn[:, None] + np.arange(3)) % 3]
+    _, first, inverse, counts = np.unique(
+        turned, axis=0, return_index=True, return_inverse=True, return_counts=True
+    )
+    return first, inverse.reshape(-1), counts
+
+
 def patches(
     shape: Shape, tolerance: Tolerance, world_vertices: np.ndarray | None = None
 ) -> list[tuple[Plane, np.ndarray, float]]:
@@ -95,7 +120,10 @@ def patches(
     them, saves computing them again."""
     if world_vertices is None:
         world_vertices = shape.world_vertices
-    triangles = world_vertices[shape.faces]
+    # Repeated faces (a coordIndex written 10,000 times over) are found once,
+    # weighted by how often they repeat: each patch scans every face.
+    first, inverse, counts = repeated_faces(world_vertices, shape.faces)
+    triangles = world_vertices[shape.faces[first]]
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     doubled = np.linalg.norm(normals, axis=1)
     valid = doubled / tolerance.length > 2 * tolerance.length  # no square to overflow
@@ -115,9 +143,10 @@ def patches(
         member = ~assigned & np.all(np.abs(distance) <= limit, axis=1)
         member[seed] = True
         assigned |= member
-        if normals[member].sum(axis=0) @ normal < 0:
+        if (normals[member] * counts[member, None]).sum(axis=0) @ normal < 0:
             normal, offset = -normal, -offset
-        found.append((Plane(normal, offset), member, 0.5 * float(doubled[member].sum())))
+        area = 0.5 * float((doubled[member] * counts[member]).sum())
+        found.append((Plane(normal, offset), member[inverse], area))
     found.sort(key=lambda item: -item[2])
     return found
 

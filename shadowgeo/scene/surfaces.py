@@ -20,7 +20,7 @@ from ..errors import GeometryError
 from ..surface import shadow_on_surface
 from ..tolerance import Tolerance
 from .model import Material, SceneLight, Shape
-from .receivers import Receiver
+from .receivers import Receiver, repeated_faces
 
 
 def _receiver_centroids(found: list[Receiver]) -> np.ndarray:
@@ -36,13 +36,14 @@ def receiving_faces(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The faces of ``geometry`` that no planar receiver covers, as one
     (vertices, faces) surface in world coordinates (open shapes' faces twice,
-    once each way round)."""
+    once each way round; repeated faces once)."""
     planar = _receiver_centroids(found)
     keys = {tuple(key) for key in np.round(planar / tolerance.length).astype(np.int64)}
     vertices, faces, base = [], [], 0
     for shape in geometry:
         world = shape.world_vertices
-        triangles = shape.faces
+        # a face repeated (by coordinates) receives one shadow, not one per copy
+        triangles = shape.faces[np.sort(repeated_faces(world, shape.faces)[0])]
         if keys and len(triangles):
             centroids = world[triangles].mean(axis=1)
             rounded = np.round(centroids / tolerance.length).astype(np.int64)
