@@ -252,8 +252,9 @@ def sun_study(
     frame = _Frame(region_2d.mean(axis=0), local_scale(2.0 * extent))
     region_cs = CrossSection([frame.to_local(region_2d)], FillRule.Positive)
     shadows = []
-    for light in lights:
-        shadow = project_shadow(caster, light, plane, receiver=polygon)
+    # one call for the day: the caster is checked and prepared once for every sun position
+    cast = project_shadow(caster, lights, plane, receiver=polygon) if lights else []
+    for shadow in cast:
         shadows.append(frame.polygons(frame.region(shadow.polygons) ^ region_cs))
     return SunStudy(
         plane=plane,

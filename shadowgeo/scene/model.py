@@ -313,3 +313,20 @@ def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
         "shadowgeo: the scene and its shadows",
         "shadowgeo_overview",
     )
+
+
+def shadow_shape(
+    vertices: ArrayLike, faces: ArrayLike, scene_light: SceneLight, source: str
+) -> Shape:
+    """A baked shadow as a shape: black, ``1 - shadow_intensity`` transparent,
+    two-sided, casting nothing (role ``"shadow"``)."""
+    transparency = float(np.clip(1.0 - scene_light.shadow_intensity, 0.0, 1.0))
+    return Shape(
+        np.asarray(vertices, dtype=np.float64),
+        np.asarray(faces, dtype=np.int64),
+        material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=transparency),
+        solid=False,
+        role="shadow",
+        source=source,
+        casts_shadow=False,
+    )

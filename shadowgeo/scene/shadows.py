@@ -65,7 +65,7 @@ from ..projection import project_shadow
 from ..tolerance import Tolerance
 from ..topology import Caster
 from ..volume import shadow_volume
-from .model import Material, Scene, SceneLight, Shape, safe_name, unique_name
+from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
 from .receivers import Receiver
 from .receivers import select as select_receivers
 from .surfaces import receiving_faces, surface_shadow
@@ -528,15 +528,8 @@ def _shadow_on(
         return None
     flat_points, faces = poly.triangulate_parts(parts)
     vertices = plane.to_3d(flat_points / scale + center) + lift * plane.normal
-    transparency = float(np.clip(1.0 - scene_light.shadow_intensity, 0.0, 1.0))
-    return Shape(
-        vertices,
-        faces,
-        material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=transparency),
-        solid=False,
-        role="shadow",
-        source=f"shadow of light {light_name} on {receiver.name}",
-        casts_shadow=False,
+    return shadow_shape(
+        vertices, faces, scene_light, f"shadow of light {light_name} on {receiver.name}"
     )
 
 

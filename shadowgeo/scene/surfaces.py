@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import GeometryError
 from ..surface import shadow_on_surface
 from ..tolerance import Tolerance
-from .model import Material, SceneLight, Shape
+from .model import SceneLight, Shape, shadow_shape
 from .receivers import Receiver, repeated_faces
 
 
@@ -31,24 +31,31 @@ def _receiver_centroids(found: list[Receiver]) -> np.ndarray:
     return centroids
 
 
+def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """(n,) bool: is each row of ``rows`` a row of ``table`` (both int64, one
+    numpy pass instead of a Python set look-up per face)."""
+    _, inverse = np.unique(np.concatenate([table, rows]), axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    found: np.ndarray = np.isin(inverse[len(table) :], inverse[: len(table)])
+    return found
+
+
 def receiving_faces(
     geometry: list[Shape], found: list[Receiver], tolerance: Tolerance
 ) -> tuple[np.ndarray, np.ndarray]:
     """The faces of ``geometry`` that no planar receiver covers, as one
     (vertices, faces) surface in world coordinates (open shapes' faces twice,
     once each way round; repeated faces once)."""
-    planar = _receiver_centroids(found)
-    keys = {tuple(key) for key in np.round(planar / tolerance.length).astype(np.int64)}
+    keys = np.round(_receiver_centroids(found) / tolerance.length).astype(np.int64)
     vertices, faces, base = [], [], 0
     for shape in geometry:
         world = shape.world_vertices
         # a face repeated (by coordinates) receives one shadow, not one per copy
         triangles = shape.faces[np.sort(repeated_faces(world, shape.faces)[0])]
-        if keys and len(triangles):
+        if len(keys) and len(triangles):
             centroids = world[triangles].mean(axis=1)
             rounded = np.round(centroids / tolerance.length).astype(np.int64)
-            covered = np.array([tuple(key) in keys for key in rounded], dtype=bool)
-            triangles = triangles[~covered]
+            triangles = triangles[~_rows_in(rounded, keys)]
         if not len(triangles):
             continue
         if not shape.solid:
@@ -85,13 +92,9 @@ def surface_shadow(
         return None
     if not len(result.mesh.faces):
         return None
-    transparency = float(np.clip(1.0 - scene_light.shadow_intensity, 0.0, 1.0))
-    return Shape(
-        np.asarray(result.mesh.vertices, dtype=np.float64),
-        np.asarray(result.mesh.faces, dtype=np.int64),
-        material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=transparency),
-        solid=False,
-        role="shadow",
-        source=f"shadow of light {light_name} on the scene's surfaces",
-        casts_shadow=False,
+    return shadow_shape(
+        result.mesh.vertices,
+        result.mesh.faces,
+        scene_light,
+        f"shadow of light {light_name} on the scene's surfaces",
     )
