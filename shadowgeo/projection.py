@@ -38,6 +38,7 @@ from .errors import GeometryError
 from .lights import Light, SpotLight, is_positional, require_light
 from .limits import check_coordinates, check_light
 from .plane import Plane
+from .seams import unique_integers
 from .silhouette import boundary_loops, check_light_outside, silhouette_loops
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, empty_mesh
@@ -808,4 +809,4 @@ def _triangle_loops(
     faces = caster.faces[selected & (facing != 0)]
     back = facing[selected & (facing != 0)] < 0
     faces = np.where(back[:, None], faces[:, ::-1], faces)
-    return list(faces), np.unique(faces)
+    return list(faces), unique_integers(faces)

@@ -317,13 +317,14 @@ def unique_integers(
     """``np.unique`` of a 1-D integer array by one sort (numpy's hash-based
     unique is many times slower on large arrays)."""
     values = np.asarray(values).reshape(-1)
+    if not return_inverse:
+        ordered = np.sort(values)
+        return ordered[np.append(True, ordered[1:] != ordered[:-1])] if len(ordered) else ordered
     order = np.argsort(values, kind="stable")
     ordered = values[order]
     first = np.ones(len(ordered), dtype=bool)
     first[1:] = ordered[1:] != ordered[:-1]
     unique = ordered[first]
-    if not return_inverse:
-        return unique
     inverse = np.empty(len(values), dtype=np.int64)
     inverse[order] = np.cumsum(first) - 1
     return unique, inverse

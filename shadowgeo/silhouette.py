@@ -22,6 +22,7 @@ from .deprecation import renamed_keyword
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
+from .seams import unique_integers
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
 
@@ -180,7 +181,7 @@ def _loops_and_vertices(
 ) -> tuple[list[np.ndarray], np.ndarray]:
     if len(starts) == 0:
         return [], np.zeros(0, dtype=np.int64)
-    return chain(starts, ends), np.unique(np.concatenate([starts, ends]))
+    return chain(starts, ends), unique_integers(np.concatenate([starts, ends]))
 
 
 def _net_boundary(

@@ -90,16 +90,18 @@ class Caster:
     @cached_property
     def face_normals(self) -> np.ndarray:
         """(m, 3) unnormalised face normals (twice the area, by the winding)."""
-        # Component-wise cross product of corner columns: several times faster
-        # than np.cross on an (m, 3, 3) gather, and the same numbers.
-        vertices, faces = self.vertices, self.faces
-        first = vertices[faces[:, 0]]
-        u = vertices[faces[:, 1]] - first
-        v = vertices[faces[:, 2]] - first
-        normals = np.empty_like(u)
-        normals[:, 0] = u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1]
-        normals[:, 1] = u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2]
-        normals[:, 2] = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+        # Component-wise cross product on coordinate columns gathered one at a
+        # time: several times faster than np.cross on an (m, 3, 3) gather (the
+        # gathers read contiguous columns), and the same numbers.
+        columns = np.ascontiguousarray(self.vertices.T)
+        first, second, third = self.faces.T
+        x0, y0, z0 = columns[0][first], columns[1][first], columns[2][first]
+        ux, uy, uz = columns[0][second] - x0, columns[1][second] - y0, columns[2][second] - z0
+        vx, vy, vz = columns[0][third] - x0, columns[1][third] - y0, columns[2][third] - z0
+        normals = np.empty((len(self.faces), 3))
+        normals[:, 0] = uy * vz - uz * vy
+        normals[:, 1] = uz * vx - ux * vz
+        normals[:, 2] = ux * vy - uy * vx
         return normals
 
     @cached_property
@@ -177,18 +179,26 @@ class Caster:
 
     @cached_property
     def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        # One argsort of a single int64 key per face edge gives the unique
-        # edges, each face edge's index and the slots grouped by edge at once
-        # (np.unique with return_inverse would sort, and edge_face_slots sort
-        # again).
+        # One sort of a single int64 key per face edge gives the unique edges,
+        # each face edge's index and the slots grouped by edge at once (np.unique
+        # with return_inverse would sort, and edge_face_slots sort again). The
+        # slot rides in the key's low bits where it fits, so a plain sort (several
+        # times faster than argsort) yields the order too, ties by slot.
         faces = self.faces
         n = np.int64(max(len(self.vertices), 1))
         starts = faces.reshape(-1)
         ends = faces[:, [1, 2, 0]].reshape(-1)
         low = np.minimum(starts, ends)
         keys = low * n + np.maximum(starts, ends)
-        order = np.argsort(keys)
-        sorted_keys = keys[order]
+        slot_bits = max(len(keys).bit_length(), 1)
+        if (int(n) * int(n)).bit_length() + slot_bits <= 63:
+            packed = (keys << np.int64(slot_bits)) | np.arange(len(keys), dtype=np.int64)
+            packed.sort()
+            order = packed & np.int64((1 << slot_bits) - 1)
+            sorted_keys = packed >> np.int64(slot_bits)
+        else:
+            order = np.argsort(keys, kind="stable")
+            sorted_keys = keys[order]
         first = np.empty(len(sorted_keys), dtype=bool)
         first[:1] = True
         np.not_equal(sorted_keys[1:], sorted_keys[:-1], out=first[1:])

@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike
 from ..errors import GeometryError, SceneError
 from ..lights import Light, is_positional
 from ..plane import Plane
+from ..seams import unique_integers
 from ..tolerance import Tolerance
 from .model import Scene, Shape, safe_name
 
@@ -264,7 +265,7 @@ def found(
             if float(np.linalg.norm(box)) < SIZE_FRACTION * scene_size:
                 continue
         for fitted, member, area in patches(shape, tolerance, world_vertices):
-            points = world_vertices[np.unique(shape.faces[member])]
+            points = world_vertices[unique_integers(shape.faces[member])]
             size = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
             if size < SIZE_FRACTION * scene_size:
                 continue

@@ -47,7 +47,6 @@ the scene.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
 from collections.abc import Callable, Sequence
 from typing import Literal, cast
@@ -58,13 +57,15 @@ from numpy.typing import ArrayLike
 from .. import limits
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
-from ..lights import DirectionalLight, Light, SpotLight, is_positional
+from ..lights import DirectionalLight, Light, is_positional
 from ..limits import check_coordinates, check_light
 from ..plane import Plane
 from ..projection import project_shadow
+from ..seams import unique_integers
 from ..tolerance import Tolerance
 from ..topology import Caster
 from ..volume import shadow_volume
+from .casters import CasterSet
 from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
 from .receivers import Receiver
 from .receivers import select as select_receivers
@@ -176,7 +177,8 @@ def add_shadows(
         notes.append("shadows: the scene has no geometry, so nothing casts or receives")
         return dataclasses.replace(scene, shapes=kept, warnings=[*scene.warnings, *notes])
     positions = [light.light.position for light in chosen if is_positional(light.light)]
-    bounds = dataclasses.replace(scene, shapes=geometry).bounds if geometry else np.zeros((0, 3))
+    stacked = CasterSet(geometry)  # world vertices once per shape, in one array
+    bounds = stacked.bounds if geometry else np.zeros((0, 3))
     check_coordinates(bounds, "scene bounds")  # whatever the tolerance: see shadowgeo.limits
     if not isinstance(tolerance, Tolerance):
         settings = {} if tolerance is None else {"chord": float(tolerance)}
@@ -187,11 +189,10 @@ def add_shadows(
     names = _Names(kept, scene.lights)
 
     if method == "volume":
-        added = _volumes(scene, geometry, chosen, tolerance, names, notes, progress)
+        added = _volumes(scene, stacked, chosen, tolerance, names, notes, progress)
     else:
         own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
         found = select_receivers(own, geometry, receivers, plane, tolerance, notes)
-        casters = [_Caster(shape) for shape in geometry]
         if surfaces is None:
             surfaces = receivers is None and plane is None
         surface = receiving_faces(geometry, found, tolerance) if surfaces else None
@@ -203,7 +204,7 @@ def add_shadows(
             )
             surface = None
         added = []
-        total, done = len(chosen) * len(found) * len(casters), 0
+        total, done = len(chosen) * len(found) * len(stacked), 0
         for index, light in enumerate(chosen):
             light_name = names.light(light, index)
             group = names.unique(f"shadows_{light_name}")
@@ -217,14 +218,14 @@ def add_shadows(
                 shape = _shadow_on(
                     receiver,
                     light,
-                    casters=casters,
+                    casters=stacked,
                     tolerance=tolerance,
                     lift=height,
                     notes=notes,
                     light_name=light_name,
                     step=step,
                 )
-                done += len(casters)
+                done += len(stacked)
                 if shape is None:
                     continue
                 shape.name = names.unique(f"shadow_{light_name}_{receiver.name}")
@@ -342,95 +343,9 @@ def _select_lights(
     return chosen
 
 
-class _Caster:
-    """A caster shape in world coordinates, its topology reused across lights."""
-
-    def __init__(self, shape: Shape) -> None:
-        self.shape = shape
-        self.vertices = shape.world_vertices
-        self.low, self.high = self.vertices.min(axis=0), self.vertices.max(axis=0)
-        self.name = shape.name or shape.source or "unnamed shape"
-        self._cut: dict[int, Caster | None] = {}
-
-    @functools.cached_property
-    def caster(self) -> Caster:
-        """The whole shape as a caster, made when first needed: in one call
-        for all casters only the arrays are used."""
-        return Caster(self.vertices, self.shape.faces)
-
-    def off_plane(self, receiver: Receiver, tolerance: Tolerance) -> Caster | None:
-        """The caster without its triangles that lie in the receiver's plane
-        (a patch does not shadow itself, nor does a rug lying on the floor)."""
-        key = id(receiver)
-        if key not in self._cut:
-            distance = np.abs(receiver.plane.signed_distance(self.vertices))
-            on_plane = np.all(distance[self.shape.faces] <= tolerance.coplanar_length, axis=1)
-            if not on_plane.any():
-                self._cut[key] = self.caster
-            elif on_plane.all():
-                self._cut[key] = None
-            else:
-                self._cut[key] = Caster(self.vertices, self.shape.faces[~on_plane])
-        return self._cut[key]
-
-
-def _lit(caster: _Caster, light: Light) -> bool:
-    """False when no part of the caster is within the light's radius or, for a
-    spot light, its cone (bounding box and sphere tests)."""
-    if not is_positional(light):
-        return True
-    position = light.position
-    nearest = np.clip(position, caster.low, caster.high)
-    if float(np.linalg.norm(nearest - position)) > light.radius:
-        return False
-    if isinstance(light, SpotLight):
-        center = 0.5 * (caster.low + caster.high)
-        radius = 0.5 * float(np.linalg.norm(caster.high - caster.low))
-        to_center = center - position
-        reach = float(np.linalg.norm(to_center))
-        if reach > radius:
-            angle = math.acos(np.clip(to_center @ light.direction / reach, -1.0, 1.0))
-            if angle - math.asin(radius / reach) > light.cut_off_angle:
-                return False
-    return True
-
-
-def _may_shadow(
-    caster: _Caster,
-    light: Light,
-    plane: Plane,
-    box2d: tuple[np.ndarray, np.ndarray] | None,
-    tolerance: Tolerance,
-) -> bool:
-    """False when the caster certainly casts nothing on the receiver's box."""
-    distance = plane.signed_distance(caster.vertices)
-    if distance.max() <= tolerance.length:
-        return False  # wholly behind the receiver
-    if is_positional(light):
-        position = light.position
-        height = float(plane.signed_distance(position[None])[0])
-        if distance.min() >= height - tolerance.length:
-            return False  # wholly at or beyond the light's height
-        if not _lit(caster, light):
-            return False
-        if box2d is None or distance.min() <= tolerance.length:
-            return True
-        # Every vertex lies strictly between the plane and the light: the
-        # shadow is inside the hull of the vertices' images.
-        scale = height / (height - distance)
-        images = position + (caster.vertices - position) * scale[:, None]
-    else:
-        if box2d is None or distance.min() <= tolerance.length:
-            return True
-        cosine = -float(plane.normal @ light.direction)
-        images = caster.vertices + np.outer(distance / cosine, light.direction)
-    image2d = plane.to_2d(images)
-    low, high = box2d
-    return bool(np.all(image2d.max(axis=0) >= low) and np.all(image2d.min(axis=0) <= high))
-
-
 def _caster_loops(
-    chosen: list[tuple[_Caster, Caster]],
+    casters: CasterSet,
+    faces: np.ndarray,
     light: Light,
     plane: Plane,
     rectangle: np.ndarray | None,
@@ -438,7 +353,8 @@ def _caster_loops(
     notes: list[str],
     light_name: str,
 ) -> list[np.ndarray]:
-    """The loops of the casters' shadows on ``plane``, in plane 2-D coordinates.
+    """The loops of the shadows of the stacked faces ``faces`` (a mask) on
+    ``plane``, in plane 2-D coordinates.
 
     All casters go through :func:`project_shadow` as one mesh: the shadow of a
     union of meshes is the union of their shadows, and one call does the work
@@ -447,21 +363,20 @@ def _caster_loops(
     them), each caster is projected alone so that only the one at fault is
     skipped, with a note.
     """
-    if len(chosen) > 1:
-        offsets = np.cumsum([0] + [len(mesh.vertices) for _, mesh in chosen[:-1]])
-        vertices = np.concatenate([mesh.vertices for _, mesh in chosen])
-        faces = np.concatenate(
-            [mesh.faces + offset for (_, mesh), offset in zip(chosen, offsets, strict=True)]
-        )
+    owners = unique_integers(casters.face_owner[faces])
+    if len(owners) > 1:
         try:
             shadow = project_shadow(
-                (vertices, faces), light, plane, receiver=rectangle, tolerance=tolerance
+                casters.mesh(faces), light, plane, receiver=rectangle, tolerance=tolerance
             )
             return [loop for part in shadow.polygons for loop in part]
         except GeometryError:
             pass  # find the caster at fault, below
     loops = []
-    for caster, mesh in chosen:
+    for owner in owners:
+        caster = casters.casters[owner]
+        own = faces[casters.face_owner == owner]
+        mesh = caster.caster if own.all() else Caster(caster.vertices, caster.shape.faces[own])
         try:
             shadow = project_shadow(mesh, light, plane, receiver=rectangle, tolerance=tolerance)
         except GeometryError as error:
@@ -476,7 +391,7 @@ def _shadow_on(
     receiver: Receiver,
     scene_light: SceneLight,
     *,
-    casters: list[_Caster],
+    casters: CasterSet,
     tolerance: Tolerance,
     lift: float,
     notes: list[str],
@@ -484,8 +399,8 @@ def _shadow_on(
     step: Callable[[int], None],
 ) -> Shape | None:
     """The united shadow of the casters on one receiver as a shape, or None:
-    raised ``lift`` off the receiver's plane, ``step(count)`` called after each
-    caster, and a note in ``notes`` for a caster that cannot cast."""
+    raised ``lift`` off the receiver's plane, ``step(count)`` called once the
+    casters are chosen, and a note in ``notes`` for a caster that cannot cast."""
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
     if plane is None:
@@ -497,15 +412,10 @@ def _shadow_on(
         low, high = box2d
         rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
         region2d = flat
-    chosen: list[tuple[_Caster, Caster]] = []
-    for count, caster in enumerate(casters, start=1):
-        step(count)
-        if not _may_shadow(caster, light, plane, box2d, tolerance):
-            continue
-        mesh = caster.off_plane(receiver, tolerance)
-        if mesh is not None:
-            chosen.append((caster, mesh))
-    loops = _caster_loops(chosen, light, plane, rectangle, tolerance, notes, light_name)
+    chosen = casters.may_shadow(light, plane, box2d, tolerance)
+    faces = chosen[casters.face_owner] & casters.off_plane(receiver.plane, tolerance)
+    step(len(casters))
+    loops = _caster_loops(casters, faces, light, plane, rectangle, tolerance, notes, light_name)
     if not loops:
         return None
     points = np.concatenate(loops)
@@ -535,7 +445,7 @@ def _shadow_on(
 
 def _volumes(
     scene: Scene,
-    geometry: list[Shape],
+    stacked: CasterSet,
     chosen: list[SceneLight],
     tolerance: Tolerance,
     names: _Names,
@@ -544,13 +454,12 @@ def _volumes(
 ) -> list[Shape]:
     """Shadow volumes of every shape for every light, ending one scene size past
     the farthest corner of the scene (a sweep of twice its size for a sun)."""
-    bounds = scene.bounds
+    bounds = stacked.bounds
     corners = np.array(
         [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
     )
-    casters = [_Caster(shape) for shape in geometry]  # topology once, for every light
     added = []
-    total, done = len(chosen) * len(casters), 0
+    total, done = len(chosen) * len(stacked), 0
     for index, scene_light in enumerate(chosen):
         light = scene_light.light
         if is_positional(light):
@@ -559,11 +468,11 @@ def _volumes(
             extent = 2 * tolerance.scale
         light_name = names.light(scene_light, index)
         group = names.unique(f"shadows_{light_name}")
-        for caster in casters:
+        for caster, lit in zip(stacked.casters, stacked.lit(light), strict=True):
             done += 1
             if progress is not None:
                 progress(done, total)
-            if not _lit(caster, light):
+            if not lit:
                 continue
             try:
                 volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)

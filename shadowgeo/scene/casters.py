@@ -1,0 +1,206 @@
+"""The casters of a scene, all in one pair of arrays, and what each can shadow.
+
+A scene of ten thousand small shapes must cost little more than one shape of
+the same triangles. :class:`CasterSet` therefore computes every shape's world
+vertices once and stacks them, with every shape's faces, into one vertex and
+one face array; the tests that drop a caster (wholly behind the receiver,
+beyond a positional light, out of its radius or cone, its shadow missing the
+receiver's box) and the removal of triangles lying in the receiver's plane are
+then a few numpy operations over all shapes at once, and the casters a
+receiver keeps go to :func:`shadowgeo.project_shadow` as one mesh. The
+topology of that mesh is cached by the faces it holds, so a second light
+whose casters are the same reuses it.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+
+import numpy as np
+
+from ..lights import Light, SpotLight, is_positional
+from ..plane import Plane
+from ..tolerance import Tolerance
+from ..topology import Caster
+from .model import Shape
+
+# Stacked caster meshes kept for later lights (each holds its topology: a few
+# times the size of its arrays).
+_MESHES_KEPT = 2
+# Up to this many distinct shape transforms, world vertices are computed per
+# transform over all its shapes at once.
+_TRANSFORMS_BATCHED = 16
+
+
+class SceneCaster:
+    """One caster shape in world coordinates (its vertices shared with the
+    set's arrays), its topology made when first needed and kept for every
+    light."""
+
+    def __init__(self, shape: Shape, vertices: np.ndarray) -> None:
+        self.shape = shape
+        self.vertices = vertices
+        self.name = shape.name or shape.source or "unnamed shape"
+
+    @functools.cached_property
+    def caster(self) -> Caster:
+        return Caster(self.vertices, self.shape.faces)
+
+
+class CasterSet:
+    """Every caster shape's world vertices and faces stacked into one mesh.
+
+    Parameters
+    ----------
+    shapes : list of Shape
+        Shapes with at least one face each.
+    """
+
+    def __init__(self, shapes: list[Shape]) -> None:
+        world = _world_vertices(shapes)
+        counts = np.array([len(v) for v in world], dtype=np.int64)
+        face_counts = np.array([len(shape.faces) for shape in shapes], dtype=np.int64)
+        self.vertex_starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        self.vertices = np.concatenate(world) if world else np.zeros((0, 3))
+        self.faces = (
+            np.concatenate(shapes_faces(shapes, self.vertex_starts))
+            if shapes
+            else np.zeros((0, 3), dtype=np.int64)
+        )
+        self.vertex_owner = np.repeat(np.arange(len(shapes)), counts)
+        self.face_owner = np.repeat(np.arange(len(shapes)), face_counts)
+        self.casters = [
+            SceneCaster(shape, self.vertices[start : start + count])
+            for shape, start, count in zip(shapes, self.vertex_starts, counts, strict=True)
+        ]
+        if shapes:
+            self.low = np.minimum.reduceat(self.vertices, self.vertex_starts, axis=0)
+            self.high = np.maximum.reduceat(self.vertices, self.vertex_starts, axis=0)
+        else:
+            self.low = self.high = np.zeros((0, 3))
+        self._meshes: dict[bytes, Caster] = {}
+
+    def __len__(self) -> int:
+        return len(self.casters)
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) the bounding box of every caster's vertices."""
+        if len(self.vertices) == 0:
+            return np.zeros((2, 3))
+        return np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+
+    def per_caster(self, values: np.ndarray, reduce: np.ufunc) -> np.ndarray:
+        """``reduce`` (np.minimum or np.maximum) of per-vertex ``values`` over
+        each caster's vertices."""
+        result: np.ndarray = reduce.reduceat(values, self.vertex_starts, axis=0)
+        return result
+
+    def lit(self, light: Light) -> np.ndarray:
+        """(k,) bool: False for a caster with no part within the light's
+        radius or, for a spot light, its cone (bounding box and sphere)."""
+        keep = np.ones(len(self), dtype=bool)
+        if not is_positional(light) or not len(self):
+            return keep
+        position = light.position
+        nearest = np.clip(position, self.low, self.high)
+        keep &= np.linalg.norm(nearest - position, axis=1) <= light.radius
+        if isinstance(light, SpotLight):
+            center = 0.5 * (self.low + self.high)
+            radius = 0.5 * np.linalg.norm(self.high - self.low, axis=1)
+            to_center = center - position
+            reach = np.linalg.norm(to_center, axis=1)
+            far = reach > radius
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cosine = np.clip((to_center @ light.direction) / reach, -1.0, 1.0)
+                spread = np.arcsin(np.clip(radius / reach, 0.0, 1.0))
+            keep &= ~(far & (np.arccos(cosine) - spread > light.cut_off_angle))
+        return keep
+
+    def may_shadow(
+        self,
+        light: Light,
+        plane: Plane,
+        box2d: tuple[np.ndarray, np.ndarray] | None,
+        tolerance: Tolerance,
+    ) -> np.ndarray:
+        """(k,) bool: False for a caster that certainly casts nothing on the
+        receiver's box in ``plane``."""
+        if not len(self):
+            return np.zeros(0, dtype=bool)
+        distance = plane.signed_distance(self.vertices)
+        lowest = self.per_caster(distance, np.minimum)
+        keep = self.per_caster(distance, np.maximum) > tolerance.length  # not wholly behind
+        if is_positional(light):
+            position = light.position
+            height = float(plane.signed_distance(position[None])[0])
+            keep &= lowest < height - tolerance.length  # not wholly at or beyond the light
+            keep &= self.lit(light)
+        if box2d is None:
+            return keep
+        # Casters with every vertex strictly between the plane and the light:
+        # the shadow is inside the hull of the vertices' images.
+        boxed = keep & (lowest > tolerance.length)
+        if not boxed.any():
+            return keep
+        inside = boxed[self.vertex_owner]
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            if is_positional(light):
+                scale = np.where(inside, height / (height - distance), 1.0)
+                images = position + (self.vertices - position) * scale[:, None]
+            else:
+                cosine = -float(plane.normal @ light.direction)
+                images = self.vertices + np.outer(
+                    np.where(inside, distance, 0.0) / cosine, light.direction
+                )
+        image2d = plane.to_2d(images)
+        low, high = box2d
+        meets = np.all(self.per_caster(image2d, np.maximum) >= low, axis=1) & np.all(
+            self.per_caster(image2d, np.minimum) <= high, axis=1
+        )
+        result: np.ndarray = keep & (~boxed | meets)
+        return result
+
+    def off_plane(self, plane: Plane, tolerance: Tolerance) -> np.ndarray:
+        """(m,) bool over the stacked faces: False for a face lying in
+        ``plane`` (a patch does not shadow itself, nor a rug the floor)."""
+        near = np.abs(plane.signed_distance(self.vertices)) <= tolerance.coplanar_length
+        off: np.ndarray = ~np.all(near[self.faces], axis=1)
+        return off
+
+    def mesh(self, faces: np.ndarray) -> Caster:
+        """The stacked vertices with the face mask ``faces`` as one caster, its
+        topology cached for the next light with the same faces."""
+        key = hashlib.blake2b(np.packbits(faces).tobytes(), digest_size=16).digest()
+        if key not in self._meshes:
+            if len(self._meshes) >= _MESHES_KEPT:
+                del self._meshes[next(iter(self._meshes))]  # the oldest
+            self._meshes[key] = Caster(self.vertices, self.faces[faces])
+        return self._meshes[key]
+
+
+def _world_vertices(shapes: list[Shape]) -> list[np.ndarray]:
+    """Every shape's world vertices: one matrix product per distinct transform
+    when there are few (scenes of many shapes mostly share one), else one per
+    shape."""
+    if len(shapes) < 2:
+        return [shape.world_vertices for shape in shapes]
+    transforms = np.stack([shape.transform for shape in shapes]).reshape(len(shapes), 16)
+    distinct, group = np.unique(transforms, axis=0, return_inverse=True)
+    if len(distinct) > _TRANSFORMS_BATCHED:
+        return [shape.world_vertices for shape in shapes]
+    raw = np.concatenate([shape.vertices for shape in shapes])
+    owner = np.repeat(group.reshape(-1), [len(shape.vertices) for shape in shapes])
+    world = np.empty_like(raw)
+    for index, transform in enumerate(distinct.reshape(-1, 4, 4)):
+        rows = owner == index
+        with np.errstate(over="ignore", invalid="ignore"):
+            world[rows] = raw[rows] @ transform[:3, :3].T + transform[:3, 3]
+    ends = np.cumsum([len(shape.vertices) for shape in shapes])[:-1]
+    return np.split(world, ends)
+
+
+def shapes_faces(shapes: list[Shape], starts: np.ndarray) -> list[np.ndarray]:
+    """Each shape's faces offset to index the stacked vertices."""
+    return [shape.faces + start for shape, start in zip(shapes, starts, strict=True)]
