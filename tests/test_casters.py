@@ -1,0 +1,70 @@
+"""The stacked casters of a scene: world vertices, culling and plane removal
+agree with the shapes one by one."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import shadowgeo as sg
+from shadowgeo.scene.casters import CasterSet
+
+
+def _shapes(count: int, transforms: int, seed: int = 3) -> list[sg.Shape]:
+    rng = np.random.default_rng(seed)
+    matrices = []
+    for _ in range(transforms):
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        matrix = np.eye(4)
+        matrix[:3, :3] = q * rng.uniform(0.5, 2.0)
+        matrix[:3, 3] = rng.uniform(-5, 5, 3)
+        matrices.append(matrix)
+    return [
+        sg.Shape(
+            rng.uniform(-1, 1, (5, 3)),
+            [[0, 1, 2], [2, 3, 4]],
+            transform=matrices[index % transforms],
+            name=f"s{index}",
+        )
+        for index in range(count)
+    ]
+
+
+@pytest.mark.parametrize("transforms", [1, 3, 40])
+def test_stacked_world_vertices_equal_each_shapes_own(transforms):
+    shapes = _shapes(60, transforms)
+    stacked = CasterSet(shapes)
+    for shape, caster in zip(shapes, stacked.casters, strict=True):
+        np.testing.assert_allclose(caster.vertices, shape.world_vertices, rtol=0, atol=1e-12)
+    faces = np.concatenate([s.faces + 5 * i for i, s in enumerate(shapes)])
+    assert np.array_equal(stacked.faces, faces)
+    every = np.concatenate([s.world_vertices for s in shapes])
+    np.testing.assert_allclose(stacked.bounds, [every.min(axis=0), every.max(axis=0)], atol=1e-12)
+
+
+def test_culling_drops_exactly_the_casters_a_point_light_cannot_reach():
+    # Four unit squares at heights 0.5, 1.5, 5 (above the light at y = 4) and
+    # -1 (below the ground), and one far out of the light's radius.
+    def square(y: float, x: float = 0.0) -> sg.Shape:
+        return sg.Shape(
+            [[x, y, 0], [x + 1, y, 0], [x + 1, y, 1], [x, y, 1]], [[0, 2, 1], [0, 3, 2]]
+        )
+
+    shapes = [square(0.5), square(1.5), square(5.0), square(-1.0), square(1.0, x=50.0)]
+    stacked = CasterSet(shapes)
+    light = sg.PointLight([0.5, 4.0, 0.5], radius=10.0)
+    ground = sg.Plane([0, 1, 0], 0)
+    tolerance = sg.Tolerance.for_points(stacked.bounds, light.position)
+    keep = stacked.may_shadow(light, ground, None, tolerance)
+    assert keep.tolist() == [True, True, False, False, False]
+    # A receiver box far to the side: the images of the first two miss it.
+    box = (np.array([20.0, 20.0]), np.array([30.0, 30.0]))
+    assert not stacked.may_shadow(light, ground, box, tolerance).any()
+
+
+def test_faces_in_the_receivers_plane_are_dropped_and_no_others():
+    rug = sg.Shape([[0, 0, 0], [1, 0, 0], [1, 0, 1]], [[0, 2, 1]])
+    tent = sg.Shape([[0, 0, 0], [1, 0, 0], [0.5, 1, 0.5]], [[0, 1, 2]])
+    stacked = CasterSet([rug, tent])
+    tolerance = sg.Tolerance.for_points(stacked.bounds)
+    assert stacked.off_plane(sg.Plane([0, 1, 0], 0), tolerance).tolist() == [False, True]
