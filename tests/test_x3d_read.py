@@ -415,6 +415,23 @@ def test_materials(tmp_path):
     assert classic.shininess == 0.7
 
 
+def test_materials_written_alike_are_read_alike_and_each_bad_one_is_named(tmp_path):
+    good = '<Material diffuseColor="0.1 0.2 0.3" transparency="0.25"/>'
+    bad = '<Material diffuseColor="0.1 zero 0.3"/>'
+    body = "\n".join(
+        f"<Shape><Appearance>{material}</Appearance><Box/></Shape>"
+        for material in (good, good, bad, bad, '<Material diffuseColor="0.3 0.2 0.1"/>')
+    )
+    scene = scene_of(tmp_path, body)
+    first, second, third, fourth, other = (s.material for s in scene.shapes)
+    assert first.diffuse_color == second.diffuse_color == (0.1, 0.2, 0.3)
+    assert first.transparency == second.transparency == 0.25
+    assert third.diffuse_color == fourth.diffuse_color == (0.8, 0.8, 0.8)  # the default
+    assert other.diffuse_color == (0.3, 0.2, 0.1)
+    named = [w for w in scene.warnings if "diffuseColor" in w]
+    assert len(named) == 2 and named[0] != named[1]  # one per element, by its line
+
+
 # -- prototypes -------------------------------------------------------------------------
 
 PROTOS = """

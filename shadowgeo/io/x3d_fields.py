@@ -76,6 +76,9 @@ class Context:
     _order: dict[Element, int] = field(default_factory=dict)  # element -> index in its own tree
     prototypes: Prototypes | None = None  # of the document
     _said: set[str] = field(default_factory=set)  # warnings given once (fields read again)
+    # Values built from a node's attributes alone, by (kind, tag, attributes):
+    # ten thousand identical Materials are read once.
+    by_content: dict[tuple[Any, ...], Any] = field(default_factory=dict)
 
     def definition(self, element: Element) -> Element | None:
         """The element a ``USE`` names: the latest DEF of that name before it in

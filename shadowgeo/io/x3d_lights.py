@@ -107,6 +107,18 @@ def material(context: Context, appearance: Element | None) -> Material:
     if not nodes:
         return unlit
     node = nodes[0]
+    key = ("material", node.tag, tuple(node.attrib.items()))
+    if key not in context.by_content:
+        said = len(context.warnings)
+        made = _material(context, node)
+        if len(context.warnings) > said:
+            return made  # each bad Material is named in its own warning
+        context.by_content[key] = made
+    known: Material = context.by_content[key]
+    return known
+
+
+def _material(context: Context, node: Element) -> Material:
     tag = local_name(node)
 
     def field(name: str) -> Any:
