@@ -109,6 +109,8 @@ def check_coordinates(points: ArrayLike, what: str) -> None:
     values = np.asarray(points, dtype=np.float64)
     if values.size == 0:
         return
+    if values.max() <= LARGEST_COORDINATE and values.min() >= -LARGEST_COORDINATE:
+        return  # every value finite and in range (NaN fails both comparisons)
     flat = values.reshape(len(values), -1) if values.ndim > 1 else values.reshape(-1, 1)
     bad = ~np.all(np.isfinite(flat) & (np.abs(flat) <= LARGEST_COORDINATE), axis=1)
     if not bad.any():

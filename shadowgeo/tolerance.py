@@ -43,6 +43,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .boxes import bounding_box
 from .errors import GeometryError
 from .limits import MAX_CURVE_SEGMENTS, SMALLEST_LENGTH, check_coordinates
 
@@ -114,7 +115,7 @@ class Tolerance:
             return cls(**settings)
         points = np.concatenate(chunks)
         check_coordinates(points, "scene")
-        lower, upper = points.min(axis=0), points.max(axis=0)
+        lower, upper = bounding_box(points)
         # Normalised before squaring: the diagonal of a box near the range's
         # ends neither overflows nor underflows.
         side = upper - lower

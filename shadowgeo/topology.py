@@ -15,6 +15,7 @@ import numpy as np
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 
+from .boxes import bounding_box
 from .errors import GeometryError
 
 if TYPE_CHECKING:
@@ -58,14 +59,14 @@ class Caster:
                 raise GeometryError("caster faces must hold integer vertex indices")
             faces = faces.astype(np.int64)
         faces = faces.astype(np.int64, copy=False)
-        bad_vertex = ~np.all(np.isfinite(vertices), axis=1)
-        if np.any(bad_vertex):
+        if not np.isfinite(vertices).all():
+            bad_vertex = ~np.all(np.isfinite(vertices), axis=1)
             index = int(np.flatnonzero(bad_vertex)[0])
             raise GeometryError(
                 f"caster vertex {index} is not finite: {vertices[index].tolist()} "
                 f"({int(bad_vertex.sum())} such vertices)"
             )
-        if faces.size:
+        if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
             bad_face = np.any((faces < 0) | (faces >= len(vertices)), axis=1)
             if np.any(bad_face):
                 index = int(np.flatnonzero(bad_face)[0])
@@ -163,7 +164,8 @@ class Caster:
         if not self.is_closed:
             raise ValueError("edge_face_slots needs a closed mesh")
         pairs = self.edge_slots.reshape(-1, 2)
-        return np.column_stack([pairs.min(axis=1), pairs.max(axis=1)])
+        first, second = pairs[:, 0], pairs[:, 1]
+        return np.column_stack([np.minimum(first, second), np.maximum(first, second)])
 
     @property
     def edge_slots(self) -> np.ndarray:
@@ -256,7 +258,7 @@ class Caster:
         used = np.zeros(len(self.vertices), dtype=bool)
         used[self.faces.reshape(-1)] = True
         points = self.vertices if used.all() else self.vertices[used]
-        return np.array([points.min(axis=0), points.max(axis=0)])
+        return bounding_box(points)
 
     def winding_number(self, point: ArrayLike) -> float:
         """Generalised winding number of the mesh around ``point`` (1 inside a

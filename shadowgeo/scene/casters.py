@@ -19,6 +19,7 @@ import hashlib
 
 import numpy as np
 
+from ..boxes import bounding_box
 from ..lights import Light, SpotLight, is_positional
 from ..plane import Plane
 from ..tolerance import Tolerance
@@ -89,7 +90,7 @@ class CasterSet:
         """(2, 3) the bounding box of every caster's vertices."""
         if len(self.vertices) == 0:
             return np.zeros((2, 3))
-        return np.array([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+        return bounding_box(self.vertices)
 
     def per_caster(self, values: np.ndarray, reduce: np.ufunc) -> np.ndarray:
         """``reduce`` (np.minimum or np.maximum) of per-vertex ``values`` over

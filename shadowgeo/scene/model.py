@@ -15,6 +15,7 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..boxes import bounding_box
 from ..lights import DirectionalLight, PointLight, SpotLight
 
 Color = tuple[float, float, float]
@@ -267,7 +268,7 @@ class Scene:
         if not points:
             return np.zeros((2, 3))
         stacked = np.concatenate(points)
-        return np.array([stacked.min(axis=0), stacked.max(axis=0)])
+        return bounding_box(stacked)
 
 
 # Where the overview camera looks from, seen from the scene's centre, Y up:
