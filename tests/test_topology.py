@@ -101,3 +101,17 @@ def test_a_sequence_that_is_not_a_pair_is_refused_by_name():
         as_caster((mesh.vertices, mesh.faces, mesh.faces))
     with pytest.raises(GeometryError, match="got str"):
         as_caster("box")
+
+
+def test_bounding_box_equals_numpys_reductions_and_carries_nan():
+    from shadowgeo.boxes import bounding_box
+
+    rng = np.random.default_rng(5)
+    for shape in [(1, 3), (7, 2), (1000, 3)]:
+        points = rng.normal(size=shape) * 1e3
+        expected = np.array([points.min(axis=0), points.max(axis=0)])
+        assert np.array_equal(bounding_box(points), expected)
+    points = rng.normal(size=(10, 3))
+    points[4, 1] = np.nan
+    box = bounding_box(points)
+    assert np.isnan(box[:, 1]).all() and np.isfinite(box[:, [0, 2]]).all()
