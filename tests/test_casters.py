@@ -68,3 +68,24 @@ def test_faces_in_the_receivers_plane_are_dropped_and_no_others():
     stacked = CasterSet([rug, tent])
     tolerance = sg.Tolerance.for_points(stacked.bounds)
     assert stacked.off_plane(sg.Plane([0, 1, 0], 0), tolerance).tolist() == [False, True]
+
+
+def _cube(low: float, high: float, drop: int | None = None) -> sg.Shape:
+    import trimesh
+
+    box = trimesh.creation.box(bounds=[[low, 0, low], [high, high - low, high]])
+    faces = np.delete(box.faces, drop, axis=0) if drop is not None else box.faces
+    return sg.Shape(box.vertices, faces)
+
+
+def test_closed_casters_keep_their_faces_on_the_plane_and_open_ones_lose_them():
+    whole, opened = _cube(0, 1), _cube(2, 3, drop=0)
+    stacked = CasterSet([whole, opened])
+    assert stacked.closed.tolist() == [True, False]
+    tolerance = sg.Tolerance.for_points(stacked.bounds)
+    keep = stacked.off_plane(sg.Plane([0, 1, 0], 0), tolerance)
+    on_ground = np.all(np.isclose(stacked.vertices[stacked.faces][:, :, 1], 0), axis=1)
+    first = stacked.face_owner == 0
+    assert keep[first].all()  # the closed cube, bottom included
+    assert on_ground[~first].any() and not keep[~first & on_ground].any()
+    assert keep[~first & ~on_ground].all()

@@ -164,11 +164,28 @@ class CasterSet:
         return result
 
     def off_plane(self, plane: Plane, tolerance: Tolerance) -> np.ndarray:
-        """(m,) bool over the stacked faces: False for a face lying in
-        ``plane`` (a patch does not shadow itself, nor a rug the floor)."""
+        """(m,) bool over the stacked faces: False for a face of an open caster
+        lying in ``plane`` (a patch does not shadow itself, nor a rug the
+        floor). A closed caster keeps every face: one resting on the plane
+        shadows its footprint, as it would anyway, and stays closed, so its
+        outline comes from its silhouette."""
         near = np.abs(plane.signed_distance(self.vertices)) <= tolerance.coplanar_length
-        off: np.ndarray = ~np.all(near[self.faces], axis=1)
+        off: np.ndarray = ~np.all(near[self.faces], axis=1) | self.closed[self.face_owner]
         return off
+
+    @functools.cached_property
+    def closed(self) -> np.ndarray:
+        """(k,) bool: True for a caster whose faces form a closed, consistently
+        wound mesh (from the edge table of the whole stack, which the first
+        light reuses: shapes share no stacked vertex)."""
+        whole = self.mesh(np.ones(len(self.faces), dtype=bool))
+        if not len(self.faces):
+            return np.zeros(len(self), dtype=bool)
+        bad_edge = (whole.edge_face_count != 2) | (whole.edge_net_direction != 0)
+        bad_face = bad_edge[whole.face_edges].any(axis=1)
+        closed = np.ones(len(self), dtype=bool)
+        closed[self.face_owner[bad_face]] = False
+        return closed
 
     def mesh(self, faces: np.ndarray) -> Caster:
         """The stacked vertices with the face mask ``faces`` as one caster, its

@@ -31,11 +31,14 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..boxes import bounding_box
 from ..errors import GeometryError, SceneError
 from ..lights import Light, is_positional
 from ..plane import Plane
 from ..seams import unique_integers
 from ..tolerance import Tolerance
+from ..topology import point_ids, row_groups
+from .casters import CasterSet
 from .model import Scene, Shape, safe_name
 
 # A found receiver: at least these fractions of the largest patch's area and of
@@ -88,11 +91,12 @@ class Receiver:
 
 
 def repeated_faces(
-    vertices: np.ndarray, faces: np.ndarray
+    vertices: np.ndarray, faces: np.ndarray, groups: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The distinct faces of (m, 3) ``faces`` over ``vertices``: corners
     compared by coordinates, and a face and its turns (``(a, b, c)``,
-    ``(b, c, a)``, ``(c, a, b)``) being one.
+    ``(b, c, a)``, ``(c, a, b)``) being one; with ``groups`` (m,) non-negative
+    ints, only faces of the same group are compared (the shapes of a stack).
 
     Returns ``(first, inverse, counts)``: the index of each distinct face's
     first copy, the (m,) index mapping every face to its distinct one, and
@@ -102,14 +106,12 @@ def repeated_faces(
     if not len(faces):
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty, empty
-    _, point = np.unique(vertices, axis=0, return_inverse=True)
-    corners = point.reshape(-1)[faces]
+    corners = point_ids(vertices)[faces]
     turn = np.argmin(corners, axis=1)
     turned = corners[np.arange(len(corners))[:, None], (turn[:, None] + np.arange(3)) % 3]
-    _, first, inverse, counts = np.unique(
-        turned, axis=0, return_index=True, return_inverse=True, return_counts=True
-    )
-    return first, inverse.reshape(-1), counts
+    if groups is not None:
+        turned = np.column_stack([np.asarray(groups, dtype=np.int64), turned])
+    return row_groups(turned)
 
 
 def patches(
@@ -152,13 +154,16 @@ def patches(
     return found
 
 
-def ground(scene: Scene, geometry: list[Shape], notes: list[str]) -> Receiver:
+def ground(
+    scene: Scene, geometry: list[Shape], notes: list[str], bounds: np.ndarray | None = None
+) -> Receiver:
     """The receiver when none is found: the unbounded ground plane through the
     lowest point of the geometry (height along the scene's up axis), facing
-    up, with a note."""
+    up, with a note. ``bounds``: the geometry's world box, when known."""
     axis = 2 if (scene.up_axis or "Y").upper() == "Z" else 1
-    points = [shape.world_vertices for shape in geometry]
-    lowest = float(np.concatenate(points)[:, axis].min()) if points else 0.0
+    if bounds is None and geometry:
+        bounds = bounding_box(np.concatenate([shape.world_vertices for shape in geometry]))
+    lowest = float(bounds[0, axis]) if bounds is not None else 0.0
     normal = np.zeros(3)
     normal[axis] = 1.0
     name = "xyz"[axis]
@@ -177,14 +182,17 @@ def select(
     plane: Plane | ArrayLike | None,
     tolerance: Tolerance,
     notes: list[str],
+    stacked: CasterSet | None = None,
 ) -> list[Receiver]:
     """The receivers for :func:`shadowgeo.add_shadows` (see the module notes):
-    a given plane, the named shapes' patches, or the patches found."""
+    a given plane, the named shapes' patches, or the patches found.
+    ``stacked``: the geometry's :class:`~.casters.CasterSet`, when the caller
+    has it (its world vertices and boxes are reused)."""
     if plane is not None:
         return [given_plane(plane)]
     if names is not None:
         return named(scene, geometry, names, tolerance)
-    return found(scene, geometry, tolerance, notes)
+    return found(scene, geometry, tolerance, notes, stacked)
 
 
 def given_plane(plane: Plane | ArrayLike) -> Receiver:
@@ -245,7 +253,11 @@ def named(
 
 
 def found(
-    scene: Scene, geometry: list[Shape], tolerance: Tolerance, notes: list[str]
+    scene: Scene,
+    geometry: list[Shape],
+    tolerance: Tolerance,
+    notes: list[str],
+    stacked: CasterSet | None = None,
 ) -> list[Receiver]:
     """The patches found automatically (see the module notes), or the ground.
 
@@ -254,16 +266,15 @@ def found(
     scene's diagonal) is skipped before any per-triangle work: its patches,
     subsets of its vertices, cannot be larger than its box.
     """
-    bounds = scene.bounds
+    if stacked is None:
+        stacked = CasterSet(geometry)
+    bounds = stacked.bounds
     scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
-    world = [shape.world_vertices for shape in geometry]
-    everything = np.concatenate(world or [np.zeros((0, 3))])
+    everything = stacked.vertices
+    diagonals = np.linalg.norm(stacked.high - stacked.low, axis=1)
     candidates = []
-    for shape, world_vertices in zip(geometry, world, strict=True):
-        if len(world_vertices) and len(shape.faces):
-            box = world_vertices.max(axis=0) - world_vertices.min(axis=0)
-            if float(np.linalg.norm(box)) < SIZE_FRACTION * scene_size:
-                continue
+    for index in np.flatnonzero(diagonals >= SIZE_FRACTION * scene_size):
+        shape, world_vertices = geometry[index], stacked.casters[index].vertices
         for fitted, member, area in patches(shape, tolerance, world_vertices):
             points = world_vertices[unique_integers(shape.faces[member])]
             size = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
@@ -283,6 +294,6 @@ def found(
             counts[id(shape)] = count + 1
             result.append(_patch_receiver(shape, world_vertices, fitted, member, area, count))
     if not result:
-        return [ground(scene, geometry, notes)]
+        return [ground(scene, geometry, notes, bounds if len(everything) else None)]
     notes.append("shadows: receivers found: " + ", ".join(r.name for r in result))
     return result

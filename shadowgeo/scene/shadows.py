@@ -18,13 +18,13 @@ Receivers
     found automatically or from the shapes named in ``receivers=``, or one
     unbounded ``plane=``; the rules are in :mod:`shadowgeo.scene.receivers`.
 Casters
-    Every shape; a receiver's own triangles (and any others lying in its
-    plane) do not shadow it. Only what can shadow a receiver is modelled: a
-    caster wholly behind the receiver's plane, wholly at or beyond a
-    positional light's height, out of a light's radius, outside a spot light's
-    cone, or whose shadow misses the receiver's bounding box is skipped. A
-    caster the light touches or sits inside (a lamp's own bulb) is skipped with
-    a note.
+    Every shape; a receiver's own triangles (and an open shape's triangles
+    lying in its plane) do not shadow it; a closed shape resting on it keeps
+    its footprint. Only what can shadow a receiver is modelled: a caster
+    wholly behind the receiver's plane, wholly at or beyond a positional
+    light's height, out of a light's radius, outside a spot light's cone, or
+    whose shadow misses the receiver's bounding box is skipped. A caster the
+    light touches or sits inside (a lamp's own bulb) is skipped with a note.
 
 The shadows of all casters of one light on one receiver are united into one
 region (so overlaps do not darken twice), cut to the receiver's outline (the
@@ -192,10 +192,10 @@ def add_shadows(
         added = _volumes(scene, stacked, chosen, tolerance, names, notes, progress)
     else:
         own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
-        found = select_receivers(own, geometry, receivers, plane, tolerance, notes)
+        found = select_receivers(own, geometry, receivers, plane, tolerance, notes, stacked)
         if surfaces is None:
             surfaces = receivers is None and plane is None
-        surface = receiving_faces(geometry, found, tolerance) if surfaces else None
+        surface = receiving_faces(geometry, found, tolerance, stacked) if surfaces else None
         if surface is not None and len(surface[1]) > limits.MAX_SURFACE_FACES:
             notes.append(
                 f"shadows: {len(surface[1])} faces besides the planar receivers, more than "

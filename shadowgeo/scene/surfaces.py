@@ -17,8 +17,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import GeometryError
+from ..seams import unique_integers
 from ..surface import shadow_on_surface
 from ..tolerance import Tolerance
+from .casters import CasterSet
 from .model import SceneLight, Shape, shadow_shape
 from .receivers import Receiver, repeated_faces
 
@@ -41,31 +43,44 @@ def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
 
 
 def receiving_faces(
-    geometry: list[Shape], found: list[Receiver], tolerance: Tolerance
+    geometry: list[Shape],
+    found: list[Receiver],
+    tolerance: Tolerance,
+    stacked: CasterSet | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The faces of ``geometry`` that no planar receiver covers, as one
     (vertices, faces) surface in world coordinates (open shapes' faces twice,
-    once each way round; repeated faces once)."""
-    keys = np.round(_receiver_centroids(found) / tolerance.length).astype(np.int64)
-    vertices, faces, base = [], [], 0
-    for shape in geometry:
-        world = shape.world_vertices
-        # a face repeated (by coordinates) receives one shadow, not one per copy
-        triangles = shape.faces[np.sort(repeated_faces(world, shape.faces)[0])]
-        if len(keys) and len(triangles):
-            centroids = world[triangles].mean(axis=1)
-            rounded = np.round(centroids / tolerance.length).astype(np.int64)
-            triangles = triangles[~_rows_in(rounded, keys)]
-        if not len(triangles):
-            continue
-        if not shape.solid:
-            triangles = np.concatenate([triangles, triangles[:, ::-1]])
-        vertices.append(world)
-        faces.append(triangles + base)
-        base += len(world)
-    if not faces:
+    once each way round; a face repeated within a shape once), in the shapes'
+    order. ``stacked``: the shapes' :class:`~.casters.CasterSet`, when the
+    caller has it; all shapes are handled in one numpy pass."""
+    if stacked is None:
+        stacked = CasterSet(geometry)
+    if not len(stacked.faces):
         return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
-    return np.concatenate(vertices), np.concatenate(faces)
+    owner = stacked.face_owner
+    # a face repeated (by coordinates) receives one shadow, not one per copy
+    first = np.sort(repeated_faces(stacked.vertices, stacked.faces, owner)[0])
+    keys = np.round(_receiver_centroids(found) / tolerance.length).astype(np.int64)
+    if len(keys):
+        centroids = stacked.vertices[stacked.faces[first]].mean(axis=1)
+        rounded = np.round(centroids / tolerance.length).astype(np.int64)
+        first = first[~_rows_in(rounded, keys)]
+    open_shape = np.array([not shape.solid for shape in geometry], dtype=bool)
+    twice = first[open_shape[owner[first]]]
+    faces = np.concatenate([stacked.faces[first], stacked.faces[twice][:, ::-1]])
+    # in the shapes' order: each shape's faces, then its faces turned round
+    order = np.lexsort(
+        (
+            np.concatenate([first, twice]),
+            np.repeat([0, 1], [len(first), len(twice)]),
+            owner[np.concatenate([first, twice])],
+        )
+    )
+    faces = faces[order]
+    used = unique_integers(faces.reshape(-1))
+    renumber = np.zeros(len(stacked.vertices), dtype=np.int64)
+    renumber[used] = np.arange(len(used))
+    return stacked.vertices[used], renumber[faces]
 
 
 def surface_shadow(
