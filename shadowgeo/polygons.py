@@ -31,6 +31,13 @@ def signed_areas(loops: list[np.ndarray]) -> np.ndarray:
     """Shoelace signed area of each (k, 2) loop, positive counter-clockwise."""
     if not loops:
         return np.zeros(0)
+    if len(loops) == 1:  # one loop (most shadows): no bookkeeping of where loops start
+        x, y = loops[0][:, 0], loops[0][:, 1]
+        if len(x) == 0:
+            return np.zeros(1)
+        x_next, y_next = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
+        cross = x * y_next - x_next * y
+        return np.array([0.5 * np.add.reduce(cross)])
     points = np.concatenate(loops).reshape(-1, 2)
     lengths = np.array([len(loop) for loop in loops])
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
@@ -90,6 +97,8 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
     """
     if not loops:
         return []
+    if len(loops) == 1:  # the common case of one outline: no holes to place
+        return [loops] if signed_areas(loops)[0] > 0 else []
     areas = signed_areas(loops)
     outers = np.flatnonzero(areas > 0)
     holes = np.flatnonzero(areas < 0)

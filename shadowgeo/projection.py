@@ -26,7 +26,7 @@ import math
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from functools import partial
+from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
 
 import numpy as np
@@ -324,6 +324,12 @@ class _Call:
     tolerance: Tolerance | None
     per_triangle: bool
 
+    @cached_property
+    def box_corners(self) -> np.ndarray:
+        """(8, 4) homogeneous corners of the caster's box, centred frame."""
+        box = self.caster.bounds - self.caster.center
+        return np.array([[x, y, z, 1.0] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]])
+
     def projector(self, light: Light, tolerance: Tolerance | None = None) -> _Projector:
         """The projector of one light, its tolerance the caller's, else
         ``tolerance``, else found from the scene's points."""
@@ -370,9 +376,14 @@ def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
             chunk = pending[first : first + _LIGHT_CHUNK]
             fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
             outlines = silhouette_loops_many(caster, fronts)
-            for (index, projector), front, outline in zip(chunk, fronts, outlines, strict=True):
+            images = _images_many(
+                caster.centered, [vertices for _, vertices in outlines], [p.H for _, p in chunk]
+            )
+            for (index, projector), front, outline, image in zip(
+                chunk, fronts, outlines, images, strict=True
+            ):
                 with _light_context(index):
-                    shadows[index] = projector.finish(_Outline(front, outline))
+                    shadows[index] = projector.finish(_Outline(front, outline, image))
     else:
         for index, projector in pending:
             with _light_context(index):
@@ -401,6 +412,7 @@ class _Outline:
 
     front: np.ndarray
     loops: tuple[list[np.ndarray], np.ndarray]
+    image: np.ndarray  # (k, 3) the loop vertices' images, as _images gives them
 
 
 def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
@@ -699,14 +711,15 @@ class _Projector:
             partial(self._clip_planes, low - _REACH * size, high + _REACH * size, lowered=True),
         )
         if outline is not None and whole.all():
-            loops, loop_vertices = outline.loops
+            (loops, loop_vertices), image = outline.loops, outline.image
             cut = cut & outline.front
         else:
             # facing > 0: the face turns its front to the light. For a face whose
             # corners all project (w > 0) this is also the sign of its image's area.
             facing = caster.facing(self.light_h)
             loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
-        projected = _project_loops(caster.centered, loops, loop_vertices, self.H)
+            image = _images(caster.centered[loop_vertices], self.H)
+        projected = _project_loops(loops, loop_vertices, image)
         if not cut.any():
             return projected
         tight = self._clip_planes(low, high)
@@ -720,9 +733,12 @@ class _Projector:
         faces, so that a caster standing on the plane is not sent to
         clipping by corners that rounding put a hair below it."""
         drop = self.tol.coplanar_length if lowered else 0.0
-        ground = np.append(self.plane.normal, self.d + drop)
-        planes = np.vstack([ground, _rectangle_planes(low, high) @ self.H])
-        unit: np.ndarray = planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+        planes = np.empty((5, 4))
+        planes[0, :3] = self.plane.normal
+        planes[0, 3] = self.d + drop
+        planes[1:] = _rectangle_planes(low, high) @ self.H
+        lengths = np.sqrt(np.einsum("ij,ij->i", planes[:, :3], planes[:, :3]))
+        unit: np.ndarray = planes / lengths[:, None]
         return unit
 
     def _sort_faces(
@@ -735,11 +751,7 @@ class _Projector:
         per-reason counts of faces leaving the tight rectangle and the
         number culled."""
         homogeneous, faces = self.caster.centered, self.caster.faces
-        box = self.caster.bounds - self.caster.center
-        corners = np.array(
-            [[x, y, z, 1.0] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]]
-        )
-        if np.all(corners @ tight.T > 0):
+        if np.all(self.call.box_corners @ tight.T > 0):
             # The caster's box lies inside every half-space, so does each vertex.
             self.culled = 0
             self._count_clipped(homogeneous, faces[:0], np.zeros((0, 3, 5), dtype=bool))
@@ -758,8 +770,14 @@ class _Projector:
         self, homogeneous: np.ndarray, faces: np.ndarray, outside: np.ndarray
     ) -> None:
         """Per-reason counts over the faces that are not whole."""
-        self.clipped["below_plane"] = int(np.any(outside[:, :, 0], axis=1).sum())
         outside_key = "outside_receiver" if len(self.receiver) else "outside_bound"
+        if len(faces) == 0:
+            zero = {"below_plane": 0, "at_or_above_light": 0, outside_key: 0}
+            if not is_positional(self.light):
+                del zero["at_or_above_light"]
+            self.clipped.update(zero)
+            return
+        self.clipped["below_plane"] = int(np.any(outside[:, :, 0], axis=1).sum())
         beyond_bound = outside[:, :, 1:].any(axis=2)
         if is_positional(self.light):
             weight = (homogeneous @ self.raw[2])[faces]  # w of each corner, scene units
@@ -847,18 +865,50 @@ def _outline(
     return loops, vertices, cut
 
 
-def _project_loops(
-    homogeneous: np.ndarray, loops: list[np.ndarray], vertices: np.ndarray, H: np.ndarray
+def _images(points: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """(k, 3) homogeneous images ``H @ p`` of (k, 4) points with w = 1, by an explicit
+    sum in a fixed order: the same bits whether one light's points are
+    projected or many lights' at once (:func:`_images_many`)."""
+    rows = [
+        points[:, 0] * H[i, 0] + points[:, 1] * H[i, 1] + points[:, 2] * H[i, 2] + H[i, 3]
+        for i in range(3)
+    ]
+    return np.column_stack(rows)
+
+
+def _images_many(
+    homogeneous: np.ndarray, vertices: list[np.ndarray], matrices: list[np.ndarray]
 ) -> list[np.ndarray]:
-    """Loops of vertex indices -> (k, 2) loops of their images under ``H``."""
+    """:func:`_images` of ``homogeneous[vertices[i]]`` under ``matrices[i]``
+    for every i, in one pass."""
+    counts = [len(each) for each in vertices]
+    points = homogeneous[np.concatenate(vertices)] if sum(counts) else np.zeros((0, 4))
+    H = np.repeat(np.array(matrices), counts, axis=0)  # (k, 3, 4): each point's matrix
+    rows = [
+        points[:, 0] * H[:, i, 0]
+        + points[:, 1] * H[:, i, 1]
+        + points[:, 2] * H[:, i, 2]
+        + H[:, i, 3]
+        for i in range(3)
+    ]
+    return np.split(np.column_stack(rows), np.cumsum(counts[:-1]))
+
+
+def _project_loops(
+    loops: list[np.ndarray], vertices: np.ndarray, image: np.ndarray
+) -> list[np.ndarray]:
+    """Loops of vertex indices -> (k, 2) loops of their images; ``image`` is
+    that of the sorted ``vertices``, every vertex the loops use."""
     if not vertices.size:
         return []
-    image = homogeneous[vertices] @ H.T
     if np.any(image[:, 2] <= 0):
         raise GeometryError("the light touches the caster (a vertex projects to infinity)")
-    points = np.zeros((len(homogeneous), 2))
-    points[vertices] = image[:, :2] / image[:, 2:3]
-    return [points[loop] for loop in loops]
+    points = image[:, :2] / image[:, 2:3]
+    if len(loops) == 1:
+        return [points[np.searchsorted(vertices, loops[0])]]
+    # vertices is sorted: find each loop corner's row by bisection, all at once
+    corners = points[np.searchsorted(vertices, np.concatenate(loops))]
+    return np.split(corners, np.cumsum([len(loop) for loop in loops[:-1]]))
 
 
 def _clipped_loops(

@@ -243,19 +243,24 @@ def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The edges in loop order (each loop from its lowest edge index, loops by
     that index) and the positions in that order where a new loop begins."""
     count = len(successor)
-    steps = max(1, int(count).bit_length())
-    # Each edge's loop label: the smallest edge index on its cycle.
+    # Each edge's loop label: the smallest edge index on its cycle. After s
+    # doublings a label is the least of 2^s successors; it is final once
+    # every edge agrees with its successor (then each cycle holds one value,
+    # which must be its least index), checked from the sixth doubling on.
     label, jump = np.arange(count), successor.copy()
-    for _ in range(steps):
+    for step in range(max(1, int(count).bit_length())):
         label = np.minimum(label, label[jump])
         jump = jump[jump]
+        if step >= 5 and np.array_equal(label[successor], label):
+            break
     # Cut each cycle before its labelled edge and rank edges by their distance
     # to the cut: the labelled edge comes first, then its successors in order.
     indices = np.arange(count)
     last = successor == label
     after = np.where(last, indices, successor)
     remaining = (~last).astype(np.int64)
-    for _ in range(steps):
+    longest = int(np.bincount(label).max())
+    for _ in range(max(1, longest.bit_length())):
         remaining = remaining + np.where(after == indices, 0, remaining[after])
         after = after[after]
     walk = np.lexsort((-remaining, label))
@@ -323,9 +328,14 @@ def _silhouettes_of_word(
     faces_of = slots // 3
     changes = words[faces_of[:, 0]] ^ words[faces_of[:, 1]]
     changed = np.flatnonzero(changes)
-    flags = np.unpackbits(changes[changed].view(np.uint8).reshape(-1, 8), axis=1, bitorder="little")
-    # light-major: each light's edges in index order, as front_boundary has them
-    light_of, row = np.nonzero(flags.T)
+    # (64, k) flags, light-major: each light's edges in index order, as
+    # front_boundary has them
+    flags = np.unpackbits(
+        np.ascontiguousarray(changes[changed].view(np.uint8).reshape(-1, 8).T),
+        axis=0,
+        bitorder="little",
+    )
+    light_of, row = np.nonzero(flags)
     outline = changed[row]
     first_front = (words[faces_of[outline, 0]] >> light_of.astype(np.uint64)) & np.uint64(1)
     light_of = light_of.astype(np.int64)
