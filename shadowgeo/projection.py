@@ -44,6 +44,7 @@ from .silhouette import (
     check_light_outside,
     silhouette_loops,
     silhouette_loops_many,
+    vertex_components,
 )
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, empty_mesh
@@ -483,14 +484,14 @@ class _Projector:
         """The shadow, from the frame :meth:`prepare` set up. ``outline``: the
         front faces and silhouette of a closed caster, found beforehand."""
         low, high, limit_regions = self.low, self.high, list(self.limit_regions)
-        loops = self._shadow_loops(low, high, outline)
+        loops, outline_loops = self._shadow_loops(low, high, outline)
         if not limit_regions and loops:
             points = np.concatenate(loops)
             if np.any(points < low) or np.any(points > high):
                 # Whole faces project past the bound: cut them there.
                 corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
                 limit_regions.append(poly.fill([corners]))
-        region = poly.fill(loops)
+        region = poly.union_of_groups(loops, partial(self._loop_groups, outline_loops))
         for limit in limit_regions:
             region = poly.intersect(region, limit)
         return self._result(region, len(loops))
@@ -693,11 +694,21 @@ class _Projector:
         cone: np.ndarray = points
         return cone
 
+    def _loop_groups(self, outline_loops: list[np.ndarray]) -> np.ndarray:
+        """Labels for :func:`poly.union_of_groups`: each outline loop the
+        connected part of the caster it runs on (a part's loops together
+        wind >= 0: they count its front faces), each clipped face its own."""
+        parts = vertex_components(self.caster)
+        n_clipped = self.n_loops - len(outline_loops)
+        own = len(self.caster.vertices) + np.arange(n_clipped)
+        return np.concatenate([parts[[loop[0] for loop in outline_loops]], own])
+
     def _shadow_loops(
         self, low: np.ndarray, high: np.ndarray, outline: _Outline | None
-    ) -> list[np.ndarray]:
+    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
         """Closed 2-D loops (local units) whose positive-winding region is the
-        shadow within the rectangle [low, high].
+        shadow within the rectangle [low, high], and the loops of vertex
+        indices the first of them come from (the rest are clipped faces).
 
         Steps: sort the faces (:meth:`_sort_faces`), chain the outline of the
         faces that project whole (:func:`_outline`, or the silhouette found
@@ -720,10 +731,11 @@ class _Projector:
             loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
             image = _images(caster.centered[loop_vertices], self.H)
         projected = _project_loops(loops, loop_vertices, image)
-        if not cut.any():
-            return projected
-        tight = self._clip_planes(low, high)
-        return projected + _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
+        if cut.any():
+            tight = self._clip_planes(low, high)
+            projected += _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
+        self.n_loops = len(projected)
+        return projected, loops
 
     def _clip_planes(self, low: np.ndarray, high: np.ndarray, lowered: bool = False) -> np.ndarray:
         """(5, 4) unit half-spaces ``planes @ x >= 0`` of the caster's centred

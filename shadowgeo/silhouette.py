@@ -246,12 +246,12 @@ def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # Each edge's loop label: the smallest edge index on its cycle. After s
     # doublings a label is the least of 2^s successors; it is final once
     # every edge agrees with its successor (then each cycle holds one value,
-    # which must be its least index), checked from the sixth doubling on.
+    # which must be its least index), checked every second doubling.
     label, jump = np.arange(count), successor.copy()
     for step in range(max(1, int(count).bit_length())):
         label = np.minimum(label, label[jump])
         jump = jump[jump]
-        if step >= 5 and np.array_equal(label[successor], label):
+        if step % 2 and np.array_equal(label[successor], label):
             break
     # Cut each cycle before its labelled edge and rank edges by their distance
     # to the cut: the labelled edge comes first, then its successors in order.
@@ -420,3 +420,29 @@ def _point_segment_distance(point: np.ndarray, start: np.ndarray, end: np.ndarra
     t = np.clip(t, 0.0, 1.0)
     distances: np.ndarray = np.linalg.norm(start + t[:, None] * direction - point, axis=1)
     return distances
+
+
+def vertex_components(caster: Caster) -> np.ndarray:
+    """(n,) int64 label of each vertex's connected part of the mesh (joined by
+    faces): the least vertex index of that part.
+
+    Hook and compress: every edge hooks the larger root under the smaller,
+    then pointers jump to their roots; a few rounds for a mesh of many small
+    parts, O(log n) rounds in general.
+    """
+    label = np.arange(len(caster.vertices))
+    faces = caster.faces
+    first = np.concatenate([faces[:, 0], faces[:, 1]])
+    second = np.concatenate([faces[:, 1], faces[:, 2]])
+    while True:
+        a, b = label[first], label[second]
+        differ = a != b
+        if not np.any(differ):
+            return label
+        a, b = a[differ], b[differ]
+        np.minimum.at(label, np.maximum(a, b), np.minimum(a, b))
+        while True:
+            jumped = label[label]
+            if np.array_equal(jumped, label):
+                break
+            label = jumped
