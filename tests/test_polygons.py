@@ -138,3 +138,41 @@ def test_a_part_with_many_holes_is_triangulated_in_tiles_with_its_exact_area():
     expected = (61.0 * 61.0 - 400.0) * 1e12
     assert doubled.sum() / 2 == pytest.approx(expected, rel=1e-12)
     assert parts_area(parts) == pytest.approx(expected, rel=1e-12)
+
+
+def test_union_of_groups_equals_one_union_and_shapely_past_the_cell_threshold():
+    from shadowgeo.polygons import components, fill, parts_area, union_of_groups
+
+    rng = np.random.default_rng(9)
+    outlines = _random_outlines(2400, 1)
+    outlines = [loop * 4.0 for loop in outlines]  # radius 4 to 24, about half the square covered
+    outlines = [loop + rng.uniform(0, 1500, 2) for loop in outlines]
+    groups = list(range(len(outlines)))
+    # Groups of several loops: rings (outer counter-clockwise, hole clockwise),
+    # whose hole loop alone winds -1: it must stay in its outer's cell.
+    rings = []
+    for centre in rng.uniform(0, 1500, (60, 2)):
+        angles = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+        circle = np.column_stack([np.cos(angles), np.sin(angles)])
+        rings.append((centre + 30 * circle, centre + 12 * circle[::-1]))
+    for row in range(3):  # long bars with a hole near one end: far from the bar's centre
+        y = 200.0 + 500 * row
+        bar = np.array([[0.0, y], [1500, y], [1500, y + 40], [0, y + 40]])
+        rings.append(
+            (bar, np.array([[1400.0, y + 10], [1400, y + 30], [1450, y + 30], [1450, y + 10]]))
+        )
+    loops = outlines + [loop for ring in rings for loop in ring]
+    groups = np.array(groups + [len(outlines) + k for k in range(len(rings)) for _ in range(2)])
+    scaled = [loop * 1e4 for loop in loops]
+    grouped = union_of_groups(scaled, lambda: groups)
+    direct = fill(scaled)
+    reference = shapely.union_all(
+        [shapely.Polygon(loop * 1e4) for loop in outlines]
+        + [shapely.Polygon(outer * 1e4, [hole * 1e4]) for outer, hole in rings]
+    )
+    assert parts_area(components(grouped)) == pytest.approx(reference.area, rel=1e-12)
+    assert parts_area(components(direct)) == pytest.approx(reference.area, rel=1e-12)
+    assert len(components(grouped)) == len(getattr(reference, "geoms", [reference]))
+    # a few loops take the one-union path, the same region
+    few = scaled[:50]
+    assert union_of_groups(few, lambda: groups[:50]).area() == pytest.approx(fill(few).area())
