@@ -721,17 +721,20 @@ class _Projector:
             self._clip_planes(low, high, lowered=True),
             partial(self._clip_planes, low - _REACH * size, high + _REACH * size, lowered=True),
         )
-        if outline is not None and whole.all():
+        if outline is not None and whole is None:
             (loops, loop_vertices), image = outline.loops, outline.image
-            cut = cut & outline.front
+            cut = None
         else:
+            if whole is None or cut is None:  # every face whole, none cut
+                whole = np.ones(caster.n_faces, dtype=bool)
+                cut = np.zeros(caster.n_faces, dtype=bool)
             # facing > 0: the face turns its front to the light. For a face whose
             # corners all project (w > 0) this is also the sign of its image's area.
             facing = caster.facing(self.light_h)
             loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
             image = _images(caster.centered[loop_vertices], self.H)
         projected = _project_loops(loops, loop_vertices, image)
-        if cut.any():
+        if cut is not None and cut.any():
             tight = self._clip_planes(low, high)
             projected += _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
         self.n_loops = len(projected)
@@ -755,19 +758,20 @@ class _Projector:
 
     def _sort_faces(
         self, tight: np.ndarray, reach: Callable[[], np.ndarray]
-    ) -> tuple[np.ndarray, np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
         """(m,) bool ``whole`` (every corner above the plane and projecting
         within the wide ``reach`` rectangle: the outline may take the face as
         it is, the 2-D limits cut it) and ``cut`` (the other faces that reach
         the ``tight`` rectangle: they are clipped one by one). Sets the
         per-reason counts of faces leaving the tight rectangle and the
-        number culled."""
+        number culled. ``(None, None)`` when every face is whole and none is
+        cut (the caster's box passes): the common case, told without arrays."""
         homogeneous, faces = self.caster.centered, self.caster.faces
         if np.all(self.call.box_corners @ tight.T > 0):
             # The caster's box lies inside every half-space, so does each vertex.
             self.culled = 0
             self._count_clipped(homogeneous, faces[:0], np.zeros((0, 3, 5), dtype=bool))
-            return np.ones(len(faces), dtype=bool), np.zeros(len(faces), dtype=bool)
+            return None, None
         whole = ~np.any(np.any(homogeneous @ reach().T < 0, axis=1)[faces], axis=1)
         touched = np.flatnonzero(np.any(np.any(homogeneous @ tight.T < 0, axis=1)[faces], axis=1))
         outside = (homogeneous[faces[touched]] @ tight.T) < 0  # (k, 3, 5)
@@ -903,7 +907,7 @@ def _images_many(
         + H[:, i, 3]
         for i in range(3)
     ]
-    return np.split(np.column_stack(rows), np.cumsum(counts[:-1]))
+    return _pieces(np.column_stack(rows), counts)
 
 
 def _project_loops(
@@ -920,7 +924,14 @@ def _project_loops(
         return [points[np.searchsorted(vertices, loops[0])]]
     # vertices is sorted: find each loop corner's row by bisection, all at once
     corners = points[np.searchsorted(vertices, np.concatenate(loops))]
-    return np.split(corners, np.cumsum([len(loop) for loop in loops[:-1]]))
+    return _pieces(corners, [len(loop) for loop in loops])
+
+
+def _pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
+    """``rows`` cut into consecutive pieces of ``counts`` rows (np.split,
+    without its per-piece overhead)."""
+    ends = np.cumsum(counts).tolist()
+    return [rows[end - count : end] for count, end in zip(counts, ends, strict=True)]
 
 
 def _clipped_loops(

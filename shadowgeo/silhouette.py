@@ -222,7 +222,14 @@ def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
     if len(starts) == 0:
         return []
     walk, cuts = _cycle_walk(_successors(starts, ends))
-    return [loop for loop in np.split(starts[walk], cuts) if len(loop) >= 3]
+    return [loop for loop in _cut(starts[walk], cuts) if len(loop) >= 3]
+
+
+def _cut(values: np.ndarray, cuts: np.ndarray) -> list[np.ndarray]:
+    """``values`` cut before each index of ``cuts`` (np.split, without its
+    per-piece overhead)."""
+    bounds = [0, *cuts.tolist(), len(values)]
+    return [values[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
 def _successors(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
@@ -260,11 +267,16 @@ def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     after = np.where(last, indices, successor)
     remaining = (~last).astype(np.int64)
     longest = int(np.bincount(label).max())
-    for _ in range(max(1, longest.bit_length())):
+    for _ in range(max(1, longest.bit_length())):  # distances double each step
         remaining = remaining + np.where(after == indices, 0, remaining[after])
         after = after[after]
-    walk = np.lexsort((-remaining, label))
-    cuts = np.flatnonzero(np.diff(label[walk])) + 1
+    # Place each edge directly (no sort): loops in label order, each from its
+    # labelled edge, which has the most edges remaining.
+    sizes = np.bincount(label, minlength=count)
+    offsets = np.cumsum(sizes) - sizes
+    walk = np.empty(count, dtype=np.int64)
+    walk[offsets[label] + sizes[label] - 1 - remaining] = indices
+    cuts = offsets[sizes > 0][1:]
     return walk, cuts
 
 
@@ -348,7 +360,7 @@ def _silhouettes_of_word(
     if len(starts):
         walk, cuts = _cycle_walk(_successors(starts, ends))
         owners = light_of[walk[np.concatenate([[0], cuts])]]
-        for loop, owner in zip(np.split(starts[walk], cuts), owners.tolist(), strict=True):
+        for loop, owner in zip(_cut(starts[walk], cuts), owners.tolist(), strict=True):
             if len(loop) >= 3:
                 loops[owner].append(loop - owner * n_vertices)
     used = np.zeros(n_lights * int(n_vertices), dtype=bool)
