@@ -59,7 +59,7 @@ PHASES = [
     ("shadowgeo.projection", "_images_many", "silhouette vertices projected, together"),
     ("shadowgeo.projection", "_Projector.finish", "finish: the rest, per light"),
     ("shadowgeo.projection", "_Projector._shadow_loops", "  loops: box test, 2-D loops"),
-    ("shadowgeo.polygons", "union_of_groups", "  2-D union (Clipper2)"),
+    ("shadowgeo.polygons", "union_parts", "  2-D union (Clipper2)"),
     ("shadowgeo.projection", "_Projector._result", "  result: parts, holes, area"),
 ]
 

@@ -65,9 +65,12 @@ def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
     return CrossSection([np.ascontiguousarray(loop, dtype=np.float64) for loop in loops], fill_rule)
 
 
-def union_of_groups(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -> CrossSection:
-    """The region of positive winding over ``loops`` (as ``fill(loops)``), for
-    loops in ``groups`` whose own winding is never negative.
+def union_parts(
+    loops: list[np.ndarray], groups: Callable[[], np.ndarray]
+) -> list[list[np.ndarray]]:
+    """The parts (``[outer, hole, ...]``, as :func:`components` gives them)
+    of the region of positive winding over ``loops``, for loops in
+    ``groups`` whose own winding is never negative.
 
     Parameters
     ----------
@@ -76,8 +79,8 @@ def union_of_groups(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -
         A label per loop, asked for only when there are many loops. The
         loops of one label together wind >= 0 at every point (all the
         outline loops of one connected part of a mesh, or one
-        counter-clockwise triangle). Then the positive region of the
-        whole is the union of the groups' positive regions.
+        counter-clockwise triangle). Then the positive region of the whole
+        is the union of the groups' positive regions.
 
     Notes
     -----
@@ -85,34 +88,79 @@ def union_of_groups(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -
     union of thousands of overlapping outlines scattered over a plane costs
     about n^1.5. Many loops are therefore first united cell by cell of a
     grid of about ``_CELL_LOOPS`` loops each (every group in the cell of its
-    first loop's box centre), and the cells' results, which overlap only
-    where outlines cross cell borders, are united once more.
+    first loop's box centre). A cell's part whose box meets no other cell's
+    parts is final as it is; the rest, near the cells' borders, are united
+    once more.
     """
     if len(loops) <= _GROUPED_LOOPS:
-        return fill(loops)
-    points = np.concatenate(loops)
-    starts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops[:-1]])])
-    centres = 0.5 * (
-        np.minimum.reduceat(points, starts, axis=0) + np.maximum.reduceat(points, starts, axis=0)
-    )
-    _, first, group_of = np.unique(groups(), return_index=True, return_inverse=True)
-    anchor = centres[first][group_of.reshape(-1)]  # each loop placed by its group's first loop
+        return components(fill(loops))
+    low, high = _boxes(loops)
+    labels = np.asarray(groups(), dtype=np.int64)
+    labels = labels - labels.min()
+    first = np.full(int(labels.max()) + 1, len(loops), dtype=np.int64)
+    np.minimum.at(first, labels, np.arange(len(loops)))
+    centres = 0.5 * (low + high)
+    anchor = centres[first[labels]]  # each loop placed by its group's first loop
     count = math.ceil(math.sqrt(len(loops) / _CELL_LOOPS))
-    low, high = anchor.min(axis=0), anchor.max(axis=0)
-    span = np.where(high > low, high - low, 1.0)
-    cell_xy = np.minimum(((anchor - low) / span * count).astype(np.int64), count - 1)
+    bottom, top = anchor.min(axis=0), anchor.max(axis=0)
+    span = np.where(top > bottom, top - bottom, 1.0)
+    cell_xy = np.minimum(((anchor - bottom) / span * count).astype(np.int64), count - 1)
     cell = cell_xy[:, 0] * count + cell_xy[:, 1]
     order = np.argsort(cell, kind="stable")
     bounds = np.searchsorted(cell[order], np.arange(count * count + 1))
-    pieces: list[np.ndarray] = []
+    parts: list[list[np.ndarray]] = []
+    owner: list[int] = []
     for index in range(count * count):
         members = order[bounds[index] : bounds[index + 1]].tolist()
         if members:
-            pieces.extend(fill([loops[i] for i in members]).to_polygons())
-    return fill([np.asarray(piece, dtype=np.float64) for piece in pieces])
+            united = components(fill([loops[i] for i in members]))
+            parts.extend(united)
+            owner.extend([index] * len(united))
+    final = _final_parts(parts, np.array(owner, dtype=np.int64))
+    rest = [loop for part, done in zip(parts, final, strict=True) if not done for loop in part]
+    return [part for part, done in zip(parts, final, strict=True) if done] + components(fill(rest))
 
 
-# union_of_groups: loops above this are united cell by cell first, about
+def union_region(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -> CrossSection:
+    """:func:`union_parts` as a region, to intersect with others: one union
+    for few loops, the cells' parts filled once more for many."""
+    if len(loops) <= _GROUPED_LOOPS:
+        return fill(loops)
+    return fill([loop for part in union_parts(loops, groups) for loop in part])
+
+
+def _final_parts(parts: list[list[np.ndarray]], owner: np.ndarray) -> list[bool]:
+    """Whether each cell's part is final: its outer loop's box meets no
+    other cell's box of parts, so no other cell's part can touch it."""
+    low, high = _boxes([part[0] for part in parts])
+    n_cells = int(owner.max()) + 1
+    cell_low = np.full((n_cells, 2), np.inf)
+    cell_high = np.full((n_cells, 2), -np.inf)
+    np.minimum.at(cell_low, owner, low)
+    np.maximum.at(cell_high, owner, high)
+    meets = (low[:, None, 0] <= cell_high[None, :, 0]) & (low[:, None, 1] <= cell_high[None, :, 1])
+    meets &= (high[:, None, 0] >= cell_low[None, :, 0]) & (high[:, None, 1] >= cell_low[None, :, 1])
+    meets[np.arange(len(parts)), owner] = False
+    final: list[bool] = (~meets.any(axis=1)).tolist()
+    return final
+
+
+def _boxes(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 2) lower and upper corners of each loop's bounding box."""
+    points = np.concatenate(loops)
+    starts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops[:-1]])])
+    return np.minimum.reduceat(points, starts, axis=0), np.maximum.reduceat(points, starts, axis=0)
+
+
+def region_loops(region: CrossSection) -> list[np.ndarray]:
+    """The loops of ``region`` (outer loops counter-clockwise, holes
+    clockwise) as (k, 2) float64 arrays, dropping any of fewer than three
+    points."""
+    loops = [np.asarray(loop, dtype=np.float64) for loop in region.to_polygons()]
+    return [loop for loop in loops if len(loop) >= 3]
+
+
+# union_parts: loops above this are united cell by cell first, about
 # _CELL_LOOPS to a cell (below it one union is faster).
 _GROUPED_LOOPS = 2000
 _CELL_LOOPS = 100
@@ -135,8 +183,7 @@ def components(region: CrossSection) -> list[list[np.ndarray]]:
     ``decompose`` is quadratic in the holes of a part, and a city's shadow
     is one part with thousands of courtyards.
     """
-    loops = [np.asarray(loop, dtype=np.float64) for loop in region.to_polygons()]
-    return nest([loop for loop in loops if len(loop) >= 3])
+    return nest(region_loops(region))
 
 
 def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:

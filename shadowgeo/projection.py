@@ -491,10 +491,13 @@ class _Projector:
                 # Whole faces project past the bound: cut them there.
                 corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
                 limit_regions.append(poly.fill([corners]))
-        region = poly.union_of_groups(loops, partial(self._loop_groups, outline_loops))
+        groups = partial(self._loop_groups, outline_loops)
+        if not limit_regions:
+            return self._result(poly.union_parts(loops, groups), len(loops))
+        region = poly.union_region(loops, groups)
         for limit in limit_regions:
             region = poly.intersect(region, limit)
-        return self._result(region, len(loops))
+        return self._result(poly.components(region), len(loops))
 
     def _light_frame(self) -> Shadow | None:
         """The light in the caster's centred frame (``light_h``) and the
@@ -695,7 +698,7 @@ class _Projector:
         return cone
 
     def _loop_groups(self, outline_loops: list[np.ndarray]) -> np.ndarray:
-        """Labels for :func:`poly.union_of_groups`: each outline loop the
+        """Labels for :func:`poly.union_parts`: each outline loop the
         connected part of the caster it runs on (a part's loops together
         wind >= 0: they count its front faces), each clipped face its own."""
         parts = vertex_components(self.caster)
@@ -801,8 +804,7 @@ class _Projector:
             beyond_bound &= weight > 0
         self.clipped[outside_key] = int(np.any(beyond_bound, axis=1).sum())
 
-    def _result(self, region: CrossSection, n_loops: int) -> Shadow:
-        parts = poly.components(region)
+    def _result(self, parts: list[list[np.ndarray]], n_loops: int) -> Shadow:
         area = poly.parts_area(parts) / self.scale / self.scale  # no square to over/underflow
         bounded = False
         if self.bound is not None and parts:
