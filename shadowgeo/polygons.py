@@ -141,8 +141,8 @@ def _final_parts(parts: list[list[np.ndarray]], owner: np.ndarray) -> list[bool]
     meets = (low[:, None, 0] <= cell_high[None, :, 0]) & (low[:, None, 1] <= cell_high[None, :, 1])
     meets &= (high[:, None, 0] >= cell_low[None, :, 0]) & (high[:, None, 1] >= cell_low[None, :, 1])
     meets[np.arange(len(parts)), owner] = False
-    touched: np.ndarray = meets.any(axis=1)
-    return [not bool(flag) for flag in touched]
+    touched = np.asarray(np.any(meets, axis=1), dtype=bool)
+    return [not flag for flag in touched.tolist()]
 
 
 def _boxes(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
