@@ -4,6 +4,7 @@ Run from the repository root::
 
     python benchmarks/bench_buildings.py                 # 1,000 and 10,000 buildings
     python benchmarks/bench_buildings.py --sizes 1000    # one size
+    python benchmarks/bench_buildings.py --phases        # where shadowgeo's time goes
 
 The city is ``n`` random boxes (8-16 m wide, 3-40 m tall, turned at random)
 standing on the ground y = 0, scattered over a square whose side grows with
@@ -22,6 +23,8 @@ box's exact shadow (the convex hull of its eight projected corners, exact for
 a convex box standing on the ground), computed with GEOS's
 ``union_all`` in float64. Times are medians of ``--repeat`` runs. The last
 column, time / (n log n), should stay flat if the cost grows as n log n.
+``--phases`` times the steps of one ``project_shadow`` call (CPU time, each
+step's functions wrapped with a timer; steps nest).
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ import shapely
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from bench_lights import timed_phases  # noqa: E402
 from common import median_time  # noqa: E402
 
 from shadowgeo import DirectionalLight, Plane, project_shadow  # noqa: E402
@@ -98,11 +102,42 @@ def exact_area(corners: np.ndarray) -> float:
     return float(shapely.union_all(shapely.convex_hull(shapely.multipoints(images))).area)
 
 
+# (module, attribute, label) of the steps --phases times, in call order.
+PHASES = [
+    ("shadowgeo.projection", "as_caster", "caster checked (vertices, faces)"),
+    ("shadowgeo.topology", "Caster.facing", "front faces (and face normals)"),
+    ("shadowgeo.projection", "silhouette_loops", "silhouettes (edge table, chaining)"),
+    ("shadowgeo.projection", "_project_loops", "outlines projected"),
+    ("shadowgeo.polygons", "union_parts", "2-D union, cell by cell, and parts"),
+    ("shadowgeo.polygons", "fill", "  of which Clipper2 unions"),
+    ("shadowgeo.polygons", "nest", "  of which holes to their parts"),
+    ("shadowgeo.projection", "vertex_components", "  of which the caster's parts"),
+    ("shadowgeo.projection", "_Projector._result", "result (area, polygons)"),
+]
+
+
+def phases(sizes: list[int]) -> None:
+    """Print where shadowgeo's time goes, per step, for each size."""
+    print("| step | " + " | ".join(f"{n:,} buildings: CPU ms" for n in sizes) + " |")
+    print("|---|" + "---|" * len(sizes))
+    results = []
+    for n in sizes:
+        mesh = as_mesh(buildings(n))
+        results.append(timed_phases(partial(project_shadow, mesh, SUN, GROUND), PHASES))
+    print("| whole call | " + " | ".join(f"{total * 1e3:.1f}" for total, _ in results) + " |")
+    for _, _, label in PHASES:
+        print(f"| {label} | " + " | ".join(f"{s[label] * 1e3:.1f}" for _, s in results) + " |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000])
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--phases", action="store_true", help="time shadowgeo's steps")
     args = parser.parse_args()
+    if args.phases:
+        phases(args.sizes)
+        return
     print(
         "| buildings | shadowgeo s | per-building + GEOS s | ratio | rel. area error "
         "shadowgeo | rel. area error GEOS | shadowgeo s / (n log n) x 1e6 |"

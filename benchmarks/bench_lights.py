@@ -64,13 +64,16 @@ PHASES = [
 ]
 
 
-def timed_phases(run: Callable[[], Any]) -> tuple[float, Counter[str]]:
-    """CPU seconds of ``run()`` and of each step in PHASES within it."""
+def timed_phases(
+    run: Callable[[], Any], phases: list[tuple[str, str, str]]
+) -> tuple[float, Counter[str]]:
+    """CPU seconds of ``run()`` and of each step of ``phases`` ((module,
+    attribute, label) triples) within it."""
     import importlib
 
     spent: Counter[str] = Counter()
     restore = []
-    for module_name, attribute, label in PHASES:
+    for module_name, attribute, label in phases:
         owner: Any = importlib.import_module(module_name)
         *path, name = attribute.split(".")
         for part in path:
@@ -113,7 +116,7 @@ def main() -> None:
         print("| step | point: CPU ms / light | directional: CPU ms / light |")
         print("|---|---|---|")
         results = {
-            kind: timed_phases(lambda group=group: project_shadow(caster, group, ground))
+            kind: timed_phases(lambda group=group: project_shadow(caster, group, ground), PHASES)
             for kind, group in groups.items()
         }
         per = {kind: 1e3 / len(groups[kind]) for kind in groups}

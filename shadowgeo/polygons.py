@@ -206,10 +206,9 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
     holes = np.flatnonzero(areas < 0)
     if len(outers) == 0:
         return []
-    points = np.concatenate(loops)
-    starts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops[:-1]])])
-    low = np.minimum.reduceat(points, starts, axis=0)
-    high = np.maximum.reduceat(points, starts, axis=0)
+    if len(holes) == 0:
+        return [[loops[i]] for i in outers.tolist()]
+    low, high = _boxes(loops)
     parent = np.full(len(holes), -1, dtype=np.int64)
     by_size = outers[np.argsort(areas[outers], kind="stable")]  # smallest first
     chunk = max(1, 4_000_000 // len(outers))
