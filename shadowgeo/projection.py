@@ -377,14 +377,12 @@ def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
             chunk = pending[first : first + _LIGHT_CHUNK]
             fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
             outlines = silhouette_loops_many(caster, fronts)
-            images = _images_many(
-                caster.centered, [vertices for _, vertices in outlines], [p.H for _, p in chunk]
-            )
-            for (index, projector), front, outline, image in zip(
-                chunk, fronts, outlines, images, strict=True
+            projected = _projected_many(caster.centered, outlines, [p.H for _, p in chunk])
+            for (index, projector), front, (loops, _), (flat, box) in zip(
+                chunk, fronts, outlines, projected, strict=True
             ):
                 with _light_context(index):
-                    shadows[index] = projector.finish(_Outline(front, outline, image))
+                    shadows[index] = projector.finish(_Outline(front, loops, flat, box))
     else:
         for index, projector in pending:
             with _light_context(index):
@@ -412,8 +410,9 @@ class _Outline:
     beforehand for many lights at once."""
 
     front: np.ndarray
-    loops: tuple[list[np.ndarray], np.ndarray]
-    image: np.ndarray  # (k, 3) the loop vertices' images, as _images gives them
+    loops: list[np.ndarray]  # of vertex indices
+    projected: list[np.ndarray] | None  # (k, 2) each, local units; None: a vertex at infinity
+    box: np.ndarray  # (2, 2) lower and upper corner of the projected points
 
 
 def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
@@ -484,10 +483,13 @@ class _Projector:
         """The shadow, from the frame :meth:`prepare` set up. ``outline``: the
         front faces and silhouette of a closed caster, found beforehand."""
         low, high, limit_regions = self.low, self.high, list(self.limit_regions)
-        loops, outline_loops = self._shadow_loops(low, high, outline)
+        loops, outline_loops, box = self._shadow_loops(low, high, outline)
+        self.n_loops = len(loops)
         if not limit_regions and loops:
-            points = np.concatenate(loops)
-            if np.any(points < low) or np.any(points > high):
+            if box is None:
+                points = np.concatenate(loops)
+                box = np.array([points.min(axis=0), points.max(axis=0)])
+            if np.any(box[0] < low) or np.any(box[1] > high):
                 # Whole faces project past the bound: cut them there.
                 corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
                 limit_regions.append(poly.fill([corners]))
@@ -708,10 +710,11 @@ class _Projector:
 
     def _shadow_loops(
         self, low: np.ndarray, high: np.ndarray, outline: _Outline | None
-    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    ) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray | None]:
         """Closed 2-D loops (local units) whose positive-winding region is the
-        shadow within the rectangle [low, high], and the loops of vertex
-        indices the first of them come from (the rest are clipped faces).
+        shadow within the rectangle [low, high], the loops of vertex indices
+        the first of them come from (the rest are clipped faces), and the
+        box of the 2-D loops when it is known already.
 
         Steps: sort the faces (:meth:`_sort_faces`), chain the outline of the
         faces that project whole (:func:`_outline`, or the silhouette found
@@ -725,8 +728,9 @@ class _Projector:
             partial(self._clip_planes, low - _REACH * size, high + _REACH * size, lowered=True),
         )
         if outline is not None and whole is None:
-            (loops, loop_vertices), image = outline.loops, outline.image
-            cut = None
+            if outline.projected is None:
+                raise GeometryError("the light touches the caster (a vertex projects to infinity)")
+            return outline.projected, outline.loops, outline.box
         else:
             if whole is None or cut is None:  # every face whole, none cut
                 whole = np.ones(caster.n_faces, dtype=bool)
@@ -737,11 +741,10 @@ class _Projector:
             loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
             image = _images(caster.centered[loop_vertices], self.H)
         projected = _project_loops(loops, loop_vertices, image)
-        if cut is not None and cut.any():
+        if cut.any():
             tight = self._clip_planes(low, high)
             projected += _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
-        self.n_loops = len(projected)
-        return projected, loops
+        return projected, loops, None
 
     def _clip_planes(self, low: np.ndarray, high: np.ndarray, lowered: bool = False) -> np.ndarray:
         """(5, 4) unit half-spaces ``planes @ x >= 0`` of the caster's centred
@@ -910,6 +913,52 @@ def _images_many(
         for i in range(3)
     ]
     return _pieces(np.column_stack(rows), counts)
+
+
+def _projected_many(
+    homogeneous: np.ndarray,
+    outlines: list[tuple[list[np.ndarray], np.ndarray]],
+    matrices: list[np.ndarray],
+) -> list[tuple[list[np.ndarray] | None, np.ndarray]]:
+    """:func:`_project_loops` of every light's silhouette (``outlines`` from
+    :func:`silhouette_loops_many`, ``matrices`` each light's ``H``) in one
+    pass, and the box of each light's 2-D points. The points are the same
+    numbers one light's call gives: the same explicit sums, the same
+    division. ``None`` loops for a light with a vertex at infinity."""
+    n_lights = len(outlines)
+    counts = [len(vertices) for _, vertices in outlines]
+    images = _images_many(homogeneous, [vertices for _, vertices in outlines], matrices)
+    if sum(counts) == 0:
+        return [([], np.zeros((2, 2))) for _ in range(n_lights)]
+    image = np.concatenate(images)
+    light_of = np.repeat(np.arange(n_lights), counts)
+    n_vertices = np.int64(len(homogeneous))
+    keys = np.concatenate([v + k * n_vertices for k, (_, v) in enumerate(outlines)])
+    with np.errstate(divide="ignore", invalid="ignore"):  # such a light raises, below
+        points = image[:, :2] / image[:, 2:3]
+    touching = np.zeros(n_lights, dtype=bool)
+    touching[light_of[image[:, 2] <= 0]] = True
+    loops = [loop + k * n_vertices for k, (own, _) in enumerate(outlines) for loop in own]
+    lengths = [len(loop) for loop in loops]
+    corners = points[np.searchsorted(keys, np.concatenate(loops))] if loops else points[:0]
+    pieces = _pieces(corners, lengths)
+    # the box of each light's loop corners (not of all its vertices: a loop
+    # of two edges is dropped, and its vertices with it)
+    corner_counts = np.array([sum(len(loop) for loop in own) for own, _ in outlines])
+    starts = np.concatenate([[0], np.cumsum(corner_counts)[:-1]])
+    has_points = corner_counts > 0
+    low = np.zeros((n_lights, 2))
+    high = np.zeros((n_lights, 2))
+    if has_points.any():
+        low[has_points] = np.minimum.reduceat(corners, starts[has_points], axis=0)
+        high[has_points] = np.maximum.reduceat(corners, starts[has_points], axis=0)
+    result: list[tuple[list[np.ndarray] | None, np.ndarray]] = []
+    first = 0
+    for k, (own, _) in enumerate(outlines):
+        mine = pieces[first : first + len(own)]
+        first += len(own)
+        result.append((None if touching[k] else mine, np.array([low[k], high[k]])))
+    return result
 
 
 def _project_loops(
