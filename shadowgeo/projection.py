@@ -731,15 +731,14 @@ class _Projector:
             if outline.projected is None:
                 raise GeometryError("the light touches the caster (a vertex projects to infinity)")
             return outline.projected, outline.loops, outline.box
-        else:
-            if whole is None or cut is None:  # every face whole, none cut
-                whole = np.ones(caster.n_faces, dtype=bool)
-                cut = np.zeros(caster.n_faces, dtype=bool)
-            # facing > 0: the face turns its front to the light. For a face whose
-            # corners all project (w > 0) this is also the sign of its image's area.
-            facing = caster.facing(self.light_h)
-            loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
-            image = _images(caster.centered[loop_vertices], self.H)
+        if whole is None or cut is None:  # every face whole, none cut
+            whole = np.ones(caster.n_faces, dtype=bool)
+            cut = np.zeros(caster.n_faces, dtype=bool)
+        # facing > 0: the face turns its front to the light. For a face whose
+        # corners all project (w > 0) this is also the sign of its image's area.
+        facing = caster.facing(self.light_h)
+        loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
+        image = _images(caster.centered[loop_vertices], self.H)
         projected = _project_loops(loops, loop_vertices, image)
         if cut.any():
             tight = self._clip_planes(low, high)
