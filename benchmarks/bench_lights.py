@@ -56,7 +56,7 @@ PHASES = [
     ("shadowgeo.projection", "_Projector.prepare", "frame: light, plane, window"),
     ("shadowgeo.topology", "Caster.facing", "front faces (one matrix-vector product)"),
     ("shadowgeo.projection", "silhouette_loops_many", "silhouettes, all lights together"),
-    ("shadowgeo.projection", "_images_many", "silhouette vertices projected, together"),
+    ("shadowgeo.projection", "_projected_many", "silhouettes projected to 2-D loops, together"),
     ("shadowgeo.projection", "_Projector.finish", "finish: the rest, per light"),
     ("shadowgeo.projection", "_Projector._shadow_loops", "  loops: box test, 2-D loops"),
     ("shadowgeo.polygons", "union_parts", "  2-D union (Clipper2)"),
