@@ -4,6 +4,7 @@ Run from the repository root::
 
     python benchmarks/bench_buildings.py                 # 1,000 and 10,000 buildings
     python benchmarks/bench_buildings.py --sizes 1000    # one size
+    python benchmarks/bench_buildings.py --phases        # where shadowgeo's time goes
 
 The city is ``n`` random boxes (8-16 m wide, 3-40 m tall, turned at random)
 standing on the ground y = 0, scattered over a square whose side grows with
@@ -17,18 +18,25 @@ One sun direction lights them all. Methods, on the same input, same process:
   ``shapely.union_all`` (GEOS). pybdshadow itself is not installed: it pulls
   in geopandas and its own data stack, and its method is the few lines here.
 
-Area error is relative to an exact reference: the union, by shapely, of each
-box's exact shadow (the convex hull of its eight projected corners, exact for
-a convex box standing on the ground), computed with GEOS's
-``union_all`` in float64. Times are medians of ``--repeat`` runs. The last
-column, time / (n log n), should stay flat if the cost grows as n log n.
+The ratio is of wall-clock medians; the CPU ratio of this process's CPU-time
+medians (steadier on a shared machine). Area error is relative to an exact
+reference: the union, by shapely, of each box's exact shadow (the convex hull
+of its eight projected corners, exact for a convex box standing on the
+ground), computed with GEOS's ``union_all`` in float64. Times are medians of
+``--repeat`` runs. The last column, time / (n log n), should stay flat if the
+cost grows as n log n.
+``--phases`` times the steps of one ``project_shadow`` call (CPU time, each
+step's functions wrapped with a timer; steps nest).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import statistics
 import sys
+import time
+from collections.abc import Callable
 from functools import partial
 from pathlib import Path
 
@@ -38,6 +46,7 @@ import shapely
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+from bench_lights import timed_phases  # noqa: E402
 from common import median_time  # noqa: E402
 
 from shadowgeo import DirectionalLight, Plane, project_shadow  # noqa: E402
@@ -98,27 +107,72 @@ def exact_area(corners: np.ndarray) -> float:
     return float(shapely.union_all(shapely.convex_hull(shapely.multipoints(images))).area)
 
 
+# (module, attribute, label) of the steps --phases times, in call order.
+PHASES = [
+    ("shadowgeo.projection", "as_caster", "caster checked (vertices, faces)"),
+    ("shadowgeo.topology", "Caster.facing", "front faces (and face normals)"),
+    ("shadowgeo.projection", "silhouette_loops", "silhouettes (edge table, chaining)"),
+    ("shadowgeo.projection", "_project_loops", "outlines projected"),
+    ("shadowgeo.polygons", "union_parts", "2-D union, cell by cell, and parts"),
+    ("shadowgeo.polygons", "fill", "  of which Clipper2 unions"),
+    ("shadowgeo.polygons", "nest", "  of which holes to their parts"),
+    ("shadowgeo.projection", "vertex_components", "  of which the caster's parts"),
+    ("shadowgeo.projection", "_Projector._result", "result (area, polygons)"),
+]
+
+
+def phases(sizes: list[int]) -> None:
+    """Print where shadowgeo's time goes, per step, for each size."""
+    print("| step | " + " | ".join(f"{n:,} buildings: CPU ms" for n in sizes) + " |")
+    print("|---|" + "---|" * len(sizes))
+    results = []
+    for n in sizes:
+        mesh = as_mesh(buildings(n))
+        results.append(timed_phases(partial(project_shadow, mesh, SUN, GROUND), PHASES))
+    print("| whole call | " + " | ".join(f"{total * 1e3:.1f}" for total, _ in results) + " |")
+    for _, _, label in PHASES:
+        print(f"| {label} | " + " | ".join(f"{s[label] * 1e3:.1f}" for _, s in results) + " |")
+
+
+def median_cpu(function: Callable[[], object], repeat: int) -> float:
+    """Median CPU seconds of this process over ``repeat`` calls: on a shared
+    machine the wall clock also counts waiting for a core."""
+    times = []
+    for _ in range(repeat):
+        start = time.process_time()
+        function()
+        times.append(time.process_time() - start)
+    return statistics.median(times)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000])
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--phases", action="store_true", help="time shadowgeo's steps")
     args = parser.parse_args()
+    if args.phases:
+        phases(args.sizes)
+        return
     print(
-        "| buildings | shadowgeo s | per-building + GEOS s | ratio | rel. area error "
+        "| buildings | shadowgeo s | per-building + GEOS s | ratio | CPU ratio | rel. area error "
         "shadowgeo | rel. area error GEOS | shadowgeo s / (n log n) x 1e6 |"
     )
-    print("|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|")
     for n in args.sizes:
         corners = buildings(n)
         mesh = as_mesh(corners)
         ours, shadow = median_time(partial(project_shadow, mesh, SUN, GROUND), args.repeat)
         theirs, union = median_time(partial(per_building_union, corners), args.repeat)
+        our_cpu = median_cpu(partial(project_shadow, mesh, SUN, GROUND), args.repeat)
+        their_cpu = median_cpu(partial(per_building_union, corners), args.repeat)
         reference = exact_area(corners)
         error = abs(shadow.area - reference) / reference  # type: ignore[attr-defined]
         geos_error = abs(union.area - reference) / reference  # type: ignore[attr-defined]
         per = ours / (n * math.log(n)) * 1e6
         print(
-            f"| {n:,} | {ours:.3f} | {theirs:.3f} | {ours / theirs:.2f} | {error:.1e} "
+            f"| {n:,} | {ours:.3f} | {theirs:.3f} | {ours / theirs:.2f} "
+            f"| {our_cpu / their_cpu:.2f} | {error:.1e} "
             f"| {geos_error:.1e} | {per:.2f} |"
         )
 

@@ -4,13 +4,18 @@ Run from the repository root::
 
     python benchmarks/bench_lights.py                 # 1,000 lights, 20,480 faces
     python benchmarks/bench_lights.py --lights 100    # a shorter run
+    python benchmarks/bench_lights.py --phases        # where a batch's time goes
 
 The caster is an icosphere of 20,480 faces, dented so it is not convex, a metre
 above the ground; the lights are random point lights above it and random sun
 directions. ``project_shadow(caster, lights, plane)`` returns one shadow per
-light; the table gives milliseconds per light for the batch call and for a
-loop of single calls (the caster's topology cached in both), and checks that
-both give the same areas bit for bit.
+light; the table gives milliseconds per light for the batch call (wall clock
+and this process's CPU time: on a shared machine the wall clock also counts
+time spent waiting for a core) and for a loop of single calls (the caster's
+topology cached in both), and checks that both give the same areas bit for
+bit. ``--phases`` times the steps of the batch call (CPU time, each step's
+own functions wrapped with a timer; steps nest, so the shares add up to more
+than the whole).
 """
 
 from __future__ import annotations
@@ -18,7 +23,10 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -42,9 +50,59 @@ def lights(count: int, seed: int = 3) -> dict[str, list[PointLight] | list[Direc
     }
 
 
+# (module, attribute, label) of the steps --phases times, in call order.
+PHASES = [
+    ("shadowgeo.projection", "_Call.projector", "frame: checks, tolerance"),
+    ("shadowgeo.projection", "_Projector.prepare", "frame: light, plane, window"),
+    ("shadowgeo.topology", "Caster.facing", "front faces (one matrix-vector product)"),
+    ("shadowgeo.projection", "silhouette_loops_many", "silhouettes, all lights together"),
+    ("shadowgeo.projection", "_projected_many", "silhouettes projected to 2-D loops, together"),
+    ("shadowgeo.projection", "_Projector.finish", "finish: the rest, per light"),
+    ("shadowgeo.projection", "_Projector._shadow_loops", "  loops: box test, 2-D loops"),
+    ("shadowgeo.polygons", "union_parts", "  2-D union (Clipper2)"),
+    ("shadowgeo.projection", "_Projector._result", "  result: parts, holes, area"),
+]
+
+
+def timed_phases(
+    run: Callable[[], Any], phases: list[tuple[str, str, str]]
+) -> tuple[float, Counter[str]]:
+    """CPU seconds of ``run()`` and of each step of ``phases`` ((module,
+    attribute, label) triples) within it."""
+    import importlib
+
+    spent: Counter[str] = Counter()
+    restore = []
+    for module_name, attribute, label in phases:
+        owner: Any = importlib.import_module(module_name)
+        *path, name = attribute.split(".")
+        for part in path:
+            owner = getattr(owner, part)
+        original = getattr(owner, name)
+
+        def wrapper(*args: Any, _f: Any = original, _label: str = label, **kw: Any) -> Any:
+            start = time.process_time()
+            try:
+                return _f(*args, **kw)
+            finally:
+                spent[_label] += time.process_time() - start
+
+        setattr(owner, name, wrapper)
+        restore.append((owner, name, original))
+    try:
+        start = time.process_time()
+        run()
+        total = time.process_time() - start
+    finally:
+        for owner, name, original in restore:
+            setattr(owner, name, original)
+    return total, spent
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lights", type=int, default=1000)
+    parser.add_argument("--phases", action="store_true", help="time the batch call's steps")
     args = parser.parse_args()
     mesh = trimesh.creation.icosphere(subdivisions=5)
     mesh.vertices[mesh.vertices[:, 1] > 0.8] *= [1, 0.7, 1]
@@ -53,18 +111,34 @@ def main() -> None:
     ground = Plane([0, 1, 0], 0)
     project_shadow(caster, DirectionalLight([0, -1, 0]), ground)  # topology cached
     print(f"{len(mesh.faces):,} faces, {args.lights:,} lights of each kind")
-    print("| lights | batch ms / light | loop ms / light | same areas |")
-    print("|---|---|---|---|")
-    for kind, group in lights(args.lights).items():
-        start = time.perf_counter()
+    groups = lights(args.lights)
+    if args.phases:
+        print("| step | point: CPU ms / light | directional: CPU ms / light |")
+        print("|---|---|---|")
+        results = {
+            kind: timed_phases(lambda group=group: project_shadow(caster, group, ground), PHASES)
+            for kind, group in groups.items()
+        }
+        per = {kind: 1e3 / len(groups[kind]) for kind in groups}
+        cells = " | ".join(f"{results[k][0] * per[k]:.3f}" for k in groups)
+        print(f"| whole batch call | {cells} |")
+        for _, _, label in PHASES:
+            cells = " | ".join(f"{results[k][1][label] * per[k]:.3f}" for k in groups)
+            print(f"| {label} | {cells} |")
+        return
+    print("| lights | batch ms / light | batch CPU ms / light | loop ms / light | same areas |")
+    print("|---|---|---|---|---|")
+    for kind, group in groups.items():
+        start, cpu = time.perf_counter(), time.process_time()
         batch = project_shadow(caster, group, ground)
-        middle = time.perf_counter()
+        middle, cpu_spent = time.perf_counter(), time.process_time() - cpu
         loop = [project_shadow(caster, light, ground) for light in group]
         end = time.perf_counter()
         same = all(a.area == b.area for a, b in zip(batch, loop, strict=True))
         per_batch = (middle - start) / len(group) * 1e3
+        per_cpu = cpu_spent / len(group) * 1e3
         per_loop = (end - middle) / len(group) * 1e3
-        print(f"| {kind} | {per_batch:.2f} | {per_loop:.2f} | {same} |")
+        print(f"| {kind} | {per_batch:.2f} | {per_cpu:.2f} | {per_loop:.2f} | {same} |")
 
 
 if __name__ == "__main__":

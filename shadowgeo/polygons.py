@@ -9,6 +9,7 @@ then costs about 1e-16 of the region's size.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
@@ -31,6 +32,13 @@ def signed_areas(loops: list[np.ndarray]) -> np.ndarray:
     """Shoelace signed area of each (k, 2) loop, positive counter-clockwise."""
     if not loops:
         return np.zeros(0)
+    if len(loops) == 1:  # one loop (most shadows): no bookkeeping of where loops start
+        x, y = loops[0][:, 0], loops[0][:, 1]
+        if len(x) == 0:
+            return np.zeros(1)
+        x_next, y_next = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
+        cross = x * y_next - x_next * y
+        return np.array([0.5 * np.add.reduce(cross)])
     points = np.concatenate(loops).reshape(-1, 2)
     lengths = np.array([len(loop) for loop in loops])
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
@@ -57,6 +65,107 @@ def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
     return CrossSection([np.ascontiguousarray(loop, dtype=np.float64) for loop in loops], fill_rule)
 
 
+def union_parts(
+    loops: list[np.ndarray], groups: Callable[[], np.ndarray]
+) -> list[list[np.ndarray]]:
+    """The parts (``[outer, hole, ...]``, as :func:`components` gives them)
+    of the region of positive winding over ``loops``, for loops in
+    ``groups`` whose own winding is never negative.
+
+    Parameters
+    ----------
+    loops : list of (k, 2) float64
+    groups : callable returning (n,) int
+        A label per loop, asked for only when there are many loops. The
+        loops of one label together wind >= 0 at every point (all the
+        outline loops of one connected part of a mesh, or one
+        counter-clockwise triangle). Then the positive region of the whole
+        is the union of the groups' positive regions.
+
+    Notes
+    -----
+    Clipper2's sweep keeps a list of the edges its scanline crosses, so one
+    union of thousands of overlapping outlines scattered over a plane costs
+    about n^1.5. Many loops are therefore first united cell by cell of a
+    grid of about ``_CELL_LOOPS`` loops each (every group in the cell of its
+    first loop's box centre). A cell's part whose box meets no other cell's
+    parts is final as it is; the rest, near the cells' borders, are united
+    once more.
+    """
+    if len(loops) <= _GROUPED_LOOPS:
+        return components(fill(loops))
+    low, high = _boxes(loops)
+    labels = np.asarray(groups(), dtype=np.int64)
+    labels = labels - labels.min()
+    first = np.full(int(labels.max()) + 1, len(loops), dtype=np.int64)
+    np.minimum.at(first, labels, np.arange(len(loops)))
+    centres = 0.5 * (low + high)
+    anchor = centres[first[labels]]  # each loop placed by its group's first loop
+    count = math.ceil(math.sqrt(len(loops) / _CELL_LOOPS))
+    bottom, top = anchor.min(axis=0), anchor.max(axis=0)
+    span = np.where(top > bottom, top - bottom, 1.0)
+    cell_xy = np.minimum(((anchor - bottom) / span * count).astype(np.int64), count - 1)
+    cell = cell_xy[:, 0] * count + cell_xy[:, 1]
+    order = np.argsort(cell, kind="stable")
+    bounds = np.searchsorted(cell[order], np.arange(count * count + 1))
+    parts: list[list[np.ndarray]] = []
+    owner: list[int] = []
+    for index in range(count * count):
+        members = order[bounds[index] : bounds[index + 1]].tolist()
+        if members:
+            united = components(fill([loops[i] for i in members]))
+            parts.extend(united)
+            owner.extend([index] * len(united))
+    final = _final_parts(parts, np.array(owner, dtype=np.int64))
+    rest = [loop for part, done in zip(parts, final, strict=True) if not done for loop in part]
+    return [part for part, done in zip(parts, final, strict=True) if done] + components(fill(rest))
+
+
+def union_region(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -> CrossSection:
+    """:func:`union_parts` as a region, to intersect with others: one union
+    for few loops, the cells' parts filled once more for many."""
+    if len(loops) <= _GROUPED_LOOPS:
+        return fill(loops)
+    return fill([loop for part in union_parts(loops, groups) for loop in part])
+
+
+def _final_parts(parts: list[list[np.ndarray]], owner: np.ndarray) -> list[bool]:
+    """Whether each cell's part is final: its outer loop's box meets no
+    other cell's box of parts, so no other cell's part can touch it."""
+    low, high = _boxes([part[0] for part in parts])
+    n_cells = int(owner.max()) + 1
+    cell_low = np.full((n_cells, 2), np.inf)
+    cell_high = np.full((n_cells, 2), -np.inf)
+    np.minimum.at(cell_low, owner, low)
+    np.maximum.at(cell_high, owner, high)
+    meets = (low[:, None, 0] <= cell_high[None, :, 0]) & (low[:, None, 1] <= cell_high[None, :, 1])
+    meets &= (high[:, None, 0] >= cell_low[None, :, 0]) & (high[:, None, 1] >= cell_low[None, :, 1])
+    meets[np.arange(len(parts)), owner] = False
+    touched = np.asarray(np.any(meets, axis=1), dtype=bool)
+    return [not flag for flag in touched.tolist()]
+
+
+def _boxes(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 2) lower and upper corners of each loop's bounding box."""
+    points = np.concatenate(loops)
+    starts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops[:-1]])])
+    return np.minimum.reduceat(points, starts, axis=0), np.maximum.reduceat(points, starts, axis=0)
+
+
+def region_loops(region: CrossSection) -> list[np.ndarray]:
+    """The loops of ``region`` (outer loops counter-clockwise, holes
+    clockwise) as (k, 2) float64 arrays, dropping any of fewer than three
+    points."""
+    loops = [np.asarray(loop, dtype=np.float64) for loop in region.to_polygons()]
+    return [loop for loop in loops if len(loop) >= 3]
+
+
+# union_parts: loops above this are united cell by cell first, about
+# _CELL_LOOPS to a cell (below it one union is faster).
+_GROUPED_LOOPS = 2000
+_CELL_LOOPS = 100
+
+
 def intersect(region: CrossSection, other: CrossSection) -> CrossSection:
     return region ^ other
 
@@ -74,8 +183,7 @@ def components(region: CrossSection) -> list[list[np.ndarray]]:
     ``decompose`` is quadratic in the holes of a part, and a city's shadow
     is one part with thousands of courtyards.
     """
-    loops = [np.asarray(loop, dtype=np.float64) for loop in region.to_polygons()]
-    return nest([loop for loop in loops if len(loop) >= 3])
+    return nest(region_loops(region))
 
 
 def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
@@ -86,24 +194,32 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
     are outer loops whose bounding box holds the hole's; only a hole with more
     than one candidate is tested, at the midpoint of its first edge (in a
     region without crossings or overlapping edges that point lies on no other
-    loop). Parts are ordered by their outer loop, holes from the smallest.
+    loop), against all candidates but the largest. Parts are ordered by
+    their outer loop, holes from the smallest.
     """
     if not loops:
         return []
+    if len(loops) == 1:  # the common case of one outline: no holes to place
+        return [loops] if signed_areas(loops)[0] > 0 else []
     areas = signed_areas(loops)
     outers = np.flatnonzero(areas > 0)
     holes = np.flatnonzero(areas < 0)
     if len(outers) == 0:
         return []
-    low = np.array([loop.min(axis=0) for loop in loops])
-    high = np.array([loop.max(axis=0) for loop in loops])
+    if len(holes) == 0:
+        return [[loops[i]] for i in outers.tolist()]
+    low, high = _boxes(loops)
     parent = np.full(len(holes), -1, dtype=np.int64)
     by_size = outers[np.argsort(areas[outers], kind="stable")]  # smallest first
     chunk = max(1, 4_000_000 // len(outers))
     for start in range(0, len(holes), chunk):
         rows = holes[start : start + chunk]
-        around = np.all(low[by_size][None] <= low[rows][:, None], axis=2) & np.all(
-            high[by_size][None] >= high[rows][:, None], axis=2
+        outer_low, outer_high = low[by_size], high[by_size]
+        around = (outer_low[None, :, 0] <= low[rows, None, 0]) & (
+            outer_low[None, :, 1] <= low[rows, None, 1]
+        )
+        around &= (outer_high[None, :, 0] >= high[rows, None, 0]) & (
+            outer_high[None, :, 1] >= high[rows, None, 1]
         )
         count = around.sum(axis=1)
         single = count == 1
@@ -111,17 +227,30 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
         for row in np.flatnonzero(count > 1):
             hole = loops[rows[row]]
             point = 0.5 * (hole[0] + hole[1])
-            for candidate in by_size[around[row]]:
+            candidates = by_size[around[row]]
+            # Every hole lies in some outer loop: when all the smaller
+            # candidates fail, the largest (often a whole city's outline,
+            # the costliest to test) is the parent without a test.
+            parent[start + row] = candidates[-1]
+            for candidate in candidates[:-1]:
                 if _contains(loops[candidate], point):
                     parent[start + row] = candidate
                     break
+    # holes grouped by parent, largest first within each group
+    grouped = holes[np.lexsort((-areas[holes], parent))]
+    group_parent = parent[np.lexsort((-areas[holes], parent))]
+    first = np.searchsorted(group_parent, outers, side="left")
+    last = np.searchsorted(group_parent, outers, side="right")
     parts = []
-    for outer in outers:
-        own = holes[parent == outer]
-        own = own[np.argsort(-areas[own], kind="stable")]
+    for outer, begin, end in zip(outers.tolist(), first.tolist(), last.tolist(), strict=True):
+        if begin == end:
+            if areas[outer] > 0:
+                parts.append([loops[outer]])
+            continue
+        own = grouped[begin:end]
         if areas[outer] + areas[own].sum() <= 0:
             continue
-        parts.append([loops[outer]] + [loops[i] for i in own])
+        parts.append([loops[outer]] + [loops[i] for i in own.tolist()])
     return parts
 
 

@@ -23,9 +23,10 @@ light's range are then applied as exact 2-D intersections.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
-from functools import partial
+from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
 
 import numpy as np
@@ -35,11 +36,17 @@ from numpy.typing import ArrayLike
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lights import Light, SpotLight, is_positional, require_light
+from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import check_coordinates, check_light
 from .plane import Plane
 from .seams import unique_integers
-from .silhouette import boundary_loops, check_light_outside, silhouette_loops
+from .silhouette import (
+    boundary_loops,
+    check_light_outside,
+    silhouette_loops,
+    silhouette_loops_many,
+    vertex_components,
+)
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, empty_mesh
 
@@ -297,43 +304,116 @@ def project_shadow(
     if caster.n_faces:
         check_coordinates(caster.bounds, "caster bounds")
     check_coordinates([plane.offset], "plane offset")
-    call = partial(
-        _one_light,
-        caster,
-        plane=plane,
-        receiver=receiver_points,
-        offset=offset,
-        tolerance=tolerance,
-        per_triangle=method == "triangles",
+    call = _Call(
+        caster, plane, plane.basis, receiver_points, offset, tolerance, method == "triangles"
     )
     if not isinstance(light, Sequence):
-        return call(light)
-    shadows = []
-    for index, each in enumerate(light):
-        try:
-            shadows.append(call(each))
-        except GeometryError as error:
-            raise GeometryError(f"light {index}: {error}") from error
-    return shadows
+        return call.projector(light).run()
+    return _many_lights(call, light)
 
 
-def _one_light(
-    caster: Caster,
-    light: Light,
-    *,
-    plane: Plane,
-    receiver: np.ndarray,
-    offset: float,
-    tolerance: Tolerance | None,
-    per_triangle: bool,
-) -> Shadow:
-    """The shadow of one light, the caster, plane and options already checked."""
-    check_light(require_light(light))
-    if tolerance is None:
+@dataclass(frozen=True)
+class _Call:
+    """What one :func:`project_shadow` call shares between its lights: the
+    checked caster, plane (with its basis, computed once), receiver and
+    options."""
+
+    caster: Caster
+    plane: Plane
+    basis: tuple[np.ndarray, np.ndarray]
+    receiver: np.ndarray
+    offset: float
+    tolerance: Tolerance | None
+    per_triangle: bool
+
+    @cached_property
+    def box_corners(self) -> np.ndarray:
+        """(8, 4) homogeneous corners of the caster's box, centred frame."""
+        box = self.caster.bounds - self.caster.center
+        return np.array([[x, y, z, 1.0] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]])
+
+    def projector(self, light: Light, tolerance: Tolerance | None = None) -> _Projector:
+        """The projector of one light, its tolerance the caller's, else
+        ``tolerance``, else found from the scene's points."""
+        check_light(require_light(light))
+        if self.tolerance is not None:
+            tolerance = self.tolerance
+        elif tolerance is None:
+            tolerance = self.scene_tolerance(light)
+        return _Projector(self, light, tolerance)
+
+    def scene_tolerance(self, light: Light) -> Tolerance:
+        """``Tolerance.for_points`` of the caster, the light and the receiver."""
         light_points = [light.position] if is_positional(light) else []
+        caster = self.caster
         scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
-        tolerance = Tolerance.for_points(*scene, *light_points, receiver)
-    return _Projector(caster, light, plane, receiver, offset, tolerance, per_triangle).run()
+        return Tolerance.for_points(*scene, *light_points, self.receiver)
+
+
+def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
+    """One shadow per light, each equal to the single-light call's.
+
+    Every light's frame is set up first; then, for a closed caster, the
+    silhouettes of the lights that need them are found together
+    (:func:`silhouette_loops_many`) and each light's outline goes to the 2-D
+    union on its own.
+    """
+    shadows: list[Shadow | None] = [None] * len(lights)
+    pending: list[tuple[int, _Projector]] = []
+    directional_tolerance: Tolerance | None = None  # the same for every directional light
+    for index, light in enumerate(lights):
+        with _light_context(index):
+            if directional_tolerance is None and isinstance(light, DirectionalLight):
+                directional_tolerance = call.scene_tolerance(light)
+            shared = None if is_positional(light) else directional_tolerance
+            projector = call.projector(light, shared)
+            early = projector.prepare()
+        if early is not None:
+            shadows[index] = early
+        else:
+            pending.append((index, projector))
+    caster = call.caster
+    if caster.is_closed and not call.per_triangle:
+        for first in range(0, len(pending), _LIGHT_CHUNK):
+            chunk = pending[first : first + _LIGHT_CHUNK]
+            fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
+            outlines = silhouette_loops_many(caster, fronts)
+            projected = _projected_many(caster.centered, outlines, [p.H for _, p in chunk])
+            for (index, projector), front, (loops, _), (flat, box) in zip(
+                chunk, fronts, outlines, projected, strict=True
+            ):
+                with _light_context(index):
+                    shadows[index] = projector.finish(_Outline(front, loops, flat, box))
+    else:
+        for index, projector in pending:
+            with _light_context(index):
+                shadows[index] = projector.finish()
+    return cast("list[Shadow]", shadows)
+
+
+# Lights whose silhouettes are found together: bounds the memory of the
+# (lights x faces) front bits.
+_LIGHT_CHUNK = 256
+
+
+@contextmanager
+def _light_context(index: int) -> Iterator[None]:
+    """Prefix a GeometryError's message with the index of the light at fault."""
+    try:
+        yield
+    except GeometryError as error:
+        raise GeometryError(f"light {index}: {error}") from error
+
+
+@dataclass(frozen=True)
+class _Outline:
+    """A closed caster's front faces and silhouette for one light, found
+    beforehand for many lights at once."""
+
+    front: np.ndarray
+    loops: list[np.ndarray]  # of vertex indices
+    projected: list[np.ndarray] | None  # (k, 2) each, local units; None: a vertex at infinity
+    box: np.ndarray  # (2, 2) lower and upper corner of the projected points
 
 
 def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
@@ -347,27 +427,26 @@ def _receiver_points(receiver: ArrayLike | None) -> np.ndarray:
 
 
 class _Projector:
-    """One call of :func:`project_shadow`; holds the per-call frame."""
+    """One light of a :func:`project_shadow` call; holds the light's frame.
 
-    def __init__(
-        self,
-        caster: Caster,
-        light: Light,
-        plane: Plane,
-        receiver: np.ndarray,
-        offset: float,
-        tol: Tolerance,
-        per_triangle: bool,
-    ) -> None:
-        self.caster = caster
+    :meth:`run` is the whole computation. It is two halves so that a call
+    with many lights can set every frame up first and then find the
+    silhouettes of all of them together: :meth:`prepare` (the light's frame
+    on the plane, the rectangle the shadow can reach, the 2-D limits) and
+    :meth:`finish` (the outline, its 2-D union, the result).
+    """
+
+    def __init__(self, call: _Call, light: Light, tol: Tolerance) -> None:
+        self.call = call
+        self.caster = call.caster
         self.light = light
-        self.plane = plane
-        self.receiver = receiver
-        self.offset = offset
+        self.plane = call.plane
+        self.receiver = call.receiver
+        self.offset = call.offset
         self.tol = tol
+        self.per_triangle = call.per_triangle
         self.clipped: dict[str, int] = {}
         self.limits: list[str] = []
-        self.per_triangle = per_triangle
 
     # -- result helpers -------------------------------------------------------------------
 
@@ -383,15 +462,56 @@ class _Projector:
     # -- the computation ------------------------------------------------------------------
 
     def run(self) -> Shadow:
-        caster, tol = self.caster, self.tol
-        if caster.n_faces == 0:
+        early = self.prepare()
+        return early if early is not None else self.finish()
+
+    def prepare(self) -> Shadow | None:
+        """Set up the light's frame, the window and the 2-D limits; the
+        (empty) shadow when that already decides it, else None."""
+        if self.caster.n_faces == 0:
             return self.empty("the caster has no faces")
+        early = self._light_frame()
+        if early is not None:
+            return early
+        receiver2d = self._plane_frame()
+        window = self._window(receiver2d)
+        if isinstance(window, Shadow):
+            return window
+        self.low, self.high, self.limit_regions = window
+        return None
+
+    def finish(self, outline: _Outline | None = None) -> Shadow:
+        """The shadow, from the frame :meth:`prepare` set up. ``outline``: the
+        front faces and silhouette of a closed caster, found beforehand."""
+        low, high, limit_regions = self.low, self.high, list(self.limit_regions)
+        loops, outline_loops, box = self._shadow_loops(low, high, outline)
+        self.n_loops = len(loops)
+        if not limit_regions and loops:
+            if box is None:
+                points = np.concatenate(loops)
+                box = np.array([points.min(axis=0), points.max(axis=0)])
+            if np.any(box[0] < low) or np.any(box[1] > high):
+                # Whole faces project past the bound: cut them there.
+                corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
+                limit_regions.append(poly.fill([corners]))
+        groups = partial(self._loop_groups, outline_loops)
+        if not limit_regions:
+            return self._result(poly.union_parts(loops, groups), len(loops))
+        region = poly.union_region(loops, groups)
+        for limit in limit_regions:
+            region = poly.intersect(region, limit)
+        return self._result(poly.components(region), len(loops))
+
+    def _light_frame(self) -> Shadow | None:
+        """The light in the caster's centred frame (``light_h``) and the
+        plane point the 2-D frame starts from (``origin``); an empty shadow
+        when the light cannot reach the plane's front."""
+        tol = self.tol
         # Work relative to the caster's centre: differences of nearby large
         # coordinates are exact, so a scene far from the origin loses nothing.
-        self.center = caster.center
+        self.center = self.caster.center
         normal = self.plane.normal
         self.d = self.plane.offset + float(normal @ self.center)
-
         if is_positional(self.light):
             self.light_position = self.light.position - self.center
             height = float(normal @ self.light_position) + self.d
@@ -406,20 +526,25 @@ class _Projector:
                 return self.empty("the light's radius does not reach the plane")
             self.height = height
             check_light_outside(self.caster, self.light.position, tol)
-            homogeneous = np.append(self.light_position, 1.0)
+            self.light_h = np.append(self.light_position, 1.0)
             self.origin = self.light_position - height * normal  # the light's foot
-        else:
-            cosine = -float(normal @ self.light.direction)
-            if abs(cosine) <= tol.angle:
-                return self.empty("the light travels parallel to the plane")
-            if cosine < 0:
-                return self.empty("the light shines on the back of the plane")
-            homogeneous = np.append(-self.light.direction, 0.0)
-            # The caster centre's shadow: the shadow lies around it.
-            self.origin = self.d / cosine * self.light.direction
+            return None
+        cosine = -float(normal @ self.light.direction)
+        if abs(cosine) <= tol.angle:
+            return self.empty("the light travels parallel to the plane")
+        if cosine < 0:
+            return self.empty("the light shines on the back of the plane")
+        self.light_h = np.append(-self.light.direction, 0.0)
+        # The caster centre's shadow: the shadow lies around it.
+        self.origin = self.d / cosine * self.light.direction
+        return None
 
-        self._light_h = homogeneous
-        u, v = self.plane.basis
+    def _plane_frame(self) -> np.ndarray | None:
+        """The projection ``raw`` from the centred frame to the plane's 2-D
+        frame around ``origin`` (moved to the receiver's middle when there is
+        one); returns the receiver in that frame."""
+        normal = self.plane.normal
+        u, v = self.call.basis
         self.foot2d = np.zeros(2)
         if len(self.receiver):
             # Coordinates relative to the receiver keep their precision however
@@ -429,27 +554,33 @@ class _Projector:
             middle -= (normal @ middle + self.d) * normal
             self.foot2d = np.array([u @ (self.origin - middle), v @ (self.origin - middle)])
             self.origin = middle
+        homogeneous = self.light_h
         plane4 = np.append(normal, self.d)
         matrix = float(plane4 @ homogeneous) * np.eye(4) - np.outer(homogeneous, plane4)
         to_plane2d = np.array(
             [np.append(u, -u @ self.origin), np.append(v, -v @ self.origin), [0, 0, 0, 1.0]]
         )
         self.raw = to_plane2d @ matrix  # (U, V, W) in scene units, before scaling
+        return self._receiver_2d() if len(self.receiver) else None
 
-        receiver2d = None
-        if len(self.receiver):
-            receiver2d = self._receiver_2d()
+    def _window(
+        self, receiver2d: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, list[CrossSection]] | Shadow:
+        """The rectangle [low, high] (local units) the shadow can reach and
+        the 2-D regions that limit it (receiver, range, spot cone); sets the
+        local ``scale`` and the projection ``H`` into local units. An empty
+        shadow when the limits leave nothing."""
+        limit_regions = []
+        if receiver2d is not None:
             low, high = receiver2d.min(axis=0), receiver2d.max(axis=0)
             self.bound = None
         else:
-            self.bound = tol.bound_length
+            self.bound = self.tol.bound_length
             low, high = np.full(2, -self.bound), np.full(2, self.bound)
         extent = float(np.max(np.abs([low, high])))
         self.scale = poly.local_scale(extent)
         self.H = np.diag([self.scale, self.scale, 1.0]) @ self.raw
         low, high = low * self.scale, high * self.scale
-
-        limit_regions = []
         if receiver2d is not None:
             limit_regions.append(poly.fill([receiver2d * self.scale], "evenodd"))
             self.limits.append("receiver")
@@ -470,18 +601,7 @@ class _Projector:
             self.limits.append("spot_cone")
         if np.any(high <= low):
             return self.empty("the lit part of the plane misses the receiver")
-
-        loops = self._shadow_loops(low, high)
-        if not limit_regions and loops:
-            points = np.concatenate(loops)
-            if np.any(points < low) or np.any(points > high):
-                # Whole faces project past the bound: cut them there.
-                corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
-                limit_regions.append(poly.fill([corners]))
-        region = poly.fill(loops)
-        for limit in limit_regions:
-            region = poly.intersect(region, limit)
-        return self._result(region, len(loops))
+        return low, high, limit_regions
 
     def _receiver_2d(self) -> np.ndarray:
         points = self.receiver - self.center
@@ -493,7 +613,7 @@ class _Projector:
                 f"receiver point {worst} {self.receiver[worst].tolist()} is "
                 f"{abs(distance[worst]):.3g} off the plane (tolerance {limit:.3g})"
             )
-        u, v = self.plane.basis
+        u, v = self.call.basis
         relative = points - self.origin
         return np.column_stack([relative @ u, relative @ v])
 
@@ -552,7 +672,7 @@ class _Projector:
         rectangle_planes = _rectangle_planes(low, high)
         if light.cut_off_angle >= math.pi / 2 - 1e-6:
             # A hemisphere: the half-plane of points in front of the light.
-            u, v = self.plane.basis
+            u, v = self.call.basis
             # Points p = origin + (x u + y v) / scale with axis . (p - light) >= 0.
             line = np.array(
                 [
@@ -580,25 +700,51 @@ class _Projector:
         cone: np.ndarray = points
         return cone
 
-    def _shadow_loops(self, low: np.ndarray, high: np.ndarray) -> list[np.ndarray]:
+    def _loop_groups(self, outline_loops: list[np.ndarray]) -> np.ndarray:
+        """Labels for :func:`poly.union_parts`: each outline loop the
+        connected part of the caster it runs on (a part's loops together
+        wind >= 0: they count its front faces), each clipped face its own."""
+        parts = vertex_components(self.caster)
+        n_clipped = self.n_loops - len(outline_loops)
+        own = len(self.caster.vertices) + np.arange(n_clipped)
+        return np.concatenate([parts[[loop[0] for loop in outline_loops]], own])
+
+    def _shadow_loops(
+        self, low: np.ndarray, high: np.ndarray, outline: _Outline | None
+    ) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray | None]:
         """Closed 2-D loops (local units) whose positive-winding region is the
-        shadow within the rectangle [low, high].
+        shadow within the rectangle [low, high], the loops of vertex indices
+        the first of them come from (the rest are clipped faces), and the
+        box of the 2-D loops when it is known already.
 
         Steps: sort the faces (:meth:`_sort_faces`), chain the outline of the
-        faces that project whole (:func:`_outline`), project it, then clip the
-        few faces that need it one by one (:func:`_clipped_loops`).
+        faces that project whole (:func:`_outline`, or the silhouette found
+        beforehand), project it, then clip the few faces that need it one by
+        one (:func:`_clipped_loops`).
         """
         caster = self.caster
         size = high - low
-        reach = self._clip_planes(low - _REACH * size, high + _REACH * size, lowered=True)
-        whole, cut = self._sort_faces(self._clip_planes(low, high, lowered=True), reach)
-        tight = self._clip_planes(low, high)
+        whole, cut = self._sort_faces(
+            self._clip_planes(low, high, lowered=True),
+            partial(self._clip_planes, low - _REACH * size, high + _REACH * size, lowered=True),
+        )
+        if outline is not None and whole is None:
+            if outline.projected is None:
+                raise GeometryError("the light touches the caster (a vertex projects to infinity)")
+            return outline.projected, outline.loops, outline.box
+        if whole is None or cut is None:  # every face whole, none cut
+            whole = np.ones(caster.n_faces, dtype=bool)
+            cut = np.zeros(caster.n_faces, dtype=bool)
         # facing > 0: the face turns its front to the light. For a face whose
         # corners all project (w > 0) this is also the sign of its image's area.
-        facing = caster.facing(self._light_h)
+        facing = caster.facing(self.light_h)
         loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
-        projected = _project_loops(caster.centered, loops, loop_vertices, self.H)
-        return projected + _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
+        image = _images(caster.centered[loop_vertices], self.H)
+        projected = _project_loops(loops, loop_vertices, image)
+        if cut.any():
+            tight = self._clip_planes(low, high)
+            projected += _clipped_loops(caster.centered, caster.faces[cut], tight, self.H)
+        return projected, loops, None
 
     def _clip_planes(self, low: np.ndarray, high: np.ndarray, lowered: bool = False) -> np.ndarray:
         """(5, 4) unit half-spaces ``planes @ x >= 0`` of the caster's centred
@@ -608,29 +754,31 @@ class _Projector:
         faces, so that a caster standing on the plane is not sent to
         clipping by corners that rounding put a hair below it."""
         drop = self.tol.coplanar_length if lowered else 0.0
-        ground = np.append(self.plane.normal, self.d + drop)
-        planes = np.vstack([ground, _rectangle_planes(low, high) @ self.H])
-        unit: np.ndarray = planes / np.linalg.norm(planes[:, :3], axis=1, keepdims=True)
+        planes = np.empty((5, 4))
+        planes[0, :3] = self.plane.normal
+        planes[0, 3] = self.d + drop
+        planes[1:] = _rectangle_planes(low, high) @ self.H
+        lengths = np.sqrt(np.einsum("ij,ij->i", planes[:, :3], planes[:, :3]))
+        unit: np.ndarray = planes / lengths[:, None]
         return unit
 
-    def _sort_faces(self, tight: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _sort_faces(
+        self, tight: np.ndarray, reach: Callable[[], np.ndarray]
+    ) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
         """(m,) bool ``whole`` (every corner above the plane and projecting
         within the wide ``reach`` rectangle: the outline may take the face as
         it is, the 2-D limits cut it) and ``cut`` (the other faces that reach
         the ``tight`` rectangle: they are clipped one by one). Sets the
         per-reason counts of faces leaving the tight rectangle and the
-        number culled."""
+        number culled. ``(None, None)`` when every face is whole and none is
+        cut (the caster's box passes): the common case, told without arrays."""
         homogeneous, faces = self.caster.centered, self.caster.faces
-        box = self.caster.bounds - self.caster.center
-        corners = np.array(
-            [[x, y, z, 1.0] for x in box[:, 0] for y in box[:, 1] for z in box[:, 2]]
-        )
-        if np.all(corners @ tight.T > 0):
+        if np.all(self.call.box_corners @ tight.T > 0):
             # The caster's box lies inside every half-space, so does each vertex.
             self.culled = 0
             self._count_clipped(homogeneous, faces[:0], np.zeros((0, 3, 5), dtype=bool))
-            return np.ones(len(faces), dtype=bool), np.zeros(len(faces), dtype=bool)
-        whole = ~np.any(np.any(homogeneous @ reach.T < 0, axis=1)[faces], axis=1)
+            return None, None
+        whole = ~np.any(np.any(homogeneous @ reach().T < 0, axis=1)[faces], axis=1)
         touched = np.flatnonzero(np.any(np.any(homogeneous @ tight.T < 0, axis=1)[faces], axis=1))
         outside = (homogeneous[faces[touched]] @ tight.T) < 0  # (k, 3, 5)
         culled = np.all(outside, axis=1).any(axis=1)
@@ -644,8 +792,14 @@ class _Projector:
         self, homogeneous: np.ndarray, faces: np.ndarray, outside: np.ndarray
     ) -> None:
         """Per-reason counts over the faces that are not whole."""
-        self.clipped["below_plane"] = int(np.any(outside[:, :, 0], axis=1).sum())
         outside_key = "outside_receiver" if len(self.receiver) else "outside_bound"
+        if len(faces) == 0:
+            zero = {"below_plane": 0, "at_or_above_light": 0, outside_key: 0}
+            if not is_positional(self.light):
+                del zero["at_or_above_light"]
+            self.clipped.update(zero)
+            return
+        self.clipped["below_plane"] = int(np.any(outside[:, :, 0], axis=1).sum())
         beyond_bound = outside[:, :, 1:].any(axis=2)
         if is_positional(self.light):
             weight = (homogeneous @ self.raw[2])[faces]  # w of each corner, scene units
@@ -653,8 +807,7 @@ class _Projector:
             beyond_bound &= weight > 0
         self.clipped[outside_key] = int(np.any(beyond_bound, axis=1).sum())
 
-    def _result(self, region: CrossSection, n_loops: int) -> Shadow:
-        parts = poly.components(region)
+    def _result(self, parts: list[list[np.ndarray]], n_loops: int) -> Shadow:
         area = poly.parts_area(parts) / self.scale / self.scale  # no square to over/underflow
         bounded = False
         if self.bound is not None and parts:
@@ -671,19 +824,24 @@ class _Projector:
         )
         if not parts:
             return Shadow(self.plane, self.light, empty_mesh(), [], 0.0, info)
-        origin2d = self.plane.to_2d(self.origin + self.center)[0]
+        u, v = self.call.basis
+        relative = self.origin + self.center - self.plane.origin
+        origin2d = np.array([relative @ u, relative @ v])
         polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
         lift = self.origin + self.offset * self.plane.normal + self.center
-        build = partial(_triangulated, parts, self.scale, lift, self.plane)
+        build = partial(_triangulated, parts, self.scale, lift, self.call.basis)
         return Shadow(self.plane, self.light, build, polygons, area, info)
 
 
 def _triangulated(
-    parts: list[list[np.ndarray]], scale: float, lift: np.ndarray, plane: Plane
+    parts: list[list[np.ndarray]],
+    scale: float,
+    lift: np.ndarray,
+    basis: tuple[np.ndarray, np.ndarray],
 ) -> trimesh.Trimesh:
-    """The mesh of a shadow's parts (local units) on ``plane``, ``lift`` being
-    the scene point of the local origin."""
-    u, v = plane.basis
+    """The mesh of a shadow's parts (local units) on the plane of ``basis``,
+    ``lift`` being the scene point of the local origin."""
+    u, v = basis
     flat, faces = poly.triangulate_parts(parts)
     flat = flat / scale
     points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v)
@@ -728,18 +886,103 @@ def _outline(
     return loops, vertices, cut
 
 
-def _project_loops(
-    homogeneous: np.ndarray, loops: list[np.ndarray], vertices: np.ndarray, H: np.ndarray
+def _images(points: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """(k, 3) homogeneous images ``H @ p`` of (k, 4) points with w = 1, by an explicit
+    sum in a fixed order: the same bits whether one light's points are
+    projected or many lights' at once (:func:`_images_many`)."""
+    rows = [
+        points[:, 0] * H[i, 0] + points[:, 1] * H[i, 1] + points[:, 2] * H[i, 2] + H[i, 3]
+        for i in range(3)
+    ]
+    return np.column_stack(rows)
+
+
+def _images_many(
+    homogeneous: np.ndarray, vertices: list[np.ndarray], matrices: list[np.ndarray]
 ) -> list[np.ndarray]:
-    """Loops of vertex indices -> (k, 2) loops of their images under ``H``."""
+    """:func:`_images` of ``homogeneous[vertices[i]]`` under ``matrices[i]``
+    for every i, in one pass."""
+    counts = [len(each) for each in vertices]
+    points = homogeneous[np.concatenate(vertices)] if sum(counts) else np.zeros((0, 4))
+    H = np.repeat(np.array(matrices), counts, axis=0)  # (k, 3, 4): each point's matrix
+    rows = [
+        points[:, 0] * H[:, i, 0]
+        + points[:, 1] * H[:, i, 1]
+        + points[:, 2] * H[:, i, 2]
+        + H[:, i, 3]
+        for i in range(3)
+    ]
+    return _pieces(np.column_stack(rows), counts)
+
+
+def _projected_many(
+    homogeneous: np.ndarray,
+    outlines: list[tuple[list[np.ndarray], np.ndarray]],
+    matrices: list[np.ndarray],
+) -> list[tuple[list[np.ndarray] | None, np.ndarray]]:
+    """:func:`_project_loops` of every light's silhouette (``outlines`` from
+    :func:`silhouette_loops_many`, ``matrices`` each light's ``H``) in one
+    pass, and the box of each light's 2-D points. The points are the same
+    numbers one light's call gives: the same explicit sums, the same
+    division. ``None`` loops for a light with a vertex at infinity."""
+    n_lights = len(outlines)
+    counts = [len(vertices) for _, vertices in outlines]
+    images = _images_many(homogeneous, [vertices for _, vertices in outlines], matrices)
+    if sum(counts) == 0:
+        return [([], np.zeros((2, 2))) for _ in range(n_lights)]
+    image = np.concatenate(images)
+    light_of = np.repeat(np.arange(n_lights), counts)
+    n_vertices = np.int64(len(homogeneous))
+    keys = np.concatenate([v + k * n_vertices for k, (_, v) in enumerate(outlines)])
+    with np.errstate(divide="ignore", invalid="ignore"):  # such a light raises, below
+        points = image[:, :2] / image[:, 2:3]
+    touching = np.zeros(n_lights, dtype=bool)
+    touching[light_of[image[:, 2] <= 0]] = True
+    loops = [loop + k * n_vertices for k, (own, _) in enumerate(outlines) for loop in own]
+    lengths = [len(loop) for loop in loops]
+    corners = points[np.searchsorted(keys, np.concatenate(loops))] if loops else points[:0]
+    pieces = _pieces(corners, lengths)
+    # the box of each light's loop corners (not of all its vertices: a loop
+    # of two edges is dropped, and its vertices with it)
+    corner_counts = np.array([sum(len(loop) for loop in own) for own, _ in outlines])
+    starts = np.concatenate([[0], np.cumsum(corner_counts)[:-1]])
+    has_points = corner_counts > 0
+    low = np.zeros((n_lights, 2))
+    high = np.zeros((n_lights, 2))
+    if has_points.any():
+        low[has_points] = np.minimum.reduceat(corners, starts[has_points], axis=0)
+        high[has_points] = np.maximum.reduceat(corners, starts[has_points], axis=0)
+    result: list[tuple[list[np.ndarray] | None, np.ndarray]] = []
+    first = 0
+    for k, (own, _) in enumerate(outlines):
+        mine = pieces[first : first + len(own)]
+        first += len(own)
+        result.append((None if touching[k] else mine, np.array([low[k], high[k]])))
+    return result
+
+
+def _project_loops(
+    loops: list[np.ndarray], vertices: np.ndarray, image: np.ndarray
+) -> list[np.ndarray]:
+    """Loops of vertex indices -> (k, 2) loops of their images; ``image`` is
+    that of the sorted ``vertices``, every vertex the loops use."""
     if not vertices.size:
         return []
-    image = homogeneous[vertices] @ H.T
     if np.any(image[:, 2] <= 0):
         raise GeometryError("the light touches the caster (a vertex projects to infinity)")
-    points = np.zeros((len(homogeneous), 2))
-    points[vertices] = image[:, :2] / image[:, 2:3]
-    return [points[loop] for loop in loops]
+    points = image[:, :2] / image[:, 2:3]
+    if len(loops) == 1:
+        return [points[np.searchsorted(vertices, loops[0])]]
+    # vertices is sorted: find each loop corner's row by bisection, all at once
+    corners = points[np.searchsorted(vertices, np.concatenate(loops))]
+    return _pieces(corners, [len(loop) for loop in loops])
+
+
+def _pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
+    """``rows`` cut into consecutive pieces of ``counts`` rows (np.split,
+    without its per-piece overhead)."""
+    ends = np.cumsum(counts).tolist()
+    return [rows[end - count : end] for count, end in zip(counts, ends, strict=True)]
 
 
 def _clipped_loops(

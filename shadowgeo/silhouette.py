@@ -22,7 +22,6 @@ from .deprecation import renamed_keyword
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
-from .seams import unique_integers
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
 
@@ -181,7 +180,10 @@ def _loops_and_vertices(
 ) -> tuple[list[np.ndarray], np.ndarray]:
     if len(starts) == 0:
         return [], np.zeros(0, dtype=np.int64)
-    return chain(starts, ends), unique_integers(np.concatenate([starts, ends]))
+    used = np.zeros(max(int(starts.max()), int(ends.max())) + 1, dtype=bool)
+    used[starts] = True
+    used[ends] = True
+    return chain(starts, ends), np.flatnonzero(used)  # sorted, as np.unique, without a sort
 
 
 def _net_boundary(
@@ -211,75 +213,168 @@ def _directed_edges(caster: Caster, slots: np.ndarray) -> np.ndarray:
 
 def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
     """Split directed edges with in-degree = out-degree at every vertex into
-    closed loops of vertex indices."""
+    closed loops of vertex indices.
+
+    At a vertex with several edges in and out, the k-th edge in (by index)
+    goes on to the k-th edge out: every edge then has one successor, and the
+    loops are the cycles of that permutation, found by pointer jumping in
+    O(k log k) numpy steps. A loop may pass a vertex twice (two outlines
+    touching there); loops of fewer than three edges enclose nothing and are
+    dropped.
+    """
     if len(starts) == 0:
         return []
-    order = np.argsort(starts, kind="stable")
-    sorted_starts = starts[order]
-    if np.all(sorted_starts[1:] != sorted_starts[:-1]):
-        return _chain_cycles(starts, ends, order, sorted_starts)
-    vertex_ids, first = np.unique(sorted_starts, return_index=True)
-    next_out = dict(zip(vertex_ids.tolist(), first.tolist(), strict=True))
-    order_list = order.tolist()
-    sorted_list = sorted_starts.tolist()
-    ends_list = ends.tolist()
-    starts_list = starts.tolist()
-    used = [False] * len(starts_list)
-    loops = []
-    for edge in order_list:
-        if used[edge]:
-            continue
-        used[edge] = True
-        start = starts_list[edge]
-        loop = [start]
-        vertex = ends_list[edge]
-        while vertex != start:
-            loop.append(vertex)
-            position = next_out.get(vertex, len(order_list))
-            while position < len(order_list) and used[order_list[position]]:
-                position += 1
-            if position == len(order_list) or sorted_list[position] != vertex:
-                raise GeometryError(f"internal error: the outline is not closed at vertex {vertex}")
-            next_out[vertex] = position + 1
-            step = order_list[position]
-            used[step] = True
-            vertex = ends_list[step]
-        if len(loop) >= 3:
-            loops.append(np.array(loop))
-    return loops
+    walk, cuts = _cycle_walk(_successors(starts, ends))
+    return [loop for loop in _cut(starts[walk], cuts) if len(loop) >= 3]
 
 
-def _chain_cycles(
-    starts: np.ndarray, ends: np.ndarray, order: np.ndarray, sorted_starts: np.ndarray
-) -> list[np.ndarray]:
-    """:func:`chain` when every vertex starts one edge: the loops are the cycles
-    of the successor permutation, found by pointer jumping in O(k log k) numpy
-    steps instead of a Python walk (the common case: a silhouette whose loops
-    do not touch)."""
-    count = len(starts)
-    position = np.minimum(np.searchsorted(sorted_starts, ends), count - 1)
-    if np.any(sorted_starts[position] != ends):
-        vertex = int(ends[np.flatnonzero(sorted_starts[position] != ends)[0]])
+def _cut(values: np.ndarray, cuts: np.ndarray) -> list[np.ndarray]:
+    """``values`` cut before each index of ``cuts`` (np.split, without its
+    per-piece overhead)."""
+    bounds = [0, *cuts.tolist(), len(values)]
+    return [values[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def _successors(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """(k,) the edge each edge goes on to: the k-th edge ending at a vertex
+    to the k-th edge starting there, both by edge index."""
+    out_order = np.argsort(starts, kind="stable")
+    in_order = np.argsort(ends, kind="stable")
+    mismatch = starts[out_order] != ends[in_order]
+    if np.any(mismatch):
+        vertex = int(ends[in_order][np.flatnonzero(mismatch)[0]])
         raise GeometryError(f"internal error: the outline is not closed at vertex {vertex}")
-    successor = order[position]
-    steps = max(1, int(count).bit_length())
-    # Each edge's loop label: the smallest edge index on its cycle.
+    successor = np.empty(len(starts), dtype=np.int64)
+    successor[in_order] = out_order
+    return successor
+
+
+def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges in loop order (each loop from its lowest edge index, loops by
+    that index) and the positions in that order where a new loop begins."""
+    count = len(successor)
+    # Each edge's loop label: the smallest edge index on its cycle. After s
+    # doublings a label is the least of 2^s successors; it is final once
+    # every edge agrees with its successor (then each cycle holds one value,
+    # which must be its least index), checked every second doubling.
     label, jump = np.arange(count), successor.copy()
-    for _ in range(steps):
+    for step in range(max(1, int(count).bit_length())):
         label = np.minimum(label, label[jump])
         jump = jump[jump]
+        if step % 2 and np.array_equal(label[successor], label):
+            break
     # Cut each cycle before its labelled edge and rank edges by their distance
     # to the cut: the labelled edge comes first, then its successors in order.
     indices = np.arange(count)
     last = successor == label
     after = np.where(last, indices, successor)
     remaining = (~last).astype(np.int64)
-    for _ in range(steps):
+    longest = int(np.bincount(label).max())
+    for _ in range(max(1, longest.bit_length())):  # distances double each step
         remaining = remaining + np.where(after == indices, 0, remaining[after])
         after = after[after]
-    walk = np.lexsort((-remaining, label))
-    cuts = np.flatnonzero(np.diff(label[walk])) + 1
-    return [loop for loop in np.split(starts[walk], cuts) if len(loop) >= 3]
+    # Place each edge directly (no sort): loops in label order, each from its
+    # labelled edge, which has the most edges remaining.
+    sizes = np.bincount(label, minlength=count)
+    offsets = np.cumsum(sizes) - sizes
+    walk = np.empty(count, dtype=np.int64)
+    walk[offsets[label] + sizes[label] - 1 - remaining] = indices
+    cuts = offsets[sizes > 0][1:]
+    return walk, cuts
+
+
+def silhouette_loops_many(
+    caster: Caster, fronts: list[np.ndarray]
+) -> list[tuple[list[np.ndarray], np.ndarray]]:
+    """:func:`silhouette_loops` of a closed caster for many lights at once.
+
+    Parameters
+    ----------
+    caster : Caster
+        A closed caster (:attr:`Caster.is_closed`).
+    fronts : list of (m,) bool
+        The front faces of each light.
+
+    Returns
+    -------
+    list of (loops, vertices)
+        One pair per light, equal array for array to what
+        :func:`silhouette_loops` gives for that light alone.
+
+    Notes
+    -----
+    The front bits of 64 lights are packed into one 64-bit word per face, so
+    one XOR per edge finds the edges where the bit changes for all 64; only
+    those edges are unpacked, and the outlines of all the lights are chained
+    together (each light's vertices numbered apart).
+    """
+    result: list[tuple[list[np.ndarray], np.ndarray]] = []
+    for first in range(0, len(fronts), _WORD):
+        result.extend(_silhouettes_of_word(caster, fronts[first : first + _WORD]))
+    return result
+
+
+# Lights whose front bits share one machine word in silhouette_loops_many.
+_WORD = 64
+
+
+def _pack_bits(fronts: list[np.ndarray]) -> np.ndarray:
+    """(m,) uint64 words from up to 64 (m,) bool arrays: bit k of word f is
+    ``fronts[k][f]``. Eight lights at a time make one byte of each word."""
+    rows = np.zeros((_WORD, len(fronts[0])), dtype=np.uint8)
+    rows[: len(fronts)] = fronts
+    packed = np.empty((len(fronts[0]), _WORD // 8), dtype=np.uint8)
+    for byte in range(_WORD // 8):
+        group = rows[8 * byte : 8 * byte + 8]
+        value = group[0].copy()
+        for bit in range(1, 8):
+            value |= group[bit] << bit
+        packed[:, byte] = value
+    words: np.ndarray = packed.view(np.uint64).reshape(-1)
+    return words
+
+
+def _silhouettes_of_word(
+    caster: Caster, fronts: list[np.ndarray]
+) -> list[tuple[list[np.ndarray], np.ndarray]]:
+    n_lights = len(fronts)
+    words = _pack_bits(fronts)
+    slots = caster.edge_face_slots
+    faces_of = slots // 3
+    changes = words[faces_of[:, 0]] ^ words[faces_of[:, 1]]
+    changed = np.flatnonzero(changes)
+    # (64, k) flags, light-major: each light's edges in index order, as
+    # front_boundary has them
+    flags = np.unpackbits(
+        np.ascontiguousarray(changes[changed].view(np.uint8).reshape(-1, 8).T),
+        axis=0,
+        bitorder="little",
+    )
+    light_of, row = np.nonzero(flags)
+    outline = changed[row]
+    first_front = (words[faces_of[outline, 0]] >> light_of.astype(np.uint64)) & np.uint64(1)
+    light_of = light_of.astype(np.int64)
+    front_slot = np.where(first_front.astype(bool), slots[outline, 0], slots[outline, 1])
+    directed = _directed_edges(caster, front_slot)
+    n_vertices = np.int64(len(caster.vertices))
+    starts = directed[:, 0] + light_of * n_vertices  # each light's vertices apart
+    ends = directed[:, 1] + light_of * n_vertices
+    loops: list[list[np.ndarray]] = [[] for _ in range(n_lights)]
+    if len(starts):
+        walk, cuts = _cycle_walk(_successors(starts, ends))
+        owners = light_of[walk[np.concatenate([[0], cuts])]]
+        for loop, owner in zip(_cut(starts[walk], cuts), owners.tolist(), strict=True):
+            if len(loop) >= 3:
+                loops[owner].append(loop - owner * n_vertices)
+    used = np.zeros(n_lights * int(n_vertices), dtype=bool)
+    used[starts] = True
+    used[ends] = True
+    keys = np.flatnonzero(used)
+    key_bounds = np.searchsorted(keys, np.arange(n_lights + 1) * n_vertices)
+    return [
+        (loops[light], keys[key_bounds[light] : key_bounds[light + 1]] - light * n_vertices)
+        for light in range(n_lights)
+    ]
 
 
 def check_light_outside(caster: Caster, position: np.ndarray, tolerance: Tolerance) -> None:
@@ -340,3 +435,29 @@ def _point_segment_distance(point: np.ndarray, start: np.ndarray, end: np.ndarra
     t = np.clip(t, 0.0, 1.0)
     distances: np.ndarray = np.linalg.norm(start + t[:, None] * direction - point, axis=1)
     return distances
+
+
+def vertex_components(caster: Caster) -> np.ndarray:
+    """(n,) int64 label of each vertex's connected part of the mesh (joined by
+    faces): the least vertex index of that part.
+
+    Hook and compress: every edge hooks the larger root under the smaller,
+    then pointers jump to their roots; a few rounds for a mesh of many small
+    parts, O(log n) rounds in general.
+    """
+    label = np.arange(len(caster.vertices))
+    faces = caster.faces
+    first = np.concatenate([faces[:, 0], faces[:, 1]])
+    second = np.concatenate([faces[:, 1], faces[:, 2]])
+    while True:
+        a, b = label[first], label[second]
+        differ = a != b
+        if not np.any(differ):
+            return label
+        a, b = a[differ], b[differ]
+        np.minimum.at(label, np.maximum(a, b), np.minimum(a, b))
+        while True:
+            jumped = label[label]
+            if np.array_equal(jumped, label):
+                break
+            label = jumped

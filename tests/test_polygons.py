@@ -138,3 +138,70 @@ def test_a_part_with_many_holes_is_triangulated_in_tiles_with_its_exact_area():
     expected = (61.0 * 61.0 - 400.0) * 1e12
     assert doubled.sum() / 2 == pytest.approx(expected, rel=1e-12)
     assert parts_area(parts) == pytest.approx(expected, rel=1e-12)
+
+
+def test_union_parts_equal_one_union_and_shapely_past_the_cell_threshold():
+    from shadowgeo.polygons import components, fill, parts_area, union_parts, union_region
+
+    rng = np.random.default_rng(9)
+    outlines = _random_outlines(2400, 1)
+    outlines = [loop * 4.0 for loop in outlines]  # radius 4 to 24, about half the square covered
+    outlines = [loop + rng.uniform(0, 1500, 2) for loop in outlines]
+    groups = list(range(len(outlines)))
+    # Groups of several loops: rings (outer counter-clockwise, hole clockwise),
+    # whose hole loop alone winds -1: it must stay in its outer's cell.
+    rings = []
+    for centre in rng.uniform(0, 1500, (60, 2)):
+        angles = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+        circle = np.column_stack([np.cos(angles), np.sin(angles)])
+        rings.append((centre + 30 * circle, centre + 12 * circle[::-1]))
+    for row in range(3):  # long bars with a hole near one end: far from the bar's centre
+        y = 200.0 + 500 * row
+        bar = np.array([[0.0, y], [1500, y], [1500, y + 40], [0, y + 40]])
+        rings.append(
+            (bar, np.array([[1400.0, y + 10], [1400, y + 30], [1450, y + 30], [1450, y + 10]]))
+        )
+    loops = outlines + [loop for ring in rings for loop in ring]
+    groups = np.array(groups + [len(outlines) + k for k in range(len(rings)) for _ in range(2)])
+    scaled = [loop * 1e4 for loop in loops]
+    grouped = union_parts(scaled, lambda: groups)
+    direct = fill(scaled)
+    reference = shapely.union_all(
+        [shapely.Polygon(loop * 1e4) for loop in outlines]
+        + [shapely.Polygon(outer * 1e4, [hole * 1e4]) for outer, hole in rings]
+    )
+    assert parts_area(grouped) == pytest.approx(reference.area, rel=1e-12)
+    assert parts_area(components(direct)) == pytest.approx(reference.area, rel=1e-12)
+    assert len(grouped) == len(getattr(reference, "geoms", [reference]))
+    region = union_region(scaled, lambda: groups)
+    assert region.area() == pytest.approx(reference.area, rel=1e-12)
+    # a few loops take the one-union path, the same region
+    few = scaled[:50]
+    assert parts_area(union_parts(few, lambda: groups[:50])) == pytest.approx(fill(few).area())
+
+
+def test_union_parts_keep_an_islands_hole_when_the_part_around_it_is_united_again():
+    from shadowgeo.polygons import parts_area, union_parts
+
+    def square(x0, y0, x1, y1):
+        return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=float)
+
+    # A square ring whose outline reaches a neighbour cell's filler square
+    # (so the ring is united again), and in its courtyard an island with a
+    # pond, in the ring's own cell: the island's part is final, pond and all.
+    ring = [square(0, 0, 100, 100), square(10, 10, 90, 90)[::-1]]
+    island = [square(40, 40, 60, 60), square(45, 45, 55, 55)[::-1]]
+    fillers = [
+        square(200 + 3 * (k % 50), 3 * (k // 50), 201 + 3 * (k % 50), 1 + 3 * (k // 50))
+        for k in range(2500)
+    ]
+    fillers.append(square(95, 50, 205, 52))  # reaches from the fillers into the ring
+    loops = ring + island + fillers
+    groups = np.array([0, 0, 1, 1] + list(range(2, 2 + len(fillers))))
+    parts = union_parts([loop * 1e5 for loop in loops], lambda: groups)
+    reference = shapely.union_all(
+        [shapely.Polygon(ring[0], [ring[1]]), shapely.Polygon(island[0], [island[1]])]
+        + [shapely.Polygon(loop) for loop in fillers]
+    )
+    assert parts_area(parts) == pytest.approx(reference.area * 1e10, rel=1e-12)
+    assert sorted(len(part) for part in parts)[-2:] == [2, 2]  # ring and island keep their holes

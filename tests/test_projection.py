@@ -528,7 +528,9 @@ def test_outline_path_matches_the_triangle_union(closed, light, height):
 # -- casters standing on the receiver ----------------------------------------------------
 
 
-def _boxes_on_the_ground(count: int, seed: int, sink: float = 0.0) -> trimesh.Trimesh:
+def _boxes_on_the_ground(
+    count: int, seed: int, sink: float = 0.0, spread: float = 8.0
+) -> trimesh.Trimesh:
     """``count`` boxes standing on y = 0 (their bases lowered by ``sink``, as
     rounding in a scene's transforms would), turned at random, some overlapping."""
     rng = np.random.default_rng(seed)
@@ -537,7 +539,9 @@ def _boxes_on_the_ground(count: int, seed: int, sink: float = 0.0) -> trimesh.Tr
         width, height, depth = rng.uniform(1, 3), rng.uniform(1, 6), rng.uniform(1, 3)
         box = trimesh.creation.box([width, height, depth])
         box.apply_transform(trimesh.transformations.rotation_matrix(rng.uniform(0, 3), [0, 1, 0]))
-        box.apply_translation([*rng.uniform(-8, 8, 1), height / 2, *rng.uniform(-8, 8, 1)])
+        box.apply_translation(
+            [*rng.uniform(-spread, spread, 1), height / 2, *rng.uniform(-spread, spread, 1)]
+        )
         box.vertices[box.vertices[:, 1] < 1e-9, 1] = -sink
         boxes.append(box)
     return trimesh.util.concatenate(boxes)
@@ -624,3 +628,58 @@ def test_a_bad_light_in_a_sequence_is_named_by_its_index():
     with pytest.raises(GeometryError, match="light 1: .*on the receiving plane"):
         project_shadow(caster, [PointLight([0, 5, 0]), PointLight([3, 0, 0])], GROUND)
     assert project_shadow(caster, [], GROUND) == []
+
+
+def _front_triangle_union(mesh: trimesh.Trimesh, light, plane: Plane) -> shapely.Geometry:
+    """Independent reference for a closed caster wholly between the light and
+    the plane: every triangle's corners taken along the light's rays to the
+    plane, and all the triangles united by shapely (GEOS)."""
+    if isinstance(light, DirectionalLight):
+        flat = along_direction(mesh.vertices, light.direction, plane.normal, plane.offset)
+    else:
+        flat = ray_plane(mesh.vertices, light.position, plane.normal, plane.offset)
+    uv = to_uv(plane, flat)[mesh.faces]
+    triangles = shapely.polygons(uv)
+    return shapely.union_all(triangles[shapely.area(triangles) > 0])
+
+
+def test_a_batch_of_many_lights_matches_single_calls_and_a_triangle_union():
+    # More than one 64-light word of front bits, both kinds, on a dented
+    # (non-convex) sphere whose silhouettes have several loops that touch.
+    mesh = trimesh.creation.icosphere(subdivisions=3)
+    mesh.vertices[mesh.vertices[:, 1] > 0.6] *= [1, 0.6, 1]
+    mesh.apply_translation([0, 2.5, 0])
+    rng = np.random.default_rng(11)
+    lights = [
+        PointLight([*rng.uniform(-3, 3, 1), rng.uniform(5, 9), *rng.uniform(-3, 3, 1)])
+        if k % 2
+        else DirectionalLight([rng.uniform(-1, 1), -rng.uniform(0.4, 1), rng.uniform(-1, 1)])
+        for k in range(150)
+    ]
+    batch = project_shadow(mesh, lights, GROUND)
+    for index, (light, shadow) in enumerate(zip(lights, batch, strict=True)):
+        single = project_shadow(mesh, light, GROUND)
+        assert shadow.area == single.area
+        assert shadow.diagnostics == single.diagnostics
+        for part, other in zip(shadow.polygons, single.polygons, strict=True):
+            assert all(np.array_equal(a, b) for a, b in zip(part, other, strict=True))
+        if index % 10 == 0:  # the reference is slow: every tenth light
+            expected = _front_triangle_union(mesh, light, GROUND)
+            assert shadow.area == pytest.approx(expected.area, rel=1e-9)
+            assert region(shadow).symmetric_difference(expected).area < 1e-9 * expected.area
+
+
+def test_thousands_of_buildings_are_united_exactly():
+    # Past the count where the 2-D union goes cell by cell.
+    count = 2500
+    mesh = _boxes_on_the_ground(count, seed=8, spread=200.0)
+    light = DirectionalLight([0.45, -0.75, 0.3])
+    shadow = project_shadow(mesh, light, GROUND)
+    corners = along_direction(mesh.vertices, light.direction, GROUND.normal, GROUND.offset)
+    hulls = shapely.convex_hull(shapely.multipoints(to_uv(GROUND, corners).reshape(count, 8, 2)))
+    expected = shapely.union_all(hulls)  # each box's shadow: the hull of its corners' images
+    assert shadow.diagnostics.n_loops == count  # one outline per building
+    assert shadow.area == pytest.approx(expected.area, rel=1e-9)
+    # the same region, holes (courtyards) and all
+    assert region(shadow).symmetric_difference(expected).area < 1e-9 * expected.area
+    assert len(shadow.polygons) == len(getattr(expected, "geoms", [expected]))

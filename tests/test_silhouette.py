@@ -272,3 +272,59 @@ def test_chain_of_loops_touching_at_a_vertex_uses_every_edge_once(seed):
     ends = np.where(ends == cycles[-1][0], shared, ends)
     loops = chain(starts, ends)
     assert sorted(loop_edges(loops)) == sorted(zip(starts.tolist(), ends.tolist(), strict=True))
+
+
+def test_silhouettes_of_many_lights_at_once_equal_each_lights_own():
+    from shadowgeo.silhouette import light_homogeneous, silhouette_loops, silhouette_loops_many
+
+    # A dented sphere (loops that touch at vertices) and two cubes sharing a
+    # corner (outlines meeting there), lit from 150 directions and points:
+    # more than two 64-light words, the last one partly filled.
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    sphere.vertices[sphere.vertices[:, 1] > 0.5] *= [1, 0.5, 1]
+    cubes = trimesh.util.concatenate(
+        [trimesh.creation.box(), trimesh.creation.box().apply_translation([1, 1, 1])]
+    )
+    cubes.merge_vertices()
+    rng = np.random.default_rng(4)
+    for mesh in (sphere, cubes):
+        caster = as_caster(mesh)
+        assert caster.is_closed
+        lights = [DirectionalLight(rng.normal(size=3)) for _ in range(75)]
+        lights += [PointLight(rng.normal(size=3) * 4 + [0, 0, 6]) for _ in range(75)]
+        fronts = [caster.facing(light_homogeneous(caster, light)) > 0 for light in lights]
+        together = silhouette_loops_many(caster, fronts)
+        assert len(together) == len(lights)
+        for light, front, (loops, vertices) in zip(lights, fronts, together, strict=True):
+            alone_loops, alone_vertices = silhouette_loops(caster, front)
+            np.testing.assert_array_equal(vertices, alone_vertices)
+            assert len(loops) == len(alone_loops)
+            assert all(np.array_equal(a, b) for a, b in zip(loops, alone_loops, strict=True))
+            # and against the brute-force outline: every silhouette edge once
+            expected, _ = brute_force_silhouette(mesh.faces, brute_force_front(mesh, light))
+            assert sorted(loop_edges(loops)) == sorted(expected)
+
+
+def test_vertex_components_label_each_part_by_its_least_vertex():
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from shadowgeo.silhouette import vertex_components
+
+    rng = np.random.default_rng(2)
+    parts = [
+        trimesh.creation.icosphere(subdivisions=2).apply_translation(rng.uniform(-9, 9, 3))
+        for _ in range(5)
+    ] + [trimesh.creation.box().apply_translation(rng.uniform(-9, 9, 3)) for _ in range(7)]
+    mesh = trimesh.util.concatenate(parts)
+    order = rng.permutation(len(mesh.vertices))  # interleave the parts' vertex numbers
+    inverse = np.argsort(order)
+    vertices, faces = mesh.vertices[order], inverse[mesh.faces]
+    labels = vertex_components(as_caster((vertices, faces)))
+    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]]])
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), (len(vertices),) * 2)
+    count, expected = connected_components(graph, directed=False)
+    assert count == len(parts) == len(np.unique(labels))
+    for part in range(count):
+        members = np.flatnonzero(expected == part)
+        assert np.all(labels[members] == members.min())
