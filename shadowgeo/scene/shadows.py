@@ -364,14 +364,19 @@ def _caster_loops(
     skipped, with a note.
     """
     owners = unique_integers(casters.face_owner[faces])
-    if len(owners) > 1:
-        try:
-            shadow = project_shadow(
-                casters.mesh(faces), light, plane, receiver=rectangle, tolerance=tolerance
-            )
-            return [loop for part in shadow.polygons for loop in part]
-        except GeometryError:
-            pass  # find the caster at fault, below
+    if not len(owners):
+        return []
+    try:
+        shadow = project_shadow(
+            casters.mesh(faces), light, plane, receiver=rectangle, tolerance=tolerance
+        )
+        return [loop for part in shadow.polygons for loop in part]
+    except GeometryError as error:
+        if len(owners) == 1:
+            name = casters.casters[owners[0]].name
+            notes.append(f"shadows: {name} does not cast for light {light_name}: {error}")
+            return []
+    # find the caster at fault: each alone
     loops = []
     for owner in owners:
         caster = casters.casters[owner]
