@@ -357,6 +357,8 @@ def _camera_worlds(document: dict[str, Any]) -> list[tuple[int, np.ndarray]]:
     """(node index, world transform) of every camera node of the default
     scene, in the file's node order (trimesh re-parents camera nodes)."""
     nodes = document.get("nodes") or []
+    if not any("camera" in node for node in nodes):
+        return []  # no world transform to compute (10,000 nodes cost a second)
     scenes = document.get("scenes") or [{"nodes": list(range(len(nodes)))}]
     roots = scenes[int(document.get("scene", 0))].get("nodes") or []
     found: dict[int, np.ndarray] = {}
