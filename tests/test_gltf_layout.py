@@ -96,3 +96,19 @@ def test_empty_shapes_keep_their_shadow_flags_through_gltf(tmp_path):
         ("e", False, True),
         ("t", True, False),
     ]
+
+
+@pytest.mark.parametrize(
+    ("document", "pointer", "wanted"),
+    [
+        ({"nodes": [{}, {}, {}, {"name": 7}]}, "/nodes/3/name", "a string"),
+        ({"nodes": [{"children": [1, True]}]}, "/nodes/0/children/1", "an integer"),
+        ({"meshes": [{"primitives": [{}, []]}]}, "/meshes/0/primitives/1", "an object"),
+        ({"scene": "zero"}, "/scene", "an integer"),
+    ],
+)
+def test_a_member_of_the_wrong_type_is_named_by_its_json_pointer(document, pointer, wanted):
+    from shadowgeo.io.gltf_layout import check_types
+
+    with pytest.raises(sg.SceneError, match=f"malformed glTF: {pointer} is .*, not {wanted}"):
+        check_types({"asset": {"version": "2.0"}, **document}, Path("scene.gltf"))
