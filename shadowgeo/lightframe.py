@@ -117,8 +117,25 @@ def _clip_rows(
     return out, counts
 
 
+# Triangles as (n, 3, 3) corners, or as (points (p, 3), faces (n, 3)) that
+# share their corners: per-point work is then done once per point.
+Triangles = np.ndarray | tuple[np.ndarray, np.ndarray]
+
+
+def _indexed(triangles: Triangles) -> tuple[np.ndarray, np.ndarray]:
+    """(points, faces) of triangles given either way; corners one by one
+    where the faces use fewer corners than there are points."""
+    if isinstance(triangles, tuple):
+        points, faces = triangles
+        if 3 * len(faces) >= len(points):
+            return points, faces
+        triangles = points[faces]
+    corners = np.asarray(triangles).reshape(-1, 3)
+    return corners, np.arange(len(corners)).reshape(-1, 3)
+
+
 def _directional_boxes(
-    triangles: np.ndarray, direction: np.ndarray
+    points: np.ndarray, faces: np.ndarray, direction: np.ndarray
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """One frame, the plane across the rays: every triangle and its (n, 4) box."""
     axis = np.zeros(3)
@@ -126,33 +143,46 @@ def _directional_boxes(
     first = np.cross(direction, axis)
     first /= np.linalg.norm(first)
     second = np.cross(direction, first)
-    x = triangles @ first
-    y = triangles @ second
+    x = (points @ first)[faces]
+    y = (points @ second)[faces]
     boxes = np.column_stack([corner_min(x), corner_min(y), corner_max(x), corner_max(y)])
-    return [(np.arange(len(triangles)), boxes)]
+    return [(np.arange(len(faces)), boxes)]
 
 
-def _cube_boxes(triangles: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+def _cube_boxes(points: np.ndarray, faces: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     """Six frames around a light at the origin: for each cube side, the
     triangles whose image reaches it and (k, 4) boxes of their images there."""
-    # Each corner's side: its largest coordinate. A triangle with all three
+    # Each point's side: its largest coordinate. A triangle with all three
     # corners on one side lies inside that side's pyramid (it is convex).
-    largest = np.argmax(np.abs(triangles), axis=2)
-    positive = np.take_along_axis(triangles, largest[:, :, None], axis=2)[:, :, 0] > 0
-    side_of = 2 * largest + np.where(positive, 0, 1)  # index into _CUBE_SIDES
-    whole = np.all(side_of == side_of[:, :1], axis=1)
+    # Column by column: numpy reduces a short axis many times slower.
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
+    largest = np.where((ax >= ay) & (ax >= az), 0, np.where(ay >= az, 1, 2))
+    coordinate = np.where(largest == 0, x, np.where(largest == 1, y, z))
+    positive = coordinate > 0
+    side = 2 * largest + np.where(positive, 0, 1)  # index into _CUBE_SIDES
+    w = np.where(positive, coordinate, -coordinate)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.where(largest == 0, y, x) / w
+        v = np.where(largest == 2, y, z) / w
+    side_of = side[faces]
+    whole = (side_of[:, 0] == side_of[:, 1]) & (side_of[:, 1] == side_of[:, 2])
     spanning = np.flatnonzero(~whole)
+    complete = np.flatnonzero(whole)
+    face_u, face_v = u[faces[complete]], v[faces[complete]]
+    all_boxes = np.column_stack(
+        [corner_min(face_u), corner_min(face_v), corner_max(face_u), corner_max(face_v)]
+    )
+    which = side_of[complete, 0]
+    corners = points[faces[spanning]] if len(spanning) else None
     out = []
     for index, (axis, sign) in enumerate(_CUBE_SIDES):
         across = [a for a in range(3) if a != axis]
-        mine = np.flatnonzero(whole & (side_of[:, 0] == index))
-        chunk = triangles[mine]
-        w = sign * chunk[:, :, axis]
-        u, v = chunk[:, :, across[0]] / w, chunk[:, :, across[1]] / w
-        boxes = [np.column_stack([corner_min(u), corner_min(v), corner_max(u), corner_max(v)])]
-        members = [mine]
-        if len(spanning):
-            found, box = _clipped_boxes(triangles[spanning], axis, sign, across)
+        here = np.flatnonzero(which == index)
+        boxes = [all_boxes[here]]
+        members = [complete[here]]
+        if corners is not None:
+            found, box = _clipped_boxes(corners, axis, sign, across)
             boxes.append(box)
             members.append(spanning[found])
         out.append((np.concatenate(members), np.concatenate(boxes)))
@@ -188,31 +218,78 @@ def _clipped_boxes(
     return has, box
 
 
+def _half_plane(direction: np.ndarray, through: np.ndarray) -> np.ndarray:
+    """(n, 3) coefficients of ``cross(direction, p - through) >= 0`` on
+    homogeneous points ``(x, y, 1)``: the left of the line along ``direction``."""
+    return np.column_stack(
+        [
+            -direction[:, 1],
+            direction[:, 0],
+            direction[:, 1] * through[:, 0] - direction[:, 0] * through[:, 1],
+        ]
+    )
+
+
+def _overall(boxes: np.ndarray) -> list[float]:
+    """The (4,) box around (n, 4) boxes, column by column (numpy reduces a
+    short axis of a 2-D array many times slower)."""
+    return [
+        float(boxes[:, 0].min()),
+        float(boxes[:, 1].min()),
+        float(boxes[:, 2].max()),
+        float(boxes[:, 3].max()),
+    ]
+
+
+def _meets(boxes: np.ndarray, box: list[float]) -> np.ndarray:
+    """(n,) bool: which of (n, 4) boxes meet one box."""
+    meets: np.ndarray = (
+        (boxes[:, 0] <= box[2])
+        & (boxes[:, 1] <= box[3])
+        & (boxes[:, 2] >= box[0])
+        & (boxes[:, 3] >= box[1])
+    )
+    return meets
+
+
 def overlapping_boxes(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(i, j) index arrays of every box ``first[i]`` that overlaps ``second[j]``;
     boxes are (n, 4) ``(xmin, ymin, xmax, ymax)``.
 
-    Two sets of very different sizes (a terrain against a few hundred caster
-    triangles) go through a uniform grid in numpy; similar sizes through
-    shapely's STRtree, whose cost is mostly making one box geometry per box.
+    Only boxes that meet the other set's overall box take part (a terrain
+    against the few triangles of one caster keeps the faces under it). Those
+    go through a uniform grid in numpy (:func:`_grid_pairs`), or through
+    shapely's STRtree where the grid would pair too many boxes that cover
+    many of its cells with everything.
     """
-    if 8 * min(len(first), len(second)) < max(len(first), len(second)):
-        return _grid_pairs(first, second)
-    tree = shapely.STRtree(shapely.box(*second.T))
-    # The geometries are their own envelopes: the tree's box test is the whole test.
-    found = tree.query(shapely.box(*first.T))
-    return found[0], found[1]
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+    if len(first) == 0 or len(second) == 0:
+        return empty
+    mine = np.flatnonzero(_meets(first, _overall(second)))
+    theirs = np.flatnonzero(_meets(second, _overall(first)))
+    if len(mine) == 0 or len(theirs) == 0:
+        return empty
+    found = _grid_pairs(first[mine], second[theirs])
+    if found is None:
+        tree = shapely.STRtree(shapely.box(*second[theirs].T))
+        # The geometries are their own envelopes: the tree's box test is the whole test.
+        found = tuple(tree.query(shapely.box(*first[mine].T)))
+    return mine[found[0]], theirs[found[1]]
 
 
-def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """Every (i, j) with box ``first[i]`` overlapping box ``second[j]``, by a
     uniform grid with cells twice a typical box: each box is listed in the
     cells it covers, boxes sharing a cell are paired, and the pairs are checked
-    and made unique. Boxes covering very many cells meet every other box."""
-    sizes = np.concatenate([first[:, 2:] - first[:, :2], second[:, 2:] - second[:, :2]])
-    low = np.minimum(first[:, :2].min(axis=0), second[:, :2].min(axis=0))
-    high = np.maximum(first[:, 2:].max(axis=0), second[:, 2:].max(axis=0))
-    cell = np.maximum(np.median(sizes, axis=0) * 2.0, (high - low) / 4096)
+    and made unique. Boxes covering very many cells meet every other box;
+    None where that would make many more pairs than boxes."""
+    box_first, box_second = _overall(first), _overall(second)
+    low = np.minimum(box_first[:2], box_second[:2])
+    high = np.maximum(box_first[2:], box_second[2:])
+    width = np.concatenate([first[:, 2] - first[:, 0], second[:, 2] - second[:, 0]])
+    height = np.concatenate([first[:, 3] - first[:, 1], second[:, 3] - second[:, 1]])
+    typical = np.array([np.median(width), np.median(height)])
+    cell = np.maximum(typical * 2.0, (high - low) / 4096)
     cell = np.maximum(cell, 1e-300)
     columns = int(np.ceil((high[0] - low[0]) / cell[0])) + 1
 
@@ -235,6 +312,8 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
 
     owner_a, cell_a, big_a = cells(first)
     owner_b, cell_b, big_b = cells(second)
+    if len(big_a) * len(second) + len(big_b) * len(first) > 4 * (len(first) + len(second)):
+        return None  # boxes too unlike in size for one grid
     order = np.argsort(cell_b, kind="stable")
     owner_b, cell_b = owner_b[order], cell_b[order]
     begin = np.searchsorted(cell_b, cell_a, side="left")
@@ -248,8 +327,12 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     j = np.concatenate(
         [j, np.tile(np.arange(len(second)), len(big_a)), np.repeat(big_b, len(first))]
     )
-    overlap = np.all(first[i, :2] <= second[j, 2:], axis=1) & np.all(
-        second[j, :2] <= first[i, 2:], axis=1
+    mine, theirs = first[i], second[j]
+    overlap = (
+        (mine[:, 0] <= theirs[:, 2])
+        & (mine[:, 1] <= theirs[:, 3])
+        & (theirs[:, 0] <= mine[:, 2])
+        & (theirs[:, 1] <= mine[:, 3])
     )
     key = np.sort(i[overlap] * np.int64(len(second)) + j[overlap])
     key = key[np.append(True, key[1:] != key[:-1])[: len(key)]]
@@ -257,8 +340,8 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def candidate_pairs(
-    receivers: np.ndarray,
-    casters: np.ndarray,
+    receivers: Triangles,
+    casters: Triangles,
     light_position: np.ndarray | None,
     direction: np.ndarray | None,
     pad: float,
@@ -267,7 +350,7 @@ def candidate_pairs(
 
     Parameters
     ----------
-    receivers, casters : (n, 3, 3) float64
+    receivers, casters : (n, 3, 3) float64, or (points (p, 3), faces (n, 3))
         Triangles, in any common frame.
     light_position : (3,) float64 or None
         A point light's position in that frame, or None for a directional light.
@@ -282,17 +365,20 @@ def candidate_pairs(
     (k,) int64 receiver indices and (k,) int64 caster indices, sorted by
     receiver, each pair once.
     """
-    if len(receivers) == 0 or len(casters) == 0:
+    receiver_points, receiver_faces = _indexed(receivers)
+    caster_points, caster_faces = _indexed(casters)
+    if len(receiver_faces) == 0 or len(caster_faces) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     if light_position is None:
         # A directional light: the caller passes its direction.
-        receiver_boxes = _directional_boxes(receivers, cast(np.ndarray, direction))
-        caster_boxes = _directional_boxes(casters, cast(np.ndarray, direction))
+        along = cast(np.ndarray, direction)
+        receiver_boxes = _directional_boxes(receiver_points, receiver_faces, along)
+        caster_boxes = _directional_boxes(caster_points, caster_faces, along)
     else:
-        receiver_boxes = _cube_boxes(receivers - light_position)
-        caster_boxes = _cube_boxes(casters - light_position)
+        receiver_boxes = _cube_boxes(receiver_points - light_position, receiver_faces)
+        caster_boxes = _cube_boxes(caster_points - light_position, caster_faces)
     keys = []
-    n_casters = np.int64(len(casters))
+    n_casters = np.int64(len(caster_faces))
     grow = np.array([-pad, -pad, pad, pad])
     for (have_mine, mine), (have_theirs, theirs) in zip(receiver_boxes, caster_boxes, strict=True):
         if len(have_mine) == 0 or len(have_theirs) == 0:
@@ -348,6 +434,141 @@ class Outline:
         )
         shapely.prepare(self.region)
         self.cross_section = united
+        # The region's loops in frame coordinates, and each boundary
+        # segment's (xmin, ymin, xmax, ymax) box.
+        self.loops = [loop / self.scale for part in self.parts for loop in part]
+        if self.loops:
+            start = np.concatenate(self.loops)
+            end = np.concatenate([np.roll(loop, -1, axis=0) for loop in self.loops])
+        else:
+            start = end = np.zeros((0, 2))
+        self.segments = np.stack([start, end], axis=1)  # (s, 2, 2)
+        self.segment_boxes = np.column_stack([np.minimum(start, end), np.maximum(start, end)])
+
+    def cut(
+        self, images: np.ndarray, margin: float | np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The region cut to each of (f, 3, 2) triangles in the frame.
+
+        1. Triangles whose box meets no boundary segment's box lie wholly
+           inside or wholly outside the region, as their first corner does;
+           the others are tested as polygons (shapely).
+        2. A triangle the boundary crosses gets signed convex pieces: the
+           region's winding number at a point ``p`` of the triangle is its
+           winding number at a reference point ``r`` (the centroid) plus the
+           signed count of boundary segments that the path from ``r`` to ``p``
+           crosses. That path stays in the triangle, so only segments whose box
+           meets the triangle's count, and segment ``ab`` is crossed exactly
+           when ``p`` lies in the wedge from ``r`` through ``a`` and ``b``,
+           beyond the line ``ab``: a convex piece of the triangle, wound
+           counter-clockwise where ``r`` lies right of ``ab`` (+1) and
+           clockwise where left (-1). With the whole triangle where ``r`` is
+           inside, the pieces' winding numbers add up to the region's (0 or 1)
+           at every point of the triangle off their edges, and the work per
+           triangle grows with the boundary near it, not the whole outline.
+        3. A triangle whose ``r`` lies within its ``margin`` of the boundary
+           (its winding there is not sure) is cut by Clipper2 instead.
+
+        Returns
+        -------
+        covered : (f,) bool
+            Triangles wholly inside the region (they get no pieces).
+        pieces : (n, k, 2) float64
+            Polygons in the frame, padded by repeating the last corner, whose
+            winding numbers add up to the region's inside their triangle.
+        owners : (n,) int64
+            The triangle of each piece.
+        """
+        count = len(images)
+        covered = np.zeros(count, dtype=bool)
+        nothing = (covered, np.zeros((0, 3, 2)), np.zeros(0, np.int64))
+        if count == 0 or not self.loops:
+            return nothing
+        boxes = np.column_stack([corner_min(images), corner_max(images)])
+        tri, seg = overlapping_boxes(boxes, self.segment_boxes)
+        crossing = np.zeros(count, dtype=bool)
+        crossing[tri] = True
+        clear = np.flatnonzero(~crossing)
+        covered[clear] = shapely.contains_xy(self.region, images[clear, 0, 0], images[clear, 0, 1])
+        near = np.flatnonzero(crossing)
+        polygons = shapely.polygons(images[near])
+        inside = shapely.covers(self.region, polygons)
+        covered[near] = inside
+        touched = np.zeros(count, dtype=bool)
+        touched[near] = shapely.intersects(self.region, polygons) & ~inside
+        if not touched.any():
+            return nothing
+        x, y = images[:, :, 0], images[:, :, 1]
+        clockwise = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
+        images = np.where(clockwise[:, None, None], images[:, ::-1], images)
+        keep = touched[tri]
+        tri, seg = tri[keep], seg[keep]
+
+        # 2. the signed pieces
+        reference = images.mean(axis=1)
+        a, b, r = self.segments[seg, 0], self.segments[seg, 1], reference[tri]
+        ab, ar = b - a, r - a
+        orient = ab[:, 0] * ar[:, 1] - ab[:, 1] * ar[:, 0]  # > 0: r left of ab
+        length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        along = np.clip(np.einsum("ij,ij->i", ar, ab) / length2, 0.0, 1.0)
+        gap = np.hypot(*(ar - along[:, None] * ab).T)  # from r to the segment
+        unsure = np.zeros(count, dtype=bool)
+        unsure[tri[gap <= np.broadcast_to(margin, (count,))[tri]]] = True
+        sure = np.flatnonzero(touched & ~unsure)
+        whole = sure[shapely.contains_xy(self.region, reference[sure, 0], reference[sure, 1])]
+        keep = ~unsure[tri] & (orient != 0)
+        tri, a, b, r, ab, orient = tri[keep], a[keep], b[keep], r[keep], ab[keep], orient[keep]
+        turn = np.sign(orient)[:, None]
+        planes = np.stack(
+            [
+                turn * _half_plane(a - r, r),  # the wedge's two sides
+                -turn * _half_plane(b - r, r),
+                -turn * _half_plane(ab, a),  # beyond ab
+            ],
+            axis=1,
+        )
+        homogeneous = np.concatenate([images[tri], np.ones((len(tri), 3, 1))], axis=2)
+        clipped, counts = clip_batch(homogeneous, np.full(len(tri), 3), planes)
+        made = counts >= 3
+        width = max(clipped.shape[1], 3)
+        slots = np.arange(width)
+        last = np.minimum(slots[None, :], np.maximum(counts, 1)[:, None] - 1)
+        pieces = np.pad(clipped[:, :, :2], ((0, 0), (0, width - clipped.shape[1]), (0, 0)))
+        pieces = np.take_along_axis(pieces, last[:, :, None], axis=1)
+        pieces = np.where((orient > 0)[:, None, None], pieces[:, ::-1], pieces)[made]
+        whole_pieces = np.pad(images[whole], ((0, 0), (0, width - 3), (0, 0)), mode="edge")
+
+        # 3. Clipper2 where the reference point is not sure
+        loops, loop_owners = self.clip_to(images[unsure])
+        extra = [
+            np.pad(loop, ((0, max(width - len(loop), 0)), (0, 0)), mode="edge")[None]
+            for loop in loops
+        ]
+        parts = [pieces, whole_pieces]
+        if extra:
+            widest = max(width, max(part.shape[1] for part in extra))
+            parts = [
+                np.pad(part, ((0, 0), (0, widest - part.shape[1]), (0, 0)), mode="edge")
+                for part in [*parts, *extra]
+                if len(part)
+            ]
+        return (
+            covered,
+            np.concatenate(parts) if parts else np.zeros((0, width, 2)),
+            np.concatenate([tri[made], whole, np.flatnonzero(unsure)[loop_owners]]),
+        )
+
+    def clip_to(self, images: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+        """The region cut to each of (f, 3, 2) counter-clockwise triangles in
+        the frame: loops, and (n,) the triangle of each loop."""
+        loops: list[np.ndarray] = []
+        owners: list[int] = []
+        for k, image in enumerate(images):
+            piece = self.cross_section ^ fill([image * self.scale])
+            for loop in piece.to_polygons():
+                loops.append(np.asarray(loop) / self.scale)
+                owners.append(k)
+        return loops, np.array(owners, dtype=np.int64)
 
     def ahead(self, points: np.ndarray) -> np.ndarray:
         """(..., ) distance of points ahead of the light along the frame's axis

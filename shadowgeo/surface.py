@@ -73,6 +73,10 @@ _BATCH = 200_000
 # bounding ball centre, radius).
 _Outlined = tuple[Outline, np.ndarray, tuple[np.ndarray, np.ndarray, float]]
 
+# Polygons in face frames, (n, k, 2) padded by repeating the last corner, and
+# (n,) the face of each.
+_Pieces = tuple[np.ndarray, np.ndarray]
+
 
 @dataclass(frozen=True)
 class SurfaceDiagnostics:
@@ -350,34 +354,40 @@ class _SurfaceProjector:
 
     def _pairs(
         self, corners: np.ndarray, lit: np.ndarray
-    ) -> tuple[
-        np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[int, list[np.ndarray]], tuple[int, int]
-    ]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, _Pieces, tuple[int, int]]:
         """(face, caster triangle) pairs to clip, sorted by face; the caster
-        triangles; faces wholly inside an outline; outline parts per face;
-        and (candidate pairs, outlined casters) counts."""
+        triangles; faces wholly inside an outline; outline pieces on the
+        others; and (candidate pairs, outlined casters) counts."""
         tol, light = self.tol, self.light
         lit_faces = np.flatnonzero(lit)
         caster_triangles, outlined = self._caster_triangles()
         direction = None if is_positional(light) else light.direction
         pad = 1e-9 if is_positional(light) else tol.length
         found_faces, found_triangles = candidate_pairs(
-            corners[lit_faces], caster_triangles, self.light_point, direction, pad
+            (self.vertices, self.faces[lit_faces]),
+            caster_triangles,
+            self.light_point,
+            direction,
+            pad,
         )
         receiver_parts = [lit_faces[found_faces]]
         triangle_parts = [found_triangles]
         # Closed casters wholly in front of a face: their outline, not their triangles.
         full = np.zeros(len(corners), dtype=bool)
-        extra: dict[int, list[np.ndarray]] = {}
+        extra: list[_Pieces] = []
         all_triangles = [caster_triangles]
         base = len(caster_triangles)
         for outline, front_triangles, bound in outlined:
             eligible = self._outline_faces(outline, bound, corners, lit)
-            self._apply_outline(outline, np.flatnonzero(eligible), corners, full, extra)
+            extra.append(self._apply_outline(outline, np.flatnonzero(eligible), corners, full))
             others = np.flatnonzero(lit & ~eligible)
             others = others[outline.may_reach(corners[others])]
             found, their = candidate_pairs(
-                corners[others], front_triangles, self.light_point, direction, pad
+                (self.vertices, self.faces[others]),
+                front_triangles,
+                self.light_point,
+                direction,
+                pad,
             )
             receiver_parts.append(others[found])
             triangle_parts.append(their + base)
@@ -397,7 +407,9 @@ class _SurfaceProjector:
         )
         front = (corner_max(heights) > tol.length) & ~full[receivers]
         counts = (n_candidates, len(outlined))
-        return receivers[front], triangles[front], caster_triangles, full, extra, counts
+        pieces = _pad_polygons([part[0] for part in extra])
+        owners = np.concatenate([part[1] for part in extra] + [np.zeros(0, np.int64)])
+        return receivers[front], triangles[front], caster_triangles, full, (pieces, owners), counts
 
     def _caster_triangles(self) -> tuple[np.ndarray, list[_Outlined]]:
         """(t, 3, 3) caster triangles handled one by one, in the centred frame
@@ -465,7 +477,7 @@ class _SurfaceProjector:
         offsets = -np.einsum("ij,ij->i", unit, corners[:, 0])
         in_front = np.minimum.reduce(box @ unit.T + offsets) > self.tol.length
         in_front |= unit @ centre + offsets - radius > self.tol.length
-        ahead = corner_min(outline.ahead(corners)) > self.tol.length
+        ahead = corner_min(outline.ahead(self.vertices)[self.faces]) > self.tol.length
         eligible: np.ndarray = lit & in_front & ahead
         return eligible
 
@@ -475,51 +487,42 @@ class _SurfaceProjector:
         faces: np.ndarray,
         corners: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
-    ) -> None:
-        """Mark faces wholly inside the outline as full; add the outline's part
-        of the others, mapped onto each face, to ``extra``."""
+    ) -> _Pieces:
+        """Mark faces wholly inside the outline as full; return the outline's
+        part of the others, mapped onto each face: signed pieces (their
+        winding numbers add up to it) and their faces."""
+        nothing = (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
         if len(faces) == 0:
-            return
-        images = outline.to_frame(corners[faces])  # (f, 3, 2)
+            return nothing
+        # Each vertex once: the faces share their corners.
+        used, inverse = unique_integers(self.faces[faces], return_inverse=True)
+        images = outline.to_frame(self.vertices[used])[inverse].reshape(-1, 3, 2)
         low, high = np.array(outline.region.bounds[:2]), np.array(outline.region.bounds[2:])
         near = ~np.any((corner_min(images) > high) | (corner_max(images) < low), axis=1)
         faces, images = faces[near], images[near]
-        triangles = shapely.polygons(images)
-        covered = shapely.covers(outline.region, triangles)
-        full[faces[covered]] = True
-        touched = shapely.intersects(outline.region, triangles) & ~covered
-        faces, images = faces[touched], images[touched]
-        if len(faces) == 0:
-            return
         x, y = images[:, :, 0], images[:, :, 1]
         # The map from the frame back to a face keeps or flips orientation as
         # the face's image does (the face runs counter-clockwise in its frame).
         flips = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
-        images = np.where(flips[:, None, None], images[:, ::-1], images)
-        loops: list[np.ndarray] = []
-        owners: list[int] = []
-        for k, image in enumerate(images):
-            piece = poly.intersect(outline.cross_section, poly.fill([image * outline.scale]))
-            for loop in piece.to_polygons():
-                loops.append(np.asarray(loop) / outline.scale)
-                owners.append(k)
-        if not loops:
-            return
-        sizes = np.array([len(loop) for loop in loops])
-        point_face = faces[np.repeat(owners, sizes)]
+        extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
+        covered, pieces, owners = outline.cut(images, 1e-9 * extent)
+        full[faces[covered]] = True
+        if len(pieces) == 0:
+            return nothing
+        width = pieces.shape[1]
+        point_face = faces[np.repeat(owners, width)]
         normal = self.unit[point_face]
         offset = -np.einsum("ij,ij->i", normal, corners[point_face, 0])
-        points = outline.onto_planes(np.concatenate(loops), normal, offset)
+        points = outline.onto_planes(pieces.reshape(-1, 2), normal, offset)
         points -= self.origin[point_face]
         flat = np.column_stack(
             [
                 np.einsum("ij,ij->i", points, self.u[point_face]),
                 np.einsum("ij,ij->i", points, self.v[point_face]),
             ]
-        )
-        for k, loop in zip(owners, np.split(flat, np.cumsum(sizes)[:-1]), strict=True):
-            extra.setdefault(int(faces[k]), []).append(loop[::-1] if flips[k] else loop)
+        ).reshape(-1, width, 2)
+        flat = np.where(flips[owners][:, None, None], flat[:, ::-1], flat)
+        return flat, faces[owners]
 
     def _side_planes(self, faces: np.ndarray, corners: np.ndarray) -> np.ndarray:
         """(f, 4, 4) unit half-spaces of the region between each face and the
@@ -583,19 +586,21 @@ class _SurfaceProjector:
         caster_triangles: np.ndarray,
         corners: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
+        extra: _Pieces,
     ) -> tuple[list[list[np.ndarray]], np.ndarray]:
         """The shadow region of each face that has one: loops in the face's
         frame, and the faces."""
         origin, u, v = self.origin, self.u, self.v
         flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
-        faces_with = unique_integers(
-            np.concatenate([owner, np.flatnonzero(full), np.fromiter(extra, np.int64)])
-        )
+        flat = _pad_polygons([flat, extra[0]])
+        owner = np.concatenate([owner, extra[1]])
+        order = np.argsort(owner, kind="stable")
+        flat, owner = flat[order], owner[order]
+        faces_with = unique_integers(np.concatenate([owner, np.flatnonzero(full)]))
         lit = self._lit_polygons(faces_with, corners, origin, u, v)
         if is_positional(self.light) and math.isfinite(self.light.radius):
-            return self._regions_one_by_one(faces_with, lit, flat, owner, full, extra)
-        return self._regions_tiled(faces_with, lit, flat, owner, full, extra)
+            return self._regions_one_by_one(faces_with, lit, flat, owner, full)
+        return self._regions_tiled(faces_with, lit, flat, owner, full)
 
     def _regions_tiled(
         self,
@@ -604,7 +609,6 @@ class _SurfaceProjector:
         flat: np.ndarray,
         owner: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
     ) -> tuple[list[list[np.ndarray]], np.ndarray]:
         """All faces' unions in one Clipper2 call: each face's frame is mapped
         (by an affine stretch, which keeps unions and intersections) into its
@@ -640,10 +644,6 @@ class _SurfaceProjector:
             mine = index[owner[rows]]
             pieces = flat[rows] * scales[mine, None, :] + centers[mine, None, :]
             loops = list(pieces)
-            for face, more in extra.items():
-                k = index[face]
-                if k >= 0:
-                    loops += [loop * scales[k] + centers[k] for loop in more]
             limits = [o * scales[k] + centers[k] for k, o in enumerate(outlines)]
             region = poly.intersect(poly.fill(loops), poly.fill(limits))
             for loop in region.to_polygons():
@@ -664,7 +664,6 @@ class _SurfaceProjector:
         flat: np.ndarray,
         owner: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
     ) -> tuple[list[list[np.ndarray]], np.ndarray]:
         """Each face's union on its own, cut to the light's range on the face."""
         starts = np.searchsorted(owner, faces_with, side="left")
@@ -686,7 +685,6 @@ class _SurfaceProjector:
                     region = poly.fill([outline * scale])
                 else:
                     pieces = list(flat[first:stop] * scale)
-                    pieces += [loop * scale for loop in extra.get(int(face), [])]
                     region = poly.intersect(poly.fill(pieces), poly.fill([outline * scale]))
                 if disc is not None:
                     region = poly.intersect(region, poly.fill([disc * scale]))
@@ -834,6 +832,18 @@ class _SurfaceProjector:
                 inverse.reshape(-1, 3), self.unit[face_index], len(used)
             )
         return trimesh.Trimesh(vertices + self.center, inverse.reshape(-1, 3), process=False)
+
+
+def _pad_polygons(polygons: list[np.ndarray]) -> np.ndarray:
+    """(n_i, k_i, 2) polygon arrays as one (n, k, 2), each padded by repeating
+    its last corner (repeated points add no edges)."""
+    polygons = [p for p in polygons if len(p)]
+    if not polygons:
+        return np.zeros((0, 3, 2))
+    width = max(p.shape[1] for p in polygons)
+    return np.concatenate(
+        [np.pad(p, ((0, 0), (0, width - p.shape[1]), (0, 0)), mode="edge") for p in polygons]
+    )
 
 
 def _disc_near(disc: np.ndarray | None, outline: np.ndarray) -> np.ndarray | None:
