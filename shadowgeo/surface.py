@@ -60,7 +60,7 @@ from .lightframe import (
     make_outline,
 )
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
-from .seams import stitch, unique_integers
+from .seams import Loops, loops_of, stitch, unique_integers
 from .sheets import face_frames, lift_directions, merge_positions, single_sheet
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
@@ -587,9 +587,9 @@ class _SurfaceProjector:
         corners: np.ndarray,
         full: np.ndarray,
         extra: _Pieces,
-    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
+    ) -> tuple[Loops, np.ndarray]:
         """The shadow region of each face that has one: loops in the face's
-        frame, and the faces."""
+        frame (region by region), and the faces (sorted)."""
         origin, u, v = self.origin, self.u, self.v
         flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
         flat = _pad_polygons([flat, extra[0]])
@@ -605,74 +605,92 @@ class _SurfaceProjector:
     def _regions_tiled(
         self,
         faces_with: np.ndarray,
-        lit: list[np.ndarray | None],
+        lit: tuple[np.ndarray, np.ndarray],
         flat: np.ndarray,
         owner: np.ndarray,
         full: np.ndarray,
-    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
+    ) -> tuple[Loops, np.ndarray]:
         """All faces' unions in one Clipper2 call: each face's frame is mapped
         (by an affine stretch, which keeps unions and intersections) into its
         own cell of one large plane, so no two faces' pieces meet, and the
         result is cut back into faces by cell. Faces span a quarter of their
         cell's height: with n faces, rounding on Clipper2's 1e-8 grid stays
         near n * 1e-16 of a face."""
-        regions: dict[int, list[np.ndarray]] = {}
-        partial_faces: list[int] = []
-        for face, outline in zip(faces_with.tolist(), lit, strict=True):
-            if outline is None:
-                continue
-            if full[face]:
-                regions[face] = [outline]
-            else:
-                partial_faces.append(face)
-        if partial_faces:
-            partial = np.array(partial_faces, dtype=np.int64)
-            # Those faces' outlines, none of them None.
-            outlines = [cast(np.ndarray, lit[i]) for i in np.searchsorted(faces_with, partial)]
+        outlines, counts = lit
+        valid = counts >= 3
+        whole = valid & full[faces_with]
+        # Faces wholly in shadow: their lit outline.
+        slots = np.arange(outlines.shape[1])
+        chunks = [
+            (
+                outlines[whole][slots[None, :] < counts[whole, None]],
+                counts[whole],
+                faces_with[whole],
+            )
+        ]
+        partial = valid & ~full[faces_with]
+        if partial.any():
+            faces = faces_with[partial]
+            limits = outlines[partial]
             # One column of cells: Clipper2 sweeps along y, so its scanlines
             # meet one face at a time. x is stretched to the full width.
-            cell = 2.0 * poly.MAX_COORDINATE / len(partial)
-            slot = np.arange(len(partial))
+            n_cells = len(faces)
+            cell = 2.0 * poly.MAX_COORDINATE / n_cells
+            slot = np.arange(n_cells)
             centers = np.column_stack(
-                [np.zeros(len(partial)), -poly.MAX_COORDINATE + cell * (slot + 0.5)]
+                [np.zeros(n_cells), -poly.MAX_COORDINATE + cell * (slot + 0.5)]
             )
-            extents = np.array([float(np.abs(o).max()) for o in outlines])
+            extents = np.abs(limits.reshape(n_cells, -1)).max(axis=1)
             scales = np.column_stack([0.5 * poly.MAX_COORDINATE / extents, 0.25 * cell / extents])
             index = np.full(len(full), -1, dtype=np.int64)
-            index[partial] = slot
+            index[faces] = slot
             rows = np.flatnonzero(index[owner] >= 0)
             mine = index[owner[rows]]
             pieces = flat[rows] * scales[mine, None, :] + centers[mine, None, :]
-            loops = list(pieces)
-            limits = [o * scales[k] + centers[k] for k, o in enumerate(outlines)]
-            region = poly.intersect(poly.fill(loops), poly.fill(limits))
-            for loop in region.to_polygons():
-                loop = np.asarray(loop)
-                if len(loop) < 3:
-                    continue
-                k = int(np.floor((loop[0, 1] + poly.MAX_COORDINATE) / cell))
-                k = min(max(k, 0), len(partial) - 1)
-                face = int(partial[k])
-                regions.setdefault(face, []).append((loop - centers[k]) / scales[k])
-        region_faces = np.array(sorted(regions), dtype=np.int64)
-        return [regions[face] for face in region_faces.tolist()], region_faces
+            limits = limits * scales[:, None, :] + centers[:, None, :]
+            region = poly.intersect(poly.fill(list(pieces)), poly.fill(list(limits)))
+            loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
+            if loops:
+                sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+                points = np.concatenate(loops)
+                first_y = points[np.cumsum(sizes) - sizes, 1]
+                k = np.floor((first_y + poly.MAX_COORDINATE) / cell).astype(np.int64)
+                k = np.clip(k, 0, n_cells - 1)
+                point_cell = np.repeat(k, sizes)
+                points = (points - centers[point_cell]) / scales[point_cell]
+                chunks.append((points, sizes, faces[k]))
+        points = np.concatenate([chunk[0] for chunk in chunks])
+        sizes = np.concatenate([chunk[1] for chunk in chunks])
+        loop_face = np.concatenate([chunk[2] for chunk in chunks])
+        # Loops region by region.
+        order = np.argsort(loop_face, kind="stable")
+        starts = np.cumsum(sizes) - sizes
+        sizes = sizes[order]
+        shift = starts[order] - (np.cumsum(sizes) - sizes)
+        points = points[np.arange(int(sizes.sum())) + np.repeat(shift, sizes)]
+        region_faces, loop_region = unique_integers(loop_face[order], return_inverse=True)
+        return (points, sizes, loop_region), region_faces
 
     def _regions_one_by_one(
         self,
         faces_with: np.ndarray,
-        lit: list[np.ndarray | None],
+        lit: tuple[np.ndarray, np.ndarray],
         flat: np.ndarray,
         owner: np.ndarray,
         full: np.ndarray,
-    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
+    ) -> tuple[Loops, np.ndarray]:
         """Each face's union on its own, cut to the light's range on the face."""
         starts = np.searchsorted(owner, faces_with, side="left")
         stops = np.searchsorted(owner, faces_with, side="right")
         regions: list[list[np.ndarray]] = []
         region_faces: list[int] = []
-        for face, first, stop, outline in zip(faces_with, starts, stops, lit, strict=True):
-            if outline is None:
+        outlines, counts = lit
+        for face, first, stop, padded, count in zip(
+            faces_with, starts, stops, outlines, counts, strict=True
+        ):
+            if count < 3:
                 continue
+            outline = padded[:count]
             disc = _disc_near(self._range_disc(face), outline)
             if disc is not None and len(disc) < 3:
                 continue  # the light's range misses the face
@@ -693,7 +711,7 @@ class _SurfaceProjector:
             if loops:
                 regions.append(loops)
                 region_faces.append(face)
-        return regions, np.array(region_faces, dtype=np.int64)
+        return loops_of(regions), np.array(region_faces, dtype=np.int64)
 
     def _pieces(
         self,
@@ -754,11 +772,23 @@ class _SurfaceProjector:
         origin: np.ndarray,
         u: np.ndarray,
         v: np.ndarray,
-    ) -> list[np.ndarray | None]:
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Each face's part that the light reaches, in the face's frame (the
-        whole face unless a spot cone or range limits it); None where empty."""
+        whole face unless a spot cone or range limits it): (f, k, 2) polygons
+        padded by repeating the last corner, and (f,) their corner counts
+        (below 3 where nothing is lit)."""
         triangle = corners[faces]
-        relative = triangle - origin[faces][:, None, :]
+        planes = self._limit_planes(faces)
+        if planes is None:
+            counts = np.full(len(faces), 3)
+            points = triangle
+        else:
+            homogeneous = np.concatenate([triangle, np.ones((len(faces), 3, 1))], axis=2)
+            clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes)
+            slots = np.arange(clipped.shape[1])
+            last = np.minimum(slots[None, :], np.maximum(counts, 1)[:, None] - 1)
+            points = np.take_along_axis(clipped, last[:, :, None], axis=1)[:, :, :3]
+        relative = points - origin[faces][:, None, :]
         flat = np.stack(
             [
                 np.einsum("nkd,nd->nk", relative, u[faces]),
@@ -766,19 +796,7 @@ class _SurfaceProjector:
             ],
             axis=2,
         )
-        planes = self._limit_planes(faces)
-        if planes is None:
-            return list(flat)
-        homogeneous = np.concatenate([triangle, np.ones((len(faces), 3, 1))], axis=2)
-        clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes)
-        out: list[np.ndarray | None] = []
-        for face, polygon, count in zip(faces, clipped, counts, strict=True):
-            if count < 3:
-                out.append(None)
-                continue
-            rel = polygon[:count, :3] - origin[face]
-            out.append(np.column_stack([rel @ u[face], rel @ v[face]]))
-        return out
+        return flat, counts
 
     def _range_disc(self, face: int) -> np.ndarray | None:
         """The light's lit disc on a face's plane (an inscribed polygon, as
