@@ -578,19 +578,27 @@ class Outline:
         distance: np.ndarray = (points - self.light_point) @ self.axis
         return distance
 
-    def may_reach(self, triangles: np.ndarray) -> np.ndarray:
-        """(n,) bool for (n, 3, 3) triangles: False where the caster surely
-        casts nothing on it -- the triangle lies ahead of the light and its
-        image misses the outline's box (the caster's image lies in it)."""
-        if len(triangles) == 0:
+    def may_reach(self, triangles: Triangles) -> np.ndarray:
+        """(n,) bool for n triangles: False where the caster surely casts
+        nothing on it -- the triangle lies ahead of the light and its image
+        misses the outline's box (the caster's image lies in it)."""
+        points, faces = _indexed(triangles)
+        if len(faces) == 0:
             return np.zeros(0, dtype=bool)
-        ahead = corner_min(self.ahead(triangles)) > 0
-        out = np.ones(len(triangles), dtype=bool)
+        ahead = corner_min(self.ahead(points)[faces]) > 0
+        out = np.ones(len(faces), dtype=bool)
         if not ahead.any():
             return out
-        images = self.to_frame(triangles[ahead])
-        low, high = np.array(self.region.bounds[:2]), np.array(self.region.bounds[2:])
-        misses = np.any((corner_min(images) > high) | (corner_max(images) < low), axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            images = self.to_frame(points)  # only the points ahead are used
+        x, y = images[:, 0][faces[ahead]], images[:, 1][faces[ahead]]
+        low_x, low_y, high_x, high_y = self.region.bounds
+        misses = (
+            (corner_min(x) > high_x)
+            | (corner_min(y) > high_y)
+            | (corner_max(x) < low_x)
+            | (corner_max(y) < low_y)
+        )
         out[np.flatnonzero(ahead)[misses]] = False
         return out
 

@@ -61,7 +61,7 @@ from .lightframe import (
 )
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .seams import Loops, loops_of, stitch, unique_integers
-from .sheets import face_frames, lift_directions, merge_positions, single_sheet
+from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
@@ -69,8 +69,8 @@ from .topology import Caster, MeshLike, as_caster
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000
 
-# A closed caster's outline, its light-facing triangles, and (its box corners,
-# bounding ball centre, radius).
+# A closed caster's outline, its light-facing triangles, and (its box
+# half-sizes, its box centre, its bounding radius about that centre).
 _Outlined = tuple[Outline, np.ndarray, tuple[np.ndarray, np.ndarray, float]]
 
 # Polygons in face frames, (n, k, 2) padded by repeating the last corner, and
@@ -266,6 +266,7 @@ class _SurfaceProjector:
     origin: np.ndarray
     u: np.ndarray
     v: np.ndarray
+    geometry: SurfaceGeometry
 
     def __init__(
         self, casters: list[Caster], light: Light, surface: Caster, offset: float, tol: Tolerance
@@ -321,17 +322,18 @@ class _SurfaceProjector:
         bounds = [c.bounds for c in self.casters if c.n_faces] + [surface.bounds]
         stacked = np.concatenate(bounds)
         self.center = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
-        # One index per position: faces that share a corner position share an edge.
-        positions, inverse = merge_positions(surface.vertices)
-        self.vertices = positions - self.center
-        self.faces = inverse.reshape(-1)[surface.faces]
+        # One index per position (faces that share a corner position share an
+        # edge), normals and frames: once per mesh, in its own centred frame.
+        geometry = surface.derived("surface_geometry", surface_geometry)
+        self.geometry = geometry
+        shift = surface.center - self.center
+        self.vertices = geometry.positions + shift
+        self.faces = geometry.faces
         corners = self.vertices[self.faces]
-        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        length = np.linalg.norm(normals, axis=1)
+        length = geometry.length
         self.face_area = 0.5 * length
         proper = length > tol.length**2
-        unit = np.zeros_like(normals)
-        unit[proper] = normals[proper] / length[proper, None]
+        unit = np.where(proper[:, None], geometry.unit, 0.0)
         self.unit = unit
         if is_positional(light):
             self.light_point = light.position - self.center
@@ -348,8 +350,8 @@ class _SurfaceProjector:
             lit = facing
         if isinstance(light, SpotLight):
             self.limits.append("spot_cone")
-        self.origin = (corners[:, 0] + corners[:, 1] + corners[:, 2]) / 3.0
-        self.u, self.v = face_frames(unit)
+        self.origin = geometry.centroid + shift
+        self.u, self.v = geometry.u, geometry.v
         return corners, facing, lit
 
     def _pairs(
@@ -381,7 +383,7 @@ class _SurfaceProjector:
             eligible = self._outline_faces(outline, bound, corners, lit)
             extra.append(self._apply_outline(outline, np.flatnonzero(eligible), corners, full))
             others = np.flatnonzero(lit & ~eligible)
-            others = others[outline.may_reach(corners[others])]
+            others = others[outline.may_reach((self.vertices, self.faces[others]))]
             found, their = candidate_pairs(
                 (self.vertices, self.faces[others]),
                 front_triangles,
@@ -414,8 +416,8 @@ class _SurfaceProjector:
     def _caster_triangles(self) -> tuple[np.ndarray, list[_Outlined]]:
         """(t, 3, 3) caster triangles handled one by one, in the centred frame
         (a closed caster's light-facing ones only), and for each closed caster
-        with an outline: (outline, its light-facing triangles, (its box corners,
-        bounding ball centre, radius)))."""
+        with an outline: (outline, its light-facing triangles, (its box
+        half-sizes, box centre, bounding radius about it))."""
         chunks: list[np.ndarray] = []
         outlined: list[_Outlined] = []
         # Without a light point the light is directional.
@@ -435,20 +437,13 @@ class _SurfaceProjector:
                 )
                 if outline is not None:
                     low, high = caster.bounds - self.center
-                    box = np.array(
-                        [
-                            [x, y, z]
-                            for x in (low[0], high[0])
-                            for y in (low[1], high[1])
-                            for z in (low[2], high[2])
-                        ]
-                    )
                     centre = 0.5 * (low + high)
-                    radius = float(np.linalg.norm(vertices - centre, axis=1).max())
-                    outlined.append((outline, vertices[faces[front]], (box, centre, radius)))
+                    radius = caster.derived("bounding_radius", _bounding_radius)
+                    half = 0.5 * (high - low)
+                    outlined.append((outline, vertices[faces[front]], (half, centre, radius)))
                     continue
                 keep = front
-            elif caster is self.surface and single_sheet(caster):
+            elif caster is self.surface and self.geometry.single_sheet:
                 # Seen from the surface itself, a blocked ray enters the sheet's
                 # back side first, through a face turned away from the light.
                 keep = caster.facing(light_homogeneous(caster, self.light)) <= 0
@@ -471,12 +466,21 @@ class _SurfaceProjector:
     ) -> np.ndarray:
         """(m,) bool: lit faces that the caster lies wholly in front of (its box
         or its bounding ball does) and whose corners lie ahead of the light in
-        the outline's frame."""
-        box, centre, radius = bound
+        the outline's frame. ``bound``: the caster's box half-sizes, centre
+        and bounding radius about that centre."""
+        half, centre, radius = bound
         unit = self.unit
-        offsets = -np.einsum("ij,ij->i", unit, corners[:, 0])
-        in_front = np.minimum.reduce(box @ unit.T + offsets) > self.tol.length
-        in_front |= unit @ centre + offsets - radius > self.tol.length
+        x, y, z = unit[:, 0], unit[:, 1], unit[:, 2]
+        first = corners[:, 0]
+        # Each face plane's height of the caster's centre; the box's lowest
+        # corner lies lower by the half-sizes along the normal's components.
+        middle = (
+            x * (centre[0] - first[:, 0])
+            + y * (centre[1] - first[:, 1])
+            + z * (centre[2] - first[:, 2])
+        )
+        reach = np.abs(x) * half[0] + np.abs(y) * half[1] + np.abs(z) * half[2]
+        in_front = middle - np.minimum(reach, radius) > self.tol.length
         ahead = corner_min(outline.ahead(self.vertices)[self.faces]) > self.tol.length
         eligible: np.ndarray = lit & in_front & ahead
         return eligible
@@ -850,6 +854,12 @@ class _SurfaceProjector:
                 inverse.reshape(-1, 3), self.unit[face_index], len(used)
             )
         return trimesh.Trimesh(vertices + self.center, inverse.reshape(-1, 3), process=False)
+
+
+def _bounding_radius(caster: Caster) -> float:
+    """The largest distance of a vertex from the centre of the mesh's box."""
+    relative = caster.vertices - caster.center
+    return float(np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2 + relative[:, 2] ** 2).max())
 
 
 def _pad_polygons(polygons: list[np.ndarray]) -> np.ndarray:
