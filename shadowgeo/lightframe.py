@@ -167,25 +167,38 @@ def _cube_boxes(points: np.ndarray, faces: np.ndarray) -> list[tuple[np.ndarray,
         v = np.where(largest == 2, y, z) / w
     side_of = side[faces]
     whole = (side_of[:, 0] == side_of[:, 1]) & (side_of[:, 1] == side_of[:, 2])
-    spanning = np.flatnonzero(~whole)
-    complete = np.flatnonzero(whole)
-    face_u, face_v = u[faces[complete]], v[faces[complete]]
+    if whole.all():
+        complete, spanning = np.arange(len(faces)), np.zeros(0, np.int64)
+        face_u, face_v = u[faces], v[faces]
+    else:
+        complete, spanning = np.flatnonzero(whole), np.flatnonzero(~whole)
+        face_u, face_v = u[faces[complete]], v[faces[complete]]
     all_boxes = np.column_stack(
         [corner_min(face_u), corner_min(face_v), corner_max(face_u), corner_max(face_v)]
     )
     which = side_of[complete, 0]
+    # Side by side: sorted once (no copy when one side holds them all).
+    if len(which) and np.all(which == which[0]):
+        bounds = np.where(np.arange(7) > which[0], len(which), 0)
+    else:
+        order = np.argsort(which, kind="stable")
+        complete, all_boxes, which = complete[order], all_boxes[order], which[order]
+        bounds = np.searchsorted(which, np.arange(7))
     corners = points[faces[spanning]] if len(spanning) else None
     out = []
     for index, (axis, sign) in enumerate(_CUBE_SIDES):
+        here = slice(bounds[index], bounds[index + 1])
+        if corners is None:
+            out.append((complete[here], all_boxes[here]))
+            continue
         across = [a for a in range(3) if a != axis]
-        here = np.flatnonzero(which == index)
-        boxes = [all_boxes[here]]
-        members = [complete[here]]
-        if corners is not None:
-            found, box = _clipped_boxes(corners, axis, sign, across)
-            boxes.append(box)
-            members.append(spanning[found])
-        out.append((np.concatenate(members), np.concatenate(boxes)))
+        found, box = _clipped_boxes(corners, axis, sign, across)
+        out.append(
+            (
+                np.concatenate([complete[here], spanning[found]]),
+                np.concatenate([all_boxes[here], box]),
+            )
+        )
     return out
 
 

@@ -69,9 +69,9 @@ from .topology import Caster, MeshLike, as_caster
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000
 
-# A closed caster's outline, its light-facing triangles, and (its box
+# A closed caster's outline, its light-facing triangles (vertices, faces), and (its box
 # half-sizes, its box centre, its bounding radius about that centre).
-_Outlined = tuple[Outline, np.ndarray, tuple[np.ndarray, np.ndarray, float]]
+_Outlined = tuple[Outline, tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, float]]
 
 # Polygons in face frames, (n, k, 2) padded by repeating the last corner, and
 # (n,) the face of each.
@@ -379,14 +379,15 @@ class _SurfaceProjector:
         extra: list[_Pieces] = []
         all_triangles = [caster_triangles]
         base = len(caster_triangles)
-        for outline, front_triangles, bound in outlined:
+        for outline, front, bound in outlined:
+            front_triangles = front[0][front[1]]
             eligible = self._outline_faces(outline, bound, corners, lit)
             extra.append(self._apply_outline(outline, np.flatnonzero(eligible), corners, full))
             others = np.flatnonzero(lit & ~eligible)
             others = others[outline.may_reach((self.vertices, self.faces[others]))]
             found, their = candidate_pairs(
                 (self.vertices, self.faces[others]),
-                front_triangles,
+                front,
                 self.light_point,
                 direction,
                 pad,
@@ -440,7 +441,7 @@ class _SurfaceProjector:
                     centre = 0.5 * (low + high)
                     radius = caster.derived("bounding_radius", _bounding_radius)
                     half = 0.5 * (high - low)
-                    outlined.append((outline, vertices[faces[front]], (half, centre, radius)))
+                    outlined.append((outline, (vertices, faces[front]), (half, centre, radius)))
                     continue
                 keep = front
             elif caster is self.surface and self.geometry.single_sheet:
@@ -498,12 +499,21 @@ class _SurfaceProjector:
         nothing = (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
         if len(faces) == 0:
             return nothing
-        # Each vertex once: the faces share their corners.
-        used, inverse = unique_integers(self.faces[faces], return_inverse=True)
-        images = outline.to_frame(self.vertices[used])[inverse].reshape(-1, 3, 2)
-        low, high = np.array(outline.region.bounds[:2]), np.array(outline.region.bounds[2:])
-        near = ~np.any((corner_min(images) > high) | (corner_max(images) < low), axis=1)
-        faces, images = faces[near], images[near]
+        # Each vertex once: the faces share their corners (those of other
+        # faces, maybe behind the light, are not used).
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vertex_images = outline.to_frame(self.vertices)
+        corner_ids = self.faces[faces]
+        x, y = vertex_images[:, 0][corner_ids], vertex_images[:, 1][corner_ids]
+        low_x, low_y, high_x, high_y = outline.region.bounds
+        near = ~(
+            (corner_min(x) > high_x)
+            | (corner_min(y) > high_y)
+            | (corner_max(x) < low_x)
+            | (corner_max(y) < low_y)
+        )
+        faces = faces[near]
+        images = vertex_images[corner_ids[near]]
         x, y = images[:, :, 0], images[:, :, 1]
         # The map from the frame back to a face keeps or flips orientation as
         # the face's image does (the face runs counter-clockwise in its frame).
