@@ -231,6 +231,36 @@ def _clipped_boxes(
     return has, box
 
 
+def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """(n,) position of points on their boxes' edges, counter-clockwise from
+    the lower left corner: 0 to 1 along the bottom, 1 to 2 up the right side,
+    2 to 3 along the top, 3 to 4 down the left side (the nearest side)."""
+    x, y = points[:, 0], points[:, 1]
+    width = np.maximum(high[:, 0] - low[:, 0], 1e-300)
+    height = np.maximum(high[:, 1] - low[:, 1], 1e-300)
+    distance = np.stack(
+        [
+            np.abs(y - low[:, 1]),
+            np.abs(x - high[:, 0]),
+            np.abs(y - high[:, 1]),
+            np.abs(x - low[:, 0]),
+        ],
+        axis=1,
+    )
+    side = np.argmin(distance, axis=1)
+    along = np.choose(
+        side,
+        [
+            (x - low[:, 0]) / width,
+            (y - low[:, 1]) / height,
+            (high[:, 0] - x) / width,
+            (high[:, 1] - y) / height,
+        ],
+    )
+    position: np.ndarray = side + np.clip(along, 0.0, 1.0)
+    return position
+
+
 def _half_plane(direction: np.ndarray, through: np.ndarray) -> np.ndarray:
     """(n, 3) coefficients of ``cross(direction, p - through) >= 0`` on
     homogeneous points ``(x, y, 1)``: the left of the line along ``direction``."""
@@ -456,6 +486,11 @@ class Outline:
         else:
             start = end = np.zeros((0, 2))
         self.segments = np.stack([start, end], axis=1)  # (s, 2, 2)
+        sizes = np.array([len(loop) for loop in self.loops], dtype=np.int64)
+        self.segment_loop = np.repeat(np.arange(len(sizes)), sizes)
+        first = np.repeat(np.cumsum(sizes) - sizes, sizes)
+        self.segment_next = np.arange(len(start)) + 1
+        self.segment_next[np.cumsum(sizes) - 1] = first[np.cumsum(sizes) - 1]
         self.segment_boxes = np.column_stack([np.minimum(start, end), np.maximum(start, end)])
 
     def cut(
@@ -517,59 +552,164 @@ class Outline:
         keep = touched[tri]
         tri, seg = tri[keep], seg[keep]
 
-        # 2. the signed pieces
+        # 2. each triangle's own stretch of the boundary, closed around it
         reference = images.mean(axis=1)
         a, b, r = self.segments[seg, 0], self.segments[seg, 1], reference[tri]
         ab, ar = b - a, r - a
-        orient = ab[:, 0] * ar[:, 1] - ab[:, 1] * ar[:, 0]  # > 0: r left of ab
         length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
         along = np.clip(np.einsum("ij,ij->i", ar, ab) / length2, 0.0, 1.0)
         gap = np.hypot(*(ar - along[:, None] * ab).T)  # from r to the segment
         unsure = np.zeros(count, dtype=bool)
         unsure[tri[gap <= np.broadcast_to(margin, (count,))[tri]]] = True
         sure = np.flatnonzero(touched & ~unsure)
-        whole = sure[shapely.contains_xy(self.region, reference[sure, 0], reference[sure, 1])]
-        keep = ~unsure[tri] & (orient != 0)
-        tri, a, b, r, ab, orient = tri[keep], a[keep], b[keep], r[keep], ab[keep], orient[keep]
-        turn = np.sign(orient)[:, None]
-        planes = np.stack(
-            [
-                turn * _half_plane(a - r, r),  # the wedge's two sides
-                -turn * _half_plane(b - r, r),
-                -turn * _half_plane(ab, a),  # beyond ab
-            ],
-            axis=1,
-        )
-        homogeneous = np.concatenate([images[tri], np.ones((len(tri), 3, 1))], axis=2)
-        clipped, counts = clip_batch(homogeneous, np.full(len(tri), 3), planes)
-        made = counts >= 3
-        width = max(clipped.shape[1], 3)
-        slots = np.arange(width)
-        last = np.minimum(slots[None, :], np.maximum(counts, 1)[:, None] - 1)
-        pieces = np.pad(clipped[:, :, :2], ((0, 0), (0, width - clipped.shape[1]), (0, 0)))
-        pieces = np.take_along_axis(pieces, last[:, :, None], axis=1)
-        pieces = np.where((orient > 0)[:, None, None], pieces[:, ::-1], pieces)[made]
-        whole_pieces = np.pad(images[whole], ((0, 0), (0, width - 3), (0, 0)), mode="edge")
+        loops, owners = self._local_cut(images, reference, sure, tri, seg)
 
         # 3. Clipper2 where the reference point is not sure
-        loops, loop_owners = self.clip_to(images[unsure])
-        extra = [
-            np.pad(loop, ((0, max(width - len(loop), 0)), (0, 0)), mode="edge")[None]
-            for loop in loops
-        ]
-        parts = [pieces, whole_pieces]
-        if extra:
-            widest = max(width, max(part.shape[1] for part in extra))
-            parts = [
-                np.pad(part, ((0, 0), (0, widest - part.shape[1]), (0, 0)), mode="edge")
-                for part in [*parts, *extra]
-                if len(part)
-            ]
+        exact, exact_owners = self.clip_to(images[unsure])
+        loops += exact
+        owners = np.concatenate([owners, np.flatnonzero(unsure)[exact_owners]])
+        width = max([3] + [len(loop) for loop in loops])
+        pieces = [np.pad(loop, ((0, width - len(loop)), (0, 0)), mode="edge") for loop in loops]
         return (
             covered,
-            np.concatenate(parts) if parts else np.zeros((0, width, 2)),
-            np.concatenate([tri[made], whole, np.flatnonzero(unsure)[loop_owners]]),
+            np.stack(pieces) if pieces else np.zeros((0, 3, 2)),
+            owners.astype(np.int64),
         )
+
+    def _local_cut(
+        self,
+        images: np.ndarray,
+        reference: np.ndarray,
+        sure: np.ndarray,
+        tri: np.ndarray,
+        seg: np.ndarray,
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        """The region cut to each triangle ``sure`` (counter-clockwise in
+        ``images``), from the boundary segments near it only (pairs ``tri``,
+        ``seg``, sorted).
+
+        Each segment is clipped to a box around the triangle; consecutive
+        pieces of one loop are joined along the box's edge, counter-clockwise.
+        Inside the box that polygon winds as the region does, up to one
+        constant (the ways around the box it took or missed): the region's
+        winding at the reference point, against the polygon's there, gives it,
+        and as many loops of the box put it right. The triangle's part of that
+        is then cut by Clipper2: every triangle in its own cell of one plane,
+        one call.
+        """
+        if len(sure) == 0:
+            return [], np.zeros(0, np.int64)
+        low, high = corner_min(images[sure]), corner_max(images[sure])
+        pad = 0.05 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1])[:, None]
+        box_low = np.zeros((len(images), 2))
+        box_high = np.zeros((len(images), 2))
+        box_low[sure], box_high[sure] = low - pad, high + pad
+        is_sure = np.zeros(len(images), dtype=bool)
+        is_sure[sure] = True
+        keep = is_sure[tri]
+        order = np.lexsort((seg[keep], tri[keep]))
+        tri, seg = tri[keep][order], seg[keep][order]
+        a, b = self.segments[seg, 0], self.segments[seg, 1]
+        step = b - a
+        # Liang-Barsky: the part a + t (b - a), t0 <= t <= t1, inside the box.
+        t0, t1 = np.zeros(len(tri)), np.ones(len(tri))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for axis in range(2):
+                first = (box_low[tri, axis] - a[:, axis]) / step[:, axis]
+                second = (box_high[tri, axis] - a[:, axis]) / step[:, axis]
+                flat = step[:, axis] == 0
+                within = (a[:, axis] >= box_low[tri, axis]) & (a[:, axis] <= box_high[tri, axis])
+                enter = np.where(flat, np.where(within, -np.inf, np.inf), np.minimum(first, second))
+                leave = np.where(flat, np.where(within, np.inf, -np.inf), np.maximum(first, second))
+                t0, t1 = np.maximum(t0, enter), np.minimum(t1, leave)
+        keep = t0 < t1
+        tri, seg, a, b, step, t0, t1 = (x[keep] for x in (tri, seg, a, b, step, t0, t1))
+        start = np.where((t0 == 0)[:, None], a, a + t0[:, None] * step)
+        end = np.where((t1 == 1)[:, None], b, a + t1[:, None] * step)
+        # Pieces grouped by (triangle, loop); each followed by the next of its group.
+        group_key = tri * len(self.loops) + self.segment_loop[seg]
+        new_group = np.ones(len(tri), dtype=bool)
+        new_group[1:] = group_key[1:] != group_key[:-1]
+        group = np.cumsum(new_group) - 1
+        group_start = np.flatnonzero(new_group)
+        following = np.arange(len(tri)) + 1
+        last = np.append(group_start[1:], len(tri)) - 1
+        following[last] = group_start
+        joined = (seg[following] == self.segment_next[seg]) & (t1 == 1)
+        # The way along the box, counter-clockwise, from each piece's end to
+        # the next piece's start: the box corners passed.
+        lo, hi = box_low[tri], box_high[tri]
+        leave_at = _perimeter(end, lo, hi)
+        enter_at = _perimeter(start[following], lo, hi)
+        travel = np.mod(enter_at - leave_at, 4.0)
+        steps = np.floor(leave_at)[:, None] + np.arange(1, 5)[None, :]
+        passed = ((steps - leave_at[:, None]) < travel[:, None]) & ~joined[:, None]
+        corner = np.mod(steps, 4).astype(np.int64)
+        corner_x = np.where((corner == 1) | (corner == 2), hi[:, :1], lo[:, :1])
+        corner_y = np.where(corner >= 2, hi[:, 1:], lo[:, 1:])
+        # Each piece: its start, its end, the corners it passes (masked).
+        points = np.concatenate(
+            [start[:, None], end[:, None], np.stack([corner_x, corner_y], axis=2)], axis=1
+        )
+        used = np.concatenate([np.ones((len(tri), 2), dtype=bool), passed], axis=1)
+        flat_points = points[used]
+        point_group = np.repeat(group, used.sum(axis=1))
+        point_tri = tri[group_start][point_group]
+        # The polygon's winding at each triangle's reference point.
+        sizes = np.bincount(point_group, minlength=len(group_start))
+        offsets = np.cumsum(sizes) - sizes
+        successor = np.arange(len(flat_points)) + 1
+        successor[offsets + sizes - 1] = offsets
+        p, q = flat_points, flat_points[successor]
+        rp = reference[point_tri]
+        side = (q[:, 0] - p[:, 0]) * (rp[:, 1] - p[:, 1]) - (rp[:, 0] - p[:, 0]) * (
+            q[:, 1] - p[:, 1]
+        )
+        up = (p[:, 1] <= rp[:, 1]) & (rp[:, 1] < q[:, 1]) & (side > 0)
+        down = (q[:, 1] <= rp[:, 1]) & (rp[:, 1] < p[:, 1]) & (side < 0)
+        winding = np.bincount(point_tri, weights=up.astype(float) - down, minlength=len(images))
+        truth = shapely.contains_xy(self.region, reference[:, 0], reference[:, 1])
+        boxes_needed = np.rint(truth - winding).astype(np.int64)
+        # One Clipper2 call: triangle k in cell k of a square grid, scaled alike
+        # along x and y, its box within the cell.
+        columns = int(np.ceil(np.sqrt(len(sure))))
+        cell = 2.0 * MAX_COORDINATE / columns
+        slot = np.full(len(images), -1, dtype=np.int64)
+        slot[sure] = np.arange(len(sure))
+        centre = np.column_stack(
+            [
+                -MAX_COORDINATE + cell * (slot % columns + 0.5),
+                -MAX_COORDINATE + cell * (slot // columns + 0.5),
+            ]
+        )
+        middle = 0.5 * (box_low + box_high)
+        size = np.maximum((box_high - box_low).max(axis=1), 1e-300)
+        scale = 0.45 * cell / size
+        mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
+        subject = list(np.split(mapped, np.cumsum(sizes)[:-1])) if len(mapped) else []
+        square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+        for k in np.flatnonzero(boxes_needed[sure] != 0):
+            face = sure[k]
+            half = 0.5 * (box_high[face] - box_low[face])
+            loop = (square * half) * scale[face] + centre[face]
+            count = int(boxes_needed[face])
+            subject += [loop if count > 0 else loop[::-1]] * abs(count)
+        clip = (images[sure] - middle[sure][:, None]) * scale[sure][:, None, None]
+        clip = clip + centre[sure][:, None]
+        region = fill(subject) ^ fill(list(clip))
+        out = [np.asarray(loop) for loop in region.to_polygons()]
+        out = [loop for loop in out if len(loop) >= 3]
+        if not out:
+            return [], np.zeros(0, np.int64)
+        first_points = np.array([loop[0] for loop in out])
+        column = np.clip(np.floor((first_points[:, 0] + MAX_COORDINATE) / cell), 0, columns - 1)
+        row = np.clip(np.floor((first_points[:, 1] + MAX_COORDINATE) / cell), 0, columns - 1)
+        owner = sure[np.minimum((row * columns + column).astype(np.int64), len(sure) - 1)]
+        loops = [
+            (loop - centre[face]) / scale[face] + middle[face]
+            for loop, face in zip(out, owner.tolist(), strict=True)
+        ]
+        return loops, owner
 
     def clip_to(self, images: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
         """The region cut to each of (f, 3, 2) counter-clockwise triangles in
