@@ -231,6 +231,20 @@ def _clipped_boxes(
     return has, box
 
 
+def padded_loops(points: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """(n, k, 2) loops of ``sizes`` points each, taken in turn from ``points``,
+    each padded to the longest by repeating its last point (repeated points
+    add no edges)."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    if len(sizes) == 0:
+        return np.zeros((0, 3, 2))
+    width = max(int(sizes.max()), 3)
+    starts = np.cumsum(sizes) - sizes
+    index = starts[:, None] + np.minimum(np.arange(width)[None, :], sizes[:, None] - 1)
+    loops: np.ndarray = points[index]
+    return loops
+
+
 def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(n,) position of points on their boxes' edges, counter-clockwise from
     the lower left corner: 0 to 1 along the bottom, 1 to 2 up the right side,
@@ -259,18 +273,6 @@ def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndar
     )
     position: np.ndarray = side + np.clip(along, 0.0, 1.0)
     return position
-
-
-def _half_plane(direction: np.ndarray, through: np.ndarray) -> np.ndarray:
-    """(n, 3) coefficients of ``cross(direction, p - through) >= 0`` on
-    homogeneous points ``(x, y, 1)``: the left of the line along ``direction``."""
-    return np.column_stack(
-        [
-            -direction[:, 1],
-            direction[:, 0],
-            direction[:, 1] * through[:, 0] - direction[:, 0] * through[:, 1],
-        ]
-    )
 
 
 def _overall(boxes: np.ndarray) -> list[float]:
@@ -562,19 +564,15 @@ class Outline:
         unsure = np.zeros(count, dtype=bool)
         unsure[tri[gap <= np.broadcast_to(margin, (count,))[tri]]] = True
         sure = np.flatnonzero(touched & ~unsure)
-        loops, owners = self._local_cut(images, reference, sure, tri, seg)
+        points, sizes, owners = self._local_cut(images, reference, sure, tri, seg)
 
         # 3. Clipper2 where the reference point is not sure
         exact, exact_owners = self.clip_to(images[unsure])
-        loops += exact
-        owners = np.concatenate([owners, np.flatnonzero(unsure)[exact_owners]])
-        width = max([3] + [len(loop) for loop in loops])
-        pieces = [np.pad(loop, ((0, width - len(loop)), (0, 0)), mode="edge") for loop in loops]
-        return (
-            covered,
-            np.stack(pieces) if pieces else np.zeros((0, 3, 2)),
-            owners.astype(np.int64),
-        )
+        if exact:
+            points = np.concatenate([points, *exact])
+            sizes = np.concatenate([sizes, [len(loop) for loop in exact]])
+            owners = np.concatenate([owners, np.flatnonzero(unsure)[exact_owners]])
+        return covered, padded_loops(points, sizes), owners.astype(np.int64)
 
     def _local_cut(
         self,
@@ -583,7 +581,7 @@ class Outline:
         sure: np.ndarray,
         tri: np.ndarray,
         seg: np.ndarray,
-    ) -> tuple[list[np.ndarray], np.ndarray]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The region cut to each triangle ``sure`` (counter-clockwise in
         ``images``), from the boundary segments near it only (pairs ``tri``,
         ``seg``, sorted).
@@ -595,10 +593,10 @@ class Outline:
         winding at the reference point, against the polygon's there, gives it,
         and as many loops of the box put it right. The triangle's part of that
         is then cut by Clipper2: every triangle in its own cell of one plane,
-        one call.
+        one call. Returns the loops' points, their sizes, and their triangles.
         """
         if len(sure) == 0:
-            return [], np.zeros(0, np.int64)
+            return np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64)
         low, high = corner_min(images[sure]), corner_max(images[sure])
         pad = 0.05 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1])[:, None]
         box_low = np.zeros((len(images), 2))
@@ -686,7 +684,7 @@ class Outline:
         size = np.maximum((box_high - box_low).max(axis=1), 1e-300)
         scale = 0.45 * cell / size
         mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
-        subject = list(np.split(mapped, np.cumsum(sizes)[:-1])) if len(mapped) else []
+        subject = [mapped[o : o + n] for o, n in zip(offsets.tolist(), sizes.tolist(), strict=True)]
         square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
         for k in np.flatnonzero(boxes_needed[sure] != 0):
             face = sure[k]
@@ -697,19 +695,21 @@ class Outline:
         clip = (images[sure] - middle[sure][:, None]) * scale[sure][:, None, None]
         clip = clip + centre[sure][:, None]
         region = fill(subject) ^ fill(list(clip))
-        out = [np.asarray(loop) for loop in region.to_polygons()]
-        out = [loop for loop in out if len(loop) >= 3]
+        out = [loop for loop in region.to_polygons() if len(loop) >= 3]
+        nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
         if not out:
-            return [], np.zeros(0, np.int64)
-        first_points = np.array([loop[0] for loop in out])
+            return nothing
+        out_sizes = np.array([len(loop) for loop in out], dtype=np.int64)
+        out_points = np.concatenate(out)
+        first_points = out_points[np.cumsum(out_sizes) - out_sizes]
         column = np.clip(np.floor((first_points[:, 0] + MAX_COORDINATE) / cell), 0, columns - 1)
         row = np.clip(np.floor((first_points[:, 1] + MAX_COORDINATE) / cell), 0, columns - 1)
         owner = sure[np.minimum((row * columns + column).astype(np.int64), len(sure) - 1)]
-        loops = [
-            (loop - centre[face]) / scale[face] + middle[face]
-            for loop, face in zip(out, owner.tolist(), strict=True)
+        point_owner = np.repeat(owner, out_sizes)
+        out_points = (out_points - centre[point_owner]) / scale[point_owner, None] + middle[
+            point_owner
         ]
-        return loops, owner
+        return out_points, out_sizes, owner
 
     def clip_to(self, images: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
         """The region cut to each of (f, 3, 2) counter-clockwise triangles in
