@@ -95,26 +95,37 @@ def clip_batch(
 def _clip_rows(
     points: np.ndarray, counts: np.ndarray, side: np.ndarray, valid: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One Sutherland-Hodgman step on rows that the plane cuts: (r, k', d)."""
+    """One Sutherland-Hodgman step on rows that the plane cuts: (r, k', d).
+    Each corner inside is kept, followed by the crossing on its edge to the
+    next corner where the edge crosses the plane; only the crossings are
+    computed."""
     rows, width, size = points.shape
     inside = (side >= 0) & valid
     slots = np.arange(width)
     following = (slots[None, :] + 1) % np.maximum(counts[:, None], 1)
-    side_next = np.take_along_axis(side, following, axis=1)
     inside_next = np.take_along_axis(inside, following, axis=1)
     crosses = valid & (inside != inside_next)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(crosses, side / np.where(crosses, side - side_next, 1.0), 0.0)
-    nxt = np.take_along_axis(points, following[:, :, None], axis=1)
-    crossing = points + t[:, :, None] * (nxt - points)
-    candidates = np.stack([points, crossing], axis=2).reshape(rows, 2 * width, size)
     keep = np.stack([inside, crosses], axis=2).reshape(rows, 2 * width)
-    counts = keep.sum(axis=1)
     position = np.cumsum(keep, axis=1) - 1
-    row, col = np.nonzero(keep)
-    out = np.zeros((rows, max(int(counts.max()), 1), size))
-    out[row, position[row, col]] = candidates[row, col]
-    return out, counts
+    counts = position[:, -1] + 1
+    out_width = max(int(counts.max()), 1)
+    out = np.zeros((rows * out_width, size))
+    # Rows of the flattened arrays: one index per entry gathers fastest.
+    flat_points = points.reshape(rows * width, size)
+    flat_position = position.reshape(-1)
+    entry = np.flatnonzero(inside)  # row * width + col
+    row, col = np.divmod(entry, width)
+    out[row * out_width + flat_position[row * 2 * width + 2 * col]] = flat_points[entry]
+    entry = np.flatnonzero(crosses)
+    row, col = np.divmod(entry, width)
+    ahead = row * width + following.reshape(-1)[entry]
+    flat_side = side.reshape(-1)
+    here, there = flat_side[entry], flat_side[ahead]
+    t = here / (here - there)
+    start = flat_points[entry]
+    target = row * out_width + flat_position[row * 2 * width + 2 * col + 1]
+    out[target] = start + t[:, None] * (flat_points[ahead] - start)
+    return out.reshape(rows, out_width, size), counts
 
 
 # Triangles as (n, 3, 3) corners, or as (points (p, 3), faces (n, 3)) that
@@ -327,7 +338,8 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     uniform grid with cells twice a typical box: each box is listed in the
     cells it covers, boxes sharing a cell are paired, and the pairs are checked
     and made unique. Boxes covering very many cells meet every other box;
-    None where that would make many more pairs than boxes."""
+    None where that, or crowded cells (images piled up along a grazing
+    light), would make many more candidate pairs than boxes."""
     box_first, box_second = _overall(first), _overall(second)
     low = np.minimum(box_first[:2], box_second[:2])
     high = np.maximum(box_first[2:], box_second[2:])
@@ -363,6 +375,8 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     owner_b, cell_b = owner_b[order], cell_b[order]
     begin = np.searchsorted(cell_b, cell_a, side="left")
     count = np.searchsorted(cell_b, cell_a, side="right") - begin
+    if int(count.sum()) > 8 * (len(first) + len(second)):
+        return None  # crowded cells: most candidates would be repeats or misses
     i = np.repeat(owner_a, count)
     k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
     j = owner_b[np.repeat(begin, count) + k]
