@@ -7,7 +7,8 @@
 * ``overlapping_boxes``: every overlapping pair, against all pairs tested;
 * ``candidate_pairs``: triangles given as shared points and faces pair exactly
   as the same triangles given corner by corner;
-* ``stitch``: a face wholly in shadow comes back as the face itself.
+* ``stitch``: a face wholly in shadow comes back as the face itself;
+* ``clip_batch``: convex polygons cut by half-planes, against shapely.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import shapely
 from shadowgeo.lightframe import (
     Outline,
     candidate_pairs,
+    clip_batch,
     overlapping_boxes,
     padded_loops,
 )
@@ -197,3 +199,29 @@ def test_stitch_gives_a_whole_face_back_as_itself(touches_shared_edge):
         assert len(first) == 2 and all(middle in triangle for triangle in first)
     else:
         assert first == [[0, 1, 2]]
+
+
+def test_clip_batch_cuts_convex_polygons_as_shapely_does():
+    rng = np.random.default_rng(11)
+    count = 300
+    triangles = rng.normal(size=(count, 3, 2))
+    homogeneous = np.concatenate([triangles, np.ones((count, 3, 1))], axis=2)
+    # three random half-planes a x + b y + c >= 0 per triangle
+    planes = np.concatenate(
+        [rng.normal(size=(count, 3, 2)), rng.uniform(-0.5, 1.0, (count, 3, 1))], axis=2
+    )
+    clipped, counts = clip_batch(homogeneous, np.full(count, 3), planes)
+    far = 1e3
+    for k in range(count):
+        region = shapely.Polygon(triangles[k]).buffer(0)
+        for a, b, c in planes[k]:
+            # the half-plane as a big polygon: points p with n . p + c >= 0
+            normal = np.array([a, b]) / np.hypot(a, b)
+            foot = -c / np.hypot(a, b) * normal
+            along = np.array([-normal[1], normal[0]])
+            half = [foot + far * along, foot - far * along, foot - far * along + far * normal]
+            half.append(foot + far * along + far * normal)
+            region = region.intersection(shapely.Polygon(half))
+        mine = clipped[k, : counts[k], :2]
+        area = abs(signed_area(mine)) if counts[k] >= 3 else 0.0
+        assert area == pytest.approx(region.area, rel=1e-9, abs=1e-12)
