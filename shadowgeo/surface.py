@@ -29,7 +29,13 @@ triangles only: every blocked ray leaves the caster through one of them last.
 A closed caster wholly in front of a face needs no triangles at all: its
 silhouette, projected once into the light's frame
 (:class:`shadowgeo.lightframe.Outline`), is cut to the face's image there and
-mapped back; faces wholly inside it are shadowed whole.
+mapped back; faces wholly inside it are shadowed whole, and a face its edge
+crosses is cut from the few edge segments near it (:meth:`Outline.cut`), so
+the cost follows the outline's length near the surface, not faces x outline.
+
+Per-mesh work on the surface (merged vertices, normals, face frames, whether
+it is a single sheet) is kept on the mesh (:func:`shadowgeo.sheets.surface_geometry`):
+a second light or a second call pays only for what the light changes.
 
 Cost: the index is O((F + T) log(F + T)) for F surface faces and T caster
 triangles; the clipping is linear in the candidate pairs, about F times the
