@@ -139,6 +139,7 @@ def brute_pairs(first, second):
         (2000, 60, 0.01, 0.02),  # a terrain against a small caster
         (300, 400, 0.05, 0.05),  # alike
         (300, 300, 0.002, 0.9),  # tiny boxes against huge ones: the tree
+        (400, 400, 0.3, 0.3),  # piled up (a grazing light): crowded cells, the tree
         (200, 200, 0.01, 0.01),  # no common ground
     ],
 )
