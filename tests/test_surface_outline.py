@@ -226,3 +226,25 @@ def test_clip_batch_cuts_convex_polygons_as_shapely_does():
         mine = clipped[k, : counts[k], :2]
         area = abs(signed_area(mine)) if counts[k] >= 3 else 0.0
         assert area == pytest.approx(region.area, rel=1e-9, abs=1e-12)
+
+
+def test_a_surfaces_geometry_is_kept_on_its_mesh_and_right():
+    import trimesh
+
+    from shadowgeo import PointLight, shadow_on_surface
+    from shadowgeo.topology import as_caster
+
+    ground = trimesh.creation.icosphere(subdivisions=2, radius=3.0)
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.5)
+    ball.apply_translation([0.0, 0.0, 5.0])
+    shadow_on_surface(ball, PointLight([0.0, 0.0, 9.0]), ground)
+
+    def recompute(_):
+        raise AssertionError("computed twice")
+
+    kept = as_caster(ground).derived("surface_geometry", recompute)
+    # trimesh's own unit normals and centroids, independently
+    assert np.allclose(kept.unit, ground.face_normals, atol=1e-12)
+    assert np.allclose(kept.centroid + as_caster(ground).center, ground.triangles_center)
+    assert np.allclose(np.cross(kept.u, kept.v), kept.unit, atol=1e-12)
+    assert not kept.single_sheet  # a closed sphere is no sheet
