@@ -28,7 +28,7 @@ Closed casters (the light outside them) contribute their light-facing
 triangles only: every blocked ray leaves the caster through one of them last.
 A closed caster wholly in front of a face needs no triangles at all: its
 silhouette, projected once into the light's frame
-(:class:`shadowgeo.lightframe.Outline`), is cut to the face's image there and
+(:class:`shadowgeo.outline.Outline`), is cut to the face's image there and
 mapped back; faces wholly inside it are shadowed whole, and a face its edge
 crosses is cut from the few edge segments near it (:meth:`Outline.cut`), so
 the cost follows the outline's length near the surface, not faces x outline.
@@ -57,15 +57,9 @@ import trimesh
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lightframe import (
-    Outline,
-    candidate_pairs,
-    clip_batch,
-    corner_max,
-    corner_min,
-    make_outline,
-)
+from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
+from .outline import Outline, make_outline
 from .seams import Loops, loops_of, stitch, unique_integers
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops

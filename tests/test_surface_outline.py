@@ -17,13 +17,8 @@ import numpy as np
 import pytest
 import shapely
 
-from shadowgeo.lightframe import (
-    Outline,
-    candidate_pairs,
-    clip_batch,
-    overlapping_boxes,
-    padded_loops,
-)
+from shadowgeo.lightframe import candidate_pairs, clip_batch, overlapping_boxes
+from shadowgeo.outline import Outline, padded_loops
 from shadowgeo.seams import loops_of, stitch
 
 
