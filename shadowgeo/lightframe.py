@@ -5,16 +5,16 @@ image overlaps its own. Images are taken in the light's frame: for a
 directional light the plane across its rays; for a point light the six sides
 of a cube map around it (each side a square pyramid of rays, so every image is
 bounded and nothing is divided by ``w <= 0``). A 2-D bounding-box index in that
-frame (shapely's STRtree) then lists the candidate (face, triangle) pairs
-without looking at every pair.
+frame (a uniform grid, or shapely's STRtree where the boxes pile up) then
+lists the candidate (face, triangle) pairs without looking at every pair.
 
 The triangles are clipped to each cube side in homogeneous coordinates by
 :func:`clip_batch`, a Sutherland-Hodgman clipper that works on many convex
 polygons at once; :mod:`shadowgeo.surface` uses the same clipper to cut
 casters to the slab between a face and the light.
 
-:class:`Outline` is a closed caster's silhouette in such a frame, computed
-once per light: its shadow on every face wholly behind it.
+:class:`shadowgeo.outline.Outline` is a closed caster's silhouette in such a
+frame, computed once per light.
 """
 
 from __future__ import annotations
@@ -24,8 +24,6 @@ from typing import cast
 
 import numpy as np
 import shapely
-
-from .polygons import MAX_COORDINATE, components, fill
 
 # The cube map around a point light: (axis, sign) of each side's central ray.
 _CUBE_SIDES = [(axis, sign) for axis in range(3) for sign in (1.0, -1.0)]
@@ -95,30 +93,58 @@ def clip_batch(
 def _clip_rows(
     points: np.ndarray, counts: np.ndarray, side: np.ndarray, valid: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """One Sutherland-Hodgman step on rows that the plane cuts: (r, k', d)."""
+    """One Sutherland-Hodgman step on rows that the plane cuts: (r, k', d).
+    Each corner inside is kept, followed by the crossing on its edge to the
+    next corner where the edge crosses the plane; only the crossings are
+    computed."""
     rows, width, size = points.shape
     inside = (side >= 0) & valid
     slots = np.arange(width)
     following = (slots[None, :] + 1) % np.maximum(counts[:, None], 1)
-    side_next = np.take_along_axis(side, following, axis=1)
     inside_next = np.take_along_axis(inside, following, axis=1)
     crosses = valid & (inside != inside_next)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(crosses, side / np.where(crosses, side - side_next, 1.0), 0.0)
-    nxt = np.take_along_axis(points, following[:, :, None], axis=1)
-    crossing = points + t[:, :, None] * (nxt - points)
-    candidates = np.stack([points, crossing], axis=2).reshape(rows, 2 * width, size)
     keep = np.stack([inside, crosses], axis=2).reshape(rows, 2 * width)
-    counts = keep.sum(axis=1)
     position = np.cumsum(keep, axis=1) - 1
-    row, col = np.nonzero(keep)
-    out = np.zeros((rows, max(int(counts.max()), 1), size))
-    out[row, position[row, col]] = candidates[row, col]
-    return out, counts
+    counts = position[:, -1] + 1
+    out_width = max(int(counts.max()), 1)
+    out = np.zeros((rows * out_width, size))
+    # Rows of the flattened arrays: one index per entry gathers fastest.
+    flat_points = points.reshape(rows * width, size)
+    flat_position = position.reshape(-1)
+    entry = np.flatnonzero(inside)  # row * width + col
+    row, col = np.divmod(entry, width)
+    out[row * out_width + flat_position[row * 2 * width + 2 * col]] = flat_points[entry]
+    entry = np.flatnonzero(crosses)
+    row, col = np.divmod(entry, width)
+    ahead = row * width + following.reshape(-1)[entry]
+    flat_side = side.reshape(-1)
+    here, there = flat_side[entry], flat_side[ahead]
+    t = here / (here - there)
+    start = flat_points[entry]
+    target = row * out_width + flat_position[row * 2 * width + 2 * col + 1]
+    out[target] = start + t[:, None] * (flat_points[ahead] - start)
+    return out.reshape(rows, out_width, size), counts
+
+
+# Triangles as (n, 3, 3) corners, or as (points (p, 3), faces (n, 3)) that
+# share their corners: per-point work is then done once per point.
+Triangles = np.ndarray | tuple[np.ndarray, np.ndarray]
+
+
+def indexed_triangles(triangles: Triangles) -> tuple[np.ndarray, np.ndarray]:
+    """(points, faces) of triangles given either way; corners one by one
+    where the faces use fewer corners than there are points."""
+    if isinstance(triangles, tuple):
+        points, faces = triangles
+        if 3 * len(faces) >= len(points):
+            return points, faces
+        triangles = points[faces]
+    corners = np.asarray(triangles).reshape(-1, 3)
+    return corners, np.arange(len(corners)).reshape(-1, 3)
 
 
 def _directional_boxes(
-    triangles: np.ndarray, direction: np.ndarray
+    points: np.ndarray, faces: np.ndarray, direction: np.ndarray
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """One frame, the plane across the rays: every triangle and its (n, 4) box."""
     axis = np.zeros(3)
@@ -126,36 +152,62 @@ def _directional_boxes(
     first = np.cross(direction, axis)
     first /= np.linalg.norm(first)
     second = np.cross(direction, first)
-    x = triangles @ first
-    y = triangles @ second
+    x = (points @ first)[faces]
+    y = (points @ second)[faces]
     boxes = np.column_stack([corner_min(x), corner_min(y), corner_max(x), corner_max(y)])
-    return [(np.arange(len(triangles)), boxes)]
+    return [(np.arange(len(faces)), boxes)]
 
 
-def _cube_boxes(triangles: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+def _cube_boxes(points: np.ndarray, faces: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
     """Six frames around a light at the origin: for each cube side, the
     triangles whose image reaches it and (k, 4) boxes of their images there."""
-    # Each corner's side: its largest coordinate. A triangle with all three
+    # Each point's side: its largest coordinate. A triangle with all three
     # corners on one side lies inside that side's pyramid (it is convex).
-    largest = np.argmax(np.abs(triangles), axis=2)
-    positive = np.take_along_axis(triangles, largest[:, :, None], axis=2)[:, :, 0] > 0
-    side_of = 2 * largest + np.where(positive, 0, 1)  # index into _CUBE_SIDES
-    whole = np.all(side_of == side_of[:, :1], axis=1)
-    spanning = np.flatnonzero(~whole)
+    # Column by column: numpy reduces a short axis many times slower.
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
+    largest = np.where((ax >= ay) & (ax >= az), 0, np.where(ay >= az, 1, 2))
+    coordinate = np.where(largest == 0, x, np.where(largest == 1, y, z))
+    positive = coordinate > 0
+    side = 2 * largest + np.where(positive, 0, 1)  # index into _CUBE_SIDES
+    w = np.where(positive, coordinate, -coordinate)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.where(largest == 0, y, x) / w
+        v = np.where(largest == 2, y, z) / w
+    side_of = side[faces]
+    whole = (side_of[:, 0] == side_of[:, 1]) & (side_of[:, 1] == side_of[:, 2])
+    if whole.all():
+        complete, spanning = np.arange(len(faces)), np.zeros(0, np.int64)
+        face_u, face_v = u[faces], v[faces]
+    else:
+        complete, spanning = np.flatnonzero(whole), np.flatnonzero(~whole)
+        face_u, face_v = u[faces[complete]], v[faces[complete]]
+    all_boxes = np.column_stack(
+        [corner_min(face_u), corner_min(face_v), corner_max(face_u), corner_max(face_v)]
+    )
+    which = side_of[complete, 0]
+    # Side by side: sorted once (no copy when one side holds them all).
+    if len(which) and np.all(which == which[0]):
+        bounds = np.where(np.arange(7) > which[0], len(which), 0)
+    else:
+        order = np.argsort(which, kind="stable")
+        complete, all_boxes, which = complete[order], all_boxes[order], which[order]
+        bounds = np.searchsorted(which, np.arange(7))
+    corners = points[faces[spanning]] if len(spanning) else None
     out = []
     for index, (axis, sign) in enumerate(_CUBE_SIDES):
+        here = slice(bounds[index], bounds[index + 1])
+        if corners is None:
+            out.append((complete[here], all_boxes[here]))
+            continue
         across = [a for a in range(3) if a != axis]
-        mine = np.flatnonzero(whole & (side_of[:, 0] == index))
-        chunk = triangles[mine]
-        w = sign * chunk[:, :, axis]
-        u, v = chunk[:, :, across[0]] / w, chunk[:, :, across[1]] / w
-        boxes = [np.column_stack([corner_min(u), corner_min(v), corner_max(u), corner_max(v)])]
-        members = [mine]
-        if len(spanning):
-            found, box = _clipped_boxes(triangles[spanning], axis, sign, across)
-            boxes.append(box)
-            members.append(spanning[found])
-        out.append((np.concatenate(members), np.concatenate(boxes)))
+        found, box = _clipped_boxes(corners, axis, sign, across)
+        out.append(
+            (
+                np.concatenate([complete[here], spanning[found]]),
+                np.concatenate([all_boxes[here], box]),
+            )
+        )
     return out
 
 
@@ -188,31 +240,67 @@ def _clipped_boxes(
     return has, box
 
 
+def _overall(boxes: np.ndarray) -> list[float]:
+    """The (4,) box around (n, 4) boxes, column by column (numpy reduces a
+    short axis of a 2-D array many times slower)."""
+    return [
+        float(boxes[:, 0].min()),
+        float(boxes[:, 1].min()),
+        float(boxes[:, 2].max()),
+        float(boxes[:, 3].max()),
+    ]
+
+
+def _meets(boxes: np.ndarray, box: list[float]) -> np.ndarray:
+    """(n,) bool: which of (n, 4) boxes meet one box."""
+    meets: np.ndarray = (
+        (boxes[:, 0] <= box[2])
+        & (boxes[:, 1] <= box[3])
+        & (boxes[:, 2] >= box[0])
+        & (boxes[:, 3] >= box[1])
+    )
+    return meets
+
+
 def overlapping_boxes(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(i, j) index arrays of every box ``first[i]`` that overlaps ``second[j]``;
     boxes are (n, 4) ``(xmin, ymin, xmax, ymax)``.
 
-    Two sets of very different sizes (a terrain against a few hundred caster
-    triangles) go through a uniform grid in numpy; similar sizes through
-    shapely's STRtree, whose cost is mostly making one box geometry per box.
+    Only boxes that meet the other set's overall box take part (a terrain
+    against the few triangles of one caster keeps the faces under it). Those
+    go through a uniform grid in numpy (:func:`_grid_pairs`), or through
+    shapely's STRtree where the grid would pair too many boxes that cover
+    many of its cells with everything.
     """
-    if 8 * min(len(first), len(second)) < max(len(first), len(second)):
-        return _grid_pairs(first, second)
-    tree = shapely.STRtree(shapely.box(*second.T))
-    # The geometries are their own envelopes: the tree's box test is the whole test.
-    found = tree.query(shapely.box(*first.T))
-    return found[0], found[1]
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+    if len(first) == 0 or len(second) == 0:
+        return empty
+    mine = np.flatnonzero(_meets(first, _overall(second)))
+    theirs = np.flatnonzero(_meets(second, _overall(first)))
+    if len(mine) == 0 or len(theirs) == 0:
+        return empty
+    found = _grid_pairs(first[mine], second[theirs])
+    if found is None:
+        tree = shapely.STRtree(shapely.box(*second[theirs].T))
+        # The geometries are their own envelopes: the tree's box test is the whole test.
+        found = tuple(tree.query(shapely.box(*first[mine].T)))
+    return mine[found[0]], theirs[found[1]]
 
 
-def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """Every (i, j) with box ``first[i]`` overlapping box ``second[j]``, by a
     uniform grid with cells twice a typical box: each box is listed in the
     cells it covers, boxes sharing a cell are paired, and the pairs are checked
-    and made unique. Boxes covering very many cells meet every other box."""
-    sizes = np.concatenate([first[:, 2:] - first[:, :2], second[:, 2:] - second[:, :2]])
-    low = np.minimum(first[:, :2].min(axis=0), second[:, :2].min(axis=0))
-    high = np.maximum(first[:, 2:].max(axis=0), second[:, 2:].max(axis=0))
-    cell = np.maximum(np.median(sizes, axis=0) * 2.0, (high - low) / 4096)
+    and made unique. Boxes covering very many cells meet every other box;
+    None where that, or crowded cells (images piled up along a grazing
+    light), would make many more candidate pairs than boxes."""
+    box_first, box_second = _overall(first), _overall(second)
+    low = np.minimum(box_first[:2], box_second[:2])
+    high = np.maximum(box_first[2:], box_second[2:])
+    width = np.concatenate([first[:, 2] - first[:, 0], second[:, 2] - second[:, 0]])
+    height = np.concatenate([first[:, 3] - first[:, 1], second[:, 3] - second[:, 1]])
+    typical = np.array([np.median(width), np.median(height)])
+    cell = np.maximum(typical * 2.0, (high - low) / 4096)
     cell = np.maximum(cell, 1e-300)
     columns = int(np.ceil((high[0] - low[0]) / cell[0])) + 1
 
@@ -235,10 +323,14 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
 
     owner_a, cell_a, big_a = cells(first)
     owner_b, cell_b, big_b = cells(second)
+    if len(big_a) * len(second) + len(big_b) * len(first) > 4 * (len(first) + len(second)):
+        return None  # boxes too unlike in size for one grid
     order = np.argsort(cell_b, kind="stable")
     owner_b, cell_b = owner_b[order], cell_b[order]
     begin = np.searchsorted(cell_b, cell_a, side="left")
     count = np.searchsorted(cell_b, cell_a, side="right") - begin
+    if int(count.sum()) > 8 * (len(first) + len(second)):
+        return None  # crowded cells: most candidates would be repeats or misses
     i = np.repeat(owner_a, count)
     k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
     j = owner_b[np.repeat(begin, count) + k]
@@ -248,8 +340,12 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     j = np.concatenate(
         [j, np.tile(np.arange(len(second)), len(big_a)), np.repeat(big_b, len(first))]
     )
-    overlap = np.all(first[i, :2] <= second[j, 2:], axis=1) & np.all(
-        second[j, :2] <= first[i, 2:], axis=1
+    mine, theirs = first[i], second[j]
+    overlap = (
+        (mine[:, 0] <= theirs[:, 2])
+        & (mine[:, 1] <= theirs[:, 3])
+        & (theirs[:, 0] <= mine[:, 2])
+        & (theirs[:, 1] <= mine[:, 3])
     )
     key = np.sort(i[overlap] * np.int64(len(second)) + j[overlap])
     key = key[np.append(True, key[1:] != key[:-1])[: len(key)]]
@@ -257,8 +353,8 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def candidate_pairs(
-    receivers: np.ndarray,
-    casters: np.ndarray,
+    receivers: Triangles,
+    casters: Triangles,
     light_position: np.ndarray | None,
     direction: np.ndarray | None,
     pad: float,
@@ -267,7 +363,7 @@ def candidate_pairs(
 
     Parameters
     ----------
-    receivers, casters : (n, 3, 3) float64
+    receivers, casters : (n, 3, 3) float64, or (points (p, 3), faces (n, 3))
         Triangles, in any common frame.
     light_position : (3,) float64 or None
         A point light's position in that frame, or None for a directional light.
@@ -282,17 +378,20 @@ def candidate_pairs(
     (k,) int64 receiver indices and (k,) int64 caster indices, sorted by
     receiver, each pair once.
     """
-    if len(receivers) == 0 or len(casters) == 0:
+    receiver_points, receiver_faces = indexed_triangles(receivers)
+    caster_points, caster_faces = indexed_triangles(casters)
+    if len(receiver_faces) == 0 or len(caster_faces) == 0:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     if light_position is None:
         # A directional light: the caller passes its direction.
-        receiver_boxes = _directional_boxes(receivers, cast(np.ndarray, direction))
-        caster_boxes = _directional_boxes(casters, cast(np.ndarray, direction))
+        along = cast(np.ndarray, direction)
+        receiver_boxes = _directional_boxes(receiver_points, receiver_faces, along)
+        caster_boxes = _directional_boxes(caster_points, caster_faces, along)
     else:
-        receiver_boxes = _cube_boxes(receivers - light_position)
-        caster_boxes = _cube_boxes(casters - light_position)
+        receiver_boxes = _cube_boxes(receiver_points - light_position, receiver_faces)
+        caster_boxes = _cube_boxes(caster_points - light_position, caster_faces)
     keys = []
-    n_casters = np.int64(len(casters))
+    n_casters = np.int64(len(caster_faces))
     grow = np.array([-pad, -pad, pad, pad])
     for (have_mine, mine), (have_theirs, theirs) in zip(receiver_boxes, caster_boxes, strict=True):
         if len(have_mine) == 0 or len(have_theirs) == 0:
@@ -304,129 +403,3 @@ def candidate_pairs(
     unique = np.sort(np.concatenate(keys))
     unique = unique[np.append(True, unique[1:] != unique[:-1])[: len(unique)]]
     return unique // n_casters, unique % n_casters
-
-
-class Outline:
-    """A closed caster's shadow seen from the light: its silhouette loops
-    projected once into a 2-D frame across the light's rays, and united.
-
-    The caster's shadow on any plane wholly behind it (seen from the light) is
-    this region mapped onto the plane; on a receiver face it is the region
-    clipped to the face's own image in this frame.
-
-    Attributes
-    ----------
-    region : shapely geometry
-        The united outline in frame coordinates (after :meth:`unite`).
-    cross_section : manifold3d.CrossSection
-        The same, scaled by ``scale`` for Clipper2.
-    """
-
-    def __init__(
-        self,
-        light_point: np.ndarray | None,
-        axis: np.ndarray,
-        first: np.ndarray,
-        second: np.ndarray,
-        direction: np.ndarray | None,
-    ) -> None:
-        self.light_point = light_point
-        self.axis, self.first, self.second = axis, first, second
-        self.direction = direction
-
-    def unite(self, points2d_loops: list[np.ndarray]) -> None:
-        """Set the region: the positive-winding union of the projected loops."""
-        extent = max(float(np.abs(np.concatenate(points2d_loops)).max()), 1e-300)
-        self.scale = MAX_COORDINATE / extent / 4.0
-        united = fill([loop * self.scale for loop in points2d_loops])
-        self.parts = components(united)
-        self.region = shapely.MultiPolygon(
-            [
-                shapely.Polygon(p[0] / self.scale, [h / self.scale for h in p[1:]])
-                for p in self.parts
-            ]
-        )
-        shapely.prepare(self.region)
-        self.cross_section = united
-
-    def ahead(self, points: np.ndarray) -> np.ndarray:
-        """(..., ) distance of points ahead of the light along the frame's axis
-        (positive for a directional light)."""
-        if self.light_point is None:
-            return np.full(points.shape[:-1], np.inf)
-        distance: np.ndarray = (points - self.light_point) @ self.axis
-        return distance
-
-    def may_reach(self, triangles: np.ndarray) -> np.ndarray:
-        """(n,) bool for (n, 3, 3) triangles: False where the caster surely
-        casts nothing on it -- the triangle lies ahead of the light and its
-        image misses the outline's box (the caster's image lies in it)."""
-        if len(triangles) == 0:
-            return np.zeros(0, dtype=bool)
-        ahead = corner_min(self.ahead(triangles)) > 0
-        out = np.ones(len(triangles), dtype=bool)
-        if not ahead.any():
-            return out
-        images = self.to_frame(triangles[ahead])
-        low, high = np.array(self.region.bounds[:2]), np.array(self.region.bounds[2:])
-        misses = np.any((corner_min(images) > high) | (corner_max(images) < low), axis=1)
-        out[np.flatnonzero(ahead)[misses]] = False
-        return out
-
-    def to_frame(self, points: np.ndarray) -> np.ndarray:
-        """(..., 3) points to (..., 2) frame coordinates (their rays)."""
-        if self.light_point is None:
-            return np.stack([points @ self.first, points @ self.second], axis=-1)
-        relative = points - self.light_point
-        depth = relative @ self.axis
-        return np.stack([relative @ self.first / depth, relative @ self.second / depth], axis=-1)
-
-    def onto_planes(self, flat: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-        """(n, 2) frame points to (n, 3) points where their rays meet the planes
-        ``normals[i] . x + offsets[i] = 0``, one plane per point."""
-        if self.light_point is None:
-            base = np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
-            height = np.einsum("ij,ij->i", base, normals) + offsets
-            # Without a light point the outline is a directional light's: it has a direction.
-            direction = cast(np.ndarray, self.direction)
-            lowered: np.ndarray = base - (height / (normals @ direction))[:, None] * direction
-            return lowered
-        rays = self.axis + np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
-        height = normals @ self.light_point + offsets
-        along = -height / np.einsum("ij,ij->i", rays, normals)
-        met: np.ndarray = self.light_point + rays * along[:, None]
-        return met
-
-
-def make_outline(
-    vertices: np.ndarray,
-    loops: list[np.ndarray],
-    all_vertices: np.ndarray,
-    light_point: np.ndarray | None,
-    direction: np.ndarray | None,
-    margin: float,
-) -> Outline | None:
-    """The :class:`Outline` of a caster whose silhouette ``loops`` index
-    ``vertices``; None when a point light is not wholly behind one plane
-    through the light and the caster (``all_vertices``), which a central
-    projection needs."""
-    if not loops:
-        return None
-    axis: np.ndarray
-    if light_point is None:
-        # A directional light: the caller passes its direction.
-        axis = cast(np.ndarray, direction)
-    else:
-        axis = all_vertices.mean(axis=0) - light_point
-        axis = axis / np.linalg.norm(axis)
-        if float(((all_vertices - light_point) @ axis).min()) <= margin:
-            return None
-    helper = np.zeros(3)
-    helper[int(np.argmin(np.abs(axis)))] = 1.0
-    first = np.cross(axis, helper)
-    first /= np.linalg.norm(first)
-    # first x second = -axis: loops counter-clockwise seen from the light stay so.
-    second = np.cross(first, axis)
-    outline = Outline(light_point, axis, first, second, direction)
-    outline.unite([outline.to_frame(vertices[loop]) for loop in loops])
-    return outline

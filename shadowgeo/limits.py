@@ -90,7 +90,9 @@ MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
 # Faces that receive through shadow_on_surface in add_shadows (beyond the planar
 # receivers), per light; a bigger scene bakes planar shadows only, with a note.
-MAX_SURFACE_FACES = 20_000
+# At this size (benchmarks/bench_surface.py's terrain at 100,000 faces under a
+# sphere) a point light costs about 0.2 s, a low sun with long shadows about 3 s.
+MAX_SURFACE_FACES = 100_000
 
 
 def check_coordinates(points: ArrayLike, what: str) -> None:

@@ -25,13 +25,27 @@ from manifold3d import triangulate
 
 from .polygons import MAX_COORDINATE
 
+# Loops of many regions at once: (P, 2) points, loop after loop; (L,) the
+# number of points of each loop; (L,) the region of each loop.
+Loops = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def loops_of(regions: list[list[np.ndarray]]) -> Loops:
+    """:data:`Loops` from a list of regions, each a list of (k, 2) loops."""
+    sizes = np.array([len(loop) for region in regions for loop in region], dtype=np.int64)
+    region = np.repeat(np.arange(len(regions)), [len(loops) for loops in regions])
+    if len(sizes) == 0:
+        return np.zeros((0, 2)), sizes, region.astype(np.int64)
+    points = np.concatenate([loop for loops in regions for loop in loops])
+    return points, sizes, region.astype(np.int64)
+
 
 def stitch(
     vertices: np.ndarray,
     faces: np.ndarray,
     face_ids: np.ndarray,
     frames: tuple[np.ndarray, np.ndarray, np.ndarray],
-    regions: list[list[np.ndarray]],
+    regions: Loops,
     eps: float,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Triangulate regions given per face so shared edges split identically.
@@ -46,9 +60,10 @@ def stitch(
         The face of each region.
     frames : three (m, 3) float64
         Each face's frame: origin, ``u``, ``v`` (``u x v`` its normal).
-    regions : list of r lists of (k, 2) float64
-        Each region's loops in its face's frame (outer loops counter-clockwise,
-        holes clockwise), lying in the face.
+    regions : Loops
+        The regions' loops, each in its face's frame (outer loops
+        counter-clockwise, holes clockwise), lying in the face; regions are
+        numbered as ``face_ids``.
     eps : float
         Distance below which a point is on an edge or two points are one.
 
@@ -62,36 +77,37 @@ def stitch(
         The face each triangle lies in.
     """
     origin, u, v = frames
-    if not regions:
+    flat, loop_sizes, loop_region = regions
+    if len(loop_sizes) == 0:
         return vertices.copy(), np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
-    loop_sizes = np.array([len(loop) for region in regions for loop in region], dtype=np.int64)
-    loop_region = np.repeat(np.arange(len(regions)), [len(region) for region in regions])
-    flat = np.concatenate([loop for region in regions for loop in region])
     point_face = np.repeat(face_ids[loop_region], loop_sizes)
+    point_region = np.repeat(loop_region, loop_sizes)
     corners = _corners_2d(vertices, faces, origin, u, v, face_ids)  # (r, 3, 2)
-    point_corners = np.repeat(corners[loop_region], loop_sizes, axis=0)  # (P, 3, 2)
 
-    # Distance of each point to each face edge j (corner j to j + 1), inside positive.
-    start = point_corners
-    edge = np.roll(point_corners, -1, axis=1) - start
-    length = np.linalg.norm(edge, axis=2)
-    relative = flat[:, None, :] - start
-    distance = (edge[..., 0] * relative[..., 1] - edge[..., 1] * relative[..., 0]) / length
+    # Distance of each point to each face edge j (corner j to j + 1), inside
+    # positive, component by component: (P, 3) arrays, one column per edge.
+    edge = np.roll(corners, -1, axis=1) - corners
+    edge_x, edge_y = edge[:, :, 0][point_region], edge[:, :, 1][point_region]
+    length = np.sqrt(edge_x * edge_x + edge_y * edge_y)
+    relative_x = flat[:, :1] - corners[:, :, 0][point_region]
+    relative_y = flat[:, 1:] - corners[:, :, 1][point_region]
+    distance = (edge_x * relative_y - edge_y * relative_x) / length
     on_edge = np.abs(distance) <= eps
-    along = np.einsum("pjk,pjk->pj", relative, edge) / length**2
+    along = (relative_x * edge_x + relative_y * edge_y) / length**2
 
     n_points = len(flat)
     edge_of = np.full(n_points, -1, dtype=np.int64)
     param = np.zeros(n_points)
     # A face corner first: near two edge lines is not enough in a sliver.
-    corner_distance = np.linalg.norm(flat[:, None, :] - point_corners, axis=2)
-    nearest_corner = np.argmin(corner_distance, axis=1)
+    corner_distance = np.sqrt(relative_x * relative_x + relative_y * relative_y)
+    nearest_corner = _first_smallest(corner_distance)
     at_corner = corner_distance[np.arange(n_points), nearest_corner] <= eps
     corner = np.where(at_corner, nearest_corner, -1)
     inside = (along > 0) & (along < 1)
     closeness = np.where(on_edge & inside, np.abs(distance), np.inf)
-    nearest_edge = np.argmin(closeness, axis=1)
-    one = np.flatnonzero(~at_corner & np.isfinite(closeness.min(axis=1)))
+    nearest_edge = _first_smallest(closeness)
+    smallest = np.minimum(np.minimum(closeness[:, 0], closeness[:, 1]), closeness[:, 2])
+    one = np.flatnonzero(~at_corner & np.isfinite(smallest))
     edge_of[one] = nearest_edge[one]
     param[one] = along[one, nearest_edge[one]]
 
@@ -168,19 +184,46 @@ def stitch(
     sequence, sequence_loop, flat2d = sequence[keep], sequence_loop[keep], flat2d[keep]
     if len(sequence) == 0:
         return points, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
-    # Every region triangulated in one call: each in its own cell of one
-    # column (an affine stretch, which keeps a valid triangulation valid).
+    # A region that is one triangle (a face wholly in shadow, most often) is
+    # its own triangulation.
     region_of = loop_region[sequence_loop]
-    n_regions = len(regions)
+    loop_sizes_kept = np.bincount(sequence_loop, minlength=len(loop_sizes))
+    loops_per_region = np.bincount(loop_region[loop_sizes_kept > 0], minlength=len(face_ids))
+    entry_region_loops = loops_per_region[region_of]
+    single = (entry_region_loops == 1) & (loop_sizes_kept[sequence_loop] == 3)
+    first_of = np.flatnonzero(single & (np.diff(sequence_loop, prepend=-1) != 0))
+    corner_a, corner_b, corner_c = flat2d[first_of], flat2d[first_of + 1], flat2d[first_of + 2]
+    doubled = (corner_b[:, 0] - corner_a[:, 0]) * (corner_c[:, 1] - corner_a[:, 1]) - (
+        corner_b[:, 1] - corner_a[:, 1]
+    ) * (corner_c[:, 0] - corner_a[:, 0])
+    first_of = first_of[doubled > 0]
+    direct = sequence[first_of[:, None] + np.arange(3)]
+    direct_owners = face_ids[region_of[first_of]]
+    rest = np.ones(len(sequence), dtype=bool)
+    rest[(first_of[:, None] + np.arange(3)).reshape(-1)] = False
+    sequence, sequence_loop, flat2d, region_of = (
+        sequence[rest],
+        sequence_loop[rest],
+        flat2d[rest],
+        region_of[rest],
+    )
+    if len(sequence) == 0:
+        return points, direct, direct_owners
+    # Every other region triangulated in one call: each in its own cell of
+    # one column (an affine stretch, which keeps a valid triangulation valid).
+    n_regions = len(face_ids)
     cell = 2.0 * MAX_COORDINATE / n_regions
-    low = np.full((n_regions, 2), np.inf)
-    high = np.full((n_regions, 2), -np.inf)
-    np.minimum.at(low, region_of, flat2d)
-    np.maximum.at(high, region_of, flat2d)
-    unused = np.isinf(low[:, 0])  # every loop of the region dropped
-    low[unused], high[unused] = 0.0, 0.0
+    # Entries run region by region: each region's box by one reduction per column.
+    starts = np.flatnonzero(np.diff(region_of, prepend=-1) != 0)
+    present = region_of[starts]
+    low = np.zeros((n_regions, 2))
+    high = np.zeros((n_regions, 2))
+    for column in range(2):
+        values = flat2d[:, column]
+        low[present, column] = np.minimum.reduceat(values, starts)
+        high[present, column] = np.maximum.reduceat(values, starts)
     middle = 0.5 * (low + high)
-    reach = np.maximum(0.5 * (high - low).max(axis=1), 1e-300)
+    reach = np.maximum(0.5 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1]), 1e-300)
     stretch = np.column_stack([0.5 * MAX_COORDINATE / reach, 0.25 * cell / reach])
     centre = np.column_stack(
         [np.zeros(n_regions), -MAX_COORDINATE + cell * (np.arange(n_regions) + 0.5)]
@@ -195,7 +238,11 @@ def stitch(
     proper = (
         (found[:, 0] != found[:, 1]) & (found[:, 1] != found[:, 2]) & (found[:, 2] != found[:, 0])
     )
-    return points, found[proper], owners[proper]
+    return (
+        points,
+        np.concatenate([direct, found[proper]]),
+        np.concatenate([direct_owners, owners[proper]]),
+    )
 
 
 def _drop_repeats(
@@ -281,6 +328,16 @@ def _insert_edge_points(
         cluster = np.where(ascending[owner], first_in[owner] + k, stop_in[owner] - 1 - k)
         sequence[block[segment[owner]] + 1 + k] = n_vertices + cluster
     return sequence, sequence_loop
+
+
+def _first_smallest(values: np.ndarray) -> np.ndarray:
+    """``np.argmin(values, axis=1)`` for (n, 3) values, column by column
+    (numpy reduces a short axis many times slower)."""
+    first, second, third = values[:, 0], values[:, 1], values[:, 2]
+    smallest: np.ndarray = np.where(
+        (first <= second) & (first <= third), 0, np.where(second <= third, 1, 2)
+    )
+    return smallest
 
 
 def _corners_2d(

@@ -7,10 +7,13 @@
   region, which lets a surface shadow itself through its faces turned away
   from the light only;
 * :func:`lift_directions` -- how to move shadow points off the surface so
-  that neighbouring faces' lifted shadows still meet.
+  that neighbouring faces' lifted shadows still meet;
+* :func:`surface_geometry` -- all of that per-mesh work, done once per mesh.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -109,3 +112,60 @@ def face_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     u = axis - np.einsum("ij,ij->i", axis, normals)[:, None] * normals
     u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
     return u, np.cross(normals, u)
+
+
+@dataclass(frozen=True)
+class SurfaceGeometry:
+    """A receiving surface's shape, in a frame centred on its own bounds.
+
+    Attributes
+    ----------
+    positions : (n, 3) float64
+        Unique vertex positions, minus the mesh's ``center``.
+    faces : (m, 3) int64
+        The faces, indexing ``positions``.
+    length : (m,) float64
+        Twice each face's area.
+    unit : (m, 3) float64
+        Unit face normals (zero where ``length`` is).
+    u, v : (m, 3) float64
+        In-plane frames, ``u x v = unit``.
+    centroid : (m, 3) float64
+        Face centroids in the same frame.
+    single_sheet : bool
+        :func:`single_sheet` of the mesh.
+    """
+
+    positions: np.ndarray
+    faces: np.ndarray
+    length: np.ndarray
+    unit: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    centroid: np.ndarray
+    single_sheet: bool
+
+
+def surface_geometry(surface: Caster) -> SurfaceGeometry:
+    """The per-mesh part of receiving shadows on ``surface``: computed once
+    and kept on the mesh (``surface.derived``) by the caller, so a second
+    light, or a second call with other casters, does not redo it."""
+    positions, inverse = merge_positions(surface.vertices)
+    positions = positions - surface.center
+    faces = inverse.reshape(-1)[surface.faces]
+    first, second, third = positions[faces[:, 0]], positions[faces[:, 1]], positions[faces[:, 2]]
+    a, b = second - first, third - first
+    # Component by component: np.cross and norms over a short axis are slow.
+    normals = np.column_stack(
+        [
+            a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+            a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+            a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+        ]
+    )
+    length = np.sqrt(normals[:, 0] ** 2 + normals[:, 1] ** 2 + normals[:, 2] ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit = np.where(length[:, None] > 0, normals / length[:, None], 0.0)
+    u, v = face_frames(unit)
+    centroid = (first + second + third) / 3.0
+    return SurfaceGeometry(positions, faces, length, unit, u, v, centroid, single_sheet(surface))

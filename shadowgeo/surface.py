@@ -28,8 +28,14 @@ Closed casters (the light outside them) contribute their light-facing
 triangles only: every blocked ray leaves the caster through one of them last.
 A closed caster wholly in front of a face needs no triangles at all: its
 silhouette, projected once into the light's frame
-(:class:`shadowgeo.lightframe.Outline`), is cut to the face's image there and
-mapped back; faces wholly inside it are shadowed whole.
+(:class:`shadowgeo.outline.Outline`), is cut to the face's image there and
+mapped back; faces wholly inside it are shadowed whole, and a face its edge
+crosses is cut from the few edge segments near it (:meth:`Outline.cut`), so
+the cost follows the outline's length near the surface, not faces x outline.
+
+Per-mesh work on the surface (merged vertices, normals, face frames, whether
+it is a single sheet) is kept on the mesh (:func:`shadowgeo.sheets.surface_geometry`):
+a second light or a second call pays only for what the light changes.
 
 Cost: the index is O((F + T) log(F + T)) for F surface faces and T caster
 triangles; the clipping is linear in the candidate pairs, about F times the
@@ -51,17 +57,11 @@ import trimesh
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lightframe import (
-    Outline,
-    candidate_pairs,
-    clip_batch,
-    corner_max,
-    corner_min,
-    make_outline,
-)
+from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
-from .seams import stitch, unique_integers
-from .sheets import face_frames, lift_directions, merge_positions, single_sheet
+from .outline import Outline, make_outline
+from .seams import Loops, loops_of, stitch, unique_integers
+from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
@@ -69,9 +69,13 @@ from .topology import Caster, MeshLike, as_caster
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000
 
-# A closed caster's outline, its light-facing triangles, and (its box corners,
-# bounding ball centre, radius).
-_Outlined = tuple[Outline, np.ndarray, tuple[np.ndarray, np.ndarray, float]]
+# A closed caster's outline, its light-facing triangles (vertices, faces), and (its box
+# half-sizes, its box centre, its bounding radius about that centre).
+_Outlined = tuple[Outline, tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray, float]]
+
+# Polygons in face frames, (n, k, 2) padded by repeating the last corner, and
+# (n,) the face of each.
+_Pieces = tuple[np.ndarray, np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -262,6 +266,7 @@ class _SurfaceProjector:
     origin: np.ndarray
     u: np.ndarray
     v: np.ndarray
+    geometry: SurfaceGeometry
 
     def __init__(
         self, casters: list[Caster], light: Light, surface: Caster, offset: float, tol: Tolerance
@@ -317,17 +322,18 @@ class _SurfaceProjector:
         bounds = [c.bounds for c in self.casters if c.n_faces] + [surface.bounds]
         stacked = np.concatenate(bounds)
         self.center = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
-        # One index per position: faces that share a corner position share an edge.
-        positions, inverse = merge_positions(surface.vertices)
-        self.vertices = positions - self.center
-        self.faces = inverse.reshape(-1)[surface.faces]
+        # One index per position (faces that share a corner position share an
+        # edge), normals and frames: once per mesh, in its own centred frame.
+        geometry = surface.derived("surface_geometry", surface_geometry)
+        self.geometry = geometry
+        shift = surface.center - self.center
+        self.vertices = geometry.positions + shift
+        self.faces = geometry.faces
         corners = self.vertices[self.faces]
-        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-        length = np.linalg.norm(normals, axis=1)
+        length = geometry.length
         self.face_area = 0.5 * length
         proper = length > tol.length**2
-        unit = np.zeros_like(normals)
-        unit[proper] = normals[proper] / length[proper, None]
+        unit = np.where(proper[:, None], geometry.unit, 0.0)
         self.unit = unit
         if is_positional(light):
             self.light_point = light.position - self.center
@@ -344,40 +350,47 @@ class _SurfaceProjector:
             lit = facing
         if isinstance(light, SpotLight):
             self.limits.append("spot_cone")
-        self.origin = (corners[:, 0] + corners[:, 1] + corners[:, 2]) / 3.0
-        self.u, self.v = face_frames(unit)
+        self.origin = geometry.centroid + shift
+        self.u, self.v = geometry.u, geometry.v
         return corners, facing, lit
 
     def _pairs(
         self, corners: np.ndarray, lit: np.ndarray
-    ) -> tuple[
-        np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[int, list[np.ndarray]], tuple[int, int]
-    ]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, _Pieces, tuple[int, int]]:
         """(face, caster triangle) pairs to clip, sorted by face; the caster
-        triangles; faces wholly inside an outline; outline parts per face;
-        and (candidate pairs, outlined casters) counts."""
+        triangles; faces wholly inside an outline; outline pieces on the
+        others; and (candidate pairs, outlined casters) counts."""
         tol, light = self.tol, self.light
         lit_faces = np.flatnonzero(lit)
         caster_triangles, outlined = self._caster_triangles()
         direction = None if is_positional(light) else light.direction
         pad = 1e-9 if is_positional(light) else tol.length
         found_faces, found_triangles = candidate_pairs(
-            corners[lit_faces], caster_triangles, self.light_point, direction, pad
+            (self.vertices, self.faces[lit_faces]),
+            caster_triangles,
+            self.light_point,
+            direction,
+            pad,
         )
         receiver_parts = [lit_faces[found_faces]]
         triangle_parts = [found_triangles]
         # Closed casters wholly in front of a face: their outline, not their triangles.
         full = np.zeros(len(corners), dtype=bool)
-        extra: dict[int, list[np.ndarray]] = {}
+        extra: list[_Pieces] = []
         all_triangles = [caster_triangles]
         base = len(caster_triangles)
-        for outline, front_triangles, bound in outlined:
+        for outline, front, bound in outlined:
+            front_triangles = front[0][front[1]]
             eligible = self._outline_faces(outline, bound, corners, lit)
-            self._apply_outline(outline, np.flatnonzero(eligible), corners, full, extra)
+            extra.append(self._apply_outline(outline, np.flatnonzero(eligible), corners, full))
             others = np.flatnonzero(lit & ~eligible)
-            others = others[outline.may_reach(corners[others])]
+            others = others[outline.may_reach((self.vertices, self.faces[others]))]
             found, their = candidate_pairs(
-                corners[others], front_triangles, self.light_point, direction, pad
+                (self.vertices, self.faces[others]),
+                front,
+                self.light_point,
+                direction,
+                pad,
             )
             receiver_parts.append(others[found])
             triangle_parts.append(their + base)
@@ -397,13 +410,15 @@ class _SurfaceProjector:
         )
         front = (corner_max(heights) > tol.length) & ~full[receivers]
         counts = (n_candidates, len(outlined))
-        return receivers[front], triangles[front], caster_triangles, full, extra, counts
+        pieces = _pad_polygons([part[0] for part in extra])
+        owners = np.concatenate([part[1] for part in extra] + [np.zeros(0, np.int64)])
+        return receivers[front], triangles[front], caster_triangles, full, (pieces, owners), counts
 
     def _caster_triangles(self) -> tuple[np.ndarray, list[_Outlined]]:
         """(t, 3, 3) caster triangles handled one by one, in the centred frame
         (a closed caster's light-facing ones only), and for each closed caster
-        with an outline: (outline, its light-facing triangles, (its box corners,
-        bounding ball centre, radius)))."""
+        with an outline: (outline, its light-facing triangles, (its box
+        half-sizes, box centre, bounding radius about it))."""
         chunks: list[np.ndarray] = []
         outlined: list[_Outlined] = []
         # Without a light point the light is directional.
@@ -423,20 +438,13 @@ class _SurfaceProjector:
                 )
                 if outline is not None:
                     low, high = caster.bounds - self.center
-                    box = np.array(
-                        [
-                            [x, y, z]
-                            for x in (low[0], high[0])
-                            for y in (low[1], high[1])
-                            for z in (low[2], high[2])
-                        ]
-                    )
                     centre = 0.5 * (low + high)
-                    radius = float(np.linalg.norm(vertices - centre, axis=1).max())
-                    outlined.append((outline, vertices[faces[front]], (box, centre, radius)))
+                    radius = caster.derived("bounding_radius", _bounding_radius)
+                    half = 0.5 * (high - low)
+                    outlined.append((outline, (vertices, faces[front]), (half, centre, radius)))
                     continue
                 keep = front
-            elif caster is self.surface and single_sheet(caster):
+            elif caster is self.surface and self.geometry.single_sheet:
                 # Seen from the surface itself, a blocked ray enters the sheet's
                 # back side first, through a face turned away from the light.
                 keep = caster.facing(light_homogeneous(caster, self.light)) <= 0
@@ -459,13 +467,22 @@ class _SurfaceProjector:
     ) -> np.ndarray:
         """(m,) bool: lit faces that the caster lies wholly in front of (its box
         or its bounding ball does) and whose corners lie ahead of the light in
-        the outline's frame."""
-        box, centre, radius = bound
+        the outline's frame. ``bound``: the caster's box half-sizes, centre
+        and bounding radius about that centre."""
+        half, centre, radius = bound
         unit = self.unit
-        offsets = -np.einsum("ij,ij->i", unit, corners[:, 0])
-        in_front = np.minimum.reduce(box @ unit.T + offsets) > self.tol.length
-        in_front |= unit @ centre + offsets - radius > self.tol.length
-        ahead = corner_min(outline.ahead(corners)) > self.tol.length
+        x, y, z = unit[:, 0], unit[:, 1], unit[:, 2]
+        first = corners[:, 0]
+        # Each face plane's height of the caster's centre; the box's lowest
+        # corner lies lower by the half-sizes along the normal's components.
+        middle = (
+            x * (centre[0] - first[:, 0])
+            + y * (centre[1] - first[:, 1])
+            + z * (centre[2] - first[:, 2])
+        )
+        reach = np.abs(x) * half[0] + np.abs(y) * half[1] + np.abs(z) * half[2]
+        in_front = middle - np.minimum(reach, radius) > self.tol.length
+        ahead = corner_min(outline.ahead(self.vertices)[self.faces]) > self.tol.length
         eligible: np.ndarray = lit & in_front & ahead
         return eligible
 
@@ -475,51 +492,51 @@ class _SurfaceProjector:
         faces: np.ndarray,
         corners: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
-    ) -> None:
-        """Mark faces wholly inside the outline as full; add the outline's part
-        of the others, mapped onto each face, to ``extra``."""
+    ) -> _Pieces:
+        """Mark faces wholly inside the outline as full; return the outline's
+        part of the others, mapped onto each face: signed pieces (their
+        winding numbers add up to it) and their faces."""
+        nothing = (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
         if len(faces) == 0:
-            return
-        images = outline.to_frame(corners[faces])  # (f, 3, 2)
-        low, high = np.array(outline.region.bounds[:2]), np.array(outline.region.bounds[2:])
-        near = ~np.any((corner_min(images) > high) | (corner_max(images) < low), axis=1)
-        faces, images = faces[near], images[near]
-        triangles = shapely.polygons(images)
-        covered = shapely.covers(outline.region, triangles)
-        full[faces[covered]] = True
-        touched = shapely.intersects(outline.region, triangles) & ~covered
-        faces, images = faces[touched], images[touched]
-        if len(faces) == 0:
-            return
+            return nothing
+        # Each vertex once: the faces share their corners (those of other
+        # faces, maybe behind the light, are not used).
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vertex_images = outline.to_frame(self.vertices)
+        corner_ids = self.faces[faces]
+        x, y = vertex_images[:, 0][corner_ids], vertex_images[:, 1][corner_ids]
+        low_x, low_y, high_x, high_y = outline.region.bounds
+        near = ~(
+            (corner_min(x) > high_x)
+            | (corner_min(y) > high_y)
+            | (corner_max(x) < low_x)
+            | (corner_max(y) < low_y)
+        )
+        faces = faces[near]
+        images = vertex_images[corner_ids[near]]
         x, y = images[:, :, 0], images[:, :, 1]
         # The map from the frame back to a face keeps or flips orientation as
         # the face's image does (the face runs counter-clockwise in its frame).
         flips = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
-        images = np.where(flips[:, None, None], images[:, ::-1], images)
-        loops: list[np.ndarray] = []
-        owners: list[int] = []
-        for k, image in enumerate(images):
-            piece = poly.intersect(outline.cross_section, poly.fill([image * outline.scale]))
-            for loop in piece.to_polygons():
-                loops.append(np.asarray(loop) / outline.scale)
-                owners.append(k)
-        if not loops:
-            return
-        sizes = np.array([len(loop) for loop in loops])
-        point_face = faces[np.repeat(owners, sizes)]
+        extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
+        covered, pieces, owners = outline.cut(images, 1e-9 * extent)
+        full[faces[covered]] = True
+        if len(pieces) == 0:
+            return nothing
+        width = pieces.shape[1]
+        point_face = faces[np.repeat(owners, width)]
         normal = self.unit[point_face]
         offset = -np.einsum("ij,ij->i", normal, corners[point_face, 0])
-        points = outline.onto_planes(np.concatenate(loops), normal, offset)
+        points = outline.onto_planes(pieces.reshape(-1, 2), normal, offset)
         points -= self.origin[point_face]
         flat = np.column_stack(
             [
                 np.einsum("ij,ij->i", points, self.u[point_face]),
                 np.einsum("ij,ij->i", points, self.v[point_face]),
             ]
-        )
-        for k, loop in zip(owners, np.split(flat, np.cumsum(sizes)[:-1]), strict=True):
-            extra.setdefault(int(faces[k]), []).append(loop[::-1] if flips[k] else loop)
+        ).reshape(-1, width, 2)
+        flat = np.where(flips[owners][:, None, None], flat[:, ::-1], flat)
+        return flat, faces[owners]
 
     def _side_planes(self, faces: np.ndarray, corners: np.ndarray) -> np.ndarray:
         """(f, 4, 4) unit half-spaces of the region between each face and the
@@ -583,97 +600,111 @@ class _SurfaceProjector:
         caster_triangles: np.ndarray,
         corners: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
-    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
+        extra: _Pieces,
+    ) -> tuple[Loops, np.ndarray]:
         """The shadow region of each face that has one: loops in the face's
-        frame, and the faces."""
+        frame (region by region), and the faces (sorted)."""
         origin, u, v = self.origin, self.u, self.v
         flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
-        faces_with = unique_integers(
-            np.concatenate([owner, np.flatnonzero(full), np.fromiter(extra, np.int64)])
-        )
+        flat = _pad_polygons([flat, extra[0]])
+        owner = np.concatenate([owner, extra[1]])
+        order = np.argsort(owner, kind="stable")
+        flat, owner = flat[order], owner[order]
+        faces_with = unique_integers(np.concatenate([owner, np.flatnonzero(full)]))
         lit = self._lit_polygons(faces_with, corners, origin, u, v)
         if is_positional(self.light) and math.isfinite(self.light.radius):
-            return self._regions_one_by_one(faces_with, lit, flat, owner, full, extra)
-        return self._regions_tiled(faces_with, lit, flat, owner, full, extra)
+            return self._regions_one_by_one(faces_with, lit, flat, owner, full)
+        return self._regions_tiled(faces_with, lit, flat, owner, full)
 
     def _regions_tiled(
         self,
         faces_with: np.ndarray,
-        lit: list[np.ndarray | None],
+        lit: tuple[np.ndarray, np.ndarray],
         flat: np.ndarray,
         owner: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
-    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
+    ) -> tuple[Loops, np.ndarray]:
         """All faces' unions in one Clipper2 call: each face's frame is mapped
         (by an affine stretch, which keeps unions and intersections) into its
         own cell of one large plane, so no two faces' pieces meet, and the
         result is cut back into faces by cell. Faces span a quarter of their
         cell's height: with n faces, rounding on Clipper2's 1e-8 grid stays
         near n * 1e-16 of a face."""
-        regions: dict[int, list[np.ndarray]] = {}
-        partial_faces: list[int] = []
-        for face, outline in zip(faces_with.tolist(), lit, strict=True):
-            if outline is None:
-                continue
-            if full[face]:
-                regions[face] = [outline]
-            else:
-                partial_faces.append(face)
-        if partial_faces:
-            partial = np.array(partial_faces, dtype=np.int64)
-            # Those faces' outlines, none of them None.
-            outlines = [cast(np.ndarray, lit[i]) for i in np.searchsorted(faces_with, partial)]
+        outlines, counts = lit
+        valid = counts >= 3
+        whole = valid & full[faces_with]
+        # Faces wholly in shadow: their lit outline.
+        slots = np.arange(outlines.shape[1])
+        chunks = [
+            (
+                outlines[whole][slots[None, :] < counts[whole, None]],
+                counts[whole],
+                faces_with[whole],
+            )
+        ]
+        partial = valid & ~full[faces_with]
+        if partial.any():
+            faces = faces_with[partial]
+            limits = outlines[partial]
             # One column of cells: Clipper2 sweeps along y, so its scanlines
             # meet one face at a time. x is stretched to the full width.
-            cell = 2.0 * poly.MAX_COORDINATE / len(partial)
-            slot = np.arange(len(partial))
+            n_cells = len(faces)
+            cell = 2.0 * poly.MAX_COORDINATE / n_cells
+            slot = np.arange(n_cells)
             centers = np.column_stack(
-                [np.zeros(len(partial)), -poly.MAX_COORDINATE + cell * (slot + 0.5)]
+                [np.zeros(n_cells), -poly.MAX_COORDINATE + cell * (slot + 0.5)]
             )
-            extents = np.array([float(np.abs(o).max()) for o in outlines])
+            extents = np.abs(limits.reshape(n_cells, -1)).max(axis=1)
             scales = np.column_stack([0.5 * poly.MAX_COORDINATE / extents, 0.25 * cell / extents])
             index = np.full(len(full), -1, dtype=np.int64)
-            index[partial] = slot
+            index[faces] = slot
             rows = np.flatnonzero(index[owner] >= 0)
             mine = index[owner[rows]]
             pieces = flat[rows] * scales[mine, None, :] + centers[mine, None, :]
-            loops = list(pieces)
-            for face, more in extra.items():
-                k = index[face]
-                if k >= 0:
-                    loops += [loop * scales[k] + centers[k] for loop in more]
-            limits = [o * scales[k] + centers[k] for k, o in enumerate(outlines)]
-            region = poly.intersect(poly.fill(loops), poly.fill(limits))
-            for loop in region.to_polygons():
-                loop = np.asarray(loop)
-                if len(loop) < 3:
-                    continue
-                k = int(np.floor((loop[0, 1] + poly.MAX_COORDINATE) / cell))
-                k = min(max(k, 0), len(partial) - 1)
-                face = int(partial[k])
-                regions.setdefault(face, []).append((loop - centers[k]) / scales[k])
-        region_faces = np.array(sorted(regions), dtype=np.int64)
-        return [regions[face] for face in region_faces.tolist()], region_faces
+            limits = limits * scales[:, None, :] + centers[:, None, :]
+            region = poly.intersect(poly.fill(list(pieces)), poly.fill(list(limits)))
+            loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
+            if loops:
+                sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+                points = np.concatenate(loops)
+                first_y = points[np.cumsum(sizes) - sizes, 1]
+                k = np.floor((first_y + poly.MAX_COORDINATE) / cell).astype(np.int64)
+                k = np.clip(k, 0, n_cells - 1)
+                point_cell = np.repeat(k, sizes)
+                points = (points - centers[point_cell]) / scales[point_cell]
+                chunks.append((points, sizes, faces[k]))
+        points = np.concatenate([chunk[0] for chunk in chunks])
+        sizes = np.concatenate([chunk[1] for chunk in chunks])
+        loop_face = np.concatenate([chunk[2] for chunk in chunks])
+        # Loops region by region.
+        order = np.argsort(loop_face, kind="stable")
+        starts = np.cumsum(sizes) - sizes
+        sizes = sizes[order]
+        shift = starts[order] - (np.cumsum(sizes) - sizes)
+        points = points[np.arange(int(sizes.sum())) + np.repeat(shift, sizes)]
+        region_faces, loop_region = unique_integers(loop_face[order], return_inverse=True)
+        return (points, sizes, loop_region), region_faces
 
     def _regions_one_by_one(
         self,
         faces_with: np.ndarray,
-        lit: list[np.ndarray | None],
+        lit: tuple[np.ndarray, np.ndarray],
         flat: np.ndarray,
         owner: np.ndarray,
         full: np.ndarray,
-        extra: dict[int, list[np.ndarray]],
-    ) -> tuple[list[list[np.ndarray]], np.ndarray]:
+    ) -> tuple[Loops, np.ndarray]:
         """Each face's union on its own, cut to the light's range on the face."""
         starts = np.searchsorted(owner, faces_with, side="left")
         stops = np.searchsorted(owner, faces_with, side="right")
         regions: list[list[np.ndarray]] = []
         region_faces: list[int] = []
-        for face, first, stop, outline in zip(faces_with, starts, stops, lit, strict=True):
-            if outline is None:
+        outlines, counts = lit
+        for face, first, stop, padded, count in zip(
+            faces_with, starts, stops, outlines, counts, strict=True
+        ):
+            if count < 3:
                 continue
+            outline = padded[:count]
             disc = _disc_near(self._range_disc(face), outline)
             if disc is not None and len(disc) < 3:
                 continue  # the light's range misses the face
@@ -686,7 +717,6 @@ class _SurfaceProjector:
                     region = poly.fill([outline * scale])
                 else:
                     pieces = list(flat[first:stop] * scale)
-                    pieces += [loop * scale for loop in extra.get(int(face), [])]
                     region = poly.intersect(poly.fill(pieces), poly.fill([outline * scale]))
                 if disc is not None:
                     region = poly.intersect(region, poly.fill([disc * scale]))
@@ -695,7 +725,7 @@ class _SurfaceProjector:
             if loops:
                 regions.append(loops)
                 region_faces.append(face)
-        return regions, np.array(region_faces, dtype=np.int64)
+        return loops_of(regions), np.array(region_faces, dtype=np.int64)
 
     def _pieces(
         self,
@@ -756,11 +786,23 @@ class _SurfaceProjector:
         origin: np.ndarray,
         u: np.ndarray,
         v: np.ndarray,
-    ) -> list[np.ndarray | None]:
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Each face's part that the light reaches, in the face's frame (the
-        whole face unless a spot cone or range limits it); None where empty."""
+        whole face unless a spot cone or range limits it): (f, k, 2) polygons
+        padded by repeating the last corner, and (f,) their corner counts
+        (below 3 where nothing is lit)."""
         triangle = corners[faces]
-        relative = triangle - origin[faces][:, None, :]
+        planes = self._limit_planes(faces)
+        if planes is None:
+            counts = np.full(len(faces), 3)
+            points = triangle
+        else:
+            homogeneous = np.concatenate([triangle, np.ones((len(faces), 3, 1))], axis=2)
+            clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes)
+            slots = np.arange(clipped.shape[1])
+            last = np.minimum(slots[None, :], np.maximum(counts, 1)[:, None] - 1)
+            points = np.take_along_axis(clipped, last[:, :, None], axis=1)[:, :, :3]
+        relative = points - origin[faces][:, None, :]
         flat = np.stack(
             [
                 np.einsum("nkd,nd->nk", relative, u[faces]),
@@ -768,19 +810,7 @@ class _SurfaceProjector:
             ],
             axis=2,
         )
-        planes = self._limit_planes(faces)
-        if planes is None:
-            return list(flat)
-        homogeneous = np.concatenate([triangle, np.ones((len(faces), 3, 1))], axis=2)
-        clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes)
-        out: list[np.ndarray | None] = []
-        for face, polygon, count in zip(faces, clipped, counts, strict=True):
-            if count < 3:
-                out.append(None)
-                continue
-            rel = polygon[:count, :3] - origin[face]
-            out.append(np.column_stack([rel @ u[face], rel @ v[face]]))
-        return out
+        return flat, counts
 
     def _range_disc(self, face: int) -> np.ndarray | None:
         """The light's lit disc on a face's plane (an inscribed polygon, as
@@ -834,6 +864,24 @@ class _SurfaceProjector:
                 inverse.reshape(-1, 3), self.unit[face_index], len(used)
             )
         return trimesh.Trimesh(vertices + self.center, inverse.reshape(-1, 3), process=False)
+
+
+def _bounding_radius(caster: Caster) -> float:
+    """The largest distance of a vertex from the centre of the mesh's box."""
+    relative = caster.vertices - caster.center
+    return float(np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2 + relative[:, 2] ** 2).max())
+
+
+def _pad_polygons(polygons: list[np.ndarray]) -> np.ndarray:
+    """(n_i, k_i, 2) polygon arrays as one (n, k, 2), each padded by repeating
+    its last corner (repeated points add no edges)."""
+    polygons = [p for p in polygons if len(p)]
+    if not polygons:
+        return np.zeros((0, 3, 2))
+    width = max(p.shape[1] for p in polygons)
+    return np.concatenate(
+        [np.pad(p, ((0, 0), (0, width - p.shape[1]), (0, 0)), mode="edge") for p in polygons]
+    )
 
 
 def _disc_near(disc: np.ndarray | None, outline: np.ndarray) -> np.ndarray | None:

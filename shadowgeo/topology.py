@@ -8,8 +8,9 @@ costs only the per-light work.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import cached_property
-from typing import TYPE_CHECKING, TypeAlias, Union
+from typing import TYPE_CHECKING, TypeAlias, TypeVar, Union, cast
 
 import numpy as np
 import trimesh
@@ -22,6 +23,7 @@ if TYPE_CHECKING:
     import trimesh
 
 _CACHE_KEY = "shadowgeo_caster"
+_T = TypeVar("_T")
 
 
 class Caster:
@@ -247,6 +249,15 @@ class Caster:
         if self.n_faces == 0:
             return False
         return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+
+    def derived(self, key: str, compute: Callable[[Caster], _T]) -> _T:
+        """``compute(self)``, computed once per mesh and ``key`` and kept, as
+        the cached properties are (the arrays are read-only): for derived data
+        that other modules define, such as a receiving surface's face frames."""
+        store: dict[str, object] = self.__dict__.setdefault("_derived", {})
+        if key not in store:
+            store[key] = compute(self)
+        return cast(_T, store[key])
 
     @cached_property
     def bounds(self) -> np.ndarray:

@@ -1,0 +1,433 @@
+"""A closed caster's outline seen from the light, and its shadow on faces.
+
+The caster's shadow on any plane wholly behind it (seen from the light) is its
+silhouette, projected once into a 2-D frame across the light's rays
+(:mod:`shadowgeo.lightframe`) and united, mapped onto the plane. On a receiver
+face it is that region cut to the face's image in the frame
+(:meth:`Outline.cut`): faces wholly inside are shadowed whole, and a face the
+outline's edge crosses is cut from the few edge segments near it.
+"""
+
+from __future__ import annotations
+
+from typing import cast
+
+import numpy as np
+import shapely
+
+from .lightframe import Triangles, corner_max, corner_min, indexed_triangles, overlapping_boxes
+from .polygons import MAX_COORDINATE, components, fill
+
+
+def padded_loops(points: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """(n, k, 2) loops of ``sizes`` points each, taken in turn from ``points``,
+    each padded to the longest by repeating its last point (repeated points
+    add no edges)."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    if len(sizes) == 0:
+        return np.zeros((0, 3, 2))
+    width = max(int(sizes.max()), 3)
+    starts = np.cumsum(sizes) - sizes
+    index = starts[:, None] + np.minimum(np.arange(width)[None, :], sizes[:, None] - 1)
+    loops: np.ndarray = points[index]
+    return loops
+
+
+def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """(n,) position of points on their boxes' edges, counter-clockwise from
+    the lower left corner: 0 to 1 along the bottom, 1 to 2 up the right side,
+    2 to 3 along the top, 3 to 4 down the left side (the nearest side)."""
+    x, y = points[:, 0], points[:, 1]
+    width = np.maximum(high[:, 0] - low[:, 0], 1e-300)
+    height = np.maximum(high[:, 1] - low[:, 1], 1e-300)
+    distance = np.stack(
+        [
+            np.abs(y - low[:, 1]),
+            np.abs(x - high[:, 0]),
+            np.abs(y - high[:, 1]),
+            np.abs(x - low[:, 0]),
+        ],
+        axis=1,
+    )
+    side = np.argmin(distance, axis=1)
+    along = np.choose(
+        side,
+        [
+            (x - low[:, 0]) / width,
+            (y - low[:, 1]) / height,
+            (high[:, 0] - x) / width,
+            (high[:, 1] - y) / height,
+        ],
+    )
+    position: np.ndarray = side + np.clip(along, 0.0, 1.0)
+    return position
+
+
+class Outline:
+    """A closed caster's shadow seen from the light: its silhouette loops
+    projected once into a 2-D frame across the light's rays, and united.
+
+    The caster's shadow on any plane wholly behind it (seen from the light) is
+    this region mapped onto the plane; on a receiver face it is the region
+    clipped to the face's own image in this frame.
+
+    Attributes
+    ----------
+    region : shapely geometry
+        The united outline in frame coordinates (after :meth:`unite`).
+    cross_section : manifold3d.CrossSection
+        The same, scaled by ``scale`` for Clipper2.
+    """
+
+    def __init__(
+        self,
+        light_point: np.ndarray | None,
+        axis: np.ndarray,
+        first: np.ndarray,
+        second: np.ndarray,
+        direction: np.ndarray | None,
+    ) -> None:
+        self.light_point = light_point
+        self.axis, self.first, self.second = axis, first, second
+        self.direction = direction
+
+    def unite(self, points2d_loops: list[np.ndarray]) -> None:
+        """Set the region: the positive-winding union of the projected loops."""
+        extent = max(float(np.abs(np.concatenate(points2d_loops)).max()), 1e-300)
+        self.scale = MAX_COORDINATE / extent / 4.0
+        united = fill([loop * self.scale for loop in points2d_loops])
+        self.parts = components(united)
+        self.region = shapely.MultiPolygon(
+            [
+                shapely.Polygon(p[0] / self.scale, [h / self.scale for h in p[1:]])
+                for p in self.parts
+            ]
+        )
+        shapely.prepare(self.region)
+        self.cross_section = united
+        # The region's loops in frame coordinates, and each boundary
+        # segment's (xmin, ymin, xmax, ymax) box.
+        self.loops = [loop / self.scale for part in self.parts for loop in part]
+        if self.loops:
+            start = np.concatenate(self.loops)
+            end = np.concatenate([np.roll(loop, -1, axis=0) for loop in self.loops])
+        else:
+            start = end = np.zeros((0, 2))
+        self.segments = np.stack([start, end], axis=1)  # (s, 2, 2)
+        sizes = np.array([len(loop) for loop in self.loops], dtype=np.int64)
+        self.segment_loop = np.repeat(np.arange(len(sizes)), sizes)
+        first = np.repeat(np.cumsum(sizes) - sizes, sizes)
+        self.segment_next = np.arange(len(start)) + 1
+        self.segment_next[np.cumsum(sizes) - 1] = first[np.cumsum(sizes) - 1]
+        self.segment_boxes = np.column_stack([np.minimum(start, end), np.maximum(start, end)])
+
+    def cut(
+        self, images: np.ndarray, margin: float | np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The region cut to each of (f, 3, 2) triangles in the frame.
+
+        1. Triangles whose box meets no boundary segment's box lie wholly
+           inside or wholly outside the region, as their first corner does;
+           the others are tested as polygons (shapely).
+        2. A triangle the boundary crosses is cut from the boundary segments
+           whose boxes meet a box around it (:meth:`_local_cut`): the work per
+           triangle grows with the boundary near it, not with the whole
+           outline. Its reference point ``r`` (the centroid) must be sure to
+           lie off the boundary: farther than its ``margin``.
+        3. A triangle whose ``r`` lies within its ``margin`` of the boundary is
+           cut against the whole outline by Clipper2 instead.
+
+        Returns
+        -------
+        covered : (f,) bool
+            Triangles wholly inside the region (they get no pieces).
+        pieces : (n, k, 2) float64
+            The region's loops inside each other triangle, in the frame (outer
+            loops counter-clockwise, holes clockwise), padded by repeating the
+            last corner.
+        owners : (n,) int64
+            The triangle of each loop.
+        """
+        count = len(images)
+        covered = np.zeros(count, dtype=bool)
+        nothing = (covered, np.zeros((0, 3, 2)), np.zeros(0, np.int64))
+        if count == 0 or not self.loops:
+            return nothing
+        boxes = np.column_stack([corner_min(images), corner_max(images)])
+        tri, seg = overlapping_boxes(boxes, self.segment_boxes)
+        crossing = np.zeros(count, dtype=bool)
+        crossing[tri] = True
+        clear = np.flatnonzero(~crossing)
+        covered[clear] = shapely.contains_xy(self.region, images[clear, 0, 0], images[clear, 0, 1])
+        near = np.flatnonzero(crossing)
+        polygons = shapely.polygons(images[near])
+        inside = shapely.covers(self.region, polygons)
+        covered[near] = inside
+        touched = np.zeros(count, dtype=bool)
+        touched[near] = shapely.intersects(self.region, polygons) & ~inside
+        if not touched.any():
+            return nothing
+        x, y = images[:, :, 0], images[:, :, 1]
+        clockwise = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
+        images = np.where(clockwise[:, None, None], images[:, ::-1], images)
+        keep = touched[tri]
+        tri, seg = tri[keep], seg[keep]
+
+        # 2. each triangle's own stretch of the boundary, closed around it
+        reference = images.mean(axis=1)
+        a, b, r = self.segments[seg, 0], self.segments[seg, 1], reference[tri]
+        ab, ar = b - a, r - a
+        length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        along = np.clip(np.einsum("ij,ij->i", ar, ab) / length2, 0.0, 1.0)
+        gap = np.hypot(*(ar - along[:, None] * ab).T)  # from r to the segment
+        unsure = np.zeros(count, dtype=bool)
+        unsure[tri[gap <= np.broadcast_to(margin, (count,))[tri]]] = True
+        sure = np.flatnonzero(touched & ~unsure)
+        points, sizes, owners = self._local_cut(images, reference, sure, tri, seg)
+
+        # 3. Clipper2 where the reference point is not sure
+        exact, exact_owners = self.clip_to(images[unsure])
+        if exact:
+            points = np.concatenate([points, *exact])
+            sizes = np.concatenate([sizes, [len(loop) for loop in exact]])
+            owners = np.concatenate([owners, np.flatnonzero(unsure)[exact_owners]])
+        return covered, padded_loops(points, sizes), owners.astype(np.int64)
+
+    def _local_cut(
+        self,
+        images: np.ndarray,
+        reference: np.ndarray,
+        sure: np.ndarray,
+        tri: np.ndarray,
+        seg: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The region cut to each triangle ``sure`` (counter-clockwise in
+        ``images``), from the boundary segments near it only (pairs ``tri``,
+        ``seg``, sorted).
+
+        Each segment is clipped to a box around the triangle; consecutive
+        pieces of one loop are joined along the box's edge, counter-clockwise.
+        Inside the box that polygon winds as the region does, up to one
+        constant (the ways around the box it took or missed): the region's
+        winding at the reference point, against the polygon's there, gives it,
+        and as many loops of the box put it right. The triangle's part of that
+        is then cut by Clipper2: every triangle in its own cell of one plane,
+        one call. Returns the loops' points, their sizes, and their triangles.
+        """
+        if len(sure) == 0:
+            return np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+        low, high = corner_min(images[sure]), corner_max(images[sure])
+        pad = 0.05 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1])[:, None]
+        box_low = np.zeros((len(images), 2))
+        box_high = np.zeros((len(images), 2))
+        box_low[sure], box_high[sure] = low - pad, high + pad
+        is_sure = np.zeros(len(images), dtype=bool)
+        is_sure[sure] = True
+        keep = is_sure[tri]
+        order = np.lexsort((seg[keep], tri[keep]))
+        tri, seg = tri[keep][order], seg[keep][order]
+        a, b = self.segments[seg, 0], self.segments[seg, 1]
+        step = b - a
+        # Liang-Barsky: the part a + t (b - a), t0 <= t <= t1, inside the box.
+        t0, t1 = np.zeros(len(tri)), np.ones(len(tri))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for axis in range(2):
+                first = (box_low[tri, axis] - a[:, axis]) / step[:, axis]
+                second = (box_high[tri, axis] - a[:, axis]) / step[:, axis]
+                flat = step[:, axis] == 0
+                within = (a[:, axis] >= box_low[tri, axis]) & (a[:, axis] <= box_high[tri, axis])
+                enter = np.where(flat, np.where(within, -np.inf, np.inf), np.minimum(first, second))
+                leave = np.where(flat, np.where(within, np.inf, -np.inf), np.maximum(first, second))
+                t0, t1 = np.maximum(t0, enter), np.minimum(t1, leave)
+        keep = t0 < t1
+        tri, seg, a, b, step, t0, t1 = (x[keep] for x in (tri, seg, a, b, step, t0, t1))
+        start = np.where((t0 == 0)[:, None], a, a + t0[:, None] * step)
+        end = np.where((t1 == 1)[:, None], b, a + t1[:, None] * step)
+        # Pieces grouped by (triangle, loop); each followed by the next of its group.
+        group_key = tri * len(self.loops) + self.segment_loop[seg]
+        new_group = np.ones(len(tri), dtype=bool)
+        new_group[1:] = group_key[1:] != group_key[:-1]
+        group = np.cumsum(new_group) - 1
+        group_start = np.flatnonzero(new_group)
+        following = np.arange(len(tri)) + 1
+        last = np.append(group_start[1:], len(tri)) - 1
+        following[last] = group_start
+        joined = (seg[following] == self.segment_next[seg]) & (t1 == 1)
+        # The way along the box, counter-clockwise, from each piece's end to
+        # the next piece's start: the box corners passed.
+        lo, hi = box_low[tri], box_high[tri]
+        leave_at = _perimeter(end, lo, hi)
+        enter_at = _perimeter(start[following], lo, hi)
+        travel = np.mod(enter_at - leave_at, 4.0)
+        steps = np.floor(leave_at)[:, None] + np.arange(1, 5)[None, :]
+        passed = ((steps - leave_at[:, None]) < travel[:, None]) & ~joined[:, None]
+        corner = np.mod(steps, 4).astype(np.int64)
+        corner_x = np.where((corner == 1) | (corner == 2), hi[:, :1], lo[:, :1])
+        corner_y = np.where(corner >= 2, hi[:, 1:], lo[:, 1:])
+        # Each piece: its start, its end, the corners it passes (masked).
+        points = np.concatenate(
+            [start[:, None], end[:, None], np.stack([corner_x, corner_y], axis=2)], axis=1
+        )
+        used = np.concatenate([np.ones((len(tri), 2), dtype=bool), passed], axis=1)
+        flat_points = points[used]
+        point_group = np.repeat(group, used.sum(axis=1))
+        point_tri = tri[group_start][point_group]
+        # The polygon's winding at each triangle's reference point.
+        sizes = np.bincount(point_group, minlength=len(group_start))
+        offsets = np.cumsum(sizes) - sizes
+        successor = np.arange(len(flat_points)) + 1
+        successor[offsets + sizes - 1] = offsets
+        p, q = flat_points, flat_points[successor]
+        rp = reference[point_tri]
+        side = (q[:, 0] - p[:, 0]) * (rp[:, 1] - p[:, 1]) - (rp[:, 0] - p[:, 0]) * (
+            q[:, 1] - p[:, 1]
+        )
+        up = (p[:, 1] <= rp[:, 1]) & (rp[:, 1] < q[:, 1]) & (side > 0)
+        down = (q[:, 1] <= rp[:, 1]) & (rp[:, 1] < p[:, 1]) & (side < 0)
+        winding = np.bincount(point_tri, weights=up.astype(float) - down, minlength=len(images))
+        truth = shapely.contains_xy(self.region, reference[:, 0], reference[:, 1])
+        boxes_needed = np.rint(truth - winding).astype(np.int64)
+        # One Clipper2 call: triangle k in cell k of a square grid, scaled alike
+        # along x and y, its box within the cell.
+        columns = int(np.ceil(np.sqrt(len(sure))))
+        cell = 2.0 * MAX_COORDINATE / columns
+        slot = np.full(len(images), -1, dtype=np.int64)
+        slot[sure] = np.arange(len(sure))
+        centre = np.column_stack(
+            [
+                -MAX_COORDINATE + cell * (slot % columns + 0.5),
+                -MAX_COORDINATE + cell * (slot // columns + 0.5),
+            ]
+        )
+        middle = 0.5 * (box_low + box_high)
+        size = np.maximum((box_high - box_low).max(axis=1), 1e-300)
+        scale = 0.45 * cell / size
+        mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
+        subject = [mapped[o : o + n] for o, n in zip(offsets.tolist(), sizes.tolist(), strict=True)]
+        square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+        for k in np.flatnonzero(boxes_needed[sure] != 0):
+            face = sure[k]
+            half = 0.5 * (box_high[face] - box_low[face])
+            loop = (square * half) * scale[face] + centre[face]
+            count = int(boxes_needed[face])
+            subject += [loop if count > 0 else loop[::-1]] * abs(count)
+        clip = (images[sure] - middle[sure][:, None]) * scale[sure][:, None, None]
+        clip = clip + centre[sure][:, None]
+        region = fill(subject) ^ fill(list(clip))
+        out = [loop for loop in region.to_polygons() if len(loop) >= 3]
+        nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
+        if not out:
+            return nothing
+        out_sizes = np.array([len(loop) for loop in out], dtype=np.int64)
+        out_points = np.concatenate(out)
+        first_points = out_points[np.cumsum(out_sizes) - out_sizes]
+        column = np.clip(np.floor((first_points[:, 0] + MAX_COORDINATE) / cell), 0, columns - 1)
+        row = np.clip(np.floor((first_points[:, 1] + MAX_COORDINATE) / cell), 0, columns - 1)
+        owner = sure[np.minimum((row * columns + column).astype(np.int64), len(sure) - 1)]
+        point_owner = np.repeat(owner, out_sizes)
+        out_points = (out_points - centre[point_owner]) / scale[point_owner, None] + middle[
+            point_owner
+        ]
+        return out_points, out_sizes, owner
+
+    def clip_to(self, images: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+        """The region cut to each of (f, 3, 2) counter-clockwise triangles in
+        the frame: loops, and (n,) the triangle of each loop."""
+        loops: list[np.ndarray] = []
+        owners: list[int] = []
+        for k, image in enumerate(images):
+            piece = self.cross_section ^ fill([image * self.scale])
+            for loop in piece.to_polygons():
+                loops.append(np.asarray(loop) / self.scale)
+                owners.append(k)
+        return loops, np.array(owners, dtype=np.int64)
+
+    def ahead(self, points: np.ndarray) -> np.ndarray:
+        """(..., ) distance of points ahead of the light along the frame's axis
+        (positive for a directional light)."""
+        if self.light_point is None:
+            return np.full(points.shape[:-1], np.inf)
+        distance: np.ndarray = (points - self.light_point) @ self.axis
+        return distance
+
+    def may_reach(self, triangles: Triangles) -> np.ndarray:
+        """(n,) bool for n triangles: False where the caster surely casts
+        nothing on it -- the triangle lies ahead of the light and its image
+        misses the outline's box (the caster's image lies in it)."""
+        points, faces = indexed_triangles(triangles)
+        if len(faces) == 0:
+            return np.zeros(0, dtype=bool)
+        ahead = corner_min(self.ahead(points)[faces]) > 0
+        out = np.ones(len(faces), dtype=bool)
+        if not ahead.any():
+            return out
+        with np.errstate(divide="ignore", invalid="ignore"):
+            images = self.to_frame(points)  # only the points ahead are used
+        x, y = images[:, 0][faces[ahead]], images[:, 1][faces[ahead]]
+        low_x, low_y, high_x, high_y = self.region.bounds
+        misses = (
+            (corner_min(x) > high_x)
+            | (corner_min(y) > high_y)
+            | (corner_max(x) < low_x)
+            | (corner_max(y) < low_y)
+        )
+        out[np.flatnonzero(ahead)[misses]] = False
+        return out
+
+    def to_frame(self, points: np.ndarray) -> np.ndarray:
+        """(..., 3) points to (..., 2) frame coordinates (their rays)."""
+        if self.light_point is None:
+            return np.stack([points @ self.first, points @ self.second], axis=-1)
+        relative = points - self.light_point
+        depth = relative @ self.axis
+        return np.stack([relative @ self.first / depth, relative @ self.second / depth], axis=-1)
+
+    def onto_planes(self, flat: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """(n, 2) frame points to (n, 3) points where their rays meet the planes
+        ``normals[i] . x + offsets[i] = 0``, one plane per point."""
+        if self.light_point is None:
+            base = np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
+            height = np.einsum("ij,ij->i", base, normals) + offsets
+            # Without a light point the outline is a directional light's: it has a direction.
+            direction = cast(np.ndarray, self.direction)
+            lowered: np.ndarray = base - (height / (normals @ direction))[:, None] * direction
+            return lowered
+        rays = self.axis + np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
+        height = normals @ self.light_point + offsets
+        along = -height / np.einsum("ij,ij->i", rays, normals)
+        met: np.ndarray = self.light_point + rays * along[:, None]
+        return met
+
+
+def make_outline(
+    vertices: np.ndarray,
+    loops: list[np.ndarray],
+    all_vertices: np.ndarray,
+    light_point: np.ndarray | None,
+    direction: np.ndarray | None,
+    margin: float,
+) -> Outline | None:
+    """The :class:`Outline` of a caster whose silhouette ``loops`` index
+    ``vertices``; None when a point light is not wholly behind one plane
+    through the light and the caster (``all_vertices``), which a central
+    projection needs."""
+    if not loops:
+        return None
+    axis: np.ndarray
+    if light_point is None:
+        # A directional light: the caller passes its direction.
+        axis = cast(np.ndarray, direction)
+    else:
+        axis = all_vertices.mean(axis=0) - light_point
+        axis = axis / np.linalg.norm(axis)
+        if float(((all_vertices - light_point) @ axis).min()) <= margin:
+            return None
+    helper = np.zeros(3)
+    helper[int(np.argmin(np.abs(axis)))] = 1.0
+    first = np.cross(axis, helper)
+    first /= np.linalg.norm(first)
+    # first x second = -axis: loops counter-clockwise seen from the light stay so.
+    second = np.cross(first, axis)
+    outline = Outline(light_point, axis, first, second, direction)
+    outline.unite([outline.to_frame(vertices[loop]) for loop in loops])
+    return outline

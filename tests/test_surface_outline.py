@@ -1,0 +1,245 @@
+"""The fast paths under shadow_on_surface, each against a brute-force or shapely reference.
+
+* ``Outline.cut``: a closed caster's outline cut to receiver faces seen from the
+  light (wholly covered faces, and the exact part of the others) against
+  shapely's intersection, including faces whose centre lies on the outline's
+  edge (cut by Clipper2 instead) and faces the outline crosses many times;
+* ``overlapping_boxes``: every overlapping pair, against all pairs tested;
+* ``candidate_pairs``: triangles given as shared points and faces pair exactly
+  as the same triangles given corner by corner;
+* ``stitch``: a face wholly in shadow comes back as the face itself;
+* ``clip_batch``: convex polygons cut by half-planes, against shapely.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+
+from shadowgeo.lightframe import candidate_pairs, clip_batch, overlapping_boxes
+from shadowgeo.outline import Outline, padded_loops
+from shadowgeo.seams import loops_of, stitch
+
+
+def star(center, radius, count=40, lobes=5, depth=0.4):
+    angles = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
+    reach = radius * (1 + depth * np.sin(lobes * angles))
+    return np.column_stack([center[0] + reach * np.cos(angles), center[1] + reach * np.sin(angles)])
+
+
+def outline_of(loops):
+    """An Outline in the plane z = 0 seen along -z (a directional light)."""
+    down = np.array([0.0, 0.0, -1.0])
+    outline = Outline(None, down, np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), down)
+    outline.unite(loops)
+    return outline
+
+
+@pytest.fixture(scope="module")
+def outline():
+    # two overlapping stars (united into one part) with a hole, and an island
+    return outline_of(
+        [
+            star((0.0, 0.0), 1.0),
+            star((1.5, 0.3), 0.7, count=31),
+            star((0.0, 0.0), 0.3)[::-1],  # a hole
+            star((-2.2, -1.5), 0.4, count=12, lobes=3),  # an island
+        ]
+    )
+
+
+def signed_area(loop):
+    x, y = loop[:, 0], loop[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def check_cut(outline, triangles, margin):
+    covered, pieces, owners = outline.cut(triangles, margin)
+    assert pieces.shape[0] == owners.shape[0]
+    for k, triangle in enumerate(triangles):
+        polygon = shapely.Polygon(triangle)
+        exact = outline.region.intersection(polygon).area
+        if covered[k]:
+            assert outline.region.covers(polygon)
+            assert not np.any(owners == k)
+            continue
+        mine = pieces[owners == k]
+        # outer loops counter-clockwise, holes clockwise: the signed areas add up
+        area = sum(signed_area(loop) for loop in mine)
+        assert area == pytest.approx(exact, rel=1e-11, abs=1e-14 * polygon.area + 1e-300)
+        for loop in mine:  # in the triangle
+            assert polygon.buffer(1e-9 * np.sqrt(polygon.area)).covers(shapely.MultiPoint(loop))
+
+
+def test_cut_matches_shapely_on_random_triangles_of_both_windings(outline):
+    rng = np.random.default_rng(7)
+    centres = rng.uniform(-2.6, 2.4, (400, 2))
+    sizes = rng.uniform(0.02, 1.5, 400)
+    triangles = centres[:, None, :] + sizes[:, None, None] * rng.normal(size=(400, 3, 2))
+    check_cut(outline, triangles, 1e-12)
+    covered, _, _ = outline.cut(triangles, 1e-12)
+    assert 0 < covered.sum() < len(triangles)
+
+
+def test_cut_of_triangles_the_boundary_crosses_many_times(outline):
+    big = np.array(
+        [[[-3.0, -3.0], [3.5, -2.0], [0.0, 3.0]], [[-1.2, 0.1], [1.2, -0.1], [0.0, 0.05]]]
+    )
+    check_cut(outline, big, 1e-12)
+    check_cut(outline, big[:, ::-1], 1e-12)
+
+
+def test_cut_where_the_centre_lies_on_the_outline_uses_clipper(outline):
+    # centroids exactly at boundary points: not sure which side, cut exactly instead
+    points = np.concatenate(outline.loops)[::7]
+    offsets = np.array([[0.05, 0.0], [-0.025, 0.04], [-0.025, -0.04]])
+    triangles = points[:, None, :] + offsets[None]
+    check_cut(outline, triangles, 1e-9)
+    # a margin wider than every triangle sends them all to Clipper2: same answers
+    check_cut(outline, triangles, 10.0)
+
+
+def test_cut_of_a_square_from_every_side_and_corner():
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    outline = outline_of([square])
+    base = np.array([[-0.2, -0.15], [0.2, -0.1], [0.0, 0.2]])
+    spots = [(x, y) for x in (0.0, 0.5, 1.0) for y in (0.0, 0.5, 1.0)]
+    triangles = np.array([base + spot for spot in spots] + [base * 8 + (0.5, 0.5)])
+    check_cut(outline, triangles, 1e-12)
+    check_cut(outline, triangles[:, ::-1], 1e-12)
+
+
+def test_padded_loops_repeat_the_last_point():
+    points = np.arange(14.0).reshape(7, 2)
+    loops = padded_loops(points, np.array([3, 4]))
+    assert loops.shape == (2, 4, 2)
+    assert loops[0].tolist() == [[0, 1], [2, 3], [4, 5], [4, 5]]
+    assert loops[1].tolist() == points[3:].tolist()
+
+
+def brute_pairs(first, second):
+    overlap = (
+        (first[:, None, 0] <= second[None, :, 2])
+        & (second[None, :, 0] <= first[:, None, 2])
+        & (first[:, None, 1] <= second[None, :, 3])
+        & (second[None, :, 1] <= first[:, None, 3])
+    )
+    return set(zip(*np.nonzero(overlap), strict=True))
+
+
+@pytest.mark.parametrize(
+    "sizes",
+    [
+        (2000, 60, 0.01, 0.02),  # a terrain against a small caster
+        (300, 400, 0.05, 0.05),  # alike
+        (300, 300, 0.002, 0.9),  # tiny boxes against huge ones: the tree
+        (400, 400, 0.3, 0.3),  # piled up (a grazing light): crowded cells, the tree
+        (200, 200, 0.01, 0.01),  # no common ground
+    ],
+)
+def test_overlapping_boxes_finds_every_pair_once(sizes):
+    count_a, count_b, size_a, size_b = sizes
+    rng = np.random.default_rng(count_a + count_b)
+
+    def boxes(count, size, shift):
+        low = rng.uniform(0, 1, (count, 2)) + shift
+        return np.column_stack([low, low + rng.uniform(0, size, (count, 2))])
+
+    first = boxes(count_a, size_a, 0.0)
+    second = boxes(count_b, size_b, 5.0 if sizes[0] == 200 else 0.0)
+    i, j = overlapping_boxes(first, second)
+    found = list(zip(i.tolist(), j.tolist(), strict=True))
+    assert len(found) == len(set(found))
+    assert set(found) == brute_pairs(first, second)
+
+
+@pytest.mark.parametrize("light", ["point", "sun"])
+def test_candidate_pairs_of_shared_points_equal_those_of_corners(light):
+    rng = np.random.default_rng(3)
+    points = rng.normal(size=(400, 3)) * [3.0, 0.3, 3.0]
+    faces = rng.integers(0, 400, (700, 3))
+    casters = rng.normal(size=(200, 3, 3)) * 0.3 + [0.0, 2.0, 0.0]
+    position = np.array([0.5, 6.0, 0.2]) if light == "point" else None
+    direction = None if light == "point" else np.array([0.3, -1.0, 0.1]) / np.sqrt(1.1)
+    pad = 1e-9 if light == "point" else 1e-6
+    shared = candidate_pairs((points, faces), casters, position, direction, pad)
+    corners = candidate_pairs(points[faces], casters, position, direction, pad)
+    assert np.array_equal(shared[0], corners[0]) and np.array_equal(shared[1], corners[1])
+    assert len(shared[0]) > 0
+
+
+@pytest.mark.parametrize("touches_shared_edge", [False, True])
+def test_stitch_gives_a_whole_face_back_as_itself(touches_shared_edge):
+    vertices = np.array([[0.0, 0, 0], [1.0, 0, 0], [0.0, 1, 0], [1.0, 1, 0]])
+    faces = np.array([[0, 1, 2], [1, 3, 2]])
+    origin = vertices[faces].mean(axis=1)
+    u = np.tile([1.0, 0, 0], (2, 1))
+    v = np.tile([0.0, 1, 0], (2, 1))
+    whole = (vertices[faces[0]] - origin[0])[:, :2]
+    corner = [0.5, 0.5] if touches_shared_edge else [0.6, 1.0]
+    part = np.array([[1.0, 0.4], [1.0, 1.0], corner]) - origin[1, :2]
+    points, triangles, face_index = stitch(
+        vertices, faces, np.array([0, 1]), (origin, u, v), loops_of([[whole], [part]]), 1e-12
+    )
+    corners = points[triangles]
+    area = 0.5 * np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])[:, 2]
+    assert np.all(area > 0)
+    assert area[face_index == 0].sum() == pytest.approx(0.5)
+    assert area[face_index == 1].sum() == pytest.approx(signed_area(part))
+    first = triangles[face_index == 0].tolist()
+    if touches_shared_edge:
+        # the region's corner on the shared edge splits the whole face too: no T-junction
+        middle = int(np.argmin(np.linalg.norm(points - [0.5, 0.5, 0.0], axis=1)))
+        assert np.allclose(points[middle], [0.5, 0.5, 0.0], atol=1e-15)
+        assert len(first) == 2 and all(middle in triangle for triangle in first)
+    else:
+        assert first == [[0, 1, 2]]
+
+
+def test_clip_batch_cuts_convex_polygons_as_shapely_does():
+    rng = np.random.default_rng(11)
+    count = 300
+    triangles = rng.normal(size=(count, 3, 2))
+    homogeneous = np.concatenate([triangles, np.ones((count, 3, 1))], axis=2)
+    # three random half-planes a x + b y + c >= 0 per triangle
+    planes = np.concatenate(
+        [rng.normal(size=(count, 3, 2)), rng.uniform(-0.5, 1.0, (count, 3, 1))], axis=2
+    )
+    clipped, counts = clip_batch(homogeneous, np.full(count, 3), planes)
+    far = 1e3
+    for k in range(count):
+        region = shapely.Polygon(triangles[k]).buffer(0)
+        for a, b, c in planes[k]:
+            # the half-plane as a big polygon: points p with n . p + c >= 0
+            normal = np.array([a, b]) / np.hypot(a, b)
+            foot = -c / np.hypot(a, b) * normal
+            along = np.array([-normal[1], normal[0]])
+            half = [foot + far * along, foot - far * along, foot - far * along + far * normal]
+            half.append(foot + far * along + far * normal)
+            region = region.intersection(shapely.Polygon(half))
+        mine = clipped[k, : counts[k], :2]
+        area = abs(signed_area(mine)) if counts[k] >= 3 else 0.0
+        assert area == pytest.approx(region.area, rel=1e-9, abs=1e-12)
+
+
+def test_a_surfaces_geometry_is_kept_on_its_mesh_and_right():
+    import trimesh
+
+    from shadowgeo import PointLight, shadow_on_surface
+    from shadowgeo.topology import as_caster
+
+    ground = trimesh.creation.icosphere(subdivisions=2, radius=3.0)
+    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.5)
+    ball.apply_translation([0.0, 0.0, 5.0])
+    shadow_on_surface(ball, PointLight([0.0, 0.0, 9.0]), ground)
+
+    def recompute(_):
+        raise AssertionError("computed twice")
+
+    kept = as_caster(ground).derived("surface_geometry", recompute)
+    # trimesh's own unit normals and centroids, independently
+    assert np.allclose(kept.unit, ground.face_normals, atol=1e-12)
+    assert np.allclose(kept.centroid + as_caster(ground).center, ground.triangles_center)
+    assert np.allclose(np.cross(kept.u, kept.v), kept.unit, atol=1e-12)
+    assert not kept.single_sheet  # a closed sphere is no sheet
