@@ -19,6 +19,7 @@ import importlib.metadata
 import math
 import os
 import platform
+import re
 import sys
 import time
 from pathlib import Path
@@ -853,15 +854,26 @@ def main() -> None:
         )
     text += ["", f"![stability]({rel(images['stability'])})", ""]
     body = "\n".join(text)
-    # The surface section comes from report_surface.py: keep the one already written.
-    kept = report_surface.existing_section(args.output.read_text() if args.output.exists() else "")
-    if kept:
-        body = report_surface.replace_section(body, kept)
+    # Sections this script does not write (every surface, scale, buildings and
+    # lights, sun studies, batch conversion: each from its own benchmark) are
+    # kept as they are in the file.
+    body = keep_other_sections(body, args.output.read_text() if args.output.exists() else "")
     tmp = args.output.with_suffix(".md.tmp")
     tmp.write_text(body)
     tmp.replace(args.output)
     print(headline(method))
     print(f"wrote {args.output}")
+
+
+def keep_other_sections(body: str, existing: str) -> str:
+    """``body`` followed by every level-2 section of ``existing`` whose title
+    ``body`` does not have, in their order."""
+    pattern = re.compile(r"^## ([^\n]+)\n.*?(?=^## |\Z)", re.M | re.S)
+    written = {match.group(1) for match in pattern.finditer(body)}
+    kept = [
+        m.group(0).rstrip("\n") for m in pattern.finditer(existing) if m.group(1) not in written
+    ]
+    return "\n\n".join([body.rstrip("\n"), *kept]) + "\n"
 
 
 if __name__ == "__main__":

@@ -71,3 +71,17 @@ def test_quick_run_writes_the_section(tmp_path):
     assert "| point light | shadow map | 128 x 128 |" in text
     assert "### How the cost grows" in text
     assert (tmp_path / "report" / "surface.png").stat().st_size > 0
+
+
+def test_the_full_report_keeps_the_sections_other_benchmarks_wrote():
+    import report
+
+    written = "# Report\n\nintro\n\n## Headline\n\nnew\n\n## Stability\n\nnew too\n"
+    existing = (
+        "# Report\n\nold intro\n\n## Headline\n\nold\n\n## Scenes at scale\n\nscale table\n\n"
+        "## Shadows on every surface\n\nsurface table\n"
+    )
+    merged = report.keep_other_sections(written, existing)
+    assert merged.count("## Headline") == 1 and "\nold\n" not in merged
+    assert merged.index("## Stability") < merged.index("## Scenes at scale\n\nscale table")
+    assert merged.rstrip().endswith("## Shadows on every surface\n\nsurface table")
