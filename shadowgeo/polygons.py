@@ -95,8 +95,10 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
     holes = np.flatnonzero(areas < 0)
     if len(outers) == 0:
         return []
-    low = np.array([loop.min(axis=0) for loop in loops])
-    high = np.array([loop.max(axis=0) for loop in loops])
+    # every loop's box in two numpy passes (loops are many and small)
+    points = np.concatenate(loops)
+    starts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops])[:-1]])
+    low, high = np.minimum.reduceat(points, starts), np.maximum.reduceat(points, starts)
     parent = np.full(len(holes), -1, dtype=np.int64)
     by_size = outers[np.argsort(areas[outers], kind="stable")]  # smallest first
     chunk = max(1, 4_000_000 // len(outers))
@@ -115,13 +117,17 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
                 if _contains(loops[candidate], point):
                     parent[start + row] = candidate
                     break
+    # holes grouped by parent in one sort, each group from the smallest hole
+    order = np.lexsort((-areas[holes], parent))
+    grouped, sorted_parents = holes[order], parent[order]
+    first = np.searchsorted(sorted_parents, outers, side="left")
+    last = np.searchsorted(sorted_parents, outers, side="right")
     parts = []
-    for outer in outers:
-        own = holes[parent == outer]
-        own = own[np.argsort(-areas[own], kind="stable")]
-        if areas[outer] + areas[own].sum() <= 0:
+    for outer, begin, end in zip(outers.tolist(), first.tolist(), last.tolist(), strict=True):
+        own = grouped[begin:end]
+        if begin < end and areas[outer] + areas[own].sum() <= 0:
             continue
-        parts.append([loops[outer]] + [loops[i] for i in own])
+        parts.append([loops[outer]] + [loops[i] for i in own.tolist()])
     return parts
 
 
