@@ -333,9 +333,12 @@ def sun_study_by_day(
         }
         from dask.distributed import as_completed
 
-        done = 0
-        for _ in as_completed(list(futures.values())):
-            done += 1
+        day_of = {future.key: day for day, future in futures.items()}
+        finished: dict[_dt.date, SunStudy] = {}
+        # each result is fetched as it comes, so the workers let go of it
+        for future in as_completed(list(futures.values())):
+            finished[day_of[future.key]] = future.result()
+            future.release()
             if progress:
-                progress(done, total)
-        return SunStudies({day: future.result() for day, future in futures.items()})
+                progress(len(finished), total)
+        return SunStudies({day: finished[day] for day in futures})
