@@ -113,7 +113,10 @@ def report(outcomes: list[Outcome]) -> None:
     shadows' notes, named by file, in the order the files were given."""
     for outcome in outcomes:
         if not outcome.ok:
-            print(f"shadowgeo convert: {outcome.source}: {outcome.error}", file=sys.stderr)
+            error = str(outcome.error)
+            # name the file once: most errors start with it already
+            named = error if error.startswith(str(outcome.source)) else f"{outcome.source}: {error}"
+            print(f"shadowgeo convert: {named}", file=sys.stderr)
             continue
         for note in outcome.notes:
             print(f"note: {outcome.source}: {note}", file=sys.stderr)

@@ -164,11 +164,16 @@ def convert_files(
         for future in as_completed(futures):
             outcome = future.result()
             index = index_of[future.key]
-            # report the paths as the caller gave them
+            # report the paths as the caller gave them, as the serial run does
+            source, target = jobs[index]
+            given = {str(source.resolve()): str(source), str(target.resolve()): str(target)}
+            error = outcome.error
+            for absolute, relative in given.items():
+                error = error.replace(absolute, relative) if error is not None else None
             finished[index] = Outcome(
-                jobs[index][0],
-                jobs[index][1],
-                outcome.error,
+                source,
+                target,
+                error,
                 outcome.notes,
                 outcome.n_shapes,
                 outcome.n_triangles,

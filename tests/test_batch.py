@@ -65,9 +65,13 @@ def test_serial_batch_writes_what_single_conversions_write(capsys, tmp_path, sin
 def test_two_dask_workers_write_the_same_bytes(capsys, tmp_path, single):
     need("dask")
     out = tmp_path / "out"
-    done = in_process(capsys, "convert", SCENES, BASIC, out, "--workers", "2", "--progress")
-    assert done.returncode == 0, done.stderr
-    assert "on a Dask LocalCluster of 2 worker(s)" in done.stdout
+    missing = Path("no-such-folder") / "gone.x3d"  # relative: named as given, not as resolved
+    done = in_process(
+        capsys, "convert", SCENES, BASIC, missing, out, "--workers", "2", "--progress"
+    )
+    assert done.returncode == 1
+    assert "on a Dask LocalCluster of 2 worker(s); 1 failed" in done.stdout
+    assert f"shadowgeo convert: {missing}: no such file" in done.stderr.splitlines()
     assert digests(out) == {name: d for name, d in single.items() if name.endswith(".x3d")}
 
 
@@ -102,9 +106,11 @@ def test_a_bad_file_is_named_and_fails_the_run_but_not_the_others(capsys, tmp_pa
     out = tmp_path / "out"
     done = in_process(capsys, "convert", folder, tmp_path / "missing.glb", out, "--serial")
     assert done.returncode == 1
-    assert f"shadowgeo convert: {folder / 'broken.x3d'}:" in done.stderr
-    assert "malformed XML" in done.stderr
-    assert f"shadowgeo convert: {tmp_path / 'missing.glb'}:" in done.stderr
+    errors = [line for line in done.stderr.splitlines() if line.startswith("shadowgeo convert:")]
+    assert len(errors) == 2
+    assert errors[0].startswith(f"shadowgeo convert: {folder / 'broken.x3d'} line ")
+    assert "malformed XML" in errors[0] and errors[0].count("broken.x3d") == 1
+    assert errors[1] == f"shadowgeo convert: {tmp_path / 'missing.glb'}: no such file"
     assert "note: skipped 1 file(s) no reader takes" in done.stderr
     assert "converted 1 of 3 file(s)" in done.stdout and "2 failed" in done.stdout
     # the good file written where its folder put it, nothing left of the bad ones
