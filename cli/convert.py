@@ -1,7 +1,8 @@
 """``shadowgeo convert IN OUT``: read a scene, add its shadows, write it.
 
 A thin layer over :func:`shadowgeo.load`, :func:`shadowgeo.add_shadows` and
-:func:`shadowgeo.save`; the formats come from the file extensions.
+:func:`shadowgeo.save`; the formats come from the file extensions. Several
+inputs, or a folder, are the batch form (:mod:`cli.batch`, on Dask).
 """
 
 from __future__ import annotations
@@ -20,6 +21,8 @@ examples:
   shadowgeo convert model.glb model.usda --plane 0,1,0,0
   shadowgeo convert scene.x3dz scene.x3d --method volume --progress
   shadowgeo convert unlit.x3d unlit.glb --sun 0.3,-1,0.2
+  shadowgeo convert scenes/ more/a.x3d out/ --format glb       (batch, on Dask)
+  shadowgeo convert scenes/ out/ --scheduler tcp://10.0.0.5:8786
 
 Lights with shadows="true" cast (else every light that is on, with a note);
 a scene with no light that is on gets a default sun travelling along
@@ -28,8 +31,15 @@ note; --sun gives another directional light, and then only it and --light
 cast; neither is written into the scene. Receivers are the large planar
 shapes (ground, floor, walls) unless named; when there is none, the ground
 plane under the scene's lowest point receives, with a note.
-Exit codes: 0 done, 1 bad input (one line naming the file and what is wrong),
-2 bad usage.
+Batch: with a folder or more than one input, OUT is a folder; each scene
+file under a folder keeps its place below it, each listed file lands in OUT.
+The files run on a Dask LocalCluster started here (--workers N, one per core
+by default), on a running cluster (--scheduler ADDRESS; its workers must see
+the same paths), or one after another here (--serial); the outputs are the
+same bytes either way. Outputs keep the input's format unless --format names
+one (inputs with no writer, such as .obj, become .glb).
+Exit codes: 0 done, 1 bad input (one line naming the file and what is wrong;
+in a batch, any file failed), 2 bad usage.
 """
 
 
@@ -40,12 +50,19 @@ def register(subparsers) -> None:
         description="Read IN, add the shadows of its lights as geometry, write OUT. "
         "Formats come from the extensions: .x3d .x3dz .x3dj .glb .gltf .usda .usdc "
         "(and .obj .stl .ply .off as input). IN is never modified; OUT is "
-        "written atomically.",
+        "written atomically. With several inputs or a folder, OUT is a folder and "
+        "the files are converted on Dask.",
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("input", metavar="IN", type=Path, help="the scene to read")
-    parser.add_argument("output", metavar="OUT", type=Path, help="the file to write")
+    parser.add_argument(
+        "paths",
+        metavar="IN... OUT",
+        type=Path,
+        nargs="+",
+        help="the scene to read and the file to write; or scene files and folders, "
+        "then the folder to write into",
+    )
     parser.add_argument(
         "--method",
         choices=("planar", "volume"),
@@ -89,7 +106,29 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
-    parser.set_defaults(func=run)
+    batch = parser.add_argument_group("batch (several inputs or a folder)")
+    batch.add_argument(
+        "--format",
+        type=output_suffix,
+        metavar="EXT",
+        help="write every output in this format (glb, x3d, usda, ...); default: the input's",
+    )
+    where = batch.add_mutually_exclusive_group()
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="a running Dask scheduler (tcp://host:8786); default: a LocalCluster here",
+    )
+    where.add_argument(
+        "--serial", action="store_true", help="no Dask: one file after another in this process"
+    )
+    batch.add_argument(
+        "--workers",
+        type=positive_int,
+        metavar="N",
+        help="worker processes of the LocalCluster (default: one per core)",
+    )
+    parser.set_defaults(func=run, parser=parser)
 
 
 def plane_argument(text: str) -> shadowgeo.Plane:
@@ -114,6 +153,25 @@ def direction_argument(text: str) -> shadowgeo.DirectionalLight:
         raise argparse.ArgumentTypeError(
             f"expected three numbers dx,dy,dz, not all zero, got {text!r} ({error})"
         ) from None
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
+    return value
+
+
+def output_suffix(text: str) -> str:
+    suffix = text.lower() if text.startswith(".") else "." + text.lower()
+    if suffix not in shadowgeo.io.WRITERS:
+        raise argparse.ArgumentTypeError(
+            f"no writer for {suffix!r}; one of {', '.join(sorted(shadowgeo.io.WRITERS))}"
+        )
+    return suffix
 
 
 def tolerance_argument(text: str) -> float:
@@ -173,7 +231,32 @@ def print_notes(notes: list[str], n_reader: int, source: Path) -> None:
         print(f"note: {note}", file=sys.stderr)
 
 
+def is_batch(paths: list[Path]) -> bool:
+    """Several inputs, a folder as input, or an existing folder as OUT."""
+    return len(paths) > 2 or paths[0].is_dir() or paths[-1].is_dir()
+
+
 def run(args) -> int:
+    paths = args.paths
+    if len(paths) < 2:
+        args.parser.error("give IN and OUT (or inputs and an output folder)")
+    batch_only = [
+        flag
+        for flag, value in (
+            ("--format", args.format),
+            ("--scheduler", args.scheduler),
+            ("--serial", args.serial),
+            ("--workers", args.workers),
+        )
+        if value
+    ]
+    if is_batch(paths):
+        from .batch import run_batch
+
+        return run_batch(args, paths[:-1], paths[-1])
+    if batch_only:
+        args.parser.error(f"{', '.join(batch_only)} only apply to several inputs or a folder")
+    args.input, args.output = paths
     source, target = args.input, args.output
     if target.exists() and source.exists() and os.path.samefile(source, target):
         raise shadowgeo.SceneError(

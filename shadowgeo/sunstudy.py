@@ -6,14 +6,12 @@ the sun above the horizon it casts the exact shadow (:func:`project_shadow`
 with a :class:`DirectionalLight` from :mod:`shadowgeo.sun`), and then returns
 the region cut into exact polygons of equal sunlight duration.
 
-How the level sets stay exact and cheap: the shadows are unions already (each a
-set of non-overlapping counter-clockwise outer loops with clockwise holes), so
-the winding number of a point over all the shadows' loops is the number of
-samples that shadow it. Adding ``m - 1`` clockwise copies of a rectangle that
-covers everything lowers every winding number by ``m - 1``, so one Clipper2
-union with the positive fill rule gives the region shadowed by at least ``m``
-samples, exactly; level ``k`` is the difference of two such regions. The cost
-per level is one union of the day's shadows.
+How the level sets stay exact: the shadows are unions already (each a set of
+non-overlapping counter-clockwise outer loops with clockwise holes), so the
+number of samples shadowing a point is its winding number over all the
+shadows' loops; :func:`shadowgeo.levels.cover_levels` cuts the region by that
+number, exactly, one tile of a few thousand vertices at a time. The level
+polygons come back cut along the tile edges.
 
 Studies over many days (a year of hourly samples) are cut into one study a day
 (:func:`sun_study_by_day`); days are independent, so they run in parallel on
@@ -32,6 +30,7 @@ from manifold3d import CrossSection, FillRule
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
+from .levels import cover_levels
 from .plane import Plane
 from .polygons import components, local_scale, signed_areas
 from .projection import project_shadow
@@ -53,12 +52,6 @@ class _Frame:
 
     def to_plane(self, loop: NDArray[np.float64]) -> NDArray[np.float64]:
         return loop / self.scale + self.centre
-
-    def region(self, polygons: Polygons) -> CrossSection:
-        loops = [self.to_local(loop) for part in polygons for loop in part]
-        if not loops:
-            return CrossSection()
-        return CrossSection(loops, FillRule.Positive)
 
     def polygons(self, region: CrossSection) -> Polygons:
         return [[self.to_plane(loop) for loop in part] for part in components(region)]
@@ -86,7 +79,8 @@ class SunStudy:
     levels : dict[int, polygons]
         For ``k`` sunlit samples, the part of the region sunlit for exactly
         ``k * step``; levels with no area are left out. The levels tile the
-        region: their areas add up to its area.
+        region: their areas add up to its area. A level's parts may be cut
+        along the edges of the tiles it was computed in.
     """
 
     plane: Plane
@@ -159,36 +153,27 @@ def _region_polygon(plane: Plane, region: ArrayLike) -> NDArray[np.float64]:
 def _levels(
     frame: _Frame, region: CrossSection, shadows: Sequence[Polygons]
 ) -> dict[int, Polygons]:
-    """Exactly-``k``-samples-sunlit parts of ``region``, by the winding trick."""
+    """Exactly-``k``-samples-sunlit parts of ``region`` (:func:`cover_levels`
+    of the shadows: ``k`` sunlit is ``count - k`` shadowed)."""
     count = len(shadows)
-    loops = [frame.to_local(loop) for shadow in shadows for part in shadow for loop in part]
-    bounds = region.bounds()  # (xmin, ymin, xmax, ymax) in the local frame
-    low, high = np.array(bounds[:2]) - 1.0, np.array(bounds[2:]) + 1.0
-    clockwise = np.array(
-        [[low[0], low[1]], [low[0], high[1]], [high[0], high[1]], [high[0], low[1]]]
-    )
+    loops = [loop for shadow in shadows for part in shadow for loop in part]
+    local = iter(_map_loops(frame.to_local, loops))
+    regions = [[next(local) for part in shadow for _ in part] for shadow in shadows]
+    covered = sorted(cover_levels(regions, region).items(), reverse=True)
+    flat = [loop for _, parts in covered for part in parts for loop in part]
+    plane = iter(_map_loops(frame.to_plane, flat))
+    return {count - m: [[next(plane) for _ in part] for part in parts] for m, parts in covered}
 
-    def shadowed_at_least(m: int) -> CrossSection:
-        if m <= 0:
-            return region
-        if m > count or not loops:
-            return CrossSection()
-        union = CrossSection(loops + [clockwise] * (m - 1), FillRule.Positive)
-        return union ^ region
 
-    levels: dict[int, Polygons] = {}
-    upper = shadowed_at_least(1)
-    previous = region
-    for m in range(count + 1):
-        # shadowed by exactly m samples = at least m minus at least m + 1
-        current = previous - upper
-        if not current.is_empty():
-            parts = frame.polygons(current)
-            if parts:
-                levels[count - m] = parts
-        previous = upper
-        upper = shadowed_at_least(m + 2)
-    return levels
+def _map_loops(
+    transform: Callable[[NDArray[np.float64]], NDArray[np.float64]],
+    loops: list[NDArray[np.float64]],
+) -> list[NDArray[np.float64]]:
+    """``transform`` (pointwise) of every loop, in one numpy pass."""
+    if not loops:
+        return []
+    ends = np.cumsum([len(loop) for loop in loops])[:-1]
+    return np.split(transform(np.concatenate(loops)), ends)
 
 
 def sun_study(
@@ -251,11 +236,10 @@ def sun_study(
     extent = float(np.max(np.abs(region_2d - region_2d.mean(axis=0)))) or 1.0
     frame = _Frame(region_2d.mean(axis=0), local_scale(2.0 * extent))
     region_cs = CrossSection([frame.to_local(region_2d)], FillRule.Positive)
-    shadows = []
     # one call for the day: the caster is checked and prepared once for every sun position
     cast = project_shadow(caster, lights, plane, receiver=polygon) if lights else []
-    for shadow in cast:
-        shadows.append(frame.polygons(frame.region(shadow.polygons) ^ region_cs))
+    # each shadow is already cut to the region, a union of non-overlapping parts
+    shadows = [shadow.polygons for shadow in cast]
     return SunStudy(
         plane=plane,
         region=frame.polygons(region_cs),
@@ -349,9 +333,12 @@ def sun_study_by_day(
         }
         from dask.distributed import as_completed
 
-        done = 0
-        for _ in as_completed(list(futures.values())):
-            done += 1
+        day_of = {future.key: day for day, future in futures.items()}
+        finished: dict[_dt.date, SunStudy] = {}
+        # each result is fetched as it comes, so the workers let go of it
+        for future in as_completed(list(futures.values())):
+            finished[day_of[future.key]] = future.result()
+            future.release()
             if progress:
-                progress(done, total)
-        return SunStudies({day: future.result() for day, future in futures.items()})
+                progress(len(finished), total)
+        return SunStudies({day: finished[day] for day in futures})

@@ -161,3 +161,36 @@ def test_days_on_dask_equal_the_serial_run():
                 for loop, other_loop in zip(part, other_part, strict=True):
                     np.testing.assert_array_equal(loop, other_loop)
     assert serial.fraction_meeting(10.0) == parallel.fraction_meeting(10.0)
+
+
+def test_a_block_of_boxes_cut_into_tiles_agrees_with_rays():
+    # 64 boxes: enough shadow vertices that the levels are computed tile by tile
+    boxes = [
+        _floating_box([x, 1.0 + 0.2 * (i % 3), z], [1.2, 1.6 + 0.3 * (i % 4), 0.9])
+        for i, (x, z) in enumerate((x, z) for x in range(-14, 14, 4) for z in range(-14, 14, 4))
+    ]
+    day = hourly(dt.datetime(2026, 6, 21, tzinfo=UTC), dt.datetime(2026, 6, 22, tzinfo=UTC))
+    study = sun_study(boxes, GROUND, PLOT, day, **LONDON)
+    assert sum(len(loop) for s in study.shadows for part in s for loop in part) > 4000
+    assert math.isclose(sum(study.level_areas().values()), 1600.0, rel_tol=1e-9)
+    rng = np.random.default_rng(5)
+    uv = rng.uniform(-20, 20, size=(3000, 2))
+    points = GROUND.to_3d(uv)
+    lit = np.full(len(points), len(study.times))
+    for when in study.times:
+        towards_sun = -sun_direction(**LONDON, when=when)
+        hit = np.zeros(len(points), dtype=bool)
+        for box in boxes:
+            hit |= _ray_hits_box(points, towards_sun, *box.bounds)
+        lit -= hit
+    boundaries = shapely.union_all(
+        [shapely.LinearRing(loop) for s in study.shadows for part in s for loop in part]
+    )
+    clear = shapely.distance(shapely.points(uv), boundaries) > 1e-6
+    level_of = np.full(len(uv), -1)
+    for k, parts in study.levels.items():
+        region = shapely.MultiPolygon([shapely.Polygon(part[0], part[1:]) for part in parts])
+        level_of[shapely.contains_xy(region, uv[:, 0], uv[:, 1])] = k
+    assert clear.sum() > 2900
+    np.testing.assert_array_equal(level_of[clear], lit[clear])
+    assert len(set(lit[clear])) >= 6

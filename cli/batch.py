@@ -1,0 +1,127 @@
+"""``shadowgeo convert IN... OUT_DIR``: many scenes, on Dask.
+
+The batch form of ``convert``: the inputs are folders (every scene file under
+them, subfolders kept) and files; each is converted on its own, on a Dask
+``LocalCluster`` started here (``--workers N``), on a running cluster
+(``--scheduler ADDRESS``) or one after another in this process (``--serial``).
+A thin layer over :func:`shadowgeo.batch.convert_files`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import shadowgeo
+from shadowgeo.batch import ConvertOptions, Outcome, convert_files, scene_suffix
+from shadowgeo.io import WRITERS
+
+from .convert import ProgressBar
+
+
+def jobs_for(
+    inputs: list[Path], out_dir: Path, suffix: str | None
+) -> tuple[list[tuple[Path, Path]], int]:
+    """(source, target) pairs for the files and folders of ``inputs``, and the
+    number of files skipped in folders (no reader for them). A folder's files
+    keep their place below it; a file lands in ``out_dir`` itself."""
+    jobs, skipped = [], 0
+    out_resolved = out_dir.resolve()
+    for given in inputs:
+        if given.is_dir():
+            for path in sorted(p for p in given.rglob("*") if p.is_file()):
+                if out_resolved in path.resolve().parents:
+                    continue  # an earlier run's outputs inside an input folder
+                if scene_suffix(path) is None:
+                    skipped += 1
+                    continue
+                jobs.append((path, out_dir / _renamed(path.relative_to(given), suffix)))
+        else:
+            jobs.append((given, out_dir / _renamed(Path(given.name), suffix)))
+    return jobs, skipped
+
+
+def _renamed(relative: Path, suffix: str | None) -> Path:
+    """``relative`` with its scene extension replaced by ``suffix`` (kept when
+    None and writable, else ``.glb``)."""
+    own = scene_suffix(relative)
+    if own is None:
+        return relative if suffix is None else relative.with_name(relative.name + suffix)
+    stem = relative.name[: len(relative.name) - len(own)]
+    chosen = suffix or (own if own in WRITERS else ".glb")
+    return relative.with_name(stem + chosen)
+
+
+def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> int:
+    if out_dir.exists() and not out_dir.is_dir():
+        raise shadowgeo.SceneError(
+            "OUT must be a folder when converting several files", path=str(out_dir)
+        )
+    jobs, skipped = jobs_for(inputs, out_dir, args.format)
+    if not jobs:
+        print("shadowgeo convert: no scene files in the inputs", file=sys.stderr)
+        return 1
+    if skipped:
+        print(f"note: skipped {skipped} file(s) no reader takes", file=sys.stderr)
+    options = ConvertOptions(
+        method=args.method,
+        lights=tuple(args.light) if args.light else None,
+        receivers=tuple(args.receiver) if args.receiver else None,
+        plane=args.plane,
+        tolerance=args.tolerance,
+        sun=args.sun,
+    )
+    scheduler = None if args.serial else (args.scheduler or "local")
+    where = (
+        "in this process"
+        if scheduler is None
+        else f"on the Dask cluster at {scheduler}"
+        if args.scheduler
+        else f"on a Dask LocalCluster of {args.workers or 'one worker per core'}"
+        + (" worker(s)" if args.workers else "")
+    )
+    show = args.progress or sys.stderr.isatty()
+    bar = ProgressBar(f"{len(jobs)} files") if show else None
+    begin = time.perf_counter()
+    try:
+        outcomes = convert_files(
+            jobs, options, scheduler=scheduler, workers=args.workers, progress=bar
+        )
+    except ImportError as error:
+        print(f"shadowgeo convert: {error} (or --serial)", file=sys.stderr)
+        return 2
+    except OSError as error:
+        print(f"shadowgeo convert: cannot reach the Dask scheduler: {error}", file=sys.stderr)
+        return 1
+    finally:
+        if bar is not None:
+            bar.close()
+    elapsed = time.perf_counter() - begin
+    report(outcomes)
+    failed = sum(not outcome.ok for outcome in outcomes)
+    print(
+        f"converted {len(outcomes) - failed} of {len(outcomes)} file(s) into {out_dir} "
+        f"in {elapsed:.1f} s {where}" + (f"; {failed} failed" if failed else "")
+    )
+    return 1 if failed else 0
+
+
+def report(outcomes: list[Outcome]) -> None:
+    """One line a file written (stdout), one a file failed (stderr), and the
+    shadows' notes, named by file, in the order the files were given."""
+    for outcome in outcomes:
+        if not outcome.ok:
+            error = str(outcome.error)
+            # name the file once: most errors start with it already
+            named = error if error.startswith(str(outcome.source)) else f"{outcome.source}: {error}"
+            print(f"shadowgeo convert: {named}", file=sys.stderr)
+            continue
+        for note in outcome.notes:
+            print(f"note: {outcome.source}: {note}", file=sys.stderr)
+        groups = f": {', '.join(outcome.groups)}" if outcome.groups else ""
+        print(
+            f"wrote {outcome.target}: {outcome.n_shapes} shape(s), {outcome.n_triangles} "
+            f"triangles, in {len(outcome.groups)} group(s){groups}"
+        )

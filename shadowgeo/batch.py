@@ -1,0 +1,184 @@
+"""Batch conversion: many scenes read, shadowed and written, here or on Dask.
+
+Each file is one independent job (:func:`convert_file`: load, add the shadows,
+save atomically). :func:`convert_files` runs the jobs one after another in
+this process, or hands them to Dask (``scheduler``), one task a file; either
+way a file's output is byte for byte the same, and a file that fails is
+reported with its name while the others go on. Dask only schedules: nothing
+here queues, retries or balances work itself.
+
+On a cluster every worker must see the input and output paths under the same
+names (a shared file system) and have shadowgeo installed.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from .errors import GeometryError, SceneError
+from .io import READERS, load, save
+from .lights import DirectionalLight
+from .plane import Plane
+from .scene import SceneLight
+from .scene.shadows import add_shadows
+
+
+@dataclass(frozen=True)
+class ConvertOptions:
+    """What :func:`add_shadows` is asked for every file (see its parameters);
+    ``sun``: a directional light that casts instead of the scene's own
+    (unless named in ``lights``), not written into the scene."""
+
+    method: Literal["planar", "volume"] = "planar"
+    lights: tuple[str, ...] | None = None
+    receivers: tuple[str, ...] | None = None
+    plane: Plane | None = None
+    tolerance: float | None = None
+    sun: DirectionalLight | None = None
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """How one file went: ``error`` is None when it was written."""
+
+    source: Path
+    target: Path
+    error: str | None = None
+    notes: tuple[str, ...] = field(default=(), repr=False)
+    n_shapes: int = 0
+    n_triangles: int = 0
+    groups: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+
+def scene_suffix(path: Path) -> str | None:
+    """The reader extension ``path`` ends with (``.x3dv.gz`` before ``.gz``),
+    or None when no reader takes it."""
+    name = path.name.lower()
+    matches = [suffix for suffix in READERS if name.endswith(suffix)]
+    return max(matches, key=len) if matches else None
+
+
+def convert_file(source: Path, target: Path, options: ConvertOptions) -> Outcome:
+    """Read ``source``, add its shadows, write ``target`` atomically.
+
+    Never raises for a bad file: a :class:`SceneError`, :class:`GeometryError`
+    or an error of the file system comes back as ``Outcome.error``; so does
+    any other exception, named by its type, so that one file cannot stop a
+    batch.
+    """
+    try:
+        if target.exists() and source.exists() and os.path.samefile(source, target):
+            raise SceneError("OUT is the input file; it is never overwritten", path=str(target))
+        # the chord only matters for X3D's curved primitives; other readers take no options
+        curved = options.tolerance is not None and READERS.get(scene_suffix(source) or "") == (
+            "x3d_read"
+        )
+        scene = load(source, **({"chord": options.tolerance} if curved else {}))
+        known = len(scene.warnings)
+        extra = [] if options.sun is None else [SceneLight(options.sun, name="sun", shadows=True)]
+        result = add_shadows(
+            scene,
+            method=options.method,
+            lights=options.lights,
+            receivers=options.receivers,
+            plane=options.plane,
+            tolerance=options.tolerance,
+            extra_lights=extra,
+        )
+        target.parent.mkdir(parents=True, exist_ok=True)
+        save(result, target)
+    except (SceneError, GeometryError) as error:
+        return Outcome(source, target, error=str(error))
+    except OSError as error:
+        return Outcome(source, target, error=f"{error.strerror or error}")
+    except Exception as error:  # a bug met on one file must not stop the batch
+        return Outcome(source, target, error=f"{type(error).__name__}: {error}")
+    added = [shape for shape in result.shapes if shape.role in ("shadow", "volume")]
+    return Outcome(
+        source,
+        target,
+        notes=tuple(result.warnings[known:]),
+        n_shapes=len(added),
+        n_triangles=sum(shape.n_faces for shape in added),
+        groups=tuple(sorted({shape.group for shape in added if shape.group})),
+    )
+
+
+def convert_files(
+    jobs: Sequence[tuple[Path, Path]],
+    options: ConvertOptions,
+    *,
+    scheduler: Any = None,
+    workers: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[Outcome]:
+    """:func:`convert_file` for each ``(source, target)`` of ``jobs``.
+
+    Parameters
+    ----------
+    jobs : sequence of (Path, Path)
+        Inputs and outputs; outputs must differ.
+    options : ConvertOptions
+    scheduler : None, "local", address or dask.distributed.Client
+        None runs the files one after another in this process; otherwise
+        :func:`shadowgeo.parallel.client_for` gives the Dask client (``"local"``
+        starts a ``LocalCluster`` of ``workers`` processes here).
+    progress : callable, optional
+        ``progress(done, total)`` as files finish.
+
+    Returns
+    -------
+    list of Outcome
+        In the order of ``jobs``, whatever order they finished in.
+    """
+    total = len(jobs)
+    if len({target for _, target in jobs}) != total:
+        raise SceneError("two inputs would be written to the same output file")
+    if scheduler is None:
+        outcomes = []
+        for done, (source, target) in enumerate(jobs, start=1):
+            outcomes.append(convert_file(source, target, options))
+            if progress:
+                progress(done, total)
+        return outcomes
+    from .parallel import client_for
+
+    with client_for(scheduler, workers=workers) as client:
+        from dask.distributed import as_completed
+
+        # absolute paths: a worker's working folder is not ours
+        futures = [
+            client.submit(convert_file, source.resolve(), target.resolve(), options, pure=False)
+            for source, target in jobs
+        ]
+        index_of = {future.key: index for index, future in enumerate(futures)}
+        finished: dict[int, Outcome] = {}
+        for future in as_completed(futures):
+            outcome = future.result()
+            index = index_of[future.key]
+            # report the paths as the caller gave them, as the serial run does
+            source, target = jobs[index]
+            given = {str(source.resolve()): str(source), str(target.resolve()): str(target)}
+            error = outcome.error
+            for absolute, relative in given.items():
+                error = error.replace(absolute, relative) if error is not None else None
+            finished[index] = Outcome(
+                source,
+                target,
+                error,
+                outcome.notes,
+                outcome.n_shapes,
+                outcome.n_triangles,
+                outcome.groups,
+            )
+            if progress:
+                progress(len(finished), total)
+        return [finished[index] for index in range(total)]
