@@ -429,3 +429,37 @@ def test_receiver_search_never_looks_inside_shapes_smaller_than_a_receiver(monke
         ]
     )
     assert region.area == pytest.approx(expected.area, rel=1e-9)
+
+
+def _hills(n: int = 12, size: float = 10.0) -> sg.Shape:
+    """An open heightfield spanning the scene, its lowest point at a valley."""
+    x, z = np.meshgrid(np.linspace(-size, size, n), np.linspace(-size, size, n))
+    y = 0.8 * np.sin(x / 3.0) * np.cos(z / 4.0)
+    vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+    faces = []
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a, b, c, d = i * n + j, i * n + j + 1, (i + 1) * n + j, (i + 1) * n + j + 1
+            faces += [[a, c, b], [b, c, d]]
+    return sg.Shape(vertices, faces, name="hills", solid=False)
+
+
+def test_a_terrain_spanning_the_scene_receives_instead_of_a_ground_plane_under_it():
+    tower = box([-1, 1.5, -1], [1, 4, 1], "tower")
+    sun = sg.SceneLight(sg.DirectionalLight([0.4, -1, 0.3]), name="sun", shadows=True)
+    result = sg.add_shadows(sg.Scene([_hills(), tower], [sun]))
+    shadows = result.shapes_with_role("shadow")
+    assert [s.name for s in shadows] == ["shadow_sun_surfaces"]  # no plane under the hills
+    assert any("hills spans the scene" in note for note in result.warnings)
+    # Every shadow triangle lies on the hills (none on a plane below them).
+    lowest = float(_hills().vertices[:, 1].min())
+    assert shadows[0].vertices[:, 1].min() > lowest - 0.1
+
+
+def test_a_lone_closed_caster_still_gets_the_ground_plane():
+    ball = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+    ball.apply_translation([0, 2, 0])
+    sun = sg.SceneLight(sg.DirectionalLight([0.4, -1, 0.3]), name="sun", shadows=True)
+    result = sg.add_shadows(sg.Scene([sg.Shape(ball.vertices, ball.faces, name="ball")], [sun]))
+    names = [s.name for s in result.shapes_with_role("shadow")]
+    assert "shadow_sun_ground" in names

@@ -75,6 +75,9 @@ from .surfaces import receiving_faces, surface_shadow
 # shape's area and of the scene's bounding-box diagonal.
 _RECEIVER_AREA_FRACTION = 0.25
 _RECEIVER_SIZE_FRACTION = 0.25
+# An open shape at least this fraction of the scene's width in both horizontal
+# directions is a terrain: it receives in place of a fallback ground plane.
+_TERRAIN_SPAN = 0.9
 # Default lift of shadows off their receiver, relative to the scene's size.
 _DEFAULT_OFFSET = 1e-3
 # The sun that casts in a scene with no light that is on, for a Y-up scene:
@@ -203,6 +206,8 @@ def add_shadows(
                 "on the planar receivers only"
             )
             surface = None
+        if surface is not None and receivers is None and plane is None:
+            found = _without_ground_under_terrain(found, stacked, scene.up_axis, notes)
         added = []
         total, done = len(chosen) * len(found) * len(stacked), 0
         for index, light in enumerate(chosen):
@@ -245,6 +250,32 @@ def add_shadows(
             listed = ", ".join(receiver.name for receiver in found)
             notes.append(f"shadows: no shadow falls on the receivers ({listed})")
     return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
+
+
+def _without_ground_under_terrain(
+    found: list[Receiver], stacked: CasterSet, up_axis: str | None, notes: list[str]
+) -> list[Receiver]:
+    """``found`` without the fallback ground plane when an open shape spans
+    the scene's whole width (a terrain, a curved floor): every surface
+    receives, so the terrain takes the shadows, and a plane under it would
+    only show as a dark rim along its edges."""
+    if len(found) != 1 or found[0].name != "ground" or found[0].triangles is not None:
+        return found
+    axis = 2 if (up_axis or "Y").upper() == "Z" else 1
+    across = [k for k in range(3) if k != axis]
+    low, high = stacked.bounds
+    width = (high - low)[across]
+    spans = np.all((stacked.high - stacked.low)[:, across] >= _TERRAIN_SPAN * width, axis=1)
+    terrain = np.flatnonzero(spans & ~stacked.closed)
+    if not len(terrain) or not np.all(width > 0):
+        return found
+    name = stacked.casters[int(terrain[0])].name
+    notes[:] = [note for note in notes if not note.startswith("shadows: no receiver found")]
+    notes.append(
+        f"shadows: no flat receiver found; {name} spans the scene and receives with every "
+        "other surface (no ground plane is added under it; --plane a,b,c,d adds one)"
+    )
+    return []
 
 
 def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
