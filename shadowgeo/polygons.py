@@ -13,6 +13,8 @@ import math
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
+from .errors import GeometryError
+from .limits import MAX_UNION_CROSSINGS
 from .plane import Plane
 
 # Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
@@ -44,11 +46,74 @@ def signed_areas(loops: list[np.ndarray]) -> np.ndarray:
     return out
 
 
+# Edge pairs sampled to estimate the crossings of a union, and the fewest
+# sampled crossings that may refuse one (fewer say too little to act on).
+_CROSSING_SAMPLES = 1 << 16
+_FEWEST_SAMPLED_CROSSINGS = 8
+
+
+def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
+    """(estimated edge crossings, sampled crossings) among the edges of the
+    (k, 2) ``loops``: the share of a fixed pseudo-random sample of edge pairs
+    that cross properly, times the number of pairs. Exact (0, 0) when there
+    are too few pairs to pass :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS`.
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    >>> crossings_estimate([square, square + 0.5])
+    (0.0, 0)
+    """
+    lengths = np.array([len(loop) for loop in loops])
+    n_edges = int(lengths.sum())
+    pairs = n_edges * (n_edges - 1) / 2
+    if pairs <= MAX_UNION_CROSSINGS:
+        return 0.0, 0
+    start = np.concatenate(loops).astype(np.float64).reshape(-1, 2)
+    following = np.arange(1, n_edges + 1)
+    firsts = np.cumsum(lengths) - lengths
+    nonempty = lengths > 0
+    following[(firsts + lengths - 1)[nonempty]] = firsts[nonempty]  # each loop closes
+    end = start[following]
+    rng = np.random.default_rng(0)  # fixed: the same loops always get the same answer
+    first = rng.integers(n_edges, size=_CROSSING_SAMPLES)
+    second = rng.integers(n_edges, size=_CROSSING_SAMPLES)
+    a, b, c, d = start[first], end[first], start[second], end[second]
+
+    def side(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> np.ndarray:
+        cross = (one[:, 0] - origin[:, 0]) * (two[:, 1] - origin[:, 1]) - (
+            one[:, 1] - origin[:, 1]
+        ) * (two[:, 0] - origin[:, 0])
+        return np.sign(cross)
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        crossing = (side(a, b, c) * side(a, b, d) < 0) & (side(c, d, a) * side(c, d, b) < 0)
+    sampled = int(np.count_nonzero(crossing))
+    return sampled / _CROSSING_SAMPLES * pairs, sampled
+
+
 def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
     """The region of points whose winding number over ``loops`` passes ``rule``
-    (``"positive"``: > 0, ``"nonzero"``, ``"evenodd"``)."""
+    (``"positive"``: > 0, ``"nonzero"``, ``"evenodd"``).
+
+    Raises
+    ------
+    GeometryError
+        When the loops' edges cross each other more than
+        :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS` times (estimated by
+        :func:`crossings_estimate`): Clipper2's work grows with the crossings,
+        more than linearly, so such a union would take minutes.
+    """
     if not loops:
         return CrossSection()
+    estimate, sampled = crossings_estimate(loops)
+    if estimate > MAX_UNION_CROSSINGS and sampled >= _FEWEST_SAMPLED_CROSSINGS:
+        n_edges = sum(len(loop) for loop in loops)
+        raise GeometryError(
+            f"the shadow's outline ({len(loops)} loops, {n_edges} edges) has about "
+            f"{estimate:.2g} edge crossings, past the budget of {MAX_UNION_CROSSINGS:,} "
+            "(shadowgeo.limits.MAX_UNION_CROSSINGS)"
+        )
     fill_rule = {
         "positive": FillRule.Positive,
         "nonzero": FillRule.NonZero,

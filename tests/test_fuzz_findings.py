@@ -1,0 +1,134 @@
+"""Regression tests for what the long fuzz campaign of issue 12 found.
+
+* A 2-D union whose edges cross millions of times (a soup of thousands of
+  overlapping triangles, an Extrusion whose 20,000-point spine folds over
+  itself) took minutes in Clipper2: ``polygons.fill`` now estimates the
+  crossings and refuses past ``limits.MAX_UNION_CROSSINGS``.
+* Faces that leave a small receiver were clipped one by one in Python, for
+  every receiver: they are clipped all at once, with the same result.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import numpy as np
+import pytest
+import shapely
+
+import shadowgeo as sg
+from cli.main import main as cli_main
+from shadowgeo import limits, polygons
+
+
+def brute_force_crossings(starts: np.ndarray, ends: np.ndarray) -> int:
+    """Proper crossings among all pairs of segments, every pair tested."""
+    total = 0
+    for index in range(len(starts) - 1):
+        a, b = starts[index], ends[index]
+        c, d = starts[index + 1 :], ends[index + 1 :]
+
+        def side(origin, one, two):
+            return np.sign(
+                (one[..., 0] - origin[..., 0]) * (two[..., 1] - origin[..., 1])
+                - (one[..., 1] - origin[..., 1]) * (two[..., 0] - origin[..., 0])
+            )
+
+        crossing = (side(a, b, c) * side(a, b, d) < 0) & (side(c, d, a) * side(c, d, b) < 0)
+        total += int(np.count_nonzero(crossing))
+    return total
+
+
+def random_triangles(count: int, seed: int) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return list(rng.uniform(0, 1, size=(count, 3, 2)))
+
+
+def test_crossings_estimate_agrees_with_brute_force():
+    loops = random_triangles(900, seed=4)  # 2,700 edges: 3.6e6 pairs, past the budget
+    starts = np.concatenate(loops)
+    ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in loops])
+    exact = brute_force_crossings(starts, ends)
+    estimate, sampled = polygons.crossings_estimate(loops)
+    assert sampled > 1000
+    assert abs(estimate - exact) < 0.05 * exact
+
+
+def test_crossings_estimate_is_exactly_zero_below_the_budget():
+    loops = random_triangles(100, seed=1)  # 300 edges: fewer pairs than the budget
+    assert polygons.crossings_estimate(loops) == (0.0, 0)
+
+
+def test_fill_refuses_a_union_past_the_crossing_budget():
+    loops = random_triangles(3000, seed=2)  # ~1e7 crossings: minutes of Clipper2
+    with pytest.raises(sg.GeometryError, match="MAX_UNION_CROSSINGS"):
+        polygons.fill(loops)
+
+
+def test_fill_unites_many_edges_that_do_not_cross():
+    # 4,000 disjoint triangles: 8e7 edge pairs, no crossing, so no refusal.
+    cells = np.stack(np.meshgrid(np.arange(80.0), np.arange(50.0)), axis=-1).reshape(-1, 2)
+    loops = [cell + np.array([[0.1, 0.1], [0.8, 0.1], [0.1, 0.7]]) for cell in cells]
+    region = polygons.fill(loops)
+    expected = shapely.union_all(shapely.polygons(np.array(loops))).area
+    assert polygons.parts_area(polygons.components(region)) == pytest.approx(expected)
+    assert expected == pytest.approx(4000 * 0.5 * 0.7 * 0.6)
+
+
+def folded_extrusion_scene(path, spine_points: int) -> None:
+    rng = np.random.default_rng(5)
+    values = np.array([0, 1, -1, 0.5, 2, 3, -2.5, 10])
+    spine = " ".join(f"{v:g}" for v in rng.choice(values, size=3 * spine_points))
+    path.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<X3D profile="Interchange" version="3.3"><Scene>\n'
+        '<Transform translation="0 20 0"><Shape>'
+        f'<Extrusion DEF="snake" spine="{spine}"/></Shape></Transform>\n'
+        '<Shape><Box size="100 0.1 100"/></Shape>\n'
+        "</Scene></X3D>\n"
+    )
+
+
+def test_extrusion_with_a_folded_20000_point_spine_is_refused_by_name(tmp_path):
+    source = tmp_path / "snake.x3d"
+    folded_extrusion_scene(source, 20_000)
+    target = tmp_path / "out.x3d"
+    stderr = io.StringIO()
+    with contextlib.redirect_stderr(stderr), contextlib.redirect_stdout(io.StringIO()):
+        code = cli_main(["convert", str(source), str(target), "--sun", "0.3,-1,0.2"])
+    assert code == 0
+    notes = [line for line in stderr.getvalue().splitlines() if "snake does not cast" in line]
+    assert notes and "MAX_UNION_CROSSINGS" in notes[0]
+    assert f"{limits.MAX_UNION_CROSSINGS:,}" in notes[0]
+    assert target.is_file()
+
+
+def textbook_shadow(triangles: np.ndarray, direction: np.ndarray) -> shapely.Geometry:
+    """Union of the triangles projected along ``direction`` onto y = 0, as (x, z)."""
+    steps = triangles[..., 1] / -direction[1]
+    projected = triangles + steps[..., None] * direction
+    return shapely.union_all(shapely.polygons(projected[..., [0, 2]]))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_faces_cut_by_a_small_receiver_give_the_textbook_shadow(seed):
+    # Most faces of this soup leave the receiver, so most are clipped.
+    rng = np.random.default_rng(seed)
+    triangles = rng.uniform(-4, 4, size=(60, 3, 3))
+    triangles[..., 1] = rng.uniform(1, 3, size=(60, 3))
+    faces = np.arange(180).reshape(-1, 3)
+    direction = np.array([0.3, -1.0, 0.2])
+    square = np.array([[-1.5, 0, -1.0], [1.0, 0, -1.0], [1.0, 0, 1.5], [-1.5, 0, 1.5]])
+    shadow = sg.project_shadow(
+        (triangles.reshape(-1, 3), faces),
+        sg.DirectionalLight(direction),
+        sg.Plane([0, 1, 0], 0),
+        receiver=square,
+    )
+    direction = direction / np.linalg.norm(direction)
+    expected = textbook_shadow(triangles, direction).intersection(
+        shapely.Polygon(square[:, [0, 2]])
+    )
+    assert shadow.area == pytest.approx(expected.area, rel=1e-9)
+    assert shadow.diagnostics.clipped["outside_receiver"] > 10
