@@ -132,3 +132,40 @@ def test_faces_cut_by_a_small_receiver_give_the_textbook_shadow(seed):
     )
     assert shadow.area == pytest.approx(expected.area, rel=1e-9)
     assert shadow.diagnostics.clipped["outside_receiver"] > 10
+
+
+def load_fuzz_tool():
+    import importlib.util
+    import sys
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "tools" / "fuzz.py"
+    spec = importlib.util.spec_from_file_location("shadowgeo_fuzz_tool", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up here
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_fuzz_flat_check_accepts_a_thin_slab_under_a_grazing_sun_and_flags_a_flat_one():
+    # A unit square lit by a sun 1.9e-12 off its plane (past the 1e-12 angle
+    # tolerance): its volume is a real slab, area x cosine x sweep (case 3496
+    # of seed 12, which the absolute threshold flagged).
+    fuzz = load_fuzz_tool()
+    vertices = np.array([[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1.0]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    direction = np.array([-0.9564962158535296, -1.9385657340094015e-12, 0.2917447326994578])
+    light = sg.DirectionalLight(direction)
+    volume = sg.shadow_volume((vertices, faces), light)
+    cosine = 1.9385657340094015e-12 / np.linalg.norm(direction)
+    assert volume.volume == pytest.approx(
+        1.0 * cosine * volume.metadata["shadowgeo"]["sweep"], rel=1e-3
+    )
+    assert fuzz.thinner_than_a_prism(vertices, faces, light, volume) is None
+    assert fuzz.check_volume(vertices, faces, light) is None
+    steeper = sg.DirectionalLight([0.3, -1.0, 0.2])
+    volume = sg.shadow_volume((vertices, faces), steeper)
+    assert fuzz.thinner_than_a_prism(vertices, faces, steeper, volume) is None
+    flattened = volume.copy()
+    flattened.vertices[:, 1] = 1.0  # every point on the square's plane: no volume
+    assert "prism" in fuzz.thinner_than_a_prism(vertices, faces, steeper, flattened)

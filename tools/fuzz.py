@@ -1206,17 +1206,57 @@ def check_volume(vertices, faces, light):
     largest = float(np.abs(centred).max())
     if largest > 0:
         normalised = trimesh.Trimesh(centred / largest, volume.faces, process=False)
-        # Flat: a volume float64 cannot tell from zero at this scale (a
-        # thousand units in the last place times the surface area, as for
-        # areas in check_shadow); a thin but real slab, e.g. under a grazing
-        # sun, is thicker than that.
-        resolution = 1e3 * np.finfo(np.float64).eps * float(normalised.area)
-        if abs(normalised.volume) <= resolution:
-            return "flat (zero volume)", (
-                f"normalised volume {float(normalised.volume)!r} <= {resolution!r}"
-            )
+        if isinstance(light, shadowgeo.DirectionalLight):
+            problem = thinner_than_a_prism(vertices, faces, light, volume)
+            if problem:
+                return "flat (zero volume)", problem
+        else:
+            # A volume float64 cannot tell from zero at its own scale.
+            resolution = 1e3 * np.finfo(np.float64).eps * float(normalised.area)
+            if abs(normalised.volume) <= resolution:
+                return "flat (zero volume)", (
+                    f"normalised volume {float(normalised.volume)!r} <= {resolution!r}"
+                )
         if not normalised.volume > 0:
             return "inside-out", f"normalised volume {float(normalised.volume)!r}"
+    return None
+
+
+def thinner_than_a_prism(vertices, faces, light, volume) -> str | None:
+    """A sun's shadow volume holds the prism that each casting face sweeps
+    (its area times the cosine with the light times the sweep length): a
+    volume smaller than half the largest such prism is flat where it should
+    not be. Faces within ten times the library's angle or length tolerance of
+    edge-on are left out (the library may rightly drop them), and so is the
+    check when no face remains. Computed in the caster's frame scaled to 1."""
+    sweep = volume.metadata.get("shadowgeo", {}).get("sweep")
+    triangles = np.asarray(vertices, dtype=np.float64)[np.asarray(faces).reshape(-1, 3)]
+    if sweep is None or not len(triangles):
+        return None
+    centre = 0.5 * (triangles.reshape(-1, 3).min(axis=0) + triangles.reshape(-1, 3).max(axis=0))
+    size = float(np.abs(triangles - centre).max())
+    if not size > 0:
+        return None
+    tolerance = shadowgeo.Tolerance.for_points(triangles.reshape(-1, 3))
+    unit = (triangles - centre) / size
+    doubled = np.cross(unit[:, 1] - unit[:, 0], unit[:, 2] - unit[:, 0])
+    longest = np.abs(unit - unit[:, [1, 2, 0]]).max(axis=(1, 2))
+    direction = np.asarray(light.direction, dtype=np.float64)
+    direction = direction / np.linalg.norm(direction)
+    norms = np.linalg.norm(doubled, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cosine = np.abs(doubled @ direction) / norms
+    casting = (np.abs(doubled).max(axis=1) > 10 * tolerance.length / size * longest) & (
+        cosine > 10 * tolerance.angle
+    )
+    if not casting.any():
+        return None
+    prism = float((0.5 * norms * cosine)[casting].max()) * float(sweep) / size
+    mesh = trimesh.Trimesh(
+        (np.asarray(volume.vertices) - centre) / size, volume.faces, process=False
+    )
+    if abs(float(mesh.volume)) < 0.5 * prism:
+        return f"volume {float(mesh.volume)!r} < half the largest face prism {prism!r} (scaled)"
     return None
 
 
