@@ -715,6 +715,15 @@ def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
+def _cpu_seconds(pid: int) -> float:
+    """User and system CPU seconds of process ``pid`` so far (0 when unknown)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def _vm_size() -> int:
     try:
         for line in Path("/proc/self/status").read_text().splitlines():
@@ -1292,6 +1301,7 @@ class Worker:
     connection: object
     task: dict | None = None
     started: float = 0.0
+    cpu_started: float = 0.0
     runs: int = 0
 
 
@@ -1335,14 +1345,18 @@ class Pool:
                         exhausted = True
                         break
                     worker.task, worker.started = task, time.monotonic()
+                    worker.cpu_started = _cpu_seconds(worker.process.pid)
                     worker.connection.send(task)
             busy = [w for w in self.workers if w.task is not None]
             if not busy:
                 return
-            hard = self.time_budget * 4 + 30  # wall clock: the machine may be shared
-            now = time.monotonic()
-            timeout = max(0.05, min(w.started + hard - now for w in busy))
-            ready = wait([w.connection for w in busy], timeout)
+            # The worker's own alarm counts CPU seconds; past 1.5 times the
+            # budget in CPU (stuck in C code), or ten minutes of wall clock
+            # (blocked, using no CPU), it is killed. Wall clock alone would
+            # kill runs that a busy shared machine merely slowed down.
+            hard_cpu = self.time_budget * 1.5 + 10
+            hard_wall = max(self.time_budget * 30, 600.0)
+            ready = wait([w.connection for w in busy], 1.0)
             for worker in busy:
                 task = worker.task
                 if worker.connection in ready:
@@ -1363,7 +1377,10 @@ class Pool:
                     if worker.runs >= self.max_runs or not result["ok"]:
                         self._replace(worker)  # a fresh process after any failure
                     yield task, result
-                elif time.monotonic() - worker.started > hard:
+                elif (
+                    _cpu_seconds(worker.process.pid) - worker.cpu_started > hard_cpu
+                    or time.monotonic() - worker.started > hard_wall
+                ):
                     result = failure("timeout (hard kill, no Python frame)", "killed")
                     result["seconds"] = time.monotonic() - worker.started
                     worker.task = None
@@ -1477,10 +1494,11 @@ def shrink_case(pool: Pool, case: dict, signature: str, tries: int) -> dict:
 # ---------------------------------------------------------------------------------------------
 
 
-def converter_tasks(seeds, encodings, count: int, seed: int):
-    """``count`` mutants per encoding, interleaved."""
+def converter_tasks(seeds, encodings, count: int, seed: int, first: int = 0):
+    """``count`` mutants per encoding, interleaved, from index ``first`` (mutant
+    ``i`` is the same whatever chunk it is run in)."""
     plans = [e for e in encodings if seeds.get(e)]
-    for index in range(count):
+    for index in range(first, first + count):
         for encoding in plans:
             yield converter_task(seeds, encoding, index, seed)
 
@@ -1544,6 +1562,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--inputs", type=int, default=200, help="mutants per encoding")
     parser.add_argument("--geometry", type=int, default=0, help="random geometry cases")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--first-index", type=int, default=0, help="index of the first mutant (to run in chunks)"
+    )
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--encodings", default=",".join(ENCODINGS))
     parser.add_argument("--jobs", type=int, default=2)
@@ -1669,7 +1690,7 @@ def campaign(args, encodings, seeds, pool: Pool) -> int:
     )
     for task, result in pool.run(until_deadline(cases)):
         record(task, result)
-    mutants = converter_tasks(seeds, encodings, args.inputs, args.seed)
+    mutants = converter_tasks(seeds, encodings, args.inputs, args.seed, args.first_index)
     for task, result in pool.run(until_deadline(mutants)):
         record(task, result)
     log.close()
