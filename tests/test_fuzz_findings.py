@@ -148,19 +148,18 @@ def load_fuzz_tool():
 
 
 def test_fuzz_flat_check_accepts_a_thin_slab_under_a_grazing_sun_and_flags_a_flat_one():
-    # A unit square lit by a sun 1.9e-12 off its plane (past the 1e-12 angle
-    # tolerance): its volume is a real slab, area x cosine x sweep (case 3496
-    # of seed 12, which the absolute threshold flagged).
+    # A unit square lit by a sun 1e-10 off its plane: its volume is a real
+    # slab, area x cosine x sweep, 1.4e-8 thick (past the 1.4e-9 length
+    # tolerance), which the old absolute threshold called flat.
     fuzz = load_fuzz_tool()
     vertices = np.array([[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1.0]])
     faces = np.array([[0, 1, 2], [0, 2, 3]])
-    direction = np.array([-0.9564962158535296, -1.9385657340094015e-12, 0.2917447326994578])
+    direction = np.array([-0.9564962158535296, -1e-10, 0.2917447326994578])
     light = sg.DirectionalLight(direction)
     volume = sg.shadow_volume((vertices, faces), light)
-    cosine = 1.9385657340094015e-12 / np.linalg.norm(direction)
-    assert volume.volume == pytest.approx(
-        1.0 * cosine * volume.metadata["shadowgeo"]["sweep"], rel=1e-3
-    )
+    cosine = 1e-10 / np.linalg.norm(direction)
+    sweep = volume.metadata["shadowgeo"]["sweep"]
+    assert volume.volume == pytest.approx(1.0 * cosine * sweep, rel=1e-3)
     assert fuzz.thinner_than_a_prism(vertices, faces, light, volume) is None
     assert fuzz.check_volume(vertices, faces, light) is None
     steeper = sg.DirectionalLight([0.3, -1.0, 0.2])
@@ -169,3 +168,48 @@ def test_fuzz_flat_check_accepts_a_thin_slab_under_a_grazing_sun_and_flags_a_fla
     flattened = volume.copy()
     flattened.vertices[:, 1] = 1.0  # every point on the square's plane: no volume
     assert "prism" in fuzz.thinner_than_a_prism(vertices, faces, steeper, flattened)
+
+
+def test_a_slab_thinner_than_the_length_tolerance_is_no_volume():
+    # Case 3496 of seed 12: a sun 1.9e-12 off the square's plane moves the
+    # far cap 2.7e-10 off it, below the 1.4e-9 length tolerance (points that
+    # close are the same point): no volume.
+    vertices = np.array([[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1.0]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    direction = np.array([-0.9564962158535296, -1.9385657340094015e-12, 0.2917447326994578])
+    tolerance = sg.Tolerance.for_points(vertices)
+    assert tolerance.bound_length * 1.94e-12 < tolerance.length
+    assert len(sg.shadow_volume((vertices, faces), sg.DirectionalLight(direction)).faces) == 0
+
+
+@pytest.mark.parametrize(
+    ("corner", "size", "direction"),
+    [
+        # geometry case 9756 of seed 12: a unit square at 1.2e8 under a sun
+        # 1.07e-12 off its plane
+        (
+            [124423420.16514093, -66253763.86468365, 7238807.267961408],
+            1.0,
+            [-0.3753103555984077, -1.0663521050021641e-12, 0.9268992054050952],
+        ),
+        # case 13675: a 1e-12 square at 1e-4 under a sun 1.8e-11 off its plane
+        (
+            [0.00013304494998637762, -0.0001068722312356503, 4.09758903924179e-05],
+            1e-12,
+            [-0.09924232853966233, -1.830315902451896e-11, -0.9950632945828248],
+        ),
+    ],
+)
+def test_a_sweep_below_float64_spacing_casts_no_volume(corner, size, direction):
+    # The sweep (100 caster diagonals) moves the square off its plane by
+    # sweep x cosine, less than float64's spacing at its height: the far cap
+    # rounds onto the near one, so the only honest volume is none.
+    corner = np.array(corner)
+    vertices = corner + size * np.array([[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1.0]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    direction = np.array(direction)
+    sweep = 100 * size * np.sqrt(2)
+    drop = sweep * abs(direction[1]) / np.linalg.norm(direction)
+    assert drop < np.spacing(abs(corner[1]))
+    volume = sg.shadow_volume((vertices, faces), sg.DirectionalLight(direction))
+    assert len(volume.faces) == 0
