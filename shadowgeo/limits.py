@@ -56,8 +56,8 @@ sphere segments        2,048           segments around one tessellated Sphere
                                        it)
 curve segments         65,536          segments of any other tessellated curve
 outline crossings      2,000,000       edge crossings among the 2-D loops one shadow
-                                       unites (estimated from a fixed sample of edge
-                                       pairs): a soup of thousands of overlapping
+                                       unites (estimated from fixed samples of edge
+                                       pairs and edges): a soup of overlapping
                                        triangles, or an Extrusion whose spine folds
                                        over itself, is refused in a fraction of a
                                        second rather than united in minutes
@@ -100,7 +100,7 @@ MAX_EXTRUSION_POINTS = 20_000_000
 MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
 # Edge crossings one 2-D union may have to resolve (about half a second of
-# Clipper2 on one core); estimated by polygons.fill from a sample of edge pairs.
+# Clipper2 on one core); estimated by polygons.crossings_estimate.
 MAX_UNION_CROSSINGS = 2_000_000
 # Faces that receive through shadow_on_surface in add_shadows (beyond the planar
 # receivers), per light; a bigger scene bakes planar shadows only, with a note.

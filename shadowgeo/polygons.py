@@ -50,13 +50,32 @@ def signed_areas(loops: list[np.ndarray]) -> np.ndarray:
 # sampled crossings that may refuse one (fewer say too little to act on).
 _CROSSING_SAMPLES = 1 << 16
 _FEWEST_SAMPLED_CROSSINGS = 8
+# For unions too large for pair sampling to resolve the budget (crossings
+# among few of very many pairs, e.g. one union per receiving face side by
+# side): whole crossing counts of a few sampled edges, about this many edge
+# tests in all, refusing only when this many of those edges cross something.
+_EDGE_TESTS = 20_000_000
+_FEWEST_CROSSING_EDGES = 4
+
+
+def _side(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> np.ndarray:
+    """Sign of the turn origin -> one -> two (rows, or one row against many)."""
+    cross = (one[..., 0] - origin[..., 0]) * (two[..., 1] - origin[..., 1]) - (
+        one[..., 1] - origin[..., 1]
+    ) * (two[..., 0] - origin[..., 0])
+    return np.sign(cross)
 
 
 def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
     """(estimated edge crossings, sampled crossings) among the edges of the
-    (k, 2) ``loops``: the share of a fixed pseudo-random sample of edge pairs
-    that cross properly, times the number of pairs. Exact (0, 0) when there
-    are too few pairs to pass :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS`.
+    (k, 2) ``loops``. Exact (0, 0) when there are too few pairs to pass
+    :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS`.
+
+    Two fixed pseudo-random samples: pairs of edges (the share that cross
+    properly, times the number of pairs), and, when that sample is too thin
+    to see the budget, a few edges tested against every edge (their mean
+    crossings, times half the edges; the count returned is then the number
+    of sampled edges that cross something).
 
     Examples
     --------
@@ -79,17 +98,28 @@ def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
     first = rng.integers(n_edges, size=_CROSSING_SAMPLES)
     second = rng.integers(n_edges, size=_CROSSING_SAMPLES)
     a, b, c, d = start[first], end[first], start[second], end[second]
-
-    def side(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> np.ndarray:
-        cross = (one[:, 0] - origin[:, 0]) * (two[:, 1] - origin[:, 1]) - (
-            one[:, 1] - origin[:, 1]
-        ) * (two[:, 0] - origin[:, 0])
-        return np.sign(cross)
-
     with np.errstate(over="ignore", invalid="ignore"):
-        crossing = (side(a, b, c) * side(a, b, d) < 0) & (side(c, d, a) * side(c, d, b) < 0)
+        crossing = (_side(a, b, c) * _side(a, b, d) < 0) & (_side(c, d, a) * _side(c, d, b) < 0)
     sampled = int(np.count_nonzero(crossing))
-    return sampled / _CROSSING_SAMPLES * pairs, sampled
+    estimate = sampled / _CROSSING_SAMPLES * pairs
+    resolvable = _FEWEST_SAMPLED_CROSSINGS / _CROSSING_SAMPLES * pairs
+    if sampled >= _FEWEST_SAMPLED_CROSSINGS or resolvable <= MAX_UNION_CROSSINGS:
+        return estimate, sampled
+    low, high = np.minimum(start, end), np.maximum(start, end)
+    counts = []
+    for edge in rng.integers(n_edges, size=max(16, _EDGE_TESTS // n_edges)):
+        near = np.flatnonzero(
+            (low[:, 0] <= high[edge, 0])
+            & (high[:, 0] >= low[edge, 0])
+            & (low[:, 1] <= high[edge, 1])
+            & (high[:, 1] >= low[edge, 1])
+        )  # only edges whose boxes meet this one's can cross it
+        p, q, c, d = start[edge], end[edge], start[near], end[near]
+        with np.errstate(over="ignore", invalid="ignore"):
+            hits = (_side(p, q, c) * _side(p, q, d) < 0) & (_side(c, d, p) * _side(c, d, q) < 0)
+        counts.append(int(np.count_nonzero(hits)))
+    crossing_edges = int(np.count_nonzero(counts))
+    return float(np.mean(counts)) * n_edges / 2, crossing_edges
 
 
 def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
@@ -107,7 +137,7 @@ def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
     if not loops:
         return CrossSection()
     estimate, sampled = crossings_estimate(loops)
-    if estimate > MAX_UNION_CROSSINGS and sampled >= _FEWEST_SAMPLED_CROSSINGS:
+    if estimate > MAX_UNION_CROSSINGS and sampled >= _FEWEST_CROSSING_EDGES:
         n_edges = sum(len(loop) for loop in loops)
         raise GeometryError(
             f"the shadow's outline ({len(loops)} loops, {n_edges} edges) has about "

@@ -213,3 +213,40 @@ def test_a_sweep_below_float64_spacing_casts_no_volume(corner, size, direction):
     assert drop < np.spacing(abs(corner[1]))
     volume = sg.shadow_volume((vertices, faces), sg.DirectionalLight(direction))
     assert len(volume.faces) == 0
+
+
+def rotated_triangle_cells(n_cells: int, per_cell: int) -> list[np.ndarray]:
+    """``per_cell`` equilateral triangles about each cell's centre, turned by
+    15 degrees each: any two of one cell cross at 6 points (a star), and
+    cells lie apart, so no edge crosses another cell's."""
+    angles = np.radians(np.array([90.0, 210.0, 330.0]))
+    loops = []
+    for cell in range(n_cells):
+        centre = np.array([3.0 * (cell % 200), 3.0 * (cell // 200)])
+        for k in range(per_cell):
+            turned = angles + np.radians(15.0 * k)
+            loops.append(centre + np.column_stack([np.cos(turned), np.sin(turned)]))
+    return loops
+
+
+def test_crossings_estimate_sees_many_small_unions_side_by_side():
+    # 16,000 cells of 8 stars: 384,000 edges (7e10 pairs, too many for the
+    # pair sample to see the budget), each edge crossing exactly 14 others.
+    one_cell = rotated_triangle_cells(1, 8)
+    starts = np.concatenate(one_cell)
+    ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in one_cell])
+    per_cell = brute_force_crossings(starts, ends)
+    assert per_cell == 28 * 6  # 28 pairs of triangles, 6 crossings each
+    loops = rotated_triangle_cells(16_000, 8)
+    estimate, crossing_edges = polygons.crossings_estimate(loops)
+    assert estimate == pytest.approx(16_000 * per_cell)
+    assert crossing_edges >= 16
+    with pytest.raises(sg.GeometryError, match="MAX_UNION_CROSSINGS"):
+        polygons.fill(loops)
+
+
+def test_many_small_unions_under_the_budget_are_united():
+    loops = rotated_triangle_cells(4_000, 4)  # 144,000 crossings in all
+    region = polygons.fill(loops)
+    star = shapely.union_all(shapely.polygons(np.array(loops[:4])))
+    assert polygons.parts_area(polygons.components(region)) == pytest.approx(4_000 * star.area)
