@@ -250,3 +250,25 @@ def test_many_small_unions_under_the_budget_are_united():
     region = polygons.fill(loops)
     star = shapely.union_all(shapely.polygons(np.array(loops[:4])))
     assert polygons.parts_area(polygons.components(region)) == pytest.approx(4_000 * star.area)
+
+
+def test_a_proto_body_of_only_is_elements_is_skipped_with_a_note(tmp_path):
+    # x3d mutant 3541 of seed 12: a Transform in a ProtoBody renamed to IS,
+    # so connecting the IS elements left the body without a node
+    # (StopIteration in the reader).
+    source = tmp_path / "proto.x3d"
+    source.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<X3D profile="Immersive" version="3.3"><Scene>\n'
+        '<ProtoDeclare name="anyShape"><ProtoInterface>\n'
+        '<field name="xtranslation" accessType="inputOutput" type="SFVec3f" value="0 0 0"/>\n'
+        "</ProtoInterface><ProtoBody><IS><IS>\n"
+        '<connect nodeField="translation" protoField="xtranslation"/>\n'
+        "</IS></IS></ProtoBody></ProtoDeclare>\n"
+        '<ProtoInstance name="anyShape"/>\n'
+        '<Shape><Box size="1 2 3"/></Shape>\n'
+        "</Scene></X3D>\n"
+    )
+    scene = sg.load(source)
+    assert [shape.n_faces for shape in scene.shapes] == [12]  # the Box alone
+    assert any("anyShape' skipped" in note and "IS" in note for note in scene.warnings)
