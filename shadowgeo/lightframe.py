@@ -25,6 +25,8 @@ from typing import cast
 import numpy as np
 import shapely
 
+from .errors import GeometryError
+from .limits import MAX_SURFACE_PAIRS
 from .polygons import MAX_COORDINATE, components, fill
 
 # The cube map around a point light: (axis, sign) of each side's central ray.
@@ -188,23 +190,56 @@ def _clipped_boxes(
     return has, box
 
 
-def overlapping_boxes(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+# Pairs one STRtree query may return (64 MB of indices), so that a query
+# that would exceed the pair budget stops before filling memory.
+_QUERY_PAIRS = 4_000_000
+
+
+def overlapping_boxes(
+    first: np.ndarray, second: np.ndarray, budget: int = MAX_SURFACE_PAIRS
+) -> tuple[np.ndarray, np.ndarray]:
     """(i, j) index arrays of every box ``first[i]`` that overlaps ``second[j]``;
     boxes are (n, 4) ``(xmin, ymin, xmax, ymax)``.
 
     Two sets of very different sizes (a terrain against a few hundred caster
     triangles) go through a uniform grid in numpy; similar sizes through
     shapely's STRtree, whose cost is mostly making one box geometry per box.
+
+    Raises
+    ------
+    GeometryError
+        More than ``budget`` overlapping pairs (a soup of large triangles
+        over one another: every pair would be clipped).
     """
     if 8 * min(len(first), len(second)) < max(len(first), len(second)):
-        return _grid_pairs(first, second)
+        return _grid_pairs(first, second, budget)
     tree = shapely.STRtree(shapely.box(*second.T))
-    # The geometries are their own envelopes: the tree's box test is the whole test.
-    found = tree.query(shapely.box(*first.T))
-    return found[0], found[1]
+    queries = shapely.box(*first.T)
+    chunk = max(1, _QUERY_PAIRS // max(len(second), 1))
+    found_first, found_second, total = [], [], 0
+    for start in range(0, len(first), chunk):
+        # The geometries are their own envelopes: the tree's box test is the whole test.
+        found = tree.query(queries[start : start + chunk])
+        total += found.shape[1]
+        _check_pairs(total, budget)
+        found_first.append(found[0] + start)
+        found_second.append(found[1])
+    if not found_first:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(found_first), np.concatenate(found_second)
 
 
-def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _check_pairs(count: int, budget: int) -> None:
+    if count > budget:
+        raise GeometryError(
+            f"more than {budget:,} (receiving face, caster triangle) pairs overlap as seen "
+            "from the light (shadowgeo.limits.MAX_SURFACE_PAIRS)"
+        )
+
+
+def _grid_pairs(
+    first: np.ndarray, second: np.ndarray, budget: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Every (i, j) with box ``first[i]`` overlapping box ``second[j]``, by a
     uniform grid with cells twice a typical box: each box is listed in the
     cells it covers, boxes sharing a cell are paired, and the pairs are checked
@@ -239,6 +274,9 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     owner_b, cell_b = owner_b[order], cell_b[order]
     begin = np.searchsorted(cell_b, cell_a, side="left")
     count = np.searchsorted(cell_b, cell_a, side="right") - begin
+    # A pair shares at most 64 cells (boxes covering more are "big").
+    candidates = int(count.sum()) + len(big_a) * len(second) + len(big_b) * len(first)
+    _check_pairs(candidates // 64, budget)
     i = np.repeat(owner_a, count)
     k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
     j = owner_b[np.repeat(begin, count) + k]
@@ -253,6 +291,7 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     )
     key = np.sort(i[overlap] * np.int64(len(second)) + j[overlap])
     key = key[np.append(True, key[1:] != key[:-1])[: len(key)]]
+    _check_pairs(len(key), budget)
     return key // len(second), key % len(second)
 
 

@@ -61,6 +61,10 @@ outline crossings      2,000,000       edge crossings among the 2-D loops one sh
                                        triangles, or an Extrusion whose spine folds
                                        over itself, is refused in a fraction of a
                                        second rather than united in minutes
+surface pairs          5,000,000       (receiving face, caster triangle) pairs that
+                                       overlap as seen from a light in
+                                       ``shadow_on_surface``; past it, an error
+                                       before the pairs fill memory
 =====================  ==============  =============================================
 
 There is no separate triangle budget: triangles come from the nodes above and
@@ -102,6 +106,9 @@ MAX_CURVE_SEGMENTS = 1 << 16
 # Edge crossings one 2-D union may have to resolve (about half a second of
 # Clipper2 on one core); estimated by polygons.crossings_estimate.
 MAX_UNION_CROSSINGS = 2_000_000
+# (receiving face, caster triangle) pairs whose images from a light overlap,
+# in shadow_on_surface: each pair is clipped, so their count is its work.
+MAX_SURFACE_PAIRS = 5_000_000
 # Faces that receive through shadow_on_surface in add_shadows (beyond the planar
 # receivers), per light; a bigger scene bakes planar shadows only, with a note.
 MAX_SURFACE_FACES = 20_000

@@ -272,3 +272,42 @@ def test_a_proto_body_of_only_is_elements_is_skipped_with_a_note(tmp_path):
     scene = sg.load(source)
     assert [shape.n_faces for shape in scene.shapes] == [12]  # the Box alone
     assert any("anyShape' skipped" in note and "IS" in note for note in scene.warnings)
+
+
+def brute_force_overlaps(first: np.ndarray, second: np.ndarray) -> set[tuple[int, int]]:
+    overlap = np.all(first[:, None, :2] <= second[None, :, 2:], axis=2) & np.all(
+        second[None, :, :2] <= first[:, None, 2:], axis=2
+    )
+    return set(zip(*np.nonzero(overlap), strict=True))
+
+
+@pytest.mark.parametrize(("n_first", "n_second"), [(300, 250), (40, 900)])
+def test_overlapping_boxes_finds_every_pair_within_the_budget(n_first, n_second):
+    # (300, 250) goes through the STRtree in chunks, (40, 900) through the grid.
+    from shadowgeo.lightframe import overlapping_boxes
+
+    rng = np.random.default_rng(n_first)
+
+    def boxes(count):
+        low = rng.uniform(0, 10, size=(count, 2))
+        return np.hstack([low, low + rng.uniform(0.1, 2, size=(count, 2))])
+
+    first, second = boxes(n_first), boxes(n_second)
+    i, j = overlapping_boxes(first, second)
+    expected = brute_force_overlaps(first, second)
+    assert set(zip(i.tolist(), j.tolist(), strict=True)) == expected
+    with pytest.raises(sg.GeometryError, match="MAX_SURFACE_PAIRS"):
+        overlapping_boxes(first, second, budget=len(expected) - 1)
+
+
+def test_a_soup_of_large_overlapping_triangles_stops_at_the_pair_budget():
+    # x3d mutant 6211 of seed 12: 6,666 large random triangles receiving
+    # each other's shadows, 4.4e7 pairs: shapely ran out of memory
+    # ("could not allocate numpy array"). 3,000 boxes over one another give
+    # 9e6 pairs, past the 5e6 budget, in bounded memory.
+    from shadowgeo.lightframe import overlapping_boxes
+
+    boxes = np.tile([0.0, 0.0, 1.0, 1.0], (3000, 1))
+    assert 3000 * 3000 > limits.MAX_SURFACE_PAIRS
+    with pytest.raises(sg.GeometryError, match="MAX_SURFACE_PAIRS"):
+        overlapping_boxes(boxes, boxes)
