@@ -311,3 +311,23 @@ def test_a_soup_of_large_overlapping_triangles_stops_at_the_pair_budget():
     assert 3000 * 3000 > limits.MAX_SURFACE_PAIRS
     with pytest.raises(sg.GeometryError, match="MAX_SURFACE_PAIRS"):
         overlapping_boxes(boxes, boxes)
+
+
+def test_usd_writer_refuses_a_vertex_past_float32_range(tmp_path):
+    # x3d mutant 8906 of seed 12: a point at 3.5e38 (inside the 1e75
+    # coordinate range) became inf in USD's float32 points and extent.
+    pytest.importorskip("pxr")
+    source = tmp_path / "far.x3d"
+    source.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<X3D profile="Interchange" version="3.3"><Scene>\n'
+        '<Shape DEF="far"><IndexedFaceSet coordIndex="0 1 2 -1">'
+        '<Coordinate point="0 0 0 1 0 0 0 3.5e38 0"/></IndexedFaceSet></Shape>\n'
+        "</Scene></X3D>\n"
+    )
+    assert np.isinf(np.float32(3.5e38))
+    scene = sg.load(source)
+    target = tmp_path / "far.usda"
+    with pytest.raises(sg.SceneError, match="float32"):
+        sg.save(scene, target)
+    assert list(tmp_path.iterdir()) == [source]
