@@ -331,3 +331,42 @@ def test_usd_writer_refuses_a_vertex_past_float32_range(tmp_path):
     with pytest.raises(sg.SceneError, match="float32"):
         sg.save(scene, target)
     assert list(tmp_path.iterdir()) == [source]
+
+
+def test_gltf_material_factors_are_clipped_to_their_range(tmp_path):
+    # glb mutant 685 of seed 12: a baseColorFactor of 1e155 went through as
+    # a colour and became inf in USD's float32 displayColor.
+    document = {
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "materials": [
+            {
+                "pbrMetallicRoughness": {"baseColorFactor": [1e155, -2, 0.5, 1]},
+                "emissiveFactor": [1e155, 0.25, 3],
+            }
+        ],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 3,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            }
+        ],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"byteLength": 36, "uri": "tri.bin"}],
+    }
+    import json
+
+    (tmp_path / "tri.bin").write_bytes(
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4").tobytes()
+    )
+    source = tmp_path / "tri.gltf"
+    source.write_text(json.dumps(document))
+    (shape,) = sg.load(source).shapes
+    assert shape.material.diffuse_color == (1.0, 0.0, 0.5)
+    assert shape.material.emissive_color == (0.0, 0.25, 1.0)
