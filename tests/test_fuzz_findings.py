@@ -369,4 +369,4 @@ def test_gltf_material_factors_are_clipped_to_their_range(tmp_path):
     source.write_text(json.dumps(document))
     (shape,) = sg.load(source).shapes
     assert shape.material.diffuse_color == (1.0, 0.0, 0.5)
-    assert shape.material.emissive_color == (0.0, 0.25, 1.0)
+    assert shape.material.emissive_color == (1.0, 0.25, 1.0)
