@@ -370,3 +370,20 @@ def test_gltf_material_factors_are_clipped_to_their_range(tmp_path):
     (shape,) = sg.load(source).shapes
     assert shape.material.diffuse_color == (1.0, 0.0, 0.5)
     assert shape.material.emissive_color == (1.0, 0.25, 1.0)
+
+
+def test_an_extrusion_section_that_repeats_a_point_gets_no_caps(tmp_path):
+    # x3dv mutant 685 of seed 12: a crossSection written 10,000 times over;
+    # triangulating that "cap" ran for minutes in one C call.
+    square = "1 1, 1 -1, -1 -1, -1 1, 1 1"
+    source = tmp_path / "twice.x3d"
+    source.write_text(
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<X3D profile="Interchange" version="3.3"><Scene>\n'
+        f'<Shape><Extrusion spine="0 0 0 0 1 0" crossSection="{square}, {square}"/></Shape>\n'
+        "</Scene></X3D>\n"
+    )
+    (shape,) = sg.load(source).shapes
+    section_points = 10
+    assert shape.n_faces == 2 * 1 * (section_points - 1)  # the sides alone, no caps
+    assert any("crossSection repeats a point" in note for note in sg.load(source).warnings)
