@@ -63,7 +63,8 @@ def _side(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> np.ndarray:
     cross = (one[..., 0] - origin[..., 0]) * (two[..., 1] - origin[..., 1]) - (
         one[..., 1] - origin[..., 1]
     ) * (two[..., 0] - origin[..., 0])
-    return np.sign(cross)
+    sign: np.ndarray = np.sign(cross)
+    return sign
 
 
 def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
