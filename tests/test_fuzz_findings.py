@@ -387,3 +387,41 @@ def test_an_extrusion_section_that_repeats_a_point_gets_no_caps(tmp_path):
     section_points = 10
     assert shape.n_faces == 2 * 1 * (section_points - 1)  # the sides alone, no caps
     assert any("crossSection repeats a point" in note for note in sg.load(source).warnings)
+
+
+def test_gltf_node_matrix_that_is_no_rigid_transform_is_a_scene_error(tmp_path):
+    # gltf mutant 8075 of seed 12: a node's matrix reordered (its last entry
+    # -1) tripped an assert inside trimesh's scene graph (AssertionError).
+    import json
+
+    (tmp_path / "tri.bin").write_bytes(
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype="<f4").tobytes()
+    )
+    shuffled = [  # node ObX of the mutant, as the fuzzer left it
+        0.9999999999999964, 0.0, 5.9116737227693505e-08, 5.911674072489603e-08,
+        0.0, -0.9999999999999964, 0.0, 0.0,
+        0.0, -5.9116737227693505e-08, 1.0, 5.911674072489603e-08,
+        5.9116737227693505e-08, 5.911674072489603e-08, 0.0, -0.9999999999999964,
+    ]  # fmt: skip
+    document = {
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "matrix": shuffled}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 3,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 1, 0],
+            }
+        ],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"byteLength": 36, "uri": "tri.bin"}],
+    }
+    source = tmp_path / "tri.gltf"
+    source.write_text(json.dumps(document))
+    with pytest.raises(sg.SceneError, match="not a rotation, scale and translation"):
+        sg.load(source)
