@@ -25,6 +25,9 @@ from typing import cast
 import numpy as np
 import shapely
 
+from .errors import GeometryError
+from .limits import MAX_SURFACE_PAIRS
+
 # The cube map around a point light: (axis, sign) of each side's central ray.
 _CUBE_SIDES = [(axis, sign) for axis in range(3) for sign in (1.0, -1.0)]
 
@@ -262,15 +265,29 @@ def _meets(boxes: np.ndarray, box: list[float]) -> np.ndarray:
     return meets
 
 
-def overlapping_boxes(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+# Pairs one STRtree query may return (64 MB of indices), so that a query
+# that would exceed the pair budget stops before filling memory.
+_QUERY_PAIRS = 4_000_000
+
+
+def overlapping_boxes(
+    first: np.ndarray, second: np.ndarray, budget: int = MAX_SURFACE_PAIRS
+) -> tuple[np.ndarray, np.ndarray]:
     """(i, j) index arrays of every box ``first[i]`` that overlaps ``second[j]``;
     boxes are (n, 4) ``(xmin, ymin, xmax, ymax)``.
 
     Only boxes that meet the other set's overall box take part (a terrain
     against the few triangles of one caster keeps the faces under it). Those
-    go through a uniform grid in numpy (:func:`_grid_pairs`), or through
-    shapely's STRtree where the grid would pair too many boxes that cover
-    many of its cells with everything.
+    go through a uniform grid in numpy (:func:`_grid_pairs`, whose candidates
+    are bounded by a few times the boxes), or through shapely's STRtree where
+    the grid would pair too many boxes that cover many of its cells with
+    everything, queried in chunks against ``budget``.
+
+    Raises
+    ------
+    GeometryError
+        More than ``budget`` overlapping pairs (a soup of large triangles
+        over one another: every pair would be clipped).
     """
     empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
     if len(first) == 0 or len(second) == 0:
@@ -281,10 +298,39 @@ def overlapping_boxes(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray
         return empty
     found = _grid_pairs(first[mine], second[theirs])
     if found is None:
-        tree = shapely.STRtree(shapely.box(*second[theirs].T))
-        # The geometries are their own envelopes: the tree's box test is the whole test.
-        found = tuple(tree.query(shapely.box(*first[mine].T)))
+        found = _tree_pairs(first[mine], second[theirs], budget)
+    if len(found[0]) > budget:
+        _check_pairs(len(found[0]), budget)
     return mine[found[0]], theirs[found[1]]
+
+
+def _tree_pairs(
+    first: np.ndarray, second: np.ndarray, budget: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Overlapping box pairs by shapely's STRtree, a chunk of queries at a
+    time so that too many pairs stop at the budget, not at memory."""
+    tree = shapely.STRtree(shapely.box(*second.T))
+    queries = shapely.box(*first.T)
+    chunk = max(1, _QUERY_PAIRS // max(len(second), 1))
+    found_first, found_second, total = [], [], 0
+    for start in range(0, len(first), chunk):
+        # The geometries are their own envelopes: the tree's box test is the whole test.
+        found = tree.query(queries[start : start + chunk])
+        total += found.shape[1]
+        _check_pairs(total, budget)
+        found_first.append(found[0] + start)
+        found_second.append(found[1])
+    if not found_first:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate(found_first), np.concatenate(found_second)
+
+
+def _check_pairs(count: int, budget: int) -> None:
+    if count > budget:
+        raise GeometryError(
+            f"more than {budget:,} (receiving face, caster triangle) pairs overlap as seen "
+            "from the light (shadowgeo.limits.MAX_SURFACE_PAIRS)"
+        )
 
 
 def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

@@ -55,11 +55,26 @@ sphere segments        2,048           segments around one tessellated Sphere
                                        (a finer chord is not met; the reader notes
                                        it)
 curve segments         65,536          segments of any other tessellated curve
+outline crossings      2,000,000       edge crossings among the 2-D loops one shadow
+                                       unites (estimated from fixed samples of edge
+                                       pairs and edges): a soup of overlapping
+                                       triangles, or an Extrusion whose spine folds
+                                       over itself, is refused in a fraction of a
+                                       second rather than united in minutes
+surface pairs          5,000,000       (receiving face, caster triangle) pairs that
+                                       overlap as seen from a light in
+                                       ``shadow_on_surface``; past it, an error
+                                       before the pairs fill memory
 =====================  ==============  =============================================
 
 There is no separate triangle budget: triangles come from the nodes above and
 cost linear memory. Duplicate and zero-area triangles cost nothing in the
-shadow's 2-D union (:func:`shadowgeo.project_shadow` drops them first).
+shadow's 2-D union (:func:`shadowgeo.project_shadow` drops them first). What
+the union costs grows with the crossings of its edges (Clipper2's sweep does
+work for each one, and more than linearly in practice), so that is what the
+outline budget counts: a ``GeometryError`` from the shadow computation, which
+:func:`shadowgeo.add_shadows` reports as a note naming the shape that does not
+cast.
 """
 
 from __future__ import annotations
@@ -88,6 +103,12 @@ MAX_INLINE_DEPTH = 16
 MAX_EXTRUSION_POINTS = 20_000_000
 MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
+# Edge crossings one 2-D union may have to resolve (about half a second of
+# Clipper2 on one core); estimated by polygons.crossings_estimate.
+MAX_UNION_CROSSINGS = 2_000_000
+# (receiving face, caster triangle) pairs whose images from a light overlap,
+# in shadow_on_surface: each pair is clipped, so their count is its work.
+MAX_SURFACE_PAIRS = 5_000_000
 # Faces that receive through shadow_on_surface in add_shadows (beyond the planar
 # receivers), per light; a bigger scene bakes planar shadows only, with a note.
 # At this size (benchmarks/bench_surface.py's terrain at 100,000 faces under a

@@ -14,6 +14,8 @@ from collections.abc import Callable
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
+from .errors import GeometryError
+from .limits import MAX_UNION_CROSSINGS
 from .plane import Plane
 
 # Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
@@ -52,11 +54,105 @@ def signed_areas(loops: list[np.ndarray]) -> np.ndarray:
     return out
 
 
+# Edge pairs sampled to estimate the crossings of a union, and the fewest
+# sampled crossings that may refuse one (fewer say too little to act on).
+_CROSSING_SAMPLES = 1 << 16
+_FEWEST_SAMPLED_CROSSINGS = 8
+# For unions too large for pair sampling to resolve the budget (crossings
+# among few of very many pairs, e.g. one union per receiving face side by
+# side): whole crossing counts of a few sampled edges, about this many edge
+# tests in all, refusing only when this many of those edges cross something.
+_EDGE_TESTS = 20_000_000
+_FEWEST_CROSSING_EDGES = 4
+
+
+def _side(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> np.ndarray:
+    """Sign of the turn origin -> one -> two (rows, or one row against many)."""
+    cross = (one[..., 0] - origin[..., 0]) * (two[..., 1] - origin[..., 1]) - (
+        one[..., 1] - origin[..., 1]
+    ) * (two[..., 0] - origin[..., 0])
+    sign: np.ndarray = np.sign(cross)
+    return sign
+
+
+def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
+    """(estimated edge crossings, sampled crossings) among the edges of the
+    (k, 2) ``loops``. Exact (0, 0) when there are too few pairs to pass
+    :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS`.
+
+    Two fixed pseudo-random samples: pairs of edges (the share that cross
+    properly, times the number of pairs), and, when that sample is too thin
+    to see the budget, a few edges tested against every edge (their mean
+    crossings, times half the edges; the count returned is then the number
+    of sampled edges that cross something).
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    >>> crossings_estimate([square, square + 0.5])
+    (0.0, 0)
+    """
+    lengths = np.array([len(loop) for loop in loops])
+    n_edges = int(lengths.sum())
+    pairs = n_edges * (n_edges - 1) / 2
+    if pairs <= MAX_UNION_CROSSINGS:
+        return 0.0, 0
+    start = np.concatenate(loops).astype(np.float64).reshape(-1, 2)
+    following = np.arange(1, n_edges + 1)
+    firsts = np.cumsum(lengths) - lengths
+    nonempty = lengths > 0
+    following[(firsts + lengths - 1)[nonempty]] = firsts[nonempty]  # each loop closes
+    end = start[following]
+    rng = np.random.default_rng(0)  # fixed: the same loops always get the same answer
+    first = rng.integers(n_edges, size=_CROSSING_SAMPLES)
+    second = rng.integers(n_edges, size=_CROSSING_SAMPLES)
+    a, b, c, d = start[first], end[first], start[second], end[second]
+    with np.errstate(over="ignore", invalid="ignore"):
+        crossing = (_side(a, b, c) * _side(a, b, d) < 0) & (_side(c, d, a) * _side(c, d, b) < 0)
+    sampled = int(np.count_nonzero(crossing))
+    estimate = sampled / _CROSSING_SAMPLES * pairs
+    resolvable = _FEWEST_SAMPLED_CROSSINGS / _CROSSING_SAMPLES * pairs
+    if sampled >= _FEWEST_SAMPLED_CROSSINGS or resolvable <= MAX_UNION_CROSSINGS:
+        return estimate, sampled
+    low, high = np.minimum(start, end), np.maximum(start, end)
+    counts = []
+    for edge in rng.integers(n_edges, size=max(16, _EDGE_TESTS // n_edges)):
+        near = np.flatnonzero(
+            (low[:, 0] <= high[edge, 0])
+            & (high[:, 0] >= low[edge, 0])
+            & (low[:, 1] <= high[edge, 1])
+            & (high[:, 1] >= low[edge, 1])
+        )  # only edges whose boxes meet this one's can cross it
+        p, q, c, d = start[edge], end[edge], start[near], end[near]
+        with np.errstate(over="ignore", invalid="ignore"):
+            hits = (_side(p, q, c) * _side(p, q, d) < 0) & (_side(c, d, p) * _side(c, d, q) < 0)
+        counts.append(int(np.count_nonzero(hits)))
+    crossing_edges = int(np.count_nonzero(counts))
+    return float(np.mean(counts)) * n_edges / 2, crossing_edges
+
+
 def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
     """The region of points whose winding number over ``loops`` passes ``rule``
-    (``"positive"``: > 0, ``"nonzero"``, ``"evenodd"``)."""
+    (``"positive"``: > 0, ``"nonzero"``, ``"evenodd"``).
+
+    Raises
+    ------
+    GeometryError
+        When the loops' edges cross each other more than
+        :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS` times (estimated by
+        :func:`crossings_estimate`): Clipper2's work grows with the crossings,
+        more than linearly, so such a union would take minutes.
+    """
     if not loops:
         return CrossSection()
+    estimate, sampled = crossings_estimate(loops)
+    if estimate > MAX_UNION_CROSSINGS and sampled >= _FEWEST_CROSSING_EDGES:
+        n_edges = sum(len(loop) for loop in loops)
+        raise GeometryError(
+            f"the shadow's outline ({len(loops)} loops, {n_edges} edges) has about "
+            f"{estimate:.2g} edge crossings, past the budget of {MAX_UNION_CROSSINGS:,} "
+            "(shadowgeo.limits.MAX_UNION_CROSSINGS)"
+        )
     fill_rule = {
         "positive": FillRule.Positive,
         "nonzero": FillRule.NonZero,

@@ -988,23 +988,71 @@ def _pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
 def _clipped_loops(
     homogeneous: np.ndarray, faces: np.ndarray, planes: np.ndarray, H: np.ndarray
 ) -> list[np.ndarray]:
-    """Each face clipped to ``planes`` and projected, turned counter-clockwise."""
+    """Each face clipped to ``planes`` and projected, turned counter-clockwise.
+
+    All faces are clipped at once (:func:`_clip_convex_many`): a mesh whose
+    faces mostly leave a small receiver would otherwise pay a Python loop per
+    face, for every receiver."""
+    corners, counts = _clip_convex_many(homogeneous[faces], planes)
+    kept = counts >= 3
+    corners, counts = corners[kept], counts[kept]
+    if not len(counts):
+        return []
+    width = corners.shape[1]
+    used = np.arange(width)[None, :] < counts[:, None]
+    image = corners @ H.T
+    if np.any(image[:, :, 2][used] <= 0):
+        raise GeometryError("the light touches the caster (a clipped point projects to infinity)")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        points = np.where(used[:, :, None], image[:, :, :2] / image[:, :, 2:3], 0.0)
+    following = np.where(np.arange(1, width + 1)[None, :] < counts[:, None], 1, 1 - counts[:, None])
+    following = following + np.arange(width)[None, :]
+    after = np.take_along_axis(points, following[:, :, None], axis=1)
+    cross = points[:, :, 0] * after[:, :, 1] - after[:, :, 0] * points[:, :, 1]
+    areas = 0.5 * np.where(used, cross, 0.0).sum(axis=1)
     loops = []
-    for face in faces:
-        polygon = _clip_convex(homogeneous[face], planes)
-        if len(polygon) < 3:
-            continue
-        image = polygon @ H.T
-        if np.any(image[:, 2] <= 0):
-            raise GeometryError(
-                "the light touches the caster (a clipped point projects to infinity)"
-            )
-        loop = image[:, :2] / image[:, 2:3]
-        area = poly.signed_areas([loop])[0]
+    for loop, count, area in zip(points, counts, areas, strict=True):
         if area == 0:
             continue
+        loop = loop[:count]
         loops.append(loop if area > 0 else loop[::-1])
     return loops
+
+
+def _clip_convex_many(polygons: np.ndarray, planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_clip_convex` of many convex polygons (n, k, d) at once: the
+    clipped corners (n, m, d), each row's first ``counts[i]`` valid, and
+    ``counts`` (n,). The same arithmetic as the one-by-one version."""
+    corners = np.asarray(polygons, dtype=np.float64)
+    counts = np.full(len(corners), corners.shape[1], dtype=np.int64)
+    for plane in planes:
+        width = corners.shape[1]
+        if not len(corners) or width == 0:
+            break
+        slots = np.arange(width)[None, :]
+        used = slots < counts[:, None]
+        side = corners @ plane
+        inside = (side >= 0) & used
+        n_inside = inside.sum(axis=1)
+        if np.all(n_inside == counts):
+            continue
+        following = np.where(slots + 1 < counts[:, None], slots + 1, 0)
+        side_next = np.take_along_axis(side, following, axis=1)
+        inside_next = np.take_along_axis(inside, following, axis=1)
+        crossing = used & (inside != inside_next)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(crossing, side / (side - side_next), 0.0)
+        after = np.take_along_axis(corners, following[:, :, None], axis=1)
+        between = corners + t[:, :, None] * (after - corners)
+        # Slot 2i holds corner i when inside, slot 2i + 1 the crossing after it.
+        candidates = np.stack([corners, between], axis=2).reshape(len(corners), 2 * width, -1)
+        keep = np.stack([inside, crossing], axis=2).reshape(len(corners), 2 * width)
+        keep[n_inside == 0] = False  # wholly outside: nothing left
+        order = np.argsort(~keep, axis=1, kind="stable")
+        counts = keep.sum(axis=1)
+        new_width = int(counts.max()) if len(counts) else 0
+        corners = np.take_along_axis(candidates, order[:, :new_width, None], axis=1)
+    return corners, counts
 
 
 def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:

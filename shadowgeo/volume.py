@@ -77,8 +77,11 @@ def shadow_volume(
         (``"sweep"``, directional), the face counts of the light cap and the
         sides (``"n_cap_faces"``, ``"n_side_faces"``), and whether the caster
         was treated as two-sided (``"two_sided"``). Empty (no faces) when no
-        face casts: an empty caster, a flat one edge-on to the light, or one
-        whose faces have no height at ``tolerance.length`` (degenerate).
+        face casts: an empty caster, a flat one edge-on to the light, one
+        whose faces have no height at ``tolerance.length`` (degenerate), or
+        one a sun grazes so closely that the sweep moves its faces off their
+        own planes by no more than ``tolerance.length`` (far from the origin,
+        float64's spacing there): the far cap would round onto the near one.
 
         Where the volume ends. Point and spot lights: it holds every
         shadowed point within a distance D of the light, and its far vertices
@@ -152,6 +155,13 @@ def shadow_volume(
         scale = np.where(doubled > 0, doubled, 1.0)
         lengths = doubled * np.linalg.norm(caster.face_normals / scale[:, None], axis=1)
         edge_on |= np.abs(facing) <= tolerance.angle * lengths * np.linalg.norm(light.direction)
+        # ... and so does one that the sweep moves off its own plane by no more
+        # than the length tolerance (far from the origin, float64's spacing
+        # there): the far cap would round onto the near one, a zero volume.
+        sweep = tolerance.bound_length if extent is None else extent
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            cosine = np.abs(facing) / (lengths * np.linalg.norm(light.direction))
+        edge_on |= cosine * sweep <= tolerance.length
     facing = np.where(edge_on, 0.0, facing)
     two_sided = not caster.is_closed
     if two_sided:

@@ -13,15 +13,16 @@ writers) at three levels:
   negative indices, fields emptied, deep nesting, DEF/USE cycles.
 
 Each mutant runs through ``cli.main.main(argv)`` in a forked worker with a time
-budget (an alarm, then a kill) and an address-space limit, so a hang or a
-blow-up is recorded, not fatal. A run fails when it raises anything but
-``SystemExit`` 1/2, returns a code outside {0, 1, 2}, leaves an output (or a
-temporary file) after failing, writes no output after succeeding, modifies its
-input, writes NaN or inf, or exceeds the time or memory budget; with ``--sun``
-and ``--plane`` the shadow area must also match the textbook one (shapely union
-of the projected triangles). Geometry mode (``--geometry N``) sends random
-casters, planes and lights through ``project_shadow``, ``silhouette`` and
-``shadow_volume``.
+budget (a CPU-time alarm, so that other work on a shared machine does not
+count; then a kill by wall clock at four times the budget) and an
+address-space limit, so a hang or a blow-up is recorded, not fatal. A run
+fails when it raises anything but ``SystemExit`` 1/2, returns a code outside
+{0, 1, 2}, leaves an output (or a temporary file) after failing, writes no
+output after succeeding, modifies its input, writes NaN or inf, or exceeds
+the time or memory budget; with ``--sun`` and ``--plane`` the shadow area
+must also match the textbook one (shapely union of the projected
+triangles). Geometry mode (``--geometry N``) sends random casters, planes
+and lights through ``project_shadow``, ``silhouette`` and ``shadow_volume``.
 
 Failures are grouped by signature (exception type and innermost shadowgeo
 frame, or the check that failed), each group's first input is shrunk by delta
@@ -648,7 +649,7 @@ def mutate_glb(data: bytes, rng: random.Random):
 
 
 class BudgetExceeded(BaseException):
-    """Raised by the alarm in a worker when a run exceeds its time budget."""
+    """Raised by the alarm in a worker when a run exceeds its CPU-time budget."""
 
 
 def _alarm(signum, frame):
@@ -679,7 +680,7 @@ def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
     os.dup2(devnull, 2)
-    signal.signal(signal.SIGALRM, _alarm)
+    signal.signal(signal.SIGPROF, _alarm)
     scratch = Path(tempfile.mkdtemp(prefix="shadowgeo-fuzz-"))
     try:
         while True:
@@ -689,8 +690,8 @@ def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
             if memory_bytes:  # the budget is per run, on top of what the process holds now
                 limit = _vm_size() + memory_bytes
                 resource.setrlimit(resource.RLIMIT_AS, (limit, resource.RLIM_INFINITY))
-            started = time.perf_counter()
-            signal.setitimer(signal.ITIMER_REAL, time_budget)
+            started, cpu_started = time.perf_counter(), time.process_time()
+            signal.setitimer(signal.ITIMER_PROF, time_budget)  # CPU seconds
             try:
                 if task["kind"] == "geometry":
                     result = run_geometry(task["case"])
@@ -705,12 +706,22 @@ def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
             except MemoryError as error:
                 result = failure(signature_of(error), traceback.format_exc(limit=-8))
             finally:
-                signal.setitimer(signal.ITIMER_REAL, 0)
+                signal.setitimer(signal.ITIMER_PROF, 0)
             result["seconds"] = time.perf_counter() - started
+            result["cpu_seconds"] = time.process_time() - cpu_started
             shutil.rmtree(scratch / "run", ignore_errors=True)
             connection.send(result)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User and system CPU seconds of process ``pid`` so far (0 when unknown)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def _vm_size() -> int:
@@ -1204,10 +1215,57 @@ def check_volume(vertices, faces, light):
     largest = float(np.abs(centred).max())
     if largest > 0:
         normalised = trimesh.Trimesh(centred / largest, volume.faces, process=False)
-        if abs(normalised.volume) <= 1e-12:
-            return "flat (zero volume)", f"normalised volume {float(normalised.volume)!r}"
+        if isinstance(light, shadowgeo.DirectionalLight):
+            problem = thinner_than_a_prism(vertices, faces, light, volume)
+            if problem:
+                return "flat (zero volume)", problem
+        else:
+            # A volume float64 cannot tell from zero at its own scale.
+            resolution = 1e3 * np.finfo(np.float64).eps * float(normalised.area)
+            if abs(normalised.volume) <= resolution:
+                return "flat (zero volume)", (
+                    f"normalised volume {float(normalised.volume)!r} <= {resolution!r}"
+                )
         if not normalised.volume > 0:
             return "inside-out", f"normalised volume {float(normalised.volume)!r}"
+    return None
+
+
+def thinner_than_a_prism(vertices, faces, light, volume) -> str | None:
+    """A sun's shadow volume holds the prism that each casting face sweeps
+    (its area times the cosine with the light times the sweep length): a
+    volume smaller than half the largest such prism is flat where it should
+    not be. Faces within ten times the library's angle or length tolerance of
+    edge-on are left out (the library may rightly drop them), and so is the
+    check when no face remains. Computed in the caster's frame scaled to 1."""
+    sweep = volume.metadata.get("shadowgeo", {}).get("sweep")
+    triangles = np.asarray(vertices, dtype=np.float64)[np.asarray(faces).reshape(-1, 3)]
+    if sweep is None or not len(triangles):
+        return None
+    centre = 0.5 * (triangles.reshape(-1, 3).min(axis=0) + triangles.reshape(-1, 3).max(axis=0))
+    size = float(np.abs(triangles - centre).max())
+    if not size > 0:
+        return None
+    tolerance = shadowgeo.Tolerance.for_points(triangles.reshape(-1, 3))
+    unit = (triangles - centre) / size
+    doubled = np.cross(unit[:, 1] - unit[:, 0], unit[:, 2] - unit[:, 0])
+    longest = np.abs(unit - unit[:, [1, 2, 0]]).max(axis=(1, 2))
+    direction = np.asarray(light.direction, dtype=np.float64)
+    direction = direction / np.linalg.norm(direction)
+    norms = np.linalg.norm(doubled, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cosine = np.abs(doubled @ direction) / norms
+    casting = (np.abs(doubled).max(axis=1) > 10 * tolerance.length / size * longest) & (
+        cosine > 10 * tolerance.angle
+    )
+    if not casting.any():
+        return None
+    prism = float((0.5 * norms * cosine)[casting].max()) * float(sweep) / size
+    mesh = trimesh.Trimesh(
+        (np.asarray(volume.vertices) - centre) / size, volume.faces, process=False
+    )
+    if abs(float(mesh.volume)) < 0.5 * prism:
+        return f"volume {float(mesh.volume)!r} < half the largest face prism {prism!r} (scaled)"
     return None
 
 
@@ -1243,6 +1301,7 @@ class Worker:
     connection: object
     task: dict | None = None
     started: float = 0.0
+    cpu_started: float = 0.0
     runs: int = 0
 
 
@@ -1286,14 +1345,18 @@ class Pool:
                         exhausted = True
                         break
                     worker.task, worker.started = task, time.monotonic()
+                    worker.cpu_started = _cpu_seconds(worker.process.pid)
                     worker.connection.send(task)
             busy = [w for w in self.workers if w.task is not None]
             if not busy:
                 return
-            hard = self.time_budget * 1.5 + 10
-            now = time.monotonic()
-            timeout = max(0.05, min(w.started + hard - now for w in busy))
-            ready = wait([w.connection for w in busy], timeout)
+            # The worker's own alarm counts CPU seconds; past 1.5 times the
+            # budget in CPU (stuck in C code), or ten minutes of wall clock
+            # (blocked, using no CPU), it is killed. Wall clock alone would
+            # kill runs that a busy shared machine merely slowed down.
+            hard_cpu = self.time_budget * 1.5 + 10
+            hard_wall = max(self.time_budget * 30, 600.0)
+            ready = wait([w.connection for w in busy], 1.0)
             for worker in busy:
                 task = worker.task
                 if worker.connection in ready:
@@ -1314,7 +1377,10 @@ class Pool:
                     if worker.runs >= self.max_runs or not result["ok"]:
                         self._replace(worker)  # a fresh process after any failure
                     yield task, result
-                elif time.monotonic() - worker.started > hard:
+                elif (
+                    _cpu_seconds(worker.process.pid) - worker.cpu_started > hard_cpu
+                    or time.monotonic() - worker.started > hard_wall
+                ):
                     result = failure("timeout (hard kill, no Python frame)", "killed")
                     result["seconds"] = time.monotonic() - worker.started
                     worker.task = None
@@ -1428,10 +1494,11 @@ def shrink_case(pool: Pool, case: dict, signature: str, tries: int) -> dict:
 # ---------------------------------------------------------------------------------------------
 
 
-def converter_tasks(seeds, encodings, count: int, seed: int):
-    """``count`` mutants per encoding, interleaved."""
+def converter_tasks(seeds, encodings, count: int, seed: int, first: int = 0):
+    """``count`` mutants per encoding, interleaved, from index ``first`` (mutant
+    ``i`` is the same whatever chunk it is run in)."""
     plans = [e for e in encodings if seeds.get(e)]
-    for index in range(count):
+    for index in range(first, first + count):
         for encoding in plans:
             yield converter_task(seeds, encoding, index, seed)
 
@@ -1495,10 +1562,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--inputs", type=int, default=200, help="mutants per encoding")
     parser.add_argument("--geometry", type=int, default=0, help="random geometry cases")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--first-index", type=int, default=0, help="index of the first mutant (to run in chunks)"
+    )
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--encodings", default=",".join(ENCODINGS))
     parser.add_argument("--jobs", type=int, default=2)
-    parser.add_argument("--time-budget", type=float, default=20.0, help="seconds per input")
+    parser.add_argument("--time-budget", type=float, default=20.0, help="CPU seconds per input")
     parser.add_argument("--memory-budget", type=float, default=1.5, help="GiB per worker")
     parser.add_argument("--shrink-tries", type=int, default=300)
     parser.add_argument("--max-seed-bytes", type=int, default=64 << 10)
@@ -1620,7 +1690,7 @@ def campaign(args, encodings, seeds, pool: Pool) -> int:
     )
     for task, result in pool.run(until_deadline(cases)):
         record(task, result)
-    mutants = converter_tasks(seeds, encodings, args.inputs, args.seed)
+    mutants = converter_tasks(seeds, encodings, args.inputs, args.seed, args.first_index)
     for task, result in pool.run(until_deadline(mutants)):
         record(task, result)
     log.close()

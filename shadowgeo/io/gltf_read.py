@@ -183,15 +183,23 @@ def _untextured(material: Any) -> Any:
     return plain
 
 
+def _unit(value: Any, default: float) -> float:
+    """A glTF factor clipped to its range [0, 1]; ``default`` when not finite
+    (JSON's 1e400 reads as inf): writers store colours as float32."""
+    number = float(value)
+    return min(max(number, 0.0), 1.0) if math.isfinite(number) else default
+
+
 def _material_from_gltf(entry: dict[str, Any]) -> tuple[Material, bool]:
     """(Material, solid) from a glTF material object."""
     pbr = entry.get("pbrMetallicRoughness") or {}
     red, green, blue, alpha = (list(pbr.get("baseColorFactor", [1, 1, 1, 1])) + [1.0] * 4)[:4]
-    alpha = float(alpha) if entry.get("alphaMode", "OPAQUE") == "BLEND" else 1.0
+    alpha = _unit(alpha, 1.0) if entry.get("alphaMode", "OPAQUE") == "BLEND" else 1.0
+    emissive = (list(entry.get("emissiveFactor") or [0, 0, 0]) + [0.0] * 3)[:3]
     material = Material(
-        diffuse_color=(float(red), float(green), float(blue)),
-        emissive_color=float_triple((entry.get("emissiveFactor") or [0, 0, 0])[:3]),
-        shininess=1.0 - float(pbr.get("roughnessFactor", 1.0)),
+        diffuse_color=float_triple(_unit(c, 1.0) for c in (red, green, blue)),
+        emissive_color=float_triple(_unit(c, 0.0) for c in emissive),
+        shininess=1.0 - _unit(pbr.get("roughnessFactor", 1.0), 1.0),
         transparency=1.0 - alpha,
         name=entry.get("name"),
     )

@@ -76,7 +76,13 @@ def triangle_meshes(
     (frames of ``loaded``'s graph that hold geometry), skipping points and
     lines with a warning."""
     for frame in frames:
-        transform, geometry_name = loaded.graph[frame]
+        try:
+            transform, geometry_name = loaded.graph[frame]
+        except AssertionError:  # trimesh asserts that a node matrix is rigid up to scale
+            raise SceneError(
+                f"node {frame!r}: its matrix is not a rotation, scale and translation",
+                path=str(path),
+            ) from None
         geometry = loaded.geometry[geometry_name]
         if not isinstance(geometry, trimesh.Trimesh):
             warnings.append(f"{path.name}: skipped {frame!r}: {type(geometry).__name__}")

@@ -105,11 +105,18 @@ class _Writer:
         if not np.all(np.isfinite(vertices)) or not np.all(np.isfinite(shape.transform)):
             raise SceneError("non-finite vertex or transform", node=f"shape {shape.name!r}")
         check_face_indices(shape)
+        with np.errstate(over="ignore"):
+            single = vertices.astype(np.float32)
+        if not np.all(np.isfinite(single)):  # a float64 past ~3.4e38 becomes inf
+            raise SceneError(
+                "vertex past float32's range (about 3.4e38), which USD points hold",
+                node=f"shape {shape.name!r}",
+            )
         mesh = UsdGeom.Mesh.Define(self.stage, path)
         prim = mesh.GetPrim()
         if shape.name:
             prim.SetDisplayName(usd_text(shape.name))
-        points = Vt.Vec3fArray.FromNumpy(vertices.astype(np.float32))
+        points = Vt.Vec3fArray.FromNumpy(single)
         mesh.CreatePointsAttr(points)
         mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, np.int32)))
         indices = np.ascontiguousarray(faces.reshape(-1), dtype=np.int32)

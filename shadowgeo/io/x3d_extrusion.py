@@ -143,7 +143,13 @@ def extrusion(context: Context, element: Element) -> tuple[np.ndarray, np.ndarra
     faces = [np.column_stack([a, a + 1, a + m + 1]), np.column_stack([a, a + m + 1, a + m])]
     closed_spine = _is_closed(spine)
     ring = np.arange(m - 1 if np.allclose(section[0], section[-1]) else m)
-    if len(ring) >= 3 and not closed_spine:
+    repeated = len(np.unique(section[ring], axis=0)) < len(ring)
+    if repeated and len(ring) >= 3 and not closed_spine:
+        # A section that visits a point twice is no simple polygon: its cap has
+        # no meaning, and triangulating it can take minutes (a section written
+        # 10,000 times over).
+        context.warn(element, "crossSection repeats a point: not a simple polygon, no caps")
+    elif len(ring) >= 3 and not closed_spine:
         if context.field(element, "convex"):
             cap = np.column_stack([np.zeros(len(ring) - 2, int), ring[1:-1], ring[2:]])
         else:

@@ -62,7 +62,10 @@ class Prototypes:
         # names first: the nodes IS brings in keep the names of the scope they come from
         self._private_names(context, copied)
         _connect(context, copied, values, node_values)
-        first = next(node for node in copied if local_name(node))
+        first = next((node for node in copied if local_name(node)), None)
+        if first is None:  # the body held only IS elements, which connecting removes
+            why = "its ProtoBody has no node once its IS connections are made"
+            context.warn(instance, f"ProtoInstance name='{name}' skipped: {why}")
         self.copies[instance] = first
         return first
 
