@@ -14,7 +14,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import settings
 from needs import REQUIRE_ALL, absent, need
+
+# Property tests draw the same examples on every run and machine (a failure in
+# CI is one anyone can reproduce), and keep no example database between runs.
+settings.register_profile("shadowgeo", derandomize=True, database=None)
+settings.load_profile("shadowgeo")
 
 ROOT = Path(__file__).resolve().parents[1]
 X3D_SCHEMA = ROOT / "tests" / "data" / "x3d-schema" / "x3d-4.0.xsd.gz"

@@ -507,6 +507,7 @@ def caster_and_light(draw):
     damage = draw(st.sampled_from(["none", "none", "holes", "flips"]))
     if damage == "holes":
         keep = rng.random(len(mesh.faces)) > rng.uniform(0.02, 0.5)
+        keep[rng.integers(len(keep))] = True  # a small hull could lose every face
         mesh = trimesh.Trimesh(mesh.vertices, mesh.faces[keep], process=False)
     elif damage == "flips":
         faces = mesh.faces.copy()
