@@ -89,3 +89,20 @@ def test_closed_casters_keep_their_faces_on_the_plane_and_open_ones_lose_them():
     assert keep[first].all()  # the closed cube, bottom included
     assert on_ground[~first].any() and not keep[~first & on_ground].any()
     assert keep[~first & ~on_ground].all()
+
+
+def test_something_in_front_of_a_patch_is_found_from_boxes_and_vertices():
+    from shadowgeo.scene.receivers import _anything_in_front  # noqa: PLC2701
+
+    ground = sg.Plane([0, 1, 0], 0)
+    floor = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5]], [[0, 2, 1]])
+    # A triangle whose box reaches above y = 0 while every vertex of it is at
+    # or below the plane would fool a box-only test: here none reaches up.
+    slanted = sg.Shape([[0, 0, 0], [1, -1, 0], [1, 0, 1]], [[0, 1, 2]])
+    above = sg.Shape([[0, 1, 0], [1, 1, 0], [1, 2, 1]], [[0, 1, 2]])
+    below = sg.Shape([[0, -2, 0], [1, -2, 0], [1, -3, 1]], [[0, 1, 2]])
+    tolerance = sg.Tolerance.for_points([[-5, -3, -5], [5, 2, 5]])
+    assert not _anything_in_front(ground, CasterSet([floor, slanted]), tolerance, False)
+    assert _anything_in_front(ground, CasterSet([floor, slanted, above]), tolerance, False)
+    assert not _anything_in_front(ground, CasterSet([floor, below]), tolerance, False)
+    assert _anything_in_front(ground, CasterSet([floor, below]), tolerance, True)

@@ -252,6 +252,42 @@ def named(
     return result
 
 
+def _anything_in_front(
+    plane: Plane, stacked: CasterSet, tolerance: Tolerance, two_sided: bool
+) -> bool:
+    """Is any vertex of the scene farther than the coplanar length in front of
+    ``plane`` (either side when ``two_sided``)? Decided from the shapes'
+    bounding boxes where they settle it (a box wholly in front, or none
+    reaching out), so that a scene of many shapes costs a pass over the boxes
+    per patch, not over every vertex."""
+    limit = tolerance.coplanar_length
+    corners = np.stack(
+        [
+            np.column_stack([xs[:, 0], ys[:, 1], zs[:, 2]])
+            for xs in (stacked.low, stacked.high)
+            for ys in (stacked.low, stacked.high)
+            for zs in (stacked.low, stacked.high)
+        ],
+        axis=1,
+    )  # (k, 8, 3)
+    height = plane.signed_distance(corners.reshape(-1, 3)).reshape(-1, 8)
+    sides = [height] if not two_sided else [height, -height]
+    for side in sides:
+        if np.any(side.min(axis=1) > limit):
+            return True  # a whole box, so every vertex in it, is in front
+    reaching = np.zeros(len(height), dtype=bool)
+    for side in sides:
+        reaching |= side.max(axis=1) > limit
+    for index in np.flatnonzero(reaching):
+        vertices = stacked.casters[int(index)].vertices
+        distance = plane.signed_distance(vertices)
+        if two_sided:
+            distance = np.abs(distance)
+        if np.any(distance > limit):
+            return True
+    return False
+
+
 def found(
     scene: Scene,
     geometry: list[Shape],
@@ -280,10 +316,7 @@ def found(
             size = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
             if size < SIZE_FRACTION * scene_size:
                 continue
-            height = fitted.signed_distance(everything)
-            if not shape.solid:
-                height = np.abs(height)
-            if np.any(height > tolerance.coplanar_length):
+            if _anything_in_front(fitted, stacked, tolerance, two_sided=not shape.solid):
                 candidates.append((shape, world_vertices, fitted, member, area))
     largest = max((area for *_, area in candidates), default=0.0)
     counts: dict[int, int] = {}
