@@ -15,10 +15,10 @@ import time
 from pathlib import Path
 
 import shadowgeo
-from shadowgeo.batch import ConvertOptions, Outcome, convert_files, scene_suffix
+from shadowgeo.batch import Outcome, convert_files, scene_suffix
 from shadowgeo.io import WRITERS
 
-from .convert import ProgressBar
+from .convert import ProgressBar, options_of
 
 
 def jobs_for(
@@ -65,14 +65,7 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
         return 1
     if skipped:
         print(f"note: skipped {skipped} file(s) no reader takes", file=sys.stderr)
-    options = ConvertOptions(
-        method=args.method,
-        lights=tuple(args.light) if args.light else None,
-        receivers=tuple(args.receiver) if args.receiver else None,
-        plane=args.plane,
-        tolerance=args.tolerance,
-        sun=args.sun,
-    )
+    options = options_of(args)
     scheduler = None if args.serial else (args.scheduler or "local")
     where = (
         "in this process"

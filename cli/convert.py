@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 
 import shadowgeo
+from shadowgeo.batch import ConvertOptions, shadowed
 
 EPILOG = """\
 examples:
@@ -208,8 +209,16 @@ class ProgressBar:
             self.stream.flush()
 
 
-def sun_light(light: shadowgeo.DirectionalLight) -> shadowgeo.SceneLight:
-    return shadowgeo.SceneLight(light, name="sun", shadows=True)
+def options_of(args: argparse.Namespace) -> ConvertOptions:
+    """What the command line asks of every file converted."""
+    return ConvertOptions(
+        method=args.method,
+        lights=tuple(args.light) if args.light else None,
+        receivers=tuple(args.receiver) if args.receiver else None,
+        plane=args.plane,
+        tolerance=args.tolerance,
+        sun=args.sun,
+    )
 
 
 # Notes of the reader printed at most (shadowgeo info lists them all).
@@ -263,27 +272,14 @@ def run(args) -> int:
             "OUT is the input file; it is never overwritten", path=str(target)
         )
     shadowgeo.io.check_writable(target)  # before the long work
-    # The chord only matters for X3D's curved primitives; other readers take no options.
-    reader = shadowgeo.io.READERS.get(source.suffix.lower())
-    curved = args.tolerance is not None and reader == "x3d_read"  # any X3D encoding
-    scene = shadowgeo.load(source, **({"chord": args.tolerance} if curved else {}))
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar(f"shadows ({args.method})") if show else None
-    known = len(scene.warnings)
     try:
-        result = shadowgeo.add_shadows(
-            scene,
-            method=args.method,
-            lights=args.light,
-            receivers=args.receiver,
-            plane=args.plane,
-            tolerance=args.tolerance,
-            progress=bar,
-            extra_lights=[] if args.sun is None else [sun_light(args.sun)],
-        )
+        scene, result = shadowed(source, options_of(args), progress=bar)
     finally:
         if bar is not None:
             bar.close()
+    known = len(scene.warnings)
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         shadowgeo.save(result, target)

@@ -23,8 +23,8 @@ from .errors import GeometryError, SceneError
 from .io import READERS, load, save
 from .lights import DirectionalLight
 from .plane import Plane
-from .scene import SceneLight
-from .scene.shadows import add_shadows
+from .scene import Scene, SceneLight
+from .scene.shadows import Progress, add_shadows
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,30 @@ def scene_suffix(path: Path) -> str | None:
     return max(matches, key=len) if matches else None
 
 
+def shadowed(
+    source: Path, options: ConvertOptions, progress: Progress | None = None
+) -> tuple[Scene, Scene]:
+    """The scene read from ``source`` and the same with the shadows
+    ``options`` ask for (see :func:`add_shadows`; ``progress`` is passed on)."""
+    # the chord only matters for X3D's curved primitives; other readers take no options
+    curved = options.tolerance is not None and READERS.get(scene_suffix(source) or "") == (
+        "x3d_read"
+    )
+    scene = load(source, **({"chord": options.tolerance} if curved else {}))
+    extra = [] if options.sun is None else [SceneLight(options.sun, name="sun", shadows=True)]
+    result = add_shadows(
+        scene,
+        method=options.method,
+        lights=options.lights,
+        receivers=options.receivers,
+        plane=options.plane,
+        tolerance=options.tolerance,
+        progress=progress,
+        extra_lights=extra,
+    )
+    return scene, result
+
+
 def convert_file(source: Path, target: Path, options: ConvertOptions) -> Outcome:
     """Read ``source``, add its shadows, write ``target`` atomically.
 
@@ -77,22 +101,8 @@ def convert_file(source: Path, target: Path, options: ConvertOptions) -> Outcome
     try:
         if target.exists() and source.exists() and os.path.samefile(source, target):
             raise SceneError("OUT is the input file; it is never overwritten", path=str(target))
-        # the chord only matters for X3D's curved primitives; other readers take no options
-        curved = options.tolerance is not None and READERS.get(scene_suffix(source) or "") == (
-            "x3d_read"
-        )
-        scene = load(source, **({"chord": options.tolerance} if curved else {}))
+        scene, result = shadowed(source, options)
         known = len(scene.warnings)
-        extra = [] if options.sun is None else [SceneLight(options.sun, name="sun", shadows=True)]
-        result = add_shadows(
-            scene,
-            method=options.method,
-            lights=options.lights,
-            receivers=options.receivers,
-            plane=options.plane,
-            tolerance=options.tolerance,
-            extra_lights=extra,
-        )
         target.parent.mkdir(parents=True, exist_ok=True)
         save(result, target)
     except (SceneError, GeometryError) as error:

@@ -39,7 +39,6 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import check_coordinates, check_light
 from .plane import Plane
-from .seams import unique_integers
 from .silhouette import (
     boundary_loops,
     check_light_outside,
@@ -48,7 +47,7 @@ from .silhouette import (
     vertex_components,
 )
 from .tolerance import Tolerance
-from .topology import Caster, MeshLike, as_caster, empty_mesh
+from .topology import Caster, MeshLike, as_caster, empty_mesh, unique_integers
 
 if TYPE_CHECKING:
     import shapely

@@ -18,12 +18,11 @@ The regions are then triangulated with those shared points, face by face.
 
 from __future__ import annotations
 
-from typing import Literal, overload
-
 import numpy as np
 from manifold3d import triangulate
 
 from .polygons import MAX_COORDINATE
+from .topology import unique_integers
 
 # Loops of many regions at once: (P, 2) points, loop after loop; (L,) the
 # number of points of each loop; (L,) the region of each loop.
@@ -356,32 +355,3 @@ def _corners_2d(
         ],
         axis=2,
     )
-
-
-@overload
-def unique_integers(values: np.ndarray, return_inverse: Literal[False] = False) -> np.ndarray: ...
-
-
-@overload
-def unique_integers(
-    values: np.ndarray, return_inverse: Literal[True]
-) -> tuple[np.ndarray, np.ndarray]: ...
-
-
-def unique_integers(
-    values: np.ndarray, return_inverse: bool = False
-) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-    """``np.unique`` of a 1-D integer array by one sort (numpy's hash-based
-    unique is many times slower on large arrays)."""
-    values = np.asarray(values).reshape(-1)
-    if not return_inverse:
-        ordered = np.sort(values)
-        return ordered[np.append(True, ordered[1:] != ordered[:-1])] if len(ordered) else ordered
-    order = np.argsort(values, kind="stable")
-    ordered = values[order]
-    first = np.ones(len(ordered), dtype=bool)
-    first[1:] = ordered[1:] != ordered[:-1]
-    unique = ordered[first]
-    inverse = np.empty(len(values), dtype=np.int64)
-    inverse[order] = np.cumsum(first) - 1
-    return unique, inverse

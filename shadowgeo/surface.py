@@ -60,11 +60,11 @@ from .errors import GeometryError
 from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .outline import Outline, make_outline
-from .seams import Loops, loops_of, stitch, unique_integers
+from .seams import Loops, loops_of, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
-from .topology import Caster, MeshLike, as_caster
+from .topology import Caster, MeshLike, as_caster, unique_integers
 
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000

@@ -24,7 +24,7 @@ from ..lights import Light, SpotLight, is_positional
 from ..plane import Plane
 from ..tolerance import Tolerance
 from ..topology import Caster
-from .model import Shape
+from .model import Shape, transformed
 
 # Stacked caster meshes kept for later lights (each holds its topology: a few
 # times the size of its arrays).
@@ -59,16 +59,13 @@ class CasterSet:
     """
 
     def __init__(self, shapes: list[Shape]) -> None:
-        world = _world_vertices(shapes)
-        counts = np.array([len(v) for v in world], dtype=np.int64)
+        counts = np.array([len(shape.vertices) for shape in shapes], dtype=np.int64)
         face_counts = np.array([len(shape.faces) for shape in shapes], dtype=np.int64)
         self.vertex_starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
-        self.vertices = np.concatenate(world) if world else np.zeros((0, 3))
-        self.faces = (
-            np.concatenate(shapes_faces(shapes, self.vertex_starts))
-            if shapes
-            else np.zeros((0, 3), dtype=np.int64)
-        )
+        self.vertices = _world_vertices(shapes, counts)
+        offsets = np.repeat(self.vertex_starts, face_counts)[:, None]
+        faces = [shape.faces for shape in shapes]
+        self.faces = np.concatenate(faces) + offsets if shapes else np.zeros((0, 3), np.int64)
         self.vertex_owner = np.repeat(np.arange(len(shapes)), counts)
         self.face_owner = np.repeat(np.arange(len(shapes)), face_counts)
         self.casters = [
@@ -170,8 +167,23 @@ class CasterSet:
         shadows its footprint, as it would anyway, and stays closed, so its
         outline comes from its silhouette."""
         near = np.abs(plane.signed_distance(self.vertices)) <= tolerance.coplanar_length
-        off: np.ndarray = ~np.all(near[self.faces], axis=1) | self.closed[self.face_owner]
+        off: np.ndarray = ~np.all(near[self.faces], axis=1)
+        if not off.all():  # the stack's topology, for closedness, only when it matters
+            off |= self.closed[self.face_owner]
         return off
+
+    @functools.cached_property
+    def box_corners(self) -> np.ndarray:
+        """(k, 8, 3) the corners of every caster's bounding box."""
+        return np.stack(
+            [
+                np.column_stack([xs[:, 0], ys[:, 1], zs[:, 2]])
+                for xs in (self.low, self.high)
+                for ys in (self.low, self.high)
+                for zs in (self.low, self.high)
+            ],
+            axis=1,
+        )
 
     @functools.cached_property
     def closed(self) -> np.ndarray:
@@ -198,27 +210,20 @@ class CasterSet:
         return self._meshes[key]
 
 
-def _world_vertices(shapes: list[Shape]) -> list[np.ndarray]:
-    """Every shape's world vertices: one matrix product per distinct transform
-    when there are few (scenes of many shapes mostly share one), else one per
-    shape."""
-    if len(shapes) < 2:
-        return [shape.world_vertices for shape in shapes]
+def _world_vertices(shapes: list[Shape], counts: np.ndarray) -> np.ndarray:
+    """Every shape's world vertices, stacked: one matrix product per distinct
+    transform when there are few (scenes of many shapes mostly share one),
+    else one per shape."""
+    if not shapes:
+        return np.zeros((0, 3))
     transforms = np.stack([shape.transform for shape in shapes]).reshape(len(shapes), 16)
     distinct, group = np.unique(transforms, axis=0, return_inverse=True)
     if len(distinct) > _TRANSFORMS_BATCHED:
-        return [shape.world_vertices for shape in shapes]
+        return np.concatenate([shape.world_vertices for shape in shapes])
     raw = np.concatenate([shape.vertices for shape in shapes])
-    owner = np.repeat(group.reshape(-1), [len(shape.vertices) for shape in shapes])
+    owner = np.repeat(group.reshape(-1), counts)
     world = np.empty_like(raw)
     for index, transform in enumerate(distinct.reshape(-1, 4, 4)):
         rows = owner == index
-        with np.errstate(over="ignore", invalid="ignore"):
-            world[rows] = raw[rows] @ transform[:3, :3].T + transform[:3, 3]
-    ends = np.cumsum([len(shape.vertices) for shape in shapes])[:-1]
-    return np.split(world, ends)
-
-
-def shapes_faces(shapes: list[Shape], starts: np.ndarray) -> list[np.ndarray]:
-    """Each shape's faces offset to index the stacked vertices."""
-    return [shape.faces + start for shape, start in zip(shapes, starts, strict=True)]
+        world[rows] = transformed(raw[rows], transform)
+    return world

@@ -127,13 +127,19 @@ class Shape:
     def world_vertices(self) -> np.ndarray:
         """(n, 3) vertices in world coordinates (inf where they overflow float64:
         the geometry's range check names them)."""
-        with np.errstate(over="ignore", invalid="ignore"):
-            world: np.ndarray = self.vertices @ self.transform[:3, :3].T + self.transform[:3, 3]
-        return world
+        return transformed(self.vertices, self.transform)
 
     @property
     def n_faces(self) -> int:
         return len(self.faces)
+
+
+def transformed(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
+    """(n, 3) ``points`` under the 4x4 affine ``matrix`` (column vectors; inf
+    where they overflow float64: the geometry's range check names them)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        world: np.ndarray = points @ matrix[:3, :3].T + matrix[:3, 3]
+    return world
 
 
 def rotate(axis_angle: ArrayLike, vector: ArrayLike) -> np.ndarray:

@@ -35,9 +35,8 @@ from ..boxes import bounding_box
 from ..errors import GeometryError, SceneError
 from ..lights import Light, is_positional
 from ..plane import Plane
-from ..seams import unique_integers
 from ..tolerance import Tolerance
-from ..topology import point_ids, row_groups
+from ..topology import point_ids, row_groups, unique_integers
 from .casters import CasterSet
 from .model import Scene, Shape, safe_name
 
@@ -183,16 +182,18 @@ def select(
     tolerance: Tolerance,
     notes: list[str],
     stacked: CasterSet | None = None,
+    ground_fallback: bool = True,
 ) -> list[Receiver]:
     """The receivers for :func:`shadowgeo.add_shadows` (see the module notes):
     a given plane, the named shapes' patches, or the patches found.
     ``stacked``: the geometry's :class:`~.casters.CasterSet`, when the caller
-    has it (its world vertices and boxes are reused)."""
+    has it (its world vertices and boxes are reused). ``ground_fallback``:
+    when no patch is found, the ground plane (:func:`ground`), else none."""
     if plane is not None:
         return [given_plane(plane)]
     if names is not None:
         return named(scene, geometry, names, tolerance)
-    return found(scene, geometry, tolerance, notes, stacked)
+    return found(scene, geometry, tolerance, notes, stacked, ground_fallback)
 
 
 def given_plane(plane: Plane | ArrayLike) -> Receiver:
@@ -261,16 +262,7 @@ def _anything_in_front(
     reaching out), so that a scene of many shapes costs a pass over the boxes
     per patch, not over every vertex."""
     limit = tolerance.coplanar_length
-    corners = np.stack(
-        [
-            np.column_stack([xs[:, 0], ys[:, 1], zs[:, 2]])
-            for xs in (stacked.low, stacked.high)
-            for ys in (stacked.low, stacked.high)
-            for zs in (stacked.low, stacked.high)
-        ],
-        axis=1,
-    )  # (k, 8, 3)
-    height = plane.signed_distance(corners.reshape(-1, 3)).reshape(-1, 8)
+    height = plane.signed_distance(stacked.box_corners.reshape(-1, 3)).reshape(-1, 8)
     sides = [height] if not two_sided else [height, -height]
     for side in sides:
         if np.any(side.min(axis=1) > limit):
@@ -294,8 +286,10 @@ def found(
     tolerance: Tolerance,
     notes: list[str],
     stacked: CasterSet | None = None,
+    ground_fallback: bool = True,
 ) -> list[Receiver]:
-    """The patches found automatically (see the module notes), or the ground.
+    """The patches found automatically (see the module notes), or the ground
+    (none when not ``ground_fallback``).
 
     World vertices are computed once per shape, and a shape whose bounding
     box is smaller than a found receiver must be (``SIZE_FRACTION`` of the
@@ -306,14 +300,14 @@ def found(
         stacked = CasterSet(geometry)
     bounds = stacked.bounds
     scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
-    everything = stacked.vertices
     diagonals = np.linalg.norm(stacked.high - stacked.low, axis=1)
     candidates = []
     for index in np.flatnonzero(diagonals >= SIZE_FRACTION * scene_size):
         shape, world_vertices = geometry[index], stacked.casters[index].vertices
         for fitted, member, area in patches(shape, tolerance, world_vertices):
             points = world_vertices[unique_integers(shape.faces[member])]
-            size = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+            low, high = bounding_box(points)
+            size = float(np.linalg.norm(high - low))
             if size < SIZE_FRACTION * scene_size:
                 continue
             if _anything_in_front(fitted, stacked, tolerance, two_sided=not shape.solid):
@@ -327,6 +321,6 @@ def found(
             counts[id(shape)] = count + 1
             result.append(_patch_receiver(shape, world_vertices, fitted, member, area, count))
     if not result:
-        return [ground(scene, geometry, notes, bounds if len(everything) else None)]
+        return [ground(scene, geometry, notes, bounds)] if ground_fallback else []
     notes.append("shadows: receivers found: " + ", ".join(r.name for r in result))
     return result

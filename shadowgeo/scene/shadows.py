@@ -61,13 +61,12 @@ from ..lights import DirectionalLight, Light, is_positional
 from ..limits import check_coordinates, check_light
 from ..plane import Plane
 from ..projection import project_shadow
-from ..seams import unique_integers
 from ..tolerance import Tolerance
-from ..topology import Caster
+from ..topology import Caster, unique_integers
 from ..volume import shadow_volume
 from .casters import CasterSet
 from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
-from .receivers import Receiver
+from .receivers import Receiver, ground
 from .receivers import select as select_receivers
 from .surfaces import receiving_faces, surface_shadow
 
@@ -195,9 +194,12 @@ def add_shadows(
         added = _volumes(scene, stacked, chosen, tolerance, names, notes, progress)
     else:
         own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
-        found = select_receivers(own, geometry, receivers, plane, tolerance, notes, stacked)
         if surfaces is None:
             surfaces = receivers is None and plane is None
+        terrain = _terrain(stacked, scene.up_axis) if surfaces else None
+        found = select_receivers(
+            own, geometry, receivers, plane, tolerance, notes, stacked, terrain is None
+        )
         surface = receiving_faces(geometry, found, tolerance, stacked) if surfaces else None
         if surface is not None and len(surface[1]) > limits.MAX_SURFACE_FACES:
             notes.append(
@@ -206,8 +208,13 @@ def add_shadows(
                 "on the planar receivers only"
             )
             surface = None
-        if surface is not None and receivers is None and plane is None:
-            found = _without_ground_under_terrain(found, stacked, scene.up_axis, notes)
+        if not found and surface is None:  # the terrain cannot receive after all
+            found = [ground(own, geometry, notes, stacked.bounds)]
+        elif not found:
+            notes.append(
+                f"shadows: no flat receiver found; {terrain} spans the scene and receives with "
+                "every other surface (no ground plane is added under it; --plane a,b,c,d adds one)"
+            )
         added = []
         total, done = len(chosen) * len(found) * len(stacked), 0
         for index, light in enumerate(chosen):
@@ -252,30 +259,24 @@ def add_shadows(
     return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
 
 
-def _without_ground_under_terrain(
-    found: list[Receiver], stacked: CasterSet, up_axis: str | None, notes: list[str]
-) -> list[Receiver]:
-    """``found`` without the fallback ground plane when an open shape spans
-    the scene's whole width (a terrain, a curved floor): every surface
-    receives, so the terrain takes the shadows, and a plane under it would
-    only show as a dark rim along its edges."""
-    if len(found) != 1 or found[0].name != "ground" or found[0].triangles is not None:
-        return found
+def _terrain(stacked: CasterSet, up_axis: str | None) -> str | None:
+    """The name of an open shape spanning the scene's whole width (a terrain,
+    a curved floor), or None. When every surface receives, it takes the
+    shadows in place of a fallback ground plane, which under it would only
+    show as a dark rim along its edges."""
+    if not len(stacked):
+        return None
     axis = 2 if (up_axis or "Y").upper() == "Z" else 1
     across = [k for k in range(3) if k != axis]
     low, high = stacked.bounds
     width = (high - low)[across]
     spans = np.all((stacked.high - stacked.low)[:, across] >= _TERRAIN_SPAN * width, axis=1)
-    terrain = np.flatnonzero(spans & ~stacked.closed)
-    if not len(terrain) or not np.all(width > 0):
-        return found
-    name = stacked.casters[int(terrain[0])].name
-    notes[:] = [note for note in notes if not note.startswith("shadows: no receiver found")]
-    notes.append(
-        f"shadows: no flat receiver found; {name} spans the scene and receives with every "
-        "other surface (no ground plane is added under it; --plane a,b,c,d adds one)"
-    )
-    return []
+    if not spans.any() or not np.all(width > 0):
+        return None
+    terrain = np.flatnonzero(spans & ~stacked.closed)  # closedness only when it can matter
+    if not len(terrain):
+        return None
+    return stacked.casters[int(terrain[0])].name
 
 
 def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:

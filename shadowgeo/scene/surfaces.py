@@ -17,9 +17,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import GeometryError
-from ..seams import unique_integers
 from ..surface import shadow_on_surface
 from ..tolerance import Tolerance
+from ..topology import row_groups, unique_integers
 from .casters import CasterSet
 from .model import SceneLight, Shape, shadow_shape
 from .receivers import Receiver, repeated_faces
@@ -36,8 +36,8 @@ def _receiver_centroids(found: list[Receiver]) -> np.ndarray:
 def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
     """(n,) bool: is each row of ``rows`` a row of ``table`` (both int64, one
     numpy pass instead of a Python set look-up per face)."""
-    _, inverse = np.unique(np.concatenate([table, rows]), axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
+    both = np.concatenate([table, rows])
+    inverse = row_groups(both - both.min(axis=0))[1]
     found: np.ndarray = np.isin(inverse[len(table) :], inverse[: len(table)])
     return found
 
