@@ -105,6 +105,13 @@ def register(subparsers) -> None:
         help="tessellation tolerance relative to the scene size (default 1e-3)",
     )
     parser.add_argument(
+        "--max-triangles",
+        type=count_argument,
+        metavar="N",
+        help="refuse a scene of more than N triangles after tessellation and instancing "
+        "(default 5,000,000: shadowgeo.limits.MAX_TRIANGLES); raise it for a trusted file",
+    )
+    parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
     batch = parser.add_argument_group("batch (several inputs or a folder)")
@@ -185,6 +192,16 @@ def tolerance_argument(text: str) -> float:
     return value
 
 
+def count_argument(text: str) -> int:
+    try:
+        value = int(text.replace(",", "").replace("_", ""))
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number of at least 1, got {text!r}")
+    return value
+
+
 class ProgressBar:
     """A one-line bar on stderr, redrawn in place."""
 
@@ -218,6 +235,7 @@ def options_of(args: argparse.Namespace) -> ConvertOptions:
         plane=args.plane,
         tolerance=args.tolerance,
         sun=args.sun,
+        max_triangles=args.max_triangles,
     )
 
 

@@ -31,7 +31,8 @@ from .scene.shadows import Progress, add_shadows
 class ConvertOptions:
     """What :func:`add_shadows` is asked for every file (see its parameters);
     ``sun``: a directional light that casts instead of the scene's own
-    (unless named in ``lights``), not written into the scene."""
+    (unless named in ``lights``), not written into the scene;
+    ``max_triangles``: the reader's budget (:func:`shadowgeo.load`)."""
 
     method: Literal["planar", "volume"] = "planar"
     lights: tuple[str, ...] | None = None
@@ -39,6 +40,7 @@ class ConvertOptions:
     plane: Plane | None = None
     tolerance: float | None = None
     sun: DirectionalLight | None = None
+    max_triangles: int | None = None
 
 
 @dataclass(frozen=True)
@@ -75,7 +77,11 @@ def shadowed(
     curved = options.tolerance is not None and READERS.get(scene_suffix(source) or "") == (
         "x3d_read"
     )
-    scene = load(source, **({"chord": options.tolerance} if curved else {}))
+    scene = load(
+        source,
+        max_triangles=options.max_triangles,
+        **({"chord": options.tolerance} if curved else {}),
+    )
     extra = [] if options.sun is None else [SceneLight(options.sun, name="sun", shadows=True)]
     result = add_shadows(
         scene,

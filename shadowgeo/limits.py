@@ -27,9 +27,9 @@ Reader budgets
 --------------
 A hostile file stops at a budget with a ``SceneError`` naming it, in bounded
 time and memory (the two segment caps are not errors: a curve simply gets no
-finer). None has an option that raises it: they sit far above any real scene
-(edit the constant to go further); ``--tolerance`` only moves the chord
-within the segment caps.
+finer). Only the triangle budget has an option that raises it (below); the
+others sit far above any real scene (edit the constant to go further);
+``--tolerance`` only moves the chord within the segment caps.
 
 =====================  ==============  =============================================
 budget                 value           where it is enforced
@@ -67,12 +67,16 @@ surface pairs          5,000,000       (receiving face, caster triangle) pairs t
                                        before the pairs fill memory
 =====================  ==============  =============================================
 
-There is no separate triangle budget: triangles come from the nodes above and
-cost linear memory. Duplicate and zero-area triangles cost nothing in the
-shadow's 2-D union (:func:`shadowgeo.project_shadow` drops them first). What
-the union costs grows with the crossings of its edges (Clipper2's sweep does
-work for each one, and more than linearly in practice), so that is what the
-outline budget counts: a ``GeometryError`` from the shadow computation, which
+Triangles: a scene of more than ``MAX_TRIANGLES`` (5,000,000) after
+tessellation and instancing is refused by :func:`shadowgeo.load` (its
+``max_triangles`` argument, or ``convert --max-triangles N``, raises the
+budget for a trusted file): time and memory grow with them. Duplicate and
+zero-area triangles, and copied outline loops, cost nothing in the shadow's
+2-D union (:func:`shadowgeo.project_shadow` and :func:`~shadowgeo.polygons.fill`
+drop them first), and shapes that repeat another's geometry exactly cast once.
+What the union costs grows with the crossings of its edges (Clipper2's sweep
+does work for each one, and more than linearly in practice), so that is what
+the outline budget counts: a ``GeometryError`` from the shadow computation, which
 :func:`shadowgeo.add_shadows` reports as a note naming the shape that does not
 cast.
 """
@@ -85,7 +89,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import GeometryError
+from .errors import GeometryError, SceneError
 
 if TYPE_CHECKING:
     from .lights import Light
@@ -114,6 +118,33 @@ MAX_SURFACE_PAIRS = 5_000_000
 # At this size (benchmarks/bench_surface.py's terrain at 100,000 faces under a
 # sphere) a point light costs about 0.2 s, a low sun with long shadows about 3 s.
 MAX_SURFACE_FACES = 100_000
+# Triangles of a scene as read (after tessellation and instancing): what a
+# conversion's time and memory grow with. At this size a conversion takes
+# about 15 CPU seconds and 2 GB; load(..., max_triangles=N) or
+# ``convert --max-triangles N`` raises it for a trusted file.
+MAX_TRIANGLES = 5_000_000
+
+
+def check_triangles(count: int, path: str, limit: int | None = None) -> None:
+    """Raise :class:`SceneError` for ``path`` when a scene of ``count``
+    triangles exceeds ``limit`` (default :data:`MAX_TRIANGLES`).
+
+    Examples
+    --------
+    >>> check_triangles(12, "box.x3d")
+    >>> check_triangles(12, "box.x3d", limit=10)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    shadowgeo.errors.SceneError: box.x3d: 12 triangles ..., more than the budget of 10 ...
+    """
+    limit = MAX_TRIANGLES if limit is None else int(limit)
+    if count > limit:
+        raise SceneError(
+            f"{count:,} triangles (after tessellation and instancing), more than the budget "
+            f"of {limit:,} (shadowgeo.limits.MAX_TRIANGLES; --max-triangles N raises it for "
+            "a trusted file)",
+            path=path,
+        )
 
 
 def check_coordinates(points: ArrayLike, what: str) -> None:

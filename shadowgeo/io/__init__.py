@@ -52,6 +52,7 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .. import limits
 from ..errors import SceneError
 from ..scene import Scene, Shape
 
@@ -181,20 +182,28 @@ def look_rotation(direction: ArrayLike) -> np.ndarray:
     return rotation
 
 
-def load(path: str | os.PathLike[str], **options: Any) -> Scene:
+def load(
+    path: str | os.PathLike[str], *, max_triangles: int | None = None, **options: Any
+) -> Scene:
     """Read a scene from ``path``; the format comes from the extension.
+
+    ``max_triangles``: the largest scene accepted, counted after tessellation
+    and instancing (default :data:`shadowgeo.limits.MAX_TRIANGLES`); raise it
+    for a trusted file.
 
     Raises
     ------
     SceneError
-        The file is missing, unreadable or malformed; the message names the
-        file and, where known, the line and node.
+        The file is missing, unreadable or malformed, or holds more triangles
+        than ``max_triangles``; the message names the file and, where known,
+        the line and node.
     """
     path = Path(path)
     module = _module(READERS, path, "read")
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
     scene: Scene = module.read(path, **options)
+    limits.check_triangles(sum(shape.n_faces for shape in scene.shapes), str(path), max_triangles)
     return scene
 
 

@@ -10,7 +10,10 @@ shapes:
   quarter of the scene's and whose area is at least a quarter of the largest
   such patch's (a ground, a floor, a large wall; not a box's face, a sign or a
   step), and with some geometry in front of it (a lone box's faces do not
-  receive: nothing can shadow them);
+  receive: nothing can shadow them); the ``MAX_FOUND`` largest of them, with
+  a note when more qualify. Shapes are ruled out before any per-patch work
+  when a histogram of their face normals shows no flat part that large
+  (:func:`may_hold_patch`);
 * named (``--receiver DEF``): the named shape's patches of at least a quarter
   of its largest patch's area; its largest patch must cover at least a tenth
   of the shape's area, else it is not planar;
@@ -46,8 +49,15 @@ AREA_FRACTION = 0.25
 SIZE_FRACTION = 0.25
 # A named receiver's largest patch covers at least this fraction of its area.
 NAMED_FRACTION = 0.1
+# Receivers found automatically, at most (the largest): each unites every
+# caster's shadow in its own plane.
+MAX_FOUND = 8
 # Patches looked for per shape (largest triangles first).
 _MAX_PATCHES = 64
+# Side of the cells of the normal histogram (unit-normal components), and the
+# faces binned per pass (bounds its memory).
+_NORMAL_CELL = 1.0 / 16.0
+_FACES_PER_PASS = 1 << 19
 
 
 @dataclasses.dataclass
@@ -280,6 +290,158 @@ def _anything_in_front(
     return False
 
 
+def may_hold_patch(
+    stacked: CasterSet, indices: np.ndarray, size: float, tolerance: Tolerance
+) -> np.ndarray:
+    """(len(indices),) bool: False for a shape none of whose flat patches
+    (:func:`patches`) can reach ``size`` across. Decided from a histogram of
+    its face normals, before any per-patch work (a sphere has no large flat
+    part: each of its patches is a face or two).
+
+    A patch's faces all lie within ``coplanar_length`` of its seed face's
+    plane. A face whose smallest height is ``w`` turns by at most an angle
+    ``t`` with ``sin t <= 2 coplanar_length / w`` from that plane, so its unit
+    normal (or its opposite) lies within ``pi coplanar_length / w`` of the
+    seed's, and its plane's offset (from the middle of the faces, ``R`` away
+    at most) within ``R`` times that plus ``coplanar_length`` of the seed's.
+    Faces with ``w`` large enough that the turn is below half a cell of the
+    histogram (cells of direction and offset) fall in the cells next to the
+    seed's; thinner faces (and degenerate ones) may join any patch. A patch
+    therefore lies in the box of the faces binned in the 81 cells around its
+    seed's plus the thin faces, and a shape where every such box is smaller
+    than ``size`` is skipped:
+    exactly the shapes whose patches :func:`found` would all have dropped.
+    """
+    keep = np.zeros(len(indices), dtype=bool)
+    limit = tolerance.coplanar_length
+    cell = _NORMAL_CELL
+    width = 2.0 * np.pi * limit / cell
+    side = int(np.ceil(1.0 / cell))  # cells from the middle to a side, each axis
+    offsets = np.array(
+        [
+            (i, j, k, m)
+            for i in (-1, 0, 1)
+            for j in (-1, 0, 1)
+            for k in (-1, 0, 1)
+            for m in (-1, 0, 1)
+        ],
+        dtype=np.int64,
+    )
+    counts = np.array([len(stacked.casters[int(i)].shape.faces) for i in indices], np.int64)
+    start = 0
+    while start < len(indices):
+        stop = start + 1
+        total = counts[start]
+        while stop < len(indices) and total + counts[stop] <= _FACES_PER_PASS:
+            total += counts[stop]
+            stop += 1
+        chunk = np.arange(start, stop)
+        keep[chunk] = _patch_bound(stacked, indices[chunk], size, limit, width, side, offsets)
+        start = stop
+    return keep
+
+
+def _patch_bound(
+    stacked: CasterSet,
+    indices: np.ndarray,
+    size: float,
+    limit: float,
+    width: float,
+    side: int,
+    offsets: np.ndarray,
+) -> np.ndarray:
+    owners = []
+    triangles = []
+    for position, index in enumerate(indices):
+        caster = stacked.casters[int(index)]
+        triangles.append(caster.vertices[caster.shape.faces])
+        owners.append(np.full(len(caster.shape.faces), position, dtype=np.int64))
+    corners = np.concatenate(triangles)
+    owner = np.concatenate(owners)
+    low = np.minimum(np.minimum(corners[:, 0], corners[:, 1]), corners[:, 2])
+    high = np.maximum(np.maximum(corners[:, 0], corners[:, 1]), corners[:, 2])
+    first = corners[:, 1] - corners[:, 0]
+    second = corners[:, 2] - corners[:, 0]
+    third = corners[:, 2] - corners[:, 1]
+    normals = np.cross(first, second)
+    doubled = np.sqrt((normals * normals).sum(axis=1))
+    longest = np.sqrt(
+        np.maximum(
+            np.maximum((first * first).sum(axis=1), (second * second).sum(axis=1)),
+            (third * third).sum(axis=1),
+        )
+    )
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        unit = normals / doubled[:, None]
+        binned = np.isfinite(unit).all(axis=1) & (doubled > 0)
+        sharp = binned & (doubled >= width * longest)
+    count = len(indices)
+    # thin and degenerate faces: members of any patch of their shape
+    loose_low = np.full((count, 3), np.inf)
+    loose_high = np.full((count, 3), -np.inf)
+    loose = ~sharp
+    holder = owner[loose]  # non-decreasing: the shapes' faces follow each other
+    if len(holder):
+        runs = np.flatnonzero(np.concatenate([[True], holder[1:] != holder[:-1]]))
+        loose_low[holder[runs]] = np.minimum.reduceat(low[loose], runs, axis=0)
+        loose_high[holder[runs]] = np.maximum.reduceat(high[loose], runs, axis=0)
+    # every face with a normal (any seed) binned by it and by its opposite,
+    # and by its plane's offset from the middle of the faces: a member's
+    # offset is within (cell / 2) * reach + limit of its seed's
+    middle = 0.5 * (low.min(axis=0) + high.max(axis=0))
+    radius = float(np.sqrt(((high.max(axis=0) - low.min(axis=0)) ** 2).sum())) / 2.0
+    centroids = (corners[binned].sum(axis=1) / 3.0) - middle
+    offsets_of = (unit[binned] * centroids).sum(axis=1)
+    band = 0.5 * _NORMAL_CELL * radius * (1.0 + 1e-9) + 2.0 * limit
+    if not np.isfinite(band) or band <= 0:
+        band = np.inf
+    levels = int(min(np.ceil(radius / band), 1 << 20)) if np.isfinite(band) else 0
+    directions = np.concatenate([unit[binned], -unit[binned]])
+    heights = np.concatenate([offsets_of, -offsets_of])
+    cells = np.clip(np.floor(directions / _NORMAL_CELL), -side, side).astype(np.int64) + side + 1
+    level = (
+        np.clip(np.floor(heights / band), -levels, levels).astype(np.int64) + levels + 1
+        if levels
+        else np.ones(len(heights), dtype=np.int64)
+    )
+    span = 2 * side + 3
+    depth = 2 * levels + 3
+    per_shape = span**3 * depth
+    keys = np.concatenate([owner[binned], owner[binned]]) * per_shape + (
+        cells[:, 0] + span * cells[:, 1] + span * span * cells[:, 2] + span**3 * level
+    )
+    order = np.argsort(keys, kind="stable")
+    keys = keys[order]
+    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]])) if len(keys) else keys
+    group_keys = keys[starts]
+    box_low = np.concatenate([low[binned], low[binned]])[order]
+    box_high = np.concatenate([high[binned], high[binned]])[order]
+    group_low = np.minimum.reduceat(box_low, starts, axis=0) if len(starts) else box_low[:0]
+    group_high = np.maximum.reduceat(box_high, starts, axis=0) if len(starts) else box_high[:0]
+    group_owner = group_keys // per_shape
+    near_low = loose_low[group_owner].copy()
+    near_high = loose_high[group_owner].copy()
+    for shift in offsets if len(group_keys) else ():
+        wanted = group_keys + int(
+            shift[0] + span * shift[1] + span * span * shift[2] + span**3 * shift[3]
+        )
+        at = np.minimum(np.searchsorted(group_keys, wanted), len(group_keys) - 1)
+        hit = group_keys[at] == wanted
+        np.minimum(near_low, np.where(hit[:, None], group_low[at], np.inf), out=near_low)
+        np.maximum(near_high, np.where(hit[:, None], group_high[at], -np.inf), out=near_high)
+    with np.errstate(invalid="ignore", over="ignore"):
+        reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=1))
+    large = ~(reach < size * (1.0 - 1e-9))  # NaN or inf: keep the shape
+    keep = np.zeros(count, dtype=bool)
+    keep[group_owner[large]] = True
+    # a shape whose faces are all thin or degenerate has no sharp seed
+    # cell; its patches lie within its loose box
+    with np.errstate(invalid="ignore", over="ignore"):
+        loose_reach = np.sqrt(((loose_high - loose_low) ** 2).sum(axis=1))
+    keep |= np.isfinite(loose_low).all(axis=1) & ~(loose_reach < size * (1.0 - 1e-9))
+    return keep
+
+
 def found(
     scene: Scene,
     geometry: list[Shape],
@@ -302,7 +464,9 @@ def found(
     scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
     diagonals = np.linalg.norm(stacked.high - stacked.low, axis=1)
     candidates = []
-    for index in np.flatnonzero(diagonals >= SIZE_FRACTION * scene_size):
+    searched = np.flatnonzero(diagonals >= SIZE_FRACTION * scene_size)
+    searched = searched[may_hold_patch(stacked, searched, SIZE_FRACTION * scene_size, tolerance)]
+    for index in searched:
         shape, world_vertices = geometry[index], stacked.casters[index].vertices
         for fitted, member, area in patches(shape, tolerance, world_vertices):
             points = world_vertices[unique_integers(shape.faces[member])]
@@ -313,14 +477,22 @@ def found(
             if _anything_in_front(fitted, stacked, tolerance, two_sided=not shape.solid):
                 candidates.append((shape, world_vertices, fitted, member, area))
     largest = max((area for *_, area in candidates), default=0.0)
+    qualify = [item for item in candidates if item[-1] >= AREA_FRACTION * largest]
+    # the largest first (a stable sort keeps the scene's order among equals)
+    ranked = sorted(range(len(qualify)), key=lambda k: -qualify[k][-1])[:MAX_FOUND]
     counts: dict[int, int] = {}
     result = []
-    for shape, world_vertices, fitted, member, area in candidates:
-        if area >= AREA_FRACTION * largest:
-            count = counts.get(id(shape), 0)
-            counts[id(shape)] = count + 1
-            result.append(_patch_receiver(shape, world_vertices, fitted, member, area, count))
+    for k in sorted(ranked):
+        shape, world_vertices, fitted, member, area = qualify[k]
+        count = counts.get(id(shape), 0)
+        counts[id(shape)] = count + 1
+        result.append(_patch_receiver(shape, world_vertices, fitted, member, area, count))
     if not result:
         return [ground(scene, geometry, notes, bounds)] if ground_fallback else []
     notes.append("shadows: receivers found: " + ", ".join(r.name for r in result))
+    if len(qualify) > MAX_FOUND:
+        notes.append(
+            f"shadows: {len(qualify) - MAX_FOUND} more flat surfaces qualify as receivers; "
+            f"the {MAX_FOUND} largest receive (--receiver DEF names others)"
+        )
     return result

@@ -64,7 +64,7 @@ from ..projection import project_shadow
 from ..tolerance import Tolerance
 from ..topology import Caster, unique_integers
 from ..volume import shadow_volume
-from .casters import CasterSet
+from .casters import CasterSet, distinct
 from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
 from .receivers import Receiver, ground
 from .receivers import select as select_receivers
@@ -171,7 +171,13 @@ def add_shadows(
         raise GeometryError("give receivers or plane, not both")
     notes: list[str] = []
     kept = _without_baked(scene, notes)
-    geometry = [s for s in kept if s.role == "geometry" and s.n_faces]
+    every_shape = [s for s in kept if s.role == "geometry" and s.n_faces]
+    geometry = distinct(every_shape)
+    if len(every_shape) > len(geometry):
+        notes.append(
+            f"shadows: {len(every_shape) - len(geometry)} shapes repeat another's geometry "
+            "exactly (same vertices, faces and transform); each casts and receives once"
+        )
     chosen = _select_lights(scene, lights, notes, extra_lights)
     for index, light in enumerate(chosen):
         check_light(light.light, f"light '{light.name or index}'")  # see shadowgeo.limits
@@ -197,14 +203,29 @@ def add_shadows(
         if surfaces is None:
             surfaces = receivers is None and plane is None
         terrain = _terrain(stacked, scene.up_axis) if surfaces else None
-        found = select_receivers(
-            own, geometry, receivers, plane, tolerance, notes, stacked, terrain is None
+        found = select_receivers(  # a named shape is looked for among every copy
+            own,
+            geometry if receivers is None else every_shape,
+            receivers,
+            plane,
+            tolerance,
+            notes,
+            stacked,
+            terrain is None,
         )
-        surface = receiving_faces(geometry, found, tolerance, stacked) if surfaces else None
-        if surface is not None and len(surface[1]) > limits.MAX_SURFACE_FACES:
+        # at most this many faces receive besides the planar receivers (fewer
+        # when faces repeat): past the budget, nothing is computed for them
+        besides = len(stacked.faces) - sum(
+            len(receiver.triangles) for receiver in found if receiver.triangles is not None
+        )
+        surface = None
+        if surfaces and besides <= limits.MAX_SURFACE_FACES:
+            surface = receiving_faces(geometry, found, tolerance, stacked)
+            besides = len(surface[1])  # an open shape's faces count twice, one each way
+        if surfaces and besides > limits.MAX_SURFACE_FACES:
             notes.append(
-                f"shadows: {len(surface[1])} faces besides the planar receivers, more than "
-                f"{limits.MAX_SURFACE_FACES} (shadowgeo.limits.MAX_SURFACE_FACES): shadows "
+                f"shadows: {besides:,} faces besides the planar receivers, more than "
+                f"{limits.MAX_SURFACE_FACES:,} (shadowgeo.limits.MAX_SURFACE_FACES): shadows "
                 "on the planar receivers only"
             )
             surface = None

@@ -1,0 +1,182 @@
+"""The automatic receiver search at scale: shapes ruled out by their normal
+histogram, repeated shapes searched once, at most MAX_FOUND receivers, and the
+scene's triangle budget."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import shadowgeo as sg
+from shadowgeo import limits
+from shadowgeo.polygons import fill, without_copies
+from shadowgeo.scene.casters import CasterSet, distinct
+from shadowgeo.scene.receivers import MAX_FOUND, found, may_hold_patch, patches
+
+TOLERANCE = sg.Tolerance.for_points([[-10, -10, -10], [10, 10, 10]])
+
+
+def _largest_patch(shape: sg.Shape) -> float:
+    """Brute force: the largest box diagonal of any patch of ``shape``."""
+    vertices = shape.world_vertices
+    sizes = [
+        float(np.linalg.norm(np.ptp(vertices[np.unique(shape.faces[member])], axis=0)))
+        for _, member, _ in patches(shape, TOLERANCE, vertices)
+    ]
+    return max(sizes, default=0.0)
+
+
+def _sphere(centre=(0.0, 0.0, 0.0), radius: float = 1.0) -> sg.Shape:
+    mesh = trimesh.creation.icosphere(subdivisions=3, radius=radius)
+    return sg.Shape(mesh.vertices + np.asarray(centre), mesh.faces)
+
+
+def test_a_curved_shape_is_ruled_out_and_a_flat_one_is_not():
+    sphere = _sphere(radius=2.0)
+    ground = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]], [[0, 2, 1], [0, 3, 2]])
+    stacked = CasterSet([sphere, ground])
+    keep = may_hold_patch(stacked, np.array([0, 1]), 2.0, TOLERANCE)
+    # the sphere's largest flat patch is one face, far below 2 across
+    assert _largest_patch(sphere) < 1.0
+    assert keep.tolist() == [False, True]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(1, 30),
+    st.floats(0.0, 1e-9),
+    st.sampled_from([0.5, 1.0, 2.0, 4.0]),
+)
+def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size):
+    """Bound against brute force: tiles of one (slightly tilted) plane,
+    slivers lying in it, scattered triangles; whenever a patch reaches
+    ``size``, the shape is kept."""
+    rng = np.random.default_rng(seed)
+    triangles = []
+    for _ in range(n_tiles):  # separate tiles of the plane y = tilt * x
+        corner = rng.uniform(-4, 4, 2)
+        tile = corner + rng.uniform(0, 1, (3, 2))
+        triangles.append(np.column_stack([tile[:, 0], tilt * tile[:, 0], tile[:, 1]]))
+    for _ in range(rng.integers(0, 4)):  # slivers in the plane, any direction
+        start, end = rng.uniform(-4, 4, (2, 2))
+        middle = 0.5 * (start + end) + rng.uniform(-1e-9, 1e-9, 2)
+        sliver = np.array([start, end, middle])
+        triangles.append(np.column_stack([sliver[:, 0], tilt * sliver[:, 0], sliver[:, 1]]))
+    for _ in range(rng.integers(0, 20)):  # noise
+        triangles.append(rng.uniform(-4, 4, (3, 3)))
+    vertices = np.concatenate(triangles)
+    shape = sg.Shape(vertices, np.arange(len(vertices)).reshape(-1, 3))
+    keep = may_hold_patch(CasterSet([shape]), np.array([0]), size, TOLERANCE)
+    if _largest_patch(shape) >= size:
+        assert keep[0]
+
+
+def test_copies_of_a_shape_cast_and_receive_once():
+    ground = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]], [[0, 2, 1], [0, 3, 2]])
+    sphere = _sphere((0.0, 2.0, 0.0))
+    copies = [
+        sg.Shape(sphere.vertices.copy(), sphere.faces.copy(), name=f"ball{k}") for k in range(50)
+    ]
+    moved = sg.Shape(sphere.vertices + [1.0, 0, 0], sphere.faces)
+    assert distinct([ground, *copies, moved]) == [ground, copies[0], moved]
+    light = sg.SceneLight(sg.DirectionalLight([0, -1, 0]), name="sun", shadows=True)
+    one = sg.add_shadows(sg.Scene([ground, copies[0]], [light]), surfaces=False)
+    many = sg.add_shadows(sg.Scene([ground, *copies], [light]), surfaces=False)
+    assert "49 shapes repeat another's geometry exactly" in " ".join(many.warnings)
+    (shadow_one,) = one.shapes_with_role("shadow")
+    (shadow_many,) = many.shapes_with_role("shadow")
+    assert np.array_equal(shadow_one.vertices, shadow_many.vertices)
+    assert len(many.shapes) == len(one.shapes) + 49  # the input's shapes are all kept
+
+
+def test_at_most_max_found_receivers_the_largest():
+    # floors stacked one above the other, each a little larger than the one
+    # below, and a post on the top one: every floor has something above it
+    shapes = []
+    count = MAX_FOUND + 3
+    for k in range(count):
+        half, y = 10.0 + 0.1 * k, 2.0 * k
+        floor = [[-half, y, -half], [half, y, -half], [half, y, half], [-half, y, half]]
+        shapes.append(sg.Shape(floor, [[0, 2, 1], [0, 3, 2]], name=f"floor{k}"))
+    post = trimesh.creation.box(bounds=[[-0.2, 2.0 * count, -0.2], [0.2, 2.0 * count + 1, 0.2]])
+    shapes.append(sg.Shape(post.vertices, post.faces, name="post"))
+    scene = sg.Scene(shapes, [sg.SceneLight(sg.DirectionalLight([0, -1, 0]), shadows=True)])
+    notes: list[str] = []
+    received = found(scene, shapes, TOLERANCE, notes, ground_fallback=False)
+    names = [receiver.name for receiver in received]
+    # the MAX_FOUND largest floors, in the scene's order
+    assert names == [f"floor{k}" for k in range(count - MAX_FOUND, count)]
+    assert f"{count - MAX_FOUND} more flat surfaces qualify" in " ".join(notes)
+
+
+def test_copies_of_loops_are_dropped_before_the_union_and_the_region_kept():
+    rng = np.random.default_rng(5)
+    triangles = [rng.uniform(0, 10, (3, 2)) for _ in range(6)]
+    triangles = [t if shapely.Polygon(t).exterior.is_ccw else t[::-1] for t in triangles]
+    loops = [np.roll(triangles[k % 6], k % 3, axis=0) for k in range(600)]
+    kept = without_copies(loops)
+    assert len(kept) == 6
+    expected = shapely.union_all([shapely.Polygon(t) for t in triangles]).area
+    assert fill(loops).area() == fill(triangles).area()
+    assert fill(loops).area() == pytest.approx(expected, rel=1e-8)  # Clipper2's precision
+    # even-odd is not a union: copies cancel, so they must stay
+    square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    assert fill([square] * 64 + [square * 3.0], "evenodd").area() == pytest.approx(9.0)
+
+
+def test_a_scene_past_the_triangle_budget_is_refused_naming_the_file(tmp_path, monkeypatch):
+    path = tmp_path / "balls.x3d"
+    spheres = "".join(
+        f'<Transform translation="{3 * k} 0 0"><Shape><Sphere/></Shape></Transform>'
+        for k in range(4)
+    )
+    path.write_text(f'<X3D version="4.0"><Scene>{spheres}</Scene></X3D>')
+    scene = sg.load(path)
+    count = sum(shape.n_faces for shape in scene.shapes)
+    with pytest.raises(sg.SceneError, match=r"balls\.x3d.*more than the budget of") as error:
+        sg.load(path, max_triangles=count - 1)
+    assert f"{count:,} triangles" in str(error.value)
+    assert len(sg.load(path, max_triangles=count).shapes) == 4
+    monkeypatch.setattr(limits, "MAX_TRIANGLES", count - 1)
+    with pytest.raises(sg.SceneError, match="MAX_TRIANGLES"):
+        sg.load(path)
+
+
+def test_the_converter_refuses_past_the_budget_and_the_option_raises_it(tmp_path):
+    from cli.main import main
+
+    path = tmp_path / "balls.x3d"
+    path.write_text('<X3D version="4.0"><Scene><Shape><Sphere/></Shape></Scene></X3D>')
+    count = sum(shape.n_faces for shape in sg.load(path).shapes)
+    out = tmp_path / "out.x3d"
+    assert main(["convert", str(path), str(out), "--max-triangles", str(count - 1)]) == 1
+    assert not out.exists()
+    assert main(["convert", str(path), str(out), "--max-triangles", str(count)]) == 0
+    assert out.exists()
+
+
+def test_past_the_surface_budget_only_planar_shadows_and_no_surface_work(monkeypatch):
+    import shadowgeo.scene.shadows as shadows
+
+    ground = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]], [[0, 2, 1], [0, 3, 2]])
+    sphere = _sphere((0.0, 2.0, 0.0), radius=1.5)
+    light = sg.SceneLight(sg.DirectionalLight([0.3, -1, 0.2]), name="sun", shadows=True)
+    scene = sg.Scene([ground, sphere], [light])
+    calls = []
+    real = shadows.receiving_faces
+    monkeypatch.setattr(shadows, "receiving_faces", lambda *a: calls.append(1) or real(*a))
+    within = sg.add_shadows(scene)
+    assert calls  # the sphere's faces are searched for shadows (a convex one gets none)
+    assert "faces besides the planar receivers" not in " ".join(within.warnings)
+    monkeypatch.setattr(limits, "MAX_SURFACE_FACES", sphere.n_faces - 1)
+    calls.clear()
+    past = sg.add_shadows(scene)
+    assert not calls  # the bound (faces less the receivers') settles it
+    assert f"{sphere.n_faces:,} faces besides the planar receivers" in " ".join(past.warnings)
+    (shadow,) = past.shapes_with_role("shadow")
+    assert shadow.name == "shadow_sun_shape"  # the ground (unnamed) only
