@@ -545,3 +545,30 @@ def test_counts_that_do_not_fit_the_points_skip_the_shape(tmp_path, body, expect
     result = sg.load(scene(tmp_path, f"<Shape>{body}</Shape>"))
     (warning,) = result.warnings
     assert result.shapes == [] and "line 2" in warning and expected in warning
+
+
+def test_deep_nesting_is_refused_before_python_runs_out_of_stack(tmp_path):
+    """Found by the fuzzing campaign (x3d mutant 7528): a prototype moved into
+    its own body nested copies until Python's recursion limit, which numpy met
+    first in a deeper stack and reported as a TypeError. The reader counts the
+    grouping nodes it is inside and stops at MAX_NESTING, well inside the
+    stack a caller leaves it."""
+    import sys
+
+    from shadowgeo import limits
+
+    body = (
+        '<ProtoDeclare name="Again"><ProtoBody><Transform><Shape><Box/></Shape>'
+        '<ProtoInstance name="Again"/></Transform></ProtoBody></ProtoDeclare>'
+        '<ProtoInstance name="Again"/>'
+    )
+    path = scene(tmp_path, body)
+
+    def nested(depth: int) -> None:  # the caller's stack already holds 300 frames
+        if depth:
+            return nested(depth - 1)
+        with pytest.raises(sg.SceneError, match=f"more than {limits.MAX_NESTING} deep"):
+            sg.load(path)
+
+    assert sys.getrecursionlimit() >= 1000
+    nested(300)

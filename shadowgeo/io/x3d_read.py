@@ -203,6 +203,12 @@ class _Reader:
                 world = matrix @ _local_matrix(context, element, tag)
             if not np.all(np.isfinite(world)):
                 raise context.error(element, "the transforms down to here overflow to infinity")
+            if len(self.open_groups) >= limits.MAX_NESTING:  # e.g. a prototype inside itself
+                raise context.error(
+                    element,
+                    f"nodes nested too deeply (grouping nodes more than {limits.MAX_NESTING} "
+                    "deep through DEF/USE, prototypes or Inline; shadowgeo.limits.MAX_NESTING)",
+                )
             self.open_groups.add(id(element))  # the element stays alive meanwhile
             baked = MARK in (element.get("class") or "").split()
             if baked:
