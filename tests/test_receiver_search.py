@@ -127,6 +127,10 @@ def test_copies_of_loops_are_dropped_before_the_union_and_the_region_kept():
     # even-odd is not a union: copies cancel, so they must stay
     square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
     assert fill([square] * 64 + [square * 3.0], "evenodd").area() == pytest.approx(9.0)
+    # with a clockwise loop, copies count: two squares less one is a square
+    assert len(without_copies([square] * 70 + [square[::-1]])) == 71
+    assert fill([square] * 70 + [square[::-1]]).area() == pytest.approx(1.0)
+    assert fill([square, square[::-1]] * 40).area() == 0.0
 
 
 def test_a_scene_past_the_triangle_budget_is_refused_naming_the_file(tmp_path, monkeypatch):
