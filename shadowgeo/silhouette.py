@@ -147,12 +147,53 @@ def front_boundary(caster: Caster, front: np.ndarray) -> tuple[np.ndarray, np.nd
     """
     if not caster.is_closed:
         return _net_boundary(caster, front, np.ones(caster.n_faces, dtype=np.int64))
-    slots = caster.edge_face_slots
-    slot_front = front[slots // 3]
-    outline = np.flatnonzero(slot_front[:, 0] != slot_front[:, 1])
-    front_slot = np.where(slot_front[outline, 0], slots[outline, 0], slots[outline, 1])
+    if caster.has_edge_table:
+        slots = caster.edge_face_slots
+        slot_front = front[slots // 3]
+        outline = np.flatnonzero(slot_front[:, 0] != slot_front[:, 1])
+        front_slot = np.where(slot_front[outline, 0], slots[outline, 0], slots[outline, 1])
+    else:
+        front_slot = _mixed_outline_slots(caster, front)
     directed = _directed_edges(caster, front_slot)
     return directed[:, 0], directed[:, 1]
+
+
+def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
+    """The front face slot of each silhouette edge of a closed caster, in the
+    order of the edges' keys (as :attr:`Caster.edge_face_slots` gives them),
+    from the edges of the few faces near the silhouette instead of the
+    mesh's whole edge table.
+
+    Both ends of a silhouette edge are *mixed* vertices (they have a front
+    and a back face: the edge's own two), and both faces of the edge contain
+    both ends; so the faces with at least two mixed corners hold both slots
+    of every silhouette edge. Among them, an edge whose two slots are both
+    present and differ in front bit is a silhouette edge.
+    """
+    faces = caster.faces
+    n_vertices = len(caster.vertices)
+    has_front = np.zeros(n_vertices, dtype=bool)
+    has_back = np.zeros(n_vertices, dtype=bool)
+    back = ~front
+    for corner in range(3):
+        has_front[faces[front, corner]] = True
+        has_back[faces[back, corner]] = True
+    mixed = has_front & has_back
+    first, second, third = (mixed[faces[:, corner]] for corner in range(3))
+    near = np.flatnonzero((first & second) | (second & third) | (third & first))
+    slots = (3 * near[:, None] + np.arange(3)).reshape(-1)
+    flat = faces.reshape(-1)
+    starts, ends = flat[slots], flat[slots - slots % 3 + (slots % 3 + 1) % 3]
+    keys = np.minimum(starts, ends) * np.int64(max(n_vertices, 1)) + np.maximum(starts, ends)
+    order = np.argsort(keys, kind="stable")
+    keys, slots = keys[order], slots[order]
+    # closed: a key is there once (its other face is not near) or twice
+    pair = np.flatnonzero(keys[1:] == keys[:-1])
+    lower, upper = slots[pair], slots[pair + 1]
+    outline = front[lower // 3] != front[upper // 3]
+    lower, upper = lower[outline], upper[outline]
+    result: np.ndarray = np.where(front[lower // 3], lower, upper)
+    return result
 
 
 def boundary_loops(

@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     import trimesh
 
 _CACHE_KEY = "shadowgeo_caster"
+# Faces per block where per-face arrays are computed a block at a time.
+_BLOCK = 1 << 16
 _T = TypeVar("_T")
 
 
@@ -95,16 +97,20 @@ class Caster:
         """(m, 3) unnormalised face normals (twice the area, by the winding)."""
         # Component-wise cross product on coordinate columns gathered one at a
         # time: several times faster than np.cross on an (m, 3, 3) gather (the
-        # gathers read contiguous columns), and the same numbers.
+        # gathers read contiguous columns), and the same numbers. Faces go in
+        # blocks, so the temporaries stay small and are reused instead of
+        # being fresh memory for every big mesh.
         columns = np.ascontiguousarray(self.vertices.T)
-        first, second, third = self.faces.T
-        x0, y0, z0 = columns[0][first], columns[1][first], columns[2][first]
-        ux, uy, uz = columns[0][second] - x0, columns[1][second] - y0, columns[2][second] - z0
-        vx, vy, vz = columns[0][third] - x0, columns[1][third] - y0, columns[2][third] - z0
         normals = np.empty((len(self.faces), 3))
-        normals[:, 0] = uy * vz - uz * vy
-        normals[:, 1] = uz * vx - ux * vz
-        normals[:, 2] = ux * vy - uy * vx
+        for start in range(0, len(self.faces), _BLOCK):
+            first, second, third = self.faces[start : start + _BLOCK].T
+            x0, y0, z0 = columns[0][first], columns[1][first], columns[2][first]
+            ux, uy, uz = columns[0][second] - x0, columns[1][second] - y0, columns[2][second] - z0
+            vx, vy, vz = columns[0][third] - x0, columns[1][third] - y0, columns[2][third] - z0
+            block = normals[start : start + _BLOCK]
+            block[:, 0] = uy * vz - uz * vy
+            block[:, 1] = uz * vx - ux * vz
+            block[:, 2] = ux * vy - uy * vx
         return normals
 
     @cached_property
@@ -126,16 +132,22 @@ class Caster:
     def face_offsets(self) -> np.ndarray:
         """(m,) ``face_normals . (first corner - center)``: with
         :attr:`face_normals`, each face's plane in the :attr:`centered` frame."""
-        offsets: np.ndarray = np.einsum(
-            "ij,ij->i", self.face_normals, self.centered[self.faces[:, 0], :3]
-        )
+        normals, offsets = self.face_normals, np.empty(len(self.faces))
+        corners = self.faces[:, 0]
+        for start in range(0, len(self.faces), _BLOCK):
+            stop = start + _BLOCK
+            offsets[start:stop] = np.einsum(
+                "ij,ij->i", normals[start:stop], self.centered[corners[start:stop], :3]
+            )
         return offsets
 
     def facing(self, light_homogeneous: ArrayLike) -> np.ndarray:
         """(m,) positive where a face turns its front to the light given as a
         homogeneous 4-vector in the :attr:`centered` frame (zero edge-on)."""
         light = np.asarray(light_homogeneous, dtype=np.float64)
-        facing: np.ndarray = self.face_normals @ light[:3] - self.face_offsets * light[3]
+        facing: np.ndarray = self.face_normals @ light[:3]
+        if light[3] != 0:  # a light at infinity does not need the face planes
+            facing -= self.face_offsets * light[3]
         return facing
 
     @cached_property
@@ -166,6 +178,12 @@ class Caster:
         pairs = self.edge_slots.reshape(-1, 2)
         first, second = pairs[:, 0], pairs[:, 1]
         return np.column_stack([np.minimum(first, second), np.maximum(first, second)])
+
+    @property
+    def has_edge_table(self) -> bool:
+        """Whether the edge table (:attr:`edges`, :attr:`edge_slots`, ...) is
+        built already: code that can do with less then skips building it."""
+        return "_edge_table" in self.__dict__
 
     @property
     def edge_slots(self) -> np.ndarray:
@@ -248,7 +266,12 @@ class Caster:
         directions: a watertight, consistently wound 2-manifold edge set."""
         if self.n_faces == 0:
             return False
-        return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+        if self.has_edge_table:
+            return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+        closed = closed_by_sort(self.faces, len(self.vertices))
+        if closed is None:  # too many vertices for one packed key
+            return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+        return closed
 
     def derived(self, key: str, compute: Callable[[Caster], _T]) -> _T:
         """``compute(self)``, computed once per mesh and ``key`` and kept, as
@@ -284,6 +307,49 @@ class Caster:
             + np.einsum("ij,ij->i", c, a) * lb
         )
         return float(np.sum(2.0 * np.arctan2(numerator, denominator)) / (4.0 * np.pi))
+
+
+def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
+    """Whether the (m, 3) ``faces`` use every edge exactly twice, in opposite
+    directions (:attr:`Caster.is_closed`), by one in-place sort of one int64
+    key per face edge; None when ``n_vertices`` is too large for the key.
+
+    The key of the edge from ``a`` to ``b`` is its undirected key
+    ``min * n + max`` with one more bit, set when ``a > b``. The faces are
+    closed exactly when the sorted keys come in pairs ``2 k, 2 k + 1``: each
+    edge once each way (sorted, the next pair's key is then larger, so no
+    edge has a third use). An edge from a vertex to itself has no set bit and
+    never pairs. Only the keys are made: no argsort, no edge table.
+
+    Examples
+    --------
+    >>> tetrahedron = np.array([[1, 0, 3], [2, 1, 3], [0, 2, 3], [0, 1, 2]])
+    >>> closed_by_sort(tetrahedron, 4), closed_by_sort(tetrahedron[:3], 4)
+    (True, False)
+    """
+    faces = np.asarray(faces)
+    count = len(faces)
+    n = max(int(n_vertices), 1)
+    if (2 * n * n).bit_length() > 63:
+        return None
+    if count == 0 or count % 2:  # an odd number of face edges cannot pair
+        return False
+    keys = np.empty(3 * count, dtype=np.int64)
+    for corner in range(3):
+        start, end = faces[:, corner], faces[:, (corner + 1) % 3]
+        key = keys[corner * count : (corner + 1) * count]
+        np.minimum(start, end, out=key)
+        key *= np.int64(n)
+        key += np.maximum(start, end)
+        key <<= np.int64(1)
+        key |= start > end
+    keys.sort()
+    pairs = keys.reshape(-1, 2)
+    for first in range(0, len(pairs), _BLOCK):
+        block = pairs[first : first + _BLOCK]
+        if not np.all((block[:, 0] ^ block[:, 1]) == 1):
+            return False
+    return True
 
 
 def point_ids(points: ArrayLike) -> np.ndarray:
