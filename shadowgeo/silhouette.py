@@ -172,13 +172,8 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
     """
     faces = caster.faces
     n_vertices = len(caster.vertices)
-    has_front = np.zeros(n_vertices, dtype=bool)
-    has_back = np.zeros(n_vertices, dtype=bool)
-    back = ~front
-    for corner in range(3):
-        has_front[faces[front, corner]] = True
-        has_back[faces[back, corner]] = True
-    mixed = has_front & has_back
+    front_uses = np.bincount(faces[front].reshape(-1), minlength=n_vertices)
+    mixed = (front_uses > 0) & (front_uses < caster.vertex_face_count)
     first, second, third = (mixed[faces[:, corner]] for corner in range(3))
     near = np.flatnonzero((first & second) | (second & third) | (third & first))
     slots = (3 * near[:, None] + np.arange(3)).reshape(-1)

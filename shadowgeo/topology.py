@@ -36,6 +36,11 @@ class Caster:
     vertices : (n, 3) float64
     faces : (m, 3) int
         Indices into ``vertices``; the winding gives the outward side.
+    copy : bool
+        Copy the arrays (the default), so that later changes to the caller's
+        arrays cannot reach the cached topology. ``False`` uses float64 and
+        int64 arrays as they are (still checked), for a caller that keeps
+        them unchanged while the caster lives: no second copy of a big mesh.
 
     Raises
     ------
@@ -47,9 +52,9 @@ class Caster:
     vertices: NDArray[np.float64]
     faces: NDArray[np.int64]
 
-    def __init__(self, vertices: ArrayLike, faces: ArrayLike) -> None:
-        vertices = np.array(vertices, dtype=np.float64, copy=True)
-        faces = np.array(faces, copy=True)
+    def __init__(self, vertices: ArrayLike, faces: ArrayLike, *, copy: bool = True) -> None:
+        vertices = np.array(vertices, dtype=np.float64, copy=True if copy else None)
+        faces = np.array(faces, copy=True if copy else None)
         if vertices.size == 0:
             vertices = vertices.reshape(0, 3)
         if faces.size == 0:
@@ -78,10 +83,13 @@ class Caster:
                     f"caster face {index} {faces[index].tolist()} indexes a missing vertex "
                     f"(the mesh has {len(vertices)} vertices)"
                 )
+        if not copy:  # read-only views: the caller's own arrays stay writable
+            vertices, faces = vertices.view(), faces.view()
         vertices.setflags(write=False)
         faces.setflags(write=False)
         self.vertices = vertices
         self.faces = faces
+        self._lit_before = False
 
     @property
     def n_faces(self) -> int:
@@ -95,23 +103,32 @@ class Caster:
     @cached_property
     def face_normals(self) -> np.ndarray:
         """(m, 3) unnormalised face normals (twice the area, by the winding)."""
-        # Component-wise cross product on coordinate columns gathered one at a
-        # time: several times faster than np.cross on an (m, 3, 3) gather (the
-        # gathers read contiguous columns), and the same numbers. Faces go in
-        # blocks, so the temporaries stay small and are reused instead of
-        # being fresh memory for every big mesh.
-        columns = np.ascontiguousarray(self.vertices.T)
         normals = np.empty((len(self.faces), 3))
         for start in range(0, len(self.faces), _BLOCK):
-            first, second, third = self.faces[start : start + _BLOCK].T
-            x0, y0, z0 = columns[0][first], columns[1][first], columns[2][first]
-            ux, uy, uz = columns[0][second] - x0, columns[1][second] - y0, columns[2][second] - z0
-            vx, vy, vz = columns[0][third] - x0, columns[1][third] - y0, columns[2][third] - z0
-            block = normals[start : start + _BLOCK]
-            block[:, 0] = uy * vz - uz * vy
-            block[:, 1] = uz * vx - ux * vz
-            block[:, 2] = ux * vy - uy * vx
+            normals[start : start + _BLOCK] = self._normals(start, start + _BLOCK)
         return normals
+
+    def _normals(self, start: int, stop: int) -> np.ndarray:
+        """(k, 3) :attr:`face_normals` of faces ``start:stop``."""
+        # Component-wise cross product on coordinate columns gathered one at a
+        # time: several times faster than np.cross on an (m, 3, 3) gather (the
+        # gathers read contiguous columns), and the same numbers. Callers go a
+        # block of faces at a time, so the temporaries stay small and are
+        # reused instead of being fresh memory for every big mesh.
+        columns = self._columns
+        first, second, third = self.faces[start:stop].T
+        x0, y0, z0 = columns[0][first], columns[1][first], columns[2][first]
+        ux, uy, uz = columns[0][second] - x0, columns[1][second] - y0, columns[2][second] - z0
+        vx, vy, vz = columns[0][third] - x0, columns[1][third] - y0, columns[2][third] - z0
+        normals = np.empty((len(first), 3))
+        normals[:, 0] = uy * vz - uz * vy
+        normals[:, 1] = uz * vx - ux * vz
+        normals[:, 2] = ux * vy - uy * vx
+        return normals
+
+    @cached_property
+    def _columns(self) -> np.ndarray:
+        return np.ascontiguousarray(self.vertices.T)
 
     @cached_property
     def center(self) -> np.ndarray:
@@ -128,25 +145,55 @@ class Caster:
         relative = self.vertices - self.center
         return np.column_stack([relative, np.ones(len(relative))])
 
+    def centered_rows(self, indices: ArrayLike) -> np.ndarray:
+        """(k, 4) the rows ``indices`` of :attr:`centered`, the same numbers,
+        without making the whole array when it is not there yet."""
+        if "centered" in self.__dict__:
+            rows: np.ndarray = self.centered[indices]
+            return rows
+        relative = self.vertices[indices] - self.center
+        return np.column_stack([relative, np.ones(len(relative))])
+
     @cached_property
     def face_offsets(self) -> np.ndarray:
         """(m,) ``face_normals . (first corner - center)``: with
         :attr:`face_normals`, each face's plane in the :attr:`centered` frame."""
-        normals, offsets = self.face_normals, np.empty(len(self.faces))
-        corners = self.faces[:, 0]
+        offsets = np.empty(len(self.faces))
         for start in range(0, len(self.faces), _BLOCK):
             stop = start + _BLOCK
-            offsets[start:stop] = np.einsum(
-                "ij,ij->i", normals[start:stop], self.centered[corners[start:stop], :3]
-            )
+            offsets[start:stop] = self._offsets(self.face_normals[start:stop], start, stop)
+        return offsets
+
+    def _offsets(self, normals: np.ndarray, start: int, stop: int) -> np.ndarray:
+        """(k,) :attr:`face_offsets` of faces ``start:stop``, their ``normals`` given."""
+        corners = self.vertices[self.faces[start:stop, 0]] - self.center  # as in centered
+        offsets: np.ndarray = np.einsum("ij,ij->i", normals, corners)
         return offsets
 
     def facing(self, light_homogeneous: ArrayLike) -> np.ndarray:
         """(m,) positive where a face turns its front to the light given as a
-        homogeneous 4-vector in the :attr:`centered` frame (zero edge-on)."""
+        homogeneous 4-vector in the :attr:`centered` frame (zero edge-on).
+
+        The first light works a block of faces at a time and keeps nothing
+        but the result; a second light keeps :attr:`face_normals` (and, if
+        positional, :attr:`face_offsets`) for the lights after it. The numbers
+        are the same either way.
+        """
         light = np.asarray(light_homogeneous, dtype=np.float64)
-        facing: np.ndarray = self.face_normals @ light[:3]
-        if light[3] != 0:  # a light at infinity does not need the face planes
+        positional = light[3] != 0  # a light at infinity does not need the face planes
+        if not self._lit_before and "face_normals" not in self.__dict__:
+            self._lit_before = True
+            facing = np.empty(len(self.faces))
+            for start in range(0, len(self.faces), _BLOCK):
+                stop = start + _BLOCK
+                normals = self._normals(start, stop)
+                block = facing[start:stop]
+                np.matmul(normals, light[:3], out=block)
+                if positional:
+                    block -= self._offsets(normals, start, stop) * light[3]
+            return facing
+        facing = self.face_normals @ light[:3]
+        if positional:
             facing -= self.face_offsets * light[3]
         return facing
 
@@ -178,6 +225,12 @@ class Caster:
         pairs = self.edge_slots.reshape(-1, 2)
         first, second = pairs[:, 0], pairs[:, 1]
         return np.column_stack([np.minimum(first, second), np.maximum(first, second)])
+
+    @cached_property
+    def vertex_face_count(self) -> np.ndarray:
+        """(n,) number of face corners at each vertex (a face that repeats a
+        vertex counts it as often)."""
+        return np.bincount(self.faces.reshape(-1), minlength=len(self.vertices))
 
     @property
     def has_edge_table(self) -> bool:
