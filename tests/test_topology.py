@@ -220,3 +220,10 @@ def test_face_normals_and_facing_in_blocks_equal_the_whole_array_formulas():
     assert np.array_equal(caster.facing(point), expected @ point[:3] - offsets)
     direction = np.array([0.3, -1.0, 0.2, 0.0])
     assert np.array_equal(caster.facing(direction) > 0, expected @ direction[:3] > 0)
+    # A fresh caster's first light goes a block at a time and keeps nothing;
+    # the second keeps the normals: the same numbers both ways.
+    fresh = Caster(vertices, faces)
+    assert np.array_equal(fresh.facing(point), expected @ point[:3] - offsets)
+    assert "face_normals" not in fresh.__dict__
+    assert np.array_equal(fresh.facing(point), expected @ point[:3] - offsets)
+    assert np.array_equal(fresh.facing(direction), expected @ direction[:3])
