@@ -443,3 +443,22 @@ def test_every_encoding_writes_the_shapes_numbers_exactly(tmp_path, suffix):
     assert shapes["dark"].role == "shadow"
     data = target.read_bytes()
     assert b"shadowgeo-numbers" not in (gzip.decompress(data) if suffix == ".x3dz" else data)
+
+
+@pytest.mark.parametrize(
+    ("value", "non_finite"),
+    [
+        ("1e99 2 -3.5e-400", False),  # underflow is finite
+        ("1.7e308 1", False),
+        ("1.8e308 1", True),
+        ("2 1E+0400", True),
+        ("9" * 250 + "e99", True),  # a long mantissa overflows with a small exponent
+        ("1" + "0" * 308 + " 4", False),
+        ("1" + "0" * 309, True),
+        ("0 NaN 1", True),
+        ("1 2 inf", True),
+        ("1 e 3", False),  # not all numbers: text, left alone
+    ],
+)
+def test_non_finite_attributes_are_found_without_parsing_every_number(value, non_finite):
+    assert x3d_write._non_finite(value) == non_finite

@@ -132,17 +132,31 @@ class _SplicingWriter:
         self.met = 0
 
     def write(self, data: bytes) -> int:
-        buffer = self.pending + bytes(data)
+        buffer = self.pending + data if self.pending else data
+        view = memoryview(buffer)  # slices written without copies
         done = 0
         for match in self.splicer.pattern.finditer(buffer):
-            self.handle.write(buffer[done : match.start()])
+            self.handle.write(view[done : match.start()])
             self.handle.write(self.splicer.texts[int(match.group(1))])
             self.met += 1
             done = match.end()
-        keep = max(done, len(buffer) - self.held)
-        self.handle.write(buffer[done:keep])
-        self.pending = buffer[keep:]
+        keep = self._start_of_token(buffer, max(done, len(buffer) - self.held))
+        self.handle.write(view[done:keep])
+        self.pending = bytes(view[keep:])
         return len(data)
+
+    def _start_of_token(self, buffer: bytes, start: int) -> int:
+        """Where the end of ``buffer`` from ``start`` on may begin a placeholder
+        that the next chunk completes (``len(buffer)`` when nowhere)."""
+        prefix = self.splicer.prefix
+        position = buffer.find(prefix[:1], start)
+        while position >= 0:
+            tail = buffer[position:]
+            head, digits = tail[: len(prefix)], tail[len(prefix) :]
+            if prefix.startswith(head) and (not digits or digits.isdigit()):
+                return position
+            position = buffer.find(prefix[:1], position + 1)
+        return len(buffer)
 
     def close(self) -> None:
         self.handle.write(self.pending)

@@ -237,6 +237,9 @@ _MAY_BE_NON_FINITE = (
 )
 
 
+_MAY_OVERFLOW = re.compile(r"[nN]|[eE]\+?0*[1-9]\d\d|\d{200}")
+
+
 def _drop(node: Element) -> None:
     """Remove ``node`` from its tree, keeping the text after it."""
     parent = node.getparent()
@@ -253,8 +256,11 @@ def _drop(node: Element) -> None:
 
 def _non_finite(value: str) -> bool:
     """All the words of ``value`` are numbers and one is not finite."""
-    # a word reads as inf or nan only if it spells one or overflows an exponent
-    if not any(letter in value for letter in "nNeE"):
+    # A word reads as inf or nan only if it spells one or overflows: an
+    # exponent of three digits or more, or two hundred digits in a row (no
+    # float64 reaches 1e308 with less). Anything else is finite, however long
+    # the text: 60 MB of coordinates are not parsed again to learn that.
+    if _MAY_OVERFLOW.search(value) is None:
         return False
     numbers = numbers_or_none(value)
     return numbers is not None and not bool(np.isfinite(numbers).all())
