@@ -454,7 +454,8 @@ def test_every_encoding_writes_the_shapes_numbers_exactly(tmp_path, suffix):
         ("2 1E+0400", True),
         ("9" * 250 + "e99", True),  # a long mantissa overflows with a small exponent
         ("1" + "0" * 308 + " 4", False),
-        ("1" + "0" * 309, True),
+        ("1" + "0" * 309 + "e0", True),
+        ("1" + "0" * 309 + "e-400", False),
         ("0 NaN 1", True),
         ("1 2 inf", True),
         ("1 e 3", False),  # not all numbers: text, left alone
