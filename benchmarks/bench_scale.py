@@ -4,6 +4,7 @@ Run from the repository root::
 
     python benchmarks/bench_scale.py            # full size, writes its REPORT.md section
     python benchmarks/bench_scale.py --quick    # small scenes, a smoke test (prints only)
+    python benchmarks/bench_scale.py --scene "one mesh"   # one scene only (prints only)
 
 It generates two scenes into a temporary folder, each as ``.x3d`` (one
 IndexedTriangleSet per shape, written by lxml) and ``.glb`` (written by
@@ -188,11 +189,13 @@ def _case(tool: str, source: Path, target: Path) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def measure(quick: bool, repeat: int = 1) -> list[dict]:
+def measure(quick: bool, repeat: int = 1, only: str | None = None) -> list[dict]:
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         for name, meshes in scenes(quick).items():
+            if only is not None and name != only:
+                continue
             stem = folder / name.replace(" ", "_")
             write_x3d(meshes, stem.with_suffix(".x3d"))
             write_glb(meshes, stem.with_suffix(".glb"))
@@ -305,14 +308,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small scenes; print only")
     parser.add_argument("--repeat", type=int, default=3, help="runs per case; the least time")
+    parser.add_argument(
+        "--scene", choices=["one mesh", "many shapes"], help="that scene only; print only"
+    )
     arguments = parser.parse_args()
-    rows = measure(arguments.quick, arguments.repeat)
+    rows = measure(arguments.quick, arguments.repeat, arguments.scene)
     command = "python benchmarks/bench_scale.py" + (" --quick" if arguments.quick else "")
     if arguments.repeat != 3:
         command += f" --repeat {arguments.repeat}"
     text = section(rows, command)
     print(text)
-    if not arguments.quick:
+    if not arguments.quick and arguments.scene is None:
         write_section(text)
 
 

@@ -25,6 +25,9 @@ from .limits import check_geometry
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
 
+# Faces per block where a pass over every face goes a block at a time.
+_BLOCK = 1 << 16
+
 
 @dataclass(frozen=True, eq=False)
 class Silhouette:
@@ -172,10 +175,21 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
     """
     faces = caster.faces
     n_vertices = len(caster.vertices)
-    front_uses = np.bincount(faces[front].reshape(-1), minlength=n_vertices)
-    mixed = (front_uses > 0) & (front_uses < caster.vertex_face_count)
-    first, second, third = (mixed[faces[:, corner]] for corner in range(3))
-    near = np.flatnonzero((first & second) | (second & third) | (third & first))
+    # a block of faces at a time: a few small temporaries, reused
+    has_front = np.zeros(n_vertices, dtype=bool)
+    has_back = np.zeros(n_vertices, dtype=bool)
+    for start in range(0, len(faces), _BLOCK):
+        block, lit = faces[start : start + _BLOCK], front[start : start + _BLOCK]
+        has_front[block[lit]] = True
+        has_back[block[~lit]] = True
+    mixed = has_front & has_back
+    near_parts = []
+    for start in range(0, len(faces), _BLOCK):
+        first, second, third = mixed[faces[start : start + _BLOCK]].T
+        near_parts.append(
+            start + np.flatnonzero((first & second) | (second & third) | (third & first))
+        )
+    near = np.concatenate(near_parts) if near_parts else np.zeros(0, dtype=np.int64)
     slots = (3 * near[:, None] + np.arange(3)).reshape(-1)
     flat = faces.reshape(-1)
     starts, ends = flat[slots], flat[slots - slots % 3 + (slots % 3 + 1) % 3]

@@ -226,12 +226,6 @@ class Caster:
         first, second = pairs[:, 0], pairs[:, 1]
         return np.column_stack([np.minimum(first, second), np.maximum(first, second)])
 
-    @cached_property
-    def vertex_face_count(self) -> np.ndarray:
-        """(n,) number of face corners at each vertex (a face that repeats a
-        vertex counts it as often)."""
-        return np.bincount(self.faces.reshape(-1), minlength=len(self.vertices))
-
     @property
     def has_edge_table(self) -> bool:
         """Whether the edge table (:attr:`edges`, :attr:`edge_slots`, ...) is
@@ -387,15 +381,17 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
         return None
     if count == 0 or count % 2:  # an odd number of face edges cannot pair
         return False
-    keys = np.empty(3 * count, dtype=np.int64)
-    for corner in range(3):
-        start, end = faces[:, corner], faces[:, (corner + 1) % 3]
-        key = keys[corner * count : (corner + 1) * count]
+    keys = np.empty((count, 3), dtype=np.int64)
+    for first in range(0, count, _BLOCK):  # small temporaries, reused
+        block = faces[first : first + _BLOCK]
+        start, end = block, np.roll(block, -1, axis=1)
+        key = keys[first : first + _BLOCK]
         np.minimum(start, end, out=key)
         key *= np.int64(n)
         key += np.maximum(start, end)
         key <<= np.int64(1)
         key |= start > end
+    keys = keys.reshape(-1)
     keys.sort()
     pairs = keys.reshape(-1, 2)
     for first in range(0, len(pairs), _BLOCK):
