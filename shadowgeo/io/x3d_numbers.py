@@ -53,8 +53,8 @@ def points_text(vertices: np.ndarray) -> bytes:
     b'0.1 -2.0 3e-20, 1.0 0.0 5.0'
     """
     values = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)  # orjson needs it
-    finite = np.isfinite(values).all(axis=1)
-    if not finite.all():
+    if not np.isfinite(values).all():
+        finite = np.isfinite(values).all(axis=1)
         bad = values[np.argmin(finite)].tolist()
         raise SceneError(f"cannot write a non-finite number in X3D: {bad}")
     if orjson is not None and len(values):

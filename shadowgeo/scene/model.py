@@ -277,15 +277,20 @@ class Scene:
     @property
     def bounds(self) -> np.ndarray:
         """(2, 3) world bounding box of the scene's own geometry."""
-        boxes = [
-            bounding_box(s.world_vertices)
-            for s in self.shapes
-            if s.role == "geometry" and len(s.faces)
-        ]
-        if not boxes:
+        geometry = [s for s in self.shapes if s.role == "geometry" and len(s.faces)]
+        if not geometry:
             return np.zeros((2, 3))
-        stacked = np.array(boxes)
-        return np.array([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)])
+        return _world_box(geometry)
+
+
+def _world_box(shapes: list[Shape]) -> np.ndarray:
+    """(2, 3) the bounding box of the shapes' world vertices (zeros for no
+    shape): one box of all the stacked vertices, but a lone shape's own
+    vertices are not copied to stack them."""
+    if not shapes:
+        return np.zeros((2, 3))
+    points = [shape.world_vertices for shape in shapes]
+    return bounding_box(points[0] if len(points) == 1 else np.concatenate(points))
 
 
 # Where the overview camera looks from, seen from the scene's centre, Y up:
@@ -309,12 +314,7 @@ def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
     >>> round(float(view.direction @ to_centre), 12), round(float(view.up[1]), 4)  # cos 34.9 deg
     (1.0, 0.8202)
     """
-    boxes = np.array([bounding_box(s.world_vertices) for s in scene.shapes if s.n_faces])
-    low, high = (
-        (boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0))
-        if len(boxes)
-        else (np.zeros(3), np.zeros(3))
-    )
+    low, high = _world_box([shape for shape in scene.shapes if shape.n_faces])
     center = (low + high) / 2
     radius = max(float(np.linalg.norm(high - low)) / 2, 1e-6)
     x, y, z = OVERVIEW_FROM
