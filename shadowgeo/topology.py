@@ -145,7 +145,7 @@ class Caster:
         relative = self.vertices - self.center
         return np.column_stack([relative, np.ones(len(relative))])
 
-    def centered_rows(self, indices: ArrayLike) -> np.ndarray:
+    def centered_rows(self, indices: np.ndarray) -> np.ndarray:
         """(k, 4) the rows ``indices`` of :attr:`centered`, the same numbers,
         without making the whole array when it is not there yet."""
         if "centered" in self.__dict__:
@@ -391,9 +391,9 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
         key += np.maximum(start, end)
         key <<= np.int64(1)
         key |= start > end
-    keys = keys.reshape(-1)
-    keys.sort()
-    pairs = keys.reshape(-1, 2)
+    flat = keys.reshape(-1)
+    flat.sort()
+    pairs = flat.reshape(-1, 2)
     for first in range(0, len(pairs), _BLOCK):
         block = pairs[first : first + _BLOCK]
         if not np.all((block[:, 0] ^ block[:, 1]) == 1):

@@ -42,7 +42,11 @@ def glb_container(text: bytes, binary: bytes | memoryview) -> bytes:
     ``binary``, each padded to 4 bytes as the spec requires (spaces, zeros).
     The pieces are joined once: a big buffer is copied once, not per piece."""
     text_pad = -len(text) % 4
-    pieces = [struct.pack("<II", len(text) + text_pad, JSON_CHUNK), text, b" " * text_pad]
+    pieces: list[bytes | memoryview] = [
+        struct.pack("<II", len(text) + text_pad, JSON_CHUNK),
+        text,
+        b" " * text_pad,
+    ]
     if len(binary):
         binary_pad = -len(binary) % 4
         pieces += [struct.pack("<II", len(binary) + binary_pad, BIN_CHUNK), binary]

@@ -107,7 +107,7 @@ class _Builder:
                 "target": target,
             }
         )
-        self.binary += memoryview(data).cast("B")
+        self.binary += data.data.cast("B")
         return len(views) - 1
 
     def _accessor(self, **accessor: Any) -> int:
