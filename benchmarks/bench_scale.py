@@ -4,6 +4,7 @@ Run from the repository root::
 
     python benchmarks/bench_scale.py            # full size, writes its REPORT.md section
     python benchmarks/bench_scale.py --quick    # small scenes, a smoke test (prints only)
+    python benchmarks/bench_scale.py --scene "one mesh"   # one scene only (prints only)
 
 It generates two scenes into a temporary folder, each as ``.x3d`` (one
 IndexedTriangleSet per shape, written by lxml) and ``.glb`` (written by
@@ -24,7 +25,9 @@ files, in the same run:
   the yardstick for the end-to-end time;
 * **lxml + numpy**: ``etree.parse`` of the ``.x3d`` (huge_tree) and every
   number attribute converted by ``np.fromstring`` -- the yardstick for the
-  X3D load.
+  X3D load -- then the same numbers written back as X3D text (shortest
+  round-trip digits, by orjson): with trimesh's load and export timed apart,
+  the *format yardstick* of each case (read its input, write its output).
 
 Times are CPU seconds of the process (the tools are single-threaded in these
 steps), the least of ``--repeat`` runs (3) of each case. Ratios are shadowgeo
@@ -141,19 +144,46 @@ def run_shadowgeo(source: str, target: str) -> dict:
 def run_trimesh(source: str, target: str) -> dict:
     start = clock()
     loaded = trimesh.load(source, force="scene")
+    middle = clock()
     loaded.export(target)
-    return {"load + export": clock() - start}
+    end = clock()
+    return {"load + export": end - start, "load": middle - start, "export": end - middle}
 
 
 def run_lxml(source: str, target: str) -> dict:
+    """lxml's parse and numpy's reading of every number attribute, then the
+    same numbers written back as X3D text (the shortest round-trip digits, by
+    orjson when installed, else repr) into ``target``: what reading and
+    writing the format costs at least."""
     start = clock()
     parser = etree.XMLParser(huge_tree=True, resolve_entities=False, no_network=True)
     tree = etree.parse(source, parser)
     count = 0
+    arrays = []
     for element in tree.iter("Coordinate", "IndexedTriangleSet"):
         text = element.get("point") if element.tag == "Coordinate" else element.get("index")
-        count += np.fromstring(text.replace(",", " "), sep=" ").size
-    return {"parse + numbers": clock() - start, "numbers": count}
+        numbers = np.fromstring(text.replace(",", " "), sep=" ")
+        if element.tag == "IndexedTriangleSet":
+            numbers = numbers.astype(np.int64)
+        arrays.append((element.tag, numbers))
+        count += numbers.size
+    middle = clock()
+    with open(target, "wb") as handle:
+        handle.write(b"<X3D><Scene>")
+        for tag, numbers in arrays:
+            name = b"point" if tag == "Coordinate" else b"index"
+            handle.write(b"<%s %s='%s'/>" % (tag.encode(), name, _number_text(numbers)))
+        handle.write(b"</Scene></X3D>")
+    end = clock()
+    return {"parse + numbers": middle - start, "write numbers": end - middle, "numbers": count}
+
+
+def _number_text(numbers: np.ndarray) -> bytes:
+    try:
+        import orjson
+    except ImportError:
+        return " ".join(map(repr, numbers.tolist())).encode()
+    return orjson.dumps(numbers, option=orjson.OPT_SERIALIZE_NUMPY)[1:-1].replace(b",", b" ")
 
 
 RUNNERS = {"shadowgeo": run_shadowgeo, "trimesh": run_trimesh, "lxml": run_lxml}
@@ -188,11 +218,13 @@ def _case(tool: str, source: Path, target: Path) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-def measure(quick: bool, repeat: int = 1) -> list[dict]:
+def measure(quick: bool, repeat: int = 1, only: str | None = None) -> list[dict]:
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         folder = Path(folder)
         for name, meshes in scenes(quick).items():
+            if only is not None and name != only:
+                continue
             stem = folder / name.replace(" ", "_")
             write_x3d(meshes, stem.with_suffix(".x3d"))
             write_glb(meshes, stem.with_suffix(".glb"))
@@ -206,7 +238,7 @@ def measure(quick: bool, repeat: int = 1) -> list[dict]:
                 "glb MB": stem.with_suffix(".glb").stat().st_size / 2**20,
             }
             peer = case("trimesh", stem.with_suffix(".glb"), folder / "peer.glb", repeat)
-            parse = case("lxml", stem.with_suffix(".x3d"), folder / "unused", repeat)
+            parse = case("lxml", stem.with_suffix(".x3d"), folder / "numbers.x3d", repeat)
             for source in (".x3d", ".glb"):
                 for target in (".glb", ".x3d"):
                     ours = case(
@@ -225,13 +257,22 @@ def _end_to_end(row: dict) -> float:
     return ours["load"] + ours["add_shadows"] + ours["save"]
 
 
+def _yardstick(row: dict) -> float:
+    """What the peers take to read the input's format and write the output's:
+    lxml's parse + numbers or trimesh's load, then the numbers written as X3D
+    text or trimesh's export."""
+    read = row["lxml"]["parse + numbers"] if row["in"] == ".x3d" else row["trimesh"]["load"]
+    write = row["lxml"]["write numbers"] if row["out"] == ".x3d" else row["trimesh"]["export"]
+    return float(read + write)
+
+
 def _line(row: dict) -> str:
     ours = row["ours"]
     return (
         f"{row['scene']} {row['in']}->{row['out']}: load {ours['load']:.2f}s shadows "
         f"{ours['add_shadows']:.2f}s save {ours['save']:.2f}s, peak {ours['peak MB']:.0f} MB; "
         f"trimesh {row['trimesh']['load + export']:.2f}s, "
-        f"lxml {row['lxml']['parse + numbers']:.2f}s"
+        f"lxml {row['lxml']['parse + numbers']:.2f}s, yardstick {_yardstick(row):.2f}s"
     )
 
 
@@ -239,9 +280,10 @@ def table(rows: list[dict]) -> str:
     lines = [
         "| scene | in → out | load (s) | add_shadows (s) | save (s) | end-to-end (s) "
         "| without shadows (s) | trimesh load+export (s) | × trimesh | × trimesh, no shadows "
-        "| lxml parse+numbers (s) | X3D load × lxml | peak RSS (MB) | peak, no shadows (MB) "
-        "| no shadows, above imports (MB) | × raw arrays |",
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| lxml parse+numbers (s) | X3D load × lxml | format yardstick (s) | × yardstick "
+        "| peak RSS (MB) | peak, no shadows (MB) | no shadows, above imports (MB) "
+        "| × raw arrays |",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for row in rows:
         ours, peer = row["ours"], row["trimesh"]["load + export"]
@@ -253,7 +295,8 @@ def table(rows: list[dict]) -> str:
             f"| {row['scene']} | {row['in']} → {row['out']} | {ours['load']:.2f} "
             f"| {ours['add_shadows']:.2f} | {ours['save']:.2f} | {_end_to_end(row):.2f} "
             f"| {plain:.2f} | {peer:.2f} | {_end_to_end(row) / peer:.2f} | {plain / peer:.2f} "
-            f"| {parse:.2f} | {x3d_ratio} | {ours['peak MB']:.0f} "
+            f"| {parse:.2f} | {x3d_ratio} | {_yardstick(row):.2f} "
+            f"| {_end_to_end(row) / _yardstick(row):.2f} | {ours['peak MB']:.0f} "
             f"| {ours['peak MB (no shadows)']:.0f} | {above:.0f} | {above / row['raw MB']:.1f} |"
         )
     return "\n".join(lines)
@@ -279,8 +322,12 @@ def section(rows: list[dict], command: str) -> str:
         f"{scenes_text}.\n\n"
         "End-to-end = load + add_shadows (default sun onto y = 0) + save of the shadowed "
         "scene; *without shadows* = load + save of the scene as read. The trimesh peer is "
-        "`trimesh.load` + `export` of the same geometry's .glb; the X3D yardstick is lxml's "
-        "parse (huge_tree) plus `np.fromstring` of every number attribute. Peak RSS is the "
+        "`trimesh.load` + `export` of the same geometry's .glb; the X3D load yardstick is "
+        "lxml's parse (huge_tree) plus `np.fromstring` of every number attribute. The *format "
+        "yardstick* of a row is what the peers take to read its input and write its output: "
+        "lxml's parse + numbers (.x3d) or trimesh's load (.glb), then the same numbers "
+        "written back as X3D text with their shortest round-trip digits (.x3d; orjson) or "
+        "trimesh's export (.glb); for .glb → .glb it is the trimesh peer. Peak RSS is the "
         "shadowgeo subprocess's: overall, and up to the save without shadows; *above imports* "
         "subtracts the RSS once shadowgeo and its readers and writers are imported, and "
         "*× raw arrays* divides that by the raw float64 vertex + int64 face arrays.\n\n"
@@ -305,14 +352,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small scenes; print only")
     parser.add_argument("--repeat", type=int, default=3, help="runs per case; the least time")
+    parser.add_argument(
+        "--scene", choices=["one mesh", "many shapes"], help="that scene only; print only"
+    )
     arguments = parser.parse_args()
-    rows = measure(arguments.quick, arguments.repeat)
+    rows = measure(arguments.quick, arguments.repeat, arguments.scene)
     command = "python benchmarks/bench_scale.py" + (" --quick" if arguments.quick else "")
     if arguments.repeat != 3:
         command += f" --repeat {arguments.repeat}"
     text = section(rows, command)
     print(text)
-    if not arguments.quick:
+    if not arguments.quick and arguments.scene is None:
         write_section(text)
 
 

@@ -738,7 +738,7 @@ class _Projector:
         # corners all project (w > 0) this is also the sign of its image's area.
         facing = caster.facing(self.light_h)
         loops, loop_vertices, cut = _outline(caster, whole, cut, facing, self.per_triangle)
-        image = _images(caster.centered[loop_vertices], self.H)
+        image = _images(caster.centered_rows(loop_vertices), self.H)
         projected = _project_loops(loops, loop_vertices, image)
         if cut.any():
             tight = self._clip_planes(low, high)
@@ -771,12 +771,12 @@ class _Projector:
         per-reason counts of faces leaving the tight rectangle and the
         number culled. ``(None, None)`` when every face is whole and none is
         cut (the caster's box passes): the common case, told without arrays."""
-        homogeneous, faces = self.caster.centered, self.caster.faces
         if np.all(self.call.box_corners @ tight.T > 0):
             # The caster's box lies inside every half-space, so does each vertex.
             self.culled = 0
-            self._count_clipped(homogeneous, faces[:0], np.zeros((0, 3, 5), dtype=bool))
+            self._count_clipped(np.zeros((0, 4)), self.caster.faces[:0], np.zeros((0, 3, 5), bool))
             return None, None
+        homogeneous, faces = self.caster.centered, self.caster.faces
         whole = ~np.any(np.any(homogeneous @ reach().T < 0, axis=1)[faces], axis=1)
         touched = np.flatnonzero(np.any(np.any(homogeneous @ tight.T < 0, axis=1)[faces], axis=1))
         outside = (homogeneous[faces[touched]] @ tight.T) < 0  # (k, 3, 5)

@@ -25,6 +25,9 @@ from .limits import check_geometry
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
 
+# Faces per block where a pass over every face goes a block at a time.
+_BLOCK = 1 << 16
+
 
 @dataclass(frozen=True, eq=False)
 class Silhouette:
@@ -147,12 +150,59 @@ def front_boundary(caster: Caster, front: np.ndarray) -> tuple[np.ndarray, np.nd
     """
     if not caster.is_closed:
         return _net_boundary(caster, front, np.ones(caster.n_faces, dtype=np.int64))
-    slots = caster.edge_face_slots
-    slot_front = front[slots // 3]
-    outline = np.flatnonzero(slot_front[:, 0] != slot_front[:, 1])
-    front_slot = np.where(slot_front[outline, 0], slots[outline, 0], slots[outline, 1])
+    if caster.has_edge_table:
+        slots = caster.edge_face_slots
+        slot_front = front[slots // 3]
+        outline = np.flatnonzero(slot_front[:, 0] != slot_front[:, 1])
+        front_slot = np.where(slot_front[outline, 0], slots[outline, 0], slots[outline, 1])
+    else:
+        front_slot = _mixed_outline_slots(caster, front)
     directed = _directed_edges(caster, front_slot)
     return directed[:, 0], directed[:, 1]
+
+
+def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
+    """The front face slot of each silhouette edge of a closed caster, in the
+    order of the edges' keys (as :attr:`Caster.edge_face_slots` gives them),
+    from the edges of the few faces near the silhouette instead of the
+    mesh's whole edge table.
+
+    Both ends of a silhouette edge are *mixed* vertices (they have a front
+    and a back face: the edge's own two), and both faces of the edge contain
+    both ends; so the faces with at least two mixed corners hold both slots
+    of every silhouette edge. Among them, an edge whose two slots are both
+    present and differ in front bit is a silhouette edge.
+    """
+    faces = caster.faces
+    n_vertices = len(caster.vertices)
+    # a block of faces at a time: a few small temporaries, reused
+    has_front = np.zeros(n_vertices, dtype=bool)
+    has_back = np.zeros(n_vertices, dtype=bool)
+    for start in range(0, len(faces), _BLOCK):
+        block, lit = faces[start : start + _BLOCK], front[start : start + _BLOCK]
+        has_front[block[lit]] = True
+        has_back[block[~lit]] = True
+    mixed = has_front & has_back
+    near_parts = []
+    for start in range(0, len(faces), _BLOCK):
+        first, second, third = mixed[faces[start : start + _BLOCK]].T
+        near_parts.append(
+            start + np.flatnonzero((first & second) | (second & third) | (third & first))
+        )
+    near = np.concatenate(near_parts) if near_parts else np.zeros(0, dtype=np.int64)
+    slots = (3 * near[:, None] + np.arange(3)).reshape(-1)
+    flat = faces.reshape(-1)
+    starts, ends = flat[slots], flat[slots - slots % 3 + (slots % 3 + 1) % 3]
+    keys = np.minimum(starts, ends) * np.int64(max(n_vertices, 1)) + np.maximum(starts, ends)
+    order = np.argsort(keys, kind="stable")
+    keys, slots = keys[order], slots[order]
+    # closed: a key is there once (its other face is not near) or twice
+    pair = np.flatnonzero(keys[1:] == keys[:-1])
+    lower, upper = slots[pair], slots[pair + 1]
+    outline = front[lower // 3] != front[upper // 3]
+    lower, upper = lower[outline], upper[outline]
+    result: np.ndarray = np.where(front[lower // 3], lower, upper)
+    return result
 
 
 def boundary_loops(

@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     import trimesh
 
 _CACHE_KEY = "shadowgeo_caster"
+# Faces per block where per-face arrays are computed a block at a time.
+_BLOCK = 1 << 16
 _T = TypeVar("_T")
 
 
@@ -34,6 +36,11 @@ class Caster:
     vertices : (n, 3) float64
     faces : (m, 3) int
         Indices into ``vertices``; the winding gives the outward side.
+    copy : bool
+        Copy the arrays (the default), so that later changes to the caller's
+        arrays cannot reach the cached topology. ``False`` uses float64 and
+        int64 arrays as they are (still checked), for a caller that keeps
+        them unchanged while the caster lives: no second copy of a big mesh.
 
     Raises
     ------
@@ -45,9 +52,9 @@ class Caster:
     vertices: NDArray[np.float64]
     faces: NDArray[np.int64]
 
-    def __init__(self, vertices: ArrayLike, faces: ArrayLike) -> None:
-        vertices = np.array(vertices, dtype=np.float64, copy=True)
-        faces = np.array(faces, copy=True)
+    def __init__(self, vertices: ArrayLike, faces: ArrayLike, *, copy: bool = True) -> None:
+        vertices = np.array(vertices, dtype=np.float64, copy=True if copy else None)
+        faces = np.array(faces, copy=True if copy else None)
         if vertices.size == 0:
             vertices = vertices.reshape(0, 3)
         if faces.size == 0:
@@ -76,10 +83,13 @@ class Caster:
                     f"caster face {index} {faces[index].tolist()} indexes a missing vertex "
                     f"(the mesh has {len(vertices)} vertices)"
                 )
+        if not copy:  # read-only views: the caller's own arrays stay writable
+            vertices, faces = vertices.view(), faces.view()
         vertices.setflags(write=False)
         faces.setflags(write=False)
         self.vertices = vertices
         self.faces = faces
+        self._lit_before = False
 
     @property
     def n_faces(self) -> int:
@@ -93,19 +103,32 @@ class Caster:
     @cached_property
     def face_normals(self) -> np.ndarray:
         """(m, 3) unnormalised face normals (twice the area, by the winding)."""
+        normals = np.empty((len(self.faces), 3))
+        for start in range(0, len(self.faces), _BLOCK):
+            normals[start : start + _BLOCK] = self._normals(start, start + _BLOCK)
+        return normals
+
+    def _normals(self, start: int, stop: int) -> np.ndarray:
+        """(k, 3) :attr:`face_normals` of faces ``start:stop``."""
         # Component-wise cross product on coordinate columns gathered one at a
         # time: several times faster than np.cross on an (m, 3, 3) gather (the
-        # gathers read contiguous columns), and the same numbers.
-        columns = np.ascontiguousarray(self.vertices.T)
-        first, second, third = self.faces.T
+        # gathers read contiguous columns), and the same numbers. Callers go a
+        # block of faces at a time, so the temporaries stay small and are
+        # reused instead of being fresh memory for every big mesh.
+        columns = self._columns
+        first, second, third = self.faces[start:stop].T
         x0, y0, z0 = columns[0][first], columns[1][first], columns[2][first]
         ux, uy, uz = columns[0][second] - x0, columns[1][second] - y0, columns[2][second] - z0
         vx, vy, vz = columns[0][third] - x0, columns[1][third] - y0, columns[2][third] - z0
-        normals = np.empty((len(self.faces), 3))
+        normals = np.empty((len(first), 3))
         normals[:, 0] = uy * vz - uz * vy
         normals[:, 1] = uz * vx - ux * vz
         normals[:, 2] = ux * vy - uy * vx
         return normals
+
+    @cached_property
+    def _columns(self) -> np.ndarray:
+        return np.ascontiguousarray(self.vertices.T)
 
     @cached_property
     def center(self) -> np.ndarray:
@@ -122,20 +145,56 @@ class Caster:
         relative = self.vertices - self.center
         return np.column_stack([relative, np.ones(len(relative))])
 
+    def centered_rows(self, indices: np.ndarray) -> np.ndarray:
+        """(k, 4) the rows ``indices`` of :attr:`centered`, the same numbers,
+        without making the whole array when it is not there yet."""
+        if "centered" in self.__dict__:
+            rows: np.ndarray = self.centered[indices]
+            return rows
+        relative = self.vertices[indices] - self.center
+        return np.column_stack([relative, np.ones(len(relative))])
+
     @cached_property
     def face_offsets(self) -> np.ndarray:
         """(m,) ``face_normals . (first corner - center)``: with
         :attr:`face_normals`, each face's plane in the :attr:`centered` frame."""
-        offsets: np.ndarray = np.einsum(
-            "ij,ij->i", self.face_normals, self.centered[self.faces[:, 0], :3]
-        )
+        offsets = np.empty(len(self.faces))
+        for start in range(0, len(self.faces), _BLOCK):
+            stop = start + _BLOCK
+            offsets[start:stop] = self._offsets(self.face_normals[start:stop], start, stop)
+        return offsets
+
+    def _offsets(self, normals: np.ndarray, start: int, stop: int) -> np.ndarray:
+        """(k,) :attr:`face_offsets` of faces ``start:stop``, their ``normals`` given."""
+        corners = self.vertices[self.faces[start:stop, 0]] - self.center  # as in centered
+        offsets: np.ndarray = np.einsum("ij,ij->i", normals, corners)
         return offsets
 
     def facing(self, light_homogeneous: ArrayLike) -> np.ndarray:
         """(m,) positive where a face turns its front to the light given as a
-        homogeneous 4-vector in the :attr:`centered` frame (zero edge-on)."""
+        homogeneous 4-vector in the :attr:`centered` frame (zero edge-on).
+
+        The first light works a block of faces at a time and keeps nothing
+        but the result; a second light keeps :attr:`face_normals` (and, if
+        positional, :attr:`face_offsets`) for the lights after it. The numbers
+        are the same either way.
+        """
         light = np.asarray(light_homogeneous, dtype=np.float64)
-        facing: np.ndarray = self.face_normals @ light[:3] - self.face_offsets * light[3]
+        positional = light[3] != 0  # a light at infinity does not need the face planes
+        if not self._lit_before and "face_normals" not in self.__dict__:
+            self._lit_before = True
+            facing = np.empty(len(self.faces))
+            for start in range(0, len(self.faces), _BLOCK):
+                stop = start + _BLOCK
+                normals = self._normals(start, stop)
+                block = facing[start:stop]
+                np.matmul(normals, light[:3], out=block)
+                if positional:
+                    block -= self._offsets(normals, start, stop) * light[3]
+            return facing
+        facing = self.face_normals @ light[:3]
+        if positional:
+            facing -= self.face_offsets * light[3]
         return facing
 
     @cached_property
@@ -166,6 +225,12 @@ class Caster:
         pairs = self.edge_slots.reshape(-1, 2)
         first, second = pairs[:, 0], pairs[:, 1]
         return np.column_stack([np.minimum(first, second), np.maximum(first, second)])
+
+    @property
+    def has_edge_table(self) -> bool:
+        """Whether the edge table (:attr:`edges`, :attr:`edge_slots`, ...) is
+        built already: code that can do with less then skips building it."""
+        return "_edge_table" in self.__dict__
 
     @property
     def edge_slots(self) -> np.ndarray:
@@ -248,7 +313,12 @@ class Caster:
         directions: a watertight, consistently wound 2-manifold edge set."""
         if self.n_faces == 0:
             return False
-        return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+        if self.has_edge_table:
+            return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+        closed = closed_by_sort(self.faces, len(self.vertices))
+        if closed is None:  # too many vertices for one packed key
+            return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
+        return closed
 
     def derived(self, key: str, compute: Callable[[Caster], _T]) -> _T:
         """``compute(self)``, computed once per mesh and ``key`` and kept, as
@@ -284,6 +354,51 @@ class Caster:
             + np.einsum("ij,ij->i", c, a) * lb
         )
         return float(np.sum(2.0 * np.arctan2(numerator, denominator)) / (4.0 * np.pi))
+
+
+def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
+    """Whether the (m, 3) ``faces`` use every edge exactly twice, in opposite
+    directions (:attr:`Caster.is_closed`), by one in-place sort of one int64
+    key per face edge; None when ``n_vertices`` is too large for the key.
+
+    The key of the edge from ``a`` to ``b`` is its undirected key
+    ``min * n + max`` with one more bit, set when ``a > b``. The faces are
+    closed exactly when the sorted keys come in pairs ``2 k, 2 k + 1``: each
+    edge once each way (sorted, the next pair's key is then larger, so no
+    edge has a third use). An edge from a vertex to itself has no set bit and
+    never pairs. Only the keys are made: no argsort, no edge table.
+
+    Examples
+    --------
+    >>> tetrahedron = np.array([[1, 0, 3], [2, 1, 3], [0, 2, 3], [0, 1, 2]])
+    >>> closed_by_sort(tetrahedron, 4), closed_by_sort(tetrahedron[:3], 4)
+    (True, False)
+    """
+    faces = np.asarray(faces)
+    count = len(faces)
+    n = max(int(n_vertices), 1)
+    if (2 * n * n).bit_length() > 63:
+        return None
+    if count == 0 or count % 2:  # an odd number of face edges cannot pair
+        return False
+    keys = np.empty((count, 3), dtype=np.int64)
+    for first in range(0, count, _BLOCK):  # small temporaries, reused
+        block = faces[first : first + _BLOCK]
+        start, end = block, np.roll(block, -1, axis=1)
+        key = keys[first : first + _BLOCK]
+        np.minimum(start, end, out=key)
+        key *= np.int64(n)
+        key += np.maximum(start, end)
+        key <<= np.int64(1)
+        key |= start > end
+    flat = keys.reshape(-1)
+    flat.sort()
+    pairs = flat.reshape(-1, 2)
+    for first in range(0, len(pairs), _BLOCK):
+        block = pairs[first : first + _BLOCK]
+        if not np.all((block[:, 0] ^ block[:, 1]) == 1):
+            return False
+    return True
 
 
 def point_ids(points: ArrayLike) -> np.ndarray:

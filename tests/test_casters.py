@@ -106,3 +106,38 @@ def test_something_in_front_of_a_patch_is_found_from_boxes_and_vertices():
     assert _anything_in_front(ground, CasterSet([floor, slanted, above]), tolerance, False)
     assert not _anything_in_front(ground, CasterSet([floor, below]), tolerance, False)
     assert _anything_in_front(ground, CasterSet([floor, below]), tolerance, True)
+
+
+def test_owners_and_faces_of_chosen_casters_match_the_owner_arrays():
+    rng = np.random.default_rng(8)
+    shapes = [
+        sg.Shape(rng.uniform(-1, 1, (6, 3)), rng.integers(0, 6, (count, 3)), name=f"s{index}")
+        for index, count in enumerate([1, 4, 2, 7, 3])
+    ]
+    stacked = CasterSet(shapes)
+    owner = np.repeat(np.arange(5), [1, 4, 2, 7, 3])
+    assert np.array_equal(stacked.face_owner, owner)
+    assert np.array_equal(stacked.vertex_owner, np.repeat(np.arange(5), 6))
+    for _ in range(20):
+        chosen = rng.random(5) < 0.5
+        assert np.array_equal(stacked.faces_of(chosen), chosen[owner])
+        faces = rng.random(len(owner)) < 0.3
+        assert stacked.owners(faces).tolist() == sorted(set(owner[faces].tolist()))
+    assert CasterSet([]).owners(np.zeros(0, dtype=bool)).tolist() == []
+
+
+def test_one_shape_without_a_transform_is_stacked_without_copies():
+    # the stack of one big mesh must not double its memory; its numbers are the shape's
+    rng = np.random.default_rng(2)
+    shape = sg.Shape(rng.normal(size=(30, 3)), rng.integers(0, 30, (40, 3)), name="one")
+    stacked = CasterSet([shape])
+    assert np.shares_memory(stacked.vertices, shape.vertices)
+    assert np.shares_memory(stacked.faces, shape.faces)
+    assert np.array_equal(stacked.vertices, shape.vertices)
+    mesh = stacked.mesh(np.ones(40, dtype=bool))
+    assert np.shares_memory(mesh.vertices, shape.vertices) and not mesh.vertices.flags.writeable
+    assert shape.vertices.flags.writeable  # the caster's read-only views leave it as it was
+    part = stacked.mesh(np.arange(40) % 2 == 0)
+    assert np.array_equal(part.faces, shape.faces[::2])
+    moved = sg.Shape(shape.vertices, shape.faces, transform=np.diag([2.0, 1.0, 1.0, 1.0]))
+    assert np.array_equal(CasterSet([moved]).vertices[:, 0], 2.0 * shape.vertices[:, 0])

@@ -328,3 +328,60 @@ def test_vertex_components_label_each_part_by_its_least_vertex():
     for part in range(count):
         members = np.flatnonzero(expected == part)
         assert np.all(labels[members] == members.min())
+
+
+def _closed_meshes():
+    rng = np.random.default_rng(21)
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    bumpy = sphere.copy()  # not convex: several silhouette loops, some nested
+    bumpy.vertices = bumpy.vertices * (1.0 + 0.3 * rng.random((len(bumpy.vertices), 1)))
+    torus = trimesh.creation.torus(
+        major_radius=1.0, minor_radius=0.3, major_sections=24, minor_sections=12
+    )
+    pair = trimesh.util.concatenate([sphere, torus.copy().apply_translation([0.5, 0.2, 0.1])])
+    # Zero-area faces: a vertex moved onto its neighbour keeps the mesh closed.
+    pinched = sphere.copy()
+    vertices = pinched.vertices.copy()
+    vertices[pinched.faces[0, 0]] = vertices[pinched.faces[0, 1]]
+    pinched = trimesh.Trimesh(vertices, pinched.faces, process=False)
+    box = trimesh.creation.box()  # edge-on faces for axis-aligned lights
+    return {"bumpy": bumpy, "torus": torus, "pair": pair, "pinched": pinched, "box": box}
+
+
+@pytest.mark.parametrize("name", ["bumpy", "torus", "pair", "pinched", "box"])
+def test_silhouette_from_the_faces_near_it_equals_the_whole_edge_table(name):
+    from shadowgeo.silhouette import front_boundary, light_homogeneous, silhouette_loops
+    from shadowgeo.topology import Caster
+
+    mesh = _closed_meshes()[name]
+    rng = np.random.default_rng(len(name))
+    lights = [DirectionalLight([0.0, 0.0, -1.0]), DirectionalLight([1.0, 0.0, 0.0])]
+    lights += [DirectionalLight(rng.normal(size=3)) for _ in range(4)]
+    lights += [PointLight(rng.normal(size=3) * 4.0) for _ in range(3)]
+    for light in lights:
+        near = Caster(mesh.vertices, mesh.faces)  # no edge table: the near faces only
+        whole = Caster(mesh.vertices, mesh.faces)
+        assert near.is_closed and len(whole.edges) and whole.has_edge_table
+        front = near.facing(light_homogeneous(near, light)) > 0
+        starts, ends = front_boundary(near, front)
+        expected_starts, expected_ends = front_boundary(whole, front)
+        assert not near.has_edge_table
+        # the same edges in the same order, so the same loops
+        assert np.array_equal(starts, expected_starts) and np.array_equal(ends, expected_ends)
+        loops, used = silhouette_loops(near, front)
+        expected_loops, expected_used = silhouette_loops(whole, front)
+        assert len(loops) == len(expected_loops) and np.array_equal(used, expected_used)
+        assert all(np.array_equal(a, b) for a, b in zip(loops, expected_loops, strict=True))
+        expected, _ = brute_force_silhouette(mesh.faces, front)
+        assert sorted(zip(starts.tolist(), ends.tolist(), strict=True)) == sorted(expected)
+
+
+def test_silhouette_of_a_closed_mesh_with_no_mixed_vertex_is_empty():
+    from shadowgeo.silhouette import front_boundary
+    from shadowgeo.topology import Caster
+
+    sphere = trimesh.creation.icosphere(subdivisions=1)
+    caster = Caster(sphere.vertices, sphere.faces)
+    for front in (np.ones(len(sphere.faces), bool), np.zeros(len(sphere.faces), bool)):
+        starts, ends = front_boundary(caster, front)
+        assert len(starts) == 0 and len(ends) == 0

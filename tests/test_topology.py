@@ -115,3 +115,115 @@ def test_bounding_box_equals_numpys_reductions_and_carries_nan():
     points[4, 1] = np.nan
     box = bounding_box(points)
     assert np.isnan(box[:, 1]).all() and np.isfinite(box[:, [0, 2]]).all()
+
+
+def _closed_by_dictionary(faces):
+    """Every edge used exactly twice, once each way (a loop edge a -> a never is)."""
+    uses: dict[tuple[int, int], list[int]] = {}
+    for face in np.asarray(faces).tolist():
+        for corner in range(3):
+            start, end = face[corner], face[(corner + 1) % 3]
+            uses.setdefault((min(start, end), max(start, end)), []).append(1 if start < end else -1)
+    return bool(uses) and all(sorted(signs) == [-1, 1] for signs in uses.values())
+
+
+def _closedness_cases():
+    sphere = trimesh.creation.icosphere(subdivisions=2)
+    torus = trimesh.creation.torus(
+        major_radius=1.0, minor_radius=0.3, major_sections=9, minor_sections=7
+    )
+    faces = sphere.faces
+    n = len(sphere.vertices)
+    tetra = np.array([[1, 0, 3], [2, 1, 3], [0, 2, 3], [0, 1, 2]])
+    flipped = faces.copy()
+    flipped[5] = flipped[5, ::-1]
+    yield "sphere", sphere.vertices, faces
+    yield "torus", torus.vertices, torus.faces
+    yield "one face less", sphere.vertices, faces[1:]
+    yield "one face flipped", sphere.vertices, flipped
+    yield "a face twice", sphere.vertices, np.vstack([faces, faces[:1]])
+    yield (
+        "a face and its reverse added",
+        sphere.vertices,
+        np.vstack([faces, faces[:1], faces[:1, ::-1]]),
+    )
+    # a -> a edges: a repeated corner, in both windings
+    yield "repeated corner", sphere.vertices, np.vstack([faces, [[0, 0, 1], [0, 1, 0]]])
+    # two tetrahedra sharing the edge 0-1: that edge has four uses
+    other = np.array([[1, 0, 5], [4, 1, 5], [0, 4, 5], [0, 1, 4]])
+    yield "edge of four faces", np.zeros((6, 3)), np.vstack([tetra, other])
+    # two spheres touching at one vertex: closed by edges, not a manifold at the vertex
+    yield (
+        "pinched at a vertex",
+        np.zeros((2 * n - 1, 3)),
+        np.vstack([faces, np.where(faces == 0, 0, faces + n - 1)]),
+    )
+    yield "odd face count", np.zeros((4, 3)), tetra[:3]
+    rng = np.random.default_rng(3)
+    for seed in range(6):
+        # random relabelling and face order, and random damage half the time
+        perm = rng.permutation(n)
+        shuffled = perm[faces][rng.permutation(len(faces))]
+        shuffled = np.roll(shuffled, rng.integers(3), axis=1)
+        if seed % 2:
+            index = rng.integers(len(shuffled))
+            shuffled[index, 0] = shuffled[index, 1]
+        yield f"random {seed}", sphere.vertices, shuffled
+
+
+@pytest.mark.parametrize(
+    ("vertices", "faces"),
+    [case[1:] for case in _closedness_cases()],
+    ids=[case[0] for case in _closedness_cases()],
+)
+def test_closedness_by_one_sort_matches_a_dictionary_of_edges(vertices, faces):
+    from shadowgeo.topology import Caster, closed_by_sort
+
+    expected = _closed_by_dictionary(faces)
+    assert closed_by_sort(np.asarray(faces), len(vertices)) == expected
+    fresh = Caster(vertices, faces)
+    assert fresh.is_closed == expected
+    assert not fresh.has_edge_table  # closedness alone builds no edge table
+    with_table = Caster(vertices, faces)
+    assert len(with_table.edges) > 0 and with_table.has_edge_table
+    assert with_table.is_closed == expected
+
+
+def test_closedness_by_sort_declines_keys_that_do_not_fit():
+    from shadowgeo.topology import closed_by_sort
+
+    assert closed_by_sort(np.array([[0, 1, 2]]), 2**31 + 1) is None
+    assert closed_by_sort(np.zeros((0, 3), dtype=np.int64), 3) is False
+
+
+def test_face_normals_and_facing_in_blocks_equal_the_whole_array_formulas():
+    from shadowgeo.topology import Caster
+
+    rng = np.random.default_rng(11)
+    vertices = rng.normal(size=(500, 3)) * 10.0
+    faces = rng.integers(0, 500, size=(150_017, 3))  # a few blocks and a part
+    caster = Caster(vertices, faces)
+    a, b, c = (vertices[faces[:, k]] for k in range(3))
+    u, v = b - a, c - a
+    expected = np.column_stack(
+        [
+            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
+        ]
+    )
+    assert np.array_equal(caster.face_normals, expected)  # the same operations, bit for bit
+    corners = caster.centered[faces[:, 0], :3]
+    offsets = np.einsum("ij,ij->i", expected, corners)
+    assert np.array_equal(caster.face_offsets, offsets)
+    point = np.array([1.0, -2.0, 3.0, 1.0])
+    assert np.array_equal(caster.facing(point), expected @ point[:3] - offsets)
+    direction = np.array([0.3, -1.0, 0.2, 0.0])
+    assert np.array_equal(caster.facing(direction) > 0, expected @ direction[:3] > 0)
+    # A fresh caster's first light goes a block at a time and keeps nothing;
+    # the second keeps the normals: the same numbers both ways.
+    fresh = Caster(vertices, faces)
+    assert np.array_equal(fresh.facing(point), expected @ point[:3] - offsets)
+    assert "face_normals" not in fresh.__dict__
+    assert np.array_equal(fresh.facing(point), expected @ point[:3] - offsets)
+    assert np.array_equal(fresh.facing(direction), expected @ direction[:3])

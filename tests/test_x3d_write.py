@@ -363,19 +363,103 @@ def test_non_finite_numbers_of_the_input_are_not_copied(tmp_path):
 
 @pytest.mark.parametrize("fast", [True, False])
 def test_point_and_index_text_reads_back_exactly(monkeypatch, fast):
+    from shadowgeo.io import x3d_numbers
     from shadowgeo.io.x3d_fields import parse as parse_field
 
     if not fast:
-        monkeypatch.setattr(x3d_write, "orjson", None)
-    elif x3d_write.orjson is None:
+        monkeypatch.setattr(x3d_numbers, "orjson", None)
+    elif x3d_numbers.orjson is None:
         pytest.skip("orjson not installed: only the repr path exists")
     rng = np.random.default_rng(3)
     points = rng.normal(size=(500, 3)) * 10.0 ** rng.integers(-60, 60, size=(500, 3))
     points[0] = [-0.0, 1 / 3, 2**-40]
-    text = x3d_write._points(points)
+    text = x3d_numbers.points_text(points).decode("ascii")
     assert text.count(", ") == len(points) - 1  # one comma between points
     read = parse_field(text, "MFVec3f")
     assert np.array_equal(read, points) and np.signbit(read[0, 0])
     faces = rng.integers(0, 2**31 - 1, size=(300, 3))
-    assert np.array_equal(parse_field(x3d_write._integers(faces), "MFInt32"), faces.ravel())
-    assert x3d_write._points(np.zeros((0, 3))) == "" and x3d_write._integers(np.zeros(0)) == ""
+    indices = x3d_numbers.integers_text(faces).decode("ascii")
+    assert np.array_equal(parse_field(indices, "MFInt32"), faces.ravel())
+    assert x3d_numbers.points_text(np.zeros((0, 3))) == b""
+    assert x3d_numbers.integers_text(np.zeros(0)) == b""
+
+
+def test_spliced_numbers_reach_the_file_whatever_the_chunks():
+    # lxml writes in chunks: a placeholder split across two of them must
+    # still become its numbers, each exactly once, and nothing else change.
+    import io
+
+    from shadowgeo.io.x3d_numbers import Splicer
+
+    splicer = Splicer()
+    root = etree.Element("X3D")
+    texts = [b"1 2 3", b"", b"4.5 -6e-7 8, 9 10 11", b"12"]
+    for index, text in enumerate(texts):
+        splicer.set(etree.SubElement(root, "Coordinate", DEF=f"c{index}"), "point", text)
+    serialised = etree.tostring(root)
+    assert serialised.count(splicer.prefix) == len(texts)
+    expected = (
+        b"<X3D>"
+        + b"".join(
+            b'<Coordinate DEF="c%d" point="%s"/>' % (index, text)
+            for index, text in enumerate(texts)
+        )
+        + b"</X3D>"
+    )
+    assert splicer.splice(serialised) == expected
+    rng = np.random.default_rng(0)
+    for size in [1, 2, 7, len(splicer.prefix) + 3, 64, 10_000]:
+        out = io.BytesIO()
+        writer = splicer.writer(out)
+        start = 0
+        while start < len(serialised):
+            step = int(rng.integers(1, size + 1))
+            writer.write(serialised[start : start + step])
+            start += step
+        writer.close()
+        assert out.getvalue() == expected
+    broken = splicer.writer(io.BytesIO())
+    broken.write(serialised[: serialised.index(splicer.prefix) + 5])
+    with pytest.raises(sg.SceneError, match="internal error: 0 of 4"):
+        broken.close()
+    splicer.fill()  # the encodings that read the tree get the text itself
+    assert [c.get("point") for c in root] == [t.decode() for t in texts]
+
+
+@pytest.mark.parametrize("suffix", [".x3d", ".x3dz", ".x3dv", ".x3dj"])
+def test_every_encoding_writes_the_shapes_numbers_exactly(tmp_path, suffix):
+    rng = np.random.default_rng(4)
+    vertices = rng.normal(size=(40, 3)) * 10.0 ** rng.integers(-30, 30, size=(40, 3))
+    faces = rng.integers(0, 40, size=(25, 3))
+    shadow = sg.Shape(vertices[::-1], faces, role="shadow", group="shadows_sun", name="dark")
+    scene = sg.Scene([sg.Shape(vertices, faces, name="thing"), shadow])
+    target = tmp_path / f"out{suffix}"
+    sg.save(scene, target)
+    back = sg.load(target)
+    shapes = {shape.name: shape for shape in back.shapes}
+    assert np.array_equal(shapes["thing"].world_vertices, vertices)
+    assert np.array_equal(shapes["thing"].faces, faces)
+    assert np.array_equal(shapes["dark"].world_vertices, vertices[::-1])
+    assert shapes["dark"].role == "shadow"
+    data = target.read_bytes()
+    assert b"shadowgeo-numbers" not in (gzip.decompress(data) if suffix == ".x3dz" else data)
+
+
+@pytest.mark.parametrize(
+    ("value", "non_finite"),
+    [
+        ("1e99 2 -3.5e-400", False),  # underflow is finite
+        ("1.7e308 1", False),
+        ("1.8e308 1", True),
+        ("2 1E+0400", True),
+        ("9" * 250 + "e99", True),  # a long mantissa overflows with a small exponent
+        ("1" + "0" * 308 + " 4", False),
+        ("1" + "0" * 309 + "e0", True),
+        ("1" + "0" * 309 + "e-400", False),
+        ("0 NaN 1", True),
+        ("1 2 inf", True),
+        ("1 e 3", False),  # not all numbers: text, left alone
+    ],
+)
+def test_non_finite_attributes_are_found_without_parsing_every_number(value, non_finite):
+    assert x3d_write._non_finite(value) == non_finite

@@ -127,7 +127,10 @@ def up_and_units(scene: Scene) -> tuple[str, float]:
 def check_face_indices(shape: Shape) -> None:
     """SceneError naming the first face index that is not one of the shape's
     vertices (negative or too large), for the writers."""
-    outside = (shape.faces < 0) | (shape.faces >= len(shape.vertices))
+    faces = shape.faces
+    if faces.size == 0 or (faces.min() >= 0 and faces.max() < len(shape.vertices)):
+        return  # two reductions; the mask below only for the message
+    outside = (faces < 0) | (faces >= len(shape.vertices))
     if outside.any():
         raise SceneError(
             f"faces index vertex {int(shape.faces[outside][0])} of {len(shape.vertices)}",

@@ -37,27 +37,35 @@ LIGHTS = "KHR_lights_punctual"
 # -- the container ------------------------------------------------------------------------
 
 
-def glb_container(text: bytes, binary: bytes) -> bytes:
+def glb_container(text: bytes, binary: bytes | memoryview) -> bytes:
     """A GLB file of a JSON chunk ``text`` and, when not empty, a BIN chunk
-    ``binary``, each padded to 4 bytes as the spec requires (spaces, zeros)."""
-    text += b" " * (-len(text) % 4)
-    chunks = struct.pack("<II", len(text), JSON_CHUNK) + text
-    if binary:
-        binary += b"\0" * (-len(binary) % 4)
-        chunks += struct.pack("<II", len(binary), BIN_CHUNK) + binary
-    return struct.pack("<4sII", GLB_MAGIC, 2, 12 + len(chunks)) + chunks
+    ``binary``, each padded to 4 bytes as the spec requires (spaces, zeros).
+    The pieces are joined once: a big buffer is copied once, not per piece."""
+    text_pad = -len(text) % 4
+    pieces: list[bytes | memoryview] = [
+        struct.pack("<II", len(text) + text_pad, JSON_CHUNK),
+        text,
+        b" " * text_pad,
+    ]
+    if len(binary):
+        binary_pad = -len(binary) % 4
+        pieces += [struct.pack("<II", len(binary) + binary_pad, BIN_CHUNK), binary]
+        pieces.append(b"\0" * binary_pad)
+    length = 12 + sum(len(piece) for piece in pieces)
+    return b"".join([struct.pack("<4sII", GLB_MAGIC, 2, length), *pieces])
 
 
-def glb_chunks(data: bytes, path: Path) -> tuple[bytes, bytes]:
+def glb_chunks(data: bytes, path: Path) -> tuple[bytes, bytes | memoryview]:
     """The JSON chunk and the BIN chunk (``b""`` when there is none) of the
-    GLB file ``data``, each checked to lie inside the file."""
+    GLB file ``data``, each checked to lie inside the file. The BIN chunk is
+    a view into ``data``, not a copy."""
     if len(data) < 20:
         raise SceneError("truncated GLB header", path=str(path))
     length, kind = struct.unpack_from("<II", data, 12)
     if kind != JSON_CHUNK or 20 + length > len(data):
         raise SceneError("GLB's first chunk is not a complete JSON chunk", path=str(path))
-    rest = data[20 + length :]
-    binary = b""
+    rest = memoryview(data)[20 + length :]
+    binary: bytes | memoryview = b""
     if len(rest) >= 8:
         bin_length, bin_kind = struct.unpack_from("<II", rest, 0)
         if bin_kind == BIN_CHUNK:
@@ -65,7 +73,7 @@ def glb_chunks(data: bytes, path: Path) -> tuple[bytes, bytes]:
     return data[20 : 20 + length], binary
 
 
-def json_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
+def json_document(path: Path) -> tuple[dict[str, Any], bytes | memoryview | None]:
     """The JSON document of a ``.gltf`` or ``.glb`` file, checked to be a JSON
     object, and a GLB's binary chunk (None for ``.gltf``)."""
     try:

@@ -47,7 +47,7 @@ from .gltf_layout import (
 from .trimesh_formats import MALFORMED, load_scene, mesh_shape, triangle_meshes
 
 
-def _gltf_document(path: Path) -> tuple[dict[str, Any], bytes | None]:
+def _gltf_document(path: Path) -> tuple[dict[str, Any], bytes | memoryview | None]:
     """The JSON document of a .gltf or .glb file, checked to be glTF 2.x with
     node references that exist and geometry trimesh decodes correctly, and a
     GLB's binary chunk (None for .gltf)."""
@@ -129,7 +129,9 @@ def _check_uris(document: dict[str, Any], path: Path) -> list[str]:
     return warnings
 
 
-def _for_trimesh(document: dict[str, Any], binary: bytes | None) -> tuple[bytes, dict[str, int]]:
+def _for_trimesh(
+    document: dict[str, Any], binary: bytes | memoryview | None
+) -> tuple[bytes, dict[str, int]]:
     """The file trimesh reads, and its frame name -> glTF node index.
 
     Nodes and meshes are renamed ``node<i>`` and ``mesh<i>``: trimesh renames

@@ -54,12 +54,10 @@ from __future__ import annotations
 
 import copy
 import gzip
-import importlib
 import math
 import os
 import re
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from lxml import etree
@@ -72,19 +70,7 @@ from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
 from .x3d_fields import Element, Tree, numbers_or_none
-
-
-def _optional(name: str) -> Any:
-    """The module ``name``, or None when it is not installed."""
-    try:
-        return importlib.import_module(name)
-    except ImportError:  # pragma: no cover - the repr fallback is tested by monkeypatching
-        return None
-
-
-# The shortest float64 text (as repr), ten times faster: the `speed` extra.
-orjson = _optional("orjson")
-
+from .x3d_numbers import Splicer, integers_text, points_text
 
 ADDED_ROLES = ("shadow", "volume")
 # Written in the ClassicVRML encoding (the same tree, another syntax).
@@ -116,15 +102,18 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
     """
     path = Path(path)
     doctype = None
+    splicer = Splicer()  # the shapes' numbers, kept out of the tree (see .x3d_numbers)
     if scene.document is not None:
-        tree = _with_added(scene)
+        tree = _with_added(scene, splicer)
         doctype = _clean(tree, scene.warnings, Path(scene.path).name if scene.path else "input")
     else:
-        tree = _fresh(scene)
+        tree = _fresh(scene, splicer)
     name = path.name.lower()
     if x3d_json.is_x3d_json(path):
+        splicer.fill()
         parts = [x3d_json.dumps(tree)]
     elif name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
+        splicer.fill()
         vrml97 = name.endswith(VRML97_SUFFIXES)
         try:
             parts = [x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")]
@@ -134,12 +123,14 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
         # XML streamed into the file: a big document is never held as bytes
         with atomic_path(path) as temporary, open(temporary, "wb") as handle:
             handle.write(_DECLARATION)
-            tree.write(handle, xml_declaration=False, encoding="UTF-8", doctype=doctype)
+            spliced = splicer.writer(handle)
+            tree.write(spliced, xml_declaration=False, encoding="UTF-8", doctype=doctype)
+            spliced.close()
             handle.write(b"\n")
         return
     else:
         text = etree.tostring(tree, xml_declaration=False, encoding="UTF-8", doctype=doctype)
-        parts = [_DECLARATION, text]
+        parts = [_DECLARATION, splicer.splice(text)]
     # written part by part: a big document is not copied to join or end it
     if not parts[-1].endswith(b"\n"):
         parts.append(b"\n")
@@ -153,7 +144,7 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
 _DECLARATION = b'<?xml version="1.0" encoding="UTF-8"?>\n'
 
 
-def _with_added(scene: Scene) -> Tree:
+def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
     tree = copy.deepcopy(scene.document)
     if not isinstance(tree, etree._ElementTree):
         tree = etree.ElementTree(tree)
@@ -167,7 +158,7 @@ def _with_added(scene: Scene) -> Tree:
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
-    groups = _add_groups(body, added, used, namespace)
+    groups = _add_groups(body, added, used, namespace, splicer)
     if groups:
         _indent(body, groups)
     return tree
@@ -226,10 +217,10 @@ def _clean(tree: Tree, notes: list[str], source: str) -> str | None:
         )
         _drop(element)
     etree.cleanup_namespaces(tree)
-    # only elements with an attribute that could spell inf or nan (or overflow
-    # an exponent) are looked at in Python: found by libxml2, in document order
-    for element in root.xpath(_MAY_BE_NON_FINITE):
-        for name, value in list(element.attrib.items()):
+    # In document order. (Not an XPath ``contains()`` per letter: it copies
+    # every attribute value once per call, 60 MB each for a big mesh.)
+    for element in root.iter(etree.Element):
+        for name, value in element.items():
             if name not in _TEXT_ATTRIBUTES and _non_finite(value):
                 shown = value if len(value) <= 40 else value[:37] + "..."
                 notes.append(
@@ -240,10 +231,11 @@ def _clean(tree: Tree, notes: list[str], source: str) -> str | None:
     return doctype
 
 
-_MAY_BE_NON_FINITE = (
-    "descendant-or-self::*[@*[contains(., 'n') or contains(., 'N') or contains(., 'e') "
-    "or contains(., 'E')]]"
-)
+# An exponent of three digits or more (searched with its letter first: a
+# literal start makes the search skip from letter to letter), and 200 digits
+# in a row: without one or the other no float64 word overflows.
+_BIG_EXPONENTS = (re.compile(r"e\+?0*[1-9]\d\d"), re.compile(r"E\+?0*[1-9]\d\d"))
+_DIGITS_TO_ZERO = bytes.maketrans(b"0123456789", b"0" * 10)
 
 
 def _drop(node: Element) -> None:
@@ -262,9 +254,16 @@ def _drop(node: Element) -> None:
 
 def _non_finite(value: str) -> bool:
     """All the words of ``value`` are numbers and one is not finite."""
-    # a word reads as inf or nan only if it spells one or overflows an exponent
-    if not any(letter in value for letter in "nNeE"):
-        return False
+    # A word reads as inf or nan only if it spells one (an n) or overflows
+    # (an e with a big exponent, or a long run of digits). Anything else is
+    # finite however long the text: 60 MB of coordinates are not parsed again.
+    if "n" not in value and "N" not in value:
+        if "e" not in value and "E" not in value:
+            return False
+        if not any(pattern.search(value) for pattern in _BIG_EXPONENTS):
+            digits = value.encode("utf-8").translate(_DIGITS_TO_ZERO)
+            if b"0" * 200 not in digits:
+                return False
     numbers = numbers_or_none(value)
     return numbers is not None and not bool(np.isfinite(numbers).all())
 
@@ -308,7 +307,11 @@ def _remove_marked(tree: Tree) -> None:
 
 
 def _add_groups(
-    parent: Element, shapes: list[Shape], used: set[str], namespace: str = ""
+    parent: Element,
+    shapes: list[Shape],
+    used: set[str],
+    namespace: str = "",
+    splicer: Splicer | None = None,
 ) -> list[Element]:
     """Append one Group per ``shape.group`` holding those shapes; returns them."""
     groups: dict[str, etree._Element] = {}
@@ -318,7 +321,7 @@ def _add_groups(
             groups[key] = etree.SubElement(
                 parent, f"{namespace}Group", DEF=unique_name(key, used), attrib={"class": MARK}
             )
-        element = _shape_element(shape, used, namespace, world=True)
+        element = _shape_element(shape, used, namespace, world=True, splicer=splicer)
         element.set("class", f"{MARK}-{shape.role}")  # read back as this role
         groups[key].append(element)
     return list(groups.values())
@@ -354,36 +357,20 @@ def _numbers(values: ArrayLike) -> str:
     return " ".join(map(repr, values.tolist()))
 
 
-def _points(vertices: np.ndarray) -> str:
-    """An MFVec3f's text, ``x y z, x y z, ...``, each number the shortest that
-    reads back as the same float64."""
-    values = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
-    finite = np.isfinite(values).all(axis=1)
-    if not finite.all():
-        bad = values[np.argmin(finite)].tolist()
-        raise SceneError(f"cannot write a non-finite number in X3D: {bad}")
-    if orjson is not None and len(values):
-        text: str = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY).decode("ascii")
-        return text[2:-2].replace("],[", ";").replace(",", " ").replace(";", ", ")
-    words = list(map(repr, values.ravel().tolist()))
-    return ", ".join(map(" ".join, zip(words[0::3], words[1::3], words[2::3], strict=True)))
-
-
-def _integers(values: np.ndarray) -> str:
-    """Integers separated by single spaces."""
-    values = np.ascontiguousarray(values, dtype=np.int64).ravel()
-    if orjson is not None and len(values):
-        listed: str = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY).decode("ascii")
-        return listed[1:-1].replace(",", " ")
-    return " ".join(map(str, values.tolist()))
-
-
 def _bool(value: bool) -> str:
     return "true" if value else "false"
 
 
-def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: bool) -> Element:
-    """A ``<Shape>``: vertices in world coordinates when ``world``, else local."""
+def _shape_element(
+    shape: Shape,
+    used: set[str],
+    namespace: str = "",
+    *,
+    world: bool,
+    splicer: Splicer | None = None,
+) -> Element:
+    """A ``<Shape>``: vertices in world coordinates when ``world``, else local;
+    its numbers in ``splicer`` when given, else in the tree."""
     element = etree.Element(f"{namespace}Shape")
     if shape.name:
         element.set("DEF", unique_name(shape.name, used))
@@ -398,14 +385,16 @@ def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: 
     attributes["transparency"] = repr(float(material.transparency))
     etree.SubElement(appearance, f"{namespace}Material", attributes)
     vertices = shape.world_vertices if world else shape.vertices
-    geometry = etree.SubElement(
-        element,
-        f"{namespace}IndexedTriangleSet",
-        index=_integers(shape.faces),
-        solid=_bool(shape.solid),
-    )
-    points = _points(vertices)
-    etree.SubElement(geometry, f"{namespace}Coordinate", point=points)
+    geometry = etree.SubElement(element, f"{namespace}IndexedTriangleSet")
+    coordinate = etree.SubElement(geometry, f"{namespace}Coordinate")
+    index, points = integers_text(shape.faces), points_text(vertices)
+    if splicer is None:
+        geometry.set("index", index.decode("ascii"))
+        coordinate.set("point", points.decode("ascii"))
+    else:
+        splicer.set(geometry, "index", index)
+        splicer.set(coordinate, "point", points)
+    geometry.set("solid", _bool(shape.solid))
     return element
 
 
@@ -415,7 +404,7 @@ def _shape_element(shape: Shape, used: set[str], namespace: str = "", *, world: 
 _IDENTITY = np.eye(4)
 
 
-def _fresh(scene: Scene) -> Tree:
+def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
     up, meters = up_and_units(scene)
     xsd = "http://www.w3.org/2001/XMLSchema-instance"
     root = etree.Element("X3D", profile="Immersive", version="4.0", nsmap={"xsd": xsd})
@@ -449,13 +438,13 @@ def _fresh(scene: Scene) -> Tree:
     for shape in scene.shapes:
         if shape.role in ADDED_ROLES:
             continue
-        node = _shape_element(shape, used, world=False)
+        node = _shape_element(shape, used, world=False, splicer=splicer)
         if not np.array_equal(shape.transform, _IDENTITY):
             transform = etree.SubElement(body, "Transform", _transform_fields(shape.transform))
             transform.append(node)
         else:
             body.append(node)
-    _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used)
+    _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used, "", splicer)
     etree.indent(root, space="  ")
     return etree.ElementTree(root)
 

@@ -32,6 +32,7 @@ _MESHES_KEPT = 2
 # Up to this many distinct shape transforms, world vertices are computed per
 # transform over all its shapes at once.
 _TRANSFORMS_BATCHED = 16
+_IDENTITY = np.eye(4).reshape(16)
 
 
 def distinct(shapes: list[Shape]) -> list[Shape]:
@@ -78,15 +79,19 @@ class CasterSet:
     """
 
     def __init__(self, shapes: list[Shape]) -> None:
-        counts = np.array([len(shape.vertices) for shape in shapes], dtype=np.int64)
-        face_counts = np.array([len(shape.faces) for shape in shapes], dtype=np.int64)
-        self.vertex_starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+        self.vertex_counts = np.array([len(shape.vertices) for shape in shapes], dtype=np.int64)
+        self.face_counts = np.array([len(shape.faces) for shape in shapes], dtype=np.int64)
+        counts = self.vertex_counts
+        self.vertex_starts = np.cumsum(counts) - counts
+        self.face_starts = np.cumsum(self.face_counts) - self.face_counts
         self.vertices = _world_vertices(shapes, counts)
-        offsets = np.repeat(self.vertex_starts, face_counts)[:, None]
-        faces = [shape.faces for shape in shapes]
-        self.faces = np.concatenate(faces) + offsets if shapes else np.zeros((0, 3), np.int64)
-        self.vertex_owner = np.repeat(np.arange(len(shapes)), counts)
-        self.face_owner = np.repeat(np.arange(len(shapes)), face_counts)
+        if len(shapes) == 1:  # one shape: its own faces, not a copy
+            self.faces = shapes[0].faces
+        elif shapes:
+            self.faces = np.concatenate([shape.faces for shape in shapes])
+            self.faces += np.repeat(self.vertex_starts, self.face_counts)[:, None]
+        else:
+            self.faces = np.zeros((0, 3), np.int64)
         self.casters = [
             SceneCaster(shape, self.vertices[start : start + count])
             for shape, start, count in zip(shapes, self.vertex_starts, counts, strict=True)
@@ -98,10 +103,32 @@ class CasterSet:
             self.low = self.high = np.zeros((0, 3))
         self._meshes: dict[bytes, Caster] = {}
 
+    @functools.cached_property
+    def vertex_owner(self) -> np.ndarray:
+        """(n,) the index of the caster of each stacked vertex."""
+        return np.repeat(np.arange(len(self)), self.vertex_counts)
+
+    @functools.cached_property
+    def face_owner(self) -> np.ndarray:
+        """(m,) the index of the caster of each stacked face."""
+        return np.repeat(np.arange(len(self)), self.face_counts)
+
+    def faces_of(self, chosen: np.ndarray) -> np.ndarray:
+        """(m,) bool over the stacked faces: the faces of the ``chosen`` (k,)
+        casters (``chosen[face_owner]`` without the owner array)."""
+        return np.repeat(chosen, self.face_counts)
+
+    def owners(self, faces: np.ndarray) -> np.ndarray:
+        """The indices of the casters with a face in the (m,) bool mask
+        ``faces``, in order."""
+        if not len(self):
+            return np.zeros(0, dtype=np.int64)
+        return np.flatnonzero(np.logical_or.reduceat(faces, self.face_starts))
+
     def __len__(self) -> int:
         return len(self.casters)
 
-    @property
+    @functools.cached_property
     def bounds(self) -> np.ndarray:
         """(2, 3) the bounding box of every caster's vertices."""
         if len(self.vertices) == 0:
@@ -161,7 +188,7 @@ class CasterSet:
         boxed = keep & (lowest > tolerance.length)
         if not boxed.any():
             return keep
-        inside = boxed[self.vertex_owner]
+        inside = np.repeat(boxed, self.vertex_counts)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             if is_positional(light):
                 scale = np.where(inside, height / (height - distance), 1.0)
@@ -186,6 +213,8 @@ class CasterSet:
         shadows its footprint, as it would anyway, and stays closed, so its
         outline comes from its silhouette."""
         near = np.abs(plane.signed_distance(self.vertices)) <= tolerance.coplanar_length
+        if not near.any():
+            return np.ones(len(self.faces), dtype=bool)
         off: np.ndarray = ~np.all(near[self.faces], axis=1)
         if not off.all():  # the stack's topology, for closedness, only when it matters
             off |= self.closed[self.face_owner]
@@ -225,21 +254,33 @@ class CasterSet:
         if key not in self._meshes:
             if len(self._meshes) >= _MESHES_KEPT:
                 del self._meshes[next(iter(self._meshes))]  # the oldest
-            self._meshes[key] = Caster(self.vertices, self.faces[faces])
+            chosen = self.faces if faces.all() else self.faces[faces]
+            self._meshes[key] = Caster(self.vertices, chosen, copy=False)
         return self._meshes[key]
 
 
 def _world_vertices(shapes: list[Shape], counts: np.ndarray) -> np.ndarray:
     """Every shape's world vertices, stacked: one matrix product per distinct
     transform when there are few (scenes of many shapes mostly share one),
-    else one per shape."""
+    else one per shape; a shape alone under no transform keeps its array."""
     if not shapes:
         return np.zeros((0, 3))
     transforms = np.stack([shape.transform for shape in shapes]).reshape(len(shapes), 16)
     distinct, group = np.unique(transforms, axis=0, return_inverse=True)
     if len(distinct) > _TRANSFORMS_BATCHED:
         return np.concatenate([shape.world_vertices for shape in shapes])
+    if len(distinct) == 1 and np.array_equal(distinct[0], _IDENTITY):
+        # x * 1 + y * 0 + z * 0 + 0 is x: no product to compute (nor copy, for one shape)
+        return (
+            shapes[0].vertices
+            if len(shapes) == 1
+            else np.concatenate([shape.vertices for shape in shapes])
+        )
+    if len(shapes) == 1:
+        return shapes[0].world_vertices
     raw = np.concatenate([shape.vertices for shape in shapes])
+    if len(distinct) == 1:
+        return transformed(raw, distinct[0].reshape(4, 4))
     owner = np.repeat(group.reshape(-1), counts)
     world = np.empty_like(raw)
     for index, transform in enumerate(distinct.reshape(-1, 4, 4)):

@@ -23,6 +23,7 @@ Color = tuple[float, float, float]
 # The X3D ``class`` of the groups holding the shapes shadowgeo adds; each added
 # Shape's class is ``MARK + "-" + role``, so a reader gives it back its role.
 MARK = "shadowgeo-shadows"
+_IDENTITY = np.eye(4)
 
 
 def safe_name(text: str) -> str:
@@ -126,7 +127,13 @@ class Shape:
     @property
     def world_vertices(self) -> np.ndarray:
         """(n, 3) vertices in world coordinates (inf where they overflow float64:
-        the geometry's range check names them)."""
+        the geometry's range check names them). Under the identity transform,
+        a read-only view of :attr:`vertices` (``x * 1 + y * 0 + z * 0 + 0``
+        is ``x``): a big shape is not copied."""
+        if np.array_equal(self.transform, _IDENTITY):
+            view = self.vertices.view()
+            view.setflags(write=False)
+            return view
         return transformed(self.vertices, self.transform)
 
     @property
@@ -270,11 +277,20 @@ class Scene:
     @property
     def bounds(self) -> np.ndarray:
         """(2, 3) world bounding box of the scene's own geometry."""
-        points = [s.world_vertices for s in self.shapes if s.role == "geometry" and len(s.faces)]
-        if not points:
+        geometry = [s for s in self.shapes if s.role == "geometry" and len(s.faces)]
+        if not geometry:
             return np.zeros((2, 3))
-        stacked = np.concatenate(points)
-        return bounding_box(stacked)
+        return _world_box(geometry)
+
+
+def _world_box(shapes: list[Shape]) -> np.ndarray:
+    """(2, 3) the bounding box of the shapes' world vertices (zeros for no
+    shape): one box of all the stacked vertices, but a lone shape's own
+    vertices are not copied to stack them."""
+    if not shapes:
+        return np.zeros((2, 3))
+    points = [shape.world_vertices for shape in shapes]
+    return bounding_box(points[0] if len(points) == 1 else np.concatenate(points))
 
 
 # Where the overview camera looks from, seen from the scene's centre, Y up:
@@ -298,9 +314,7 @@ def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
     >>> round(float(view.direction @ to_centre), 12), round(float(view.up[1]), 4)  # cos 34.9 deg
     (1.0, 0.8202)
     """
-    points = [shape.world_vertices for shape in scene.shapes if shape.n_faces]
-    stacked = np.concatenate(points) if points else np.zeros((1, 3))
-    low, high = stacked.min(axis=0), stacked.max(axis=0)
+    low, high = _world_box([shape for shape in scene.shapes if shape.n_faces])
     center = (low + high) / 2
     radius = max(float(np.linalg.norm(high - low)) / 2, 1e-6)
     x, y, z = OVERVIEW_FROM

@@ -62,7 +62,7 @@ from ..limits import check_coordinates, check_light
 from ..plane import Plane
 from ..projection import project_shadow
 from ..tolerance import Tolerance
-from ..topology import Caster, unique_integers
+from ..topology import Caster
 from ..volume import shadow_volume
 from .casters import CasterSet, distinct
 from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
@@ -416,7 +416,7 @@ def _caster_loops(
     them), each caster is projected alone so that only the one at fault is
     skipped, with a note.
     """
-    owners = unique_integers(casters.face_owner[faces])
+    owners = casters.owners(faces)
     if not len(owners):
         return []
     try:
@@ -471,7 +471,7 @@ def _shadow_on(
         rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
         region2d = flat
     chosen = casters.may_shadow(light, plane, box2d, tolerance)
-    faces = chosen[casters.face_owner] & casters.off_plane(receiver.plane, tolerance)
+    faces = casters.faces_of(chosen) & casters.off_plane(receiver.plane, tolerance)
     step(len(casters))
     loops = _caster_loops(casters, faces, light, plane, rectangle, tolerance, notes, light_name)
     if not loops:

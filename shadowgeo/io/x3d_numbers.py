@@ -1,0 +1,167 @@
+"""The big number fields of written X3D: their text, and how it reaches the file.
+
+A shape's ``point`` and ``index`` are most of an X3D file's bytes. Setting
+them as lxml attributes and letting lxml serialise them costs more than
+formatting them: lxml checks and copies every character when the attribute
+is set and scans it again for escapes when it is written. The numbers need
+neither (digits, signs, ``.``, ``e``, spaces and commas), so the writer puts
+a short placeholder in the tree instead (:class:`Splicer`) and the formatted
+bytes go into the file where lxml writes the placeholder.
+
+Floats are written with the shortest text that reads back as the same float64
+(Python's ``repr``; orjson's, when the ``speed`` extra installs it, is the
+same digits ten times faster).
+"""
+
+from __future__ import annotations
+
+import importlib
+import re
+import secrets
+from typing import Any, BinaryIO
+
+import numpy as np
+
+from ..errors import SceneError
+from .x3d_fields import Element
+
+
+def _optional(name: str) -> Any:
+    """The module ``name``, or None when it is not installed."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:  # pragma: no cover - the repr fallback is tested by monkeypatching
+        return None
+
+
+# The shortest float64 text (as repr), ten times faster: the `speed` extra.
+orjson = _optional("orjson")
+
+
+def points_text(vertices: np.ndarray) -> bytes:
+    """An MFVec3f's text, ``x y z, x y z, ...``, each number the shortest that
+    reads back as the same float64.
+
+    Raises
+    ------
+    SceneError
+        A coordinate is not finite.
+
+    Examples
+    --------
+    >>> points_text(np.array([[0.1, -2.0, 3e-20], [1.0, 0.0, 5.0]]))
+    b'0.1 -2.0 3e-20, 1.0 0.0 5.0'
+    """
+    values = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)  # orjson needs it
+    if not np.isfinite(values).all():
+        finite = np.isfinite(values).all(axis=1)
+        bad = values[np.argmin(finite)].tolist()
+        raise SceneError(f"cannot write a non-finite number in X3D: {bad}")
+    if orjson is not None and len(values):
+        listed: bytes = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)
+        # [[x,y,z],[x,y,z]] -> x y z] [x y z -> x y z, x y z: two passes in C
+        return listed[2:-2].replace(b",", b" ").replace(b"] [", b", ")
+    words = list(map(repr, values.ravel().tolist()))
+    triples = map(" ".join, zip(words[0::3], words[1::3], words[2::3], strict=True))
+    return ", ".join(triples).encode("ascii")
+
+
+def integers_text(values: np.ndarray) -> bytes:
+    """Integers separated by single spaces.
+
+    >>> integers_text(np.array([[0, 1, 2], [2, 1, 30]]))
+    b'0 1 2 2 1 30'
+    """
+    values = np.ascontiguousarray(values, dtype=np.int64).ravel()
+    if orjson is not None and len(values):
+        listed: bytes = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)
+        return listed[1:-1].replace(b",", b" ")
+    return " ".join(map(str, values.tolist())).encode("ascii")
+
+
+class Splicer:
+    """Number attributes kept out of the lxml tree until the file is written.
+
+    :meth:`set` puts a placeholder (``shadowgeo-numbers-<random>-<index>``,
+    a token no document holds by chance) in the attribute; :meth:`writer`
+    wraps the output file so that each placeholder lxml writes becomes the
+    numbers; :meth:`fill` sets the real text instead, for the encodings that
+    read the tree (JSON, ClassicVRML).
+    """
+
+    def __init__(self) -> None:
+        self.prefix = f"shadowgeo-numbers-{secrets.token_hex(8)}-".encode("ascii")
+        self.pattern = re.compile(re.escape(self.prefix) + rb"(\d{9})")
+        self.texts: list[bytes] = []
+        self.places: list[tuple[Element, str]] = []
+
+    def set(self, element: Element, name: str, text: bytes) -> None:
+        """Give ``element``'s attribute ``name`` the numbers ``text`` (ASCII)."""
+        token = self.prefix + b"%09d" % len(self.texts)
+        self.texts.append(text)
+        self.places.append((element, name))
+        element.set(name, token.decode("ascii"))
+
+    def fill(self) -> None:
+        """Set every placeholder's attribute to its numbers, in the tree."""
+        for (element, name), text in zip(self.places, self.texts, strict=True):
+            element.set(name, text.decode("ascii"))
+        self.places, self.texts = [], []
+
+    def splice(self, data: bytes) -> bytes:
+        """``data`` (serialised XML) with every placeholder replaced."""
+        return self.pattern.sub(lambda match: self.texts[int(match.group(1))], data)
+
+    def writer(self, handle: BinaryIO) -> _SplicingWriter:
+        """A file-like object that writes to ``handle`` with the placeholders
+        replaced; :meth:`_SplicingWriter.close` writes the rest and checks
+        that every placeholder was met once."""
+        return _SplicingWriter(self, handle)
+
+
+class _SplicingWriter:
+    """What :meth:`Splicer.writer` returns: lxml writes in chunks, so a
+    placeholder may arrive in two pieces; the last bytes of each chunk that
+    could begin one wait for the next chunk."""
+
+    def __init__(self, splicer: Splicer, handle: BinaryIO) -> None:
+        self.splicer = splicer
+        self.handle = handle
+        self.pending = b""
+        self.held = len(splicer.prefix) + 9 - 1  # a token's length, less one
+        self.met = 0
+
+    def write(self, data: bytes) -> int:
+        buffer = self.pending + data if self.pending else data
+        view = memoryview(buffer)  # slices written without copies
+        done = 0
+        for match in self.splicer.pattern.finditer(buffer):
+            self.handle.write(view[done : match.start()])
+            self.handle.write(self.splicer.texts[int(match.group(1))])
+            self.met += 1
+            done = match.end()
+        keep = self._start_of_token(buffer, max(done, len(buffer) - self.held))
+        self.handle.write(view[done:keep])
+        self.pending = bytes(view[keep:])
+        return len(data)
+
+    def _start_of_token(self, buffer: bytes, start: int) -> int:
+        """Where the end of ``buffer`` from ``start`` on may begin a placeholder
+        that the next chunk completes (``len(buffer)`` when nowhere)."""
+        prefix = self.splicer.prefix
+        position = buffer.find(prefix[:1], start)
+        while position >= 0:
+            tail = buffer[position:]
+            head, digits = tail[: len(prefix)], tail[len(prefix) :]
+            if prefix.startswith(head) and (not digits or digits.isdigit()):
+                return position
+            position = buffer.find(prefix[:1], position + 1)
+        return len(buffer)
+
+    def close(self) -> None:
+        self.handle.write(self.pending)
+        self.pending = b""
+        if self.met != len(self.splicer.texts):
+            raise SceneError(
+                f"internal error: {self.met} of {len(self.splicer.texts)} number fields written"
+            )
