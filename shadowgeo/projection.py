@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
@@ -35,6 +35,17 @@ from manifold3d import CrossSection
 from numpy.typing import ArrayLike
 
 from . import polygons as poly
+from .batchlights import (
+    BACK,
+    BEHIND,
+    CASTS,
+    ON_PLANE,
+    PARALLEL,
+    LightFrames,
+    light_frames,
+    project_outlines,
+    takes_arrays,
+)
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import check_coordinates, check_light
@@ -44,6 +55,7 @@ from .silhouette import (
     check_light_outside,
     silhouette_loops,
     silhouette_loops_many,
+    silhouette_outlines,
     vertex_components,
 )
 from .tolerance import Tolerance
@@ -307,6 +319,8 @@ def project_shadow(
         caster, plane, plane.basis, receiver_points, offset, tolerance, method == "triangles"
     )
     if not isinstance(light, Sequence):
+        if call.takes_arrays(light):  # the same functions as a batch: the same bits
+            return _many_lights(call, [light], single=True)[0]
         return call.projector(light).run()
     return _many_lights(call, light)
 
@@ -341,6 +355,17 @@ class _Call:
             tolerance = self.scene_tolerance(light)
         return _Projector(self, light, tolerance)
 
+    def takes_arrays(self, light: Light) -> bool:
+        """Whether ``light`` takes the array path (:mod:`shadowgeo.batchlights`):
+        a closed caster, no receiver, the outline method, and a point light of
+        unlimited range or a directional light."""
+        return (
+            self.caster.is_closed
+            and not self.per_triangle
+            and not len(self.receiver)
+            and takes_arrays(light)
+        )
+
     def scene_tolerance(self, light: Light) -> Tolerance:
         """``Tolerance.for_points`` of the caster, the light and the receiver."""
         light_points = [light.position] if is_positional(light) else []
@@ -349,19 +374,46 @@ class _Call:
         return Tolerance.for_points(*scene, *light_points, self.receiver)
 
 
-def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
-    """One shadow per light, each equal to the single-light call's.
+def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> list[Shadow]:
+    """One shadow per light, each equal to the single-light call's (which
+    comes here too, ``single``, for a light that takes the array path).
 
-    Every light's frame is set up first; then, for a closed caster, the
-    silhouettes of the lights that need them are found together
-    (:func:`silhouette_loops_many`) and each light's outline goes to the 2-D
-    union on its own.
+    The lights that :meth:`_Call.takes_arrays` get their frames together
+    (:func:`light_frames`), then their silhouettes, projected together;
+    the others are set up one by one and, for a closed caster, their
+    silhouettes found together. Each light's outline then goes to the 2-D
+    union on its own. Errors found while setting up come in the lights'
+    order.
     """
+    context = partial(_light_context, prefix=not single)
     shadows: list[Shadow | None] = [None] * len(lights)
+    arrays = [index for index, light in enumerate(lights) if call.takes_arrays(light)]
+    row_of = dict(zip(arrays, range(len(arrays)), strict=True))
+    frames = None
+    if arrays:
+        frames = light_frames(
+            call.caster,
+            call.plane.normal,
+            call.plane.offset,
+            call.basis,
+            [lights[index] for index in arrays],
+            call.tolerance,
+        )
     pending: list[tuple[int, _Projector]] = []
+    fast: list[tuple[int, int]] = []  # (light index, row of frames)
     directional_tolerance: Tolerance | None = None  # the same for every directional light
     for index, light in enumerate(lights):
-        with _light_context(index):
+        with context(index):
+            row = row_of.get(index)
+            if row is not None and frames is not None:
+                settled = _settle(call, frames, row, light)
+                if isinstance(settled, Shadow):
+                    shadows[index] = settled
+                elif settled is None:
+                    fast.append((index, row))
+                else:
+                    pending.append((index, settled))
+                continue
             if directional_tolerance is None and isinstance(light, DirectionalLight):
                 directional_tolerance = call.scene_tolerance(light)
             shared = None if is_positional(light) else directional_tolerance
@@ -371,6 +423,11 @@ def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
             shadows[index] = early
         else:
             pending.append((index, projector))
+    if frames is not None:
+        for first in range(0, len(fast), _LIGHT_CHUNK):
+            rows = fast[first : first + _LIGHT_CHUNK]
+            for index, shadow in _array_shadows(call, frames, lights, rows, context):
+                shadows[index] = shadow
     caster = call.caster
     if caster.is_closed and not call.per_triangle:
         for first in range(0, len(pending), _LIGHT_CHUNK):
@@ -381,13 +438,137 @@ def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
             for (index, projector), front, (loops, _), (flat, box) in zip(
                 chunk, fronts, outlines, projected, strict=True
             ):
-                with _light_context(index):
+                with context(index):
                     shadows[index] = projector.finish(_Outline(front, loops, flat, box))
     else:
         for index, projector in pending:
-            with _light_context(index):
+            with context(index):
                 shadows[index] = projector.finish()
     return cast("list[Shadow]", shadows)
+
+
+def _settle(call: _Call, frames: LightFrames, row: int, light: Light) -> Shadow | _Projector | None:
+    """What the frame decides for light ``row`` of ``frames``: its (empty)
+    shadow, a projector set up for the general path (the caster's box
+    leaves the window), or None (the array path goes on)."""
+    if not frames.in_range[row]:
+        check_light(light)
+    verdict = int(frames.verdict[row])
+    if verdict == ON_PLANE:
+        light = cast("PointLight", light)
+        raise GeometryError(
+            f"the light at {light.position.tolist()} lies on the receiving plane "
+            f"(distance {float(frames.height[row]):.3g}, "
+            f"tolerance {float(frames.length[row]):.3g})"
+        )
+    if verdict != CASTS:
+        info = ShadowDiagnostics(n_triangles=call.caster.n_faces, empty_reason=_EMPTY[verdict])
+        return Shadow(call.plane, light, empty_mesh(), [], 0.0, info)
+    tolerance = frames.tolerance(row, call.tolerance)
+    if frames.near[row]:
+        check_light_outside(call.caster, cast("PointLight", light).position, tolerance)
+    if frames.inside[row]:
+        return None
+    projector = _Projector(call, light, tolerance)
+    early = projector.prepare()
+    return early if early is not None else projector
+
+
+_EMPTY = {
+    BEHIND: "the light is behind the plane (its normal points away)",
+    PARALLEL: "the light travels parallel to the plane",
+    BACK: "the light shines on the back of the plane",
+}
+
+
+def _array_shadows(
+    call: _Call,
+    frames: LightFrames,
+    lights: Sequence[Light],
+    chunk: list[tuple[int, int]],
+    context: Callable[[int], AbstractContextManager[None]],
+) -> Iterator[tuple[int, Shadow]]:
+    """(light index, shadow) of the lights of ``chunk`` ((index, row of
+    ``frames``) pairs, every corner of the caster's box inside each one's
+    window): silhouettes found and projected together, then each light's
+    loops united on their own."""
+    caster = call.caster
+    rows = np.array([row for _, row in chunk], dtype=np.int64)
+    fronts = [caster.facing(frames.light_h[row]) > 0 for row in rows.tolist()]
+    outlines = silhouette_outlines(caster, fronts)
+    projected = project_outlines(caster.centered, outlines, frames.H[rows])
+    half = frames.scale[rows] * frames.bound[rows]
+    leaves = np.any(projected.low < -half[:, None], axis=1) | np.any(
+        projected.high > half[:, None], axis=1
+    )
+    ends = np.cumsum(outlines.loop_lengths)
+    loops = _pieces(projected.points, outlines.loop_lengths.tolist())
+    loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(chunk) + 1)).tolist()
+    reach = np.maximum(np.abs(projected.low), np.abs(projected.high)).max(axis=1).tolist()
+    for k, (index, row) in enumerate(chunk):
+        light = lights[index]
+        with context(index):
+            if projected.touching[k] or leaves[k]:
+                # the general path: it cuts the outline to the window, or
+                # refuses a light that touches the caster
+                projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
+                early = projector.prepare()
+                yield index, early if early is not None else projector.finish()
+                continue
+            first, last = loop_bounds[k], loop_bounds[k + 1]
+            starts = ends[first:last] - outlines.loop_lengths[first:last]
+            yield (
+                index,
+                _array_result(
+                    call, frames, row, light, loops[first:last], outlines.corners[starts], reach[k]
+                ),
+            )
+
+
+def _array_result(
+    call: _Call,
+    frames: LightFrames,
+    row: int,
+    light: Light,
+    loops: list[np.ndarray],
+    firsts: np.ndarray,
+    reach: float,
+) -> Shadow:
+    """The shadow of one light of the array path from its 2-D ``loops``
+    (``firsts``: the vertex each starts at; ``reach``: the largest
+    coordinate of their corners), as :meth:`_Projector.finish` makes it."""
+    caster = call.caster
+    parts = poly.union_parts(loops, lambda: vertex_components(caster)[firsts])
+    scale = float(frames.scale[row])
+    bound = float(frames.bound[row])
+    area = poly.parts_area(parts) / scale / scale  # no square to over/underflow
+    limit = (bound - float(frames.length[row])) * scale
+    bounded = False
+    # The union's corners are the loops' corners and crossings, rounded to
+    # Clipper2's grid (1e-8 local units): a unit below the limit is far enough.
+    if parts and reach + 1.0 >= limit:
+        outer = np.abs(np.concatenate([part[0] for part in parts])).max()
+        bounded = max(float(outer), 0.0) >= limit
+    clipped = {"below_plane": 0, "at_or_above_light": 0, "outside_bound": 0}
+    if not frames.positional[row]:
+        del clipped["at_or_above_light"]
+    info = ShadowDiagnostics(
+        n_triangles=caster.n_faces,
+        clipped=clipped,
+        bounded_artificially=bounded,
+        bound=bound,
+        n_loops=len(loops),
+    )
+    if not parts:
+        return Shadow(call.plane, light, empty_mesh(), [], 0.0, info)
+    u, v = call.basis
+    origin = frames.origin[row]
+    relative = origin + caster.center - call.plane.origin
+    origin2d = np.array([relative @ u, relative @ v])
+    polygons = [[loop / scale + origin2d for loop in loops] for loops in parts]
+    lift = origin + call.offset * call.plane.normal + caster.center
+    build = partial(_triangulated, parts, scale, lift, call.basis)
+    return Shadow(call.plane, light, build, polygons, area, info)
 
 
 # Lights whose silhouettes are found together: bounds the memory of the
@@ -396,11 +577,14 @@ _LIGHT_CHUNK = 256
 
 
 @contextmanager
-def _light_context(index: int) -> Iterator[None]:
-    """Prefix a GeometryError's message with the index of the light at fault."""
+def _light_context(index: int, prefix: bool = True) -> Iterator[None]:
+    """Prefix a GeometryError's message with the index of the light at fault
+    (unless ``prefix`` is False: a single light's call)."""
     try:
         yield
     except GeometryError as error:
+        if not prefix:
+            raise
         raise GeometryError(f"light {index}: {error}") from error
 
 

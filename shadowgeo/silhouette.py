@@ -303,28 +303,89 @@ def silhouette_loops_many(
 
     Notes
     -----
+    The loops come from :func:`silhouette_outlines`, cut light by light.
+    """
+    outlines = silhouette_outlines(caster, fronts)
+    loops = _cut(outlines.corners, np.cumsum(outlines.loop_lengths)[:-1])
+    loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(fronts) + 1)).tolist()
+    used_bounds = np.searchsorted(outlines.used_light, np.arange(len(fronts) + 1)).tolist()
+    return [
+        (
+            loops[loop_bounds[light] : loop_bounds[light + 1]],
+            outlines.used[used_bounds[light] : used_bounds[light + 1]],
+        )
+        for light in range(len(fronts))
+    ]
+
+
+@dataclass(frozen=True)
+class Outlines:
+    """The silhouettes of many lights, flat: every light's loops one after
+    the other, light by light, each light's as :func:`silhouette_loops`
+    gives them.
+
+    Attributes
+    ----------
+    corners : (c,) int64
+        Vertex indices of every loop corner, loop after loop.
+    loop_lengths : (l,) int64
+        Corners in each loop (>= 3).
+    loop_light : (l,) int64
+        The light of each loop, ascending.
+    used : (u,) int64
+        Every vertex of each light's silhouette edges (also those of loops
+        dropped for having fewer than three edges), light by light, each
+        light's ascending.
+    used_light : (u,) int64
+        The light of each entry of ``used``.
+    """
+
+    corners: np.ndarray
+    loop_lengths: np.ndarray
+    loop_light: np.ndarray
+    used: np.ndarray
+    used_light: np.ndarray
+
+
+def silhouette_outlines(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
+    """The silhouettes of a closed caster for many lights (``fronts``: each
+    light's (m,) bool front faces), as one flat :class:`Outlines`.
+
+    Notes
+    -----
     The front bits of 64 lights are packed into one 64-bit word per face, so
     one XOR per edge finds the edges where the bit changes for all 64; only
     those edges are unpacked, and the outlines of all the lights are chained
     together (each light's vertices numbered apart).
     """
-    result: list[tuple[list[np.ndarray], np.ndarray]] = []
-    for first in range(0, len(fronts), _WORD):
-        result.extend(_silhouettes_of_word(caster, fronts[first : first + _WORD]))
-    return result
+    words = [
+        _outlines_of_word(caster, fronts[first : first + _WORD])
+        for first in range(0, len(fronts), _WORD)
+    ]
+    if len(words) == 1:
+        return words[0]
+    firsts = range(0, len(fronts), _WORD)
+    return Outlines(
+        np.concatenate([word.corners for word in words]),
+        np.concatenate([word.loop_lengths for word in words]),
+        np.concatenate([w.loop_light + f for w, f in zip(words, firsts, strict=True)]),
+        np.concatenate([word.used for word in words]),
+        np.concatenate([w.used_light + f for w, f in zip(words, firsts, strict=True)]),
+    )
 
 
-# Lights whose front bits share one machine word in silhouette_loops_many.
+# Lights whose front bits share one machine word in silhouette_outlines.
 _WORD = 64
 
 
 def _pack_bits(fronts: list[np.ndarray]) -> np.ndarray:
     """(m,) uint64 words from up to 64 (m,) bool arrays: bit k of word f is
     ``fronts[k][f]``. Eight lights at a time make one byte of each word."""
-    rows = np.zeros((_WORD, len(fronts[0])), dtype=np.uint8)
+    n_bytes = -(-len(fronts) // 8)  # the bytes that hold any light's bit
+    rows = np.zeros((8 * n_bytes, len(fronts[0])), dtype=np.uint8)
     rows[: len(fronts)] = fronts
-    packed = np.empty((len(fronts[0]), _WORD // 8), dtype=np.uint8)
-    for byte in range(_WORD // 8):
+    packed = np.zeros((len(fronts[0]), _WORD // 8), dtype=np.uint8)
+    for byte in range(n_bytes):
         group = rows[8 * byte : 8 * byte + 8]
         value = group[0].copy()
         for bit in range(1, 8):
@@ -334,10 +395,7 @@ def _pack_bits(fronts: list[np.ndarray]) -> np.ndarray:
     return words
 
 
-def _silhouettes_of_word(
-    caster: Caster, fronts: list[np.ndarray]
-) -> list[tuple[list[np.ndarray], np.ndarray]]:
-    n_lights = len(fronts)
+def _outlines_of_word(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
     words = _pack_bits(fronts)
     slots = caster.edge_face_slots
     faces_of = slots // 3
@@ -350,31 +408,37 @@ def _silhouettes_of_word(
         axis=0,
         bitorder="little",
     )
-    light_of, row = np.nonzero(flags)
-    outline = changed[row]
+    hits = np.flatnonzero(flags.view(bool))  # a flat bool scan: far faster than 2-D nonzero
+    bounds = np.searchsorted(hits, np.arange(_WORD + 1) * len(changed))
+    light_of = np.repeat(np.arange(_WORD, dtype=np.int64), np.diff(bounds))
+    outline = changed[hits - light_of * len(changed)]
     first_front = (words[faces_of[outline, 0]] >> light_of.astype(np.uint64)) & np.uint64(1)
-    light_of = light_of.astype(np.int64)
     front_slot = np.where(first_front.astype(bool), slots[outline, 0], slots[outline, 1])
     directed = _directed_edges(caster, front_slot)
     n_vertices = np.int64(len(caster.vertices))
-    starts = directed[:, 0] + light_of * n_vertices  # each light's vertices apart
-    ends = directed[:, 1] + light_of * n_vertices
-    loops: list[list[np.ndarray]] = [[] for _ in range(n_lights)]
-    if len(starts):
-        walk, cuts = _cycle_walk(_successors(starts, ends))
-        owners = light_of[walk[np.concatenate([[0], cuts])]]
-        for loop, owner in zip(_cut(starts[walk], cuts), owners.tolist(), strict=True):
-            if len(loop) >= 3:
-                loops[owner].append(loop - owner * n_vertices)
-    used = np.zeros(n_lights * int(n_vertices), dtype=bool)
+    apart = light_of * n_vertices  # each light's vertices apart
+    starts = directed[:, 0] + apart
+    ends = directed[:, 1] + apart
+    used = np.zeros(len(fronts) * int(n_vertices), dtype=bool)
     used[starts] = True
     used[ends] = True
     keys = np.flatnonzero(used)
-    key_bounds = np.searchsorted(keys, np.arange(n_lights + 1) * n_vertices)
-    return [
-        (loops[light], keys[key_bounds[light] : key_bounds[light + 1]] - light * n_vertices)
-        for light in range(n_lights)
-    ]
+    used_light = keys // n_vertices
+    empty = np.zeros(0, dtype=np.int64)
+    if len(starts) == 0:
+        return Outlines(empty, empty, empty, keys - used_light * n_vertices, used_light)
+    walk, cuts = _cycle_walk(_successors(starts, ends))
+    loop_starts = np.concatenate([[0], cuts])
+    lengths = np.diff(np.append(loop_starts, len(walk)))
+    kept = lengths >= 3
+    loop_light = light_of[walk[loop_starts]]
+    if kept.all():
+        corners = directed[walk, 0]
+    else:
+        corners = directed[walk[np.repeat(kept, lengths)], 0]
+    return Outlines(
+        corners, lengths[kept], loop_light[kept], keys - used_light * n_vertices, used_light
+    )
 
 
 def check_light_outside(caster: Caster, position: np.ndarray, tolerance: Tolerance) -> None:
