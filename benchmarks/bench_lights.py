@@ -52,15 +52,13 @@ def lights(count: int, seed: int = 3) -> dict[str, list[PointLight] | list[Direc
 
 # (module, attribute, label) of the steps --phases times, in call order.
 PHASES = [
-    ("shadowgeo.projection", "_Call.projector", "frame: checks, tolerance"),
-    ("shadowgeo.projection", "_Projector.prepare", "frame: light, plane, window"),
-    ("shadowgeo.topology", "Caster.facing", "front faces (one matrix-vector product)"),
-    ("shadowgeo.projection", "silhouette_loops_many", "silhouettes, all lights together"),
-    ("shadowgeo.projection", "_projected_many", "silhouettes projected to 2-D loops, together"),
-    ("shadowgeo.projection", "_Projector.finish", "finish: the rest, per light"),
-    ("shadowgeo.projection", "_Projector._shadow_loops", "  loops: box test, 2-D loops"),
+    ("shadowgeo.projection", "light_frames", "frames: tolerance, plane frame, window (arrays)"),
+    ("shadowgeo.projection", "_settle", "frame verdicts, per light"),
+    ("shadowgeo.topology", "Caster.facing", "front faces (one matrix-vector product each)"),
+    ("shadowgeo.projection", "silhouette_outlines", "silhouettes, all lights together"),
+    ("shadowgeo.projection", "project_outlines", "silhouettes projected to 2-D, together"),
+    ("shadowgeo.projection", "_array_result", "finish: the rest, per light"),
     ("shadowgeo.polygons", "union_parts", "  2-D union (Clipper2)"),
-    ("shadowgeo.projection", "_Projector._result", "  result: parts, holes, area"),
 ]
 
 

@@ -309,27 +309,29 @@ def project_outlines(centered: np.ndarray, outlines: Outlines, H: np.ndarray) ->
     left to right, then divided by W: the same bits for one light or many.
     """
     count = len(H)
-    flat = H.reshape(count, 12)
+    # Coefficient by coefficient and column by column: gathers from short
+    # contiguous tables, no (c, 12) matrix per corner.
+    coefficients = np.ascontiguousarray(H.reshape(count, 12).T)
+    columns = [np.ascontiguousarray(centered[:, axis]) for axis in range(3)]
     corner_light = np.repeat(outlines.loop_light, outlines.loop_lengths)
-    matrices = flat[corner_light]
-    points = centered[outlines.corners]
-    x, y, z = points[:, 0], points[:, 1], points[:, 2]
 
-    def row(i: int, m: np.ndarray) -> np.ndarray:
-        result: np.ndarray = x * m[:, 4 * i] + y * m[:, 4 * i + 1] + z * m[:, 4 * i + 2]
-        result += m[:, 4 * i + 3]
-        return result
+    def image(i: int, vertices: np.ndarray, light: np.ndarray) -> np.ndarray:
+        total: np.ndarray = columns[0][vertices] * coefficients[4 * i][light]
+        total += columns[1][vertices] * coefficients[4 * i + 1][light]
+        total += columns[2][vertices] * coefficients[4 * i + 2][light]
+        total += coefficients[4 * i + 3][light]
+        return total
 
+    corners = outlines.corners
     with np.errstate(divide="ignore", invalid="ignore"):
-        projected = (
-            np.column_stack([row(0, matrices), row(1, matrices)]) / row(2, matrices)[:, None]
+        w = image(2, corners, corner_light)
+        projected = np.column_stack(
+            [image(0, corners, corner_light) / w, image(1, corners, corner_light) / w]
         )
-    # W of every vertex a silhouette edge uses (a dropped two-edge loop's too)
-    used = centered[outlines.used]
-    m = flat[outlines.used_light]
-    w = used[:, 0] * m[:, 8] + used[:, 1] * m[:, 9] + used[:, 2] * m[:, 10] + m[:, 11]
+    # W of every vertex a silhouette edge starts at (a dropped two-edge loop's too)
     touching = np.zeros(count, dtype=bool)
-    touching[outlines.used_light[w <= 0]] = True
+    w_all = image(2, outlines.edge_starts, outlines.edge_light)
+    touching[outlines.edge_light[w_all <= 0]] = True
     low = np.zeros((count, 2))
     high = np.zeros((count, 2))
     if len(projected):

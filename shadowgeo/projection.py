@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import AbstractContextManager, contextmanager
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
@@ -426,7 +426,7 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
     if frames is not None:
         for first in range(0, len(fast), _LIGHT_CHUNK):
             rows = fast[first : first + _LIGHT_CHUNK]
-            for index, shadow in _array_shadows(call, frames, lights, rows, context):
+            for index, shadow in _array_shadows(call, frames, lights, rows, not single):
                 shadows[index] = shadow
     caster = call.caster
     if caster.is_closed and not call.per_triangle:
@@ -486,29 +486,49 @@ def _array_shadows(
     frames: LightFrames,
     lights: Sequence[Light],
     chunk: list[tuple[int, int]],
-    context: Callable[[int], AbstractContextManager[None]],
+    prefix: bool,
 ) -> Iterator[tuple[int, Shadow]]:
     """(light index, shadow) of the lights of ``chunk`` ((index, row of
     ``frames``) pairs, every corner of the caster's box inside each one's
     window): silhouettes found and projected together, then each light's
-    loops united on their own."""
+    loops united on their own. ``prefix``: errors name the light's index."""
     caster = call.caster
     rows = np.array([row for _, row in chunk], dtype=np.int64)
     fronts = [caster.facing(frames.light_h[row]) > 0 for row in rows.tolist()]
     outlines = silhouette_outlines(caster, fronts)
     projected = project_outlines(caster.centered, outlines, frames.H[rows])
-    half = frames.scale[rows] * frames.bound[rows]
-    leaves = np.any(projected.low < -half[:, None], axis=1) | np.any(
-        projected.high > half[:, None], axis=1
-    )
-    ends = np.cumsum(outlines.loop_lengths)
+    scale, bound = frames.scale[rows], frames.bound[rows]
+    half = scale * bound
+    general = (
+        projected.touching
+        | np.any(projected.low < -half[:, None], axis=1)
+        | np.any(projected.high > half[:, None], axis=1)
+    ).tolist()
     loops = _pieces(projected.points, outlines.loop_lengths.tolist())
+    firsts = outlines.corners[np.cumsum(outlines.loop_lengths) - outlines.loop_lengths]
     loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(chunk) + 1)).tolist()
-    reach = np.maximum(np.abs(projected.low), np.abs(projected.high)).max(axis=1).tolist()
+    # The union's corners are the loops' corners and crossings, rounded to
+    # Clipper2's grid (1e-8 local units): loops a unit inside the limit
+    # cannot reach it.
+    limit = (bound - frames.length[rows]) * scale
+    reach = np.maximum(np.abs(projected.low), np.abs(projected.high)).max(axis=1)
+    unbounded = (reach + 1.0 < limit).tolist()
+    u, v = call.basis
+    # element-wise sums: a matrix product's bits may depend on the rows' count
+    relative = (frames.origin[rows] + caster.center) - call.plane.origin
+    origins = np.column_stack(
+        [
+            relative[:, 0] * axis[0] + relative[:, 1] * axis[1] + relative[:, 2] * axis[2]
+            for axis in (u, v)
+        ]
+    )
+    lifts = (frames.origin[rows] + call.offset * call.plane.normal) + caster.center
+    positional = frames.positional[rows].tolist()
+    scales, bounds, limits = scale.tolist(), bound.tolist(), limit.tolist()
     for k, (index, row) in enumerate(chunk):
         light = lights[index]
-        with context(index):
-            if projected.touching[k] or leaves[k]:
+        try:
+            if general[k]:
                 # the general path: it cuts the outline to the window, or
                 # refuses a light that touches the caster
                 projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
@@ -516,57 +536,60 @@ def _array_shadows(
                 yield index, early if early is not None else projector.finish()
                 continue
             first, last = loop_bounds[k], loop_bounds[k + 1]
-            starts = ends[first:last] - outlines.loop_lengths[first:last]
-            yield (
-                index,
-                _array_result(
-                    call, frames, row, light, loops[first:last], outlines.corners[starts], reach[k]
-                ),
+            own = loops[first:last]
+            parts = poly.union_parts(own, partial(_part_labels, caster, firsts[first:last]))
+            bounded = not unbounded[k] and _reaches(parts, limits[k])
+            info = ShadowDiagnostics(
+                n_triangles=caster.n_faces,
+                clipped=dict(_NONE_CLIPPED if positional[k] else _NONE_CLIPPED_DIRECTIONAL),
+                bounded_artificially=bounded,
+                bound=bounds[k],
+                n_loops=len(own),
             )
+            yield index, _array_result(call, light, parts, scales[k], origins[k], lifts[k], info)
+        except GeometryError as error:
+            if not prefix:
+                raise
+            raise GeometryError(f"light {index}: {error}") from error
+
+
+# The per-reason counts of a shadow no face of which was clipped (copied
+# into each result: the diagnostics' dict is the caller's to keep).
+_NONE_CLIPPED = {"below_plane": 0, "at_or_above_light": 0, "outside_bound": 0}
+_NONE_CLIPPED_DIRECTIONAL = {"below_plane": 0, "outside_bound": 0}
+
+
+def _part_labels(caster: Caster, firsts: np.ndarray) -> np.ndarray:
+    """The connected part of the caster that each outline loop (starting
+    at vertex ``firsts``) runs on: the groups of :func:`poly.union_parts`."""
+    labels: np.ndarray = vertex_components(caster)[firsts]
+    return labels
+
+
+def _reaches(parts: list[list[np.ndarray]], limit: float) -> bool:
+    """Whether an outer loop of ``parts`` reaches ``limit`` (local units):
+    the default bound cut the shadow."""
+    if not parts:
+        return False
+    outer = np.abs(np.concatenate([part[0] for part in parts])).max()
+    return max(float(outer), 0.0) >= limit
 
 
 def _array_result(
     call: _Call,
-    frames: LightFrames,
-    row: int,
     light: Light,
-    loops: list[np.ndarray],
-    firsts: np.ndarray,
-    reach: float,
+    parts: list[list[np.ndarray]],
+    scale: float,
+    origin2d: np.ndarray,
+    lift: np.ndarray,
+    info: ShadowDiagnostics,
 ) -> Shadow:
-    """The shadow of one light of the array path from its 2-D ``loops``
-    (``firsts``: the vertex each starts at; ``reach``: the largest
-    coordinate of their corners), as :meth:`_Projector.finish` makes it."""
-    caster = call.caster
-    parts = poly.union_parts(loops, lambda: vertex_components(caster)[firsts])
-    scale = float(frames.scale[row])
-    bound = float(frames.bound[row])
-    area = poly.parts_area(parts) / scale / scale  # no square to over/underflow
-    limit = (bound - float(frames.length[row])) * scale
-    bounded = False
-    # The union's corners are the loops' corners and crossings, rounded to
-    # Clipper2's grid (1e-8 local units): a unit below the limit is far enough.
-    if parts and reach + 1.0 >= limit:
-        outer = np.abs(np.concatenate([part[0] for part in parts])).max()
-        bounded = max(float(outer), 0.0) >= limit
-    clipped = {"below_plane": 0, "at_or_above_light": 0, "outside_bound": 0}
-    if not frames.positional[row]:
-        del clipped["at_or_above_light"]
-    info = ShadowDiagnostics(
-        n_triangles=caster.n_faces,
-        clipped=clipped,
-        bounded_artificially=bounded,
-        bound=bound,
-        n_loops=len(loops),
-    )
+    """The shadow of one light of the array path from its united ``parts``
+    (local units), as :meth:`_Projector._result` makes it."""
     if not parts:
         return Shadow(call.plane, light, empty_mesh(), [], 0.0, info)
-    u, v = call.basis
-    origin = frames.origin[row]
-    relative = origin + caster.center - call.plane.origin
-    origin2d = np.array([relative @ u, relative @ v])
+    area = poly.parts_area(parts) / scale / scale  # no square to over/underflow
     polygons = [[loop / scale + origin2d for loop in loops] for loops in parts]
-    lift = origin + call.offset * call.plane.normal + caster.center
     build = partial(_triangulated, parts, scale, lift, call.basis)
     return Shadow(call.plane, light, build, polygons, area, info)
 

@@ -308,12 +308,9 @@ def silhouette_loops_many(
     outlines = silhouette_outlines(caster, fronts)
     loops = _cut(outlines.corners, np.cumsum(outlines.loop_lengths)[:-1])
     loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(fronts) + 1)).tolist()
-    used_bounds = np.searchsorted(outlines.used_light, np.arange(len(fronts) + 1)).tolist()
+    vertices = outlines.vertices(len(fronts), len(caster.vertices))
     return [
-        (
-            loops[loop_bounds[light] : loop_bounds[light + 1]],
-            outlines.used[used_bounds[light] : used_bounds[light + 1]],
-        )
+        (loops[loop_bounds[light] : loop_bounds[light + 1]], vertices[light])
         for light in range(len(fronts))
     ]
 
@@ -332,19 +329,31 @@ class Outlines:
         Corners in each loop (>= 3).
     loop_light : (l,) int64
         The light of each loop, ascending.
-    used : (u,) int64
-        Every vertex of each light's silhouette edges (also those of loops
-        dropped for having fewer than three edges), light by light, each
-        light's ascending.
-    used_light : (u,) int64
-        The light of each entry of ``used``.
+    edge_starts : (e,) int64
+        The first vertex of every silhouette edge (also of loops dropped for
+        having fewer than three edges): each vertex of a light's silhouette
+        at least once, as every vertex has as many edges out as in.
+    edge_light : (e,) int64
+        The light of each edge, ascending.
     """
 
     corners: np.ndarray
     loop_lengths: np.ndarray
     loop_light: np.ndarray
-    used: np.ndarray
-    used_light: np.ndarray
+    edge_starts: np.ndarray
+    edge_light: np.ndarray
+
+    def vertices(self, n_lights: int, n_vertices: int) -> list[np.ndarray]:
+        """Each light's silhouette vertices, ascending (as
+        :func:`silhouette_loops` gives them)."""
+        used = np.zeros(n_lights * n_vertices, dtype=bool)
+        used[self.edge_starts + self.edge_light * np.int64(n_vertices)] = True
+        keys = np.flatnonzero(used)
+        bounds = np.searchsorted(keys, np.arange(n_lights + 1) * np.int64(n_vertices)).tolist()
+        return [
+            keys[bounds[light] : bounds[light + 1]] - light * n_vertices
+            for light in range(n_lights)
+        ]
 
 
 def silhouette_outlines(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
@@ -369,8 +378,8 @@ def silhouette_outlines(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
         np.concatenate([word.corners for word in words]),
         np.concatenate([word.loop_lengths for word in words]),
         np.concatenate([w.loop_light + f for w, f in zip(words, firsts, strict=True)]),
-        np.concatenate([word.used for word in words]),
-        np.concatenate([w.used_light + f for w, f in zip(words, firsts, strict=True)]),
+        np.concatenate([word.edge_starts for word in words]),
+        np.concatenate([w.edge_light + f for w, f in zip(words, firsts, strict=True)]),
     )
 
 
@@ -419,14 +428,9 @@ def _outlines_of_word(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
     apart = light_of * n_vertices  # each light's vertices apart
     starts = directed[:, 0] + apart
     ends = directed[:, 1] + apart
-    used = np.zeros(len(fronts) * int(n_vertices), dtype=bool)
-    used[starts] = True
-    used[ends] = True
-    keys = np.flatnonzero(used)
-    used_light = keys // n_vertices
-    empty = np.zeros(0, dtype=np.int64)
     if len(starts) == 0:
-        return Outlines(empty, empty, empty, keys - used_light * n_vertices, used_light)
+        empty = np.zeros(0, dtype=np.int64)
+        return Outlines(empty, empty, empty, empty, empty)
     walk, cuts = _cycle_walk(_successors(starts, ends))
     loop_starts = np.concatenate([[0], cuts])
     lengths = np.diff(np.append(loop_starts, len(walk)))
@@ -436,9 +440,7 @@ def _outlines_of_word(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
         corners = directed[walk, 0]
     else:
         corners = directed[walk[np.repeat(kept, lengths)], 0]
-    return Outlines(
-        corners, lengths[kept], loop_light[kept], keys - used_light * n_vertices, used_light
-    )
+    return Outlines(corners, lengths[kept], loop_light[kept], directed[:, 0], light_of)
 
 
 def check_light_outside(caster: Caster, position: np.ndarray, tolerance: Tolerance) -> None:
