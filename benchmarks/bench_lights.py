@@ -57,8 +57,8 @@ PHASES = [
     ("shadowgeo.topology", "Caster.facing", "front faces (one matrix-vector product each)"),
     ("shadowgeo.projection", "silhouette_outlines", "silhouettes, all lights together"),
     ("shadowgeo.projection", "project_outlines", "silhouettes projected to 2-D, together"),
-    ("shadowgeo.projection", "_array_result", "finish: the rest, per light"),
-    ("shadowgeo.polygons", "union_parts", "  2-D union (Clipper2)"),
+    ("shadowgeo.projection", "_array_result", "result: area, polygons (per light)"),
+    ("shadowgeo.polygons", "union_parts", "2-D union (Clipper2, per light)"),
 ]
 
 

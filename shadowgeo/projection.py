@@ -359,12 +359,13 @@ class _Call:
         """Whether ``light`` takes the array path (:mod:`shadowgeo.batchlights`):
         a closed caster, no receiver, the outline method, and a point light of
         unlimited range or a directional light."""
-        return (
-            self.caster.is_closed
-            and not self.per_triangle
-            and not len(self.receiver)
-            and takes_arrays(light)
-        )
+        return self.takes_arrays_at_all and takes_arrays(light)
+
+    @cached_property
+    def takes_arrays_at_all(self) -> bool:
+        """A closed caster, no receiver and the outline method: lights of
+        the right kinds take the array path."""
+        return self.caster.is_closed and not self.per_triangle and not len(self.receiver)
 
     def scene_tolerance(self, light: Light) -> Tolerance:
         """``Tolerance.for_points`` of the caster, the light and the receiver."""
@@ -387,9 +388,15 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
     """
     context = partial(_light_context, prefix=not single)
     shadows: list[Shadow | None] = [None] * len(lights)
-    arrays = [index for index, light in enumerate(lights) if call.takes_arrays(light)]
-    row_of = dict(zip(arrays, range(len(arrays)), strict=True))
+    arrays = (
+        [index for index, light in enumerate(lights) if takes_arrays(light)]
+        if call.takes_arrays_at_all
+        else []
+    )
+    fast: list[tuple[int, int]] = []  # (light index, row of frames)
     frames = None
+    others = list(range(len(lights)))
+    row_of: dict[int, int] = {}
     if arrays:
         frames = light_frames(
             call.caster,
@@ -399,10 +406,16 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
             [lights[index] for index in arrays],
             call.tolerance,
         )
+        # Most lights: nothing to check or refuse one by one.
+        plain = frames.in_range & (frames.verdict == CASTS) & ~frames.near & frames.inside
+        fast = [(arrays[row], row) for row in np.flatnonzero(plain).tolist()]
+        row_of = {arrays[row]: row for row in np.flatnonzero(~plain).tolist()}
+        taken = set(arrays)
+        others = sorted([index for index in others if index not in taken] + list(row_of))
     pending: list[tuple[int, _Projector]] = []
-    fast: list[tuple[int, int]] = []  # (light index, row of frames)
     directional_tolerance: Tolerance | None = None  # the same for every directional light
-    for index, light in enumerate(lights):
+    for index in others:
+        light = lights[index]
         with context(index):
             row = row_of.get(index)
             if row is not None and frames is not None:
@@ -423,6 +436,7 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
             shadows[index] = early
         else:
             pending.append((index, projector))
+    fast.sort()
     if frames is not None:
         for first in range(0, len(fast), _LIGHT_CHUNK):
             rows = fast[first : first + _LIGHT_CHUNK]
@@ -464,12 +478,12 @@ def _settle(call: _Call, frames: LightFrames, row: int, light: Light) -> Shadow 
     if verdict != CASTS:
         info = ShadowDiagnostics(n_triangles=call.caster.n_faces, empty_reason=_EMPTY[verdict])
         return Shadow(call.plane, light, empty_mesh(), [], 0.0, info)
-    tolerance = frames.tolerance(row, call.tolerance)
     if frames.near[row]:
-        check_light_outside(call.caster, cast("PointLight", light).position, tolerance)
+        position = cast("PointLight", light).position
+        check_light_outside(call.caster, position, frames.tolerance(row, call.tolerance))
     if frames.inside[row]:
         return None
-    projector = _Projector(call, light, tolerance)
+    projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
     early = projector.prepare()
     return early if early is not None else projector
 
