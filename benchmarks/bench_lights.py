@@ -54,7 +54,7 @@ def lights(count: int, seed: int = 3) -> dict[str, list[PointLight] | list[Direc
 PHASES = [
     ("shadowgeo.projection", "light_frames", "frames: tolerance, plane frame, window (arrays)"),
     ("shadowgeo.projection", "_settle", "frame verdicts, per light"),
-    ("shadowgeo.topology", "Caster.facing", "front faces (one matrix-vector product each)"),
+    ("shadowgeo.projection", "front_rows", "front faces (one matrix-vector product each)"),
     ("shadowgeo.projection", "silhouette_outlines", "silhouettes, all lights together"),
     ("shadowgeo.projection", "project_outlines", "silhouettes projected to 2-D, together"),
     ("shadowgeo.projection", "_array_result", "result: area, polygons (per light)"),

@@ -280,6 +280,19 @@ def _inside_window(
     return result
 
 
+def front_rows(caster: Caster, light_h: np.ndarray) -> np.ndarray:
+    """(8 j, m) uint8, row k 1 where a face turns its front to light k
+    (``caster.facing(light_h[k]) > 0``), rows past the lights' count 0: the
+    front bits as :func:`shadowgeo.silhouette.silhouette_outlines` packs
+    them, written in place."""
+    count = len(light_h)
+    rows = np.zeros((-(-count // 8) * 8, caster.n_faces), dtype=np.uint8)
+    flags = rows.view(bool)
+    for light in range(count):
+        np.greater(caster.facing(light_h[light]), 0.0, out=flags[light])
+    return rows
+
+
 @dataclass(frozen=True)
 class ProjectedOutlines:
     """Every light's silhouette loops in its 2-D frame.

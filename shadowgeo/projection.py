@@ -42,6 +42,7 @@ from .batchlights import (
     ON_PLANE,
     PARALLEL,
     LightFrames,
+    front_rows,
     light_frames,
     project_outlines,
     takes_arrays,
@@ -508,8 +509,7 @@ def _array_shadows(
     loops united on their own. ``prefix``: errors name the light's index."""
     caster = call.caster
     rows = np.array([row for _, row in chunk], dtype=np.int64)
-    fronts = [caster.facing(frames.light_h[row]) > 0 for row in rows.tolist()]
-    outlines = silhouette_outlines(caster, fronts)
+    outlines = silhouette_outlines(caster, front_rows(caster, frames.light_h[rows]))
     projected = project_outlines(caster.centered, outlines, frames.H[rows])
     scale, bound = frames.scale[rows], frames.bound[rows]
     half = scale * bound

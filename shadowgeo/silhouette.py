@@ -267,12 +267,15 @@ def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # to the cut: the labelled edge comes first, then its successors in order.
     indices = np.arange(count)
     last = successor == label
-    after = np.where(last, indices, successor)
-    remaining = (~last).astype(np.int64)
+    # The last edge of each cycle points at a sentinel (index count) that
+    # has nothing remaining and points at itself.
+    after = np.append(np.where(last, count, successor), count)
+    remaining = np.append((~last).astype(np.int64), 0)
     longest = int(np.bincount(label).max())
     for _ in range(max(1, longest.bit_length())):  # distances double each step
-        remaining = remaining + np.where(after == indices, 0, remaining[after])
+        remaining += remaining[after]
         after = after[after]
+    remaining = remaining[:count]
     # Place each edge directly (no sort): loops in label order, each from its
     # labelled edge, which has the most edges remaining.
     sizes = np.bincount(label, minlength=count)
@@ -356,9 +359,10 @@ class Outlines:
         ]
 
 
-def silhouette_outlines(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
+def silhouette_outlines(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -> Outlines:
     """The silhouettes of a closed caster for many lights (``fronts``: each
-    light's (m,) bool front faces), as one flat :class:`Outlines`.
+    light's (m,) bool front faces, or a (k, m) uint8 array of 0 and 1 whose
+    k is a multiple of 8), as one flat :class:`Outlines`.
 
     Notes
     -----
@@ -387,12 +391,16 @@ def silhouette_outlines(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
 _WORD = 64
 
 
-def _pack_bits(fronts: list[np.ndarray]) -> np.ndarray:
+def _pack_bits(fronts: list[np.ndarray] | np.ndarray) -> np.ndarray:
     """(m,) uint64 words from up to 64 (m,) bool arrays: bit k of word f is
-    ``fronts[k][f]``. Eight lights at a time make one byte of each word."""
+    ``fronts[k][f]``. Eight lights at a time make one byte of each word.
+    A (8 j, m) uint8 array of 0 and 1 is used as it is."""
     n_bytes = -(-len(fronts) // 8)  # the bytes that hold any light's bit
-    rows = np.zeros((8 * n_bytes, len(fronts[0])), dtype=np.uint8)
-    rows[: len(fronts)] = fronts
+    if isinstance(fronts, np.ndarray) and fronts.dtype == np.uint8 and len(fronts) % 8 == 0:
+        rows = fronts
+    else:
+        rows = np.zeros((8 * n_bytes, len(fronts[0])), dtype=np.uint8)
+        rows[: len(fronts)] = fronts
     packed = np.zeros((len(fronts[0]), _WORD // 8), dtype=np.uint8)
     for byte in range(n_bytes):
         group = rows[8 * byte : 8 * byte + 8]
@@ -404,7 +412,7 @@ def _pack_bits(fronts: list[np.ndarray]) -> np.ndarray:
     return words
 
 
-def _outlines_of_word(caster: Caster, fronts: list[np.ndarray]) -> Outlines:
+def _outlines_of_word(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -> Outlines:
     words = _pack_bits(fronts)
     slots = caster.edge_face_slots
     faces_of = slots // 3
