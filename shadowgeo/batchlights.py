@@ -288,8 +288,15 @@ def front_rows(caster: Caster, light_h: np.ndarray) -> np.ndarray:
     count = len(light_h)
     rows = np.zeros((-(-count // 8) * 8, caster.n_faces), dtype=np.uint8)
     flags = rows.view(bool)
+    # Caster.facing's arithmetic, into one buffer: ``normals @ l_xyz -
+    # offsets l_w``; with l_w = 0 the subtraction changes no sign.
+    normals, offsets = caster.face_normals, caster.face_offsets
+    facing = np.empty(caster.n_faces)
     for light in range(count):
-        np.greater(caster.facing(light_h[light]), 0.0, out=flags[light])
+        np.matmul(normals, light_h[light, :3], out=facing)
+        if light_h[light, 3] != 0.0:
+            facing -= offsets * light_h[light, 3]
+        np.greater(facing, 0.0, out=flags[light])
     return rows
 
 

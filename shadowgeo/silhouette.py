@@ -238,8 +238,8 @@ def _cut(values: np.ndarray, cuts: np.ndarray) -> list[np.ndarray]:
 def _successors(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """(k,) the edge each edge goes on to: the k-th edge ending at a vertex
     to the k-th edge starting there, both by edge index."""
-    out_order = np.argsort(starts, kind="stable")
-    in_order = np.argsort(ends, kind="stable")
+    out_order = _stable_order(starts)
+    in_order = _stable_order(ends)
     mismatch = starts[out_order] != ends[in_order]
     if np.any(mismatch):
         vertex = int(ends[in_order][np.flatnonzero(mismatch)[0]])
@@ -247,6 +247,18 @@ def _successors(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     successor = np.empty(len(starts), dtype=np.int64)
     successor[in_order] = out_order
     return successor
+
+
+def _stable_order(keys: np.ndarray) -> np.ndarray:
+    """``np.argsort(keys, kind="stable")`` for non-negative integer keys:
+    the index is made part of the key (all keys distinct), and numpy's
+    default sort of distinct keys is a few times faster than its stable
+    sort."""
+    count = np.int64(len(keys))
+    if count == 0 or int(keys.max()) >= (1 << 62) // max(int(count), 1):
+        return np.argsort(keys, kind="stable")
+    order: np.ndarray = np.argsort(keys * count + np.arange(count))
+    return order
 
 
 def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
