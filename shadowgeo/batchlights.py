@@ -15,16 +15,23 @@ objects) stays in :mod:`shadowgeo.projection`.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from functools import partial
+from typing import cast
 
 import numpy as np
 
+from . import polygons as poly
+from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight
-from .limits import LARGEST_COORDINATE
+from .limits import LARGEST_COORDINATE, check_light
+from .plane import Plane
 from .polygons import MAX_COORDINATE
-from .silhouette import Outlines
+from .shadow import Shadow, ShadowDiagnostics, triangulated
+from .silhouette import Outlines, check_light_outside, silhouette_outlines, vertex_components
 from .tolerance import Tolerance, resolution, scene_scales
-from .topology import Caster
+from .topology import Caster, empty_mesh
 
 # What the frame alone decides about a light.
 CASTS = 0  # the light reaches the plane's front: a shadow to compute
@@ -361,3 +368,239 @@ def project_outlines(centered: np.ndarray, outlines: Outlines, H: np.ndarray) ->
         low[has] = np.minimum.reduceat(projected, starts, axis=0)
         high[has] = np.maximum.reduceat(projected, starts, axis=0)
     return ProjectedOutlines(projected, touching, low, high)
+
+
+def settle(
+    caster: Caster,
+    plane: Plane,
+    frames: LightFrames,
+    row: int,
+    light: Light,
+    tolerance: Tolerance | None,
+) -> Shadow | None:
+    """What the frame decides for light ``row`` of ``frames`` (``tolerance``:
+    the call's own, if any): its (empty) shadow, or None when it goes on
+    (on the array path if ``frames.inside[row]``, else the general path).
+
+    Raises
+    ------
+    GeometryError
+        The light lies on the plane, touches the caster or is inside it, or
+        its coordinates are out of range.
+    """
+    if not frames.in_range[row]:
+        check_light(light)
+    verdict = int(frames.verdict[row])
+    if verdict == ON_PLANE:
+        light = cast("PointLight", light)
+        raise GeometryError(
+            f"the light at {light.position.tolist()} lies on the receiving plane "
+            f"(distance {float(frames.height[row]):.3g}, "
+            f"tolerance {float(frames.length[row]):.3g})"
+        )
+    if verdict != CASTS:
+        info = ShadowDiagnostics(n_triangles=caster.n_faces, empty_reason=_EMPTY[verdict])
+        return Shadow(plane, light, empty_mesh(), [], 0.0, info)
+    if frames.near[row]:
+        position = cast("PointLight", light).position
+        check_light_outside(caster, position, frames.tolerance(row, tolerance))
+    return None
+
+
+_EMPTY = {
+    BEHIND: "the light is behind the plane (its normal points away)",
+    PARALLEL: "the light travels parallel to the plane",
+    BACK: "the light shines on the back of the plane",
+}
+
+
+def array_shadows(
+    caster: Caster,
+    plane: Plane,
+    offset: float,
+    frames: LightFrames,
+    lights: Sequence[Light],
+    chunk: list[tuple[int, int]],
+) -> Iterator[Shadow | None]:
+    """The shadow of each light of ``chunk`` ((index into ``lights``, row of
+    ``frames``) pairs, every corner of the caster's box inside each one's
+    window), in order, as the general path of
+    :func:`shadowgeo.project_shadow` makes it (lifted by ``offset``); None
+    for a light the general path must take (its outline leaves the window
+    after all, or touches the light).
+
+    The silhouettes are found and projected together, then each light's
+    loops are united on their own (a GeometryError there comes out at that
+    light's turn).
+    """
+    rows = np.array([row for _, row in chunk], dtype=np.int64)
+    outlines = silhouette_outlines(caster, front_rows(caster, frames.light_h[rows]))
+    projected = project_outlines(caster.centered, outlines, frames.H[rows])
+    scale, bound = frames.scale[rows], frames.bound[rows]
+    half = scale * bound
+    general = (
+        projected.touching
+        | np.any(projected.low < -half[:, None], axis=1)
+        | np.any(projected.high > half[:, None], axis=1)
+    ).tolist()
+    loops = pieces(projected.points, outlines.loop_lengths.tolist())
+    firsts = outlines.corners[np.cumsum(outlines.loop_lengths) - outlines.loop_lengths]
+    loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(chunk) + 1)).tolist()
+    # The union's corners are the loops' corners and crossings, rounded to
+    # Clipper2's grid (1e-8 local units): loops a unit inside the limit
+    # cannot reach it.
+    limit = (bound - frames.length[rows]) * scale
+    reach = np.maximum(np.abs(projected.low), np.abs(projected.high)).max(axis=1)
+    unbounded = (reach + 1.0 < limit).tolist()
+    u, v = plane.basis
+    # element-wise sums: a matrix product's bits may depend on the rows' count
+    relative = (frames.origin[rows] + caster.center) - plane.origin
+    origins = np.column_stack(
+        [
+            relative[:, 0] * axis[0] + relative[:, 1] * axis[1] + relative[:, 2] * axis[2]
+            for axis in (u, v)
+        ]
+    )
+    lifts = (frames.origin[rows] + offset * plane.normal) + caster.center
+    positional = frames.positional[rows].tolist()
+    scales, bounds, limits = scale.tolist(), bound.tolist(), limit.tolist()
+    for k, (index, _) in enumerate(chunk):
+        if general[k]:
+            yield None
+            continue
+        first, last = loop_bounds[k], loop_bounds[k + 1]
+        own = loops[first:last]
+        parts = poly.union_parts(own, partial(_part_labels, caster, firsts[first:last]))
+        bounded = not unbounded[k] and _reaches(parts, limits[k])
+        info = ShadowDiagnostics(
+            n_triangles=caster.n_faces,
+            clipped=dict(_NONE_CLIPPED if positional[k] else _NONE_CLIPPED_DIRECTIONAL),
+            bounded_artificially=bounded,
+            bound=bounds[k],
+            n_loops=len(own),
+        )
+        yield _array_result(plane, lights[index], parts, scales[k], origins[k], lifts[k], info)
+
+
+# The per-reason counts of a shadow no face of which was clipped (copied
+# into each result: the diagnostics' dict is the caller's to keep).
+_NONE_CLIPPED = {"below_plane": 0, "at_or_above_light": 0, "outside_bound": 0}
+_NONE_CLIPPED_DIRECTIONAL = {"below_plane": 0, "outside_bound": 0}
+
+
+def _part_labels(caster: Caster, firsts: np.ndarray) -> np.ndarray:
+    """The connected part of the caster that each outline loop (starting
+    at vertex ``firsts``) runs on: the groups of :func:`poly.union_parts`."""
+    labels: np.ndarray = vertex_components(caster)[firsts]
+    return labels
+
+
+def _reaches(parts: list[list[np.ndarray]], limit: float) -> bool:
+    """Whether an outer loop of ``parts`` reaches ``limit`` (local units):
+    the default bound cut the shadow."""
+    if not parts:
+        return False
+    outer = np.abs(np.concatenate([part[0] for part in parts])).max()
+    return max(float(outer), 0.0) >= limit
+
+
+def _array_result(
+    plane: Plane,
+    light: Light,
+    parts: list[list[np.ndarray]],
+    scale: float,
+    origin2d: np.ndarray,
+    lift: np.ndarray,
+    info: ShadowDiagnostics,
+) -> Shadow:
+    """The shadow of one light of the array path from its united ``parts``
+    (local units), as the general path makes it."""
+    if not parts:
+        return Shadow(plane, light, empty_mesh(), [], 0.0, info)
+    area = _parts_area(parts) / scale / scale  # no square to over/underflow
+    polygons = [[loop / scale + origin2d for loop in loops] for loops in parts]
+    build = partial(triangulated, parts, scale, lift, plane.basis)
+    return Shadow(plane, light, build, polygons, area, info)
+
+
+def _parts_area(parts: list[list[np.ndarray]]) -> float:
+    """:func:`poly.parts_area` by two dot products a loop (the shoelace
+    sum ``x_i y_i+1 - x_i+1 y_i``): a shadow is mostly one loop, and a
+    handful of numpy calls on it is most of the cost."""
+    total = 0.0
+    for loops in parts:
+        for loop in loops:
+            x, y = loop[:, 0], loop[:, 1]
+            total += float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + (x[-1] * y[0] - x[0] * y[-1]))
+    return 0.5 * total
+
+
+def _images_many(
+    homogeneous: np.ndarray, vertices: list[np.ndarray], matrices: list[np.ndarray]
+) -> list[np.ndarray]:
+    """:func:`_images` of ``homogeneous[vertices[i]]`` under ``matrices[i]``
+    for every i, in one pass."""
+    counts = [len(each) for each in vertices]
+    points = homogeneous[np.concatenate(vertices)] if sum(counts) else np.zeros((0, 4))
+    H = np.repeat(np.array(matrices), counts, axis=0)  # (k, 3, 4): each point's matrix
+    rows = [
+        points[:, 0] * H[:, i, 0]
+        + points[:, 1] * H[:, i, 1]
+        + points[:, 2] * H[:, i, 2]
+        + H[:, i, 3]
+        for i in range(3)
+    ]
+    return pieces(np.column_stack(rows), counts)
+
+
+def projected_many(
+    homogeneous: np.ndarray,
+    outlines: list[tuple[list[np.ndarray], np.ndarray]],
+    matrices: list[np.ndarray],
+) -> list[tuple[list[np.ndarray] | None, np.ndarray]]:
+    """The general path's projection of every light's silhouette (``outlines`` from
+    :func:`silhouette_loops_many`, ``matrices`` each light's ``H``) in one
+    pass, and the box of each light's 2-D points. The points are the same
+    numbers one light's call gives: the same explicit sums, the same
+    division. ``None`` loops for a light with a vertex at infinity."""
+    n_lights = len(outlines)
+    counts = [len(vertices) for _, vertices in outlines]
+    images = _images_many(homogeneous, [vertices for _, vertices in outlines], matrices)
+    if sum(counts) == 0:
+        return [([], np.zeros((2, 2))) for _ in range(n_lights)]
+    image = np.concatenate(images)
+    light_of = np.repeat(np.arange(n_lights), counts)
+    n_vertices = np.int64(len(homogeneous))
+    keys = np.concatenate([v + k * n_vertices for k, (_, v) in enumerate(outlines)])
+    with np.errstate(divide="ignore", invalid="ignore"):  # such a light raises, below
+        points = image[:, :2] / image[:, 2:3]
+    touching = np.zeros(n_lights, dtype=bool)
+    touching[light_of[image[:, 2] <= 0]] = True
+    loops = [loop + k * n_vertices for k, (own, _) in enumerate(outlines) for loop in own]
+    lengths = [len(loop) for loop in loops]
+    corners = points[np.searchsorted(keys, np.concatenate(loops))] if loops else points[:0]
+    cut = pieces(corners, lengths)
+    # the box of each light's loop corners (not of all its vertices: a loop
+    # of two edges is dropped, and its vertices with it)
+    corner_counts = np.array([sum(len(loop) for loop in own) for own, _ in outlines])
+    starts = np.concatenate([[0], np.cumsum(corner_counts)[:-1]])
+    has_points = corner_counts > 0
+    low = np.zeros((n_lights, 2))
+    high = np.zeros((n_lights, 2))
+    if has_points.any():
+        low[has_points] = np.minimum.reduceat(corners, starts[has_points], axis=0)
+        high[has_points] = np.maximum.reduceat(corners, starts[has_points], axis=0)
+    result: list[tuple[list[np.ndarray] | None, np.ndarray]] = []
+    first = 0
+    for k, (own, _) in enumerate(outlines):
+        mine = cut[first : first + len(own)]
+        first += len(own)
+        result.append((None if touching[k] else mine, np.array([low[k], high[k]])))
+    return result
+
+
+def pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
+    """``rows`` cut into consecutive pieces of ``counts`` rows (np.split,
+    without its per-piece overhead)."""
+    ends = np.cumsum(counts).tolist()
+    return [rows[end - count : end] for count, end in zip(counts, ends, strict=True)]

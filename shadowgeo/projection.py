@@ -25,46 +25,45 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
 
 import numpy as np
-import trimesh
 from manifold3d import CrossSection
 from numpy.typing import ArrayLike
 
 from . import polygons as poly
 from .batchlights import (
-    BACK,
-    BEHIND,
     CASTS,
-    ON_PLANE,
-    PARALLEL,
-    LightFrames,
-    front_rows,
+    array_shadows,
     light_frames,
-    project_outlines,
+    pieces,
+    projected_many,
+    settle,
     takes_arrays,
 )
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import check_coordinates, check_light
 from .plane import Plane
+
+# Shadow and ShadowDiagnostics live in .shadow; they are re-exported here,
+# where they were first defined and are still imported from.
+from .shadow import Shadow as Shadow
+from .shadow import ShadowDiagnostics as ShadowDiagnostics
+from .shadow import triangulated
 from .silhouette import (
     boundary_loops,
     check_light_outside,
     silhouette_loops,
     silhouette_loops_many,
-    silhouette_outlines,
     vertex_components,
 )
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, empty_mesh, unique_integers
 
 if TYPE_CHECKING:
-    import shapely
-
     from .lights import PointLight
 
 
@@ -111,103 +110,6 @@ def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
     P = plane.vector
     L = light.homogeneous
     return float(P @ L) * np.eye(4) - np.outer(L, P)
-
-
-@dataclass(frozen=True)
-class ShadowDiagnostics:
-    """What :func:`project_shadow` did to get its result.
-
-    Attributes
-    ----------
-    n_triangles : int
-        Caster triangles considered.
-    clipped : dict[str, int]
-        Triangles cut (partly or wholly) for each reason: ``"below_plane"``
-        (the caster pierces the receiver), ``"at_or_above_light"`` (the
-        anti-shadow and divide-by-zero region), ``"outside_receiver"`` or
-        ``"outside_bound"`` (the shadow leaves the receiver's bounding box or
-        the default bound).
-    culled : int
-        Triangles that cast nothing at all.
-    limits : tuple[str, ...]
-        2-D limits applied after projection: ``"receiver"``, ``"spot_cone"``,
-        ``"range"``.
-    bounded_artificially : bool
-        The shadow runs past the default bound (it is truly unbounded, or
-        larger than ``bound``): no receiver limited it.
-    bound : float or None
-        Half-width of the default bound square used, in scene units.
-    empty_reason : str or None
-        Why the shadow is empty, when it is empty for a reason other than
-        geometry (light behind or parallel to the plane, out of range, ...).
-    n_loops : int
-        Loops handed to the 2-D union (outline edges chained, plus clipped
-        triangles): a measure of the work done.
-    """
-
-    n_triangles: int = 0
-    clipped: dict[str, int] = field(default_factory=dict)
-    culled: int = 0
-    limits: tuple[str, ...] = ()
-    bounded_artificially: bool = False
-    bound: float | None = None
-    empty_reason: str | None = None
-    n_loops: int = 0
-
-
-@dataclass(frozen=True)
-class Shadow:
-    """A planar shadow.
-
-    Attributes
-    ----------
-    plane : Plane
-        The receiving plane.
-    light : Light
-        The light that casts it.
-    mesh : trimesh.Trimesh
-        The shadow region triangulated on the plane (lifted by ``offset``
-        towards the light), with no overlapping triangles, wound
-        counter-clockwise seen from the light's side. A property, computed
-        on first use from ``mesh_source`` (a mesh, or a function that builds
-        it).
-    polygons : list of list of (k, 2) float64
-        The region in ``plane.to_2d`` coordinates: one ``[outer, hole, ...]``
-        list per connected part, outer loops counter-clockwise.
-    area : float
-        Exact area of the region (scene units squared).
-    diagnostics : ShadowDiagnostics
-    """
-
-    plane: Plane
-    light: Light
-    mesh_source: trimesh.Trimesh | Callable[[], trimesh.Trimesh] = field(repr=False)
-    polygons: list[list[np.ndarray]]
-    area: float
-    diagnostics: ShadowDiagnostics
-
-    @property
-    def mesh(self) -> trimesh.Trimesh:
-        """The region triangulated, built on first use: a caller that needs
-        only ``polygons`` or ``area`` (a sun study, a union of many
-        buildings) never pays for the triangulation."""
-        source = self.mesh_source
-        if isinstance(source, trimesh.Trimesh):
-            return source
-        mesh = source()
-        object.__setattr__(self, "mesh_source", mesh)
-        return mesh
-
-    @property
-    def is_empty(self) -> bool:
-        return self.area == 0.0
-
-    def to_shapely(self) -> shapely.MultiPolygon:
-        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates."""
-        import shapely
-
-        parts = [shapely.Polygon(loops[0], loops[1:]) for loops in self.polygons]
-        return shapely.MultiPolygon(parts)
 
 
 @overload
@@ -420,13 +322,18 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
         with context(index):
             row = row_of.get(index)
             if row is not None and frames is not None:
-                settled = _settle(call, frames, row, light)
-                if isinstance(settled, Shadow):
+                settled = settle(call.caster, call.plane, frames, row, light, call.tolerance)
+                if settled is not None:
                     shadows[index] = settled
-                elif settled is None:
+                elif frames.inside[row]:
                     fast.append((index, row))
                 else:
-                    pending.append((index, settled))
+                    projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
+                    early = projector.prepare()
+                    if early is not None:
+                        shadows[index] = early
+                    else:
+                        pending.append((index, projector))
                 continue
             if directional_tolerance is None and isinstance(light, DirectionalLight):
                 directional_tolerance = call.scene_tolerance(light)
@@ -441,15 +348,23 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
     if frames is not None:
         for first in range(0, len(fast), _LIGHT_CHUNK):
             rows = fast[first : first + _LIGHT_CHUNK]
-            for index, shadow in _array_shadows(call, frames, lights, rows, not single):
-                shadows[index] = shadow
+            found = array_shadows(call.caster, call.plane, call.offset, frames, lights, rows)
+            for index, row in rows:
+                with context(index):
+                    shadow = next(found)
+                    if shadow is None:  # the general path after all
+                        tolerance = frames.tolerance(row, call.tolerance)
+                        projector = _Projector(call, lights[index], tolerance)
+                        early = projector.prepare()
+                        shadow = early if early is not None else projector.finish()
+                    shadows[index] = shadow
     caster = call.caster
     if caster.is_closed and not call.per_triangle:
         for first in range(0, len(pending), _LIGHT_CHUNK):
             chunk = pending[first : first + _LIGHT_CHUNK]
             fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
             outlines = silhouette_loops_many(caster, fronts)
-            projected = _projected_many(caster.centered, outlines, [p.H for _, p in chunk])
+            projected = projected_many(caster.centered, outlines, [p.H for _, p in chunk])
             for (index, projector), front, (loops, _), (flat, box) in zip(
                 chunk, fronts, outlines, projected, strict=True
             ):
@@ -460,152 +375,6 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
             with context(index):
                 shadows[index] = projector.finish()
     return cast("list[Shadow]", shadows)
-
-
-def _settle(call: _Call, frames: LightFrames, row: int, light: Light) -> Shadow | _Projector | None:
-    """What the frame decides for light ``row`` of ``frames``: its (empty)
-    shadow, a projector set up for the general path (the caster's box
-    leaves the window), or None (the array path goes on)."""
-    if not frames.in_range[row]:
-        check_light(light)
-    verdict = int(frames.verdict[row])
-    if verdict == ON_PLANE:
-        light = cast("PointLight", light)
-        raise GeometryError(
-            f"the light at {light.position.tolist()} lies on the receiving plane "
-            f"(distance {float(frames.height[row]):.3g}, "
-            f"tolerance {float(frames.length[row]):.3g})"
-        )
-    if verdict != CASTS:
-        info = ShadowDiagnostics(n_triangles=call.caster.n_faces, empty_reason=_EMPTY[verdict])
-        return Shadow(call.plane, light, empty_mesh(), [], 0.0, info)
-    if frames.near[row]:
-        position = cast("PointLight", light).position
-        check_light_outside(call.caster, position, frames.tolerance(row, call.tolerance))
-    if frames.inside[row]:
-        return None
-    projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
-    early = projector.prepare()
-    return early if early is not None else projector
-
-
-_EMPTY = {
-    BEHIND: "the light is behind the plane (its normal points away)",
-    PARALLEL: "the light travels parallel to the plane",
-    BACK: "the light shines on the back of the plane",
-}
-
-
-def _array_shadows(
-    call: _Call,
-    frames: LightFrames,
-    lights: Sequence[Light],
-    chunk: list[tuple[int, int]],
-    prefix: bool,
-) -> Iterator[tuple[int, Shadow]]:
-    """(light index, shadow) of the lights of ``chunk`` ((index, row of
-    ``frames``) pairs, every corner of the caster's box inside each one's
-    window): silhouettes found and projected together, then each light's
-    loops united on their own. ``prefix``: errors name the light's index."""
-    caster = call.caster
-    rows = np.array([row for _, row in chunk], dtype=np.int64)
-    outlines = silhouette_outlines(caster, front_rows(caster, frames.light_h[rows]))
-    projected = project_outlines(caster.centered, outlines, frames.H[rows])
-    scale, bound = frames.scale[rows], frames.bound[rows]
-    half = scale * bound
-    general = (
-        projected.touching
-        | np.any(projected.low < -half[:, None], axis=1)
-        | np.any(projected.high > half[:, None], axis=1)
-    ).tolist()
-    loops = _pieces(projected.points, outlines.loop_lengths.tolist())
-    firsts = outlines.corners[np.cumsum(outlines.loop_lengths) - outlines.loop_lengths]
-    loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(chunk) + 1)).tolist()
-    # The union's corners are the loops' corners and crossings, rounded to
-    # Clipper2's grid (1e-8 local units): loops a unit inside the limit
-    # cannot reach it.
-    limit = (bound - frames.length[rows]) * scale
-    reach = np.maximum(np.abs(projected.low), np.abs(projected.high)).max(axis=1)
-    unbounded = (reach + 1.0 < limit).tolist()
-    u, v = call.basis
-    # element-wise sums: a matrix product's bits may depend on the rows' count
-    relative = (frames.origin[rows] + caster.center) - call.plane.origin
-    origins = np.column_stack(
-        [
-            relative[:, 0] * axis[0] + relative[:, 1] * axis[1] + relative[:, 2] * axis[2]
-            for axis in (u, v)
-        ]
-    )
-    lifts = (frames.origin[rows] + call.offset * call.plane.normal) + caster.center
-    positional = frames.positional[rows].tolist()
-    scales, bounds, limits = scale.tolist(), bound.tolist(), limit.tolist()
-    for k, (index, row) in enumerate(chunk):
-        light = lights[index]
-        try:
-            if general[k]:
-                # the general path: it cuts the outline to the window, or
-                # refuses a light that touches the caster
-                projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
-                early = projector.prepare()
-                yield index, early if early is not None else projector.finish()
-                continue
-            first, last = loop_bounds[k], loop_bounds[k + 1]
-            own = loops[first:last]
-            parts = poly.union_parts(own, partial(_part_labels, caster, firsts[first:last]))
-            bounded = not unbounded[k] and _reaches(parts, limits[k])
-            info = ShadowDiagnostics(
-                n_triangles=caster.n_faces,
-                clipped=dict(_NONE_CLIPPED if positional[k] else _NONE_CLIPPED_DIRECTIONAL),
-                bounded_artificially=bounded,
-                bound=bounds[k],
-                n_loops=len(own),
-            )
-            yield index, _array_result(call, light, parts, scales[k], origins[k], lifts[k], info)
-        except GeometryError as error:
-            if not prefix:
-                raise
-            raise GeometryError(f"light {index}: {error}") from error
-
-
-# The per-reason counts of a shadow no face of which was clipped (copied
-# into each result: the diagnostics' dict is the caller's to keep).
-_NONE_CLIPPED = {"below_plane": 0, "at_or_above_light": 0, "outside_bound": 0}
-_NONE_CLIPPED_DIRECTIONAL = {"below_plane": 0, "outside_bound": 0}
-
-
-def _part_labels(caster: Caster, firsts: np.ndarray) -> np.ndarray:
-    """The connected part of the caster that each outline loop (starting
-    at vertex ``firsts``) runs on: the groups of :func:`poly.union_parts`."""
-    labels: np.ndarray = vertex_components(caster)[firsts]
-    return labels
-
-
-def _reaches(parts: list[list[np.ndarray]], limit: float) -> bool:
-    """Whether an outer loop of ``parts`` reaches ``limit`` (local units):
-    the default bound cut the shadow."""
-    if not parts:
-        return False
-    outer = np.abs(np.concatenate([part[0] for part in parts])).max()
-    return max(float(outer), 0.0) >= limit
-
-
-def _array_result(
-    call: _Call,
-    light: Light,
-    parts: list[list[np.ndarray]],
-    scale: float,
-    origin2d: np.ndarray,
-    lift: np.ndarray,
-    info: ShadowDiagnostics,
-) -> Shadow:
-    """The shadow of one light of the array path from its united ``parts``
-    (local units), as :meth:`_Projector._result` makes it."""
-    if not parts:
-        return Shadow(call.plane, light, empty_mesh(), [], 0.0, info)
-    area = _parts_area(parts) / scale / scale  # no square to over/underflow
-    polygons = [[loop / scale + origin2d for loop in loops] for loops in parts]
-    build = partial(_triangulated, parts, scale, lift, call.basis)
-    return Shadow(call.plane, light, build, polygons, area, info)
 
 
 # Lights whose silhouettes are found together: bounds the memory of the
@@ -1049,35 +818,8 @@ class _Projector:
         origin2d = np.array([relative @ u, relative @ v])
         polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
         lift = self.origin + self.offset * self.plane.normal + self.center
-        build = partial(_triangulated, parts, self.scale, lift, self.call.basis)
+        build = partial(triangulated, parts, self.scale, lift, self.call.basis)
         return Shadow(self.plane, self.light, build, polygons, area, info)
-
-
-def _parts_area(parts: list[list[np.ndarray]]) -> float:
-    """:func:`poly.parts_area` by two dot products a loop (the shoelace
-    sum ``x_i y_i+1 - x_i+1 y_i``): a shadow is mostly one loop, and a
-    handful of numpy calls on it is most of the cost."""
-    total = 0.0
-    for loops in parts:
-        for loop in loops:
-            x, y = loop[:, 0], loop[:, 1]
-            total += float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + (x[-1] * y[0] - x[0] * y[-1]))
-    return 0.5 * total
-
-
-def _triangulated(
-    parts: list[list[np.ndarray]],
-    scale: float,
-    lift: np.ndarray,
-    basis: tuple[np.ndarray, np.ndarray],
-) -> trimesh.Trimesh:
-    """The mesh of a shadow's parts (local units) on the plane of ``basis``,
-    ``lift`` being the scene point of the local origin."""
-    u, v = basis
-    flat, faces = poly.triangulate_parts(parts)
-    flat = flat / scale
-    points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v)
-    return trimesh.Trimesh(points, faces, process=False)
 
 
 # Faces whose corners project within the rectangle widened by this many times
@@ -1129,70 +871,6 @@ def _images(points: np.ndarray, H: np.ndarray) -> np.ndarray:
     return np.column_stack(rows)
 
 
-def _images_many(
-    homogeneous: np.ndarray, vertices: list[np.ndarray], matrices: list[np.ndarray]
-) -> list[np.ndarray]:
-    """:func:`_images` of ``homogeneous[vertices[i]]`` under ``matrices[i]``
-    for every i, in one pass."""
-    counts = [len(each) for each in vertices]
-    points = homogeneous[np.concatenate(vertices)] if sum(counts) else np.zeros((0, 4))
-    H = np.repeat(np.array(matrices), counts, axis=0)  # (k, 3, 4): each point's matrix
-    rows = [
-        points[:, 0] * H[:, i, 0]
-        + points[:, 1] * H[:, i, 1]
-        + points[:, 2] * H[:, i, 2]
-        + H[:, i, 3]
-        for i in range(3)
-    ]
-    return _pieces(np.column_stack(rows), counts)
-
-
-def _projected_many(
-    homogeneous: np.ndarray,
-    outlines: list[tuple[list[np.ndarray], np.ndarray]],
-    matrices: list[np.ndarray],
-) -> list[tuple[list[np.ndarray] | None, np.ndarray]]:
-    """:func:`_project_loops` of every light's silhouette (``outlines`` from
-    :func:`silhouette_loops_many`, ``matrices`` each light's ``H``) in one
-    pass, and the box of each light's 2-D points. The points are the same
-    numbers one light's call gives: the same explicit sums, the same
-    division. ``None`` loops for a light with a vertex at infinity."""
-    n_lights = len(outlines)
-    counts = [len(vertices) for _, vertices in outlines]
-    images = _images_many(homogeneous, [vertices for _, vertices in outlines], matrices)
-    if sum(counts) == 0:
-        return [([], np.zeros((2, 2))) for _ in range(n_lights)]
-    image = np.concatenate(images)
-    light_of = np.repeat(np.arange(n_lights), counts)
-    n_vertices = np.int64(len(homogeneous))
-    keys = np.concatenate([v + k * n_vertices for k, (_, v) in enumerate(outlines)])
-    with np.errstate(divide="ignore", invalid="ignore"):  # such a light raises, below
-        points = image[:, :2] / image[:, 2:3]
-    touching = np.zeros(n_lights, dtype=bool)
-    touching[light_of[image[:, 2] <= 0]] = True
-    loops = [loop + k * n_vertices for k, (own, _) in enumerate(outlines) for loop in own]
-    lengths = [len(loop) for loop in loops]
-    corners = points[np.searchsorted(keys, np.concatenate(loops))] if loops else points[:0]
-    pieces = _pieces(corners, lengths)
-    # the box of each light's loop corners (not of all its vertices: a loop
-    # of two edges is dropped, and its vertices with it)
-    corner_counts = np.array([sum(len(loop) for loop in own) for own, _ in outlines])
-    starts = np.concatenate([[0], np.cumsum(corner_counts)[:-1]])
-    has_points = corner_counts > 0
-    low = np.zeros((n_lights, 2))
-    high = np.zeros((n_lights, 2))
-    if has_points.any():
-        low[has_points] = np.minimum.reduceat(corners, starts[has_points], axis=0)
-        high[has_points] = np.maximum.reduceat(corners, starts[has_points], axis=0)
-    result: list[tuple[list[np.ndarray] | None, np.ndarray]] = []
-    first = 0
-    for k, (own, _) in enumerate(outlines):
-        mine = pieces[first : first + len(own)]
-        first += len(own)
-        result.append((None if touching[k] else mine, np.array([low[k], high[k]])))
-    return result
-
-
 def _project_loops(
     loops: list[np.ndarray], vertices: np.ndarray, image: np.ndarray
 ) -> list[np.ndarray]:
@@ -1207,14 +885,7 @@ def _project_loops(
         return [points[np.searchsorted(vertices, loops[0])]]
     # vertices is sorted: find each loop corner's row by bisection, all at once
     corners = points[np.searchsorted(vertices, np.concatenate(loops))]
-    return _pieces(corners, [len(loop) for loop in loops])
-
-
-def _pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
-    """``rows`` cut into consecutive pieces of ``counts`` rows (np.split,
-    without its per-piece overhead)."""
-    ends = np.cumsum(counts).tolist()
-    return [rows[end - count : end] for count, end in zip(counts, ends, strict=True)]
+    return pieces(corners, [len(loop) for loop in loops])
 
 
 def _clipped_loops(
