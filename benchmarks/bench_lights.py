@@ -53,12 +53,12 @@ def lights(count: int, seed: int = 3) -> dict[str, list[PointLight] | list[Direc
 # (module, attribute, label) of the steps --phases times, in call order.
 PHASES = [
     ("shadowgeo.projection", "light_frames", "frames: tolerance, plane frame, window (arrays)"),
-    ("shadowgeo.projection", "_settle", "frame verdicts, per light"),
-    ("shadowgeo.projection", "front_rows", "front faces (one matrix-vector product each)"),
-    ("shadowgeo.projection", "silhouette_outlines", "silhouettes, all lights together"),
-    ("shadowgeo.projection", "project_outlines", "silhouettes projected to 2-D, together"),
-    ("shadowgeo.projection", "_array_result", "result: area, polygons (per light)"),
+    ("shadowgeo.projection", "settle", "frame verdicts (lights that need one)"),
+    ("shadowgeo.batchlights", "front_rows", "front faces (one matrix-vector product each)"),
+    ("shadowgeo.batchlights", "silhouette_outlines", "silhouettes, all lights together"),
+    ("shadowgeo.batchlights", "project_outlines", "silhouettes projected to 2-D, together"),
     ("shadowgeo.polygons", "union_parts", "2-D union (Clipper2, per light)"),
+    ("shadowgeo.batchlights", "_array_result", "result: area, polygons (per light)"),
 ]
 
 

@@ -452,7 +452,8 @@ def array_shadows(
     limit = (bound - frames.length[rows]) * scale
     reach = np.maximum(np.abs(projected.low), np.abs(projected.high)).max(axis=1)
     unbounded = (reach + 1.0 < limit).tolist()
-    u, v = plane.basis
+    basis = plane.basis  # a property that computes: once for the chunk
+    u, v = basis
     # element-wise sums: a matrix product's bits may depend on the rows' count
     relative = (frames.origin[rows] + caster.center) - plane.origin
     origins = np.column_stack(
@@ -479,7 +480,9 @@ def array_shadows(
             bound=bounds[k],
             n_loops=len(own),
         )
-        yield _array_result(plane, lights[index], parts, scales[k], origins[k], lifts[k], info)
+        yield _array_result(
+            plane, basis, lights[index], parts, scales[k], origins[k], lifts[k], info
+        )
 
 
 # The per-reason counts of a shadow no face of which was clipped (copied
@@ -506,6 +509,7 @@ def _reaches(parts: list[list[np.ndarray]], limit: float) -> bool:
 
 def _array_result(
     plane: Plane,
+    basis: tuple[np.ndarray, np.ndarray],
     light: Light,
     parts: list[list[np.ndarray]],
     scale: float,
@@ -519,7 +523,7 @@ def _array_result(
         return Shadow(plane, light, empty_mesh(), [], 0.0, info)
     area = _parts_area(parts) / scale / scale  # no square to over/underflow
     polygons = [[loop / scale + origin2d for loop in loops] for loops in parts]
-    build = partial(triangulated, parts, scale, lift, plane.basis)
+    build = partial(triangulated, parts, scale, lift, basis)
     return Shadow(plane, light, build, polygons, area, info)
 
 
