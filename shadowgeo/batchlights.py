@@ -417,6 +417,7 @@ _EMPTY = {
 def array_shadows(
     caster: Caster,
     plane: Plane,
+    basis: tuple[np.ndarray, np.ndarray],
     offset: float,
     frames: LightFrames,
     lights: Sequence[Light],
@@ -425,7 +426,8 @@ def array_shadows(
     """The shadow of each light of ``chunk`` ((index into ``lights``, row of
     ``frames``) pairs, every corner of the caster's box inside each one's
     window), in order, as the general path of
-    :func:`shadowgeo.project_shadow` makes it (lifted by ``offset``); None
+    :func:`shadowgeo.project_shadow` makes it (``basis``: the plane's,
+    ``offset``: the lift); None
     for a light the general path must take (its outline leaves the window
     after all, or touches the light).
 
@@ -434,7 +436,8 @@ def array_shadows(
     light's turn).
     """
     rows = np.array([row for _, row in chunk], dtype=np.int64)
-    outlines = silhouette_outlines(caster, front_rows(caster, frames.light_h[rows]))
+    fronts = front_rows(caster, frames.light_h[rows])
+    outlines = silhouette_outlines(caster, fronts if len(chunk) > 1 else fronts[:1])
     projected = project_outlines(caster.centered, outlines, frames.H[rows])
     scale, bound = frames.scale[rows], frames.bound[rows]
     half = scale * bound
@@ -452,7 +455,6 @@ def array_shadows(
     limit = (bound - frames.length[rows]) * scale
     reach = np.maximum(np.abs(projected.low), np.abs(projected.high)).max(axis=1)
     unbounded = (reach + 1.0 < limit).tolist()
-    basis = plane.basis  # a property that computes: once for the chunk
     u, v = basis
     # element-wise sums: a matrix product's bits may depend on the rows' count
     relative = (frames.origin[rows] + caster.center) - plane.origin

@@ -348,7 +348,9 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
     if frames is not None:
         for first in range(0, len(fast), _LIGHT_CHUNK):
             rows = fast[first : first + _LIGHT_CHUNK]
-            found = array_shadows(call.caster, call.plane, call.offset, frames, lights, rows)
+            found = array_shadows(
+                call.caster, call.plane, call.basis, call.offset, frames, lights, rows
+            )
             for index, row in rows:
                 with context(index):
                     shadow = next(found)

@@ -383,6 +383,14 @@ def silhouette_outlines(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -
     those edges are unpacked, and the outlines of all the lights are chained
     together (each light's vertices numbered apart).
     """
+    if len(fronts) == 1:
+        # One light: its own boundary, no word of 64 to pack and unpack.
+        starts, ends = front_boundary(caster, np.asarray(fronts[0]).astype(bool, copy=False))
+        loops = chain(starts, ends)
+        zeros = np.zeros(len(loops), dtype=np.int64)
+        lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
+        corners = np.concatenate(loops) if loops else np.zeros(0, dtype=np.int64)
+        return Outlines(corners, lengths, zeros, starts, np.zeros(len(starts), dtype=np.int64))
     words = [
         _outlines_of_word(caster, fronts[first : first + _WORD])
         for first in range(0, len(fronts), _WORD)
