@@ -248,11 +248,13 @@ def _projections(
         shift = -(origin[:, 0] * axis[0] + origin[:, 1] * axis[1] + origin[:, 2] * axis[2])
         reach = light_h[:, 0] * axis[0] + light_h[:, 1] * axis[1] + light_h[:, 2] * axis[2]
         reach = reach + shift * w
-        for column in range(3):
-            H[:, row, column] = scale * (s * axis[column] - reach * plane[column])
-        H[:, row, 3] = scale * (s * shift - reach * plane[3])
-    for column in range(4):
-        H[:, 2, column] = s * (column == 3) - w * plane[column]
+        # the row (axis, shift), all four columns at once
+        frame = np.empty((len(light_h), 4))
+        frame[:, :3] = axis
+        frame[:, 3] = shift
+        H[:, row] = scale[:, None] * (s[:, None] * frame - reach[:, None] * plane)
+    H[:, 2] = -w[:, None] * plane
+    H[:, 2, 3] += s
     return H
 
 
