@@ -14,8 +14,8 @@ and this process's CPU time: on a shared machine the wall clock also counts
 time spent waiting for a core) and for a loop of single calls (the caster's
 topology cached in both), and checks that both give the same areas bit for
 bit. ``--phases`` times the steps of the batch call (CPU time, each step's
-own functions wrapped with a timer; steps nest, so the shares add up to more
-than the whole).
+own functions wrapped with a timer; what the steps leave of the whole is
+Python between them: the loop over lights, the general path's few lights).
 """
 
 from __future__ import annotations
