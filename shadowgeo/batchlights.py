@@ -449,6 +449,9 @@ def array_shadows(
         | np.any(projected.high > half[:, None], axis=1)
     ).tolist()
     loops = pieces(projected.points, outlines.loop_lengths.tolist())
+    whole = simple_outlines(
+        projected.points, outlines.loop_lengths, outlines.loop_light, len(chunk)
+    ).tolist()
     firsts = outlines.corners[np.cumsum(outlines.loop_lengths) - outlines.loop_lengths]
     loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(chunk) + 1)).tolist()
     # The union's corners are the loops' corners and crossings, rounded to
@@ -475,7 +478,10 @@ def array_shadows(
             continue
         first, last = loop_bounds[k], loop_bounds[k + 1]
         own = loops[first:last]
-        parts = poly.union_parts(own, partial(_part_labels, caster, firsts[first:last]))
+        if whole[k] >= 0:  # one simple loop: no union to do
+            parts = [[loops[whole[k]]]]
+        else:
+            parts = poly.union_parts(own, partial(_part_labels, caster, firsts[first:last]))
         bounded = not unbounded[k] and _reaches(parts, limits[k])
         info = ShadowDiagnostics(
             n_triangles=caster.n_faces,
@@ -612,3 +618,66 @@ def pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
     without its per-piece overhead)."""
     ends = np.cumsum(counts).tolist()
     return [rows[end - count : end] for count, end in zip(counts, ends, strict=True)]
+
+
+# Coordinates of the 2-D loops stay within +-MAX_COORDINATE (the window), so
+# a difference of two of them is off by at most this much (a few units in
+# the last place of MAX_COORDINATE) ...
+_POINT_SLACK = 8 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
+# ... and a product of two differences by this much relative.
+_PRODUCT_SLACK = 1e-13
+
+
+def _turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sign, cross): +1 where ``origin -> one -> two`` certainly turns left,
+    -1 certainly right, 0 when rounding could decide it; and the cross
+    product ``(one - origin) x (two - origin)`` itself."""
+    a, b = one - origin, two - origin
+    cross: np.ndarray = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    size_a = np.abs(a[:, 0]) + np.abs(a[:, 1])
+    size_b = np.abs(b[:, 0]) + np.abs(b[:, 1])
+    margin = 2 * _POINT_SLACK * (size_a + size_b) + _PRODUCT_SLACK * size_a * size_b
+    sign: np.ndarray = np.where(cross > margin, 1, np.where(cross < -margin, -1, 0))
+    return sign, cross
+
+
+def simple_outlines(
+    points: np.ndarray, loop_lengths: np.ndarray, loop_light: np.ndarray, count: int
+) -> np.ndarray:
+    """(count,) for each light, the index of its one loop when the light has
+    one loop only and that loop is certainly simple and counter-clockwise,
+    else -1: its inside is then the region of positive winding as it is,
+    with no 2-D union to find it (a convex caster's outline, and one loop of
+    a smooth caster's, is such a loop).
+
+    The certificate: the loop is star-shaped around the mean of its corners
+    c. Every edge turns left around c beyond rounding (``c -> p_i -> p_i+1``)
+    and the edges go round c once in all, so they lie in wedges from c that
+    do not overlap: no two edges meet but neighbours at their corner.
+
+    ``points`` (c, 2) are the loops' corners one loop after another,
+    ``loop_lengths`` (l,) their counts and ``loop_light`` (l,) (ascending)
+    their lights, as :func:`project_outlines` and
+    :class:`~shadowgeo.silhouette.Outlines` give them.
+    """
+    result = np.full(count, -1, dtype=np.int64)
+    light_loops = np.bincount(loop_light, minlength=count)
+    alone = np.flatnonzero(light_loops[loop_light] == 1)  # loops that are their light's only one
+    if len(alone) == 0:
+        return result
+    lengths = loop_lengths[alone]
+    firsts = (np.cumsum(loop_lengths) - loop_lengths)[alone]
+    starts = np.cumsum(lengths) - lengths  # in the loops taken out
+    corner = np.repeat(firsts - starts, lengths) + np.arange(int(lengths.sum()))
+    mine = points[corner]
+    position = np.arange(len(mine))
+    ends = np.repeat(starts + lengths, lengths)
+    after = np.where(position + 1 == ends, np.repeat(starts, lengths), position + 1)
+    middle = np.repeat(np.add.reduceat(mine, starts) / lengths[:, None], lengths, axis=0)
+    sign, cross = _turns(middle, mine, mine[after])
+    spoke, next_spoke = mine - middle, mine[after] - middle
+    dot = spoke[:, 0] * next_spoke[:, 0] + spoke[:, 1] * next_spoke[:, 1]
+    sweep = np.add.reduceat(np.arctan2(cross, dot), starts)
+    star = (np.minimum.reduceat(sign, starts) == 1) & (np.abs(sweep - 2 * np.pi) < 1.0)
+    result[loop_light[alone[star]]] = alone[star]
+    return result

@@ -272,3 +272,66 @@ def test_hundreds_of_lights_across_chunks_equal_single_calls():
     for k in rng.choice(len(lights), 25, replace=False).tolist() + [256, 257, 299]:
         _same(batch[k], project_shadow(mesh, lights[k], TILTED))
     assert all(not shadow.is_empty for shadow in batch)
+
+
+# -- one simple loop: no 2-D union ----------------------------------------------------------
+
+
+def _hull_shadow(points, light):
+    u, v = GROUND.basis
+    if isinstance(light, PointLight):
+        hits = ray_plane(points, light.position, GROUND.normal, GROUND.offset)
+    else:
+        hits = along_direction(points, light.direction, GROUND.normal, GROUND.offset)
+    flat = np.column_stack([(hits - GROUND.origin) @ u, (hits - GROUND.origin) @ v])
+    return shapely.MultiPoint(flat).convex_hull
+
+
+def test_a_convex_caster_needs_no_union_and_casts_the_hull(monkeypatch):
+    import shadowgeo.polygons as polygons
+
+    mesh = trimesh.creation.icosphere(subdivisions=2)  # convex
+    mesh.apply_translation([0.5, 3, -0.5])
+    rng = np.random.default_rng(21)
+    lights = [PointLight(rng.uniform([-3, 6, -3], [3, 9, 3])) for _ in range(20)]
+    lights += [DirectionalLight(rng.uniform([-0.5, -1, -0.5], [0.5, -0.6, 0.5])) for _ in range(20)]
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a 2-D union for a single convex outline")
+
+    monkeypatch.setattr(polygons, "union_parts", refuse)
+    batch = project_shadow(mesh, lights, GROUND)
+    for light, shadow in zip(lights, batch, strict=True):
+        _same(shadow, project_shadow(mesh, light, GROUND))
+        expected = _hull_shadow(mesh.vertices, light)
+        assert shadow.diagnostics.n_loops == 1 and len(shadow.polygons) == 1
+        assert shadow.area == pytest.approx(expected.area, rel=1e-12)
+        assert shadow.to_shapely().symmetric_difference(expected).area < 1e-9 * expected.area
+
+
+def test_one_loop_that_is_not_star_shaped_is_still_united(monkeypatch):
+    # An L-shaped prism seen from above: one loop, not star-shaped around
+    # the mean of its corners (which lies outside it), so Clipper2 unites it.
+    import shadowgeo.polygons as polygons
+
+    calls = []
+    union_parts = polygons.union_parts
+    monkeypatch.setattr(
+        polygons, "union_parts", lambda *args: calls.append(1) or union_parts(*args)
+    )
+    outline = np.array([[0, 0], [6, 0], [6, 1], [1, 1], [1, 6], [0, 6]], dtype=float)
+    prism = trimesh.creation.extrude_polygon(shapely.Polygon(outline), 1.0)
+    prism.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
+    prism.apply_translation([0, 2, 0])
+    light = DirectionalLight([0, -1, 0])
+    shadow = project_shadow(prism, [light], GROUND)[0]
+    _same(shadow, project_shadow(prism, light, GROUND))
+    u, v = GROUND.basis
+    corners = prism.vertices
+    flat = np.column_stack([(corners - GROUND.origin) @ u, (corners - GROUND.origin) @ v])
+    expected = shapely.union_all(
+        [shapely.Polygon(flat[face]) for face in prism.faces if shapely.Polygon(flat[face]).area]
+    )
+    assert shadow.diagnostics.n_loops == 1 and len(calls) == 2  # batch and single
+    assert shadow.area == pytest.approx(11.0, rel=1e-12)
+    assert shadow.to_shapely().symmetric_difference(expected).area < 1e-9
