@@ -478,8 +478,8 @@ def array_shadows(
             continue
         first, last = loop_bounds[k], loop_bounds[k + 1]
         own = loops[first:last]
-        if whole[k] >= 0:  # one simple loop: no union to do
-            parts = [[loops[whole[k]]]]
+        if whole[k] >= 0:  # one simple loop: no union to do (a copy: not a view of the chunk)
+            parts = [[loops[whole[k]].copy()]]
         else:
             parts = poly.union_parts(own, partial(_part_labels, caster, firsts[first:last]))
         bounded = not unbounded[k] and _reaches(parts, limits[k])
