@@ -428,10 +428,9 @@ def array_shadows(
     """The shadow of each light of ``chunk`` ((index into ``lights``, row of
     ``frames``) pairs, every corner of the caster's box inside each one's
     window), in order, as the general path of
-    :func:`shadowgeo.project_shadow` makes it (``basis``: the plane's,
-    ``offset``: the lift); None
-    for a light the general path must take (its outline leaves the window
-    after all, or touches the light).
+    :func:`shadowgeo.project_shadow` makes it (``basis``: the plane's 2-D
+    frame, ``offset``: the lift); None for a light the general path must
+    take (its outline leaves the window after all, or touches the light).
 
     The silhouettes are found and projected together, then each light's
     loops are united on their own (a GeometryError there comes out at that
