@@ -14,8 +14,8 @@ and this process's CPU time: on a shared machine the wall clock also counts
 time spent waiting for a core) and for a loop of single calls (the caster's
 topology cached in both), and checks that both give the same areas bit for
 bit. ``--phases`` times the steps of the batch call (CPU time, each step's
-own functions wrapped with a timer; steps nest, so the shares add up to more
-than the whole).
+own functions wrapped with a timer; what the steps leave of the whole is
+Python between them: the loop over lights, the general path's few lights).
 """
 
 from __future__ import annotations
@@ -52,15 +52,13 @@ def lights(count: int, seed: int = 3) -> dict[str, list[PointLight] | list[Direc
 
 # (module, attribute, label) of the steps --phases times, in call order.
 PHASES = [
-    ("shadowgeo.projection", "_Call.projector", "frame: checks, tolerance"),
-    ("shadowgeo.projection", "_Projector.prepare", "frame: light, plane, window"),
-    ("shadowgeo.topology", "Caster.facing", "front faces (one matrix-vector product)"),
-    ("shadowgeo.projection", "silhouette_loops_many", "silhouettes, all lights together"),
-    ("shadowgeo.projection", "_projected_many", "silhouettes projected to 2-D loops, together"),
-    ("shadowgeo.projection", "_Projector.finish", "finish: the rest, per light"),
-    ("shadowgeo.projection", "_Projector._shadow_loops", "  loops: box test, 2-D loops"),
-    ("shadowgeo.polygons", "union_parts", "  2-D union (Clipper2)"),
-    ("shadowgeo.projection", "_Projector._result", "  result: parts, holes, area"),
+    ("shadowgeo.projection", "light_frames", "frames: tolerance, plane frame, window (arrays)"),
+    ("shadowgeo.projection", "settle", "frame verdicts (lights that need one)"),
+    ("shadowgeo.batchlights", "front_rows", "front faces (one matrix-vector product each)"),
+    ("shadowgeo.batchlights", "silhouette_outlines", "silhouettes, all lights together"),
+    ("shadowgeo.batchlights", "project_outlines", "silhouettes projected to 2-D, together"),
+    ("shadowgeo.polygons", "union_parts", "2-D union (Clipper2, per light)"),
+    ("shadowgeo.batchlights", "_array_result", "result: area, polygons (per light)"),
 ]
 
 

@@ -25,20 +25,34 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
 
 import numpy as np
-import trimesh
 from manifold3d import CrossSection
 from numpy.typing import ArrayLike
 
 from . import polygons as poly
+from .batchlights import (
+    CASTS,
+    array_shadows,
+    light_frames,
+    pieces,
+    projected_many,
+    settle,
+    takes_arrays,
+)
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import check_coordinates, check_light
 from .plane import Plane
+
+# Shadow and ShadowDiagnostics live in .shadow; they are re-exported here,
+# where they were first defined and are still imported from.
+from .shadow import Shadow as Shadow
+from .shadow import ShadowDiagnostics as ShadowDiagnostics
+from .shadow import triangulated
 from .silhouette import (
     boundary_loops,
     check_light_outside,
@@ -50,8 +64,6 @@ from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, empty_mesh, unique_integers
 
 if TYPE_CHECKING:
-    import shapely
-
     from .lights import PointLight
 
 
@@ -98,103 +110,6 @@ def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
     P = plane.vector
     L = light.homogeneous
     return float(P @ L) * np.eye(4) - np.outer(L, P)
-
-
-@dataclass(frozen=True)
-class ShadowDiagnostics:
-    """What :func:`project_shadow` did to get its result.
-
-    Attributes
-    ----------
-    n_triangles : int
-        Caster triangles considered.
-    clipped : dict[str, int]
-        Triangles cut (partly or wholly) for each reason: ``"below_plane"``
-        (the caster pierces the receiver), ``"at_or_above_light"`` (the
-        anti-shadow and divide-by-zero region), ``"outside_receiver"`` or
-        ``"outside_bound"`` (the shadow leaves the receiver's bounding box or
-        the default bound).
-    culled : int
-        Triangles that cast nothing at all.
-    limits : tuple[str, ...]
-        2-D limits applied after projection: ``"receiver"``, ``"spot_cone"``,
-        ``"range"``.
-    bounded_artificially : bool
-        The shadow runs past the default bound (it is truly unbounded, or
-        larger than ``bound``): no receiver limited it.
-    bound : float or None
-        Half-width of the default bound square used, in scene units.
-    empty_reason : str or None
-        Why the shadow is empty, when it is empty for a reason other than
-        geometry (light behind or parallel to the plane, out of range, ...).
-    n_loops : int
-        Loops handed to the 2-D union (outline edges chained, plus clipped
-        triangles): a measure of the work done.
-    """
-
-    n_triangles: int = 0
-    clipped: dict[str, int] = field(default_factory=dict)
-    culled: int = 0
-    limits: tuple[str, ...] = ()
-    bounded_artificially: bool = False
-    bound: float | None = None
-    empty_reason: str | None = None
-    n_loops: int = 0
-
-
-@dataclass(frozen=True)
-class Shadow:
-    """A planar shadow.
-
-    Attributes
-    ----------
-    plane : Plane
-        The receiving plane.
-    light : Light
-        The light that casts it.
-    mesh : trimesh.Trimesh
-        The shadow region triangulated on the plane (lifted by ``offset``
-        towards the light), with no overlapping triangles, wound
-        counter-clockwise seen from the light's side. A property, computed
-        on first use from ``mesh_source`` (a mesh, or a function that builds
-        it).
-    polygons : list of list of (k, 2) float64
-        The region in ``plane.to_2d`` coordinates: one ``[outer, hole, ...]``
-        list per connected part, outer loops counter-clockwise.
-    area : float
-        Exact area of the region (scene units squared).
-    diagnostics : ShadowDiagnostics
-    """
-
-    plane: Plane
-    light: Light
-    mesh_source: trimesh.Trimesh | Callable[[], trimesh.Trimesh] = field(repr=False)
-    polygons: list[list[np.ndarray]]
-    area: float
-    diagnostics: ShadowDiagnostics
-
-    @property
-    def mesh(self) -> trimesh.Trimesh:
-        """The region triangulated, built on first use: a caller that needs
-        only ``polygons`` or ``area`` (a sun study, a union of many
-        buildings) never pays for the triangulation."""
-        source = self.mesh_source
-        if isinstance(source, trimesh.Trimesh):
-            return source
-        mesh = source()
-        object.__setattr__(self, "mesh_source", mesh)
-        return mesh
-
-    @property
-    def is_empty(self) -> bool:
-        return self.area == 0.0
-
-    def to_shapely(self) -> shapely.MultiPolygon:
-        """The region as a ``shapely.MultiPolygon`` in plane 2-D coordinates."""
-        import shapely
-
-        parts = [shapely.Polygon(loops[0], loops[1:]) for loops in self.polygons]
-        return shapely.MultiPolygon(parts)
 
 
 @overload
@@ -307,6 +222,8 @@ def project_shadow(
         caster, plane, plane.basis, receiver_points, offset, tolerance, method == "triangles"
     )
     if not isinstance(light, Sequence):
+        if call.takes_arrays(light):  # the same functions as a batch: the same bits
+            return _many_lights(call, [light], single=True)[0]
         return call.projector(light).run()
     return _many_lights(call, light)
 
@@ -341,6 +258,18 @@ class _Call:
             tolerance = self.scene_tolerance(light)
         return _Projector(self, light, tolerance)
 
+    def takes_arrays(self, light: Light) -> bool:
+        """Whether ``light`` takes the array path (:mod:`shadowgeo.batchlights`):
+        a closed caster, no receiver, the outline method, and a point light of
+        unlimited range or a directional light."""
+        return self.takes_arrays_at_all and takes_arrays(light)
+
+    @cached_property
+    def takes_arrays_at_all(self) -> bool:
+        """A closed caster, no receiver and the outline method: lights of
+        the right kinds take the array path."""
+        return self.caster.is_closed and not self.per_triangle and not len(self.receiver)
+
     def scene_tolerance(self, light: Light) -> Tolerance:
         """``Tolerance.for_points`` of the caster, the light and the receiver."""
         light_points = [light.position] if is_positional(light) else []
@@ -349,19 +278,63 @@ class _Call:
         return Tolerance.for_points(*scene, *light_points, self.receiver)
 
 
-def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
-    """One shadow per light, each equal to the single-light call's.
+def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> list[Shadow]:
+    """One shadow per light, each equal to the single-light call's (which
+    comes here too, ``single``, for a light that takes the array path).
 
-    Every light's frame is set up first; then, for a closed caster, the
-    silhouettes of the lights that need them are found together
-    (:func:`silhouette_loops_many`) and each light's outline goes to the 2-D
-    union on its own.
+    The lights that :meth:`_Call.takes_arrays` get their frames together
+    (:func:`light_frames`), then their silhouettes, projected together;
+    the others are set up one by one and, for a closed caster, their
+    silhouettes found together. Each light's outline then goes to the 2-D
+    union on its own. Errors found while setting up come in the lights'
+    order.
     """
+    context = partial(_light_context, prefix=not single)
     shadows: list[Shadow | None] = [None] * len(lights)
+    arrays = (
+        [index for index, light in enumerate(lights) if takes_arrays(light)]
+        if call.takes_arrays_at_all
+        else []
+    )
+    fast: list[tuple[int, int]] = []  # (light index, row of frames)
+    frames = None
+    others = list(range(len(lights)))
+    row_of: dict[int, int] = {}
+    if arrays:
+        frames = light_frames(
+            call.caster,
+            call.plane.normal,
+            call.plane.offset,
+            call.basis,
+            [lights[index] for index in arrays],
+            call.tolerance,
+        )
+        # Most lights: nothing to check or refuse one by one.
+        plain = frames.in_range & (frames.verdict == CASTS) & ~frames.near & frames.inside
+        fast = [(arrays[row], row) for row in np.flatnonzero(plain).tolist()]
+        row_of = {arrays[row]: row for row in np.flatnonzero(~plain).tolist()}
+        taken = set(arrays)
+        others = sorted([index for index in others if index not in taken] + list(row_of))
     pending: list[tuple[int, _Projector]] = []
     directional_tolerance: Tolerance | None = None  # the same for every directional light
-    for index, light in enumerate(lights):
-        with _light_context(index):
+    for index in others:
+        light = lights[index]
+        with context(index):
+            row = row_of.get(index)
+            if row is not None and frames is not None:
+                settled = settle(call.caster, call.plane, frames, row, light, call.tolerance)
+                if settled is not None:
+                    shadows[index] = settled
+                elif frames.inside[row]:
+                    fast.append((index, row))
+                else:
+                    projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
+                    early = projector.prepare()
+                    if early is not None:
+                        shadows[index] = early
+                    else:
+                        pending.append((index, projector))
+                continue
             if directional_tolerance is None and isinstance(light, DirectionalLight):
                 directional_tolerance = call.scene_tolerance(light)
             shared = None if is_positional(light) else directional_tolerance
@@ -371,21 +344,37 @@ def _many_lights(call: _Call, lights: Sequence[Light]) -> list[Shadow]:
             shadows[index] = early
         else:
             pending.append((index, projector))
+    fast.sort()
+    if frames is not None:
+        for first in range(0, len(fast), _LIGHT_CHUNK):
+            rows = fast[first : first + _LIGHT_CHUNK]
+            found = array_shadows(
+                call.caster, call.plane, call.basis, call.offset, frames, lights, rows
+            )
+            for index, row in rows:
+                with context(index):
+                    shadow = next(found)
+                    if shadow is None:  # the general path after all
+                        tolerance = frames.tolerance(row, call.tolerance)
+                        projector = _Projector(call, lights[index], tolerance)
+                        early = projector.prepare()
+                        shadow = early if early is not None else projector.finish()
+                    shadows[index] = shadow
     caster = call.caster
     if caster.is_closed and not call.per_triangle:
         for first in range(0, len(pending), _LIGHT_CHUNK):
             chunk = pending[first : first + _LIGHT_CHUNK]
             fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
             outlines = silhouette_loops_many(caster, fronts)
-            projected = _projected_many(caster.centered, outlines, [p.H for _, p in chunk])
+            projected = projected_many(caster.centered, outlines, [p.H for _, p in chunk])
             for (index, projector), front, (loops, _), (flat, box) in zip(
                 chunk, fronts, outlines, projected, strict=True
             ):
-                with _light_context(index):
+                with context(index):
                     shadows[index] = projector.finish(_Outline(front, loops, flat, box))
     else:
         for index, projector in pending:
-            with _light_context(index):
+            with context(index):
                 shadows[index] = projector.finish()
     return cast("list[Shadow]", shadows)
 
@@ -396,11 +385,14 @@ _LIGHT_CHUNK = 256
 
 
 @contextmanager
-def _light_context(index: int) -> Iterator[None]:
-    """Prefix a GeometryError's message with the index of the light at fault."""
+def _light_context(index: int, prefix: bool = True) -> Iterator[None]:
+    """Prefix a GeometryError's message with the index of the light at fault
+    (unless ``prefix`` is False: a single light's call)."""
     try:
         yield
     except GeometryError as error:
+        if not prefix:
+            raise
         raise GeometryError(f"light {index}: {error}") from error
 
 
@@ -828,23 +820,8 @@ class _Projector:
         origin2d = np.array([relative @ u, relative @ v])
         polygons = [[loop / self.scale + origin2d for loop in loops] for loops in parts]
         lift = self.origin + self.offset * self.plane.normal + self.center
-        build = partial(_triangulated, parts, self.scale, lift, self.call.basis)
+        build = partial(triangulated, parts, self.scale, lift, self.call.basis)
         return Shadow(self.plane, self.light, build, polygons, area, info)
-
-
-def _triangulated(
-    parts: list[list[np.ndarray]],
-    scale: float,
-    lift: np.ndarray,
-    basis: tuple[np.ndarray, np.ndarray],
-) -> trimesh.Trimesh:
-    """The mesh of a shadow's parts (local units) on the plane of ``basis``,
-    ``lift`` being the scene point of the local origin."""
-    u, v = basis
-    flat, faces = poly.triangulate_parts(parts)
-    flat = flat / scale
-    points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v)
-    return trimesh.Trimesh(points, faces, process=False)
 
 
 # Faces whose corners project within the rectangle widened by this many times
@@ -896,70 +873,6 @@ def _images(points: np.ndarray, H: np.ndarray) -> np.ndarray:
     return np.column_stack(rows)
 
 
-def _images_many(
-    homogeneous: np.ndarray, vertices: list[np.ndarray], matrices: list[np.ndarray]
-) -> list[np.ndarray]:
-    """:func:`_images` of ``homogeneous[vertices[i]]`` under ``matrices[i]``
-    for every i, in one pass."""
-    counts = [len(each) for each in vertices]
-    points = homogeneous[np.concatenate(vertices)] if sum(counts) else np.zeros((0, 4))
-    H = np.repeat(np.array(matrices), counts, axis=0)  # (k, 3, 4): each point's matrix
-    rows = [
-        points[:, 0] * H[:, i, 0]
-        + points[:, 1] * H[:, i, 1]
-        + points[:, 2] * H[:, i, 2]
-        + H[:, i, 3]
-        for i in range(3)
-    ]
-    return _pieces(np.column_stack(rows), counts)
-
-
-def _projected_many(
-    homogeneous: np.ndarray,
-    outlines: list[tuple[list[np.ndarray], np.ndarray]],
-    matrices: list[np.ndarray],
-) -> list[tuple[list[np.ndarray] | None, np.ndarray]]:
-    """:func:`_project_loops` of every light's silhouette (``outlines`` from
-    :func:`silhouette_loops_many`, ``matrices`` each light's ``H``) in one
-    pass, and the box of each light's 2-D points. The points are the same
-    numbers one light's call gives: the same explicit sums, the same
-    division. ``None`` loops for a light with a vertex at infinity."""
-    n_lights = len(outlines)
-    counts = [len(vertices) for _, vertices in outlines]
-    images = _images_many(homogeneous, [vertices for _, vertices in outlines], matrices)
-    if sum(counts) == 0:
-        return [([], np.zeros((2, 2))) for _ in range(n_lights)]
-    image = np.concatenate(images)
-    light_of = np.repeat(np.arange(n_lights), counts)
-    n_vertices = np.int64(len(homogeneous))
-    keys = np.concatenate([v + k * n_vertices for k, (_, v) in enumerate(outlines)])
-    with np.errstate(divide="ignore", invalid="ignore"):  # such a light raises, below
-        points = image[:, :2] / image[:, 2:3]
-    touching = np.zeros(n_lights, dtype=bool)
-    touching[light_of[image[:, 2] <= 0]] = True
-    loops = [loop + k * n_vertices for k, (own, _) in enumerate(outlines) for loop in own]
-    lengths = [len(loop) for loop in loops]
-    corners = points[np.searchsorted(keys, np.concatenate(loops))] if loops else points[:0]
-    pieces = _pieces(corners, lengths)
-    # the box of each light's loop corners (not of all its vertices: a loop
-    # of two edges is dropped, and its vertices with it)
-    corner_counts = np.array([sum(len(loop) for loop in own) for own, _ in outlines])
-    starts = np.concatenate([[0], np.cumsum(corner_counts)[:-1]])
-    has_points = corner_counts > 0
-    low = np.zeros((n_lights, 2))
-    high = np.zeros((n_lights, 2))
-    if has_points.any():
-        low[has_points] = np.minimum.reduceat(corners, starts[has_points], axis=0)
-        high[has_points] = np.maximum.reduceat(corners, starts[has_points], axis=0)
-    result: list[tuple[list[np.ndarray] | None, np.ndarray]] = []
-    first = 0
-    for k, (own, _) in enumerate(outlines):
-        mine = pieces[first : first + len(own)]
-        first += len(own)
-        result.append((None if touching[k] else mine, np.array([low[k], high[k]])))
-    return result
-
-
 def _project_loops(
     loops: list[np.ndarray], vertices: np.ndarray, image: np.ndarray
 ) -> list[np.ndarray]:
@@ -974,14 +887,7 @@ def _project_loops(
         return [points[np.searchsorted(vertices, loops[0])]]
     # vertices is sorted: find each loop corner's row by bisection, all at once
     corners = points[np.searchsorted(vertices, np.concatenate(loops))]
-    return _pieces(corners, [len(loop) for loop in loops])
-
-
-def _pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
-    """``rows`` cut into consecutive pieces of ``counts`` rows (np.split,
-    without its per-piece overhead)."""
-    ends = np.cumsum(counts).tolist()
-    return [rows[end - count : end] for count, end in zip(counts, ends, strict=True)]
+    return pieces(corners, [len(loop) for loop in loops])
 
 
 def _clipped_loops(

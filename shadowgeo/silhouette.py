@@ -288,8 +288,8 @@ def _cut(values: np.ndarray, cuts: np.ndarray) -> list[np.ndarray]:
 def _successors(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """(k,) the edge each edge goes on to: the k-th edge ending at a vertex
     to the k-th edge starting there, both by edge index."""
-    out_order = np.argsort(starts, kind="stable")
-    in_order = np.argsort(ends, kind="stable")
+    out_order = _stable_order(starts)
+    in_order = _stable_order(ends)
     mismatch = starts[out_order] != ends[in_order]
     if np.any(mismatch):
         vertex = int(ends[in_order][np.flatnonzero(mismatch)[0]])
@@ -297,6 +297,18 @@ def _successors(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     successor = np.empty(len(starts), dtype=np.int64)
     successor[in_order] = out_order
     return successor
+
+
+def _stable_order(keys: np.ndarray) -> np.ndarray:
+    """``np.argsort(keys, kind="stable")`` for non-negative integer keys:
+    the index is made part of the key (all keys distinct), and numpy's
+    default sort of distinct keys is a few times faster than its stable
+    sort."""
+    count = np.int64(len(keys))
+    if count == 0 or int(keys.max()) >= (1 << 62) // max(int(count), 1):
+        return np.argsort(keys, kind="stable")
+    order: np.ndarray = np.argsort(keys * count + np.arange(count))
+    return order
 
 
 def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -317,12 +329,15 @@ def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # to the cut: the labelled edge comes first, then its successors in order.
     indices = np.arange(count)
     last = successor == label
-    after = np.where(last, indices, successor)
-    remaining = (~last).astype(np.int64)
+    # The last edge of each cycle points at a sentinel (index count) that
+    # has nothing remaining and points at itself.
+    after = np.append(np.where(last, count, successor), count)
+    remaining = np.append((~last).astype(np.int64), 0)
     longest = int(np.bincount(label).max())
     for _ in range(max(1, longest.bit_length())):  # distances double each step
-        remaining = remaining + np.where(after == indices, 0, remaining[after])
+        remaining += remaining[after]
         after = after[after]
+    remaining = remaining[:count]
     # Place each edge directly (no sort): loops in label order, each from its
     # labelled edge, which has the most edges remaining.
     sizes = np.bincount(label, minlength=count)
@@ -353,28 +368,111 @@ def silhouette_loops_many(
 
     Notes
     -----
+    The loops come from :func:`silhouette_outlines`, cut light by light.
+    """
+    outlines = silhouette_outlines(caster, fronts)
+    loops = _cut(outlines.corners, np.cumsum(outlines.loop_lengths)[:-1])
+    loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(fronts) + 1)).tolist()
+    vertices = outlines.vertices(len(fronts), len(caster.vertices))
+    return [
+        (loops[loop_bounds[light] : loop_bounds[light + 1]], vertices[light])
+        for light in range(len(fronts))
+    ]
+
+
+@dataclass(frozen=True)
+class Outlines:
+    """The silhouettes of many lights, flat: every light's loops one after
+    the other, light by light, each light's as :func:`silhouette_loops`
+    gives them.
+
+    Attributes
+    ----------
+    corners : (c,) int64
+        Vertex indices of every loop corner, loop after loop.
+    loop_lengths : (l,) int64
+        Corners in each loop (>= 3).
+    loop_light : (l,) int64
+        The light of each loop, ascending.
+    edge_starts : (e,) int64
+        The first vertex of every silhouette edge (also of loops dropped for
+        having fewer than three edges): each vertex of a light's silhouette
+        at least once, as every vertex has as many edges out as in.
+    edge_light : (e,) int64
+        The light of each edge, ascending.
+    """
+
+    corners: np.ndarray
+    loop_lengths: np.ndarray
+    loop_light: np.ndarray
+    edge_starts: np.ndarray
+    edge_light: np.ndarray
+
+    def vertices(self, n_lights: int, n_vertices: int) -> list[np.ndarray]:
+        """Each light's silhouette vertices, ascending (as
+        :func:`silhouette_loops` gives them)."""
+        used = np.zeros(n_lights * n_vertices, dtype=bool)
+        used[self.edge_starts + self.edge_light * np.int64(n_vertices)] = True
+        keys = np.flatnonzero(used)
+        bounds = np.searchsorted(keys, np.arange(n_lights + 1) * np.int64(n_vertices)).tolist()
+        return [
+            keys[bounds[light] : bounds[light + 1]] - light * n_vertices
+            for light in range(n_lights)
+        ]
+
+
+def silhouette_outlines(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -> Outlines:
+    """The silhouettes of a closed caster for many lights (``fronts``: each
+    light's (m,) bool front faces, or a (k, m) uint8 array of 0 and 1 whose
+    k is a multiple of 8), as one flat :class:`Outlines`.
+
+    Notes
+    -----
     The front bits of 64 lights are packed into one 64-bit word per face, so
     one XOR per edge finds the edges where the bit changes for all 64; only
     those edges are unpacked, and the outlines of all the lights are chained
     together (each light's vertices numbered apart).
     """
-    result: list[tuple[list[np.ndarray], np.ndarray]] = []
-    for first in range(0, len(fronts), _WORD):
-        result.extend(_silhouettes_of_word(caster, fronts[first : first + _WORD]))
-    return result
+    if len(fronts) == 1:
+        # One light: its own boundary, no word of 64 to pack and unpack.
+        starts, ends = front_boundary(caster, np.asarray(fronts[0]).astype(bool, copy=False))
+        loops = chain(starts, ends)
+        zeros = np.zeros(len(loops), dtype=np.int64)
+        lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
+        corners = np.concatenate(loops) if loops else np.zeros(0, dtype=np.int64)
+        return Outlines(corners, lengths, zeros, starts, np.zeros(len(starts), dtype=np.int64))
+    words = [
+        _outlines_of_word(caster, fronts[first : first + _WORD])
+        for first in range(0, len(fronts), _WORD)
+    ]
+    if len(words) == 1:
+        return words[0]
+    firsts = range(0, len(fronts), _WORD)
+    return Outlines(
+        np.concatenate([word.corners for word in words]),
+        np.concatenate([word.loop_lengths for word in words]),
+        np.concatenate([w.loop_light + f for w, f in zip(words, firsts, strict=True)]),
+        np.concatenate([word.edge_starts for word in words]),
+        np.concatenate([w.edge_light + f for w, f in zip(words, firsts, strict=True)]),
+    )
 
 
-# Lights whose front bits share one machine word in silhouette_loops_many.
+# Lights whose front bits share one machine word in silhouette_outlines.
 _WORD = 64
 
 
-def _pack_bits(fronts: list[np.ndarray]) -> np.ndarray:
+def _pack_bits(fronts: list[np.ndarray] | np.ndarray) -> np.ndarray:
     """(m,) uint64 words from up to 64 (m,) bool arrays: bit k of word f is
-    ``fronts[k][f]``. Eight lights at a time make one byte of each word."""
-    rows = np.zeros((_WORD, len(fronts[0])), dtype=np.uint8)
-    rows[: len(fronts)] = fronts
-    packed = np.empty((len(fronts[0]), _WORD // 8), dtype=np.uint8)
-    for byte in range(_WORD // 8):
+    ``fronts[k][f]``. Eight lights at a time make one byte of each word.
+    A (8 j, m) uint8 array of 0 and 1 is used as it is."""
+    n_bytes = -(-len(fronts) // 8)  # the bytes that hold any light's bit
+    if isinstance(fronts, np.ndarray) and fronts.dtype == np.uint8 and len(fronts) % 8 == 0:
+        rows = fronts
+    else:
+        rows = np.zeros((8 * n_bytes, len(fronts[0])), dtype=np.uint8)
+        rows[: len(fronts)] = fronts
+    packed = np.zeros((len(fronts[0]), _WORD // 8), dtype=np.uint8)
+    for byte in range(n_bytes):
         group = rows[8 * byte : 8 * byte + 8]
         value = group[0].copy()
         for bit in range(1, 8):
@@ -384,10 +482,7 @@ def _pack_bits(fronts: list[np.ndarray]) -> np.ndarray:
     return words
 
 
-def _silhouettes_of_word(
-    caster: Caster, fronts: list[np.ndarray]
-) -> list[tuple[list[np.ndarray], np.ndarray]]:
-    n_lights = len(fronts)
+def _outlines_of_word(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -> Outlines:
     words = _pack_bits(fronts)
     slots = caster.edge_face_slots
     faces_of = slots // 3
@@ -400,31 +495,30 @@ def _silhouettes_of_word(
         axis=0,
         bitorder="little",
     )
-    light_of, row = np.nonzero(flags)
-    outline = changed[row]
+    hits = np.flatnonzero(flags.view(bool))  # a flat bool scan: far faster than 2-D nonzero
+    bounds = np.searchsorted(hits, np.arange(_WORD + 1) * len(changed))
+    light_of = np.repeat(np.arange(_WORD, dtype=np.int64), np.diff(bounds))
+    outline = changed[hits - light_of * len(changed)]
     first_front = (words[faces_of[outline, 0]] >> light_of.astype(np.uint64)) & np.uint64(1)
-    light_of = light_of.astype(np.int64)
     front_slot = np.where(first_front.astype(bool), slots[outline, 0], slots[outline, 1])
     directed = _directed_edges(caster, front_slot)
     n_vertices = np.int64(len(caster.vertices))
-    starts = directed[:, 0] + light_of * n_vertices  # each light's vertices apart
-    ends = directed[:, 1] + light_of * n_vertices
-    loops: list[list[np.ndarray]] = [[] for _ in range(n_lights)]
-    if len(starts):
-        walk, cuts = _cycle_walk(_successors(starts, ends))
-        owners = light_of[walk[np.concatenate([[0], cuts])]]
-        for loop, owner in zip(_cut(starts[walk], cuts), owners.tolist(), strict=True):
-            if len(loop) >= 3:
-                loops[owner].append(loop - owner * n_vertices)
-    used = np.zeros(n_lights * int(n_vertices), dtype=bool)
-    used[starts] = True
-    used[ends] = True
-    keys = np.flatnonzero(used)
-    key_bounds = np.searchsorted(keys, np.arange(n_lights + 1) * n_vertices)
-    return [
-        (loops[light], keys[key_bounds[light] : key_bounds[light + 1]] - light * n_vertices)
-        for light in range(n_lights)
-    ]
+    apart = light_of * n_vertices  # each light's vertices apart
+    starts = directed[:, 0] + apart
+    ends = directed[:, 1] + apart
+    if len(starts) == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return Outlines(empty, empty, empty, empty, empty)
+    walk, cuts = _cycle_walk(_successors(starts, ends))
+    loop_starts = np.concatenate([[0], cuts])
+    lengths = np.diff(np.append(loop_starts, len(walk)))
+    kept = lengths >= 3
+    loop_light = light_of[walk[loop_starts]]
+    if kept.all():
+        corners = directed[walk, 0]
+    else:
+        corners = directed[walk[np.repeat(kept, lengths)], 0]
+    return Outlines(corners, lengths[kept], loop_light[kept], directed[:, 0], light_of)
 
 
 def check_light_outside(caster: Caster, position: np.ndarray, tolerance: Tolerance) -> None:

@@ -50,6 +50,7 @@ from .limits import MAX_CURVE_SEGMENTS, SMALLEST_LENGTH, check_coordinates
 # Units in the last place of float64 that a coordinate may carry after a few
 # arithmetic operations; the length tolerance never drops below this.
 _ULPS = 64.0
+_EPSILON = float(np.finfo(np.float64).eps)
 
 
 @dataclass(frozen=True)
@@ -138,8 +139,7 @@ class Tolerance:
     @property
     def length(self) -> float:
         """Absolute length below which two points are the same."""
-        resolution = _ULPS * np.finfo(np.float64).eps * self.magnitude
-        return max(self.relative * self.scale, resolution)
+        return max(self.relative * self.scale, float(resolution(self.magnitude)))
 
     @property
     def coplanar_length(self) -> float:
@@ -168,6 +168,45 @@ class Tolerance:
         if step <= 0.0 or sweep / step >= MAX_CURVE_SEGMENTS:
             return max(minimum, MAX_CURVE_SEGMENTS)
         return max(minimum, math.ceil(sweep / step))
+
+
+def resolution(magnitude: float | np.ndarray) -> float | np.ndarray:
+    """The shortest length float64 resolves among coordinates as large as
+    ``magnitude`` (a float, or an array of them): ``_ULPS`` units in the
+    last place. :attr:`Tolerance.length` never drops below it."""
+    return _ULPS * _EPSILON * magnitude
+
+
+def scene_scales(lower: np.ndarray, upper: np.ndarray, magnitude: np.ndarray) -> np.ndarray:
+    """(k,) the ``scale`` that :meth:`Tolerance.for_points` gives each of k
+    scenes, from their boxes ``lower``, ``upper`` (k, 3) and their largest
+    absolute coordinates ``magnitude`` (k,): many lights' tolerances at once.
+
+    The diagonal is summed element by element (it may differ from
+    ``for_points``'s in the last bit).
+
+    Raises
+    ------
+    GeometryError
+        A scene smaller than ``limits.SMALLEST_LENGTH``.
+    """
+    side = upper - lower
+    largest = np.maximum(np.maximum(side[:, 0], side[:, 1]), side[:, 2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = side / largest[:, None]
+    norm = np.sqrt(
+        ratio[:, 0] * ratio[:, 0] + ratio[:, 1] * ratio[:, 1] + ratio[:, 2] * ratio[:, 2]
+    )
+    diagonal = np.where(largest > 0, largest * norm, 0.0)
+    point = (diagonal <= resolution(magnitude)) | (diagonal == 0.0)
+    small = ~point & (diagonal < SMALLEST_LENGTH)
+    if np.any(small):
+        raise GeometryError(
+            f"the scene is {float(diagonal[small][0]):g} across, below the smallest supported "
+            f"size {SMALLEST_LENGTH:g}"
+        )
+    scale: np.ndarray = np.where(point, np.maximum(magnitude, 1.0), diagonal)
+    return scale
 
 
 def below_resolution(bounds: np.ndarray) -> bool:
