@@ -14,6 +14,7 @@ from collections.abc import Callable
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
+from .arrangement import convex_union
 from .errors import GeometryError
 from .limits import MAX_UNION_CROSSINGS
 from .plane import Plane
@@ -187,7 +188,16 @@ def union_parts(
     first loop's box centre). A cell's part whose box meets no other cell's
     parts is final as it is; the rest, near the cells' borders, are united
     once more.
+
+    Many strictly convex counter-clockwise loops (a city of box buildings)
+    are first tried by their arrangement (:func:`~shadowgeo.arrangement.convex_union`),
+    which needs no cells and no second union; where it cannot certify a
+    sign (touching outlines) the cells above do the work.
     """
+    if len(loops) >= _ARRANGED_LOOPS:
+        boundary = convex_union(loops)
+        if boundary is not None:
+            return nest(boundary)
     if len(loops) <= _GROUPED_LOOPS:
         return components(fill(loops))
     low, high = _boxes(loops)
@@ -220,7 +230,7 @@ def union_parts(
 def union_region(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -> CrossSection:
     """:func:`union_parts` as a region, to intersect with others: one union
     for few loops, the cells' parts filled once more for many."""
-    if len(loops) <= _GROUPED_LOOPS:
+    if len(loops) <= _GROUPED_LOOPS and len(loops) < _ARRANGED_LOOPS:
         return fill(loops)
     return fill([loop for part in union_parts(loops, groups) for loop in part])
 
@@ -260,6 +270,9 @@ def region_loops(region: CrossSection) -> list[np.ndarray]:
 # _CELL_LOOPS to a cell (below it one union is faster).
 _GROUPED_LOOPS = 2000
 _CELL_LOOPS = 100
+# union_parts tries convex loops by their arrangement from this many on
+# (below it the numpy steps' fixed costs outweigh Clipper2's).
+_ARRANGED_LOOPS = 64
 
 
 def intersect(region: CrossSection, other: CrossSection) -> CrossSection:

@@ -384,6 +384,60 @@ def unique_integers(
 MeshLike: TypeAlias = Union["trimesh.Trimesh", tuple[ArrayLike, ArrayLike], Caster]  # noqa: UP007
 
 
+def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cycles of a permutation, walked.
+
+    Parameters
+    ----------
+    successor : (k,) int
+        A permutation: item ``i`` is followed by ``successor[i]``.
+
+    Returns
+    -------
+    walk : (k,) int64
+        The items in cycle order, each cycle from its lowest item, cycles
+        by that item.
+    cuts : (c - 1,) int64
+        The positions in ``walk`` where a new cycle begins.
+
+    Examples
+    --------
+    >>> walk, cuts = cycle_walk(np.array([2, 0, 1, 4, 3]))
+    >>> walk.tolist(), cuts.tolist()
+    ([0, 2, 1, 3, 4], [3])
+    """
+    count = len(successor)
+    # Each item's cycle label: the smallest item on its cycle. After s
+    # doublings a label is the least of 2^s successors; it is final once
+    # every item agrees with its successor (then each cycle holds one value,
+    # which must be its least item), checked every second doubling.
+    label, jump = np.arange(count), successor.copy()
+    for step in range(max(1, int(count).bit_length())):
+        label = np.minimum(label, label[jump])
+        jump = jump[jump]
+        if step % 2 and np.array_equal(label[successor], label):
+            break
+    # Cut each cycle before its labelled item and rank items by their
+    # distance to the cut: the labelled item comes first, then its
+    # successors in order.
+    indices = np.arange(count)
+    last = successor == label
+    after = np.where(last, indices, successor)
+    remaining = (~last).astype(np.int64)
+    longest = int(np.bincount(label).max())
+    for _ in range(max(1, longest.bit_length())):  # distances double each step
+        remaining = remaining + np.where(after == indices, 0, remaining[after])
+        after = after[after]
+    # Place each item directly (no sort): cycles in label order, each from
+    # its labelled item, which has the most items remaining.
+    sizes = np.bincount(label, minlength=count)
+    offsets = np.cumsum(sizes) - sizes
+    walk = np.empty(count, dtype=np.int64)
+    walk[offsets[label] + sizes[label] - 1 - remaining] = indices
+    cuts = offsets[sizes > 0][1:]
+    return walk, cuts
+
+
 def as_caster(caster: MeshLike) -> Caster:
     """A :class:`Caster` from a ``Caster``, a ``trimesh.Trimesh`` (cached on the
     mesh) or a ``(vertices, faces)`` pair."""
