@@ -38,6 +38,8 @@ _ORIENTATION_ERROR = 1e-14
 # Candidate box pairs per loop above which the grid is not worth it (one loop
 # spanning many others' cells): the caller unites the loops another way.
 _PAIRS_PER_LOOP = 64
+# ... unless there are no more candidates than this in all (a few tens of MB).
+_CANDIDATE_PAIRS = 1_000_000
 # Crossing parameters along one edge closer than this are not ordered (the
 # sort key edge + t resolves about 1e-11 at 60,000 edges; 64 ulps of the
 # edge count where that is coarser).
@@ -132,7 +134,7 @@ def _box_pairs(
     A grid with cells as large as the largest box: each box is filed under
     the cell of its lower corner and paired with the boxes of its own cell
     and of the next cells. None when that would test more than
-    ``_PAIRS_PER_LOOP`` candidates per loop."""
+    ``_PAIRS_PER_LOOP`` candidates per loop and ``_CANDIDATE_PAIRS`` in all."""
     count = len(low)
     cell = np.maximum((high - low).max(axis=0), 1e-300)
     origin = low.min(axis=0)
@@ -153,7 +155,7 @@ def _box_pairs(
     begins, ends = np.concatenate(begin), np.concatenate(end)
     counts = np.maximum(ends - begins, 0)
     total = int(counts.sum())
-    if total > _PAIRS_PER_LOOP * count:
+    if total > max(_PAIRS_PER_LOOP * count, _CANDIDATE_PAIRS):
         return None
     first = np.repeat(np.tile(position, 5), counts)
     offsets = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)

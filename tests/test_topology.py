@@ -115,3 +115,24 @@ def test_bounding_box_equals_numpys_reductions_and_carries_nan():
     points[4, 1] = np.nan
     box = bounding_box(points)
     assert np.isnan(box[:, 1]).all() and np.isfinite(box[:, [0, 2]]).all()
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_cycle_walk_follows_every_cycle_of_a_permutation(seed):
+    from shadowgeo.topology import cycle_walk
+
+    rng = np.random.default_rng(seed)
+    successor = rng.permutation(int(rng.integers(1, 400)))
+    walk, cuts = cycle_walk(successor)
+    # brute force: walk each cycle from its least item, cycles by that item
+    seen, expected, starts = set(), [], []
+    for item in range(len(successor)):
+        if item in seen:
+            continue
+        starts.append(len(expected))
+        while item not in seen:
+            seen.add(item)
+            expected.append(item)
+            item = int(successor[item])
+    assert walk.tolist() == expected
+    assert cuts.tolist() == starts[1:]
