@@ -40,6 +40,9 @@ _ORIENTATION_ERROR = 1e-14
 _PAIRS_PER_LOOP = 64
 # ... unless there are no more candidates than this in all (a few tens of MB).
 _CANDIDATE_PAIRS = 1_000_000
+# Rounding of a point turned into another frame, as a share of the largest
+# coordinate (a few ulps; a thousand for margin).
+_FRAME_ROUNDING = 1e-13
 # Crossing parameters along one edge closer than this are not ordered (the
 # sort key edge + t resolves about 1e-11 at 60,000 edges; 64 ulps of the
 # edge count where that is coarser).
@@ -72,8 +75,19 @@ def convex_union(loops: list[np.ndarray]) -> list[np.ndarray] | None:
     >>> [len(loop) for loop in convex_union([square, square + 1])]
     [8]
     """
+    flat = convex_union_flat(loops)
+    if flat is None:
+        return None
+    points, starts = flat
+    bounds = [*starts.tolist(), len(points)]
+    return [points[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`convex_union` as one (n, 2) array of the loops' points and
+    the (c,) start of each loop in it (no array per loop)."""
     if not loops:
-        return []
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
     sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
     if sizes.min() < 3:
         return None
@@ -85,12 +99,15 @@ def convex_union(loops: list[np.ndarray]) -> list[np.ndarray] | None:
         return None
     low = np.minimum.reduceat(points, starts, axis=0)
     high = np.maximum.reduceat(points, starts, axis=0)
-    pairs = _box_pairs(low, high)
+    pairs = _box_pairs(*_frame_boxes(points, following, starts))
     if pairs is None:
         return None
     order, first, second = pairs
+    meets = np.all(low[order[first]] <= high[order[second]], axis=1)
+    meets &= np.all(low[order[second]] <= high[order[first]], axis=1)
+    first, second = first[meets], second[meets]
     if len(first) == 0:  # no two boxes meet: each loop is its own outline
-        return [points[start : start + size] for start, size in zip(starts, sizes, strict=True)]
+        return points, starts
     # Loops renumbered in the grid's order: neighbours sit close in memory,
     # and the gathers below run several times faster.
     sizes, low, high = sizes[order], low[order], high[order]
@@ -123,6 +140,25 @@ def _strictly_convex(
     # passes the +x axis once for each time the loop winds round.
     passes = (edges[:, 1] < 0) & (after[:, 1] >= 0)
     return bool(np.all(np.add.reduceat(passes.astype(np.int64), starts) == 1))
+
+
+def _frame_boxes(
+    points: np.ndarray, following: np.ndarray, starts: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each loop's box in the frame of the edges' main direction, grown by
+    more than rounding: loops that meet have boxes that meet.
+
+    Shadows cast by one light are long along the light's direction; boxes
+    along it pair far fewer loops that do not meet than boxes along x and y.
+    """
+    edges = points[following] - points
+    tensor = edges.T @ edges
+    _, axes = np.linalg.eigh(tensor)  # columns: the frame, main direction last
+    turned = points @ axes
+    low = np.minimum.reduceat(turned, starts, axis=0)
+    high = np.maximum.reduceat(turned, starts, axis=0)
+    grow = _FRAME_ROUNDING * float(np.abs(turned).max(initial=0.0)) + np.finfo(float).tiny
+    return low - grow, high + grow
 
 
 def _box_pairs(
@@ -226,19 +262,24 @@ def _crossings(
         index_b = starts[loops_b][:, None] + np.arange(size_b)
         low_a, high_a = edge_low[index_a], edge_high[index_a]
         low_b, high_b = edge_low[index_b], edge_high[index_b]
-        meet = _meets_box(low_a, high_a, box_low[loops_b], box_high[loops_b])[:, :, None]
-        meet = meet & _meets_box(low_b, high_b, box_low[loops_a], box_high[loops_a])[:, None, :]
-        for part in ("real", "imag"):
-            lower_a, upper_a = getattr(low_a, part), getattr(high_a, part)
-            lower_b, upper_b = getattr(low_b, part), getattr(high_b, part)
-            meet &= lower_a[:, :, None] <= upper_b[:, None, :]
-            meet &= lower_b[:, None, :] <= upper_a[:, :, None]
+        near_a = _meets_box(low_a, high_a, box_low[loops_b], box_high[loops_b])
+        near_b = _meets_box(low_b, high_b, box_low[loops_a], box_high[loops_a])
+        meet = near_a[:, :, None] & near_b[:, None, :]
         flat = np.flatnonzero(meet)
         pair, rest = np.divmod(flat, size_a * size_b)
         edges_a.append(starts[loops_a[pair]] + rest // size_b)
         edges_b.append(starts[loops_b[pair]] + rest % size_b)
         owners.append(pair if chosen is None else chosen[pair])
     edge_a, edge_b, owner = np.concatenate(edges_a), np.concatenate(edges_b), np.concatenate(owners)
+    low_a, high_a, low_b, high_b = (
+        edge_low[edge_a],
+        edge_high[edge_a],
+        edge_low[edge_b],
+        edge_high[edge_b],
+    )
+    meet = (low_a.real <= high_b.real) & (low_b.real <= high_a.real)
+    meet &= (low_a.imag <= high_b.imag) & (low_b.imag <= high_a.imag)
+    edge_a, edge_b, owner = edge_a[meet], edge_b[meet], owner[meet]
     a0, a1, b0, b1 = start[edge_a], end[edge_a], start[edge_b], end[edge_b]
     u, v = _orientation(a0, a1, b0), _orientation(a0, a1, b1)  # b's ends against a's edge
     s, w = _orientation(b0, b1, a0), _orientation(b0, b1, a1)  # a's ends against b's edge
@@ -314,9 +355,10 @@ def _boundary(
     delta_b: np.ndarray,
     where: np.ndarray,
     slack: np.ndarray,
-) -> list[np.ndarray] | None:
+) -> tuple[np.ndarray, np.ndarray] | None:
     """The stretches of the loops covered by no other loop, chained into
-    loops; None if two crossings on one edge are too close to order."""
+    loops, as (n, 2) points and the start of each loop among them; None if
+    two crossings on one edge are too close to order."""
     n_points, n_crossings = len(points), len(t_a)
     # Events round every loop: each vertex, then the crossings on the edge
     # it starts, by parameter. Only the crossings are sorted (by edge + t,
@@ -357,7 +399,7 @@ def _boundary(
     after[last_event] = first_event
     kept = np.flatnonzero(cover == 0)
     if not len(kept):
-        return []
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
     start_node, end_node = node[kept], node[after[kept]]
     piece_at = np.full(n_points + n_crossings, -1, dtype=np.int64)
     piece_at[start_node] = np.arange(len(kept))
@@ -367,8 +409,7 @@ def _boundary(
         return None
     walk, cuts = _walk_runs(successor)
     location = np.concatenate([points, where])[start_node[walk]]
-    bounds = [0, *cuts.tolist(), len(walk)]
-    return [location[s:e] for s, e in zip(bounds[:-1], bounds[1:], strict=True)]
+    return location, np.concatenate([[0], cuts]).astype(np.int64)
 
 
 def _walk_runs(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -14,7 +14,7 @@ from collections.abc import Callable
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
-from .arrangement import convex_union
+from .arrangement import convex_union_flat
 from .errors import GeometryError
 from .limits import MAX_UNION_CROSSINGS
 from .plane import Plane
@@ -195,9 +195,9 @@ def union_parts(
     sign (touching outlines) the cells above do the work.
     """
     if len(loops) >= _ARRANGED_LOOPS:
-        boundary = convex_union(loops)
+        boundary = convex_union_flat(loops)
         if boundary is not None:
-            return nest(boundary)
+            return nest_flat(*boundary)
     if len(loops) <= _GROUPED_LOOPS:
         return components(fill(loops))
     low, high = _boxes(loops)
@@ -310,17 +310,34 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
         return []
     if len(loops) == 1:  # the common case of one outline: no holes to place
         return [loops] if signed_areas(loops)[0] > 0 else []
-    areas = signed_areas(loops)
+    lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
+    return nest_flat(np.concatenate(loops).reshape(-1, 2), np.cumsum(lengths) - lengths, loops)
+
+
+def nest_flat(
+    points: np.ndarray, starts: np.ndarray, loops: list[np.ndarray] | None = None
+) -> list[list[np.ndarray]]:
+    """:func:`nest` of loops given as one (n, 2) array of their points, loop
+    ``i`` from ``starts[i]`` to the next start; ``loops``: the same loops as
+    arrays, when they are at hand already (else cut from ``points``)."""
+    if len(starts) == 0:
+        return []
+    lengths = np.diff(np.append(starts, len(points)))
+    if loops is None:
+        loops = [points[a : a + k] for a, k in zip(starts.tolist(), lengths.tolist(), strict=True)]
+    following = np.arange(1, len(points) + 1)
+    following[starts + lengths - 1] = starts
+    cross = points[:, 0] * points[following, 1] - points[following, 0] * points[:, 1]
+    areas = 0.5 * np.add.reduceat(cross, starts)
     outers = np.flatnonzero(areas > 0)
     holes = np.flatnonzero(areas < 0)
-    if len(outers) == 0:
-        return []
     if len(holes) == 0:
         return [[loops[i]] for i in outers.tolist()]
-    low, high = _boxes(loops)
+    low = np.minimum.reduceat(points, starts, axis=0)
+    high = np.maximum.reduceat(points, starts, axis=0)
     parent = np.full(len(holes), -1, dtype=np.int64)
     by_size = outers[np.argsort(areas[outers], kind="stable")]  # smallest first
-    chunk = max(1, 4_000_000 // len(outers))
+    chunk = max(1, 4_000_000 // max(len(outers), 1))
     for start in range(0, len(holes), chunk):
         rows = holes[start : start + chunk]
         outer_low, outer_high = low[by_size], high[by_size]
@@ -333,7 +350,7 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
         count = around.sum(axis=1)
         single = count == 1
         parent[start : start + chunk][single] = by_size[np.argmax(around[single], axis=1)]
-        for row in np.flatnonzero(count > 1):
+        for row in np.flatnonzero(count > 1).tolist():
             hole = loops[rows[row]]
             point = 0.5 * (hole[0] + hole[1])
             candidates = by_size[around[row]]
@@ -341,25 +358,25 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
             # candidates fail, the largest (often a whole city's outline,
             # the costliest to test) is the parent without a test.
             parent[start + row] = candidates[-1]
-            for candidate in candidates[:-1]:
+            for candidate in candidates[:-1].tolist():
                 if _contains(loops[candidate], point):
                     parent[start + row] = candidate
                     break
     # holes grouped by parent, largest first within each group
-    grouped = holes[np.lexsort((-areas[holes], parent))]
-    group_parent = parent[np.lexsort((-areas[holes], parent))]
+    regroup = np.lexsort((-areas[holes], parent))
+    grouped, group_parent = holes[regroup], parent[regroup]
     first = np.searchsorted(group_parent, outers, side="left")
     last = np.searchsorted(group_parent, outers, side="right")
-    parts = []
-    for outer, begin, end in zip(outers.tolist(), first.tolist(), last.tolist(), strict=True):
-        if begin == end:
-            if areas[outer] > 0:
-                parts.append([loops[outer]])
-            continue
-        own = grouped[begin:end]
-        if areas[outer] + areas[own].sum() <= 0:
-            continue
-        parts.append([loops[outer]] + [loops[i] for i in own.tolist()])
+    parts = [[loops[i]] for i in outers.tolist()]
+    emptied = []
+    for index in np.flatnonzero(last > first).tolist():
+        own = grouped[first[index] : last[index]]
+        if areas[outers[index]] + areas[own].sum() <= 0:
+            emptied.append(index)
+        parts[index].extend(loops[i] for i in own.tolist())
+    if emptied:
+        gone = set(emptied)
+        parts = [part for index, part in enumerate(parts) if index not in gone]
     return parts
 
 
