@@ -116,7 +116,7 @@ PHASES = [
     ("shadowgeo.polygons", "union_parts", "2-D union and parts"),
     ("shadowgeo.polygons", "convex_union", "  of which the arrangement (numpy)"),
     ("shadowgeo.polygons", "fill", "  of which Clipper2 unions"),
-    ("shadowgeo.polygons", "nest", "  of which holes to their parts"),
+    ("shadowgeo.polygons", "nest_flat", "  of which holes to their parts"),
     ("shadowgeo.projection", "vertex_components", "  of which the caster's parts"),
     ("shadowgeo.projection", "_Projector._result", "result (area, polygons)"),
 ]

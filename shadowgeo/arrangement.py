@@ -99,7 +99,10 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
         return None
     low = np.minimum.reduceat(points, starts, axis=0)
     high = np.maximum.reduceat(points, starts, axis=0)
-    pairs = _box_pairs(*_frame_boxes(points, following, starts))
+    axes, grow = _main_frame(points, following)
+    turned = points @ axes
+    turned_low, turned_high = _grown_boxes(turned, starts, grow)
+    pairs = _box_pairs(turned_low, turned_high)
     if pairs is None:
         return None
     order, first, second = pairs
@@ -119,7 +122,8 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     following[starts + sizes - 1] = starts
     if int(np.sum(sizes[first] * sizes[second])) > _TABLE_ENTRIES:
         return None
-    found = _crossings(points, following, starts, sizes, low, high, first, second)
+    frame = (points @ axes, grow, turned_low[order], turned_high[order])
+    found = _crossings(points, following, starts, sizes, low, high, first, second, frame)
     if found is None:
         return None
     return _boundary(points, following, starts, sizes, *found)
@@ -142,22 +146,26 @@ def _strictly_convex(
     return bool(np.all(np.add.reduceat(passes.astype(np.int64), starts) == 1))
 
 
-def _frame_boxes(
-    points: np.ndarray, following: np.ndarray, starts: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Each loop's box in the frame of the edges' main direction, grown by
-    more than rounding: loops that meet have boxes that meet.
+def _main_frame(points: np.ndarray, following: np.ndarray) -> tuple[np.ndarray, float]:
+    """(2, 2) axes of the frame of the edges' main direction, and by how
+    much a box in that frame is grown to hold every point for sure.
 
     Shadows cast by one light are long along the light's direction; boxes
-    along it pair far fewer loops that do not meet than boxes along x and y.
+    along it pair far fewer loops (and edges) that do not meet than boxes
+    along x and y.
     """
     edges = points[following] - points
-    tensor = edges.T @ edges
-    _, axes = np.linalg.eigh(tensor)  # columns: the frame, main direction last
-    turned = points @ axes
+    _, axes = np.linalg.eigh(edges.T @ edges)  # columns: the frame, main direction last
+    grow = _FRAME_ROUNDING * float(np.abs(points).max(initial=0.0)) + np.finfo(float).tiny
+    return axes, grow
+
+
+def _grown_boxes(
+    turned: np.ndarray, starts: np.ndarray, grow: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each loop's box of ``turned`` points, grown by ``grow``."""
     low = np.minimum.reduceat(turned, starts, axis=0)
     high = np.maximum.reduceat(turned, starts, axis=0)
-    grow = _FRAME_ROUNDING * float(np.abs(turned).max(initial=0.0)) + np.finfo(float).tiny
     return low - grow, high + grow
 
 
@@ -219,12 +227,15 @@ def _crossings(
     high: np.ndarray,
     first: np.ndarray,
     second: np.ndarray,
+    frame: tuple[np.ndarray, float, np.ndarray, np.ndarray],
 ) -> tuple[np.ndarray, ...] | None:
     """Every proper crossing between the edges of paired loops, and each
     loop's cover count at its first vertex; None where a sign is uncertain.
 
-    Only edge pairs whose boxes meet are tested (others cannot meet, exactly);
-    each such pair's four orientations must be certain.
+    Only edge pairs whose boxes meet are tested (others cannot meet), boxes
+    taken in ``frame`` (the points turned into the main frame, the growth
+    that holds their rounding, the loops' grown boxes there); each such
+    pair's four orientations must be certain.
 
     Returns (depth, edge_a, t_a, delta_a, edge_b, t_b, delta_b, where,
     slack): per loop the number of other loops holding its first vertex; per
@@ -235,8 +246,15 @@ def _crossings(
     # complex far faster than a row of an (n, 2) array.
     start = points.view(np.complex128).ravel()
     end = start[following]
-    edge_low = np.minimum(start.real, end.real) + 1j * np.minimum(start.imag, end.imag)
-    edge_high = np.maximum(start.real, end.real) + 1j * np.maximum(start.imag, end.imag)
+    turned, grow, turned_low, turned_high = frame
+    turned_start = np.ascontiguousarray(turned).view(np.complex128).ravel()
+    turned_end = turned_start[following]
+    edge_low = np.minimum(turned_start.real, turned_end.real) - grow
+    edge_low = edge_low + 1j * (np.minimum(turned_start.imag, turned_end.imag) - grow)
+    edge_high = np.maximum(turned_start.real, turned_end.real) + grow
+    edge_high = edge_high + 1j * (np.maximum(turned_start.imag, turned_end.imag) + grow)
+    loop_low = np.ascontiguousarray(turned_low).view(np.complex128).ravel()
+    loop_high = np.ascontiguousarray(turned_high).view(np.complex128).ravel()
     box_low, box_high = low.view(np.complex128).ravel(), high.view(np.complex128).ravel()
     pair_low = np.minimum(box_low[first].real, box_low[second].real) + 1j * np.minimum(
         box_low[first].imag, box_low[second].imag
@@ -262,8 +280,8 @@ def _crossings(
         index_b = starts[loops_b][:, None] + np.arange(size_b)
         low_a, high_a = edge_low[index_a], edge_high[index_a]
         low_b, high_b = edge_low[index_b], edge_high[index_b]
-        near_a = _meets_box(low_a, high_a, box_low[loops_b], box_high[loops_b])
-        near_b = _meets_box(low_b, high_b, box_low[loops_a], box_high[loops_a])
+        near_a = _meets_box(low_a, high_a, loop_low[loops_b], loop_high[loops_b])
+        near_b = _meets_box(low_b, high_b, loop_low[loops_a], loop_high[loops_a])
         meet = near_a[:, :, None] & near_b[:, None, :]
         flat = np.flatnonzero(meet)
         pair, rest = np.divmod(flat, size_a * size_b)
