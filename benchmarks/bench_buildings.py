@@ -25,8 +25,9 @@ of its eight projected corners, exact for a convex box standing on the
 ground), computed with GEOS's ``union_all`` in float64. Times are medians of
 ``--repeat`` runs. The last column, time / (n log n), should stay flat if the
 cost grows as n log n.
-``--phases`` times the steps of one ``project_shadow`` call (CPU time, each
-step's functions wrapped with a timer; steps nest).
+``--phases`` times the steps of ``project_shadow`` calls (CPU time, each
+step's functions wrapped with a timer; steps nest), after one call to warm
+up, and prints the median call of ``--repeat``.
 """
 
 from __future__ import annotations
@@ -114,7 +115,7 @@ PHASES = [
     ("shadowgeo.projection", "silhouette_loops", "silhouettes (edge table, chaining)"),
     ("shadowgeo.projection", "_project_loops", "outlines projected"),
     ("shadowgeo.polygons", "union_parts", "2-D union and parts"),
-    ("shadowgeo.polygons", "convex_union", "  of which the arrangement (numpy)"),
+    ("shadowgeo.polygons", "convex_union_flat", "  of which the arrangement (numpy)"),
     ("shadowgeo.polygons", "fill", "  of which Clipper2 unions"),
     ("shadowgeo.polygons", "nest_flat", "  of which holes to their parts"),
     ("shadowgeo.projection", "vertex_components", "  of which the caster's parts"),
@@ -122,14 +123,18 @@ PHASES = [
 ]
 
 
-def phases(sizes: list[int]) -> None:
-    """Print where shadowgeo's time goes, per step, for each size."""
+def phases(sizes: list[int], repeat: int) -> None:
+    """Print where shadowgeo's time goes, per step, for each size: the steps
+    of the median of ``repeat`` calls (by whole-call CPU time)."""
     print("| step | " + " | ".join(f"{n:,} buildings: CPU ms" for n in sizes) + " |")
     print("|---|" + "---|" * len(sizes))
     results = []
     for n in sizes:
         mesh = as_mesh(buildings(n))
-        results.append(timed_phases(partial(project_shadow, mesh, SUN, GROUND), PHASES))
+        call = partial(project_shadow, mesh, SUN, GROUND)
+        call()  # warm: first-touch memory and imports are no step's cost
+        runs = [timed_phases(call, PHASES) for _ in range(repeat)]
+        results.append(sorted(runs, key=lambda run: run[0])[len(runs) // 2])  # the median call
     print("| whole call | " + " | ".join(f"{total * 1e3:.1f}" for total, _ in results) + " |")
     for _, _, label in PHASES:
         print(f"| {label} | " + " | ".join(f"{s[label] * 1e3:.1f}" for _, s in results) + " |")
@@ -153,7 +158,7 @@ def main() -> None:
     parser.add_argument("--phases", action="store_true", help="time shadowgeo's steps")
     args = parser.parse_args()
     if args.phases:
-        phases(args.sizes)
+        phases(args.sizes, args.repeat)
         return
     print(
         "| buildings | shadowgeo s | per-building + GEOS s | ratio | CPU ratio | rel. area error "

@@ -88,7 +88,7 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     the (c,) start of each loop in it (no array per loop)."""
     if not loops:
         return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
-    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    sizes = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
     if sizes.min() < 3:
         return None
     points = np.ascontiguousarray(np.concatenate(loops), dtype=np.float64)

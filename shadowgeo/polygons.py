@@ -8,6 +8,7 @@ then costs about 1e-16 of the region's size.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 
@@ -266,6 +267,8 @@ def region_loops(region: CrossSection) -> list[np.ndarray]:
     return [loop for loop in loops if len(loop) >= 3]
 
 
+# Candidate edges one batch of nest's point-in-loop tests visits at most.
+_NEST_EDGES = 4_000_000
 # union_parts: loops above this are united cell by cell first, about
 # _CELL_LOOPS to a cell (below it one union is faster).
 _GROUPED_LOOPS = 2000
@@ -350,18 +353,11 @@ def nest_flat(
         count = around.sum(axis=1)
         single = count == 1
         parent[start : start + chunk][single] = by_size[np.argmax(around[single], axis=1)]
-        for row in np.flatnonzero(count > 1).tolist():
-            hole = loops[rows[row]]
-            point = 0.5 * (hole[0] + hole[1])
-            candidates = by_size[around[row]]
-            # Every hole lies in some outer loop: when all the smaller
-            # candidates fail, the largest (often a whole city's outline,
-            # the costliest to test) is the parent without a test.
-            parent[start + row] = candidates[-1]
-            for candidate in candidates[:-1].tolist():
-                if _contains(loops[candidate], point):
-                    parent[start + row] = candidate
-                    break
+        many = np.flatnonzero(count > 1)
+        if len(many):
+            parent[start + many] = _smallest_around(
+                points, starts, lengths, following, rows[many], by_size, around[many]
+            )
     # holes grouped by parent, largest first within each group
     regroup = np.lexsort((-areas[holes], parent))
     grouped, group_parent = holes[regroup], parent[regroup]
@@ -380,15 +376,72 @@ def nest_flat(
     return parts
 
 
-def _contains(loop: np.ndarray, point: np.ndarray) -> bool:
-    """Crossing-number test: ``point`` strictly inside the closed ``loop``."""
-    start, end = loop, np.roll(loop, -1, axis=0)
-    straddle = (start[:, 1] > point[1]) != (end[:, 1] > point[1])
-    start, end = start[straddle], end[straddle]
-    crossing = start[:, 0] + (point[1] - start[:, 1]) * (end[:, 0] - start[:, 0]) / (
+def _smallest_around(
+    points: np.ndarray,
+    starts: np.ndarray,
+    lengths: np.ndarray,
+    following: np.ndarray,
+    holes: np.ndarray,
+    by_size: np.ndarray,
+    around: np.ndarray,
+) -> np.ndarray:
+    """For each of ``holes`` (loop indices), the smallest of its candidate
+    outer loops (``by_size[around[row]]``, smallest first) that holds the
+    midpoint of its first edge; the largest candidate without a test when
+    none of the others does (every hole lies in some outer loop, and the
+    largest is often a whole city's outline, the costliest to test).
+
+    All (hole, candidate) crossing-number tests at once, over the edges
+    of the candidates that straddle the point's height."""
+    row, column = np.nonzero(around)  # by row, then smallest candidate first
+    last = np.append(row[1:] != row[:-1], True)
+    parent = by_size[column[last]]
+    row, candidate = row[~last], by_size[column[~last]]
+    if not len(row):
+        return parent
+    corner = starts[holes]
+    point = 0.5 * (points[corner] + points[corner + 1])[row]
+    counts = lengths[candidate]
+    ends = np.cumsum(counts)
+    inside = np.zeros(len(row), dtype=bool)
+    # pairs in batches of about _NEST_EDGES candidate edges
+    cuts = np.searchsorted(ends, np.arange(_NEST_EDGES, int(ends[-1]), _NEST_EDGES))
+    for begin, stop in itertools.pairwise([0, *np.unique(cuts).tolist(), len(row)]):
+        if stop > begin:
+            inside[begin:stop] = _holds(
+                points,
+                following,
+                starts[candidate[begin:stop]],
+                counts[begin:stop],
+                point[begin:stop],
+            )
+    found = np.flatnonzero(inside)
+    rows_found, first = np.unique(row[found], return_index=True)
+    parent[rows_found] = candidate[found[first]]
+    return parent
+
+
+def _holds(
+    points: np.ndarray,
+    following: np.ndarray,
+    starts: np.ndarray,
+    counts: np.ndarray,
+    point: np.ndarray,
+) -> np.ndarray:
+    """(p,) bool: whether loop p (``counts[p]`` points from ``starts[p]``)
+    holds ``point[p]`` strictly inside, by crossing numbers."""
+    edge = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(int(counts.sum()))
+    pair = np.repeat(np.arange(len(counts)), counts)
+    start, end = points[edge], points[following[edge]]
+    height = point[pair, 1]
+    straddle = np.flatnonzero((start[:, 1] > height) != (end[:, 1] > height))
+    start, end, pair = start[straddle], end[straddle], pair[straddle]
+    crossing = start[:, 0] + (point[pair, 1] - start[:, 1]) * (end[:, 0] - start[:, 0]) / (
         end[:, 1] - start[:, 1]
     )
-    return bool(np.count_nonzero(crossing > point[0]) % 2)
+    hits = np.bincount(pair[crossing > point[pair, 0]], minlength=len(counts))
+    holds: np.ndarray = hits % 2 == 1
+    return holds
 
 
 def parts_area(parts: list[list[np.ndarray]]) -> float:

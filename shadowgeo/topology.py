@@ -189,7 +189,9 @@ class Caster:
         faces = self.faces
         n = np.int64(max(len(self.vertices), 1))
         starts = faces.reshape(-1)
-        ends = faces[:, [1, 2, 0]].reshape(-1)
+        ends = np.empty_like(faces)  # corner k + 1: column copies, no fancy index
+        ends[:, :2], ends[:, 2] = faces[:, 1:], faces[:, 0]
+        ends = ends.reshape(-1)
         low = np.minimum(starts, ends)
         keys = low * n + np.maximum(starts, ends)
         slot_bits = max(len(keys).bit_length(), 1)
@@ -208,7 +210,7 @@ class Caster:
         inverse = np.empty(len(keys), dtype=np.int64)
         inverse[order] = np.cumsum(first) - 1
         edges = np.column_stack([unique_keys // n, unique_keys % n])
-        sign = np.where(starts < ends, 1, -1).astype(np.int64)
+        sign = 2 * (starts < ends).astype(np.int64) - 1
         group_starts = np.append(np.flatnonzero(first), len(keys)).astype(np.int64)
         return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3), order, group_starts
 

@@ -205,3 +205,38 @@ def test_union_parts_keep_an_islands_hole_when_the_part_around_it_is_united_agai
     )
     assert parts_area(parts) == pytest.approx(reference.area * 1e10, rel=1e-12)
     assert sorted(len(part) for part in parts)[-2:] == [2, 2]  # ring and island keep their holes
+
+
+@pytest.mark.parametrize("batch", [4_000_000, 7])
+def test_nest_puts_each_hole_in_the_smallest_loop_around_it(monkeypatch, batch):
+    import shadowgeo.polygons as polygons
+
+    # Concentric rings of squares, two nests side by side: outer loops
+    # (counter-clockwise) at half-widths 10, 6, 2 and holes (clockwise) at
+    # 8, 4; every hole has all the larger outer loops of its nest as
+    # candidates, and the test must pick the nearest one. Small batches
+    # split one hole's candidates between batches.
+    monkeypatch.setattr(polygons, "_NEST_EDGES", batch)
+
+    def square(centre, half, clockwise):
+        loop = centre + half * np.array([[-1.0, -1], [1, -1], [1, 1], [-1, 1]])
+        return loop[::-1] if clockwise else loop
+
+    loops = [
+        square(np.array([x, 0.0]), half, half % 4 == 0)
+        for x in (0.0, 30.0)
+        for half in (10, 8, 6, 4, 2)
+    ]
+    order = np.random.default_rng(1).permutation(len(loops))
+    parts = polygons.nest([loops[i] for i in order])
+    shapes = sorted(
+        (float(part[0][:, 0].mean()), float(part[0][:, 0].max() - part[0][:, 0].mean()),
+         [float(hole[:, 0].max() - hole[:, 0].mean()) for hole in part[1:]])
+        for part in parts
+    )  # fmt: skip
+    expected = [(x, 2.0, []) for x in (0.0, 30.0)]
+    expected += [(x, 6.0, [4.0]) for x in (0.0, 30.0)]
+    expected += [(x, 10.0, [8.0]) for x in (0.0, 30.0)]
+    assert shapes == sorted(expected)
+    reference = shapely.union_all([shapely.Polygon(part[0], part[1:]) for part in parts])
+    assert reference.area == pytest.approx(2 * (400 - 256 + 144 - 64 + 16))
