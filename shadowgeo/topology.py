@@ -172,28 +172,29 @@ class Caster:
         """(3 m,) every face corner ``3 * face + k`` grouped by the edge it
         starts (corner k to k + 1): the slots of edge ``i`` are
         ``edge_slots[edge_slot_starts[i]:edge_slot_starts[i + 1]]``."""
-        return self._edge_table[3]
+        return self._edge_sort[0]
 
     @property
     def edge_slot_starts(self) -> np.ndarray:
         """(e + 1,) offsets of each edge's group in :attr:`edge_slots`."""
-        return self._edge_table[4]
+        return self._edge_sort[2]
 
     @cached_property
-    def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        # One sort of a single int64 key per face edge gives the unique edges,
-        # each face edge's index and the slots grouped by edge at once (np.unique
-        # with return_inverse would sort, and edge_face_slots sort again). The
-        # slot rides in the key's low bits where it fits, so a plain sort (several
-        # times faster than argsort) yields the order too, ties by slot.
-        faces = self.faces
+    def _edge_sort(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(slots in edge order, (3 m,) bool first slot of its edge, group
+        starts, sorted edge keys ``low * n + high``).
+
+        One sort of a single int64 key per face edge gives the edges' groups
+        and the slots in them at once (np.unique with return_inverse would
+        sort, and edge_face_slots sort again). The slot rides in the key's
+        low bits where it fits, so a plain sort (several times faster than
+        argsort) yields the order too, ties by slot. What only some callers
+        need (unique edges, each face edge's index, its sign) is derived
+        from it on demand: a closed caster's silhouette needs none of them.
+        """
+        starts, ends = self._corner_edges
         n = np.int64(max(len(self.vertices), 1))
-        starts = faces.reshape(-1)
-        ends = np.empty_like(faces)  # corner k + 1: column copies, no fancy index
-        ends[:, :2], ends[:, 2] = faces[:, 1:], faces[:, 0]
-        ends = ends.reshape(-1)
-        low = np.minimum(starts, ends)
-        keys = low * n + np.maximum(starts, ends)
+        keys = np.minimum(starts, ends) * n + np.maximum(starts, ends)
         slot_bits = max(len(keys).bit_length(), 1)
         if (int(n) * int(n)).bit_length() + slot_bits <= 63:
             packed = (keys << np.int64(slot_bits)) | np.arange(len(keys), dtype=np.int64)
@@ -206,29 +207,39 @@ class Caster:
         first = np.empty(len(sorted_keys), dtype=bool)
         first[:1] = True
         np.not_equal(sorted_keys[1:], sorted_keys[:-1], out=first[1:])
-        unique_keys = sorted_keys[first]
-        inverse = np.empty(len(keys), dtype=np.int64)
-        inverse[order] = np.cumsum(first) - 1
-        edges = np.column_stack([unique_keys // n, unique_keys % n])
-        sign = 2 * (starts < ends).astype(np.int64) - 1
         group_starts = np.append(np.flatnonzero(first), len(keys)).astype(np.int64)
-        return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3), order, group_starts
+        return order, first, group_starts, sorted_keys
 
-    @property
+    @cached_property
+    def _corner_edges(self) -> tuple[np.ndarray, np.ndarray]:
+        """(3 m,) start and end vertex of each face edge (corner k to k + 1)."""
+        faces = self.faces
+        ends = np.empty_like(faces)  # column copies, no fancy index
+        ends[:, :2], ends[:, 2] = faces[:, 1:], faces[:, 0]
+        return faces.reshape(-1), ends.reshape(-1)
+
+    @cached_property
     def edges(self) -> np.ndarray:
         """(e, 2) unique undirected edges, lower vertex index first."""
-        return self._edge_table[0]
+        _, first, _, sorted_keys = self._edge_sort
+        n = np.int64(max(len(self.vertices), 1))
+        unique_keys = sorted_keys[first]
+        return np.column_stack([unique_keys // n, unique_keys % n])
 
-    @property
+    @cached_property
     def face_edges(self) -> np.ndarray:
         """(m, 3) index into :attr:`edges` of the edge from corner k to corner k+1."""
-        return self._edge_table[1]
+        order, first, _, _ = self._edge_sort
+        inverse = np.empty(len(order), dtype=np.int64)
+        inverse[order] = np.cumsum(first) - 1
+        return inverse.reshape(-1, 3)
 
-    @property
+    @cached_property
     def face_edge_signs(self) -> np.ndarray:
         """(m, 3) +1 where that face edge runs from the lower vertex index to
         the higher one, -1 otherwise."""
-        return self._edge_table[2]
+        starts, ends = self._corner_edges
+        return (2 * (starts < ends).astype(np.int64) - 1).reshape(-1, 3)
 
     @cached_property
     def edge_face_count(self) -> np.ndarray:
