@@ -135,7 +135,9 @@ class Caster:
         """(m,) positive where a face turns its front to the light given as a
         homogeneous 4-vector in the :attr:`centered` frame (zero edge-on)."""
         light = np.asarray(light_homogeneous, dtype=np.float64)
-        facing: np.ndarray = self.face_normals @ light[:3] - self.face_offsets * light[3]
+        facing: np.ndarray = self.face_normals @ light[:3]
+        if light[3] != 0:  # a light at infinity (w = 0) needs no face offsets
+            facing -= self.face_offsets * light[3]
         return facing
 
     @cached_property
