@@ -40,6 +40,9 @@ _ORIENTATION_ERROR = 1e-14
 _PAIRS_PER_LOOP = 64
 # ... unless there are no more candidates than this in all (a few tens of MB).
 _CANDIDATE_PAIRS = 1_000_000
+# The grid's cells are listed in a table while there are at most this many
+# per loop (else found by bisection).
+_DENSE_CELLS = 8
 # Rounding of a point turned into another frame, as a share of the largest
 # coordinate (a few ulps; a thousand for margin).
 _FRAME_ROUNDING = 1e-13
@@ -106,8 +109,9 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     if pairs is None:
         return None
     order, first, second = pairs
-    meets = np.all(low[order[first]] <= high[order[second]], axis=1)
-    meets &= np.all(low[order[second]] <= high[order[first]], axis=1)
+    low_xy, high_xy = low.view(np.complex128).ravel(), high.view(np.complex128).ravel()
+    one, other = order[first], order[second]
+    meets = _boxes_meet(low_xy[one], high_xy[one], low_xy[other], high_xy[other])
     first, second = first[meets], second[meets]
     if len(first) == 0:  # no two boxes meet: each loop is its own outline
         return points, starts
@@ -191,12 +195,17 @@ def _box_pairs(
     position = np.arange(count)
     # same cell (later boxes only), then the cells right-below, right,
     # right-above and above
-    begin = [position + 1]
-    end = [np.searchsorted(sorted_id, sorted_id, side="right")]
-    for step in (rows - 1, rows, rows + 1, 1):
-        begin.append(np.searchsorted(sorted_id, sorted_id + step, side="left"))
-        end.append(np.searchsorted(sorted_id, sorted_id + step, side="right"))
-    begins, ends = np.concatenate(begin), np.concatenate(end)
+    steps = np.array([0, rows - 1, rows, rows + 1, 1])
+    targets = (sorted_id[None, :] + steps[:, None]).ravel()
+    n_cells = int(sorted_id[-1]) + rows + 2
+    if n_cells <= _DENSE_CELLS * count:  # each cell's range from a table, no search
+        bounds = np.zeros(n_cells + 1, dtype=np.int64)
+        np.cumsum(np.bincount(sorted_id, minlength=n_cells), out=bounds[1:])
+        begins, ends = bounds[targets], bounds[targets + 1]
+    else:
+        begins = np.searchsorted(sorted_id, targets, side="left")
+        ends = np.searchsorted(sorted_id, targets, side="right")
+    begins[:count] = position + 1
     counts = np.maximum(ends - begins, 0)
     total = int(counts.sum())
     if total > max(_PAIRS_PER_LOOP * count, _CANDIDATE_PAIRS):
@@ -204,10 +213,19 @@ def _box_pairs(
     first = np.repeat(np.tile(position, 5), counts)
     offsets = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)
     second = np.repeat(begins, counts) + offsets
-    low, high = low[order], high[order]
-    meets = (low[first, 0] <= high[second, 0]) & (low[second, 0] <= high[first, 0])
-    meets &= (low[first, 1] <= high[second, 1]) & (low[second, 1] <= high[first, 1])
+    low = np.ascontiguousarray(low[order]).view(np.complex128).ravel()
+    high = np.ascontiguousarray(high[order]).view(np.complex128).ravel()
+    meets = _boxes_meet(low[first], high[first], low[second], high[second])
     return order, first[meets], second[meets]
+
+
+def _boxes_meet(
+    low_a: np.ndarray, high_a: np.ndarray, low_b: np.ndarray, high_b: np.ndarray
+) -> np.ndarray:
+    """Whether closed boxes a and b meet, corners as complex numbers."""
+    meets: np.ndarray = (low_a.real <= high_b.real) & (low_b.real <= high_a.real)
+    meets &= (low_a.imag <= high_b.imag) & (low_b.imag <= high_a.imag)
+    return meets
 
 
 def _orientation(origin: np.ndarray, towards: np.ndarray, point: np.ndarray) -> np.ndarray:

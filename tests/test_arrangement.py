@@ -152,11 +152,13 @@ def test_union_parts_takes_the_arrangement_for_a_city_and_matches_shapely():
     _check_against_shapely(scaled, parts)
 
 
-def test_box_pairs_are_every_meeting_pair_once_against_brute_force():
+@pytest.mark.parametrize("spread", [20, 100_000], ids=["cell table", "cells bisected"])
+def test_box_pairs_are_every_meeting_pair_once_against_brute_force(spread):
     from shadowgeo.arrangement import _box_pairs  # noqa: PLC2701 - the step under test
 
     rng = np.random.default_rng(2)
     low = rng.integers(0, 20, (300, 2)).astype(float)  # corners on the grid's lines
+    low[::2] = rng.integers(0, spread, (150, 2))  # a sparse grid: far more cells than boxes
     high = low + rng.integers(0, 4, (300, 2))  # boxes touching, and points (empty boxes)
     order, first, second = _box_pairs(low, high)
     found = {
