@@ -264,6 +264,7 @@ def _crossings(
     # complex far faster than a row of an (n, 2) array.
     start = points.view(np.complex128).ravel()
     end = start[following]
+    step = end - start
     turned, grow, turned_low, turned_high = frame
     turned_start = np.ascontiguousarray(turned).view(np.complex128).ravel()
     turned_end = turned_start[following]
@@ -316,20 +317,27 @@ def _crossings(
     meet = (low_a.real <= high_b.real) & (low_b.real <= high_a.real)
     meet &= (low_a.imag <= high_b.imag) & (low_b.imag <= high_a.imag)
     edge_a, edge_b, owner = edge_a[meet], edge_b[meet], owner[meet]
-    a0, a1, b0, b1 = start[edge_a], end[edge_a], start[edge_b], end[edge_b]
-    u, v = _orientation(a0, a1, b0), _orientation(a0, a1, b1)  # b's ends against a's edge
-    s, w = _orientation(b0, b1, a0), _orientation(b0, b1, a1)  # a's ends against b's edge
+    # The four orientations from three products: with r = b0 - a0 and the
+    # edges' steps da, db, b0 and a0 against the other's edge are the usual
+    # determinants (b0 - a0) x ..., and b1, a1 add the steps' product c.
+    a0, step_a, b0, step_b = start[edge_a], step[edge_a], start[edge_b], step[edge_b]
+    r = b0 - a0
+    u = step_a.real * r.imag - step_a.imag * r.real  # b0 against a's edge
+    s = r.real * step_b.imag - r.imag * step_b.real  # a0 against b's edge
+    c = step_a.real * step_b.imag - step_a.imag * step_b.real
+    v, w = u + c, s - c  # b1 against a's edge, a1 against b's edge
     margin = bound[owner]
     smallest = np.minimum(np.minimum(np.abs(u), np.abs(v)), np.minimum(np.abs(s), np.abs(w)))
     if np.any(smallest <= margin):
         return None
     cross = np.flatnonzero((u * v < 0) & (s * w < 0))
     edge_a, edge_b, margin = edge_a[cross], edge_b[cross], margin[cross]
-    u, v, s, w = u[cross], v[cross], s[cross], w[cross]
-    t_a, t_b = s / (s - w), u / (u - v)
-    where = a0[cross] + t_a * (a1[cross] - a0[cross])
+    u, s, c = u[cross], s[cross], c[cross]
+    t_a, t_b = s / c, -u / c  # s / (s - w), u / (u - v)
+    where = a0[cross] + t_a * step_a[cross]
     where_xy = np.column_stack([where.real, where.imag])
-    slack = np.column_stack([2 * margin / np.abs(s - w), 2 * margin / np.abs(u - v)])
+    slack = 2 * margin / np.abs(c)
+    slack = np.column_stack([slack, slack])
     delta_a, delta_b = np.where(s < 0, 1, -1), np.where(u < 0, 1, -1)
     return depth, edge_a, t_a, delta_a, edge_b, t_b, delta_b, where_xy, slack
 
@@ -411,7 +419,8 @@ def _boundary(
     margin = np.maximum(error, resolution)
     if np.any(same_edge & close) or np.any((t <= margin) | (1 - t <= margin)):
         return None
-    vertex_at = np.arange(n_points) + np.searchsorted(edge, np.arange(n_points), side="left")
+    on_edge = np.bincount(edge, minlength=n_points)  # crossings before each vertex
+    vertex_at = np.arange(n_points) + np.cumsum(on_edge) - on_edge
     crossing_at = edge + 1 + np.arange(len(edge))
     n_events = n_points + len(edge)
     node = np.empty(n_events, dtype=np.int64)
