@@ -255,7 +255,8 @@ def _final_parts(parts: list[list[np.ndarray]], owner: np.ndarray) -> list[bool]
 def _boxes(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """(n, 2) lower and upper corners of each loop's bounding box."""
     points = np.concatenate(loops)
-    starts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops[:-1]])])
+    lengths = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
+    starts = np.cumsum(lengths) - lengths  # integers even for one loop
     return np.minimum.reduceat(points, starts, axis=0), np.maximum.reduceat(points, starts, axis=0)
 
 

@@ -240,3 +240,24 @@ def test_nest_puts_each_hole_in_the_smallest_loop_around_it(monkeypatch, batch):
     assert shapes == sorted(expected)
     reference = shapely.union_all([shapely.Polygon(part[0], part[1:]) for part in parts])
     assert reference.area == pytest.approx(2 * (400 - 256 + 144 - 64 + 16))
+
+
+def test_union_parts_of_one_group_past_the_cell_threshold_is_one_part():
+    # A fan of 2,400 triangles round one point, all of one group (the
+    # triangles of one connected caster, as method="triangles" gives them):
+    # every loop lands in one cell, which unites into one part. (The cells'
+    # box helper used to fail on a single part: its loop starts came out
+    # as floats.) The triangles share the centre, so the arrangement hands
+    # them back to the cells.
+    from shadowgeo.arrangement import convex_union
+    from shadowgeo.polygons import parts_area, union_parts
+
+    count = 2400
+    angles = np.arange(count + 1) * 2 * np.pi / count
+    rim = 1e6 * np.column_stack([np.cos(angles), np.sin(angles)])
+    loops = [np.array([[0.0, 0.0], rim[k], rim[k + 1]]) for k in range(count)]
+    assert convex_union(loops) is None
+    parts = union_parts(loops, lambda: np.zeros(count, dtype=np.int64))
+    assert len(parts) == 1 and len(parts[0]) == 1
+    expected = 0.5 * count * np.sin(2 * np.pi / count) * 1e12  # the regular 2,400-gon
+    assert parts_area(parts) == pytest.approx(expected, rel=1e-12)
