@@ -171,3 +171,52 @@ def test_box_pairs_are_every_meeting_pair_once_against_brute_force(spread):
         if np.all(low[i] <= high[j]) and np.all(low[j] <= high[i])
     }
     assert found == expected
+
+
+def _boxes_mesh(corners_low: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-aligned boxes [low, low + size] as one (vertices, faces) mesh."""
+    unit = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+    faces = np.array(
+        [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+         [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]]
+    )  # fmt: skip
+    vertices = corners_low[:, None, :] + unit[None] * size[:, None, :]
+    return vertices.reshape(-1, 3), (faces[None] + 8 * np.arange(len(size))[:, None, None]).reshape(
+        -1, 3
+    )
+
+
+@pytest.mark.parametrize("terraced", [False, True], ids=["apart", "terraced"])
+def test_a_city_shadow_matches_the_union_of_each_box_shadow(monkeypatch, terraced):
+    import shadowgeo.polygons as polygons
+    from shadowgeo import DirectionalLight, Plane, project_shadow
+
+    # Rows of boxes on the ground y = 0; terraced rows share their side
+    # walls exactly (the outlines touch along an edge: handed back to the
+    # cells), the others stand a little apart and their shadows overlap.
+    rng = np.random.default_rng(5)
+    rows, per_row, width = 10, 12, 10.0
+    x = np.tile(np.arange(per_row) * (width if terraced else width + 0.5), rows)
+    z = np.repeat(np.arange(rows) * 30.0, per_row)
+    low = np.column_stack([x, np.zeros_like(x), z])
+    size = np.column_stack(
+        [np.full_like(x, width), rng.uniform(5, 40, len(x)), rng.uniform(8, 12, len(x))]
+    )
+    sun = DirectionalLight([0.45, -0.75, 0.3])
+    ground = Plane([0, 1, 0], 0)
+    taken = []
+    arranged = polygons.convex_union_flat
+    monkeypatch.setattr(
+        polygons, "convex_union_flat", lambda loops: taken.append(arranged(loops)) or taken[-1]
+    )
+    shadow = project_shadow(_boxes_mesh(low, size), sun, ground)
+    assert [found is None for found in taken] == [terraced]
+    # each box's shadow: the hull of its corners' images along the sun
+    vertices, _ = _boxes_mesh(low, size)
+    direction = sun.direction
+    flat = vertices - (vertices[:, 1:2] / direction[1]) * direction
+    images = ground.to_2d(flat).reshape(-1, 8, 2)
+    expected = shapely.union_all(shapely.convex_hull(shapely.multipoints(images)))
+    assert shadow.area == pytest.approx(expected.area, rel=1e-9)
+    region = shapely.MultiPolygon([shapely.Polygon(p[0], p[1:]) for p in shadow.polygons])
+    assert region.symmetric_difference(expected).area < 1e-9 * expected.area
