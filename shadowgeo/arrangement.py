@@ -98,11 +98,13 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     starts = np.cumsum(sizes) - sizes
     following = np.arange(1, len(points) + 1)
     following[starts + sizes - 1] = starts
-    if not _strictly_convex(points, following, starts, sizes):
+    step = points.view(np.complex128).ravel()
+    step = step[following] - step  # each edge, as a complex number
+    if not _strictly_convex(step, following, starts):
         return None
     low = np.minimum.reduceat(points, starts, axis=0)
     high = np.maximum.reduceat(points, starts, axis=0)
-    axes, grow = _main_frame(points, following)
+    axes, grow = _main_frame(points, step)
     turned = points @ axes
     turned_low, turned_high = _grown_boxes(turned, starts, grow)
     pairs = _box_pairs(turned_low, turned_high)
@@ -133,33 +135,33 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     return _boundary(points, following, starts, sizes, *found)
 
 
-def _strictly_convex(
-    points: np.ndarray, following: np.ndarray, starts: np.ndarray, sizes: np.ndarray
-) -> bool:
+def _strictly_convex(step: np.ndarray, following: np.ndarray, starts: np.ndarray) -> bool:
     """Every loop turns left at each corner, by more than rounding, and its
-    edges' directions go round once (so it is simple)."""
-    edges = points[following] - points
-    after = edges[following]
-    turn = edges[:, 0] * after[:, 1] - edges[:, 1] * after[:, 0]
-    scale = np.abs(edges[:, 0] * after[:, 1]) + np.abs(edges[:, 1] * after[:, 0])
+    edges' directions go round once (so it is simple); ``step``: the edges
+    as complex numbers."""
+    after = step[following]
+    turn = step.real * after.imag - step.imag * after.real
+    scale = np.abs(step.real * after.imag) + np.abs(step.imag * after.real)
     if not np.all(turn > 2 * _ORIENTATION_ERROR * scale):
         return False
     # With every turn to the left (by less than a half turn), the direction
     # passes the +x axis once for each time the loop winds round.
-    passes = (edges[:, 1] < 0) & (after[:, 1] >= 0)
+    passes = (step.imag < 0) & (after.imag >= 0)
     return bool(np.all(np.add.reduceat(passes.astype(np.int64), starts) == 1))
 
 
-def _main_frame(points: np.ndarray, following: np.ndarray) -> tuple[np.ndarray, float]:
-    """(2, 2) axes of the frame of the edges' main direction, and by how
-    much a box in that frame is grown to hold every point for sure.
+def _main_frame(points: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, float]:
+    """(2, 2) axes of the frame of the edges' (``step``, complex) main
+    direction, and by how much a box in that frame is grown to hold every
+    point for sure.
 
     Shadows cast by one light are long along the light's direction; boxes
     along it pair far fewer loops (and edges) that do not meet than boxes
     along x and y.
     """
-    edges = points[following] - points
-    _, axes = np.linalg.eigh(edges.T @ edges)  # columns: the frame, main direction last
+    x, y = step.real, step.imag
+    tensor = np.array([[x @ x, x @ y], [x @ y, y @ y]])
+    _, axes = np.linalg.eigh(tensor)  # columns: the frame, main direction last
     grow = _FRAME_ROUNDING * float(np.abs(points).max(initial=0.0)) + np.finfo(float).tiny
     return axes, grow
 
