@@ -105,8 +105,7 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     low = np.minimum.reduceat(points, starts, axis=0)
     high = np.maximum.reduceat(points, starts, axis=0)
     axes, grow = _main_frame(points, step)
-    turned = points @ axes
-    turned_low, turned_high = _grown_boxes(turned, starts, grow)
+    turned_low, turned_high = _grown_boxes(_turned(points, axes), starts, grow)
     pairs = _box_pairs(turned_low, turned_high)
     if pairs is None:
         return None
@@ -128,7 +127,7 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     following[starts + sizes - 1] = starts
     if int(np.sum(sizes[first] * sizes[second])) > _TABLE_ENTRIES:
         return None
-    frame = (points @ axes, grow, turned_low[order], turned_high[order])
+    frame = (_turned(points, axes), grow, turned_low[order], turned_high[order])
     found = _crossings(points, following, starts, sizes, low, high, first, second, frame)
     if found is None:
         return None
@@ -159,11 +158,22 @@ def _main_frame(points: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, float
     along it pair far fewer loops (and edges) that do not meet than boxes
     along x and y.
     """
+    # Sums of products written out: a BLAS call (np.dot, @) may wake
+    # OpenBLAS's threads, which then spin on the other core.
     x, y = step.real, step.imag
-    tensor = np.array([[x @ x, x @ y], [x @ y, y @ y]])
+    across = float(np.add.reduce(x * y))
+    tensor = np.array(
+        [[float(np.add.reduce(x * x)), across], [across, float(np.add.reduce(y * y))]]
+    )
     _, axes = np.linalg.eigh(tensor)  # columns: the frame, main direction last
     grow = _FRAME_ROUNDING * float(np.abs(points).max(initial=0.0)) + np.finfo(float).tiny
     return axes, grow
+
+
+def _turned(points: np.ndarray, axes: np.ndarray) -> np.ndarray:
+    """(n, 2) ``points @ axes``, written out (no BLAS call)."""
+    x, y = points[:, 0], points[:, 1]
+    return np.column_stack([x * axes[0, 0] + y * axes[1, 0], x * axes[0, 1] + y * axes[1, 1]])
 
 
 def _grown_boxes(
