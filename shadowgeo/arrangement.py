@@ -26,6 +26,8 @@ points rounded once (about 1e-16 of the pair's size).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .topology import cycle_walk
@@ -158,14 +160,15 @@ def _main_frame(points: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, float
     along it pair far fewer loops (and edges) that do not meet than boxes
     along x and y.
     """
-    # Sums of products written out: a BLAS call (np.dot, @) may wake
-    # OpenBLAS's threads, which then spin on the other core.
+    # Sums of products written out and the tensor's main axis in closed
+    # form: a BLAS or LAPACK call (np.dot, @, eigh) may wake OpenBLAS's
+    # threads, which then spin on the other core.
     x, y = step.real, step.imag
     across = float(np.add.reduce(x * y))
-    tensor = np.array(
-        [[float(np.add.reduce(x * x)), across], [across, float(np.add.reduce(y * y))]]
-    )
-    _, axes = np.linalg.eigh(tensor)  # columns: the frame, main direction last
+    spread = float(np.add.reduce(x * x)) - float(np.add.reduce(y * y))
+    angle = 0.5 * math.atan2(2 * across, spread)
+    cosine, sine = math.cos(angle), math.sin(angle)
+    axes = np.array([[-sine, cosine], [cosine, sine]])  # columns: across, then along
     grow = _FRAME_ROUNDING * float(np.abs(points).max(initial=0.0)) + np.finfo(float).tiny
     return axes, grow
 
