@@ -5,10 +5,12 @@ building). Clipper2 pays a few microseconds per loop and its sweep grows as
 n^1.5 over a plane; here the union is built from the loops' crossings
 directly, all loops at once:
 
-1. loops whose boxes overlap are paired through a uniform grid;
-2. for each pair, the side of every vertex of one loop against every edge of
-   the other (one orientation table per pair), whose signs give every edge
-   crossing and whether a loop's first vertex lies inside the other;
+1. loops whose boxes overlap (in the frame of the edges' main direction,
+   along which shadows are long) are paired through a uniform grid;
+2. for each pair, the edges of each loop that meet the other's box are
+   paired when their own boxes meet, and four orientations tell whether
+   they cross; each loop's first vertex is tested against the loops whose
+   boxes hold it;
 3. walking round each loop, the number of other loops covering it starts at
    its first vertex's count and steps by +-1 at each crossing: the stretches
    covered by none are the union's boundary;
@@ -52,8 +54,9 @@ _FRAME_ROUNDING = 1e-13
 # sort key edge + t resolves about 1e-11 at 60,000 edges; 64 ulps of the
 # edge count where that is coarser).
 _T_RESOLUTION = 1e-9
-# Orientation table entries (vertex against edge) above which the tables
-# would fill too much memory: many-sided loops over one another.
+# Edge pairs of the paired loops (every edge of one against every edge of
+# the other) above which the candidate arrays would fill too much memory:
+# many-sided loops over one another.
 _TABLE_ENTRIES = 20_000_000
 
 

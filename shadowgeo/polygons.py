@@ -201,6 +201,13 @@ def union_parts(
             return nest_flat(*boundary)
     if len(loops) <= _GROUPED_LOOPS:
         return components(fill(loops))
+    return _cell_parts(loops, groups)
+
+
+def _cell_parts(
+    loops: list[np.ndarray], groups: Callable[[], np.ndarray]
+) -> list[list[np.ndarray]]:
+    """:func:`union_parts` cell by cell (see its Notes)."""
     low, high = _boxes(loops)
     labels = np.asarray(groups(), dtype=np.int64)
     labels = labels - labels.min()
@@ -229,11 +236,18 @@ def union_parts(
 
 
 def union_region(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -> CrossSection:
-    """:func:`union_parts` as a region, to intersect with others: one union
-    for few loops, the cells' parts filled once more for many."""
-    if len(loops) <= _GROUPED_LOOPS and len(loops) < _ARRANGED_LOOPS:
+    """:func:`union_parts` as a region, to intersect with others: the
+    arrangement's loops filled, or one union for few loops, or the cells'
+    parts filled once more for many."""
+    if len(loops) >= _ARRANGED_LOOPS:
+        boundary = convex_union_flat(loops)
+        if boundary is not None:
+            points, starts = boundary
+            bounds = [*starts.tolist(), len(points)]
+            return fill([points[a:b] for a, b in itertools.pairwise(bounds)])
+    if len(loops) <= _GROUPED_LOOPS:
         return fill(loops)
-    return fill([loop for part in union_parts(loops, groups) for loop in part])
+    return fill([loop for part in _cell_parts(loops, groups) for loop in part])
 
 
 def _final_parts(parts: list[list[np.ndarray]], owner: np.ndarray) -> list[bool]:
@@ -396,7 +410,7 @@ def _smallest_around(
     of the candidates that straddle the point's height."""
     row, column = np.nonzero(around)  # by row, then smallest candidate first
     last = np.append(row[1:] != row[:-1], True)
-    parent = by_size[column[last]]
+    parent: np.ndarray = by_size[column[last]]
     row, candidate = row[~last], by_size[column[~last]]
     if not len(row):
         return parent

@@ -11,7 +11,7 @@ import pytest
 import shapely
 
 from shadowgeo.arrangement import convex_union
-from shadowgeo.polygons import nest, parts_area, union_parts
+from shadowgeo.polygons import nest, parts_area, union_parts, union_region
 
 
 def _square(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
@@ -122,6 +122,8 @@ def test_uncertain_signs_are_handed_back_and_the_cells_unite_them(case):
     reference = shapely.union_all([shapely.Polygon(loop * 1e6) for loop in loops])
     assert parts_area(parts) == pytest.approx(reference.area, rel=1e-12)
     assert _region(parts).symmetric_difference(reference).area < 1e-12 * reference.area
+    region = union_region([loop * 1e6 for loop in loops], lambda: np.arange(len(loops)))
+    assert region.area() == pytest.approx(reference.area, rel=1e-12)
 
 
 @pytest.mark.parametrize(
@@ -150,6 +152,8 @@ def test_union_parts_takes_the_arrangement_for_a_city_and_matches_shapely():
     assert convex_union(scaled) is not None
     parts = union_parts(scaled, lambda: np.arange(len(loops)))
     _check_against_shapely(scaled, parts)
+    region = union_region(scaled, lambda: np.arange(len(loops)))  # to intersect with limits
+    assert region.area() == pytest.approx(parts_area(parts), rel=1e-12)
 
 
 @pytest.mark.parametrize("spread", [20, 100_000], ids=["cell table", "cells bisected"])
@@ -220,3 +224,29 @@ def test_a_city_shadow_matches_the_union_of_each_box_shadow(monkeypatch, terrace
     assert shadow.area == pytest.approx(expected.area, rel=1e-9)
     region = shapely.MultiPolygon([shapely.Polygon(p[0], p[1:]) for p in shadow.polygons])
     assert region.symmetric_difference(expected).area < 1e-9 * expected.area
+
+
+def test_a_courtyard_spanning_many_grid_cells_keeps_its_hole_and_islands():
+    # 160 overlapping squares (side 3, turned a little each) in a ring round
+    # a 100 x 100 courtyard: the pairing grid's cells are one square wide,
+    # so the hole spans hundreds of them; islands inside it, one of them a
+    # ring with its own pond.
+    loops = []
+    for k in range(160):
+        t = k / 40.0
+        side, along = divmod(t, 1.0)
+        corner = [(0, 0), (100, 0), (100, 100), (0, 100)][int(side)]
+        direction = [(1, 0), (0, 1), (-1, 0), (0, -1)][int(side)]
+        centre = np.add(corner, np.multiply(direction, 100 * along))
+        angle = 0.01 * k
+        axes = np.array([[np.cos(angle), np.sin(angle)], [-np.sin(angle), np.cos(angle)]])
+        loops.append(centre + np.array([[-1.5, -1.5], [1.5, -1.5], [1.5, 1.5], [-1.5, 1.5]]) @ axes)
+    islands = [_square(20 + 7 * k, 40.3, 25 + 7 * k, 45.3) for k in range(8)]
+    pond_ring = [_square(60.0, 60.0, 70.0, 63.0), _square(60.2, 67.1, 70.3, 70.2)]
+    pond_ring += [_square(59.5, 59.4, 62.7, 70.6), _square(67.3, 59.7, 70.6, 70.4)]
+    everything = loops + islands + pond_ring
+    boundary = convex_union(everything)
+    assert boundary is not None
+    parts = nest(boundary)
+    _check_against_shapely(everything, parts)
+    assert sum(len(part) - 1 for part in parts) == 2  # the courtyard and the pond
