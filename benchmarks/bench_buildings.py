@@ -18,15 +18,18 @@ One sun direction lights them all. Methods, on the same input, same process:
   ``shapely.union_all`` (GEOS). pybdshadow itself is not installed: it pulls
   in geopandas and its own data stack, and its method is the few lines here.
 
-The ratio is of wall-clock medians; the CPU ratio of this process's CPU-time
-medians (steadier on a shared machine). Area error is relative to an exact
+The two methods are called in turn, ``--repeat`` rounds after one warm call
+each, so a shared machine's drifting load weighs on both alike; the ratio is
+of wall-clock medians, the CPU ratio of this process's CPU-time medians
+(steadier on a shared machine), both from the same calls. Area error is relative to an exact
 reference: the union, by shapely, of each box's exact shadow (the convex hull
 of its eight projected corners, exact for a convex box standing on the
 ground), computed with GEOS's ``union_all`` in float64. Times are medians of
-``--repeat`` runs. The last column, time / (n log n), should stay flat if the
-cost grows as n log n.
-``--phases`` times the steps of one ``project_shadow`` call (CPU time, each
-step's functions wrapped with a timer; steps nest).
+``--repeat`` runs. The last column, CPU time / (n log n), should stay flat if
+the cost grows as n log n.
+``--phases`` times the steps of ``project_shadow`` calls (CPU time, each
+step's functions wrapped with a timer; steps nest), after one call to warm
+up, and prints the median call of ``--repeat``.
 """
 
 from __future__ import annotations
@@ -47,7 +50,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_lights import timed_phases  # noqa: E402
-from common import median_time  # noqa: E402
 
 from shadowgeo import DirectionalLight, Plane, project_shadow  # noqa: E402
 
@@ -113,66 +115,88 @@ PHASES = [
     ("shadowgeo.topology", "Caster.facing", "front faces (and face normals)"),
     ("shadowgeo.projection", "silhouette_loops", "silhouettes (edge table, chaining)"),
     ("shadowgeo.projection", "_project_loops", "outlines projected"),
-    ("shadowgeo.polygons", "union_parts", "2-D union, cell by cell, and parts"),
+    ("shadowgeo.polygons", "union_parts", "2-D union and parts"),
+    ("shadowgeo.polygons", "convex_union_flat", "  of which the arrangement (numpy)"),
     ("shadowgeo.polygons", "fill", "  of which Clipper2 unions"),
-    ("shadowgeo.polygons", "nest", "  of which holes to their parts"),
+    ("shadowgeo.polygons", "nest_flat", "  of which holes to their parts"),
     ("shadowgeo.projection", "vertex_components", "  of which the caster's parts"),
     ("shadowgeo.projection", "_Projector._result", "result (area, polygons)"),
 ]
 
 
-def phases(sizes: list[int]) -> None:
-    """Print where shadowgeo's time goes, per step, for each size."""
+def phases(sizes: list[int], repeat: int) -> None:
+    """Print where shadowgeo's time goes, per step, for each size: the steps
+    of the median of ``repeat`` calls (by whole-call CPU time)."""
     print("| step | " + " | ".join(f"{n:,} buildings: CPU ms" for n in sizes) + " |")
     print("|---|" + "---|" * len(sizes))
     results = []
     for n in sizes:
         mesh = as_mesh(buildings(n))
-        results.append(timed_phases(partial(project_shadow, mesh, SUN, GROUND), PHASES))
+        call = partial(project_shadow, mesh, SUN, GROUND)
+        call()  # warm: first-touch memory and imports are no step's cost
+        runs = [timed_phases(call, PHASES) for _ in range(repeat)]
+        results.append(sorted(runs, key=lambda run: run[0])[len(runs) // 2])  # the median call
     print("| whole call | " + " | ".join(f"{total * 1e3:.1f}" for total, _ in results) + " |")
     for _, _, label in PHASES:
         print(f"| {label} | " + " | ".join(f"{s[label] * 1e3:.1f}" for _, s in results) + " |")
 
 
-def median_cpu(function: Callable[[], object], repeat: int) -> float:
-    """Median CPU seconds of this process over ``repeat`` calls: on a shared
-    machine the wall clock also counts waiting for a core."""
-    times = []
+def timed(function: Callable[[], object]) -> tuple[float, float, object]:
+    """Wall-clock and process-CPU seconds of one call, and its result."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    result = function()
+    return time.perf_counter() - wall, time.process_time() - cpu, result
+
+
+def interleaved(
+    ours: Callable[[], object], theirs: Callable[[], object], repeat: int
+) -> tuple[list[tuple[float, float, object]], list[tuple[float, float, object]]]:
+    """``repeat`` rounds of one call each way, alternating (after one warm
+    call each): on a shared machine whose load drifts, both sides see the
+    same drift."""
+    ours(), theirs()
+    mine, peer = [], []
     for _ in range(repeat):
-        start = time.process_time()
-        function()
-        times.append(time.process_time() - start)
-    return statistics.median(times)
+        mine.append(timed(ours))
+        peer.append(timed(theirs))
+    return mine, peer
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000])
-    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--phases", action="store_true", help="time shadowgeo's steps")
     args = parser.parse_args()
     if args.phases:
-        phases(args.sizes)
+        phases(args.sizes, args.repeat)
         return
     print(
-        "| buildings | shadowgeo s | per-building + GEOS s | ratio | CPU ratio | rel. area error "
-        "shadowgeo | rel. area error GEOS | shadowgeo s / (n log n) x 1e6 |"
+        "| buildings | shadowgeo s | per-building + GEOS s | ratio | shadowgeo CPU s "
+        "| per-building + GEOS CPU s | CPU ratio | rel. area error shadowgeo "
+        "| rel. area error GEOS | shadowgeo CPU s / (n log n) x 1e6 |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for n in args.sizes:
         corners = buildings(n)
         mesh = as_mesh(corners)
-        ours, shadow = median_time(partial(project_shadow, mesh, SUN, GROUND), args.repeat)
-        theirs, union = median_time(partial(per_building_union, corners), args.repeat)
-        our_cpu = median_cpu(partial(project_shadow, mesh, SUN, GROUND), args.repeat)
-        their_cpu = median_cpu(partial(per_building_union, corners), args.repeat)
+        mine, peer = interleaved(
+            partial(project_shadow, mesh, SUN, GROUND),
+            partial(per_building_union, corners),
+            args.repeat,
+        )
+        ours = statistics.median(run[0] for run in mine)
+        theirs = statistics.median(run[0] for run in peer)
+        our_cpu = statistics.median(run[1] for run in mine)
+        their_cpu = statistics.median(run[1] for run in peer)
+        shadow, union = mine[-1][2], peer[-1][2]
         reference = exact_area(corners)
         error = abs(shadow.area - reference) / reference  # type: ignore[attr-defined]
         geos_error = abs(union.area - reference) / reference  # type: ignore[attr-defined]
-        per = ours / (n * math.log(n)) * 1e6
+        per = our_cpu / (n * math.log(n)) * 1e6
         print(
             f"| {n:,} | {ours:.3f} | {theirs:.3f} | {ours / theirs:.2f} "
-            f"| {our_cpu / their_cpu:.2f} | {error:.1e} "
+            f"| {our_cpu:.3f} | {their_cpu:.3f} | {our_cpu / their_cpu:.2f} | {error:.1e} "
             f"| {geos_error:.1e} | {per:.2f} |"
         )
 

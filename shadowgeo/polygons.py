@@ -8,12 +8,14 @@ then costs about 1e-16 of the region's size.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
+from .arrangement import convex_union_flat
 from .errors import GeometryError
 from .limits import MAX_UNION_CROSSINGS
 from .plane import Plane
@@ -249,9 +251,25 @@ def union_parts(
     first loop's box centre). A cell's part whose box meets no other cell's
     parts is final as it is; the rest, near the cells' borders, are united
     once more.
+
+    Many strictly convex counter-clockwise loops (a city of box buildings)
+    are first tried by their arrangement (:func:`~shadowgeo.arrangement.convex_union`),
+    which needs no cells and no second union; where it cannot certify a
+    sign (touching outlines) the cells above do the work.
     """
+    if len(loops) >= _ARRANGED_LOOPS:
+        boundary = convex_union_flat(loops)
+        if boundary is not None:
+            return nest_flat(*boundary)
     if len(loops) <= _GROUPED_LOOPS:
         return components(fill(loops))
+    return _cell_parts(loops, groups)
+
+
+def _cell_parts(
+    loops: list[np.ndarray], groups: Callable[[], np.ndarray]
+) -> list[list[np.ndarray]]:
+    """:func:`union_parts` cell by cell (see its Notes)."""
     low, high = _boxes(loops)
     labels = np.asarray(groups(), dtype=np.int64)
     labels = labels - labels.min()
@@ -280,11 +298,18 @@ def union_parts(
 
 
 def union_region(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -> CrossSection:
-    """:func:`union_parts` as a region, to intersect with others: one union
-    for few loops, the cells' parts filled once more for many."""
+    """:func:`union_parts` as a region, to intersect with others: the
+    arrangement's loops filled, or one union for few loops, or the cells'
+    parts filled once more for many."""
+    if len(loops) >= _ARRANGED_LOOPS:
+        boundary = convex_union_flat(loops)
+        if boundary is not None:
+            points, starts = boundary
+            bounds = [*starts.tolist(), len(points)]
+            return fill([points[a:b] for a, b in itertools.pairwise(bounds)])
     if len(loops) <= _GROUPED_LOOPS:
         return fill(loops)
-    return fill([loop for part in union_parts(loops, groups) for loop in part])
+    return fill([loop for part in _cell_parts(loops, groups) for loop in part])
 
 
 def _final_parts(parts: list[list[np.ndarray]], owner: np.ndarray) -> list[bool]:
@@ -306,7 +331,8 @@ def _final_parts(parts: list[list[np.ndarray]], owner: np.ndarray) -> list[bool]
 def _boxes(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """(n, 2) lower and upper corners of each loop's bounding box."""
     points = np.concatenate(loops)
-    starts = np.concatenate([[0], np.cumsum([len(loop) for loop in loops[:-1]])])
+    lengths = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
+    starts = np.cumsum(lengths) - lengths  # integers even for one loop
     return np.minimum.reduceat(points, starts, axis=0), np.maximum.reduceat(points, starts, axis=0)
 
 
@@ -318,10 +344,15 @@ def region_loops(region: CrossSection) -> list[np.ndarray]:
     return [loop for loop in loops if len(loop) >= 3]
 
 
+# Candidate edges one batch of nest's point-in-loop tests visits at most.
+_NEST_EDGES = 4_000_000
 # union_parts: loops above this are united cell by cell first, about
 # _CELL_LOOPS to a cell (below it one union is faster).
 _GROUPED_LOOPS = 2000
 _CELL_LOOPS = 100
+# union_parts tries convex loops by their arrangement from this many on
+# (below it the numpy steps' fixed costs outweigh Clipper2's).
+_ARRANGED_LOOPS = 64
 
 
 def intersect(region: CrossSection, other: CrossSection) -> CrossSection:
@@ -359,17 +390,34 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
         return []
     if len(loops) == 1:  # the common case of one outline: no holes to place
         return [loops] if signed_areas(loops)[0] > 0 else []
-    areas = signed_areas(loops)
+    lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
+    return nest_flat(np.concatenate(loops).reshape(-1, 2), np.cumsum(lengths) - lengths, loops)
+
+
+def nest_flat(
+    points: np.ndarray, starts: np.ndarray, loops: list[np.ndarray] | None = None
+) -> list[list[np.ndarray]]:
+    """:func:`nest` of loops given as one (n, 2) array of their points, loop
+    ``i`` from ``starts[i]`` to the next start; ``loops``: the same loops as
+    arrays, when they are at hand already (else cut from ``points``)."""
+    if len(starts) == 0:
+        return []
+    lengths = np.diff(np.append(starts, len(points)))
+    if loops is None:
+        loops = [points[a : a + k] for a, k in zip(starts.tolist(), lengths.tolist(), strict=True)]
+    following = np.arange(1, len(points) + 1)
+    following[starts + lengths - 1] = starts
+    cross = points[:, 0] * points[following, 1] - points[following, 0] * points[:, 1]
+    areas = 0.5 * np.add.reduceat(cross, starts)
     outers = np.flatnonzero(areas > 0)
     holes = np.flatnonzero(areas < 0)
-    if len(outers) == 0:
-        return []
     if len(holes) == 0:
         return [[loops[i]] for i in outers.tolist()]
-    low, high = _boxes(loops)
+    low = np.minimum.reduceat(points, starts, axis=0)
+    high = np.maximum.reduceat(points, starts, axis=0)
     parent = np.full(len(holes), -1, dtype=np.int64)
     by_size = outers[np.argsort(areas[outers], kind="stable")]  # smallest first
-    chunk = max(1, 4_000_000 // len(outers))
+    chunk = max(1, 4_000_000 // max(len(outers), 1))
     for start in range(0, len(holes), chunk):
         rows = holes[start : start + chunk]
         outer_low, outer_high = low[by_size], high[by_size]
@@ -382,45 +430,95 @@ def nest(loops: list[np.ndarray]) -> list[list[np.ndarray]]:
         count = around.sum(axis=1)
         single = count == 1
         parent[start : start + chunk][single] = by_size[np.argmax(around[single], axis=1)]
-        for row in np.flatnonzero(count > 1):
-            hole = loops[rows[row]]
-            point = 0.5 * (hole[0] + hole[1])
-            candidates = by_size[around[row]]
-            # Every hole lies in some outer loop: when all the smaller
-            # candidates fail, the largest (often a whole city's outline,
-            # the costliest to test) is the parent without a test.
-            parent[start + row] = candidates[-1]
-            for candidate in candidates[:-1]:
-                if _contains(loops[candidate], point):
-                    parent[start + row] = candidate
-                    break
+        many = np.flatnonzero(count > 1)
+        if len(many):
+            parent[start + many] = _smallest_around(
+                points, starts, lengths, following, rows[many], by_size, around[many]
+            )
     # holes grouped by parent, largest first within each group
-    grouped = holes[np.lexsort((-areas[holes], parent))]
-    group_parent = parent[np.lexsort((-areas[holes], parent))]
+    regroup = np.lexsort((-areas[holes], parent))
+    grouped, group_parent = holes[regroup], parent[regroup]
     first = np.searchsorted(group_parent, outers, side="left")
     last = np.searchsorted(group_parent, outers, side="right")
-    parts = []
-    for outer, begin, end in zip(outers.tolist(), first.tolist(), last.tolist(), strict=True):
-        if begin == end:
-            if areas[outer] > 0:
-                parts.append([loops[outer]])
-            continue
-        own = grouped[begin:end]
-        if areas[outer] + areas[own].sum() <= 0:
-            continue
-        parts.append([loops[outer]] + [loops[i] for i in own.tolist()])
+    parts = [[loops[i]] for i in outers.tolist()]
+    emptied = []
+    for index in np.flatnonzero(last > first).tolist():
+        own = grouped[first[index] : last[index]]
+        if areas[outers[index]] + areas[own].sum() <= 0:
+            emptied.append(index)
+        parts[index].extend(loops[i] for i in own.tolist())
+    if emptied:
+        gone = set(emptied)
+        parts = [part for index, part in enumerate(parts) if index not in gone]
     return parts
 
 
-def _contains(loop: np.ndarray, point: np.ndarray) -> bool:
-    """Crossing-number test: ``point`` strictly inside the closed ``loop``."""
-    start, end = loop, np.roll(loop, -1, axis=0)
-    straddle = (start[:, 1] > point[1]) != (end[:, 1] > point[1])
-    start, end = start[straddle], end[straddle]
-    crossing = start[:, 0] + (point[1] - start[:, 1]) * (end[:, 0] - start[:, 0]) / (
+def _smallest_around(
+    points: np.ndarray,
+    starts: np.ndarray,
+    lengths: np.ndarray,
+    following: np.ndarray,
+    holes: np.ndarray,
+    by_size: np.ndarray,
+    around: np.ndarray,
+) -> np.ndarray:
+    """For each of ``holes`` (loop indices), the smallest of its candidate
+    outer loops (``by_size[around[row]]``, smallest first) that holds the
+    midpoint of its first edge; the largest candidate without a test when
+    none of the others does (every hole lies in some outer loop, and the
+    largest is often a whole city's outline, the costliest to test).
+
+    All (hole, candidate) crossing-number tests at once, over the edges
+    of the candidates that straddle the point's height."""
+    row, column = np.nonzero(around)  # by row, then smallest candidate first
+    last = np.append(row[1:] != row[:-1], True)
+    parent: np.ndarray = by_size[column[last]]
+    row, candidate = row[~last], by_size[column[~last]]
+    if not len(row):
+        return parent
+    corner = starts[holes]
+    point = 0.5 * (points[corner] + points[corner + 1])[row]
+    counts = lengths[candidate]
+    ends = np.cumsum(counts)
+    inside = np.zeros(len(row), dtype=bool)
+    # pairs in batches of about _NEST_EDGES candidate edges
+    cuts = np.searchsorted(ends, np.arange(_NEST_EDGES, int(ends[-1]), _NEST_EDGES))
+    for begin, stop in itertools.pairwise([0, *np.unique(cuts).tolist(), len(row)]):
+        if stop > begin:
+            inside[begin:stop] = _holds(
+                points,
+                following,
+                starts[candidate[begin:stop]],
+                counts[begin:stop],
+                point[begin:stop],
+            )
+    found = np.flatnonzero(inside)
+    rows_found, first = np.unique(row[found], return_index=True)
+    parent[rows_found] = candidate[found[first]]
+    return parent
+
+
+def _holds(
+    points: np.ndarray,
+    following: np.ndarray,
+    starts: np.ndarray,
+    counts: np.ndarray,
+    point: np.ndarray,
+) -> np.ndarray:
+    """(p,) bool: whether loop p (``counts[p]`` points from ``starts[p]``)
+    holds ``point[p]`` strictly inside, by crossing numbers."""
+    edge = np.repeat(starts - np.cumsum(counts) + counts, counts) + np.arange(int(counts.sum()))
+    pair = np.repeat(np.arange(len(counts)), counts)
+    start, end = points[edge], points[following[edge]]
+    height = point[pair, 1]
+    straddle = np.flatnonzero((start[:, 1] > height) != (end[:, 1] > height))
+    start, end, pair = start[straddle], end[straddle], pair[straddle]
+    crossing = start[:, 0] + (point[pair, 1] - start[:, 1]) * (end[:, 0] - start[:, 0]) / (
         end[:, 1] - start[:, 1]
     )
-    return bool(np.count_nonzero(crossing > point[0]) % 2)
+    hits = np.bincount(pair[crossing > point[pair, 0]], minlength=len(counts))
+    holds: np.ndarray = hits % 2 == 1
+    return holds
 
 
 def parts_area(parts: list[list[np.ndarray]]) -> float:

@@ -181,18 +181,24 @@ class Caster:
         """
         light = np.asarray(light_homogeneous, dtype=np.float64)
         positional = light[3] != 0  # a light at infinity does not need the face planes
+        # products written out: a BLAS call (@) may wake OpenBLAS's threads,
+        # which then spin on the other core for longer than the product takes
         if not self._lit_before and "face_normals" not in self.__dict__:
             self._lit_before = True
-            facing = np.empty(len(self.faces))
+            facing: np.ndarray = np.empty(len(self.faces))
             for start in range(0, len(self.faces), _BLOCK):
                 stop = start + _BLOCK
                 normals = self._normals(start, stop)
                 block = facing[start:stop]
-                np.matmul(normals, light[:3], out=block)
+                np.multiply(normals[:, 0], light[0], out=block)
+                block += normals[:, 1] * light[1]
+                block += normals[:, 2] * light[2]
                 if positional:
                     block -= self._offsets(normals, start, stop) * light[3]
             return facing
-        facing = self.face_normals @ light[:3]
+        normals = self.face_normals
+        facing = normals[:, 0] * light[0] + normals[:, 1] * light[1]
+        facing += normals[:, 2] * light[2]
         if positional:
             facing -= self.face_offsets * light[3]
         return facing
@@ -230,33 +236,36 @@ class Caster:
     def has_edge_table(self) -> bool:
         """Whether the edge table (:attr:`edges`, :attr:`edge_slots`, ...) is
         built already: code that can do with less then skips building it."""
-        return "_edge_table" in self.__dict__
+        return "_edge_sort" in self.__dict__
 
     @property
     def edge_slots(self) -> np.ndarray:
         """(3 m,) every face corner ``3 * face + k`` grouped by the edge it
         starts (corner k to k + 1): the slots of edge ``i`` are
         ``edge_slots[edge_slot_starts[i]:edge_slot_starts[i + 1]]``."""
-        return self._edge_table[3]
+        return self._edge_sort[0]
 
     @property
     def edge_slot_starts(self) -> np.ndarray:
         """(e + 1,) offsets of each edge's group in :attr:`edge_slots`."""
-        return self._edge_table[4]
+        return self._edge_sort[2]
 
     @cached_property
-    def _edge_table(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        # One sort of a single int64 key per face edge gives the unique edges,
-        # each face edge's index and the slots grouped by edge at once (np.unique
-        # with return_inverse would sort, and edge_face_slots sort again). The
-        # slot rides in the key's low bits where it fits, so a plain sort (several
-        # times faster than argsort) yields the order too, ties by slot.
-        faces = self.faces
+    def _edge_sort(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(slots in edge order, (3 m,) bool first slot of its edge, group
+        starts, sorted edge keys ``low * n + high``).
+
+        One sort of a single int64 key per face edge gives the edges' groups
+        and the slots in them at once (np.unique with return_inverse would
+        sort, and edge_face_slots sort again). The slot rides in the key's
+        low bits where it fits, so a plain sort (several times faster than
+        argsort) yields the order too, ties by slot. What only some callers
+        need (unique edges, each face edge's index, its sign) is derived
+        from it on demand: a closed caster's silhouette needs none of them.
+        """
+        starts, ends = self._corner_edges
         n = np.int64(max(len(self.vertices), 1))
-        starts = faces.reshape(-1)
-        ends = faces[:, [1, 2, 0]].reshape(-1)
-        low = np.minimum(starts, ends)
-        keys = low * n + np.maximum(starts, ends)
+        keys = np.minimum(starts, ends) * n + np.maximum(starts, ends)
         slot_bits = max(len(keys).bit_length(), 1)
         if (int(n) * int(n)).bit_length() + slot_bits <= 63:
             packed = (keys << np.int64(slot_bits)) | np.arange(len(keys), dtype=np.int64)
@@ -269,29 +278,39 @@ class Caster:
         first = np.empty(len(sorted_keys), dtype=bool)
         first[:1] = True
         np.not_equal(sorted_keys[1:], sorted_keys[:-1], out=first[1:])
-        unique_keys = sorted_keys[first]
-        inverse = np.empty(len(keys), dtype=np.int64)
-        inverse[order] = np.cumsum(first) - 1
-        edges = np.column_stack([unique_keys // n, unique_keys % n])
-        sign = np.where(starts < ends, 1, -1).astype(np.int64)
         group_starts = np.append(np.flatnonzero(first), len(keys)).astype(np.int64)
-        return edges, inverse.reshape(-1, 3), sign.reshape(-1, 3), order, group_starts
+        return order, first, group_starts, sorted_keys
 
-    @property
+    @cached_property
+    def _corner_edges(self) -> tuple[np.ndarray, np.ndarray]:
+        """(3 m,) start and end vertex of each face edge (corner k to k + 1)."""
+        faces = self.faces
+        ends = np.empty_like(faces)  # column copies, no fancy index
+        ends[:, :2], ends[:, 2] = faces[:, 1:], faces[:, 0]
+        return faces.reshape(-1), ends.reshape(-1)
+
+    @cached_property
     def edges(self) -> np.ndarray:
         """(e, 2) unique undirected edges, lower vertex index first."""
-        return self._edge_table[0]
+        _, first, _, sorted_keys = self._edge_sort
+        n = np.int64(max(len(self.vertices), 1))
+        unique_keys = sorted_keys[first]
+        return np.column_stack([unique_keys // n, unique_keys % n])
 
-    @property
+    @cached_property
     def face_edges(self) -> np.ndarray:
         """(m, 3) index into :attr:`edges` of the edge from corner k to corner k+1."""
-        return self._edge_table[1]
+        order, first, _, _ = self._edge_sort
+        inverse = np.empty(len(order), dtype=np.int64)
+        inverse[order] = np.cumsum(first) - 1
+        return inverse.reshape(-1, 3)
 
-    @property
+    @cached_property
     def face_edge_signs(self) -> np.ndarray:
         """(m, 3) +1 where that face edge runs from the lower vertex index to
         the higher one, -1 otherwise."""
-        return self._edge_table[2]
+        starts, ends = self._corner_edges
+        return (2 * (starts < ends).astype(np.int64) - 1).reshape(-1, 3)
 
     @cached_property
     def edge_face_count(self) -> np.ndarray:
@@ -497,6 +516,60 @@ def unique_integers(
 
 # What every geometry function takes as its caster.
 MeshLike: TypeAlias = Union["trimesh.Trimesh", tuple[ArrayLike, ArrayLike], Caster]  # noqa: UP007
+
+
+def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cycles of a permutation, walked.
+
+    Parameters
+    ----------
+    successor : (k,) int
+        A permutation: item ``i`` is followed by ``successor[i]``.
+
+    Returns
+    -------
+    walk : (k,) int64
+        The items in cycle order, each cycle from its lowest item, cycles
+        by that item.
+    cuts : (c - 1,) int64
+        The positions in ``walk`` where a new cycle begins.
+
+    Examples
+    --------
+    >>> walk, cuts = cycle_walk(np.array([2, 0, 1, 4, 3]))
+    >>> walk.tolist(), cuts.tolist()
+    ([0, 2, 1, 3, 4], [3])
+    """
+    count = len(successor)
+    # Each item's cycle label: the smallest item on its cycle. After s
+    # doublings a label is the least of 2^s successors; it is final once
+    # every item agrees with its successor (then each cycle holds one value,
+    # which must be its least item), checked every second doubling.
+    label, jump = np.arange(count), successor.copy()
+    for step in range(max(1, int(count).bit_length())):
+        label = np.minimum(label, label[jump])
+        jump = jump[jump]
+        if step % 2 and np.array_equal(label[successor], label):
+            break
+    # Cut each cycle before its labelled item and rank items by their
+    # distance to the cut: the labelled item comes first, then its
+    # successors in order.
+    indices = np.arange(count)
+    last = successor == label
+    after = np.where(last, indices, successor)
+    remaining = (~last).astype(np.int64)
+    longest = int(np.bincount(label).max())
+    for _ in range(max(1, longest.bit_length())):  # distances double each step
+        remaining = remaining + np.where(after == indices, 0, remaining[after])
+        after = after[after]
+    # Place each item directly (no sort): cycles in label order, each from
+    # its labelled item, which has the most items remaining.
+    sizes = np.bincount(label, minlength=count)
+    offsets = np.cumsum(sizes) - sizes
+    walk = np.empty(count, dtype=np.int64)
+    walk[offsets[label] + sizes[label] - 1 - remaining] = indices
+    cuts = offsets[sizes > 0][1:]
+    return walk, cuts
 
 
 def as_caster(caster: MeshLike) -> Caster:

@@ -205,3 +205,59 @@ def test_union_parts_keep_an_islands_hole_when_the_part_around_it_is_united_agai
     )
     assert parts_area(parts) == pytest.approx(reference.area * 1e10, rel=1e-12)
     assert sorted(len(part) for part in parts)[-2:] == [2, 2]  # ring and island keep their holes
+
+
+@pytest.mark.parametrize("batch", [4_000_000, 7])
+def test_nest_puts_each_hole_in_the_smallest_loop_around_it(monkeypatch, batch):
+    import shadowgeo.polygons as polygons
+
+    # Concentric rings of squares, two nests side by side: outer loops
+    # (counter-clockwise) at half-widths 10, 6, 2 and holes (clockwise) at
+    # 8, 4; every hole has all the larger outer loops of its nest as
+    # candidates, and the test must pick the nearest one. Small batches
+    # split one hole's candidates between batches.
+    monkeypatch.setattr(polygons, "_NEST_EDGES", batch)
+
+    def square(centre, half, clockwise):
+        loop = centre + half * np.array([[-1.0, -1], [1, -1], [1, 1], [-1, 1]])
+        return loop[::-1] if clockwise else loop
+
+    loops = [
+        square(np.array([x, 0.0]), half, half % 4 == 0)
+        for x in (0.0, 30.0)
+        for half in (10, 8, 6, 4, 2)
+    ]
+    order = np.random.default_rng(1).permutation(len(loops))
+    parts = polygons.nest([loops[i] for i in order])
+    shapes = sorted(
+        (float(part[0][:, 0].mean()), float(part[0][:, 0].max() - part[0][:, 0].mean()),
+         [float(hole[:, 0].max() - hole[:, 0].mean()) for hole in part[1:]])
+        for part in parts
+    )  # fmt: skip
+    expected = [(x, 2.0, []) for x in (0.0, 30.0)]
+    expected += [(x, 6.0, [4.0]) for x in (0.0, 30.0)]
+    expected += [(x, 10.0, [8.0]) for x in (0.0, 30.0)]
+    assert shapes == sorted(expected)
+    reference = shapely.union_all([shapely.Polygon(part[0], part[1:]) for part in parts])
+    assert reference.area == pytest.approx(2 * (400 - 256 + 144 - 64 + 16))
+
+
+def test_union_parts_of_one_group_past_the_cell_threshold_is_one_part():
+    # A fan of 2,400 triangles round one point, all of one group (the
+    # triangles of one connected caster, as method="triangles" gives them):
+    # every loop lands in one cell, which unites into one part. (The cells'
+    # box helper used to fail on a single part: its loop starts came out
+    # as floats.) The triangles share the centre, so the arrangement hands
+    # them back to the cells.
+    from shadowgeo.arrangement import convex_union
+    from shadowgeo.polygons import parts_area, union_parts
+
+    count = 2400
+    angles = np.arange(count + 1) * 2 * np.pi / count
+    rim = 1e6 * np.column_stack([np.cos(angles), np.sin(angles)])
+    loops = [np.array([[0.0, 0.0], rim[k], rim[k + 1]]) for k in range(count)]
+    assert convex_union(loops) is None
+    parts = union_parts(loops, lambda: np.zeros(count, dtype=np.int64))
+    assert len(parts) == 1 and len(parts[0]) == 1
+    expected = 0.5 * count * np.sin(2 * np.pi / count) * 1e12  # the regular 2,400-gon
+    assert parts_area(parts) == pytest.approx(expected, rel=1e-12)
