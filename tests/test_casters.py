@@ -141,3 +141,42 @@ def test_one_shape_without_a_transform_is_stacked_without_copies():
     assert np.array_equal(part.faces, shape.faces[::2])
     moved = sg.Shape(shape.vertices, shape.faces, transform=np.diag([2.0, 1.0, 1.0, 1.0]))
     assert np.array_equal(CasterSet([moved]).vertices[:, 0], 2.0 * shape.vertices[:, 0])
+
+
+def test_a_closed_casters_face_turned_to_the_light_in_the_plane_is_dropped():
+    """Seen on the corpus car: the receiver search found the hood, a flat top
+    of the closed car shell, and the hood's own faces shadowed it whole. A
+    face lying in the lit plane and turned to the light's side is the
+    receiver itself; only faces the caster rests on (turned away) are kept."""
+    cube = _cube(0, 1)
+    stacked = CasterSet([cube])
+    tolerance = sg.Tolerance.for_points(stacked.bounds)
+    top = sg.Plane([0, 1, 0], -1.0)  # y = 1, lit from above
+    keep = stacked.off_plane(top, tolerance)
+    on_top = np.all(np.isclose(stacked.vertices[stacked.faces][:, :, 1], 1), axis=1)
+    assert on_top.sum() == 2 and not keep[on_top].any() and keep[~on_top].all()
+    below = sg.Plane([0, -1, 0], 1.0)  # the same plane lit from below: the cube rests on it
+    assert stacked.off_plane(below, tolerance).all()
+
+
+def test_a_step_shadows_only_the_part_of_its_lower_top_the_upper_part_hides():
+    import manifold3d
+
+    lower = manifold3d.Manifold.cube([2.0, 1.0, 1.0])
+    upper = manifold3d.Manifold.cube([1.0, 1.0, 1.0]).translate([0.0, 1.0, 0.0])
+    mesh = (lower + upper).to_mesh()
+    step = sg.Shape(np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts))
+    sun = sg.SceneLight(sg.DirectionalLight([0.5, -1.0, 0.0]), name="sun", shadows=True)
+    # on the plane y = 1: under the upper part (x in [0, 1]) and its shadow
+    # beyond it, 0.5 long (x in [1, 1.5]); the lower top past x = 1.5 is lit
+    result = sg.add_shadows(sg.Scene([step], [sun]), plane=(0, 1, 0, -1), offset=0.0)
+    (shadow,) = result.shapes_with_role("shadow")
+    triangles = shadow.vertices[shadow.faces]
+    area = (
+        0.5
+        * np.linalg.norm(
+            np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1
+        ).sum()
+    )
+    assert area == pytest.approx(1.5, rel=1e-9)
+    assert triangles[:, :, 0].max() == pytest.approx(1.5, rel=1e-9)

@@ -207,17 +207,25 @@ class CasterSet:
         return result
 
     def off_plane(self, plane: Plane, tolerance: Tolerance) -> np.ndarray:
-        """(m,) bool over the stacked faces: False for a face of an open caster
-        lying in ``plane`` (a patch does not shadow itself, nor a rug the
-        floor). A closed caster keeps every face: one resting on the plane
-        shadows its footprint, as it would anyway, and stays closed, so its
-        outline comes from its silhouette."""
+        """(m,) bool over the stacked faces: False for a face lying in the lit
+        ``plane`` (its normal towards the light's side) that does not rest on
+        it: a patch does not shadow itself, nor a rug the floor, nor the hood
+        of a car (a closed shape's face turned to the light) the hood. A
+        closed caster keeps the faces it rests on the plane with (turned away
+        from the light's side): they shadow its footprint, as it would anyway,
+        and it stays closed, so its outline comes from its silhouette."""
         near = np.abs(plane.signed_distance(self.vertices)) <= tolerance.coplanar_length
         if not near.any():
             return np.ones(len(self.faces), dtype=bool)
         off: np.ndarray = ~np.all(near[self.faces], axis=1)
-        if not off.all():  # the stack's topology, for closedness, only when it matters
-            off |= self.closed[self.face_owner]
+        if off.all():
+            return off
+        lying = np.flatnonzero(~off)
+        corners = self.vertices[self.faces[lying]]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        resting = normals @ plane.normal < 0  # turned away from the light's side
+        # the stack's topology, for closedness, only when it matters
+        off[lying[resting & self.closed[self.face_owner[lying]]]] = True
         return off
 
     @functools.cached_property

@@ -471,7 +471,7 @@ def _shadow_on(
         rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
         region2d = flat
     chosen = casters.may_shadow(light, plane, box2d, tolerance)
-    faces = casters.faces_of(chosen) & casters.off_plane(receiver.plane, tolerance)
+    faces = casters.faces_of(chosen) & casters.off_plane(plane, tolerance)
     step(len(casters))
     loops = _caster_loops(casters, faces, light, plane, rectangle, tolerance, notes, light_name)
     if not loops:
