@@ -38,7 +38,7 @@ document size          512 MiB         X3D after inflating ``.x3dz`` (an inflati
                                        bomb stops there)
 XML depth              256 elements    X3D, checked on the parsed tree (libxml2
                                        stops at 2,048 while parsing)
-nesting                128 groups      grouping nodes inside one another as the
+nesting                256 groups      grouping nodes inside one another as the
                                        scene is walked, through DEF/USE,
                                        prototypes and Inline
 XML text or attribute  document size   X3D: one attribute may fill the document
@@ -105,9 +105,9 @@ SMALLEST_LENGTH = 1e-75
 MAX_DOCUMENT_BYTES = 512 * 1024 * 1024
 MAX_XML_DEPTH = 256
 # Grouping nodes one inside another as the X3D reader walks the scene, counted
-# through DEF/USE, prototypes and Inline (each level costs a few Python stack
-# frames: this stays well inside Python's default limit of 1,000).
-MAX_NESTING = 128
+# through DEF/USE, prototypes and Inline (the reader raises Python's recursion
+# limit to hold this many levels above its caller's stack).
+MAX_NESTING = MAX_XML_DEPTH
 MAX_NODES = 2_000_000
 MAX_PROTO_EXPANSIONS = 10_000
 MAX_INLINE_DEPTH = 16

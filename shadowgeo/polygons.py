@@ -146,8 +146,10 @@ def without_copies(loops: list[np.ndarray]) -> list[np.ndarray]:
     Examples
     --------
     >>> square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
-    >>> len(without_copies([square, np.roll(square, 1, axis=0), square[::-1]]))
+    >>> len(without_copies([square, np.roll(square, 1, axis=0), square + 2]))
     2
+    >>> len(without_copies([square, np.roll(square, 1, axis=0), square[::-1]]))
+    3
     """
     lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
     if not lengths.all():

@@ -564,11 +564,15 @@ def test_deep_nesting_is_refused_before_python_runs_out_of_stack(tmp_path):
     )
     path = scene(tmp_path, body)
 
-    def nested(depth: int) -> None:  # the caller's stack already holds 300 frames
+    def nested(depth: int) -> None:  # the caller's stack already holds 900 frames
         if depth:
             return nested(depth - 1)
         with pytest.raises(sg.SceneError, match=f"more than {limits.MAX_NESTING} deep"):
             sg.load(path)
 
-    assert sys.getrecursionlimit() >= 1000
-    nested(300)
+    before = sys.getrecursionlimit()
+    sys.setrecursionlimit(1000)  # Python's default, whatever ran before
+    try:
+        nested(900)
+    finally:
+        sys.setrecursionlimit(max(before, sys.getrecursionlimit()))

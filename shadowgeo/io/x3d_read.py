@@ -52,6 +52,8 @@ from __future__ import annotations
 
 import os
 import re
+import sys
+import types
 from pathlib import Path
 from typing import Any
 
@@ -78,6 +80,9 @@ SILENT = {"WorldInfo", "ProtoDeclare", "ExternProtoDeclare", "IS", "connect", "f
 TEXTURES = {"ImageTexture", "MovieTexture", "ImageCubeMapTexture", "ImageTexture3D"}
 # Node instances visited at most: DEF/USE nesting can expand exponentially.
 MAX_NODES = limits.MAX_NODES  # every budget is stated in shadowgeo.limits
+# Python frames one level of grouping nodes may take in the traversal (node,
+# children, an Inline's reader, a prototype's copy), with room to spare.
+_FRAMES_PER_LEVEL = 8
 # Why nodes of a kind are skipped, for the warnings.
 REASONS = [
     (("Sensor", "Interpolator", "Script", "ROUTE", "Trigger", "Sequencer", "Filter", "Follower",
@@ -461,6 +466,21 @@ def _local_matrix(context: Context, element: Element, tag: str) -> np.ndarray:
     return local
 
 
+def _stack_for_nesting() -> None:
+    """Let Python's recursion limit hold :data:`~shadowgeo.limits.MAX_NESTING`
+    grouping nodes (a few frames each) above the caller's own stack, so that
+    the budget, not the limit, stops a deep scene: met first inside numpy,
+    the limit can surface as another error. The limit is only ever raised,
+    never lowered (another thread may be reading a deep scene)."""
+    depth = 0
+    frame: types.FrameType | None = sys._getframe()
+    while frame is not None:
+        depth, frame = depth + 1, frame.f_back
+    needed = depth + _FRAMES_PER_LEVEL * limits.MAX_NESTING + 200
+    if sys.getrecursionlimit() < needed:
+        sys.setrecursionlimit(needed)
+
+
 def read(
     path: str | os.PathLike[str], *, tolerance: Tolerance | None = None, chord: float | None = None
 ) -> Scene:
@@ -516,6 +536,7 @@ def read(
     tree = x3d_parse.parse(path, notes)
     scene = Scene(path=str(path), document=tree, warnings=notes)
     reader = _Reader(path.resolve().parent, scene.warnings)
+    _stack_for_nesting()
     try:
         reader.document(tree, path, np.eye(4), scene)
         reader.finish(scene, tolerance, chord)
