@@ -413,7 +413,7 @@ def nest_flat(
     areas = 0.5 * np.add.reduceat(cross, starts)
     outers = np.flatnonzero(areas > 0)
     holes = np.flatnonzero(areas < 0)
-    if len(holes) == 0:
+    if len(holes) == 0 or len(outers) == 0:  # holes in nothing bound no region
         return [[loops[i]] for i in outers.tolist()]
     low = np.minimum.reduceat(points, starts, axis=0)
     high = np.maximum.reduceat(points, starts, axis=0)
@@ -431,7 +431,8 @@ def nest_flat(
         )
         count = around.sum(axis=1)
         single = count == 1
-        parent[start : start + chunk][single] = by_size[np.argmax(around[single], axis=1)]
+        if single.any():
+            parent[start : start + chunk][single] = by_size[np.argmax(around[single], axis=1)]
         many = np.flatnonzero(count > 1)
         if len(many):
             parent[start + many] = _smallest_around(

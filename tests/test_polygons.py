@@ -261,3 +261,18 @@ def test_union_parts_of_one_group_past_the_cell_threshold_is_one_part():
     assert len(parts) == 1 and len(parts[0]) == 1
     expected = 0.5 * count * np.sin(2 * np.pi / count) * 1e12  # the regular 2,400-gon
     assert parts_area(parts) == pytest.approx(expected, rel=1e-12)
+
+
+def test_loops_that_are_all_holes_bound_no_region():
+    """Found by the fuzzing campaign (x3dv mutant 2618): Clipper2 rounds a
+    sliver to its grid and can hand back only clockwise loops; nesting them
+    with no outer loop raised from an argmax over nothing."""
+    from shadowgeo.polygons import nest, nest_flat
+
+    square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    holes = [square[::-1], square[::-1] + 3.0]
+    assert nest(holes) == []
+    assert nest_flat(np.concatenate(holes), np.array([0, 4])) == []
+    # a hole beside an outer loop it is not in stays out of every part
+    parts = nest_flat(np.concatenate([square * 2.0, square[::-1] + 5.0]), np.array([0, 4]))
+    assert len(parts) == 1 and len(parts[0]) == 1

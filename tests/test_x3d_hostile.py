@@ -574,5 +574,6 @@ def test_deep_nesting_is_refused_before_python_runs_out_of_stack(tmp_path):
     sys.setrecursionlimit(1000)  # Python's default, whatever ran before
     try:
         nested(900)
+        assert sys.getrecursionlimit() == 1000  # put back after the walk
     finally:
-        sys.setrecursionlimit(max(before, sys.getrecursionlimit()))
+        sys.setrecursionlimit(before)

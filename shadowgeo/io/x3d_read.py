@@ -50,10 +50,12 @@ Rules the reader follows, where X3D leaves a choice:
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import sys
 import types
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -466,19 +468,29 @@ def _local_matrix(context: Context, element: Element, tag: str) -> np.ndarray:
     return local
 
 
-def _stack_for_nesting() -> None:
+@contextlib.contextmanager
+def _stack_for_nesting() -> Iterator[None]:
     """Let Python's recursion limit hold :data:`~shadowgeo.limits.MAX_NESTING`
-    grouping nodes (a few frames each) above the caller's own stack, so that
-    the budget, not the limit, stops a deep scene: met first inside numpy,
-    the limit can surface as another error. The limit is only ever raised,
-    never lowered (another thread may be reading a deep scene)."""
+    grouping nodes (a few frames each) above the caller's own stack while a
+    scene is walked, so that the budget, not the limit, stops a deep scene:
+    met first inside numpy, the limit can surface as another error. The
+    limit is put back afterwards unless something else changed it meanwhile
+    (another thread reading a deeper scene)."""
     depth = 0
     frame: types.FrameType | None = sys._getframe()
     while frame is not None:
         depth, frame = depth + 1, frame.f_back
+    before = sys.getrecursionlimit()
     needed = depth + _FRAMES_PER_LEVEL * limits.MAX_NESTING + 200
-    if sys.getrecursionlimit() < needed:
-        sys.setrecursionlimit(needed)
+    if before >= needed:
+        yield
+        return
+    sys.setrecursionlimit(needed)
+    try:
+        yield
+    finally:
+        if sys.getrecursionlimit() == needed:
+            sys.setrecursionlimit(before)
 
 
 def read(
@@ -536,9 +548,9 @@ def read(
     tree = x3d_parse.parse(path, notes)
     scene = Scene(path=str(path), document=tree, warnings=notes)
     reader = _Reader(path.resolve().parent, scene.warnings)
-    _stack_for_nesting()
     try:
-        reader.document(tree, path, np.eye(4), scene)
+        with _stack_for_nesting():
+            reader.document(tree, path, np.eye(4), scene)
         reader.finish(scene, tolerance, chord)
     except RecursionError:
         message = "nodes nested too deeply (through DEF/USE, prototypes or Inline)"
