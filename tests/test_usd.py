@@ -530,3 +530,37 @@ def test_usd_writer_refuses_an_unknown_up_axis_or_scale(tmp_path, scene, message
     with pytest.raises(sg.SceneError, match=rf"bad\.usda.*{message}"):
         sg.save(scene, tmp_path / "bad.usda")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("value", [float("-inf"), float("nan"), 1e155])
+def test_a_non_finite_display_colour_is_an_error_not_copied_out(tmp_path, value):
+    """Found by the fuzzing campaign (usda mutants 317, 1003, 6902, 6996,
+    8763): a displayColor of -inf, nan or a number past float32 (inf once
+    stored) was read into the material and written into the output."""
+
+    def build(stage):
+        mesh = UsdGeom.Mesh.Define(stage, "/World/Column")
+        mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+        mesh.CreateFaceVertexCountsAttr([3])
+        mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
+        mesh.CreateDisplayColorPrimvar().Set([(0.85, 0.85, value)])
+
+    path = tmp_path / "colour.usda"
+    _author(path, build)
+    with pytest.raises(sg.SceneError, match=r"colour\.usda.*Mesh </World/Column>.*displayColor"):
+        sg.load(path)
+    assert "0.85" in path.read_text()  # the input is untouched
+
+
+def test_a_finite_display_colour_is_read(tmp_path):
+    def build(stage):
+        mesh = UsdGeom.Mesh.Define(stage, "/World/Column")
+        mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+        mesh.CreateFaceVertexCountsAttr([3])
+        mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
+        mesh.CreateDisplayColorPrimvar().Set([(0.25, 0.5, 0.75)])
+
+    path = tmp_path / "colour.usda"
+    _author(path, build)
+    (shape,) = sg.load(path).shapes
+    assert shape.material.diffuse_color == pytest.approx((0.25, 0.5, 0.75))

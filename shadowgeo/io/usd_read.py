@@ -126,25 +126,31 @@ def _polygons(
     return counts, indices
 
 
-def _material(mesh: Any, time: Any) -> Material:
+def _material(mesh: Any, time: Any, path: Path, where: str) -> Material:
     """The display colour and opacity, refined by a bound UsdPreviewSurface's
-    emissive colour and roughness and the material's name."""
+    emissive colour and roughness and the material's name; a SceneError for
+    any of them that is not finite (it would be written out again)."""
     UsdShade = pxr()[6]
     opacity = mesh.GetDisplayOpacityPrimvar().Get(time)
     color = mesh.GetDisplayColorPrimvar().Get(time)
     material = Material(
-        diffuse_color=float_triple(color[0]) if color else Material().diffuse_color,
-        transparency=1.0 - float(opacity[0]) if opacity else 0.0,
+        diffuse_color=float_triple(_finite(color[0], "displayColor", path, where))
+        if color
+        else Material().diffuse_color,
+        transparency=1.0 - float(_finite(opacity[0], "displayOpacity", path, where))
+        if opacity
+        else 0.0,
     )
     bound, _ = UsdShade.MaterialBindingAPI(mesh.GetPrim()).ComputeBoundMaterial()
     if bound:
         shader = bound.ComputeSurfaceSource()[0]
         emissive = shader.GetInput("emissiveColor") if shader else None
         if emissive and emissive.Get() is not None:
-            material.emissive_color = float_triple(emissive.Get())
+            value = _finite(emissive.Get(), "emissiveColor", path, where)
+            material.emissive_color = float_triple(value)
         roughness = shader.GetInput("roughness") if shader else None
         if roughness and roughness.Get() is not None:
-            material.shininess = 1.0 - float(roughness.Get())
+            material.shininess = 1.0 - float(_finite(roughness.Get(), "roughness", path, where))
         material.name = bound.GetPrim().GetDisplayName() or None
     return material
 
@@ -169,7 +175,7 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
             points,
             faces,
             _world(mesh, time, path),
-            material=_material(mesh, time),
+            material=_material(mesh, time, path, where),
             name=stored_name(prim, "role"),
             solid=not mesh.GetDoubleSidedAttr().Get(time),
             role=custom(prim, "role", "geometry"),
