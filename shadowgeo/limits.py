@@ -46,6 +46,10 @@ XML text or attribute  document size   X3D: one attribute may fill the document
                                        libxml2's 10 MB limit for untrusted input
                                        stays for documents in an encoding other
                                        than UTF-8 / ASCII / ISO-8859 / windows-125x
+USD text parse         512 MiB + 64 B      each ``.usda`` layer, parsed first in a child
+                       per byte; 20 s  process held to this memory and CPU time
+                       + 1 s per MB    (usd-core's parser can take gigabytes on a
+                                       malformed file)
 entity declarations    none            X3D: ``<!ENTITY`` in the bytes is refused
                                        before libxml2 parses anything
 nodes                  2,000,000       X3D nodes after DEF/USE, Inline and PROTO
@@ -125,6 +129,14 @@ MAX_SURFACE_PAIRS = 5_000_000
 # At this size (benchmarks/bench_surface.py's terrain at 100,000 faces under a
 # sphere) a point light costs about 0.2 s, a low sun with long shadows about 3 s.
 MAX_SURFACE_FACES = 100_000
+# A USD text layer is first parsed in a child process within this address
+# space (on top of what the process maps already) and CPU time (see
+# shadowgeo.io.usd_text): a malformed .usda can make usd-core's parser take
+# gigabytes.
+USD_TEXT_MEMORY = 512 * 1024 * 1024
+USD_TEXT_MEMORY_PER_BYTE = 64
+USD_TEXT_SECONDS = 20
+USD_TEXT_BYTES_PER_SECOND = 1_000_000
 # Triangles of a scene as read (after tessellation and instancing): what a
 # conversion's time and memory grow with. At this size a conversion takes
 # about 15 CPU seconds and 2 GB; load(..., max_triangles=N) or

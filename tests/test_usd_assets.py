@@ -302,3 +302,27 @@ def test_an_expression_in_a_texture_path_is_checked_as_it_evaluates(tmp_path, op
     notes = sg.load(path).warnings
     assert any("leaves the file's folder" in note or "expression" in note for note in notes), notes
     assert not any(str(outside) in call for call in opened), opened
+
+
+def test_a_text_layer_is_parsed_within_a_budget_first(tmp_path, monkeypatch):
+    """Found by the fuzzing campaign (usda mutant 3327): a few bytes inserted
+    into a 725 KB .usda made usd-core's parser take 7.8 GB and 71 CPU seconds
+    before its error. Each text layer is parsed first in a child process held
+    to a memory and CPU budget; here the budget is shrunk below what any parse
+    needs, so the same file that reads with the default budget is refused."""
+    import trimesh
+
+    from shadowgeo import limits
+
+    ball = trimesh.creation.icosphere(subdivisions=5)  # 10,242 points: MBs to parse
+    scene = sg.Scene([sg.Shape(ball.vertices, ball.faces, name="ball")])
+    path = tmp_path / "scene.usda"
+    sg.save(scene, path)
+    assert len(sg.load(path).shapes) == 1  # within the default budget
+    monkeypatch.setattr(limits, "USD_TEXT_MEMORY", 1)
+    monkeypatch.setattr(limits, "USD_TEXT_MEMORY_PER_BYTE", 0)
+    with pytest.raises(sg.SceneError, match=r"scene\.usda.*(needs more than|not a USD file)"):
+        sg.load(path)
+    crate = tmp_path / "scene.usdc"  # a crate layer is not parsed as text
+    sg.save(scene, crate)
+    assert len(sg.load(crate).shapes) == 1

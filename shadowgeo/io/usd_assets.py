@@ -36,6 +36,7 @@ from typing import Any
 from ..errors import SceneError
 from . import outside_reason, refuse_outside
 from .usd_layout import opened, pxr
+from .usd_text import parse_within_budget
 
 # Kinds of asset path that name a layer usd-core opens.
 LAYER_KINDS = {"sublayer", "reference", "payload", "value clip", "value clip manifest"}
@@ -63,6 +64,7 @@ def check_assets(path: Path, notes: list[str] | None = None) -> None:
         if current in seen:
             continue
         seen.add(current)
+        parse_within_budget(current)  # a text layer's parser, held to a budget
         # Anonymous: read afresh, never a stale copy from the layer registry.
         layer = opened(Sdf.Layer.OpenAsAnonymous, current, "not a USD file")
         inside = "" if current == root else f" in {current.relative_to(folder)}"
