@@ -23,7 +23,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
 from .tolerance import Tolerance
-from .topology import Caster, MeshLike, as_caster
+from .topology import Caster, MeshLike, as_caster, cycle_walk
 
 # Faces per block where a pass over every face goes a block at a time.
 _BLOCK = 1 << 16
@@ -274,7 +274,7 @@ def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
     """
     if len(starts) == 0:
         return []
-    walk, cuts = _cycle_walk(_successors(starts, ends))
+    walk, cuts = cycle_walk(_successors(starts, ends))
     return [loop for loop in _cut(starts[walk], cuts) if len(loop) >= 3]
 
 
@@ -309,43 +309,6 @@ def _stable_order(keys: np.ndarray) -> np.ndarray:
         return np.argsort(keys, kind="stable")
     order: np.ndarray = np.argsort(keys * count + np.arange(count))
     return order
-
-
-def _cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The edges in loop order (each loop from its lowest edge index, loops by
-    that index) and the positions in that order where a new loop begins."""
-    count = len(successor)
-    # Each edge's loop label: the smallest edge index on its cycle. After s
-    # doublings a label is the least of 2^s successors; it is final once
-    # every edge agrees with its successor (then each cycle holds one value,
-    # which must be its least index), checked every second doubling.
-    label, jump = np.arange(count), successor.copy()
-    for step in range(max(1, int(count).bit_length())):
-        label = np.minimum(label, label[jump])
-        jump = jump[jump]
-        if step % 2 and np.array_equal(label[successor], label):
-            break
-    # Cut each cycle before its labelled edge and rank edges by their distance
-    # to the cut: the labelled edge comes first, then its successors in order.
-    indices = np.arange(count)
-    last = successor == label
-    # The last edge of each cycle points at a sentinel (index count) that
-    # has nothing remaining and points at itself.
-    after = np.append(np.where(last, count, successor), count)
-    remaining = np.append((~last).astype(np.int64), 0)
-    longest = int(np.bincount(label).max())
-    for _ in range(max(1, longest.bit_length())):  # distances double each step
-        remaining += remaining[after]
-        after = after[after]
-    remaining = remaining[:count]
-    # Place each edge directly (no sort): loops in label order, each from its
-    # labelled edge, which has the most edges remaining.
-    sizes = np.bincount(label, minlength=count)
-    offsets = np.cumsum(sizes) - sizes
-    walk = np.empty(count, dtype=np.int64)
-    walk[offsets[label] + sizes[label] - 1 - remaining] = indices
-    cuts = offsets[sizes > 0][1:]
-    return walk, cuts
 
 
 def silhouette_loops_many(
@@ -509,7 +472,7 @@ def _outlines_of_word(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -> 
     if len(starts) == 0:
         empty = np.zeros(0, dtype=np.int64)
         return Outlines(empty, empty, empty, empty, empty)
-    walk, cuts = _cycle_walk(_successors(starts, ends))
+    walk, cuts = cycle_walk(_successors(starts, ends))
     loop_starts = np.concatenate([[0], cuts])
     lengths = np.diff(np.append(loop_starts, len(walk)))
     kept = lengths >= 3

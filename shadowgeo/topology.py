@@ -556,12 +556,15 @@ def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # successors in order.
     indices = np.arange(count)
     last = successor == label
-    after = np.where(last, indices, successor)
-    remaining = (~last).astype(np.int64)
+    # The last item of each cycle points at a sentinel (index count) that
+    # has nothing remaining and points at itself.
+    after = np.append(np.where(last, count, successor), count)
+    remaining = np.append((~last).astype(np.int64), 0)
     longest = int(np.bincount(label).max())
     for _ in range(max(1, longest.bit_length())):  # distances double each step
-        remaining = remaining + np.where(after == indices, 0, remaining[after])
+        remaining += remaining[after]
         after = after[after]
+    remaining = remaining[:count]
     # Place each item directly (no sort): cycles in label order, each from
     # its labelled item, which has the most items remaining.
     sizes = np.bincount(label, minlength=count)
