@@ -135,7 +135,7 @@ MAX_SURFACE_FACES = 100_000
 # gigabytes.
 USD_TEXT_MEMORY = 512 * 1024 * 1024
 USD_TEXT_MEMORY_PER_BYTE = 64
-USD_TEXT_SECONDS = 20
+USD_TEXT_SECONDS = 10
 USD_TEXT_BYTES_PER_SECOND = 1_000_000
 # Triangles of a scene as read (after tessellation and instancing): what a
 # conversion's time and memory grow with. At this size a conversion takes

@@ -691,6 +691,7 @@ def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
                 limit = _vm_size() + memory_bytes
                 resource.setrlimit(resource.RLIMIT_AS, (limit, resource.RLIM_INFINITY))
             started, cpu_started = time.perf_counter(), time.process_time()
+            children_started = _children_cpu_seconds()
             signal.setitimer(signal.ITIMER_PROF, time_budget)  # CPU seconds
             try:
                 if task["kind"] == "geometry":
@@ -708,11 +709,29 @@ def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
             finally:
                 signal.setitimer(signal.ITIMER_PROF, 0)
             result["seconds"] = time.perf_counter() - started
-            result["cpu_seconds"] = time.process_time() - cpu_started
+            # The alarm counts this process only; CPU spent by child processes
+            # the run started and waited for (the USD text check) counts too.
+            children = _children_cpu_seconds() - children_started
+            result["cpu_seconds"] = time.process_time() - cpu_started + children
+            if result["ok"] and result["cpu_seconds"] > time_budget:
+                result = {
+                    **failure(
+                        "timeout (CPU with child processes)",
+                        f"{result['cpu_seconds']:.1f} CPU-s, {children:.1f} of them in children",
+                    ),
+                    "seconds": result["seconds"],
+                    "cpu_seconds": result["cpu_seconds"],
+                }
             shutil.rmtree(scratch / "run", ignore_errors=True)
             connection.send(result)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _children_cpu_seconds() -> float:
+    """User and system CPU seconds of this process's waited-for children."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def _cpu_seconds(pid: int) -> float:
@@ -1351,11 +1370,12 @@ class Pool:
             if not busy:
                 return
             # The worker's own alarm counts CPU seconds; past 1.5 times the
-            # budget in CPU (stuck in C code), or ten minutes of wall clock
-            # (blocked, using no CPU), it is killed. Wall clock alone would
-            # kill runs that a busy shared machine merely slowed down.
+            # budget in CPU (stuck in C code), or three times the budget plus
+            # a minute of wall clock (blocked, using no CPU: a hang), it is
+            # killed. The wall-clock margin lets a busy shared machine slow a
+            # run down without its being called hung.
             hard_cpu = self.time_budget * 1.5 + 10
-            hard_wall = max(self.time_budget * 30, 600.0)
+            hard_wall = self.time_budget * 3 + 60
             ready = wait([w.connection for w in busy], 1.0)
             for worker in busy:
                 task = worker.task
@@ -1378,10 +1398,12 @@ class Pool:
                         self._replace(worker)  # a fresh process after any failure
                     yield task, result
                 elif (
-                    _cpu_seconds(worker.process.pid) - worker.cpu_started > hard_cpu
-                    or time.monotonic() - worker.started > hard_wall
-                ):
-                    result = failure("timeout (hard kill, no Python frame)", "killed")
+                    over_cpu := _cpu_seconds(worker.process.pid) - worker.cpu_started > hard_cpu
+                ) or time.monotonic() - worker.started > hard_wall:
+                    result = failure(
+                        "timeout (hard kill, no Python frame)" if over_cpu else "hang (wall clock)",
+                        "killed",
+                    )
                     result["seconds"] = time.monotonic() - worker.started
                     worker.task = None
                     self._replace(worker)
