@@ -47,7 +47,7 @@ XML text or attribute  document size   X3D: one attribute may fill the document
                                        stays for documents in an encoding other
                                        than UTF-8 / ASCII / ISO-8859 / windows-125x
 USD text parse         512 MiB + 64 B      each ``.usda`` layer, parsed first in a child
-                       per byte; 20 s  process held to this memory and CPU time
+                       per byte; 10 s  process held to this memory and CPU time
                        + 1 s per MB    (usd-core's parser can take gigabytes on a
                                        malformed file)
 entity declarations    none            X3D: ``<!ENTITY`` in the bytes is refused
@@ -55,6 +55,11 @@ entity declarations    none            X3D: ``<!ENTITY`` in the bytes is refused
 nodes                  2,000,000       X3D nodes after DEF/USE, Inline and PROTO
                                        expansion, counted over every copy
 PROTO expansions       10,000          ProtoInstance copies per document
+lights                 10,000          lights of a scene as read, every copy
+                                       counted (X3D, glTF, USD)
+casting lights         100             lights whose shadows ``add_shadows`` bakes
+                                       when none is named: the first ones cast,
+                                       with a note (``--light NAME`` chooses)
 Inline depth           16              nested X3D Inlines
 Extrusion              20,000,000      vertices (spine points x cross-section
                                        points) of one Extrusion
@@ -114,6 +119,12 @@ MAX_XML_DEPTH = 256
 MAX_NESTING = MAX_XML_DEPTH
 MAX_NODES = 2_000_000
 MAX_PROTO_EXPANSIONS = 10_000
+# Lights of a scene as read: each is a node of the output, and a fuzzed file
+# that copies one 30,000 times took 11 CPU-s to read and write.
+MAX_LIGHTS = 10_000
+# Lights whose shadows add_shadows bakes unless the caller names them: each
+# is a shadow pass over every caster and receiver.
+MAX_CASTING_LIGHTS = 100
 MAX_INLINE_DEPTH = 16
 MAX_EXTRUSION_POINTS = 20_000_000
 MAX_SPHERE_SEGMENTS = 2048
@@ -164,6 +175,25 @@ def check_triangles(count: int, path: str, limit: int | None = None) -> None:
             "a trusted file)",
             path=path,
         )
+
+
+def lights_message(count: int) -> str:
+    """Why a scene with ``count`` lights (more than :data:`MAX_LIGHTS`) is refused."""
+    return f"more than {MAX_LIGHTS:,} lights ({count:,} so far; shadowgeo.limits.MAX_LIGHTS)"
+
+
+def check_lights(count: int, path: str) -> None:
+    """Raise :class:`SceneError` for ``path`` when a scene has ``count``
+    lights, more than :data:`MAX_LIGHTS`.
+
+    >>> check_lights(MAX_LIGHTS, "city.glb")
+    >>> check_lights(MAX_LIGHTS + 1, "city.glb")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    shadowgeo.errors.SceneError: city.glb: more than 10,000 lights (10,001 so far; ...)
+    """
+    if count > MAX_LIGHTS:
+        raise SceneError(lights_message(count), path=path)
 
 
 def check_coordinates(points: ArrayLike, what: str) -> None:

@@ -425,3 +425,54 @@ def test_gltf_node_matrix_that_is_no_rigid_transform_is_a_scene_error(tmp_path):
     source.write_text(json.dumps(document))
     with pytest.raises(sg.SceneError, match="not a rotation, scale and translation"):
         sg.load(source)
+
+
+# -- fuzz wrl 6519: a light copied 10,000 times ---------------------------------------------
+
+
+def _lit_scene(count: int) -> sg.Scene:
+    box = sg.Shape(
+        [[0, 1, 0], [1, 1, 0], [0, 1, 1], [0, 2, 0]],
+        [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        name="block",
+    )
+    floor = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]], [[0, 2, 1], [0, 3, 2]])
+    lights = [
+        sg.SceneLight(sg.PointLight([0.1 * k, 6, 0.2]), name=f"lamp{k}") for k in range(count)
+    ]
+    return sg.Scene([floor, box], lights)
+
+
+@pytest.mark.parametrize("suffix", [".x3d", ".x3dv", ".x3dj", ".glb", ".usda"])
+def test_a_scene_with_more_lights_than_the_budget_is_refused_by_every_reader(
+    tmp_path, monkeypatch, suffix
+):
+    path = tmp_path / f"lamps{suffix}"
+    sg.save(_lit_scene(4), path)
+    monkeypatch.setattr(limits, "MAX_LIGHTS", 4)
+    assert len(sg.load(path).lights) == 4
+    monkeypatch.setattr(limits, "MAX_LIGHTS", 3)
+    with pytest.raises(sg.SceneError, match=r"more than 3 lights .*MAX_LIGHTS") as refused:
+        sg.load(path)
+    assert str(path) in str(refused.value)
+
+
+def test_a_vrml_file_of_ten_thousand_and_one_lights_is_refused_naming_the_line(tmp_path):
+    # The campaign's mutant held 30,006 DirectionalLights in 2.4 MB and took
+    # 11 CPU-s to read and write; the budget stops it where it passes 10,000.
+    light = "DirectionalLight { direction 0 -1 0 }\n"
+    path = tmp_path / "lamps.wrl"
+    path.write_text("#VRML V2.0 utf8\n" + light * (limits.MAX_LIGHTS + 1))
+    with pytest.raises(sg.SceneError, match="more than 10,000 lights") as refused:
+        sg.load(path)
+    assert f"line {limits.MAX_LIGHTS + 2}" in str(refused.value)
+
+
+def test_at_most_the_casting_budget_of_lights_cast_with_a_note(monkeypatch):
+    monkeypatch.setattr(limits, "MAX_CASTING_LIGHTS", 2)
+    result = sg.add_shadows(_lit_scene(3), surfaces=False)
+    groups = sorted({shape.group for shape in result.shapes_with_role("shadow")})
+    assert groups == ["shadows_lamp0", "shadows_lamp1"]
+    assert any("3 lights would cast; the first 2" in note for note in result.warnings)
+    named = sg.add_shadows(_lit_scene(3), lights=["lamp0", "lamp1", "lamp2"], surfaces=False)
+    assert len({shape.group for shape in named.shapes_with_role("shadow")}) == 3

@@ -30,6 +30,7 @@ from urllib.parse import unquote
 import numpy as np
 import trimesh
 
+from .. import limits
 from ..errors import SceneError
 from ..scene import Material, Scene, Shape
 from ..scene.model import Viewpoint, axis_angle
@@ -339,6 +340,7 @@ def _read_lights(
             continue
         world, _ = graph.get(frame)
         extras = shadowgeo_extras(node)
+        limits.check_lights(len(scene.lights) + 1, str(scene.path))
         scene.lights.append(
             scene_light(entries[reference["light"]], np.asarray(world), node.get("name"), extras)
         )

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import limits
 from ..errors import SceneError
 from ..lights import DirectionalLight, Light, PointLight, SpotLight
 from ..polygons import polygons_triangles
@@ -226,6 +227,7 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
     intensity = _finite(usd_light.GetIntensityAttr().Get(time) or 0.0, "intensity", path, where)
     ambient = _finite(custom(prim, "ambientIntensity", 0.0), "ambientIntensity", path, where)
     attenuation = custom(prim, "attenuation", (1.0, 0.0, 0.0))
+    limits.check_lights(len(scene.lights) + 1, str(path))
     scene.lights.append(
         SceneLight(
             light,

@@ -229,6 +229,8 @@ class _Reader:
         elif tag == "Shape":
             self.shape(context, element, matrix, name)
         elif tag in LIGHTS:
+            if len(self.lights) >= limits.MAX_LIGHTS:
+                raise context.error(element, limits.lights_message(len(self.lights) + 1))
             light = scene_light(context, element, matrix)
             if light is not None:
                 self.lights.append(light)

@@ -387,12 +387,20 @@ def _select_lights(
         return [sun]
     chosen = [light for light in lit if light.shadows]
     if not chosen:
-        listed = ", ".join(_Names.light(light, i) for i, light in enumerate(lit))
+        listed = ", ".join(_Names.light(light, i) for i, light in enumerate(lit[:10]))
+        more = f", and {len(lit) - 10:,} more" if len(lit) > 10 else ""
         notes.append(
             f'shadows: no light has shadows="true"; all {len(lit)} lights that are on cast '
-            f"shadows ({listed})"
+            f"shadows ({listed}{more})"
         )
         chosen = lit
+    if len(chosen) > limits.MAX_CASTING_LIGHTS:
+        notes.append(
+            f"shadows: {len(chosen):,} lights would cast; the first "
+            f"{limits.MAX_CASTING_LIGHTS} in the scene's order do (each is a shadow pass; "
+            "shadowgeo.limits.MAX_CASTING_LIGHTS; --light NAME chooses)"
+        )
+        chosen = chosen[: limits.MAX_CASTING_LIGHTS]
     return chosen
 
 
