@@ -235,7 +235,10 @@ def test_a_two_sided_wall_receives_on_the_lit_side_and_a_solid_one_only_in_front
     assert shadows(sg.add_shadows(sg.Scene([solid, cube], [light(lamp)]), receivers=["wall"])) == []
     wall = sg.Shape(corners, QUAD, name="wall", solid=False)
     result = sg.add_shadows(sg.Scene([wall, cube], [light(lamp)]), offset=0.0)
-    (shadow,) = shadows(result)
+    # a wall is no floor: the ground plane under the scene receives too
+    assert [s.name for s in shadows(result)] == ["shadow_lamp_wall", "shadow_lamp_ground"]
+    assert any("is a floor under the scene" in note for note in result.warnings)
+    shadow = shadows(result)[0]
     assert np.all(shadow.world_vertices[:, 0] == 0.0)
     corners = ray_plane(box_corners([1, 1, -0.5], [2, 2, 0.5]), lamp, np.array([1, 0, 0]), 0.0)
     expected = shapely.MultiPoint(corners[:, 1:]).convex_hull.intersection(shapely.box(0, -3, 3, 3))
@@ -463,3 +466,54 @@ def test_a_lone_closed_caster_still_gets_the_ground_plane():
     result = sg.add_shadows(sg.Scene([sg.Shape(ball.vertices, ball.faces, name="ball")], [sun]))
     names = [s.name for s in result.shapes_with_role("shadow")]
     assert "shadow_sun_ground" in names
+
+
+def test_a_table_top_is_no_floor_so_the_ground_plane_receives_too():
+    # The top (y 1..1.1) is found as a receiver (a vase stands on it), but it
+    # is no floor under the scene: the ground plane under the legs receives
+    # too, and a sun straight down darkens exactly the top's 4 x 4 footprint.
+    top = box([-2, 1, -2], [2, 1.1, 2], "top")
+    legs = [
+        box([x, 0, z], [x + 0.1, 1, z + 0.1], f"leg{k}")
+        for k, (x, z) in enumerate([(-2, -2), (1.9, -2), (-2, 1.9), (1.9, 1.9)])
+    ]
+    vase = box([-0.2, 1.1, -0.2], [0.2, 1.6, 0.2], "vase")
+    sun = sg.SceneLight(sg.DirectionalLight([0, -1, 0]), name="sun", shadows=True)
+    result = sg.add_shadows(sg.Scene([top, *legs, vase], [sun]), surfaces=False)
+    by_name = {s.name: s for s in result.shapes_with_role("shadow")}
+    (on_top,) = [name for name in by_name if name.startswith("shadow_sun_top")]
+    assert set(by_name) == {on_top, "shadow_sun_ground"}
+    assert any("none of the receivers found is a floor" in n for n in result.warnings)
+    ground_shadow = by_name["shadow_sun_ground"]
+    assert np.all(ground_shadow.world_vertices[:, 1] > 0)  # lifted off y = 0, barely
+    assert np.all(ground_shadow.world_vertices[:, 1] < 0.01)
+    for name, area in ((on_top, 0.16), ("shadow_sun_ground", 16.0)):
+        region, summed = xz_union(by_name[name])
+        assert region.area == pytest.approx(area, rel=1e-12)
+        assert summed == pytest.approx(area, rel=1e-12)  # no triangle overlaps another
+
+
+def test_a_ground_slab_that_a_sunken_post_reaches_under_is_the_floor():
+    # The slab's top (y = 0) is found; a post sunk 1 below it makes the scene's
+    # lowest point lie under the slab, where the ground plane would be hidden.
+    slab = box([-10, -1, -10], [10, 0, 10], "slab")
+    post = box([-0.5, -1, -0.5], [0.5, 3, 0.5], "post")
+    sun = sg.SceneLight(sg.DirectionalLight([0.4, -1, 0.3]), name="sun", shadows=True)
+    result = sg.add_shadows(sg.Scene([slab, post], [sun]), surfaces=False)
+    assert [s.name for s in result.shapes_with_role("shadow")] == ["shadow_sun_slab"]
+    assert not any("floor" in note for note in result.warnings)
+
+
+def test_an_open_shell_over_the_scene_is_no_terrain():
+    # A box without its +x side (a car's body, seen from outside) spans the
+    # scene like a terrain, but its faces cover its plan twice (top and
+    # bottom): it is a shell, so the ground plane under it receives, where
+    # the hills take the shadows themselves.
+    shell = trimesh.creation.box(bounds=[[-3, 0.5, -3], [3, 2, 3]])
+    keep = shell.face_normals[:, 0] < 0.5
+    shell = sg.Shape(shell.vertices, shell.faces[keep], name="shell", solid=True)
+    sun = sg.SceneLight(sg.DirectionalLight([0.4, -1, 0.3]), name="sun", shadows=True)
+    result = sg.add_shadows(sg.Scene([shell], [sun]))
+    names = [s.name for s in result.shapes_with_role("shadow")]
+    assert "shadow_sun_ground" in names
+    assert not any("spans the scene" in note for note in result.warnings)

@@ -19,7 +19,10 @@ shapes:
   of the shape's area, else it is not planar;
 * a plane ``a x + b y + c z + d = 0``: unbounded, lit from either side;
 * when none is found: the ground plane under the scene's lowest point (along
-  its up axis), unbounded, lit from above, with a note.
+  its up axis), unbounded, lit from above, with a note. The ground plane also
+  receives, besides those found, when none of them is a floor under the scene
+  (:func:`is_floor`): a car's flat hood or a facade's wall is found, but the
+  shadow a reader looks for is the one on the ground.
 
 A patch of a ``solid`` shape receives only on its front (the side its
 triangles face, as a renderer culls the back); a patch of a ``solid="false"``
@@ -52,6 +55,14 @@ NAMED_FRACTION = 0.1
 # Receivers found automatically, at most (the largest): each unites every
 # caster's shadow in its own plane.
 MAX_FOUND = 8
+# A found receiver is a floor under the scene when it faces up within this
+# angle's cosine (30 degrees) and its highest point lies within this fraction
+# of the scene's height above the scene's lowest point, or it lies in the
+# scene's lower half and covers this fraction of its plan or its lowest vertex
+# (see is_floor); without one, the ground plane receives too.
+FLOOR_COSINE = 0.866
+FLOOR_FRACTION = 0.1
+FLOOR_COVER = 0.5
 # Patches looked for per shape (largest triangles first).
 _MAX_PATCHES = 64
 # Side of the cells of the normal histogram (unit-normal components), and the
@@ -163,25 +174,81 @@ def patches(
     return found
 
 
+def _up_axis(scene: Scene) -> int:
+    return 2 if (scene.up_axis or "Y").upper() == "Z" else 1
+
+
 def ground(
-    scene: Scene, geometry: list[Shape], notes: list[str], bounds: np.ndarray | None = None
+    scene: Scene,
+    geometry: list[Shape],
+    notes: list[str],
+    bounds: np.ndarray | None = None,
+    besides: Sequence[Receiver] = (),
 ) -> Receiver:
-    """The receiver when none is found: the unbounded ground plane through the
-    lowest point of the geometry (height along the scene's up axis), facing
-    up, with a note. ``bounds``: the geometry's world box, when known."""
-    axis = 2 if (scene.up_axis or "Y").upper() == "Z" else 1
+    """The unbounded ground plane through the lowest point of the geometry
+    (height along the scene's up axis), facing up, with a note: the receiver
+    when none is found, or when those found (``besides``) hold no floor under
+    the scene. ``bounds``: the geometry's world box, when known."""
+    axis = _up_axis(scene)
     if bounds is None and geometry:
         bounds = bounding_box(np.concatenate([shape.world_vertices for shape in geometry]))
     lowest = float(bounds[0, axis]) if bounds is not None else 0.0
     normal = np.zeros(3)
     normal[axis] = 1.0
     name = "xyz"[axis]
-    notes.append(
-        "shadows: no receiver found (no large flat surface with something in front of it); "
-        f"the ground plane {name} = {lowest:.6g} under the scene's lowest point receives "
-        "(--receiver DEF or --plane a,b,c,d chooses another)"
-    )
+    plane = f"the ground plane {name} = {lowest:.6g} under the scene's lowest point receives"
+    if besides:
+        notes.append(
+            f"shadows: none of the receivers found is a floor under the scene; {plane} too "
+            "(--receiver DEF or --plane a,b,c,d chooses others)"
+        )
+    else:
+        notes.append(
+            "shadows: no receiver found (no large flat surface with something in front of "
+            f"it); {plane} (--receiver DEF or --plane a,b,c,d chooses another)"
+        )
     return Receiver(Plane(normal, -lowest), "ground", two_sided=False)
+
+
+def is_floor(receiver: Receiver, bounds: np.ndarray, lowest: np.ndarray, axis: int) -> bool:
+    """Whether a found ``receiver`` is a floor under the scene whose world box
+    is ``bounds`` and whose lowest vertex is ``lowest``: it faces up (within
+    :data:`FLOOR_COSINE`; either way for a two-sided patch) and either its
+    highest point is within :data:`FLOOR_FRACTION` of the scene's height above
+    the scene's lowest point, or it lies in the lower half of the scene and
+    covers :data:`FLOOR_COVER` of the scene's plan or the lowest vertex in
+    plan (a ground slab that a foundation, a basement or a sunken object
+    reaches under: what lies below it is hidden by it).
+
+    >>> tile = np.array([[[0, 0, 0], [2, 0, 0], [0, 0, 2]]], dtype=float)
+    >>> floor = Receiver(Plane([0, 1, 0], 0.0), "floor", tile, two_sided=False, area=2.0)
+    >>> box, under, aside = np.array([[0.0, 0, 0], [2, 4, 1]]), [0.5, 0, 0.5], [3, 0, 3]
+    >>> [is_floor(floor, box + [0, dy, 0], under, 1) for dy in (0, -0.5, -1, -2, -3)]
+    [True, True, True, True, False]
+    >>> floor.area = 0.5  # a quarter of the plan
+    >>> [is_floor(floor, box + [0, dy, 0], aside, 1) for dy in (0, -0.4, -0.5)]
+    [True, True, False]
+    >>> is_floor(floor, box + [0, -1, 0], under, 1)
+    True
+    """
+    if receiver.triangles is None:
+        return True  # an unbounded plane: it is the floor
+    up = float(receiver.plane.normal[axis])
+    if (abs(up) if receiver.two_sided else up) < FLOOR_COSINE:
+        return False
+    across = [k for k in range(3) if k != axis]
+    height = float(bounds[1, axis] - bounds[0, axis])
+    above = float(receiver.triangles[..., axis].max() - bounds[0, axis])
+    if above <= FLOOR_FRACTION * height:
+        return True
+    if above > 0.5 * height:
+        return False
+    plan = float(np.prod(bounds[1, across] - bounds[0, across]))
+    if receiver.area * abs(up) >= FLOOR_COVER * plan:
+        return True
+    corners = receiver.triangles[..., across].reshape(-1, 2)
+    point = np.asarray(lowest, dtype=np.float64)[across]
+    return bool(np.all(corners.min(axis=0) <= point) and np.all(point <= corners.max(axis=0)))
 
 
 def select(
@@ -495,4 +562,8 @@ def found(
             f"shadows: {len(qualify) - MAX_FOUND} more flat surfaces qualify as receivers; "
             f"the {MAX_FOUND} largest receive (--receiver DEF names others)"
         )
+    axis = _up_axis(scene)
+    lowest = stacked.vertices[int(np.argmin(stacked.vertices[:, axis]))]
+    if ground_fallback and not any(is_floor(r, bounds, lowest, axis) for r in result):
+        result.append(ground(scene, geometry, notes, bounds, besides=result))
     return result

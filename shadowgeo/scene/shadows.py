@@ -77,6 +77,10 @@ _RECEIVER_SIZE_FRACTION = 0.25
 # An open shape at least this fraction of the scene's width in both horizontal
 # directions is a terrain: it receives in place of a fallback ground plane.
 _TERRAIN_SPAN = 0.9
+# ... when it is a height field: its faces, projected down, cover its footprint
+# (its box's) at most this many times over (a car's open shell covers it twice:
+# roof and floor).
+_TERRAIN_COVER = 1.25
 # Default lift of shadows off their receiver, relative to the scene's size.
 _DEFAULT_OFFSET = 1e-3
 # The sun that casts in a scene with no light that is on, for a Y-up scene:
@@ -281,9 +285,10 @@ def add_shadows(
 
 
 def _terrain(stacked: CasterSet, up_axis: str | None) -> str | None:
-    """The name of an open shape spanning the scene's whole width (a terrain,
-    a curved floor), or None. When every surface receives, it takes the
-    shadows in place of a fallback ground plane, which under it would only
+    """The name of an open shape spanning the scene's whole width that is a
+    height field (a terrain, a curved floor: its faces projected down cover
+    its footprint about once), or None. When every surface receives, it takes
+    the shadows in place of a fallback ground plane, which under it would only
     show as a dark rim along its edges."""
     if not len(stacked):
         return None
@@ -295,9 +300,15 @@ def _terrain(stacked: CasterSet, up_axis: str | None) -> str | None:
     if not spans.any() or not np.all(width > 0):
         return None
     terrain = np.flatnonzero(spans & ~stacked.closed)  # closedness only when it can matter
-    if not len(terrain):
-        return None
-    return stacked.casters[int(terrain[0])].name
+    for index in terrain:
+        caster = stacked.casters[int(index)]
+        corners = caster.vertices[caster.shape.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        covered = 0.5 * float(np.abs(normals[:, axis]).sum())
+        footprint = float(np.prod((stacked.high - stacked.low)[index, across]))
+        if covered <= _TERRAIN_COVER * footprint:
+            return caster.name
+    return None
 
 
 def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
