@@ -326,3 +326,8 @@ def test_a_text_layer_is_parsed_within_a_budget_first(tmp_path, monkeypatch):
     crate = tmp_path / "scene.usdc"  # a crate layer is not parsed as text
     sg.save(scene, crate)
     assert len(sg.load(crate).shapes) == 1
+    # nor is a small text layer (the child would cost more than the parse)
+    small = tmp_path / "small.usda"
+    sg.save(sg.Scene([sg.Shape([[0, 0, 0], [1, 0, 0], [0, 0, 1]], [[0, 2, 1]])]), small)
+    assert path.stat().st_size > limits.USD_TEXT_CHECK_BYTES >= small.stat().st_size
+    assert len(sg.load(small).shapes) == 1

@@ -9,7 +9,9 @@ limited (:data:`~shadowgeo.limits.USD_TEXT_MEMORY` and friends); only a layer
 it parsed within them is opened by the caller. A fresh process, not a fork:
 usd-core's worker threads, once started, would leave a forked child waiting
 on locks for ever. A crate (``.usdc``) layer is read by offsets and is not
-checked. Without the ``resource`` module (Windows) the check is skipped.
+checked, nor is a text layer of at most
+:data:`~shadowgeo.limits.USD_TEXT_CHECK_BYTES` (the child costs about 0.35 s
+to start). Without the ``resource`` module (Windows) the check is skipped.
 """
 
 from __future__ import annotations
@@ -69,6 +71,8 @@ def parse_within_budget(path: Path) -> None:
     if sys.platform == "win32" or not is_text_layer(path):
         return
     size = path.stat().st_size
+    if size <= limits.USD_TEXT_CHECK_BYTES:
+        return
     memory = limits.USD_TEXT_MEMORY + limits.USD_TEXT_MEMORY_PER_BYTE * size
     seconds = limits.USD_TEXT_SECONDS + size // limits.USD_TEXT_BYTES_PER_SECOND
     command = [sys.executable, "-c", _CHILD, str(memory), str(seconds), str(path)]
