@@ -63,6 +63,9 @@ MAX_FOUND = 8
 FLOOR_COSINE = 0.866
 FLOOR_FRACTION = 0.1
 FLOOR_COVER = 0.5
+# A found receiver is also a floor when it is a side of the scene's box turned
+# inwards, within this fraction of the box's extent, whichever axis is up.
+BOUNDING_FRACTION = 0.2
 # Patches looked for per shape (largest triangles first).
 _MAX_PATCHES = 64
 # Side of the cells of the normal histogram (unit-normal components), and the
@@ -210,6 +213,45 @@ def ground(
     return Receiver(Plane(normal, -lowest), "ground", two_sided=False)
 
 
+def bounds_the_scene(receiver: Receiver, bounds: np.ndarray) -> bool:
+    """Whether a found ``receiver`` is a side of the scene's world box
+    ``bounds``, turned inwards: its plane is within :data:`FLOOR_COSINE` of
+    an axis, it lies within :data:`BOUNDING_FRACTION` of the box's extent of
+    one of the box's faces across that axis, faces into the box (either way
+    for a two-sided patch) and covers :data:`FLOOR_COVER` of that face. Such a
+    patch is the scene's floor whichever axis is up: many VRML files exported
+    from Z-up tools are read as Y-up.
+
+    >>> tile = np.array([[[0, 0, 0], [2, 0, 0], [0, 0, 2]]], dtype=float)
+    >>> wall = Receiver(Plane([0, 0, 1], 0.0), "wall", tile[..., [0, 2, 1]], area=2.0)
+    >>> box = np.array([[0.0, 0.0, 0.0], [2.0, 2.0, 3.0]])
+    >>> bounds_the_scene(wall, box), bounds_the_scene(wall, box - [0, 0, 1.5])
+    (True, False)
+    >>> wall.two_sided = False
+    >>> bounds_the_scene(wall, box), bounds_the_scene(wall, box - [0, 0, 3])
+    (True, False)
+    """
+    if receiver.triangles is None:
+        return True
+    normal = receiver.plane.normal
+    k = int(np.argmax(np.abs(normal)))
+    if abs(float(normal[k])) < FLOOR_COSINE:
+        return False
+    extent = bounds[1] - bounds[0]
+    across = [j for j in range(3) if j != k]
+    face = float(np.prod(extent[across]))
+    if not receiver.area * abs(float(normal[k])) >= FLOOR_COVER * face:
+        return False
+    heights = receiver.triangles[..., k]
+    near = BOUNDING_FRACTION * float(extent[k])
+    inward_up = receiver.two_sided or normal[k] > 0
+    inward_down = receiver.two_sided or normal[k] < 0
+    return bool(
+        (inward_up and float(heights.max() - bounds[0, k]) <= near)
+        or (inward_down and float(bounds[1, k] - heights.min()) <= near)
+    )
+
+
 def is_floor(receiver: Receiver, bounds: np.ndarray, lowest: np.ndarray, axis: int) -> bool:
     """Whether a found ``receiver`` is a floor under the scene whose world box
     is ``bounds`` and whose lowest vertex is ``lowest``: it faces up (within
@@ -233,6 +275,8 @@ def is_floor(receiver: Receiver, bounds: np.ndarray, lowest: np.ndarray, axis: i
     """
     if receiver.triangles is None:
         return True  # an unbounded plane: it is the floor
+    if bounds_the_scene(receiver, bounds):
+        return True  # a floor, whichever way is up (a Z-up file read as Y-up)
     up = float(receiver.plane.normal[axis])
     if (abs(up) if receiver.two_sided else up) < FLOOR_COSINE:
         return False
