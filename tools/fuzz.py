@@ -278,9 +278,13 @@ def mutate_meaning(data: bytes, encoding: str, rng: random.Random):
             if re.fullmatch(rb"[\s,]*", data[run[-1].end() : match.start()]) is None:
                 break
             run.append(match)
-        for match in reversed(run):
-            data = data[: match.start()] + value + data[match.end() :]
-        return data, f"meaning:field={value.decode()}"
+        # one join, not one copy of the whole file per number: after a count
+        # mutation a run can hold a million numbers
+        pieces, done = [], 0
+        for match in run:
+            pieces += [data[done : match.start()], value]
+            done = match.end()
+        return b"".join([*pieces, data[done:]]), f"meaning:field={value.decode()}"
     # count: a run of numbers repeated many times (a huge index or point list)
     match = rng.choice(numbers)
     end = min(len(data), match.end() + rng.randint(10, 400))
