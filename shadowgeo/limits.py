@@ -46,10 +46,11 @@ XML text or attribute  document size   X3D: one attribute may fill the document
                                        libxml2's 10 MB limit for untrusted input
                                        stays for documents in an encoding other
                                        than UTF-8 / ASCII / ISO-8859 / windows-125x
-USD text parse         512 MiB + 64 B      each ``.usda`` layer over 64 KiB, parsed first
-                       per byte; 10 s  in a child process held to this memory and
-                       + 1 s per MB    CPU time (usd-core's parser can take
-                                       gigabytes on a malformed file)
+USD layer check        512 MiB + 64 B      each ``.usda`` layer over 64 KiB and each
+                       per byte; 10 s  ``.usdc`` crate (every value unpacked), read
+                       + 1 s per MB    first in a child process held to this memory
+                                       and CPU time (a malformed text layer can take
+                                       gigabytes; a corrupt crate can abort usd-core)
 entity declarations    none            X3D: ``<!ENTITY`` in the bytes is refused
                                        before libxml2 parses anything
 nodes                  2,000,000       X3D nodes after DEF/USE, Inline and PROTO

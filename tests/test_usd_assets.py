@@ -321,11 +321,17 @@ def test_a_text_layer_is_parsed_within_a_budget_first(tmp_path, monkeypatch):
     assert len(sg.load(path).shapes) == 1  # within the default budget
     monkeypatch.setattr(limits, "USD_TEXT_MEMORY", 1)
     monkeypatch.setattr(limits, "USD_TEXT_MEMORY_PER_BYTE", 0)
-    with pytest.raises(sg.SceneError, match=r"scene\.usda.*(needs more than|not a USD file)"):
+    refusal = r"(needs more than|not a USD file|stopped with signal)"
+    with pytest.raises(sg.SceneError, match=r"scene\.usda.*" + refusal):
         sg.load(path)
-    crate = tmp_path / "scene.usdc"  # a crate layer is not parsed as text
+    crate = tmp_path / "scene.usdc"  # a crate is checked whatever its size (it can abort)
     sg.save(scene, crate)
+    with pytest.raises(sg.SceneError, match=r"scene\.usdc.*" + refusal):
+        sg.load(crate)
+    monkeypatch.undo()
     assert len(sg.load(crate).shapes) == 1
+    monkeypatch.setattr(limits, "USD_TEXT_MEMORY", 1)
+    monkeypatch.setattr(limits, "USD_TEXT_MEMORY_PER_BYTE", 0)
     # nor is a small text layer (the child would cost more than the parse)
     small = tmp_path / "small.usda"
     sg.save(sg.Scene([sg.Shape([[0, 0, 0], [1, 0, 0], [0, 0, 1]], [[0, 2, 1]])]), small)

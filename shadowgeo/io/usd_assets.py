@@ -150,6 +150,8 @@ def layer_assets(layer: Any) -> list[tuple[str, str]]:
     prims = list(layer.rootPrims)
     while prims:
         prim = prims.pop()
+        if prim is None:  # a variant without its prim spec: a corrupt crate
+            continue
         found.extend(_arcs_and_clips(prim))
         prims.extend(prim.nameChildren)
         for variant_set in prim.variantSets.values():

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -39,7 +40,7 @@ def _world(xformable: Any, time: Any, path: Path) -> np.ndarray:
     is not finite."""
     Tf = pxr()[2]
     prim = xformable.GetPrim()
-    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+    where = _where(prim)
     try:
         world = np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
     except Tf.ErrorException as error:
@@ -90,15 +91,38 @@ def _triangles(
     return np.concatenate(pieces).astype(np.int64)[order], dropped
 
 
-def _points(mesh: Any, time: Any) -> np.ndarray:
+def _array(attribute: Any, time: Any, dtype: Any, path: Path, where: str) -> np.ndarray:
+    """The attribute's value at ``time`` as a flat-or-nested numpy array of
+    ``dtype`` (empty when unset); a SceneError naming it when the value is of
+    another type (a corrupt crate can hold a token where numbers belong)."""
+    value = attribute.Get(time)
+    try:
+        return np.array(value or [], dtype=dtype)
+    except (TypeError, ValueError):
+        raise SceneError(
+            f"{attribute.GetName()} holds {type(value).__name__}, not numbers",
+            path=str(path),
+            node=where,
+        ) from None
+
+
+def _points(mesh: Any, time: Any, path: Path, where: str) -> np.ndarray:
     """(n, 3) float64 points: the writer's exact ``shadowgeo:points`` while
     they still match ``points`` (what other tools see and may have edited)."""
-    points = np.array(mesh.GetPointsAttr().Get(time) or [], dtype=np.float64).reshape(-1, 3)
+    points = _array(mesh.GetPointsAttr(), time, np.float64, path, where)
+    if points.size % 3:
+        raise SceneError(f"points hold {points.size} numbers", path=str(path), node=where)
+    points = points.reshape(-1, 3)
     exact = custom(mesh.GetPrim(), "points")
     if exact is not None:
-        exact = np.array(exact, dtype=np.float64).reshape(-1, 3)
-        if exact.shape == points.shape and np.array_equal(exact.astype(np.float32), points):
-            return exact
+        try:
+            exact = np.array(exact, dtype=np.float64)
+        except (TypeError, ValueError):
+            return points  # not the writer's
+        if exact.size == points.size:  # else not the writer's (a corrupt or edited file)
+            exact = exact.reshape(-1, 3)
+            if np.array_equal(exact.astype(np.float32), points):
+                return exact
     return points
 
 
@@ -107,8 +131,8 @@ def _polygons(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``faceVertexCounts`` and ``faceVertexIndices`` as int64 arrays, checked
     to agree with each other and with the ``n_points`` points."""
-    counts = np.array(mesh.GetFaceVertexCountsAttr().Get(time) or [], dtype=np.int64)
-    indices = np.array(mesh.GetFaceVertexIndicesAttr().Get(time) or [], dtype=np.int64)
+    counts = _array(mesh.GetFaceVertexCountsAttr(), time, np.int64, path, where)
+    indices = _array(mesh.GetFaceVertexIndicesAttr(), time, np.int64, path, where)
     if len(counts) and counts.min() < 0:
         raise SceneError(f"faceVertexCounts holds {int(counts.min())}", path=str(path), node=where)
     if counts.sum() != len(indices):
@@ -161,8 +185,8 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
     triangulated polygons, material, world transform and shadowgeo fields."""
     UsdGeom = pxr()[4]
     mesh = UsdGeom.Mesh(prim)
-    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
-    points = _points(mesh, time)
+    where = _where(prim)
+    points = _points(mesh, time, path, where)
     counts, indices = _polygons(mesh, time, len(points), path, where)
     holes = mesh.GetHoleIndicesAttr().Get(time) or []
     faces, dropped = _triangles(points, counts, indices, holes)
@@ -222,7 +246,7 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
             light = PointLight(world[:3, 3], radius)
     shadow = UsdLux.ShadowAPI(prim).GetShadowEnableAttr().Get(time)
     visibility = usd_light.ComputeVisibility(time)
-    where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
+    where = _where(prim)
     color = _finite(usd_light.GetColorAttr().Get(time) or (1, 1, 1), "color", path, where)
     intensity = _finite(usd_light.GetIntensityAttr().Get(time) or 0.0, "intensity", path, where)
     ambient = _finite(custom(prim, "ambientIntensity", 0.0), "ambientIntensity", path, where)
@@ -276,8 +300,36 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
         raise SceneError("no such file", path=str(path))
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     notes: list[str] = []
-    check_assets(path, notes)
-    stage = opened(Usd.Stage.Open, path, "cannot open")
+    try:
+        check_assets(path, notes)
+        stage = opened(Usd.Stage.Open, path, "cannot open")
+        scene = _stage_scene(stage, path, notes)
+    except Tf.ErrorException as error:
+        # usd-core reads a crate's values lazily: corrupt data surfaces here
+        raise SceneError(f"corrupt USD data: {_message(error)}", path=str(path)) from None
+    except UnicodeDecodeError:
+        raise SceneError("corrupt USD data: text that is not UTF-8", path=str(path)) from None
+    return scene
+
+
+def _where(prim: Any) -> str:
+    """``Type </path>`` of a prim, for messages; a corrupt crate's names may
+    not be UTF-8."""
+    try:
+        return f"{prim.GetTypeName()} <{prim.GetPath()}>"
+    except UnicodeDecodeError:
+        return "a prim whose name is not UTF-8"
+
+
+def _message(error: Exception) -> str:
+    """usd-core's message without its C++ function, line and file."""
+    text = error_text(error)
+    found = re.fullmatch(r"Error in '.*?' at line \d+ in file \S+ : '(.*)'", text, re.S)
+    return found.group(1) if found else text
+
+
+def _stage_scene(stage: Any, path: Path, notes: list[str]) -> Scene:
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     up = UsdGeom.GetStageUpAxis(stage)
     scene = Scene(
         path=str(path),
@@ -289,22 +341,38 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
     time = Usd.TimeCode.EarliestTime()
     indices: list[int | None] = []
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
-        where = f"{prim.GetTypeName()} <{prim.GetPath()}>"
-        if prim.IsA(UsdGeom.Mesh):
-            imageable = UsdGeom.Imageable(prim)
-            if imageable.ComputeVisibility(time) == UsdGeom.Tokens.invisible:
-                continue
-            if imageable.ComputePurpose() == UsdGeom.Tokens.guide:
-                continue
-            _read_mesh(scene, prim, path, time)
-            indices.append(custom(prim, "index"))
-        elif prim.IsA(UsdGeom.Gprim):
-            scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
-        elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
-            if not _read_light(scene, prim, time, path):
-                scene.warnings.append(f"{path.name}: skipped {where}: not a point, spot or sun")
+        where = _where(prim)
+        try:
+            _read_prim(scene, prim, path, time, indices)
+        except Tf.ErrorException as error:
+            raise SceneError(
+                f"corrupt USD data: {_message(error)}", path=str(path), node=where
+            ) from None
+        except UnicodeDecodeError:
+            raise SceneError(
+                "corrupt USD data: text that is not UTF-8", path=str(path), node=where
+            ) from None
     # Shapes shadowgeo wrote carry their place in the scene; others follow in file order.
     keys = [(0, index) if index is not None else (1, 0) for index in indices]
     order = sorted(range(len(keys)), key=keys.__getitem__)
     scene.shapes = [scene.shapes[i] for i in order]
     return scene
+
+
+def _read_prim(scene: Scene, prim: Any, path: Path, time: Any, indices: list[int | None]) -> None:
+    """Add ``prim``'s mesh (and its index in ``indices``) or light to ``scene``."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+    where = _where(prim)
+    if prim.IsA(UsdGeom.Mesh):
+        imageable = UsdGeom.Imageable(prim)
+        if imageable.ComputeVisibility(time) == UsdGeom.Tokens.invisible:
+            return
+        if imageable.ComputePurpose() == UsdGeom.Tokens.guide:
+            return
+        _read_mesh(scene, prim, path, time)
+        indices.append(custom(prim, "index"))
+    elif prim.IsA(UsdGeom.Gprim):
+        scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
+    elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
+        if not _read_light(scene, prim, time, path):
+            scene.warnings.append(f"{path.name}: skipped {where}: not a point, spot or sun")

@@ -8,14 +8,21 @@ first parsed by a fresh Python process whose address space and CPU time are
 limited (:data:`~shadowgeo.limits.USD_TEXT_MEMORY` and friends); only a layer
 it parsed within them is opened by the caller. A fresh process, not a fork:
 usd-core's worker threads, once started, would leave a forked child waiting
-on locks for ever. A crate (``.usdc``) layer is read by offsets and is not
-checked, nor is a text layer of at most
-:data:`~shadowgeo.limits.USD_TEXT_CHECK_BYTES` (the child costs about 0.35 s
-to start). Without the ``resource`` module (Windows) the check is skipped.
+on locks for ever. A text layer of at most
+:data:`~shadowgeo.limits.USD_TEXT_CHECK_BYTES` is not checked (the child
+costs about 0.35 s to start).
+
+A crate (``.usdc``) layer is checked whatever its size: its values are read
+lazily, and fuzzing found single corrupt bytes in a 3 KB crate that make
+usd-core abort the whole process (SIGABRT) when a value is unpacked. The
+child unpacks every value (``ExportToString``); a crate it could not read is
+refused, and the caller never touches one that would abort it. Without the
+``resource`` module (Windows) the check is skipped.
 """
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -35,6 +42,8 @@ resource.setrlimit(resource.RLIMIT_AS, (mapped + memory, mapped + memory))
 resource.setrlimit(resource.RLIMIT_CPU, (seconds, seconds + 1))
 try:
     layer = Sdf.Layer.OpenAsAnonymous(path)
+    if layer and sys.argv[4] == "crate":
+        layer.ExportToString()  # unpacks every value: a corrupt one aborts here
 except Tf.ErrorException as error:
     lines = []
     for item in error.args:
@@ -51,13 +60,19 @@ sys.exit(0 if layer else 3)
 """
 
 
-def is_text_layer(path: Path) -> bool:
-    """Whether ``path`` starts as a USD text layer does (``#usda``)."""
+def _kind(path: Path) -> str:
+    """``"text"`` or ``"crate"`` from the layer's first bytes, else ``""``."""
     try:
         with path.open("rb") as stream:
-            return stream.read(5) == b"#usda"
+            start = stream.read(8)
     except OSError:
-        return False
+        return ""
+    return "text" if start[:5] == b"#usda" else "crate" if start == b"PXR-USDC" else ""
+
+
+def is_text_layer(path: Path) -> bool:
+    """Whether ``path`` starts as a USD text layer does (``#usda``)."""
+    return _kind(path) == "text"
 
 
 def parse_within_budget(path: Path) -> None:
@@ -68,16 +83,24 @@ def parse_within_budget(path: Path) -> None:
     budget usd-core may report running out of memory as such an error), and
     when the parse ran past the budget; the caller then never parses it
     unbounded."""
-    if sys.platform == "win32" or not is_text_layer(path):
+    kind = _kind(path)
+    if sys.platform == "win32" or not kind:
         return
     size = path.stat().st_size
-    if size <= limits.USD_TEXT_CHECK_BYTES:
+    if kind == "text" and size <= limits.USD_TEXT_CHECK_BYTES:
         return
     memory = limits.USD_TEXT_MEMORY + limits.USD_TEXT_MEMORY_PER_BYTE * size
     seconds = limits.USD_TEXT_SECONDS + size // limits.USD_TEXT_BYTES_PER_SECOND
-    command = [sys.executable, "-c", _CHILD, str(memory), str(seconds), str(path)]
+    command = [sys.executable, "-c", _CHILD, str(memory), str(seconds), str(path), kind]
     try:
-        child = subprocess.run(command, capture_output=True, timeout=4 * seconds + 30)
+        # one work thread: under the address-space limit, usd-core's thread
+        # pool could not reserve its stacks and the child crashed on a sound crate
+        child = subprocess.run(
+            command,
+            capture_output=True,
+            timeout=4 * seconds + 30,
+            env={**os.environ, "PXR_WORK_THREAD_LIMIT": "1"},
+        )
     except subprocess.TimeoutExpired:
         code = -1
     else:
@@ -89,6 +112,13 @@ def parse_within_budget(path: Path) -> None:
         raise SceneError(f"not a USD file: {said}" if said else "not a USD file", path=str(path))
     if code > 0 and code != _EXHAUSTED:
         return  # the check itself could not run (no usd-core there): the caller's open decides
+    if code < -1:
+        raise SceneError(
+            f"usd-core stopped with signal {-code} reading this {size:,}-byte "
+            f"{kind} layer (a corrupt file, or past {memory / 2**30:.1f} GiB or {seconds} CPU "
+            "seconds): refused",
+            path=str(path),
+        )
     raise SceneError(
         f"usd-core needs more than {memory / 2**30:.1f} GiB or {seconds} CPU seconds to "
         f"parse this {size:,}-byte text layer: refused (a malformed layer can make its "
