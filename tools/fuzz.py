@@ -97,7 +97,16 @@ ENCODINGS = {
     "glb": ".glb",
     "gltf": ".gltf",
     "usda": ".usda",
+    "usdc": ".usdc",
+    "obj": ".obj",
+    "stl": ".stl",
+    "ply": ".ply",
+    "off": ".off",
 }
+# Seeds written from the X3D seeds: by shadowgeo, or (meshes that shadowgeo
+# reads but does not write) by trimesh.
+WRITTEN = ("glb", "gltf", "usda", "usdc", "obj", "stl", "ply", "off")
+MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off")
 TEXT_ENCODINGS = {"x3d", "x3dv", "wrl", "json", "x3dj", "gltf", "usda"}
 XML_ENCODINGS = {"x3d"}
 JSON_ENCODINGS = {"json", "x3dj", "gltf"}
@@ -138,7 +147,8 @@ MAX_MUTANT = 4 << 20
 
 def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, list]:
     """Seed files per encoding: (name, content). Missing folders are skipped.
-    glb, glTF and USD seeds are the X3D ones written by shadowgeo, in a worker
+    glb, glTF, USD and mesh (OBJ, STL, PLY, OFF) seeds are the X3D ones written by
+    shadowgeo (meshes by trimesh), in a worker
     (the parent never starts USD's threads, so forking stays safe)."""
     seeds: dict[str, list[tuple[str, bytes]]] = defaultdict(list)
     roots = [p for p in (SHARED / "corpus", EXAMPLES) if p.is_dir()]
@@ -154,13 +164,13 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
     tasks = [
         {"kind": "seed", "path": name, "suffix": ENCODINGS[encoding], "encoding": encoding}
         for name, _ in seeds["x3d"]
-        for encoding in ("glb", "gltf", "usda")
+        for encoding in WRITTEN
         if encoding in encodings
     ]
     for task, result in pool.run(tasks):
         if result.get("data"):
             seeds[task["encoding"]].append((f"{task['path']} as {task['suffix']}", result["data"]))
-    for encoding in ("glb", "gltf", "usda"):  # made in completion order: sort, to replay
+    for encoding in WRITTEN:  # made in completion order: sort, to replay
         seeds[encoding] = sorted(seeds[encoding])
     return dict(seeds)
 
@@ -174,7 +184,16 @@ def run_seed(task: dict, scratch: Path) -> dict:
     target = folder / f"seed{task['suffix']}"
     try:
         scene = shadowgeo.load(task["path"])
-        if scene.shapes:
+        if scene.shapes and task["suffix"] in MESH_SUFFIXES:
+            import trimesh
+
+            meshes = [
+                trimesh.Trimesh(shape.world_vertices, shape.faces, process=False)
+                for shape in scene.shapes
+                if len(shape.faces)
+            ]
+            trimesh.util.concatenate(meshes).export(target)
+        elif scene.shapes:
             shadowgeo.save(scene, target)
     except (shadowgeo.SceneError, shadowgeo.GeometryError, OSError):
         pass
