@@ -191,6 +191,15 @@ def _author(path, build) -> None:
     stage.Save()
 
 
+def _triangle(stage, prim_path):
+    """One triangle mesh at ``prim_path``, authored with pxr."""
+    mesh = UsdGeom.Mesh.Define(stage, prim_path)
+    mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    mesh.CreateFaceVertexCountsAttr([3])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
+    return mesh
+
+
 def test_reads_polygons_orientation_and_nesting_from_another_author(tmp_path):
     def build(stage):
         parent = UsdGeom.Xform.Define(stage, "/Root")
@@ -539,11 +548,7 @@ def test_a_non_finite_display_colour_is_an_error_not_copied_out(tmp_path, value)
     stored) was read into the material and written into the output."""
 
     def build(stage):
-        mesh = UsdGeom.Mesh.Define(stage, "/World/Column")
-        mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
-        mesh.CreateFaceVertexCountsAttr([3])
-        mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
-        mesh.CreateDisplayColorPrimvar().Set([(0.85, 0.85, value)])
+        _triangle(stage, "/World/Column").CreateDisplayColorPrimvar().Set([(0.85, 0.85, value)])
 
     path = tmp_path / "colour.usda"
     _author(path, build)
@@ -554,11 +559,7 @@ def test_a_non_finite_display_colour_is_an_error_not_copied_out(tmp_path, value)
 
 def test_a_finite_display_colour_is_read(tmp_path):
     def build(stage):
-        mesh = UsdGeom.Mesh.Define(stage, "/World/Column")
-        mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
-        mesh.CreateFaceVertexCountsAttr([3])
-        mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
-        mesh.CreateDisplayColorPrimvar().Set([(0.25, 0.5, 0.75)])
+        _triangle(stage, "/World/Column").CreateDisplayColorPrimvar().Set([(0.25, 0.5, 0.75)])
 
     path = tmp_path / "colour.usda"
     _author(path, build)

@@ -64,7 +64,7 @@ def check_assets(path: Path, notes: list[str] | None = None) -> None:
         if current in seen:
             continue
         seen.add(current)
-        parse_within_budget(current)  # a text layer's parser, held to a budget
+        parse_within_budget(current)  # read first by a child held to a budget
         # Anonymous: read afresh, never a stale copy from the layer registry.
         layer = opened(Sdf.Layer.OpenAsAnonymous, current, "not a USD file")
         inside = "" if current == root else f" in {current.relative_to(folder)}"

@@ -16,9 +16,11 @@ refused.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -300,16 +302,29 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
         raise SceneError("no such file", path=str(path))
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     notes: list[str] = []
-    try:
+    with _corrupt_data(path):
         check_assets(path, notes)
         stage = opened(Usd.Stage.Open, path, "cannot open")
-        scene = _stage_scene(stage, path, notes)
+        return _stage_scene(stage, path, notes)
+
+
+@contextlib.contextmanager
+def _corrupt_data(path: Path, where: str | None = None) -> Iterator[None]:
+    """Turn what corrupt data raises into a SceneError naming ``path`` (and
+    the prim ``where``): usd-core unpacks a crate's values lazily, so a
+    corrupt one surfaces as ``Tf.ErrorException`` from any ``Get()``, or as
+    text that is not UTF-8."""
+    Tf = pxr()[2]
+    try:
+        yield
     except Tf.ErrorException as error:
-        # usd-core reads a crate's values lazily: corrupt data surfaces here
-        raise SceneError(f"corrupt USD data: {_message(error)}", path=str(path)) from None
+        raise SceneError(
+            f"corrupt USD data: {_message(error)}", path=str(path), node=where
+        ) from None
     except UnicodeDecodeError:
-        raise SceneError("corrupt USD data: text that is not UTF-8", path=str(path)) from None
-    return scene
+        raise SceneError(
+            "corrupt USD data: text that is not UTF-8", path=str(path), node=where
+        ) from None
 
 
 def _where(prim: Any) -> str:
@@ -342,16 +357,8 @@ def _stage_scene(stage: Any, path: Path, notes: list[str]) -> Scene:
     indices: list[int | None] = []
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
         where = _where(prim)
-        try:
-            _read_prim(scene, prim, path, time, indices)
-        except Tf.ErrorException as error:
-            raise SceneError(
-                f"corrupt USD data: {_message(error)}", path=str(path), node=where
-            ) from None
-        except UnicodeDecodeError:
-            raise SceneError(
-                "corrupt USD data: text that is not UTF-8", path=str(path), node=where
-            ) from None
+        with _corrupt_data(path, where):
+            _read_prim(scene, prim, path, time, where, indices)
     # Shapes shadowgeo wrote carry their place in the scene; others follow in file order.
     keys = [(0, index) if index is not None else (1, 0) for index in indices]
     order = sorted(range(len(keys)), key=keys.__getitem__)
@@ -359,10 +366,12 @@ def _stage_scene(stage: Any, path: Path, notes: list[str]) -> Scene:
     return scene
 
 
-def _read_prim(scene: Scene, prim: Any, path: Path, time: Any, indices: list[int | None]) -> None:
-    """Add ``prim``'s mesh (and its index in ``indices``) or light to ``scene``."""
+def _read_prim(
+    scene: Scene, prim: Any, path: Path, time: Any, where: str, indices: list[int | None]
+) -> None:
+    """Add ``prim``'s (named ``where``) mesh, and its index in ``indices``, or
+    its light to ``scene``."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
-    where = _where(prim)
     if prim.IsA(UsdGeom.Mesh):
         imageable = UsdGeom.Imageable(prim)
         if imageable.ComputeVisibility(time) == UsdGeom.Tokens.invisible:

@@ -70,13 +70,10 @@ def _kind(path: Path) -> str:
     return "text" if start[:5] == b"#usda" else "crate" if start == b"PXR-USDC" else ""
 
 
-def is_text_layer(path: Path) -> bool:
-    """Whether ``path`` starts as a USD text layer does (``#usda``)."""
-    return _kind(path) == "text"
-
-
 def parse_within_budget(path: Path) -> None:
-    """Parse the text layer ``path`` in a child process held to the budget.
+    """Read the layer ``path`` in a child process held to the budget: a text
+    layer over :data:`~shadowgeo.limits.USD_TEXT_CHECK_BYTES`, and any crate
+    with every value unpacked; other files are left to the caller's open.
 
     Returns when it parsed. Raises :class:`SceneError` naming ``path`` with
     usd-core's own message when the parser refused the layer (within the
@@ -112,16 +109,14 @@ def parse_within_budget(path: Path) -> None:
         raise SceneError(f"not a USD file: {said}" if said else "not a USD file", path=str(path))
     if code > 0 and code != _EXHAUSTED:
         return  # the check itself could not run (no usd-core there): the caller's open decides
-    if code < -1:
-        raise SceneError(
-            f"usd-core stopped with signal {-code} reading this {size:,}-byte "
-            f"{kind} layer (a corrupt file, or past {memory / 2**30:.1f} GiB or {seconds} CPU "
-            "seconds): refused",
-            path=str(path),
-        )
+    budget = f"{memory / 2**30:.1f} GiB or {seconds} CPU seconds"
+    why = (
+        f"usd-core stopped with signal {-code} (a corrupt file, or past {budget})"
+        if code < -1
+        else f"usd-core needs more than {budget}"
+    )
     raise SceneError(
-        f"usd-core needs more than {memory / 2**30:.1f} GiB or {seconds} CPU seconds to "
-        f"parse this {size:,}-byte text layer: refused (a malformed layer can make its "
-        "parser take gigabytes; shadowgeo.limits.USD_TEXT_MEMORY)",
+        f"{why} to read this {size:,}-byte {kind} layer: refused (a malformed layer can "
+        "make usd-core take gigabytes or abort; shadowgeo.limits.USD_TEXT_MEMORY)",
         path=str(path),
     )

@@ -275,6 +275,11 @@ class Scene:
         return [shape for shape in self.shapes if shape.role == role]
 
     @property
+    def up_index(self) -> int:
+        """The index of the up axis in a point (1 for Y, 2 for Z)."""
+        return 2 if (self.up_axis or "Y").upper() == "Z" else 1
+
+    @property
     def bounds(self) -> np.ndarray:
         """(2, 3) world bounding box of the scene's own geometry."""
         geometry = [s for s in self.shapes if s.role == "geometry" and len(s.faces)]
@@ -318,7 +323,7 @@ def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
     center = (low + high) / 2
     radius = max(float(np.linalg.norm(high - low)) / 2, 1e-6)
     x, y, z = OVERVIEW_FROM
-    z_up = (scene.up_axis or "Y").upper() == "Z"
+    z_up = scene.up_index == 2
     away = np.array([x, -z, y] if z_up else [x, y, z])
     away /= np.linalg.norm(away)
     up = np.array([0.0, 0.0, 1.0] if z_up else [0.0, 1.0, 0.0])

@@ -177,10 +177,6 @@ def patches(
     return found
 
 
-def _up_axis(scene: Scene) -> int:
-    return 2 if (scene.up_axis or "Y").upper() == "Z" else 1
-
-
 def ground(
     scene: Scene,
     geometry: list[Shape],
@@ -192,7 +188,7 @@ def ground(
     (height along the scene's up axis), facing up, with a note: the receiver
     when none is found, or when those found (``besides``) hold no floor under
     the scene. ``bounds``: the geometry's world box, when known."""
-    axis = _up_axis(scene)
+    axis = scene.up_index
     if bounds is None and geometry:
         bounds = bounding_box(np.concatenate([shape.world_vertices for shape in geometry]))
     lowest = float(bounds[0, axis]) if bounds is not None else 0.0
@@ -606,7 +602,7 @@ def found(
             f"shadows: {len(qualify) - MAX_FOUND} more flat surfaces qualify as receivers; "
             f"the {MAX_FOUND} largest receive (--receiver DEF names others)"
         )
-    axis = _up_axis(scene)
+    axis = scene.up_index
     lowest = stacked.vertices[int(np.argmin(stacked.vertices[:, axis]))]
     if ground_fallback and not any(is_floor(r, bounds, lowest, axis) for r in result):
         result.append(ground(scene, geometry, notes, bounds, besides=result))

@@ -206,7 +206,7 @@ def add_shadows(
         own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
         if surfaces is None:
             surfaces = receivers is None and plane is None
-        terrain = _terrain(stacked, scene.up_axis) if surfaces else None
+        terrain = _terrain(stacked, scene.up_index) if surfaces else None
         found = select_receivers(  # a named shape is looked for among every copy
             own,
             geometry if receivers is None else every_shape,
@@ -284,7 +284,7 @@ def add_shadows(
     return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
 
 
-def _terrain(stacked: CasterSet, up_axis: str | None) -> str | None:
+def _terrain(stacked: CasterSet, axis: int) -> str | None:
     """The name of an open shape spanning the scene's whole width that is a
     height field (a terrain, a curved floor: its faces projected down cover
     its footprint about once), or None. When every surface receives, it takes
@@ -292,7 +292,6 @@ def _terrain(stacked: CasterSet, up_axis: str | None) -> str | None:
     show as a dark rim along its edges."""
     if not len(stacked):
         return None
-    axis = 2 if (up_axis or "Y").upper() == "Z" else 1
     across = [k for k in range(3) if k != axis]
     low, high = stacked.bounds
     width = (high - low)[across]
