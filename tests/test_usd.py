@@ -596,3 +596,69 @@ def test_a_corrupt_crate_is_a_scene_error_wherever_its_bytes_break(tmp_path):
             refused += 1
         broken.unlink()
     assert refused > 0  # the loop did reach corrupt values
+
+
+_TYPED_LAYER = """#usda 1.0
+(
+    upAxis = "Z"
+    metersPerUnit = 1
+)
+def Xform "World"
+{
+    %(World)s
+    def Mesh "Column"
+    {
+        %(Column)s
+        point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]
+        int[] faceVertexCounts = [3]
+        int[] faceVertexIndices = [0, 1, 2]
+    }
+}
+def SphereLight "Bulb"
+{
+    %(Bulb)s
+}
+"""
+
+
+@pytest.mark.parametrize("suffix", [".usda", ".usdc"])
+@pytest.mark.parametrize(
+    ("prim", "line", "kind"),
+    [
+        ("Column", "custom double3[] shadowgeo:role = [(1, 2, 3)]", "not text"),
+        ("Column", 'custom string shadowgeo:castsShadow = "yes"', "not true or false"),
+        ("Column", "custom double shadowgeo:index = 2.5", "not an integer"),
+        ("Column", "float3 doubleSided = (1, 2, 3)", "not true or false"),
+        ("Column", "float primvars:displayColor = 0.5", "not colours"),
+        ("World", "custom int shadowgeo:group = 7", "not text"),
+        ("Bulb", "custom double3[] shadowgeo:range = [(1, 2, 3)]", "not a number"),
+        ("Bulb", "custom double shadowgeo:attenuation = 1", "not three numbers"),
+        ("Bulb", 'custom token shadowgeo:shadowIntensity = "dark"', "not a number"),
+        ("Bulb", "double inputs:color = 1", "not three numbers"),
+        ("Bulb", "float3 inputs:intensity = (1, 2, 3)", "not a number"),
+        ("Bulb", 'string inputs:shadow:enable = "on"', "not true or false"),
+    ],
+)
+def test_a_value_of_the_wrong_type_is_a_scene_error_naming_it(tmp_path, suffix, prim, line, kind):
+    """Found by fuzzing .usdc (mutant 5067 of the campaign's seed 12): one
+    corrupt byte made a crate's shadowgeo:range hand back the points of a
+    mesh, and float() of them raised a ValueError traceback; a text layer
+    authoring a schema attribute with another type (a float displayColor)
+    raised a TypeError. A corrupt crate can give any attribute another's
+    value, and a hand-edited layer can author any type: every value the
+    reader uses is checked to be of the kind it needs, else a SceneError
+    names the file, the prim and the attribute."""
+    lines = dict.fromkeys(["World", "Column", "Bulb"], "")
+    lines[prim] = line
+    text = tmp_path / "typed.usda"
+    text.write_text(_TYPED_LAYER % lines)
+    path = tmp_path / f"typed{suffix}"
+    if suffix == ".usdc":
+        assert Sdf.Layer.FindOrOpen(str(text)).Export(str(path))
+    with pytest.raises(sg.SceneError) as caught:
+        sg.load(path)
+    message = str(caught.value)
+    where = {"World": "</World/Column>", "Column": "</World/Column>", "Bulb": "</Bulb>"}[prim]
+    name = line.split(" = ")[0].split()[-1].split(":")[-1]
+    assert path.name in message and where in message and kind in message
+    assert name in message

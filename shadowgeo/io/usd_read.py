@@ -66,6 +66,57 @@ def _finite(value: Any, what: str, path: Path, where: str) -> Any:
     return value
 
 
+# What each kind of value _typed accepts, as its messages name it.
+_KINDS = {
+    "number": "a number",
+    "triple": "three numbers",
+    "text": "text",
+    "flag": "true or false",
+    "integer": "an integer",
+}
+
+
+def _typed(value: Any, kind: str, what: str, path: Path, where: str) -> Any:
+    """``value`` unchanged when it is of ``kind`` (a key of ``_KINDS``);
+    otherwise a SceneError naming ``what``. A corrupt crate can hand back any
+    value for any attribute (one value's entry can point at another's), and
+    a hand-edited layer can author any type under a shadowgeo name."""
+    if kind == "text":
+        ok = isinstance(value, str)
+    elif kind == "flag":
+        ok = isinstance(value, bool | int | np.bool_)
+    elif kind in ("number", "integer"):
+        ok = isinstance(value, int if kind == "integer" else int | float)
+        ok = ok and not isinstance(value, bool)
+    else:
+        try:
+            ok = np.asarray(value, dtype=np.float64).shape == (3,)
+        except (TypeError, ValueError):
+            ok = False
+    if not ok:
+        raise SceneError(
+            f"{what} holds {type(value).__name__}, not {_KINDS[kind]}", path=str(path), node=where
+        )
+    return value
+
+
+def _get(attribute: Any, kind: str, default: Any, time: Any, path: Path, where: str) -> Any:
+    """The attribute's value at ``time`` (``default`` when it has none),
+    checked to be of ``kind`` (see :func:`_typed`)."""
+    value = attribute.Get(time)
+    if value is None:
+        return default
+    return _typed(value, kind, str(attribute.GetName()), path, where)
+
+
+def _custom(prim: Any, name: str, kind: str, default: Any, path: Path, where: str) -> Any:
+    """:func:`~shadowgeo.io.usd_layout.custom`, checked to be of ``kind``."""
+    value = custom(prim, name)
+    if value is None:
+        return default
+    return _typed(value, kind, f"shadowgeo:{name}", path, where)
+
+
 def _triangles(
     points: np.ndarray, counts: np.ndarray, indices: np.ndarray, holes: Any
 ) -> tuple[np.ndarray, int]:
@@ -158,14 +209,18 @@ def _material(mesh: Any, time: Any, path: Path, where: str) -> Material:
     emissive colour and roughness and the material's name; a SceneError for
     any of them that is not finite (it would be written out again)."""
     UsdShade = pxr()[6]
-    opacity = mesh.GetDisplayOpacityPrimvar().Get(time)
-    color = mesh.GetDisplayColorPrimvar().Get(time)
+    opacity = _array(mesh.GetDisplayOpacityPrimvar(), time, np.float64, path, where).ravel()
+    color = _array(mesh.GetDisplayColorPrimvar(), time, np.float64, path, where)
+    if color.size and (color.ndim != 2 or color.shape[1] != 3):
+        raise SceneError(
+            f"displayColor holds {color.size} numbers, not colours", path=str(path), node=where
+        )
     material = Material(
         diffuse_color=float_triple(_finite(color[0], "displayColor", path, where))
-        if color
+        if color.size
         else Material().diffuse_color,
         transparency=1.0 - float(_finite(opacity[0], "displayOpacity", path, where))
-        if opacity
+        if opacity.size
         else 0.0,
     )
     bound, _ = UsdShade.MaterialBindingAPI(mesh.GetPrim()).ComputeBoundMaterial()
@@ -173,11 +228,12 @@ def _material(mesh: Any, time: Any, path: Path, where: str) -> Material:
         shader = bound.ComputeSurfaceSource()[0]
         emissive = shader.GetInput("emissiveColor") if shader else None
         if emissive and emissive.Get() is not None:
-            value = _finite(emissive.Get(), "emissiveColor", path, where)
-            material.emissive_color = float_triple(value)
+            value = _typed(emissive.Get(), "triple", "emissiveColor", path, where)
+            material.emissive_color = float_triple(_finite(value, "emissiveColor", path, where))
         roughness = shader.GetInput("roughness") if shader else None
         if roughness and roughness.Get() is not None:
-            material.shininess = 1.0 - float(_finite(roughness.Get(), "roughness", path, where))
+            value = _typed(roughness.Get(), "number", "roughness", path, where)
+            material.shininess = 1.0 - float(_finite(value, "roughness", path, where))
         material.name = bound.GetPrim().GetDisplayName() or None
     return material
 
@@ -190,7 +246,7 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
     where = _where(prim)
     points = _points(mesh, time, path, where)
     counts, indices = _polygons(mesh, time, len(points), path, where)
-    holes = mesh.GetHoleIndicesAttr().Get(time) or []
+    holes = _array(mesh.GetHoleIndicesAttr(), time, np.int64, path, where)
     faces, dropped = _triangles(points, counts, indices, holes)
     if dropped:
         scene.warnings.append(f"{path.name}: {where}: skipped {dropped} holes or degenerate faces")
@@ -204,12 +260,14 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
             _world(mesh, time, path),
             material=_material(mesh, time, path, where),
             name=stored_name(prim, "role"),
-            solid=not mesh.GetDoubleSidedAttr().Get(time),
-            role=custom(prim, "role", "geometry"),
-            group=custom(parent, "group") if parent and not parent.IsPseudoRoot() else None,
+            solid=not _get(mesh.GetDoubleSidedAttr(), "flag", False, time, path, where),
+            role=_custom(prim, "role", "text", "geometry", path, where),
+            group=_custom(parent, "group", "text", None, path, where)
+            if parent and not parent.IsPseudoRoot()
+            else None,
             source=f"{path.name}, {where}",
-            casts_shadow=bool(custom(prim, "castsShadow", True)),
-            receives_shadow=bool(custom(prim, "receivesShadow", False)),
+            casts_shadow=bool(_custom(prim, "castsShadow", "flag", True, path, where)),
+            receives_shadow=bool(_custom(prim, "receivesShadow", "flag", False, path, where)),
         )
     )
 
@@ -225,34 +283,41 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
         return False
     world = _world(usd_light, time, path)
     direction = world[:3, :3] @ [0.0, 0.0, -1.0]
-    radius = float(custom(prim, "range", math.inf))
-    beam = custom(prim, "beamWidth")
+    where = _where(prim)
+    radius = float(_custom(prim, "range", "number", math.inf, path, where))
+    beam = _custom(prim, "beamWidth", "number", None, path, where)
     light: Light
     if isinstance(usd_light, UsdLux.DistantLight):
         light = DirectionalLight(direction)
     else:
         shaping = UsdLux.ShapingAPI(prim)
         cone = (
-            shaping.GetShapingConeAngleAttr().Get(time) if prim.HasAPI(UsdLux.ShapingAPI) else None
+            _get(shaping.GetShapingConeAngleAttr(), "number", None, time, path, where)
+            if prim.HasAPI(UsdLux.ShapingAPI)
+            else None
         )
         if cone is not None and 0 < cone <= 90:
             cut_off = math.radians(cone)
-            exact = custom(prim, "cutOffAngle")
+            exact = _custom(prim, "cutOffAngle", "number", None, path, where)
             if exact is not None and abs(exact - cut_off) <= 1e-6 * cut_off:
                 cut_off = float(exact)
             light = SpotLight(world[:3, 3], direction, min(cut_off, math.pi / 2), radius)
             if beam is None:
-                softness = shaping.GetShapingConeSoftnessAttr().Get(time) or 0.0
+                softness = _get(
+                    shaping.GetShapingConeSoftnessAttr(), "number", 0.0, time, path, where
+                )
                 beam = (1.0 - softness) * light.cut_off_angle
         else:
             light = PointLight(world[:3, 3], radius)
-    shadow = UsdLux.ShadowAPI(prim).GetShadowEnableAttr().Get(time)
+    shadow = _get(UsdLux.ShadowAPI(prim).GetShadowEnableAttr(), "flag", False, time, path, where)
     visibility = usd_light.ComputeVisibility(time)
-    where = _where(prim)
-    color = _finite(usd_light.GetColorAttr().Get(time) or (1, 1, 1), "color", path, where)
-    intensity = _finite(usd_light.GetIntensityAttr().Get(time) or 0.0, "intensity", path, where)
-    ambient = _finite(custom(prim, "ambientIntensity", 0.0), "ambientIntensity", path, where)
-    attenuation = custom(prim, "attenuation", (1.0, 0.0, 0.0))
+    color = _get(usd_light.GetColorAttr(), "triple", (1, 1, 1), time, path, where)
+    color = _finite(color, "color", path, where)
+    intensity = _get(usd_light.GetIntensityAttr(), "number", 0.0, time, path, where)
+    intensity = _finite(intensity, "intensity", path, where)
+    ambient = _custom(prim, "ambientIntensity", "number", 0.0, path, where)
+    ambient = _finite(ambient, "ambientIntensity", path, where)
+    attenuation = _custom(prim, "attenuation", "triple", (1.0, 0.0, 0.0), path, where)
     limits.check_lights(len(scene.lights) + 1, str(path))
     scene.lights.append(
         SceneLight(
@@ -264,9 +329,9 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
             attenuation=float_triple(_finite(attenuation, "attenuation", path, where)),
             beam_width=float(beam if beam is not None else math.pi / 4),
             on=visibility != UsdGeom.Tokens.invisible,
-            global_=bool(custom(prim, "global", True)),
+            global_=bool(_custom(prim, "global", "flag", True, path, where)),
             shadows=bool(shadow),
-            shadow_intensity=float(custom(prim, "shadowIntensity", 1.0)),
+            shadow_intensity=float(_custom(prim, "shadowIntensity", "number", 1.0, path, where)),
         )
     )
     return True
@@ -379,7 +444,7 @@ def _read_prim(
         if imageable.ComputePurpose() == UsdGeom.Tokens.guide:
             return
         _read_mesh(scene, prim, path, time)
-        indices.append(custom(prim, "index"))
+        indices.append(_custom(prim, "index", "integer", None, path, where))
     elif prim.IsA(UsdGeom.Gprim):
         scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
     elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
