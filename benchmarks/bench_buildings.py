@@ -112,15 +112,17 @@ def exact_area(corners: np.ndarray) -> float:
 # (module, attribute, label) of the steps --phases times, in call order.
 PHASES = [
     ("shadowgeo.projection", "as_caster", "caster checked (vertices, faces)"),
-    ("shadowgeo.topology", "Caster.facing", "front faces (and face normals)"),
-    ("shadowgeo.projection", "silhouette_loops", "silhouettes (edge table, chaining)"),
-    ("shadowgeo.projection", "_project_loops", "outlines projected"),
-    ("shadowgeo.polygons", "union_parts", "2-D union and parts"),
-    ("shadowgeo.polygons", "convex_union_flat", "  of which the arrangement (numpy)"),
+    ("shadowgeo.projection", "light_frames", "light's frame: tolerance, plane frame, window"),
+    ("shadowgeo.batchlights", "front_rows", "front faces (and face normals)"),
+    ("shadowgeo.batchlights", "silhouette_outlines", "silhouettes (edge keys, chaining)"),
+    ("shadowgeo.batchlights", "project_outlines", "outlines projected"),
+    ("shadowgeo.polygons", "arranged_parts", "2-D union by the arrangement, and parts"),
+    ("shadowgeo.polygons", "convex_union_arrays", "  of which the arrangement (numpy)"),
+    ("shadowgeo.polygons", "FlatParts.nested", "  of which holes to their parts"),
+    ("shadowgeo.polygons", "union_parts", "2-D union by Clipper2 (handed back), and parts"),
     ("shadowgeo.polygons", "fill", "  of which Clipper2 unions"),
-    ("shadowgeo.polygons", "nest_flat", "  of which holes to their parts"),
-    ("shadowgeo.projection", "vertex_components", "  of which the caster's parts"),
-    ("shadowgeo.projection", "_Projector._result", "result (area, polygons)"),
+    ("shadowgeo.batchlights", "vertex_components", "  of which the caster's parts"),
+    ("shadowgeo.batchlights", "_array_result", "result (area, polygons)"),
 ]
 
 

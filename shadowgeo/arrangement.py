@@ -97,9 +97,19 @@ def convex_union_flat(loops: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray] 
     if not loops:
         return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
     sizes = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
+    return convex_union_arrays(np.concatenate(loops), sizes)
+
+
+def convex_union_arrays(
+    points: np.ndarray, sizes: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """:func:`convex_union_flat` of loops given as one (n, 2) array of their
+    points, one loop after another, ``sizes[i]`` points each."""
+    if len(sizes) == 0:
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
     if sizes.min() < 3:
         return None
-    points = np.ascontiguousarray(np.concatenate(loops), dtype=np.float64)
+    points = np.ascontiguousarray(points, dtype=np.float64)
     starts = np.cumsum(sizes) - sizes
     following = np.arange(1, len(points) + 1)
     following[starts + sizes - 1] = starts
@@ -301,6 +311,45 @@ def _crossings(
     depth = _first_vertex_depth(start, end, starts, sizes, box_low, box_high, first, second, bound)
     if depth is None:
         return None
+    # The edge pairs of a block of loop pairs at a time: the temporaries
+    # (several numbers per edge pair) stay a few MB, memory reused from
+    # block to block rather than fresh pages each time.
+    weight = np.cumsum(sizes[first] * sizes[second])
+    cuts = np.searchsorted(weight, np.arange(_BLOCK_EDGE_PAIRS, int(weight[-1]), _BLOCK_EDGE_PAIRS))
+    edges = (start, step, edge_low, edge_high, loop_low, loop_high)
+    found = []
+    for begin, stop in zip([0, *cuts.tolist()], [*cuts.tolist(), len(first)], strict=True):
+        if stop > begin:
+            block = _block_crossings(
+                edges, starts, sizes, first[begin:stop], second[begin:stop], bound[begin:stop]
+            )
+            if block is None:
+                return None
+            found.append(block)
+    edge_a, t_a, delta_a, edge_b, t_b, delta_b, where, slack = (
+        np.concatenate(column) for column in zip(*found, strict=True)
+    )
+    return depth, edge_a, t_a, delta_a, edge_b, t_b, delta_b, where, slack
+
+
+# Edge pairs (every edge of one loop against every edge of the other,
+# summed over the loop pairs) that _crossings tests in one block.
+_BLOCK_EDGE_PAIRS = 1 << 16
+
+
+def _block_crossings(
+    edges: tuple[np.ndarray, ...],
+    starts: np.ndarray,
+    sizes: np.ndarray,
+    first: np.ndarray,
+    second: np.ndarray,
+    bound: np.ndarray,
+) -> tuple[np.ndarray, ...] | None:
+    """:func:`_crossings`' crossings between the loop pairs ``first[i]``,
+    ``second[i]`` (``bound``: each pair's orientation error bound;
+    ``edges``: every edge's start and step, its box and its loop's box in
+    the main frame), without the first vertices' depth."""
+    start, step, edge_low, edge_high, loop_low, loop_high = edges
     edges_a, edges_b, owners = [], [], []
     radix = int(sizes.max()) + 1
     pair_sizes = sizes[first] * radix + sizes[second]
@@ -357,7 +406,7 @@ def _crossings(
     slack = 2 * margin / np.abs(c)
     slack = np.column_stack([slack, slack])
     delta_a, delta_b = np.where(s < 0, 1, -1), np.where(u < 0, 1, -1)
-    return depth, edge_a, t_a, delta_a, edge_b, t_b, delta_b, where_xy, slack
+    return edge_a, t_a, delta_a, edge_b, t_b, delta_b, where_xy, slack
 
 
 def _first_vertex_depth(

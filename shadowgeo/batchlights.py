@@ -451,7 +451,8 @@ def array_shadows(
     whole = simple_outlines(
         projected.points, outlines.loop_lengths, outlines.loop_light, len(chunk)
     ).tolist()
-    firsts = outlines.corners[np.cumsum(outlines.loop_lengths) - outlines.loop_lengths]
+    corner_bounds = np.append(0, np.cumsum(outlines.loop_lengths)).tolist()
+    firsts = outlines.corners[corner_bounds[:-1]]
     loop_bounds = np.searchsorted(outlines.loop_light, np.arange(len(chunk) + 1)).tolist()
     # The union's corners are the loops' corners and crossings, rounded to
     # Clipper2's grid (1e-8 local units): loops a unit inside the limit
@@ -477,10 +478,16 @@ def array_shadows(
             continue
         first, last = loop_bounds[k], loop_bounds[k + 1]
         own = loops[first:last]
+        parts: list[list[np.ndarray]] | poly.FlatParts | None = None
         if whole[k] >= 0:  # one simple loop: no union to do (a copy: not a view of the chunk)
             parts = [[loops[whole[k]].copy()]]
-        else:
-            parts = poly.union_parts(own, partial(_part_labels, caster, firsts[first:last]))
+        else:  # many convex loops (a city) stay one array from here to the result
+            corners = slice(corner_bounds[first], corner_bounds[last])
+            lengths = outlines.loop_lengths[first:last]
+            parts = poly.arranged_parts(projected.points[corners].copy(), lengths)
+        if parts is None:
+            labels = partial(_part_labels, caster, firsts[first:last])
+            parts = poly.union_parts(own, labels, arranged=False)  # tried above
         bounded = not unbounded[k] and _reaches(parts, limits[k])
         info = ShadowDiagnostics(
             n_triangles=caster.n_faces,
@@ -507,9 +514,11 @@ def _part_labels(caster: Caster, firsts: np.ndarray) -> np.ndarray:
     return labels
 
 
-def _reaches(parts: list[list[np.ndarray]], limit: float) -> bool:
+def _reaches(parts: list[list[np.ndarray]] | poly.FlatParts, limit: float) -> bool:
     """Whether an outer loop of ``parts`` reaches ``limit`` (local units):
     the default bound cut the shadow."""
+    if isinstance(parts, poly.FlatParts):
+        return parts.reach() >= limit
     if not parts:
         return False
     outer = np.abs(np.concatenate([part[0] for part in parts])).max()
@@ -520,7 +529,7 @@ def _array_result(
     plane: Plane,
     basis: tuple[np.ndarray, np.ndarray],
     light: Light,
-    parts: list[list[np.ndarray]],
+    parts: list[list[np.ndarray]] | poly.FlatParts,
     scale: float,
     origin2d: np.ndarray,
     lift: np.ndarray,
@@ -528,6 +537,14 @@ def _array_result(
 ) -> Shadow:
     """The shadow of one light of the array path from its united ``parts``
     (local units), as the general path makes it."""
+    if isinstance(parts, poly.FlatParts):  # scaled and moved as one array
+        if not parts.groups:
+            return Shadow(plane, light, empty_mesh(), [], 0.0, info)
+        area = parts.area / scale / scale
+        polygons = parts.parts(parts.cut(parts.points / scale + origin2d))
+        parts = parts.parts()
+        build = partial(triangulated, parts, scale, lift, basis)
+        return Shadow(plane, light, build, polygons, area, info)
     if not parts:
         return Shadow(plane, light, empty_mesh(), [], 0.0, info)
     area = _parts_area(parts) / scale / scale  # no square to over/underflow

@@ -11,11 +11,12 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
-from .arrangement import convex_union_flat
+from .arrangement import convex_union_arrays, convex_union_flat
 from .errors import GeometryError
 from .limits import MAX_UNION_CROSSINGS
 from .plane import Plane
@@ -228,7 +229,7 @@ def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
 
 
 def union_parts(
-    loops: list[np.ndarray], groups: Callable[[], np.ndarray]
+    loops: list[np.ndarray], groups: Callable[[], np.ndarray], arranged: bool = True
 ) -> list[list[np.ndarray]]:
     """The parts (``[outer, hole, ...]``, as :func:`components` gives them)
     of the region of positive winding over ``loops``, for loops in
@@ -257,15 +258,28 @@ def union_parts(
     Many strictly convex counter-clockwise loops (a city of box buildings)
     are first tried by their arrangement (:func:`~shadowgeo.arrangement.convex_union`),
     which needs no cells and no second union; where it cannot certify a
-    sign (touching outlines) the cells above do the work.
+    sign (touching outlines) the cells above do the work; ``arranged=False``
+    skips that try (the caller made it: :func:`arranged_parts`).
     """
-    if len(loops) >= _ARRANGED_LOOPS:
+    if arranged and len(loops) >= ARRANGED_LOOPS:
         boundary = convex_union_flat(loops)
         if boundary is not None:
             return nest_flat(*boundary)
     if len(loops) <= _GROUPED_LOOPS:
         return components(fill(loops))
     return _cell_parts(loops, groups)
+
+
+def arranged_parts(points: np.ndarray, sizes: np.ndarray) -> FlatParts | None:
+    """:func:`union_parts` by the loops' arrangement alone, for loops given
+    flat (``points`` one loop after another, ``sizes[i]`` points each), with
+    the result flat too; None where :func:`union_parts` would unite them
+    another way (too few loops for the arrangement to pay, or it cannot
+    certify a sign)."""
+    if len(sizes) < ARRANGED_LOOPS:
+        return None
+    boundary = convex_union_arrays(points, sizes)
+    return None if boundary is None else FlatParts.nested(*boundary)
 
 
 def _cell_parts(
@@ -303,7 +317,7 @@ def union_region(loops: list[np.ndarray], groups: Callable[[], np.ndarray]) -> C
     """:func:`union_parts` as a region, to intersect with others: the
     arrangement's loops filled, or one union for few loops, or the cells'
     parts filled once more for many."""
-    if len(loops) >= _ARRANGED_LOOPS:
+    if len(loops) >= ARRANGED_LOOPS:
         boundary = convex_union_flat(loops)
         if boundary is not None:
             points, starts = boundary
@@ -354,7 +368,7 @@ _GROUPED_LOOPS = 2000
 _CELL_LOOPS = 100
 # union_parts tries convex loops by their arrangement from this many on
 # (below it the numpy steps' fixed costs outweigh Clipper2's).
-_ARRANGED_LOOPS = 64
+ARRANGED_LOOPS = 64
 
 
 def intersect(region: CrossSection, other: CrossSection) -> CrossSection:
@@ -402,19 +416,97 @@ def nest_flat(
     """:func:`nest` of loops given as one (n, 2) array of their points, loop
     ``i`` from ``starts[i]`` to the next start; ``loops``: the same loops as
     arrays, when they are at hand already (else cut from ``points``)."""
-    if len(starts) == 0:
-        return []
-    lengths = np.diff(np.append(starts, len(points)))
-    if loops is None:
-        loops = [points[a : a + k] for a, k in zip(starts.tolist(), lengths.tolist(), strict=True)]
-    following = np.arange(1, len(points) + 1)
-    following[starts + lengths - 1] = starts
-    cross = points[:, 0] * points[following, 1] - points[following, 0] * points[:, 1]
-    areas = 0.5 * np.add.reduceat(cross, starts)
-    outers = np.flatnonzero(areas > 0)
-    holes = np.flatnonzero(areas < 0)
-    if len(holes) == 0 or len(outers) == 0:  # holes in nothing bound no region
-        return [[loops[i]] for i in outers.tolist()]
+    return FlatParts.nested(points, starts).parts(loops)
+
+
+@dataclass(frozen=True)
+class FlatParts:
+    """Loops of one (n, 2) array grouped into parts, as :func:`nest` groups
+    them, without an array per loop until one is asked for.
+
+    ``points``: the loops one after another, loop ``i`` from ``starts[i]``
+    (``lengths[i]`` points); ``areas``: each loop's signed area;
+    ``groups``: per part, the loop indices ``[outer, hole, ...]``.
+    """
+
+    points: np.ndarray
+    starts: np.ndarray
+    lengths: np.ndarray
+    areas: np.ndarray
+    groups: list[list[int]]
+
+    @classmethod
+    def nested(cls, points: np.ndarray, starts: np.ndarray) -> FlatParts:
+        """The loops at ``starts`` of ``points``, holes placed in the
+        smallest outer loop around them (see :func:`nest`)."""
+        lengths = np.diff(np.append(starts, len(points)))
+        if len(starts) == 0:
+            return cls(points, starts, lengths, np.zeros(0), [])
+        following = np.arange(1, len(points) + 1)
+        following[starts + lengths - 1] = starts
+        cross = points[:, 0] * points[following, 1] - points[following, 0] * points[:, 1]
+        areas = 0.5 * np.add.reduceat(cross, starts)
+        outers = np.flatnonzero(areas > 0)
+        holes = np.flatnonzero(areas < 0)
+        if len(holes) == 0 or len(outers) == 0:  # holes in nothing bound no region
+            return cls(points, starts, lengths, areas, [[i] for i in outers.tolist()])
+        parent = _hole_parents(points, starts, lengths, following, areas, outers, holes)
+        # holes grouped by parent, largest first within each group
+        regroup = np.lexsort((-areas[holes], parent))
+        grouped, group_parent = holes[regroup], parent[regroup]
+        first = np.searchsorted(group_parent, outers, side="left")
+        last = np.searchsorted(group_parent, outers, side="right")
+        groups = [[i] for i in outers.tolist()]
+        emptied = []
+        for index in np.flatnonzero(last > first).tolist():
+            own = grouped[first[index] : last[index]]
+            if areas[outers[index]] + areas[own].sum() <= 0:
+                emptied.append(index)
+            groups[index].extend(own.tolist())
+        if emptied:
+            gone = set(emptied)
+            groups = [group for index, group in enumerate(groups) if index not in gone]
+        return cls(points, starts, lengths, areas, groups)
+
+    def parts(self, loops: list[np.ndarray] | None = None) -> list[list[np.ndarray]]:
+        """The parts as lists of (k, 2) arrays: views of ``points``, or the
+        same loops of ``loops`` (say, the points moved into another frame)."""
+        if loops is None:
+            loops = self.cut(self.points)
+        return [[loops[i] for i in group] for group in self.groups]
+
+    def cut(self, points: np.ndarray) -> list[np.ndarray]:
+        """``points`` (an array like :attr:`points`, row for row) cut into
+        the loops."""
+        bounds = self.starts.tolist()
+        return [points[a : a + k] for a, k in zip(bounds, self.lengths.tolist(), strict=True)]
+
+    @property
+    def area(self) -> float:
+        """The parts' area: outer loops minus holes."""
+        kept = [i for group in self.groups for i in group]
+        return float(self.areas[kept].sum()) if kept else 0.0
+
+    def reach(self) -> float:
+        """The largest absolute coordinate of the parts' outer loops."""
+        if not self.groups:
+            return 0.0
+        largest = np.maximum.reduceat(np.abs(self.points).max(axis=1), self.starts)
+        return float(largest[[group[0] for group in self.groups]].max())
+
+
+def _hole_parents(
+    points: np.ndarray,
+    starts: np.ndarray,
+    lengths: np.ndarray,
+    following: np.ndarray,
+    areas: np.ndarray,
+    outers: np.ndarray,
+    holes: np.ndarray,
+) -> np.ndarray:
+    """(h,) the loop index of the outer loop each of ``holes`` belongs to:
+    the smallest whose box holds the hole's and, where several do, that
+    holds the hole's first edge's midpoint."""
     low = np.minimum.reduceat(points, starts, axis=0)
     high = np.maximum.reduceat(points, starts, axis=0)
     parent = np.full(len(holes), -1, dtype=np.int64)
@@ -438,22 +530,7 @@ def nest_flat(
             parent[start + many] = _smallest_around(
                 points, starts, lengths, following, rows[many], by_size, around[many]
             )
-    # holes grouped by parent, largest first within each group
-    regroup = np.lexsort((-areas[holes], parent))
-    grouped, group_parent = holes[regroup], parent[regroup]
-    first = np.searchsorted(group_parent, outers, side="left")
-    last = np.searchsorted(group_parent, outers, side="right")
-    parts = [[loops[i]] for i in outers.tolist()]
-    emptied = []
-    for index in np.flatnonzero(last > first).tolist():
-        own = grouped[first[index] : last[index]]
-        if areas[outers[index]] + areas[own].sum() <= 0:
-            emptied.append(index)
-        parts[index].extend(loops[i] for i in own.tolist())
-    if emptied:
-        gone = set(emptied)
-        parts = [part for index, part in enumerate(parts) if index not in gone]
-    return parts
+    return parent
 
 
 def _smallest_around(

@@ -170,8 +170,10 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
     Both ends of a silhouette edge are *mixed* vertices (they have a front
     and a back face: the edge's own two), and both faces of the edge contain
     both ends; so the faces with at least two mixed corners hold both slots
-    of every silhouette edge. Among them, an edge whose two slots are both
-    present and differ in front bit is a silhouette edge.
+    of every silhouette edge. On a closed caster each directed edge is in
+    one face and its reverse in another: a front face's edge a -> b between
+    mixed vertices is on the silhouette exactly when b -> a is in no front
+    face, and the face of b -> a, holding two mixed corners, is near.
     """
     faces = caster.faces
     n_vertices = len(caster.vertices)
@@ -190,18 +192,21 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
             start + np.flatnonzero((first & second) | (second & third) | (third & first))
         )
     near = np.concatenate(near_parts) if near_parts else np.zeros(0, dtype=np.int64)
-    slots = (3 * near[:, None] + np.arange(3)).reshape(-1)
-    flat = faces.reshape(-1)
-    starts, ends = flat[slots], flat[slots - slots % 3 + (slots % 3 + 1) % 3]
-    keys = np.minimum(starts, ends) * np.int64(max(n_vertices, 1)) + np.maximum(starts, ends)
-    order = np.argsort(keys, kind="stable")
-    keys, slots = keys[order], slots[order]
-    # closed: a key is there once (its other face is not near) or twice
-    pair = np.flatnonzero(keys[1:] == keys[:-1])
-    lower, upper = slots[pair], slots[pair + 1]
-    outline = front[lower // 3] != front[upper // 3]
-    lower, upper = lower[outline], upper[outline]
-    result: np.ndarray = np.where(front[lower // 3], lower, upper)
+    near = near[front[near]]
+    corners = faces[near]
+    starts, ends = corners.reshape(-1), corners[:, [1, 2, 0]].reshape(-1)
+    between = np.flatnonzero(mixed[starts] & mixed[ends])
+    starts, ends = starts[between], ends[between]
+    slots = 3 * near[between // 3] + between % 3
+    width = np.int64(max(n_vertices, 1))
+    ahead = np.sort(starts * width + ends)
+    back = ends * width + starts
+    found = np.minimum(np.searchsorted(ahead, back), max(len(ahead) - 1, 0))
+    outline = np.flatnonzero(ahead[found] != back) if len(ahead) else between[:0]
+    # in the order of the undirected edges' keys, as the edge table lists them
+    starts, ends, slots = starts[outline], ends[outline], slots[outline]
+    order = np.argsort(np.minimum(starts, ends) * width + np.maximum(starts, ends))
+    result: np.ndarray = slots[order]
     return result
 
 
@@ -276,6 +281,20 @@ def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
         return []
     walk, cuts = cycle_walk(_successors(starts, ends))
     return [loop for loop in _cut(starts[walk], cuts) if len(loop) >= 3]
+
+
+def chain_flat(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`chain`'s loops as one array of their vertices, one loop after
+    another, and (l,) the loops' lengths (no array per loop)."""
+    if len(starts) == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    walk, cuts = cycle_walk(_successors(starts, ends))
+    lengths = np.diff(np.concatenate([[0], cuts, [len(walk)]]))
+    kept = lengths >= 3
+    corners = starts[walk]
+    if not kept.all():
+        corners = corners[np.repeat(kept, lengths)]
+    return corners, lengths[kept]
 
 
 def _cut(values: np.ndarray, cuts: np.ndarray) -> list[np.ndarray]:
@@ -399,10 +418,8 @@ def silhouette_outlines(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -
     if len(fronts) == 1:
         # One light: its own boundary, no word of 64 to pack and unpack.
         starts, ends = front_boundary(caster, np.asarray(fronts[0]).astype(bool, copy=False))
-        loops = chain(starts, ends)
-        zeros = np.zeros(len(loops), dtype=np.int64)
-        lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
-        corners = np.concatenate(loops) if loops else np.zeros(0, dtype=np.int64)
+        corners, lengths = chain_flat(starts, ends)
+        zeros = np.zeros(len(lengths), dtype=np.int64)
         return Outlines(corners, lengths, zeros, starts, np.zeros(len(starts), dtype=np.int64))
     words = [
         _outlines_of_word(caster, fronts[first : first + _WORD])

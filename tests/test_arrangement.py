@@ -209,9 +209,11 @@ def test_a_city_shadow_matches_the_union_of_each_box_shadow(monkeypatch, terrace
     sun = DirectionalLight([0.45, -0.75, 0.3])
     ground = Plane([0, 1, 0], 0)
     taken = []
-    arranged = polygons.convex_union_flat
+    arranged = polygons.convex_union_arrays
     monkeypatch.setattr(
-        polygons, "convex_union_flat", lambda loops: taken.append(arranged(loops)) or taken[-1]
+        polygons,
+        "convex_union_arrays",
+        lambda points, sizes: taken.append(arranged(points, sizes)) or taken[-1],
     )
     shadow = project_shadow(_boxes_mesh(low, size), sun, ground)
     assert [found is None for found in taken] == [terraced]

@@ -317,7 +317,9 @@ def test_one_loop_that_is_not_star_shaped_is_still_united(monkeypatch):
     calls = []
     union_parts = polygons.union_parts
     monkeypatch.setattr(
-        polygons, "union_parts", lambda *args: calls.append(1) or union_parts(*args)
+        polygons,
+        "union_parts",
+        lambda *args, **kwargs: calls.append(1) or union_parts(*args, **kwargs),
     )
     outline = np.array([[0, 0], [6, 0], [6, 1], [1, 1], [1, 6], [0, 6]], dtype=float)
     prism = trimesh.creation.extrude_polygon(shapely.Polygon(outline), 1.0)

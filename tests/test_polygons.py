@@ -276,3 +276,34 @@ def test_loops_that_are_all_holes_bound_no_region():
     # a hole beside an outer loop it is not in stays out of every part
     parts = nest_flat(np.concatenate([square * 2.0, square[::-1] + 5.0]), np.array([0, 4]))
     assert len(parts) == 1 and len(parts[0]) == 1
+
+
+def test_flat_parts_give_the_area_and_reach_of_their_nested_loops():
+    # Two squares with a hole each, one with an island in its hole, a hole
+    # in nothing: the flat parts' area and reach are those of the parts
+    # nest gives, loop arrays cut from one array.
+    from shadowgeo.polygons import FlatParts, nest, parts_area
+
+    square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    loops = [
+        square * 10,
+        (square * 4 + 3)[::-1],
+        square * 2 + 4,
+        square * 10 + [20, -30],
+        (square * 3 + [22, -27])[::-1],
+        (square + 50)[::-1],
+    ]
+    lengths = np.array([len(loop) for loop in loops])
+    flat = FlatParts.nested(np.concatenate(loops), np.cumsum(lengths) - lengths)
+    expected = nest(loops)
+    parts = flat.parts()
+    assert [[loop.tolist() for loop in part] for part in parts] == [
+        [loop.tolist() for loop in part] for part in expected
+    ]
+    assert flat.area == pytest.approx(parts_area(expected), rel=1e-15)
+    assert flat.area == pytest.approx(100 - 16 + 4 + 100 - 9, rel=1e-15)
+    # the second square's outer loop (x 20..30, y -30..-20); the stray hole is no part
+    assert flat.reach() == 30.0
+    moved = flat.parts(flat.cut(flat.points + 1.0))
+    pairs = [(a, b) for p, q in zip(parts, moved, strict=True) for a, b in zip(p, q, strict=True)]
+    assert all(np.array_equal(a + 1.0, b) for a, b in pairs)

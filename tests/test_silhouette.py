@@ -385,3 +385,21 @@ def test_silhouette_of_a_closed_mesh_with_no_mixed_vertex_is_empty():
     for front in (np.ones(len(sphere.faces), bool), np.zeros(len(sphere.faces), bool)):
         starts, ends = front_boundary(caster, front)
         assert len(starts) == 0 and len(ends) == 0
+
+
+@pytest.mark.parametrize("name", ["bumpy", "torus", "pair", "pinched", "box"])
+def test_chained_flat_outline_is_the_chained_loops_end_to_end(name):
+    from shadowgeo.silhouette import chain, chain_flat, front_boundary, light_homogeneous
+    from shadowgeo.topology import Caster
+
+    mesh = _closed_meshes()[name]
+    rng = np.random.default_rng(len(name) + 1)
+    for light in [DirectionalLight(rng.normal(size=3)) for _ in range(4)]:
+        caster = Caster(mesh.vertices, mesh.faces)
+        starts, ends = front_boundary(caster, caster.facing(light_homogeneous(caster, light)) > 0)
+        # a two-edge loop (enclosing nothing) is dropped by both
+        starts, ends = np.append(starts, [10**6, 10**6 + 1]), np.append(ends, [10**6 + 1, 10**6])
+        loops = chain(starts, ends)
+        corners, lengths = chain_flat(starts, ends)
+        assert lengths.tolist() == [len(loop) for loop in loops] and min(lengths) >= 3
+        assert np.array_equal(corners, np.concatenate(loops))
