@@ -119,7 +119,7 @@ PHASES = [
     ("shadowgeo.polygons", "arranged_parts", "2-D union by the arrangement, and parts"),
     ("shadowgeo.polygons", "convex_union_arrays", "  of which the arrangement (numpy)"),
     ("shadowgeo.polygons", "FlatParts.nested", "  of which holes to their parts"),
-    ("shadowgeo.polygons", "union_parts", "2-D union by Clipper2 (handed back), and parts"),
+    ("shadowgeo.polygons", "clipper_parts", "2-D union by Clipper2 (handed back), and parts"),
     ("shadowgeo.polygons", "fill", "  of which Clipper2 unions"),
     ("shadowgeo.batchlights", "vertex_components", "  of which the caster's parts"),
     ("shadowgeo.batchlights", "_array_result", "result (area, polygons)"),

@@ -57,7 +57,7 @@ PHASES = [
     ("shadowgeo.batchlights", "front_rows", "front faces (one matrix-vector product each)"),
     ("shadowgeo.batchlights", "silhouette_outlines", "silhouettes, all lights together"),
     ("shadowgeo.batchlights", "project_outlines", "silhouettes projected to 2-D, together"),
-    ("shadowgeo.polygons", "union_parts", "2-D union (Clipper2, per light)"),
+    ("shadowgeo.polygons", "clipper_parts", "2-D union (Clipper2, per light)"),
     ("shadowgeo.batchlights", "_array_result", "result: area, polygons (per light)"),
 ]
 

@@ -487,7 +487,7 @@ def array_shadows(
             parts = poly.arranged_parts(projected.points[corners].copy(), lengths)
         if parts is None:
             labels = partial(_part_labels, caster, firsts[first:last])
-            parts = poly.union_parts(own, labels, arranged=False)  # tried above
+            parts = poly.clipper_parts(own, labels)
         bounded = not unbounded[k] and _reaches(parts, limits[k])
         info = ShadowDiagnostics(
             n_triangles=caster.n_faces,
@@ -509,7 +509,7 @@ _NONE_CLIPPED_DIRECTIONAL = {"below_plane": 0, "outside_bound": 0}
 
 def _part_labels(caster: Caster, firsts: np.ndarray) -> np.ndarray:
     """The connected part of the caster that each outline loop (starting
-    at vertex ``firsts``) runs on: the groups of :func:`poly.union_parts`."""
+    at vertex ``firsts``) runs on: the groups of :func:`poly.clipper_parts`."""
     labels: np.ndarray = vertex_components(caster)[firsts]
     return labels
 

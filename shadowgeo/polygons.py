@@ -229,7 +229,7 @@ def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
 
 
 def union_parts(
-    loops: list[np.ndarray], groups: Callable[[], np.ndarray], arranged: bool = True
+    loops: list[np.ndarray], groups: Callable[[], np.ndarray]
 ) -> list[list[np.ndarray]]:
     """The parts (``[outer, hole, ...]``, as :func:`components` gives them)
     of the region of positive winding over ``loops``, for loops in
@@ -247,6 +247,36 @@ def union_parts(
 
     Notes
     -----
+    Many strictly convex counter-clockwise loops (a city of box buildings)
+    are first tried by their arrangement (:func:`arranged_parts`), which
+    needs no Clipper2 call; where it cannot certify a sign (touching
+    outlines) :func:`clipper_parts` does the work.
+    """
+    if len(loops) >= ARRANGED_LOOPS:
+        sizes = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
+        flat = arranged_parts(np.concatenate(loops), sizes)
+        if flat is not None:
+            return flat.parts()
+    return clipper_parts(loops, groups)
+
+
+def arranged_parts(points: np.ndarray, sizes: np.ndarray) -> FlatParts | None:
+    """:func:`union_parts` by the loops' arrangement alone, for loops given
+    flat (``points`` one loop after another, ``sizes[i]`` points each), with
+    the result flat too; None where it does not apply (too few loops for the
+    arrangement to pay, a loop not strictly convex, a sign it cannot
+    certify): then :func:`clipper_parts` unites the loops."""
+    if len(sizes) < ARRANGED_LOOPS:
+        return None
+    boundary = convex_union_arrays(points, sizes)
+    return None if boundary is None else FlatParts.nested(*boundary)
+
+
+def clipper_parts(
+    loops: list[np.ndarray], groups: Callable[[], np.ndarray]
+) -> list[list[np.ndarray]]:
+    """:func:`union_parts` by Clipper2.
+
     Clipper2's sweep keeps a list of the edges its scanline crosses, so one
     union of thousands of overlapping outlines scattered over a plane costs
     about n^1.5. Many loops are therefore first united cell by cell of a
@@ -254,32 +284,10 @@ def union_parts(
     first loop's box centre). A cell's part whose box meets no other cell's
     parts is final as it is; the rest, near the cells' borders, are united
     once more.
-
-    Many strictly convex counter-clockwise loops (a city of box buildings)
-    are first tried by their arrangement (:func:`~shadowgeo.arrangement.convex_union`),
-    which needs no cells and no second union; where it cannot certify a
-    sign (touching outlines) the cells above do the work; ``arranged=False``
-    skips that try (the caller made it: :func:`arranged_parts`).
     """
-    if arranged and len(loops) >= ARRANGED_LOOPS:
-        boundary = convex_union_flat(loops)
-        if boundary is not None:
-            return nest_flat(*boundary)
     if len(loops) <= _GROUPED_LOOPS:
         return components(fill(loops))
     return _cell_parts(loops, groups)
-
-
-def arranged_parts(points: np.ndarray, sizes: np.ndarray) -> FlatParts | None:
-    """:func:`union_parts` by the loops' arrangement alone, for loops given
-    flat (``points`` one loop after another, ``sizes[i]`` points each), with
-    the result flat too; None where :func:`union_parts` would unite them
-    another way (too few loops for the arrangement to pay, or it cannot
-    certify a sign)."""
-    if len(sizes) < ARRANGED_LOOPS:
-        return None
-    boundary = convex_union_arrays(points, sizes)
-    return None if boundary is None else FlatParts.nested(*boundary)
 
 
 def _cell_parts(
@@ -366,7 +374,7 @@ _NEST_EDGES = 4_000_000
 # _CELL_LOOPS to a cell (below it one union is faster).
 _GROUPED_LOOPS = 2000
 _CELL_LOOPS = 100
-# union_parts tries convex loops by their arrangement from this many on
+# union_parts and arranged_parts try convex loops by their arrangement from this many on
 # (below it the numpy steps' fixed costs outweigh Clipper2's).
 ARRANGED_LOOPS = 64
 

@@ -277,10 +277,8 @@ def chain(starts: np.ndarray, ends: np.ndarray) -> list[np.ndarray]:
     touching there); loops of fewer than three edges enclose nothing and are
     dropped.
     """
-    if len(starts) == 0:
-        return []
-    walk, cuts = cycle_walk(_successors(starts, ends))
-    return [loop for loop in _cut(starts[walk], cuts) if len(loop) >= 3]
+    corners, lengths = chain_flat(starts, ends)
+    return _cut(corners, np.cumsum(lengths)[:-1]) if len(lengths) else []
 
 
 def chain_flat(starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -299,7 +299,7 @@ def test_a_convex_caster_needs_no_union_and_casts_the_hull(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("a 2-D union for a single convex outline")
 
-    monkeypatch.setattr(polygons, "union_parts", refuse)
+    monkeypatch.setattr(polygons, "clipper_parts", refuse)
     batch = project_shadow(mesh, lights, GROUND)
     for light, shadow in zip(lights, batch, strict=True):
         _same(shadow, project_shadow(mesh, light, GROUND))
@@ -315,11 +315,9 @@ def test_one_loop_that_is_not_star_shaped_is_still_united(monkeypatch):
     import shadowgeo.polygons as polygons
 
     calls = []
-    union_parts = polygons.union_parts
+    clipper_parts = polygons.clipper_parts
     monkeypatch.setattr(
-        polygons,
-        "union_parts",
-        lambda *args, **kwargs: calls.append(1) or union_parts(*args, **kwargs),
+        polygons, "clipper_parts", lambda *args: calls.append(1) or clipper_parts(*args)
     )
     outline = np.array([[0, 0], [6, 0], [6, 1], [1, 1], [1, 6], [0, 6]], dtype=float)
     prism = trimesh.creation.extrude_polygon(shapely.Polygon(outline), 1.0)

@@ -36,13 +36,11 @@ from .usd_assets import check_assets
 from .usd_layout import custom, error_text, opened, pxr, stored_name
 
 
-def _world(xformable: Any, time: Any, path: Path) -> np.ndarray:
-    """(4, 4) column-vector local-to-world transform of a prim; a SceneError
-    naming the prim when usd-core cannot compute it (an unknown xformOp) or it
-    is not finite."""
+def _world(xformable: Any, time: Any, path: Path, where: str) -> np.ndarray:
+    """(4, 4) column-vector local-to-world transform of a prim (named
+    ``where``); a SceneError naming it when usd-core cannot compute it (an
+    unknown xformOp) or it is not finite."""
     Tf = pxr()[2]
-    prim = xformable.GetPrim()
-    where = _where(prim)
     try:
         world = np.array(xformable.ComputeLocalToWorldTransform(time), dtype=np.float64).T
     except Tf.ErrorException as error:
@@ -76,11 +74,12 @@ _KINDS = {
 }
 
 
-def _typed(value: Any, kind: str, what: str, path: Path, where: str) -> Any:
-    """``value`` unchanged when it is of ``kind`` (a key of ``_KINDS``);
-    otherwise a SceneError naming ``what``. A corrupt crate can hand back any
-    value for any attribute (one value's entry can point at another's), and
-    a hand-edited layer can author any type under a shadowgeo name."""
+def _typed(value: Any, kind: str, what: str, path: Path, where: str, finite: bool = False) -> Any:
+    """``value`` unchanged when it is of ``kind`` (a key of ``_KINDS``), and
+    with ``finite`` every number finite (see :func:`_finite`); otherwise a
+    SceneError naming ``what``. A corrupt crate can hand back any value for
+    any attribute (one value's entry can point at another's), and a
+    hand-edited layer can author any type under a shadowgeo name."""
     if kind == "text":
         ok = isinstance(value, str)
     elif kind == "flag":
@@ -97,24 +96,34 @@ def _typed(value: Any, kind: str, what: str, path: Path, where: str) -> Any:
         raise SceneError(
             f"{what} holds {type(value).__name__}, not {_KINDS[kind]}", path=str(path), node=where
         )
-    return value
+    return _finite(value, what, path, where) if finite else value
 
 
-def _get(attribute: Any, kind: str, default: Any, time: Any, path: Path, where: str) -> Any:
+def _get(
+    attribute: Any,
+    kind: str,
+    default: Any,
+    time: Any,
+    path: Path,
+    where: str,
+    finite: bool = False,
+) -> Any:
     """The attribute's value at ``time`` (``default`` when it has none),
-    checked to be of ``kind`` (see :func:`_typed`)."""
+    checked by :func:`_typed`."""
     value = attribute.Get(time)
     if value is None:
         return default
-    return _typed(value, kind, str(attribute.GetName()), path, where)
+    return _typed(value, kind, str(attribute.GetName()), path, where, finite)
 
 
-def _custom(prim: Any, name: str, kind: str, default: Any, path: Path, where: str) -> Any:
-    """:func:`~shadowgeo.io.usd_layout.custom`, checked to be of ``kind``."""
+def _custom(
+    prim: Any, name: str, kind: str, default: Any, path: Path, where: str, finite: bool = False
+) -> Any:
+    """:func:`~shadowgeo.io.usd_layout.custom`, checked by :func:`_typed`."""
     value = custom(prim, name)
     if value is None:
         return default
-    return _typed(value, kind, f"shadowgeo:{name}", path, where)
+    return _typed(value, kind, f"shadowgeo:{name}", path, where, finite)
 
 
 def _triangles(
@@ -227,23 +236,24 @@ def _material(mesh: Any, time: Any, path: Path, where: str) -> Material:
     if bound:
         shader = bound.ComputeSurfaceSource()[0]
         emissive = shader.GetInput("emissiveColor") if shader else None
-        if emissive and emissive.Get() is not None:
-            value = _typed(emissive.Get(), "triple", "emissiveColor", path, where)
-            material.emissive_color = float_triple(_finite(value, "emissiveColor", path, where))
+        if emissive:
+            value = _get(emissive.GetAttr(), "triple", None, time, path, where, True)
+            if value is not None:
+                material.emissive_color = float_triple(value)
         roughness = shader.GetInput("roughness") if shader else None
-        if roughness and roughness.Get() is not None:
-            value = _typed(roughness.Get(), "number", "roughness", path, where)
-            material.shininess = 1.0 - float(_finite(value, "roughness", path, where))
+        if roughness:
+            value = _get(roughness.GetAttr(), "number", None, time, path, where, True)
+            if value is not None:
+                material.shininess = 1.0 - float(value)
         material.name = bound.GetPrim().GetDisplayName() or None
     return material
 
 
-def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
+def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any, where: str) -> None:
     """Append the shape of the ``UsdGeom.Mesh`` at ``prim``: its points,
     triangulated polygons, material, world transform and shadowgeo fields."""
     UsdGeom = pxr()[4]
     mesh = UsdGeom.Mesh(prim)
-    where = _where(prim)
     points = _points(mesh, time, path, where)
     counts, indices = _polygons(mesh, time, len(points), path, where)
     holes = _array(mesh.GetHoleIndicesAttr(), time, np.int64, path, where)
@@ -257,7 +267,7 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
         Shape(
             points,
             faces,
-            _world(mesh, time, path),
+            _world(mesh, time, path, where),
             material=_material(mesh, time, path, where),
             name=stored_name(prim, "role"),
             solid=not _get(mesh.GetDoubleSidedAttr(), "flag", False, time, path, where),
@@ -272,7 +282,7 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any) -> None:
     )
 
 
-def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
+def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> bool:
     """Append the light at ``prim``; False when it is no light shadowgeo models."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     if prim.IsA(UsdLux.DistantLight):
@@ -281,9 +291,8 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
         usd_light = UsdLux.SphereLight(prim)
     else:
         return False
-    world = _world(usd_light, time, path)
+    world = _world(usd_light, time, path, where)
     direction = world[:3, :3] @ [0.0, 0.0, -1.0]
-    where = _where(prim)
     radius = float(_custom(prim, "range", "number", math.inf, path, where))
     beam = _custom(prim, "beamWidth", "number", None, path, where)
     light: Light
@@ -311,13 +320,10 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
             light = PointLight(world[:3, 3], radius)
     shadow = _get(UsdLux.ShadowAPI(prim).GetShadowEnableAttr(), "flag", False, time, path, where)
     visibility = usd_light.ComputeVisibility(time)
-    color = _get(usd_light.GetColorAttr(), "triple", (1, 1, 1), time, path, where)
-    color = _finite(color, "color", path, where)
-    intensity = _get(usd_light.GetIntensityAttr(), "number", 0.0, time, path, where)
-    intensity = _finite(intensity, "intensity", path, where)
-    ambient = _custom(prim, "ambientIntensity", "number", 0.0, path, where)
-    ambient = _finite(ambient, "ambientIntensity", path, where)
-    attenuation = _custom(prim, "attenuation", "triple", (1.0, 0.0, 0.0), path, where)
+    color = _get(usd_light.GetColorAttr(), "triple", (1, 1, 1), time, path, where, True)
+    intensity = _get(usd_light.GetIntensityAttr(), "number", 0.0, time, path, where, True)
+    ambient = _custom(prim, "ambientIntensity", "number", 0.0, path, where, True)
+    attenuation = _custom(prim, "attenuation", "triple", (1.0, 0.0, 0.0), path, where, True)
     limits.check_lights(len(scene.lights) + 1, str(path))
     scene.lights.append(
         SceneLight(
@@ -326,7 +332,7 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path) -> bool:
             color=float_triple(color),
             intensity=float(intensity),
             ambient_intensity=float(ambient),
-            attenuation=float_triple(_finite(attenuation, "attenuation", path, where)),
+            attenuation=float_triple(attenuation),
             beam_width=float(beam if beam is not None else math.pi / 4),
             on=visibility != UsdGeom.Tokens.invisible,
             global_=bool(_custom(prim, "global", "flag", True, path, where)),
@@ -443,10 +449,10 @@ def _read_prim(
             return
         if imageable.ComputePurpose() == UsdGeom.Tokens.guide:
             return
-        _read_mesh(scene, prim, path, time)
+        _read_mesh(scene, prim, path, time, where)
         indices.append(_custom(prim, "index", "integer", None, path, where))
     elif prim.IsA(UsdGeom.Gprim):
         scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
     elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
-        if not _read_light(scene, prim, time, path):
+        if not _read_light(scene, prim, time, path, where):
             scene.warnings.append(f"{path.name}: skipped {where}: not a point, spot or sun")
