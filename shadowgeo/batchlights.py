@@ -448,7 +448,7 @@ def array_shadows(
         | np.any(projected.high > half[:, None], axis=1)
     ).tolist()
     loops = pieces(projected.points, outlines.loop_lengths.tolist())
-    whole = simple_outlines(
+    whole = whole_outlines(
         projected.points, outlines.loop_lengths, outlines.loop_light, len(chunk)
     ).tolist()
     corner_bounds = np.append(0, np.cumsum(outlines.loop_lengths)).tolist()
@@ -479,7 +479,7 @@ def array_shadows(
         first, last = loop_bounds[k], loop_bounds[k + 1]
         own = loops[first:last]
         parts: list[list[np.ndarray]] | poly.FlatParts | None = None
-        if whole[k] >= 0:  # one simple loop: no union to do (a copy: not a view of the chunk)
+        if whole[k] >= 0:  # one loop is the whole: no union to do (a copy: not a view of the chunk)
             parts = [[loops[whole[k]].copy()]]
         else:  # many convex loops (a city) stay one array from here to the result
             corners = slice(corner_bounds[first], corner_bounds[last])
@@ -644,56 +644,46 @@ _POINT_SLACK = 8 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
 _PRODUCT_SLACK = 1e-13
 
 
-def _turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(sign, cross): +1 where ``origin -> one -> two`` certainly turns left,
-    -1 certainly right, 0 when rounding could decide it; and the cross
-    product ``(one - origin) x (two - origin)`` itself."""
-    a, b = one - origin, two - origin
-    cross: np.ndarray = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    size_a = np.abs(a[:, 0]) + np.abs(a[:, 1])
-    size_b = np.abs(b[:, 0]) + np.abs(b[:, 1])
-    margin = 2 * _POINT_SLACK * (size_a + size_b) + _PRODUCT_SLACK * size_a * size_b
-    sign: np.ndarray = np.where(cross > margin, 1, np.where(cross < -margin, -1, 0))
-    return sign, cross
-
-
-def simple_outlines(
+def whole_outlines(
     points: np.ndarray, loop_lengths: np.ndarray, loop_light: np.ndarray, count: int
 ) -> np.ndarray:
-    """(count,) for each light, the index of its one loop when the light has
-    one loop only and that loop is certainly simple and counter-clockwise,
-    else -1: its inside is then the region of positive winding as it is,
-    with no 2-D union to find it (a convex caster's outline, and one loop of
-    a smooth caster's, is such a loop).
+    """(count,) for each light, the index of the one loop whose inside is
+    certainly the light's whole region of positive winding, else -1: that
+    region is then the loop as it is, with no 2-D union to find it.
 
-    The certificate: the loop is star-shaped around the mean of its corners
-    c. Every edge turns left around c beyond rounding (``c -> p_i -> p_i+1``)
-    and the edges go round c once in all, so they lie in wedges from c that
-    do not overlap: no two edges meet but neighbours at their corner.
+    The certificate (compiled: :func:`shadowgeo.kernels.whole_loops`): the
+    light's loop of largest area, the holder, is star-shaped around the
+    mean of its corners c and counter-clockwise (every edge turns left
+    around c beyond rounding, and the edges go round c once in all, so they
+    lie in wedges from c that do not overlap: the loop is simple). Every
+    other loop of the light is
+
+    - simple and counter-clockwise, being monotone along an axis (its
+      principal axis, which suits a crescent, else x, else y): it winds at
+      least zero times round any point;
+    - inside the holder: each corner strictly inside a wedge, each edge in
+      a run of wedges of less than half a turn, crossing each spoke within
+      it short of the holder's corner.
+
+    The holder winds once round each point inside it and the others at
+    least zero times, and none round a point outside it. That is every light
+    on a convex caster (one loop), and most on a dented one, whose folds
+    project inside its outline.
 
     ``points`` (c, 2) are the loops' corners one loop after another,
     ``loop_lengths`` (l,) their counts and ``loop_light`` (l,) (ascending)
     their lights, as :func:`project_outlines` and
     :class:`~shadowgeo.silhouette.Outlines` give them.
     """
-    result = np.full(count, -1, dtype=np.int64)
-    light_loops = np.bincount(loop_light, minlength=count)
-    alone = np.flatnonzero(light_loops[loop_light] == 1)  # loops that are their light's only one
-    if len(alone) == 0:
-        return result
-    lengths = loop_lengths[alone]
-    firsts = (np.cumsum(loop_lengths) - loop_lengths)[alone]
-    starts = np.cumsum(lengths) - lengths  # in the loops taken out
-    corner = np.repeat(firsts - starts, lengths) + np.arange(int(lengths.sum()))
-    mine = points[corner]
-    position = np.arange(len(mine))
-    ends = np.repeat(starts + lengths, lengths)
-    after = np.where(position + 1 == ends, np.repeat(starts, lengths), position + 1)
-    middle = np.repeat(np.add.reduceat(mine, starts) / lengths[:, None], lengths, axis=0)
-    sign, cross = _turns(middle, mine, mine[after])
-    spoke, next_spoke = mine - middle, mine[after] - middle
-    dot = spoke[:, 0] * next_spoke[:, 0] + spoke[:, 1] * next_spoke[:, 1]
-    sweep = np.add.reduceat(np.arctan2(cross, dot), starts)
-    star = (np.minimum.reduceat(sign, starts) == 1) & (np.abs(sweep - 2 * np.pi) < 1.0)
-    result[loop_light[alone[star]]] = alone[star]
-    return result
+    from .kernels import whole_loops  # numba: imported on first use
+
+    return whole_loops(
+        np.ascontiguousarray(points[:, 0]),
+        np.ascontiguousarray(points[:, 1]),
+        np.asarray(loop_lengths, dtype=np.int64),
+        np.asarray(loop_light, dtype=np.int64),
+        count,
+        _POINT_SLACK,
+        _PRODUCT_SLACK,
+        float(np.finfo(np.float64).eps),
+    )

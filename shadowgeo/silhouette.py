@@ -23,7 +23,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
 from .tolerance import Tolerance
-from .topology import Caster, MeshLike, as_caster, cycle_walk
+from .topology import COMPILED_ITEMS, Caster, MeshLike, as_caster, cycle_walk
 
 # Faces per block where a pass over every face goes a block at a time.
 _BLOCK = 1 << 16
@@ -302,9 +302,24 @@ def _cut(values: np.ndarray, cuts: np.ndarray) -> list[np.ndarray]:
     return [values[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
 
 
-def _successors(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+def _successors(starts: np.ndarray, ends: np.ndarray, span: int | None = None) -> np.ndarray:
     """(k,) the edge each edge goes on to: the k-th edge ending at a vertex
-    to the k-th edge starting there, both by edge index."""
+    to the k-th edge starting there, both by edge index.
+
+    ``span``: the keys come in blocks of that many (``light * span +
+    vertex``, the blocks rising with the edge index); many edges are then
+    matched by a compiled pass a block (:func:`shadowgeo.kernels.successors`,
+    the same result) instead of two sorts."""
+    size = span if span is not None else int(max(starts.max(), ends.max(), 0)) + 1
+    # (the lists' heads are ``span`` long: not for a few edges of a big mesh)
+    if len(starts) >= COMPILED_ITEMS and size <= 16 * len(starts):
+        from .kernels import successors
+
+        successor, matched = successors(
+            np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64), size
+        )
+        if matched:
+            return np.asarray(successor)
     out_order = _stable_order(starts)
     in_order = _stable_order(ends)
     mismatch = starts[out_order] != ends[in_order]
@@ -487,7 +502,7 @@ def _outlines_of_word(caster: Caster, fronts: list[np.ndarray] | np.ndarray) -> 
     if len(starts) == 0:
         empty = np.zeros(0, dtype=np.int64)
         return Outlines(empty, empty, empty, empty, empty)
-    walk, cuts = cycle_walk(_successors(starts, ends))
+    walk, cuts = cycle_walk(_successors(starts, ends, int(n_vertices)))
     loop_starts = np.concatenate([[0], cuts])
     lengths = np.diff(np.append(loop_starts, len(walk)))
     kept = lengths >= 3

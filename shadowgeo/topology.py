@@ -518,6 +518,13 @@ def unique_integers(
 MeshLike: TypeAlias = Union["trimesh.Trimesh", tuple[ArrayLike, ArrayLike], Caster]  # noqa: UP007
 
 
+# Permutations (and outlines: silhouette._successors) of at least this many
+# items are walked by compiled loops (shadowgeo.kernels, numba): the pointer
+# doubling below takes about 2 log2(k) passes over k items. Below it, numba's
+# import (about 0.7 s the first time) would cost more than it saves.
+COMPILED_ITEMS = 4096
+
+
 def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The cycles of a permutation, walked.
 
@@ -541,6 +548,13 @@ def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ([0, 2, 1, 3, 4], [3])
     """
     count = len(successor)
+    if count >= COMPILED_ITEMS:  # a compiled walk, the same result
+        from .kernels import cycle_walk as compiled
+
+        walk: np.ndarray
+        cuts: np.ndarray
+        walk, cuts = compiled(np.asarray(successor, dtype=np.int64))
+        return walk, cuts
     # Each item's cycle label: the smallest item on its cycle. After s
     # doublings a label is the least of 2^s successors; it is final once
     # every item agrees with its successor (then each cycle holds one value,

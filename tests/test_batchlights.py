@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 import shapely
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from reference import along_direction, ray_plane, segment_hits_mesh
 
 from shadowgeo import (
@@ -335,3 +337,141 @@ def test_one_loop_that_is_not_star_shaped_is_still_united(monkeypatch):
     assert shadow.diagnostics.n_loops == 1 and len(calls) == 2  # batch and single
     assert shadow.area == pytest.approx(11.0, rel=1e-12)
     assert shadow.to_shapely().symmetric_difference(expected).area < 1e-9
+
+
+# -- one loop the whole of many: no 2-D union ----------------------------------------------
+
+
+def _whole(loops):
+    """whole_outlines of one light's loops (a list of (k, 2) arrays)."""
+    from shadowgeo.batchlights import whole_outlines
+
+    points = np.concatenate(loops)
+    lengths = np.array([len(loop) for loop in loops])
+    return int(whole_outlines(points, lengths, np.zeros(len(loops), dtype=np.int64), 1)[0])
+
+
+def _ring(count, radius=10.0, centre=(0.0, 0.0), notch=None):
+    """A counter-clockwise regular polygon; ``notch`` = (k, depth) pulls
+    every k-th corner in to ``depth`` of the radius (a star: not convex)."""
+    angle = np.linspace(0, 2 * np.pi, count, endpoint=False)
+    r = np.full(count, radius)
+    if notch is not None:
+        r[:: notch[0]] *= notch[1]
+    return np.column_stack([centre[0] + r * np.cos(angle), centre[1] + r * np.sin(angle)])
+
+
+def _filled_area_outside(loops, region_loop):
+    """Area of the positive winding of ``loops`` outside ``region_loop``
+    and of ``region_loop`` outside it (Clipper2, independent of the
+    certificate)."""
+    from shadowgeo.polygons import fill
+
+    union = fill(loops)
+    region = fill([region_loop])
+    return (union - region).area(), (region - union).area()
+
+
+# counter-clockwise, off the holders' centre (a corner there is in no wedge)
+TRIANGLE = np.array([[0.3, 0.2], [2.0, 0.2], [0.5, 1.5]])
+CRESCENT = np.array(
+    [[np.cos(a) * 3, np.sin(a) * 3] for a in np.linspace(0.2, 2.6, 12)]
+    + [[np.cos(a) * 2.2, np.sin(a) * 2.2] for a in np.linspace(2.5, 0.3, 12)]
+)  # counter-clockwise, not star-shaped round its mean
+
+
+@pytest.mark.parametrize(
+    ("loops", "expected"),
+    [
+        ([_ring(40), TRIANGLE], 0),  # a simple counter-clockwise loop inside
+        ([TRIANGLE + [1, 1], _ring(40), CRESCENT], 1),  # the holder need not be first
+        ([_ring(40), CRESCENT + [-1.0, 0.5]], 0),
+        ([_ring(40, notch=(4, 0.7)), TRIANGLE], 0),  # a star-shaped holder
+        ([_ring(40), TRIANGLE[::-1]], -1),  # clockwise: a hole
+        ([_ring(40), TRIANGLE + [9.5, 0]], -1),  # a corner outside
+        ([_ring(40), np.array([[0, 0], [2, 2], [2, 0], [0, 2.0]])], -1),  # a bow tie
+        ([_ring(40, notch=(4, 0.5)), np.array([[9.0, -1], [9.0, 1], [-1, 0.5]])], -1),
+        ([np.array([[0, 0], [6, 0], [6, 1], [1, 1], [1, 6], [0, 6.0]])], -1),  # an L
+        ([CRESCENT], -1),
+        ([_ring(6)], 0),
+    ],
+)
+def test_one_loop_is_the_whole_only_when_it_certainly_is(loops, expected):
+    assert _whole(loops) == expected
+    if expected >= 0:  # the independent union agrees
+        extra, missing = _filled_area_outside(loops, loops[expected])
+        assert extra < 1e-9 and missing < 1e-9
+
+
+def test_an_edge_across_a_notch_is_outside_the_holder_though_its_corners_are_inside():
+    # The triangle's corners lie inside the star, but its edge x = 8 cuts
+    # through the notch whose corner is pulled in to (5, 0).
+    star = _ring(40, notch=(4, 0.5))
+    triangle = np.array([[8.0, -2.5], [8.0, 2.5], [2.0, 0.0]])  # counter-clockwise
+    assert np.allclose(star[0], [5, 0])
+    region = shapely.Polygon(star)
+    assert all(region.contains(shapely.Point(corner)) for corner in triangle)
+    assert not region.contains(shapely.LineString(triangle[:2]))
+    assert _whole([star, triangle]) == -1
+    assert _whole([star, triangle + [-4, 0.3]]) == 0  # moved inside: the star is the whole
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    corners=st.integers(3, 60),
+    notch=st.sampled_from([None, (2, 0.8), (3, 0.5), (5, 0.2)]),
+    small=st.lists(
+        st.tuples(
+            st.integers(3, 9),  # corners
+            st.floats(-7, 7),
+            st.floats(-7, 7),  # where
+            st.floats(0.05, 4),  # how big
+            st.integers(0, 2**31 - 1),  # the corners' shuffle
+        ),
+        min_size=1,
+        max_size=5,
+    ),
+)
+def test_whenever_a_loop_is_certified_the_union_is_that_loop(corners, notch, small):
+    holder = _ring(corners, notch=notch)
+    loops = [holder]
+    for count, cx, cy, size, seed in small:
+        rng = np.random.default_rng(seed)
+        shape = rng.uniform(-size, size, (count, 2)) + [cx, cy]  # any loop: crossing, either way
+        if seed % 3:  # or a simple one (convex or star-shaped), either way round
+            angle = np.sort(rng.uniform(0, 2 * np.pi, count))
+            radius = size * (rng.uniform(0.2, 1, count) if seed % 3 == 2 else np.ones(count))
+            shape = radius[..., None] * np.column_stack([np.cos(angle), np.sin(angle)])
+            shape = (shape[::-1] if seed % 2 else shape) + [cx, cy]
+        loops.append(shape)
+    found = _whole(loops)
+    if found >= 0:
+        extra, missing = _filled_area_outside(loops, loops[found])
+        assert extra < 1e-6 and missing < 1e-6
+
+
+def test_a_dented_caster_takes_the_holder_and_agrees_with_the_union(monkeypatch):
+    import shadowgeo.batchlights as batchlights
+
+    mesh = _sphere()
+    rng = np.random.default_rng(8)
+    lights = [PointLight(p) for p in rng.uniform([-3, 6, -3], [3, 9, 3], (30, 3))]
+    suns = rng.uniform([-0.6, -1, -0.6], [0.6, -0.5, 0.6], (30, 3))
+    lights += [DirectionalLight(d) for d in suns]
+    found = []
+    whole_outlines = batchlights.whole_outlines
+    monkeypatch.setattr(
+        batchlights, "whole_outlines", lambda *a: found.append(w := whole_outlines(*a)) or w
+    )
+    batch = project_shadow(mesh, lights, GROUND)
+    certified = np.concatenate(found)
+    # many lights see several loops, and most of those have one holding the rest
+    assert (certified >= 0).sum() >= 40
+    monkeypatch.setattr(batchlights, "whole_outlines", lambda *args: np.full(args[3], -1))
+    united = project_shadow(mesh, lights, GROUND)
+    for one, other in zip(batch, united, strict=True):
+        assert one.area == pytest.approx(other.area, rel=1e-12)
+        assert one.to_shapely().symmetric_difference(other.to_shapely()).area < 1e-9 * other.area
+    for k in range(0, len(lights), 7):
+        monkeypatch.setattr(batchlights, "whole_outlines", whole_outlines)
+        _same(batch[k], project_shadow(mesh, lights[k], GROUND))

@@ -15,6 +15,7 @@ from reference import hull_area_2d, ray_plane
 
 from shadowgeo import (
     DirectionalLight,
+    GeometryError,
     Plane,
     PointLight,
     SpotLight,
@@ -403,3 +404,44 @@ def test_chained_flat_outline_is_the_chained_loops_end_to_end(name):
         corners, lengths = chain_flat(starts, ends)
         assert lengths.tolist() == [len(loop) for loop in loops] and min(lengths) >= 3
         assert np.array_equal(corners, np.concatenate(loops))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_compiled_successors_equal_the_sorted_ones_in_blocks_and_touching(seed, monkeypatch):
+    import importlib
+
+    from shadowgeo.kernels import successors
+
+    module = importlib.import_module(
+        "shadowgeo.silhouette"
+    )  # the package's silhouette is a function
+
+    rng = np.random.default_rng(seed)
+    span, starts, ends = 0, [], []
+    for _ in range(int(rng.integers(1, 6))):  # blocks of edges, as lights of a batch
+        cycles, block_starts, block_ends = shuffled_cycles(rng, shortest=1)
+        shared = cycles[0][0]  # loops touching at a vertex: several edges in and out
+        block_starts = np.where(block_starts == cycles[-1][0], shared, block_starts)
+        block_ends = np.where(block_ends == cycles[-1][0], shared, block_ends)
+        starts.append(block_starts)
+        ends.append(block_ends)
+        span = max(span, int(block_starts.max()) + 1, int(block_ends.max()) + 1)
+    offsets = [span * k for k in range(len(starts))]
+    starts = np.concatenate([s + o for s, o in zip(starts, offsets, strict=True)])
+    ends = np.concatenate([e + o for e, o in zip(ends, offsets, strict=True)])
+    monkeypatch.setattr(module, "COMPILED_ITEMS", 10**9)
+    sorted_way = module._successors(starts, ends, span)
+    compiled, matched = successors(starts, ends, span)
+    assert matched and np.array_equal(compiled, sorted_way)
+    monkeypatch.setattr(module, "COMPILED_ITEMS", 0)
+    assert np.array_equal(module._successors(starts, ends, span), sorted_way)
+    # Blocks out of order, or an outline that does not close: not matched,
+    # and the sorting way tells which.
+    if len(offsets) > 1:
+        assert not successors(starts[::-1].copy(), ends[::-1].copy(), span)[1]
+    broken = ends.copy()
+    other = int(np.flatnonzero(ends != ends[0])[0])
+    broken[0] = broken[other]
+    assert not successors(starts, broken, span)[1]
+    with pytest.raises(GeometryError, match="not closed"):
+        module._successors(starts, broken, span)

@@ -233,13 +233,22 @@ def test_face_normals_and_facing_in_blocks_equal_the_whole_array_formulas():
     assert np.array_equal(fresh.facing(direction), dot(direction))
 
 
+@pytest.mark.parametrize("compiled", [False, True])
 @pytest.mark.parametrize("seed", range(5))
-def test_cycle_walk_follows_every_cycle_of_a_permutation(seed):
-    from shadowgeo.topology import cycle_walk
+def test_cycle_walk_follows_every_cycle_of_a_permutation(seed, compiled, monkeypatch):
+    import shadowgeo.topology as topology
 
     rng = np.random.default_rng(seed)
     successor = rng.permutation(int(rng.integers(1, 400)))
-    walk, cuts = cycle_walk(successor)
+    if seed == 4:  # long cycles and fixed points: a permutation of cycles of 1 .. 300 items
+        sizes = [1, 1, 300, 2, 50, 1, 17]
+        items = rng.permutation(sum(sizes))
+        successor = np.empty(len(items), dtype=np.int64)
+        for cycle in np.split(items, np.cumsum(sizes)[:-1]):
+            successor[cycle] = np.roll(cycle, -1)
+    # the compiled walk for long permutations, the doubling one for short
+    monkeypatch.setattr(topology, "COMPILED_ITEMS", 0 if compiled else 10**9)
+    walk, cuts = topology.cycle_walk(successor)
     # brute force: walk each cycle from its least item, cycles by that item
     seen, expected, starts = set(), [], []
     for item in range(len(successor)):
@@ -252,3 +261,10 @@ def test_cycle_walk_follows_every_cycle_of_a_permutation(seed):
             item = int(successor[item])
     assert walk.tolist() == expected
     assert cuts.tolist() == starts[1:]
+
+
+def test_the_compiled_cycle_walk_refuses_a_successor_out_of_range():
+    from shadowgeo.kernels import cycle_walk
+
+    with pytest.raises(IndexError, match="out of range"):
+        cycle_walk(np.array([1, 2, 3], dtype=np.int64))

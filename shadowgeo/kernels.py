@@ -1,0 +1,444 @@
+"""Compiled loops for the many-lights path (numba), where numpy would take
+dozens of passes over a chunk's arrays for a few hundred corners a light.
+
+Imported on first use only (numba's import takes about half a second):
+:func:`shadowgeo.batchlights.whole_outlines` and, for long permutations,
+:func:`shadowgeo.topology.cycle_walk` are the callers. Each function is
+compiled once and cached beside this file (or in numba's user cache when
+this folder is read-only).
+
+Every sign here is a certificate: it is taken only when it holds beyond the
+rounding of the numbers that give it, and a loop or light that is not
+certified goes the general way (a 2-D union by Clipper2), never a guess.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+# A sign is certain when the cross product is beyond its light's margin
+# (see whole_loops), an order along an axis when the difference is beyond
+# the axis slack.
+
+
+@nb.njit(cache=True, inline="always")
+def _pseudo_angle(dx: float, dy: float) -> float:
+    """A number in [0, 4) that grows with the angle of (dx, dy) from the x
+    axis, counter-clockwise; p(angle + pi) = p(angle) + 2 (mod 4)."""
+    size = abs(dx) + abs(dy)
+    ratio = dy / size if size > 0 else 0.0
+    if dx >= 0:
+        return ratio + 4.0 if dy < 0 else ratio
+    return 2.0 - ratio
+
+
+@nb.njit(cache=True)
+def _star(
+    x: np.ndarray, y: np.ndarray, first: int, n: int, margin: float, rel: np.ndarray
+) -> tuple[bool, float, float]:
+    """Whether the loop of corners ``first .. first + n`` is certainly
+    star-shaped around the mean of its corners and counter-clockwise: each
+    edge turns left round the mean beyond ``margin``, and the spokes' angles
+    fall back once only round the loop (each certain turn is a step far
+    beyond the angles' rounding). Fills ``rel[:n]`` with each spoke's
+    pseudo-angle from the first spoke's, in [0, 4) and rising; returns the
+    mean too."""
+    cx = 0.0
+    cy = 0.0
+    for i in range(first, first + n):
+        cx += x[i]
+        cy += y[i]
+    cx /= n
+    cy /= n
+    falls = 0
+    base = _pseudo_angle(x[first] - cx, y[first] - cy)
+    previous = base
+    for k in range(n):
+        i = first + k
+        j = first + (k + 1) % n
+        ax = x[i] - cx
+        ay = y[i] - cy
+        # (p_i - c) x (p_i+1 - c) as (p_i - c) x (p_i+1 - p_i)
+        if not ax * (y[j] - y[i]) - ay * (x[j] - x[i]) > margin:
+            return False, cx, cy
+        angle = _pseudo_angle(ax, ay)
+        if k > 0 and angle < previous:
+            falls += 1
+        previous = angle
+        rel[k] = angle - base + (4.0 if angle < base else 0.0)
+    if base < previous:  # the step from the last spoke back to the first
+        falls += 1
+    return falls == 1, cx, cy
+
+
+@nb.njit(cache=True)
+def _monotone(
+    x: np.ndarray,
+    y: np.ndarray,
+    first: int,
+    n: int,
+    c: float,
+    s: float,
+    slack: float,
+    margin: float,
+    order: np.ndarray,
+) -> bool:
+    """Whether the loop of corners ``first .. first + n`` is certainly simple
+    and counter-clockwise by being monotone along the axis (c, s): from one
+    lowest corner its corners rise strictly to one highest (the lower side)
+    and fall strictly back (the upper side), and each corner between the
+    ends of one side lies strictly left of the other side's edge across
+    from it. It is then the region between the graphs of two functions, one
+    above the other. Orders are certain beyond ``slack``, sides beyond
+    ``margin`` (a turn of axes keeps the signs of the loop's own cross
+    products). ``order`` is scratch of at least ``n + 1`` items."""
+    if n < 3:
+        return False
+    lowest = -1
+    highest = -1
+    changes = 0
+    for k in range(n):
+        i = first + k
+        j = first + (k + 1) % n
+        h = first + (k - 1) % n
+        rise = (x[j] * c + y[j] * s) - (x[i] * c + y[i] * s)
+        if not abs(rise) > slack:
+            return False
+        fall_in = (x[i] * c + y[i] * s) - (x[h] * c + y[h] * s) < 0
+        if rise > 0 and fall_in:
+            lowest = k
+            changes += 1
+        elif rise < 0 and not fall_in:
+            highest = k
+            changes += 1
+    if changes != 2:
+        return False
+    # The upper side in rising order: from the lowest corner backwards to
+    # the highest.
+    m = (lowest - highest) % n + 1
+    for t in range(m):
+        order[t] = first + (lowest - t) % n
+    # Each corner strictly inside the lower side against the upper side's
+    # edge spanning it; the upper side's, against the lower side's.
+    u = 0
+    k = (lowest + 1) % n
+    while k != highest:
+        i = first + k
+        along = x[i] * c + y[i] * s
+        while u + 1 < m - 1 and x[order[u + 1]] * c + y[order[u + 1]] * s <= along:
+            u += 1
+        lo = order[u]
+        hi = order[u + 1]
+        if not (
+            along - (x[lo] * c + y[lo] * s) > slack and (x[hi] * c + y[hi] * s) - along > slack
+        ):
+            return False
+        # the upper edge runs hi -> lo (falling); the inside is on its left
+        if not (x[lo] - x[hi]) * (y[i] - y[hi]) - (y[lo] - y[hi]) * (x[i] - x[hi]) > margin:
+            return False
+        k = (k + 1) % n
+    # The lower side in rising order: from the lowest corner forwards.
+    m = (highest - lowest) % n + 1
+    for t in range(m):
+        order[t] = first + (lowest + t) % n
+    u = 0
+    for t in range(1, (lowest - highest) % n):  # the upper side's, rising
+        i = first + (lowest - t) % n
+        along = x[i] * c + y[i] * s
+        while u + 1 < m - 1 and x[order[u + 1]] * c + y[order[u + 1]] * s <= along:
+            u += 1
+        lo = order[u]
+        hi = order[u + 1]
+        if not (
+            along - (x[lo] * c + y[lo] * s) > slack and (x[hi] * c + y[hi] * s) - along > slack
+        ):
+            return False
+        # the lower edge runs lo -> hi (rising); the inside is on its left
+        if not (x[hi] - x[lo]) * (y[i] - y[lo]) - (y[hi] - y[lo]) * (x[i] - x[lo]) > margin:
+            return False
+    return True
+
+
+@nb.njit(cache=True)
+def _simple(
+    x: np.ndarray,
+    y: np.ndarray,
+    first: int,
+    n: int,
+    slack: float,
+    margin: float,
+    order: np.ndarray,
+) -> bool:
+    """:func:`_monotone` along the loop's principal axis (a crescent's
+    length), else along x, else along y."""
+    mx = 0.0
+    my = 0.0
+    for i in range(first, first + n):
+        mx += x[i]
+        my += y[i]
+    mx /= n
+    my /= n
+    sxx = 0.0
+    sxy = 0.0
+    syy = 0.0
+    for i in range(first, first + n):
+        dx = x[i] - mx
+        dy = y[i] - my
+        sxx += dx * dx
+        sxy += dx * dy
+        syy += dy * dy
+    angle = 0.5 * np.arctan2(2 * sxy, sxx - syy)
+    if _monotone(x, y, first, n, np.cos(angle), np.sin(angle), slack, margin, order):
+        return True
+    if _monotone(x, y, first, n, 1.0, 0.0, slack, margin, order):
+        return True
+    return _monotone(x, y, first, n, 0.0, 1.0, slack, margin, order)
+
+
+@nb.njit(cache=True, inline="always")
+def _wedge(px: float, py: float, rel: np.ndarray, n: int, base: float) -> tuple[int, float]:
+    """The wedge of the star-shaped loop (spokes' angles ``rel`` from the
+    first spoke's, ``base``) whose angles hold the direction (px, py) from
+    its centre: the last spoke at or before it; and that direction's angle
+    from the first spoke."""
+    angle = _pseudo_angle(px, py)
+    turn = angle - base + (4.0 if angle < base else 0.0)
+    lo = 0
+    hi = n
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if rel[mid] <= turn:
+            lo = mid
+        else:
+            hi = mid
+    return lo, turn
+
+
+@nb.njit(cache=True)
+def _held(
+    x: np.ndarray,
+    y: np.ndarray,
+    first: int,
+    n: int,
+    h_first: int,
+    h_n: int,
+    rel: np.ndarray,
+    cx: float,
+    cy: float,
+    margin: float,
+) -> bool:
+    """Whether the loop ``first .. first + n`` is certainly inside the
+    star-shaped loop ``h_first .. h_first + h_n`` (centre (cx, cy), spokes'
+    angles ``rel``): each corner strictly inside the wedge (the triangle
+    from the centre to an edge) its angle finds, and each edge crossing
+    every spoke between its ends' wedges short of the holder's corner, the
+    wedges spanning less than half a turn. The pieces of an edge between
+    two spokes then lie in the wedge between them."""
+    base = _pseudo_angle(x[h_first] - cx, y[h_first] - cy)
+    for k in range(n):
+        i = first + k
+        j = first + (k + 1) % n
+        ox = x[i] - cx
+        oy = y[i] - cy
+        w_i, t_i = _wedge(ox, oy, rel, h_n, base)
+        w_j, t_j = _wedge(x[j] - cx, y[j] - cy, rel, h_n, base)
+        a = h_first + w_i
+        b = h_first + (w_i + 1) % h_n
+        ax = x[a] - cx
+        ay = y[a] - cy
+        bx = x[b] - cx
+        by = y[b] - cy
+        if not (
+            ax * oy - ay * ox > margin
+            and ox * by - oy * bx > margin
+            and (bx - ax) * (oy - ay) - (by - ay) * (ox - ax) > margin
+        ):
+            return False
+        ccw = (t_j - t_i) % 4.0 < 2.0
+        lo = w_i if ccw else w_j
+        hi = w_j if ccw else w_i
+        if lo == hi:
+            continue
+        top = (hi + 1) % h_n
+        if top == lo or not (rel[top] - rel[lo]) % 4.0 < 1.9:
+            return False
+        dx = x[j] - x[i]
+        dy = y[j] - y[i]
+        to_centre = dx * (cy - y[i]) - dy * (cx - x[i])
+        if not abs(to_centre) > margin:
+            return False
+        spoke = (lo + 1) % h_n
+        while True:
+            v = h_first + spoke
+            to_corner = dx * (y[v] - y[i]) - dy * (x[v] - x[i])
+            if not (
+                (to_centre > margin and to_corner < -margin)
+                or (to_centre < -margin and to_corner > margin)
+            ):
+                return False
+            if spoke == hi:
+                break
+            spoke = (spoke + 1) % h_n
+    return True
+
+
+@nb.njit(cache=True)
+def whole_loops(
+    x: np.ndarray,
+    y: np.ndarray,
+    loop_lengths: np.ndarray,
+    loop_light: np.ndarray,
+    count: int,
+    point_slack: float,
+    product_slack: float,
+    epsilon: float,
+) -> np.ndarray:
+    """(count,) for each light, the index of the one loop whose inside is
+    certainly the light's whole region of positive winding, else -1 (see
+    :func:`shadowgeo.batchlights.whole_outlines` for the certificates).
+
+    ``x``, ``y`` are the loops' corners one loop after another,
+    ``loop_lengths`` their counts and ``loop_light`` (ascending) their
+    lights. A light's margins come from the box of its corners (size s: its
+    width plus its height; any difference of two of its points is at most s
+    in |dx| + |dy|): a cross product of two differences is off by at most
+    ``4 point_slack s + product_slack s^2``, a coordinate along an axis by
+    ``4 epsilon (|x| + |y|)`` at most.
+    """
+    result = np.full(count, -1, dtype=np.int64)
+    n_loops = len(loop_lengths)
+    firsts = np.empty(n_loops + 1, dtype=np.int64)
+    firsts[0] = 0
+    longest = 1
+    for loop in range(n_loops):
+        firsts[loop + 1] = firsts[loop] + loop_lengths[loop]
+        longest = max(longest, loop_lengths[loop])
+    rel = np.empty(longest)
+    order = np.empty(longest + 1, dtype=np.int64)
+    start = 0
+    while start < n_loops:
+        light = loop_light[start]
+        stop = start
+        while stop < n_loops and loop_light[stop] == light:
+            stop += 1
+        low_x = np.inf
+        high_x = -np.inf
+        low_y = np.inf
+        high_y = -np.inf
+        for i in range(firsts[start], firsts[stop]):
+            low_x = min(low_x, x[i])
+            high_x = max(high_x, x[i])
+            low_y = min(low_y, y[i])
+            high_y = max(high_y, y[i])
+        size = (high_x - low_x) + (high_y - low_y)
+        margin = 4 * point_slack * size + product_slack * size * size
+        slack = 8 * epsilon * (max(-low_x, high_x) + max(-low_y, high_y))
+        # the loop of largest area holds the others, if any does
+        holder = start
+        best = -np.inf
+        for loop in range(start, stop):
+            twice = 0.0
+            a, n = firsts[loop], loop_lengths[loop]
+            for k in range(n):
+                i = a + k
+                j = a + (k + 1) % n
+                twice += x[i] * y[j] - x[j] * y[i]
+            if twice >= best:
+                best = twice
+                holder = loop
+        h_first, h_n = firsts[holder], loop_lengths[holder]
+        star, cx, cy = _star(x, y, h_first, h_n, margin, rel)
+        certified = star
+        for loop in range(start, stop):
+            if not certified:
+                break
+            if loop == holder:
+                continue
+            a, n = firsts[loop], loop_lengths[loop]
+            certified = _simple(x, y, a, n, slack, margin, order) and _held(
+                x, y, a, n, h_first, h_n, rel, cx, cy, margin
+            )
+        if certified:
+            result[light] = holder
+        start = stop
+    return result
+
+
+@nb.njit(cache=True)
+def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`shadowgeo.topology.cycle_walk` walked one item after another
+    (the same result: each cycle from its lowest item, cycles by that
+    item). Items are taken in rising order; the first not yet walked is the
+    lowest of its cycle, all lower items being on cycles walked before."""
+    count = len(successor)
+    for item in range(count):  # numba does not check indices
+        if successor[item] < 0 or successor[item] >= count:
+            raise IndexError("cycle_walk: a successor out of range")
+    walk = np.empty(count, dtype=np.int64)
+    cuts = np.empty(count, dtype=np.int64)
+    seen = np.zeros(count, dtype=np.bool_)
+    filled = 0
+    n_cuts = 0
+    for first in range(count):
+        if seen[first]:
+            continue
+        if filled > 0:
+            cuts[n_cuts] = filled
+            n_cuts += 1
+        item = first
+        while not seen[item]:
+            seen[item] = True
+            walk[filled] = item
+            filled += 1
+            item = successor[item]
+    return walk, cuts[:n_cuts].copy()
+
+
+@nb.njit(cache=True)
+def successors(starts: np.ndarray, ends: np.ndarray, span: int) -> tuple[np.ndarray, bool]:
+    """``shadowgeo.silhouette._successors`` (the k-th edge ending at a key,
+    by edge index, goes on to the k-th edge starting there) for keys in
+    blocks of ``span`` (a light's vertices: ``light * span + vertex``),
+    each edge's two keys in one block, blocks rising with the edge index:
+    one pass a block with a list of edges out of each vertex. False when the
+    keys are not so (or the edges do not close): the caller then sorts."""
+    count = len(starts)
+    successor = np.empty(count, dtype=np.int64)
+    head = np.full(span, -1, dtype=np.int64)
+    tail = np.empty(span, dtype=np.int64)
+    following = np.full(count, -1, dtype=np.int64)
+    first = 0
+    block = -1
+    while first < count:
+        if starts[first] < 0 or starts[first] // span <= block:
+            return successor, False
+        block = starts[first] // span
+        base = block * span
+        last = first
+        while last < count and starts[last] // span == block:
+            last += 1
+        for edge in range(first, last):  # the edges out of each vertex, in order
+            vertex = starts[edge] - base
+            if head[vertex] < 0:
+                head[vertex] = edge
+            else:
+                following[tail[vertex]] = edge
+            tail[vertex] = edge
+        closed = True
+        for edge in range(first, last):  # the k-th in goes on to the k-th out
+            end = ends[edge] - base
+            if end < 0 or end >= span or head[end] < 0:
+                closed = False
+                break
+            successor[edge] = head[end]
+            head[end] = following[head[end]]
+        for edge in range(first, last):
+            vertex = starts[edge] - base
+            if head[vertex] >= 0:
+                closed = False
+            head[vertex] = -1
+        if not closed:
+            return successor, False
+        first = last
+    return successor, True
