@@ -21,6 +21,10 @@ import numpy as np
 # (see whole_loops), an order along an axis when the difference is beyond
 # the axis slack.
 
+# Directions (over half a turn, from x) in which a loop is tried for being
+# monotone when it is not along its principal axis.
+_DIRECTIONS = 16
+
 
 @nb.njit(cache=True, inline="always")
 def _pseudo_angle(dx: float, dy: float) -> float:
@@ -112,6 +116,8 @@ def _monotone(
         elif rise < 0 and not fall_in:
             highest = k
             changes += 1
+        if changes > 2:
+            return False
     if changes != 2:
         return False
     # The upper side in rising order: from the lowest corner backwards to
@@ -171,7 +177,8 @@ def _simple(
     order: np.ndarray,
 ) -> bool:
     """:func:`_monotone` along the loop's principal axis (a crescent's
-    length), else along x, else along y."""
+    length), else along one of ``_DIRECTIONS`` directions half a turn apart
+    from x."""
     mx = 0.0
     my = 0.0
     for i in range(first, first + n):
@@ -191,9 +198,11 @@ def _simple(
     angle = 0.5 * np.arctan2(2 * sxy, sxx - syy)
     if _monotone(x, y, first, n, np.cos(angle), np.sin(angle), slack, margin, order):
         return True
-    if _monotone(x, y, first, n, 1.0, 0.0, slack, margin, order):
-        return True
-    return _monotone(x, y, first, n, 0.0, 1.0, slack, margin, order)
+    for k in range(_DIRECTIONS):  # a fold's loop that bends is often monotone another way
+        angle = np.pi * k / _DIRECTIONS
+        if _monotone(x, y, first, n, np.cos(angle), np.sin(angle), slack, margin, order):
+            return True
+    return False
 
 
 @nb.njit(cache=True, inline="always")
