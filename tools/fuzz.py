@@ -1060,8 +1060,19 @@ def geometry_case(seed: int, index: int) -> dict:
         mesh = trimesh.creation.box(extents=rng.uniform(0.01, 2, size=3))
         vertices, faces = mesh.vertices, mesh.faces
     elif kind == "sphere":
-        mesh = trimesh.creation.icosphere(subdivisions=1)
-        vertices, faces = mesh.vertices, mesh.faces
+        # most with a dent (not convex: its folds cast outline loops inside
+        # the outline, the many-loop certificate's case); drawn apart so the
+        # other kinds' cases stay as they were
+        dent = np.random.default_rng([seed, index, 7])
+        mesh = trimesh.creation.icosphere(subdivisions=int(dent.integers(1, 4)))
+        vertices, faces = mesh.vertices.copy(), mesh.faces
+        if dent.random() < 0.7:  # the cap above a level pressed in: a crater, still embedded
+            axis = dent.normal(size=3)
+            axis /= np.linalg.norm(axis)
+            level, depth = dent.uniform(0.2, 0.9), dent.uniform(0.3, 0.95)
+            height = vertices @ axis
+            above = height > level
+            vertices[above] -= ((1 - depth) * height[above])[:, None] * axis
     elif kind == "grid":
         vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1.0]]) + rng.normal(size=3)
         faces = np.array([[0, 1, 2], [0, 2, 3]])
