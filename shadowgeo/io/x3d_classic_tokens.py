@@ -15,19 +15,21 @@ from typing import NamedTuple, cast
 
 from ..errors import SceneError
 
+# One match a token, with the white space (and commas) before it.
 _TOKEN = re.compile(
-    r"""(?P<space>[ \t\r\n,]+)
-      | (?P<comment>\#[^\n\r]*)
-      | (?P<string>"(?:[^"\\]|\\.)*")
-      | (?P<open>")
-      | (?P<numbers>\[[0-9a-fA-FxX.+\- \t\r\n,]*\])
-      | (?P<punct>[{}\[\]])
-      | (?P<word>[^ \t\r\n,\#"{}\[\]]+)""",
+    r"""[ \t\r\n,]*
+      (?: (?P<comment>\#[^\n\r]*)
+        | (?P<string>"(?:[^"\\]|\\.)*")
+        | (?P<open>")
+        | (?P<numbers>\[[0-9a-fA-FxX.+\- \t\r\n,]*\])
+        | (?P<punct>[{}\[\]])
+        | (?P<word>[^ \t\r\n,\#"{}\[\]]+) )""",
     re.VERBOSE | re.DOTALL,
 )
 _NUMBER = re.compile(r"[+-]?(?:0[xX][0-9A-Fa-f]+|(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)")
 _HEX = re.compile(r"[+-]?0[xX][0-9A-Fa-f]+")
 _ESCAPE = re.compile(r"\\(.)", re.DOTALL)
+_BREAK = re.compile("\n")
 
 
 class Token(NamedTuple):
@@ -58,10 +60,19 @@ def tokens(text: str, path: str) -> list[Token]:
      ('word', 'b'), ('punct', ']'), ('comment', ' c')]
     """
     found: list[Token] = []
-    line = 1
+    # Lines are counted once for the whole text: each token's is the number
+    # of line breaks before its start.
+    breaks = [match.start() for match in _BREAK.finditer(text)]
+    line, next_break, seen = 1, (breaks[0] if breaks else len(text)), 0
     for match in _TOKEN.finditer(text):
         # every alternative of _TOKEN is a named group
-        kind, value = cast(str, match.lastgroup), match.group()
+        kind = cast(str, match.lastgroup)
+        start = match.start(kind)
+        while next_break < start:  # the breaks before this token
+            seen += 1
+            next_break = breaks[seen] if seen < len(breaks) else len(text)
+        line = seen + 1
+        value = match.group(kind)
         if kind == "open":
             raise SceneError(
                 "a string is not closed before the end of the file", path=path, line=line
@@ -72,9 +83,8 @@ def tokens(text: str, path: str) -> list[Token]:
             found.append(Token(kind, value[1:-1], line))
         elif kind == "comment":
             found.append(Token(kind, value[1:], line))
-        elif kind != "space":
+        else:
             found.append(Token(kind, value, line))
-        line += value.count("\n")
     return found
 
 
