@@ -117,6 +117,21 @@ def test_transform_order_translation_rotation_scale_center(tmp_path):
     np.testing.assert_allclose(world[1], [1, 0, 3], atol=1e-12)
 
 
+def test_a_translation_alone_gives_the_numbers_of_the_whole_transform(tmp_path):
+    # A Transform with only a translation takes a short way: the same bits as
+    # the same Transform with every other field written out at its default.
+    points = "0.1 0.2 0.3  1e-3 7 -2  3.3 0 1e5"
+    short = '<Transform translation="0.7 -1.3 2.9">' + TRIANGLE.format(points) + "</Transform>"
+    whole = (
+        '<Transform translation="0.7 -1.3 2.9" rotation="0 0 1 0" scale="1 1 1" '
+        'scaleOrientation="0 0 1 0" center="0 0 0">' + TRIANGLE.format(points) + "</Transform>"
+    )
+    (one,) = scene_of(tmp_path, short).shapes
+    (other,) = scene_of(tmp_path, whole).shapes
+    assert np.array_equal(one.world_vertices, other.world_vertices)
+    assert np.array_equal(one.world_vertices[1], np.array([1e-3, 7, -2]) + [0.7, -1.3, 2.9])
+
+
 def test_scale_orientation(tmp_path):
     # scaleOrientation turns x onto y: scale (2, 1, 1) then stretches along y only
     body = (

@@ -453,12 +453,21 @@ def _definitions(context: Context, root: Element) -> dict[str, list[Element]]:
     return defs
 
 
+# The fields of a Transform other than its translation: where none is given,
+# the local matrix is a translation.
+_TURNING_FIELDS = ("rotation", "scale", "scaleOrientation", "center")
+
+
 def _local_matrix(context: Context, element: Element, tag: str) -> np.ndarray:
     """4x4 local-to-parent matrix of a grouping node (identity for plain groups)."""
     local = np.eye(4)
     if tag == "MatrixTransform":
         local = context.field(element, "matrix").reshape(4, 4).T.copy()
     elif tag in ("Transform", "CADPart"):
+        if all(element.get(name) is None for name in _TURNING_FIELDS):
+            # (the defaults' matrices are exact identities: the same numbers)
+            local[:3, 3] = context.field(element, "translation")
+            return local
         names = ("translation", "rotation", "scale", "scaleOrientation", "center")
         field = {name: context.field(element, name) for name in names}
         orientation = rotation_matrix(field["scaleOrientation"])
