@@ -160,6 +160,8 @@ class _Parser:
     # -- tokens ------------------------------------------------------------------
     def peek(self, ahead: int = 0) -> Token | None:
         index = self.position
+        if ahead == 0 and index < len(self.tokens) and self.tokens[index].kind != "comment":
+            return self.tokens[index]  # the common case, first
         while index < len(self.tokens):
             if self.tokens[index].kind != "comment":
                 if ahead == 0:
@@ -169,6 +171,10 @@ class _Parser:
         return None
 
     def take(self, what: str = "a token") -> Token:
+        position = self.position
+        if position < len(self.tokens) and self.tokens[position].kind != "comment":
+            self.position = position + 1  # the common case, first
+            return self.tokens[position]
         while self.position < len(self.tokens) and self.tokens[self.position].kind == "comment":
             self.comments.append(self.tokens[self.position])
             self.position += 1
