@@ -644,6 +644,25 @@ _POINT_SLACK = 8 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
 _PRODUCT_SLACK = 1e-13
 
 
+def _turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sign, cross): +1 where ``origin -> one -> two`` certainly turns left,
+    -1 certainly right, 0 when rounding could decide it; and the cross
+    product ``(one - origin) x (two - origin)`` itself."""
+    a, b = one - origin, two - origin
+    cross: np.ndarray = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    size_a = np.abs(a[:, 0]) + np.abs(a[:, 1])
+    size_b = np.abs(b[:, 0]) + np.abs(b[:, 1])
+    margin = 2 * _POINT_SLACK * (size_a + size_b) + _PRODUCT_SLACK * size_a * size_b
+    sign: np.ndarray = np.where(cross > margin, 1, np.where(cross < -margin, -1, 0))
+    return sign, cross
+
+
+# Lights of at most this many outline loops are tried for one loop holding
+# the others (a dented caster's folds); a light of more (a city, many shapes
+# as one caster) is not: its largest loop would not hold them.
+HELD_LOOPS = 64
+
+
 def whole_outlines(
     points: np.ndarray, loop_lengths: np.ndarray, loop_light: np.ndarray, count: int
 ) -> np.ndarray:
@@ -651,39 +670,84 @@ def whole_outlines(
     certainly the light's whole region of positive winding, else -1: that
     region is then the loop as it is, with no 2-D union to find it.
 
-    The certificate (compiled: :func:`shadowgeo.kernels.whole_loops`): the
-    light's loop of largest area, the holder, is star-shaped around the
-    mean of its corners c and counter-clockwise (every edge turns left
-    around c beyond rounding, and the edges go round c once in all, so they
-    lie in wedges from c that do not overlap: the loop is simple). Every
-    other loop of the light is
+    Two certificates, each for lights of one kind, so that a light gets the
+    same answer alone or among others:
 
-    - simple and counter-clockwise, being monotone along an axis (its
-      principal axis, which suits a crescent, else x, else y): it winds at
-      least zero times round any point;
-    - inside the holder: each corner strictly inside a wedge, each edge in
-      a run of wedges of less than half a turn, crossing each spoke within
-      it short of the holder's corner.
-
-    The holder winds once round each point inside it and the others at
-    least zero times, and none round a point outside it. That is every light
-    on a convex caster (one loop), and most on a dented one, whose folds
-    project inside its outline.
+    - **One loop** (numpy, :func:`_star_shaped_alone`): star-shaped around
+      the mean of its corners and counter-clockwise. That is every light on
+      a convex caster, and most on a smooth one.
+    - **Two to** :data:`HELD_LOOPS` **loops** (compiled:
+      :func:`shadowgeo.kernels.whole_loops`, which imports numba the first
+      time): the light's loop of largest area, the holder, is star-shaped
+      round the mean of its corners; every other loop is simple and
+      counter-clockwise, being monotone along an axis (its principal axis,
+      which suits a crescent, else one of 16 directions), so it winds at
+      least zero times round any point; and inside the holder, each corner
+      strictly inside a wedge (the triangle from the mean to an edge), each
+      edge crossing every spoke between its ends' wedges short of the
+      holder's corner. The holder winds once round each point inside it and
+      the others at least zero times, and none round a point outside it:
+      a dented caster, whose folds project inside its outline.
 
     ``points`` (c, 2) are the loops' corners one loop after another,
     ``loop_lengths`` (l,) their counts and ``loop_light`` (l,) (ascending)
     their lights, as :func:`project_outlines` and
     :class:`~shadowgeo.silhouette.Outlines` give them.
     """
+    result = _star_shaped_alone(points, loop_lengths, loop_light, count)
+    light_loops = np.bincount(loop_light, minlength=count)
+    tried = (light_loops >= 2) & (light_loops <= HELD_LOOPS)
+    if not tried.any():
+        return result
     from .kernels import whole_loops  # numba: imported on first use
 
-    return whole_loops(
-        np.ascontiguousarray(points[:, 0]),
-        np.ascontiguousarray(points[:, 1]),
-        np.asarray(loop_lengths, dtype=np.int64),
-        np.asarray(loop_light, dtype=np.int64),
+    loops = np.flatnonzero(tried[loop_light])
+    corners = np.repeat(tried[loop_light], loop_lengths)
+    held = whole_loops(
+        np.ascontiguousarray(points[corners, 0]),
+        np.ascontiguousarray(points[corners, 1]),
+        np.asarray(loop_lengths[loops], dtype=np.int64),
+        np.asarray(loop_light[loops], dtype=np.int64),
         count,
         _POINT_SLACK,
         _PRODUCT_SLACK,
         float(np.finfo(np.float64).eps),
     )
+    found = held >= 0
+    result[found] = loops[held[found]]  # (held counts the tried loops only)
+    return result
+
+
+def _star_shaped_alone(
+    points: np.ndarray, loop_lengths: np.ndarray, loop_light: np.ndarray, count: int
+) -> np.ndarray:
+    """(count,) for each light, the index of its one loop when the light has
+    one loop only and that loop is certainly simple and counter-clockwise,
+    else -1 (the first certificate of :func:`whole_outlines`).
+
+    The loop is star-shaped around the mean of its corners c: every edge
+    turns left around c beyond rounding (``c -> p_i -> p_i+1``) and the
+    edges go round c once in all, so they lie in wedges from c that do not
+    overlap: no two edges meet but neighbours at their corner.
+    """
+    result = np.full(count, -1, dtype=np.int64)
+    light_loops = np.bincount(loop_light, minlength=count)
+    alone = np.flatnonzero(light_loops[loop_light] == 1)  # loops that are their light's only one
+    if len(alone) == 0:
+        return result
+    lengths = loop_lengths[alone]
+    firsts = (np.cumsum(loop_lengths) - loop_lengths)[alone]
+    starts = np.cumsum(lengths) - lengths  # in the loops taken out
+    corner = np.repeat(firsts - starts, lengths) + np.arange(int(lengths.sum()))
+    mine = points[corner]
+    position = np.arange(len(mine))
+    ends = np.repeat(starts + lengths, lengths)
+    after = np.where(position + 1 == ends, np.repeat(starts, lengths), position + 1)
+    middle = np.repeat(np.add.reduceat(mine, starts) / lengths[:, None], lengths, axis=0)
+    sign, cross = _turns(middle, mine, mine[after])
+    spoke, next_spoke = mine - middle, mine[after] - middle
+    dot = spoke[:, 0] * next_spoke[:, 0] + spoke[:, 1] * next_spoke[:, 1]
+    sweep = np.add.reduceat(np.arctan2(cross, dot), starts)
+    star = (np.minimum.reduceat(sign, starts) == 1) & (np.abs(sweep - 2 * np.pi) < 1.0)
+    result[loop_light[alone[star]]] = alone[star]
+    return result

@@ -23,7 +23,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
 from .tolerance import Tolerance
-from .topology import COMPILED_ITEMS, Caster, MeshLike, as_caster, cycle_walk
+from .topology import COMPILED_ITEMS, Caster, MeshLike, as_caster, compiled_loaded, cycle_walk
 
 # Faces per block where a pass over every face goes a block at a time.
 _BLOCK = 1 << 16
@@ -312,7 +312,7 @@ def _successors(starts: np.ndarray, ends: np.ndarray, span: int | None = None) -
     the same result) instead of two sorts."""
     size = span if span is not None else int(max(starts.max(), ends.max(), 0)) + 1
     # (the lists' heads are ``span`` long: not for a few edges of a big mesh)
-    if len(starts) >= COMPILED_ITEMS and size <= 16 * len(starts):
+    if len(starts) >= COMPILED_ITEMS and size <= 16 * len(starts) and compiled_loaded():
         from .kernels import successors
 
         successor, matched = successors(

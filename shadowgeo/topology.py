@@ -8,6 +8,7 @@ costs only the per-light work.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from functools import cached_property
 from typing import TYPE_CHECKING, Literal, TypeAlias, TypeVar, Union, cast, overload
@@ -519,10 +520,17 @@ MeshLike: TypeAlias = Union["trimesh.Trimesh", tuple[ArrayLike, ArrayLike], Cast
 
 
 # Permutations (and outlines: silhouette._successors) of at least this many
-# items are walked by compiled loops (shadowgeo.kernels, numba): the pointer
-# doubling below takes about 2 log2(k) passes over k items. Below it, numba's
-# import (about 0.7 s the first time) would cost more than it saves.
+# items are walked by compiled loops (shadowgeo.kernels, numba) once those are
+# loaded (by a light whose outline has loops inside its outline): the pointer
+# doubling below takes about 2 log2(k) passes over k items. numba's import (about
+# 0.8 s and 100 MB the first time) is not worth paying for a walk alone.
 COMPILED_ITEMS = 4096
+
+
+def compiled_loaded() -> bool:
+    """Whether :mod:`shadowgeo.kernels` (numba) is loaded already: walks that
+    give the same result either way then take it."""
+    return "shadowgeo.kernels" in sys.modules
 
 
 def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -548,7 +556,7 @@ def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ([0, 2, 1, 3, 4], [3])
     """
     count = len(successor)
-    if count >= COMPILED_ITEMS:  # a compiled walk, the same result
+    if count >= COMPILED_ITEMS and compiled_loaded():  # a compiled walk, the same result
         from .kernels import cycle_walk as compiled
 
         walk: np.ndarray

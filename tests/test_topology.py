@@ -246,7 +246,10 @@ def test_cycle_walk_follows_every_cycle_of_a_permutation(seed, compiled, monkeyp
         successor = np.empty(len(items), dtype=np.int64)
         for cycle in np.split(items, np.cumsum(sizes)[:-1]):
             successor[cycle] = np.roll(cycle, -1)
-    # the compiled walk for long permutations, the doubling one for short
+    # the compiled walk for long permutations once numba is loaded, the
+    # doubling one for short
+    if compiled:
+        import shadowgeo.kernels  # noqa: F401
     monkeypatch.setattr(topology, "COMPILED_ITEMS", 0 if compiled else 10**9)
     walk, cuts = topology.cycle_walk(successor)
     # brute force: walk each cycle from its least item, cycles by that item
@@ -268,3 +271,34 @@ def test_the_compiled_cycle_walk_refuses_a_successor_out_of_range():
 
     with pytest.raises(IndexError, match="out of range"):
         cycle_walk(np.array([1, 2, 3], dtype=np.int64))
+
+
+def test_numba_is_not_loaded_for_shadows_that_do_not_need_it():
+    # A convex caster (one outline loop a light), many shapes as one caster
+    # (thousands of loops) and a long outline's walk: numpy only. numba's
+    # import costs about 0.8 s and 100 MB, paid only for a light whose outline
+    # has a few loops (a dented caster) or by a caller who loads it.
+    script = """
+import sys
+import numpy as np
+import trimesh
+import shadowgeo as sg
+sphere = trimesh.creation.icosphere(subdivisions=6)
+sphere.apply_translation([0, 3, 0])
+boxes = [trimesh.creation.box(extents=[0.5, 1, 0.5]) for _ in range(900)]
+for k, box in enumerate(boxes):
+    box.apply_translation([k % 30, 2, k // 30])
+city = trimesh.util.concatenate(boxes)
+ground = sg.Plane([0, 1, 0], 0)
+for caster in (sphere, city):
+    sg.project_shadow(caster, sg.DirectionalLight([0.3, -1, 0.2]), ground)
+    sg.project_shadow(caster, [sg.PointLight([1, 9, 2]), sg.DirectionalLight([0, -1, 0.1])], ground)
+print("numba" in sys.modules)
+"""
+    import subprocess
+    import sys
+
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=300, check=True
+    )
+    assert result.stdout.strip() == "False"
