@@ -330,28 +330,45 @@ class ProjectedOutlines:
     high: np.ndarray
 
 
-def project_outlines(centered: np.ndarray, outlines: Outlines, H: np.ndarray) -> ProjectedOutlines:
+def project_outlines(caster: Caster, outlines: Outlines, H: np.ndarray) -> ProjectedOutlines:
     """The corners of ``outlines`` (k lights) projected by each light's
-    ``H`` (k, 3, 4), ``centered`` the caster's (n, 4) homogeneous vertices.
+    ``H`` (k, 3, 4), in the frame of ``caster``'s :attr:`~Caster.centered`
+    vertices.
 
     Each image is the sum ``x H[i, 0] + y H[i, 1] + z H[i, 2] + H[i, 3]``,
     left to right, then divided by W: the same bits for one light or many.
+    Where the outlines have fewer corners than the mesh has vertices, only
+    theirs are centred (the same numbers as :attr:`~Caster.centered`'s
+    rows): a mesh of a million faces has a few thousand, and the whole
+    centred copy with its columns was memory touched for the first time in
+    every process.
     """
     count = len(H)
     # Coefficient by coefficient and column by column: gathers from short
     # contiguous tables, no (c, 12) matrix per corner.
     coefficients = np.ascontiguousarray(H.reshape(count, 12).T)
-    columns = [np.ascontiguousarray(centered[:, axis]) for axis in range(3)]
     corner_light = np.repeat(outlines.loop_light, outlines.loop_lengths)
 
-    def image(i: int, vertices: np.ndarray, light: np.ndarray) -> np.ndarray:
-        total: np.ndarray = columns[0][vertices] * coefficients[4 * i][light]
-        total += columns[1][vertices] * coefficients[4 * i + 1][light]
-        total += columns[2][vertices] * coefficients[4 * i + 2][light]
+    if len(outlines.corners) + len(outlines.edge_starts) > len(caster.vertices):
+        # (many lights on a small mesh: the centred columns once, then gathers)
+        columns = [np.ascontiguousarray(caster.centered[:, axis]) for axis in range(3)]
+
+        def coordinates(vertices: np.ndarray) -> list[np.ndarray]:
+            return [column[vertices] for column in columns]
+    else:
+
+        def coordinates(vertices: np.ndarray) -> list[np.ndarray]:
+            rows = caster.centered_rows(vertices)
+            return [rows[:, 0], rows[:, 1], rows[:, 2]]
+
+    def image(i: int, xyz: list[np.ndarray], light: np.ndarray) -> np.ndarray:
+        total: np.ndarray = xyz[0] * coefficients[4 * i][light]
+        total += xyz[1] * coefficients[4 * i + 1][light]
+        total += xyz[2] * coefficients[4 * i + 2][light]
         total += coefficients[4 * i + 3][light]
         return total
 
-    corners = outlines.corners
+    corners = coordinates(outlines.corners)
     with np.errstate(divide="ignore", invalid="ignore"):
         w = image(2, corners, corner_light)
         projected = np.column_stack(
@@ -359,7 +376,7 @@ def project_outlines(centered: np.ndarray, outlines: Outlines, H: np.ndarray) ->
         )
     # W of every vertex a silhouette edge starts at (a dropped two-edge loop's too)
     touching = np.zeros(count, dtype=bool)
-    w_all = image(2, outlines.edge_starts, outlines.edge_light)
+    w_all = image(2, coordinates(outlines.edge_starts), outlines.edge_light)
     touching[outlines.edge_light[w_all <= 0]] = True
     low = np.zeros((count, 2))
     high = np.zeros((count, 2))
@@ -439,7 +456,7 @@ def array_shadows(
     rows = np.array([row for _, row in chunk], dtype=np.int64)
     fronts = front_rows(caster, frames.light_h[rows])
     outlines = silhouette_outlines(caster, fronts if len(chunk) > 1 else fronts[:1])
-    projected = project_outlines(caster.centered, outlines, frames.H[rows])
+    projected = project_outlines(caster, outlines, frames.H[rows])
     scale, bound = frames.scale[rows], frames.bound[rows]
     half = scale * bound
     general = (
