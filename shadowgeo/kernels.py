@@ -88,30 +88,31 @@ def _monotone(
     s: float,
     slack: float,
     margin: float,
-    order: np.ndarray,
+    along: np.ndarray,
+    side: np.ndarray,
 ) -> bool:
     """Whether the loop of corners ``first .. first + n`` is certainly simple
     and counter-clockwise by being monotone along the axis (c, s): from one
     lowest corner its corners rise strictly to one highest (the lower side)
     and fall strictly back (the upper side), and each corner between the
     ends of one side lies strictly left of the other side's edge across
-    from it. It is then the region between the graphs of two functions, one
-    above the other. Orders are certain beyond ``slack``, sides beyond
-    ``margin`` (a turn of axes keeps the signs of the loop's own cross
-    products). ``order`` is scratch of at least ``n + 1`` items."""
+    from it (:func:`_beside`). It is then the region between the graphs of
+    two functions, one above the other. Orders are certain beyond
+    ``slack``, sides beyond ``margin`` (a turn of axes keeps the signs of
+    the loop's own cross products). ``along`` and ``side`` are scratch of at
+    least ``n + 1`` items."""
     if n < 3:
         return False
+    for k in range(n):
+        along[k] = x[first + k] * c + y[first + k] * s
     lowest = -1
     highest = -1
     changes = 0
     for k in range(n):
-        i = first + k
-        j = first + (k + 1) % n
-        h = first + (k - 1) % n
-        rise = (x[j] * c + y[j] * s) - (x[i] * c + y[i] * s)
+        rise = along[(k + 1) % n] - along[k]
         if not abs(rise) > slack:
             return False
-        fall_in = (x[i] * c + y[i] * s) - (x[h] * c + y[h] * s) < 0
+        fall_in = along[k] - along[(k - 1) % n] < 0
         if rise > 0 and fall_in:
             lowest = k
             changes += 1
@@ -122,48 +123,54 @@ def _monotone(
             return False
     if changes != 2:
         return False
-    # The upper side in rising order: from the lowest corner backwards to
-    # the highest.
-    m = (lowest - highest) % n + 1
-    for t in range(m):
-        order[t] = first + (lowest - t) % n
-    # Each corner strictly inside the lower side against the upper side's
-    # edge spanning it; the upper side's, against the lower side's.
+    up = (highest - lowest) % n  # edges of the lower side
+    down = n - up  # of the upper side
+    # The upper side in rising order (from the lowest corner backwards)
+    # against the lower side's corners between its ends, then the lower
+    # side (forwards) against the upper side's.
+    for t in range(down + 1):
+        side[t] = (lowest - t) % n
+    if not _beside(x, y, first, n, along, side, down + 1, lowest, 1, up, True, slack, margin):
+        return False
+    for t in range(up + 1):
+        side[t] = (lowest + t) % n
+    return _beside(x, y, first, n, along, side, up + 1, lowest, -1, down, False, slack, margin)
+
+
+@nb.njit(cache=True)
+def _beside(
+    x: np.ndarray,
+    y: np.ndarray,
+    first: int,
+    n: int,
+    along: np.ndarray,
+    side: np.ndarray,
+    m: int,
+    start: int,
+    step: int,
+    count: int,
+    upper: bool,
+    slack: float,
+    margin: float,
+) -> bool:
+    """Whether the corners ``start + step t`` (t from 1 to ``count`` - 1,
+    round the loop ``first .. first + n``), in rising order along the axis,
+    lie strictly left of the edge of ``side`` (``m`` corners of the other
+    side in rising order) across from each: below the upper side's edges,
+    which run falling, above the lower side's, which run rising."""
     u = 0
-    k = (lowest + 1) % n
-    while k != highest:
+    for t in range(1, count):
+        k = (start + step * t) % n
+        while u + 1 < m - 1 and along[side[u + 1]] <= along[k]:
+            u += 1
+        lo, hi = side[u], side[u + 1]
+        if not (along[k] - along[lo] > slack and along[hi] - along[k] > slack):
+            return False
+        tail = first + (hi if upper else lo)
+        head = first + (lo if upper else hi)
         i = first + k
-        along = x[i] * c + y[i] * s
-        while u + 1 < m - 1 and x[order[u + 1]] * c + y[order[u + 1]] * s <= along:
-            u += 1
-        lo = order[u]
-        hi = order[u + 1]
-        if not (
-            along - (x[lo] * c + y[lo] * s) > slack and (x[hi] * c + y[hi] * s) - along > slack
-        ):
-            return False
-        # the upper edge runs hi -> lo (falling); the inside is on its left
-        if not (x[lo] - x[hi]) * (y[i] - y[hi]) - (y[lo] - y[hi]) * (x[i] - x[hi]) > margin:
-            return False
-        k = (k + 1) % n
-    # The lower side in rising order: from the lowest corner forwards.
-    m = (highest - lowest) % n + 1
-    for t in range(m):
-        order[t] = first + (lowest + t) % n
-    u = 0
-    for t in range(1, (lowest - highest) % n):  # the upper side's, rising
-        i = first + (lowest - t) % n
-        along = x[i] * c + y[i] * s
-        while u + 1 < m - 1 and x[order[u + 1]] * c + y[order[u + 1]] * s <= along:
-            u += 1
-        lo = order[u]
-        hi = order[u + 1]
-        if not (
-            along - (x[lo] * c + y[lo] * s) > slack and (x[hi] * c + y[hi] * s) - along > slack
-        ):
-            return False
-        # the lower edge runs lo -> hi (rising); the inside is on its left
-        if not (x[hi] - x[lo]) * (y[i] - y[lo]) - (y[hi] - y[lo]) * (x[i] - x[lo]) > margin:
+        cross = (x[head] - x[tail]) * (y[i] - y[tail]) - (y[head] - y[tail]) * (x[i] - x[tail])
+        if not cross > margin:
             return False
     return True
 
@@ -176,7 +183,8 @@ def _simple(
     n: int,
     slack: float,
     margin: float,
-    order: np.ndarray,
+    along: np.ndarray,
+    side: np.ndarray,
 ) -> bool:
     """:func:`_monotone` along the loop's principal axis (a crescent's
     length), else along one of ``_DIRECTIONS`` directions half a turn apart
@@ -198,11 +206,11 @@ def _simple(
         sxy += dx * dy
         syy += dy * dy
     angle = 0.5 * np.arctan2(2 * sxy, sxx - syy)
-    if _monotone(x, y, first, n, np.cos(angle), np.sin(angle), slack, margin, order):
+    if _monotone(x, y, first, n, np.cos(angle), np.sin(angle), slack, margin, along, side):
         return True
     for k in range(_DIRECTIONS):  # a fold's loop that bends is often monotone another way
         angle = np.pi * k / _DIRECTIONS
-        if _monotone(x, y, first, n, np.cos(angle), np.sin(angle), slack, margin, order):
+        if _monotone(x, y, first, n, np.cos(angle), np.sin(angle), slack, margin, along, side):
             return True
     return False
 
@@ -247,12 +255,13 @@ def _held(
     wedges spanning less than half a turn. The pieces of an edge between
     two spokes then lie in the wedge between them."""
     base = _pseudo_angle(x[h_first] - cx, y[h_first] - cy)
+    w_j, t_j = _wedge(x[first] - cx, y[first] - cy, rel, h_n, base)
     for k in range(n):
         i = first + k
         j = first + (k + 1) % n
         ox = x[i] - cx
         oy = y[i] - cy
-        w_i, t_i = _wedge(ox, oy, rel, h_n, base)
+        w_i, t_i = w_j, t_j  # each corner's wedge, found once
         w_j, t_j = _wedge(x[j] - cx, y[j] - cy, rel, h_n, base)
         a = h_first + w_i
         b = h_first + (w_i + 1) % h_n
@@ -325,8 +334,9 @@ def whole_loops(
     for loop in range(n_loops):
         firsts[loop + 1] = firsts[loop] + loop_lengths[loop]
         longest = max(longest, loop_lengths[loop])
-    rel = np.empty(longest)
-    order = np.empty(longest + 1, dtype=np.int64)
+    rel = np.empty(longest)  # scratch, the longest loop's size
+    along = np.empty(longest + 1)
+    side = np.empty(longest + 1, dtype=np.int64)
     start = 0
     while start < n_loops:
         light = loop_light[start]
@@ -367,7 +377,7 @@ def whole_loops(
             if loop == holder:
                 continue
             a, n = firsts[loop], loop_lengths[loop]
-            certified = _simple(x, y, a, n, slack, margin, order) and _held(
+            certified = _simple(x, y, a, n, slack, margin, along, side) and _held(
                 x, y, a, n, h_first, h_n, rel, cx, cy, margin
             )
         if certified:

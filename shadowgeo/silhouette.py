@@ -23,7 +23,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
 from .tolerance import Tolerance
-from .topology import COMPILED_ITEMS, Caster, MeshLike, as_caster, compiled_loaded, cycle_walk
+from .topology import Caster, MeshLike, as_caster, compiled_walk, cycle_walk
 
 # Faces per block where a pass over every face goes a block at a time.
 _BLOCK = 1 << 16
@@ -310,16 +310,16 @@ def _successors(starts: np.ndarray, ends: np.ndarray, span: int | None = None) -
     vertex``, the blocks rising with the edge index); many edges are then
     matched by a compiled pass a block (:func:`shadowgeo.kernels.successors`,
     the same result) instead of two sorts."""
-    size = span if span is not None else int(max(starts.max(), ends.max(), 0)) + 1
-    # (the lists' heads are ``span`` long: not for a few edges of a big mesh)
-    if len(starts) >= COMPILED_ITEMS and size <= 16 * len(starts) and compiled_loaded():
-        from .kernels import successors
+    if compiled_walk(len(starts)):
+        size = span if span is not None else int(max(starts.max(), ends.max())) + 1
+        if size <= 16 * len(starts):  # (the lists' heads are ``size`` long)
+            from .kernels import successors
 
-        successor, matched = successors(
-            np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64), size
-        )
-        if matched:
-            return np.asarray(successor)
+            successor, matched = successors(
+                np.asarray(starts, dtype=np.int64), np.asarray(ends, dtype=np.int64), size
+            )
+            if matched:
+                return np.asarray(successor)
     out_order = _stable_order(starts)
     in_order = _stable_order(ends)
     mismatch = starts[out_order] != ends[in_order]

@@ -527,10 +527,11 @@ MeshLike: TypeAlias = Union["trimesh.Trimesh", tuple[ArrayLike, ArrayLike], Cast
 COMPILED_ITEMS = 4096
 
 
-def compiled_loaded() -> bool:
-    """Whether :mod:`shadowgeo.kernels` (numba) is loaded already: walks that
-    give the same result either way then take it."""
-    return "shadowgeo.kernels" in sys.modules
+def compiled_walk(count: int) -> bool:
+    """Whether a walk of ``count`` items takes the compiled loops: at least
+    :data:`COMPILED_ITEMS` of them, and :mod:`shadowgeo.kernels` (numba)
+    loaded already (the walks give the same result either way)."""
+    return count >= COMPILED_ITEMS and "shadowgeo.kernels" in sys.modules
 
 
 def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -556,7 +557,7 @@ def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ([0, 2, 1, 3, 4], [3])
     """
     count = len(successor)
-    if count >= COMPILED_ITEMS and compiled_loaded():  # a compiled walk, the same result
+    if compiled_walk(count):  # the same result
         from .kernels import cycle_walk as compiled
 
         walk: np.ndarray

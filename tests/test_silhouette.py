@@ -429,11 +429,12 @@ def test_compiled_successors_equal_the_sorted_ones_in_blocks_and_touching(seed, 
     offsets = [span * k for k in range(len(starts))]
     starts = np.concatenate([s + o for s, o in zip(starts, offsets, strict=True)])
     ends = np.concatenate([e + o for e, o in zip(ends, offsets, strict=True)])
-    monkeypatch.setattr(module, "COMPILED_ITEMS", 10**9)
+    topology = importlib.import_module("shadowgeo.topology")
+    monkeypatch.setattr(topology, "COMPILED_ITEMS", 10**9)
     sorted_way = module._successors(starts, ends, span)
     compiled, matched = successors(starts, ends, span)
     assert matched and np.array_equal(compiled, sorted_way)
-    monkeypatch.setattr(module, "COMPILED_ITEMS", 0)
+    monkeypatch.setattr(topology, "COMPILED_ITEMS", 0)
     assert np.array_equal(module._successors(starts, ends, span), sorted_way)
     # Blocks out of order, or an outline that does not close: not matched,
     # and the sorting way tells which.

@@ -63,7 +63,7 @@ def tokens(text: str, path: str) -> list[Token]:
     # Lines are counted once for the whole text: each token's is the number
     # of line breaks before its start.
     breaks = [match.start() for match in _BREAK.finditer(text)]
-    line, next_break, seen = 1, (breaks[0] if breaks else len(text)), 0
+    next_break, seen = (breaks[0] if breaks else len(text)), 0
     for match in _TOKEN.finditer(text):
         # every alternative of _TOKEN is a named group
         kind = cast(str, match.lastgroup)
