@@ -678,6 +678,10 @@ def _turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.nda
 # the others (a dented caster's folds); a light of more (a city, many shapes
 # as one caster) is not: its largest loop would not hold them.
 HELD_LOOPS = 64
+# ... and of at least this many corners in all: the union of a few small
+# loops takes Clipper2 microseconds, not worth loading compiled code for (a
+# sphere and a box in a small scene; a dented 20k-face mesh has 200-440).
+HELD_CORNERS = 128
 
 
 def whole_outlines(
@@ -693,7 +697,8 @@ def whole_outlines(
     - **One loop** (numpy, :func:`_star_shaped_alone`): star-shaped around
       the mean of its corners and counter-clockwise. That is every light on
       a convex caster, and most on a smooth one.
-    - **Two to** :data:`HELD_LOOPS` **loops** (compiled:
+    - **Two to** :data:`HELD_LOOPS` **loops**, :data:`HELD_CORNERS` or more
+      corners in all, one loop's box holding the others' (compiled:
       :func:`shadowgeo.kernels.whole_loops`, which imports numba the first
       time): the light's loop of largest area, the holder, is star-shaped
       round the mean of its corners; every other loop is simple and
@@ -714,7 +719,10 @@ def whole_outlines(
     result = _star_shaped_alone(points, loop_lengths, loop_light, count)
     light_loops = np.bincount(loop_light, minlength=count)
     tried = (light_loops >= 2) & (light_loops <= HELD_LOOPS)
-    if not tried.any():
+    tried &= np.bincount(loop_light, weights=loop_lengths, minlength=count) >= HELD_CORNERS
+    if tried.any():
+        tried &= _one_box_holds_all(points, loop_lengths, loop_light, count)
+    if not tried.any():  # (numba is then not loaded: a scene of separate shapes)
         return result
     from .kernels import whole_loops  # numba: imported on first use
 
@@ -733,6 +741,30 @@ def whole_outlines(
     found = held >= 0
     result[found] = loops[held[found]]  # (held counts the tried loops only)
     return result
+
+
+def _one_box_holds_all(
+    points: np.ndarray, loop_lengths: np.ndarray, loop_light: np.ndarray, count: int
+) -> np.ndarray:
+    """(count,) bool: whether one of the light's loops has a box (of its
+    corners) holding every other loop's box. The second certificate of
+    :func:`whole_outlines` needs it (the others' corners inside the holder
+    lie inside the holder's box; comparisons of the same floats, exact), so a
+    light without it, separate shapes side by side, is not sent to the
+    compiled test at all."""
+    starts = np.cumsum(loop_lengths) - loop_lengths
+    low = np.minimum.reduceat(points, starts, axis=0)
+    high = np.maximum.reduceat(points, starts, axis=0)
+    firsts = np.searchsorted(loop_light, np.arange(count))  # loop_light ascends
+    present = np.bincount(loop_light, minlength=count) > 0
+    light_low = np.full((count, 2), np.inf)
+    light_high = np.full((count, 2), -np.inf)
+    light_low[present] = np.minimum.reduceat(low, firsts[present], axis=0)
+    light_high[present] = np.maximum.reduceat(high, firsts[present], axis=0)
+    whole = np.all(low == light_low[loop_light], axis=1) & np.all(
+        high == light_high[loop_light], axis=1
+    )
+    return np.bincount(loop_light[whole], minlength=count) > 0
 
 
 def _star_shaped_alone(

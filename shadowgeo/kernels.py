@@ -3,7 +3,9 @@ dozens of passes over a chunk's arrays for a few hundred corners a light.
 
 Imported on first use only (numba's import and the cached machine code take
 about 0.8 s and 100 MB): :func:`shadowgeo.batchlights.whole_outlines` loads it
-for a light of two to 64 outline loops; once it is loaded,
+for a light of two to 64 outline loops, 128 corners or more, one loop's box
+holding the others' (a dented caster's folds; not a few shapes side by side,
+nor a small scene's sphere and box); once it is loaded,
 :func:`shadowgeo.topology.cycle_walk` and ``shadowgeo.silhouette._successors``
 take its walks for long outlines (the same results as their numpy ways). Each
 function is compiled once and cached beside this file (or in numba's user

@@ -343,12 +343,18 @@ def test_one_loop_that_is_not_star_shaped_is_still_united(monkeypatch):
 
 
 def _whole(loops):
-    """whole_outlines of one light's loops (a list of (k, 2) arrays)."""
-    from shadowgeo.batchlights import whole_outlines
+    """whole_outlines of one light's loops (a list of (k, 2) arrays), small
+    ones too (the certificate itself; below HELD_CORNERS corners it is not
+    tried, only because a union of small loops is cheap)."""
+    from unittest import mock
+
+    from shadowgeo import batchlights
 
     points = np.concatenate(loops)
     lengths = np.array([len(loop) for loop in loops])
-    return int(whole_outlines(points, lengths, np.zeros(len(loops), dtype=np.int64), 1)[0])
+    with mock.patch.object(batchlights, "HELD_CORNERS", 0):
+        whole = batchlights.whole_outlines(points, lengths, np.zeros(len(loops), dtype=np.int64), 1)
+    return int(whole[0])
 
 
 def _ring(count, radius=10.0, centre=(0.0, 0.0), notch=None):
@@ -451,6 +457,21 @@ def test_whenever_a_loop_is_certified_the_union_is_that_loop(corners, notch, sma
     if found >= 0:
         extra, missing = _filled_area_outside(loops, loops[found])
         assert extra < 1e-6 and missing < 1e-6
+    # The box test that keeps separate shapes from the compiled test never
+    # turns away a light the compiled test certifies.
+    from shadowgeo import kernels
+    from shadowgeo.batchlights import _POINT_SLACK, _PRODUCT_SLACK, _one_box_holds_all
+
+    points = np.concatenate(loops)
+    lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
+    light = np.zeros(len(loops), dtype=np.int64)
+    held = kernels.whole_loops(
+        *(np.ascontiguousarray(points[:, k]) for k in (0, 1)),
+        lengths, light, 1, _POINT_SLACK, _PRODUCT_SLACK, float(np.finfo(float).eps),
+    )  # fmt: skip
+    assert held[0] < 0 or _one_box_holds_all(points, lengths, light, 1)[0]
+    if not _one_box_holds_all(points, lengths, light, 1)[0]:
+        assert found == -1
 
 
 def test_a_dented_caster_takes_the_holder_and_agrees_with_the_union(monkeypatch):

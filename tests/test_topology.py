@@ -275,7 +275,9 @@ def test_the_compiled_cycle_walk_refuses_a_successor_out_of_range():
 
 def test_numba_is_not_loaded_for_shadows_that_do_not_need_it():
     # A convex caster (one outline loop a light), many shapes as one caster
-    # (thousands of loops) and a long outline's walk: numpy only. numba's
+    # (thousands of loops), a few shapes side by side (a few loops, none
+    # holding the others), a few small loops and a long outline's walk: numpy
+    # only. numba's
     # import costs about 0.8 s and 100 MB, paid only for a light whose outline
     # has a few loops (a dented caster) or by a caller who loads it.
     script = """
@@ -289,8 +291,14 @@ boxes = [trimesh.creation.box(extents=[0.5, 1, 0.5]) for _ in range(900)]
 for k, box in enumerate(boxes):
     box.apply_translation([k % 30, 2, k // 30])
 city = trimesh.util.concatenate(boxes)
+# a few shapes side by side (a light sees a few loops, none holding the rest)
+street = trimesh.util.concatenate(boxes[:5] + [sphere])
+# a box half inside a coarse ball: two small loops, one round the other's box
+ball = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+ball_and_box = trimesh.util.concatenate([ball, trimesh.creation.box(extents=[1.5, 1.5, 1.5])])
+ball_and_box.apply_translation([0, 2, 0])
 ground = sg.Plane([0, 1, 0], 0)
-for caster in (sphere, city):
+for caster in (sphere, city, street, ball_and_box):
     sg.project_shadow(caster, sg.DirectionalLight([0.3, -1, 0.2]), ground)
     sg.project_shadow(caster, [sg.PointLight([1, 9, 2]), sg.DirectionalLight([0, -1, 0.1])], ground)
 print("numba" in sys.modules)
