@@ -11,7 +11,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from . import polygons as poly
 from .lights import Light
@@ -19,6 +18,7 @@ from .plane import Plane
 
 if TYPE_CHECKING:
     import shapely
+    import trimesh
 
 
 @dataclass(frozen=True)
@@ -100,7 +100,7 @@ class Shadow:
         only ``polygons`` or ``area`` (a sun study, a union of many
         buildings) never pays for the triangulation."""
         source = self.mesh_source
-        if isinstance(source, trimesh.Trimesh):
+        if not callable(source):  # built already (a Trimesh is not callable)
             return source
         mesh = source()
         object.__setattr__(self, "mesh_source", mesh)
@@ -130,4 +130,6 @@ def triangulated(
     flat, faces = poly.triangulate_parts(parts)
     flat = flat / scale
     points = lift + np.outer(flat[:, 0], u) + np.outer(flat[:, 1], v)
+    import trimesh  # (imported when a mesh is first asked for: its import takes 1 s)
+
     return trimesh.Trimesh(points, faces, process=False)

@@ -48,12 +48,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import cast
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import shapely
-import trimesh
 
 from . import polygons as poly
 from .errors import GeometryError
@@ -65,6 +64,9 @@ from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geome
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, unique_integers
+
+if TYPE_CHECKING:
+    import trimesh
 
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000
@@ -123,6 +125,10 @@ class SurfaceShadow:
     Attributes
     ----------
     light : Light
+    vertices : (k, 3) float64
+    faces : (t, 3) int64
+        The shadow's triangles (``mesh`` is the same as a ``trimesh.Trimesh``,
+        built on first use).
     mesh : trimesh.Trimesh
         The shadowed parts of the light-facing faces, as triangles lying in
         those faces (moved ``offset`` along each face's normal towards the
@@ -146,11 +152,25 @@ class SurfaceShadow:
     """
 
     light: Light
-    mesh: trimesh.Trimesh
+    vertices: np.ndarray
+    faces: np.ndarray
     face_index: np.ndarray
     fraction: np.ndarray
     area: float
     diagnostics: SurfaceDiagnostics
+    _mesh: trimesh.Trimesh | None = field(default=None, init=False, repr=False, compare=False)
+
+    @property
+    def mesh(self) -> trimesh.Trimesh:
+        """``vertices`` and ``faces`` as a ``trimesh.Trimesh`` (built on
+        first use: a caller that needs the arrays only, such as the scene
+        converter, never imports trimesh)."""
+        if self._mesh is None:
+            import trimesh
+
+            mesh = trimesh.Trimesh(self.vertices, self.faces, process=False)
+            object.__setattr__(self, "_mesh", mesh)
+        return cast("trimesh.Trimesh", self._mesh)
 
     @property
     def is_empty(self) -> bool:
@@ -292,7 +312,7 @@ class _SurfaceProjector:
             regions,
             self.tol.length,
         )
-        mesh = self._mesh(points, shadow_faces, face_index)
+        vertices, triangles = self._lifted(points, shadow_faces, face_index)
         # Areas from the triangles in their faces, before any lift.
         flat = points[shadow_faces]
         areas = 0.5 * np.linalg.norm(
@@ -313,7 +333,8 @@ class _SurfaceProjector:
             n_full_faces=int(full.sum()),
             limits=tuple(self.limits),
         )
-        return SurfaceShadow(self.light, mesh, face_index, fraction, float(areas.sum()), info)
+        area = float(areas.sum())
+        return SurfaceShadow(self.light, vertices, triangles, face_index, fraction, area, info)
 
     def _faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The surface in the centred frame, with vertices merged by position:
@@ -852,18 +873,20 @@ class _SurfaceProjector:
             return None
         return np.concatenate(chunks, axis=1)
 
-    def _mesh(
+    def _lifted(
         self, points: np.ndarray, faces: np.ndarray, face_index: np.ndarray
-    ) -> trimesh.Trimesh:
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The shadow's vertices (those its faces use, moved ``offset`` off
+        their faces, in scene coordinates) and faces."""
         if len(faces) == 0:
-            return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), np.int64), process=False)
+            return np.zeros((0, 3)), np.zeros((0, 3), np.int64)
         used, inverse = unique_integers(faces, return_inverse=True)
         vertices = points[used]
         if self.offset != 0.0:
             vertices = vertices + self.offset * lift_directions(
                 inverse.reshape(-1, 3), self.unit[face_index], len(used)
             )
-        return trimesh.Trimesh(vertices + self.center, inverse.reshape(-1, 3), process=False)
+        return vertices + self.center, inverse.reshape(-1, 3)
 
 
 def _bounding_radius(caster: Caster) -> float:

@@ -14,7 +14,6 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Literal, TypeAlias, TypeVar, Union, cast, overload
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from .boxes import bounding_box
@@ -635,4 +634,6 @@ def _not_a_caster(caster: object) -> GeometryError:
 def empty_mesh() -> trimesh.Trimesh:
     """A ``trimesh.Trimesh`` without vertices or faces: the shadow or shadow
     volume where there is none."""
+    import trimesh
+
     return trimesh.Trimesh(np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64), process=False)

@@ -29,10 +29,9 @@ import math
 import os
 import sys
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING, Any, TypeAlias, Union
+from typing import TYPE_CHECKING, Any, TypeAlias, TypeGuard, Union
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
@@ -43,9 +42,10 @@ from .scene.model import Scene, SceneLight, Shape, Viewpoint
 
 if TYPE_CHECKING:
     import pyvista as pv
+    import trimesh
 
 # What plot() draws: a scene, shape, shadow or mesh, or any nesting of lists of them.
-Plottable: TypeAlias = Union[Scene, Shape, Shadow, trimesh.Trimesh, Iterable["Plottable"]]  # noqa: UP007
+Plottable: TypeAlias = Union[Scene, Shape, Shadow, "trimesh.Trimesh", Iterable["Plottable"]]  # noqa: UP007
 # A light as plot() takes it: bare, or with its scene colour and intensity.
 AnyLight: TypeAlias = Light | SceneLight
 
@@ -77,6 +77,13 @@ class _Item:
         self.opacity = float(opacity)
 
 
+def _is_trimesh(thing: object) -> TypeGuard[trimesh.Trimesh]:
+    """Whether ``thing`` is a ``trimesh.Trimesh`` (trimesh is not imported to
+    find out: none exists before it is)."""
+    module = sys.modules.get("trimesh")
+    return module is not None and isinstance(thing, module.Trimesh)
+
+
 def _collect(
     things: Plottable | None, role: str, items: list[_Item], lights: list[AnyLight]
 ) -> None:
@@ -96,7 +103,7 @@ def _collect(
     elif isinstance(things, Shadow):
         items.append(_Item(things.mesh.vertices, things.mesh.faces, "shadow", SHADOW_COLOR))
         lights.append(things.light)
-    elif isinstance(things, trimesh.Trimesh):
+    elif _is_trimesh(things):
         color = {"shadow": SHADOW_COLOR, "volume": VOLUME_COLOR}.get(role, (0.8, 0.8, 0.8))
         opacity = VOLUME_OPACITY if role == "volume" else 1.0
         items.append(_Item(things.vertices, things.faces, role, color, opacity))

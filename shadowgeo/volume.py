@@ -19,9 +19,9 @@ closed whatever the rounding:
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
-import trimesh
 
 from .deprecation import renamed_keyword
 from .errors import GeometryError
@@ -30,6 +30,9 @@ from .limits import check_geometry, check_length
 from .silhouette import check_light_outside, light_homogeneous
 from .tolerance import Tolerance, below_resolution
 from .topology import Caster, MeshLike, as_caster, empty_mesh
+
+if TYPE_CHECKING:
+    import trimesh
 
 
 @renamed_keyword("mesh", "caster")
@@ -117,6 +120,7 @@ def shadow_volume(
     A unit cube lit from straight above: its top face swept 2 units down, a
     1 x 1 x 2 box that holds the cube and the 1 unit of shadow below it.
 
+    >>> import trimesh
     >>> cube = trimesh.creation.box()
     >>> volume = shadow_volume(cube, DirectionalLight([0, 0, -1]), extent=2.0)
     >>> volume.is_watertight, volume.is_winding_consistent, round(float(volume.volume), 12)
@@ -194,6 +198,8 @@ def shadow_volume(
     )
     faces = np.concatenate([near_faces, near_faces[:, ::-1] + n_used, sides])
     vertices = np.concatenate([caster.vertices[source], far + caster.center])
+    import trimesh
+
     result = trimesh.Trimesh(vertices, faces, process=False, validate=False)
     info.update(n_cap_faces=len(cap), n_side_faces=len(sides), two_sided=two_sided)
     result.metadata["shadowgeo"] = info

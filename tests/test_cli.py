@@ -63,6 +63,27 @@ def converted(tmp_path_factory):
     return outputs
 
 
+def test_converting_an_x3d_scene_imports_no_mesh_library(tmp_path):
+    # trimesh (with scipy and networkx) takes about 1.4 s to import and
+    # numba 0.8 s: an X3D scene converted to X3D or glTF needs neither, nor
+    # does ``import shadowgeo``. They load when a caller asks for a mesh
+    # (Shadow.mesh, shadow_volume, a glTF or OBJ input).
+    script = f"""
+import sys
+import shadowgeo
+assert "trimesh" not in sys.modules, "import shadowgeo imported trimesh"
+from cli.main import main
+for suffix in (".x3d", ".glb"):
+    assert main(["convert", {str(EXAMPLE)!r}, {str(tmp_path)!r} + "/out" + suffix]) == 0
+print(sorted(name for name in ("trimesh", "scipy", "numba", "pyvista") if name in sys.modules))
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "[]"
+
+
 def test_help_lists_examples(capsys):
     for command in ("convert", "info"):
         with pytest.raises(SystemExit) as exit_:

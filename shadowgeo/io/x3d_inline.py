@@ -25,7 +25,7 @@ import numpy as np
 from .. import limits
 from ..errors import GeometryError, SceneError
 from ..scene import Scene
-from . import gltf_read, outside_reason, x3d_parse
+from . import outside_reason, x3d_parse
 from .gltf_layout import external_uris, json_document
 from .x3d_fields import Context, Element, Tree, local_name
 from .x3d_geometry import Instance, Mesh
@@ -144,6 +144,8 @@ def _read_gltf(reader: InlineReader, context: Context, element: Element, path: P
             return f"refers to '{uri}', outside the scene's folder (never read)"
     # the glTF reader's own checks (compression, quantized positions, ...) and materials
     try:
+        from . import gltf_read  # (trimesh: imported for a glTF Inline only)
+
         loaded = gltf_read.read(path)
     except (SceneError, GeometryError) as error:
         return f"cannot be read: {error}"

@@ -105,11 +105,11 @@ def surface_shadow(
     except GeometryError as error:
         notes.append(f"shadows: no shadows on the surfaces for light {light_name}: {error}")
         return None
-    if not len(result.mesh.faces):
+    if not len(result.faces):
         return None
     return shadow_shape(
-        result.mesh.vertices,
-        result.mesh.faces,
+        result.vertices,
+        result.faces,
         scene_light,
         f"shadow of light {light_name} on the scene's surfaces",
     )
