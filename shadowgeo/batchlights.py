@@ -351,7 +351,7 @@ def project_outlines(caster: Caster, outlines: Outlines, H: np.ndarray) -> Proje
 
     if len(outlines.corners) + len(outlines.edge_starts) > len(caster.vertices):
         # (many lights on a small mesh: the centred columns once, then gathers)
-        columns = [np.ascontiguousarray(caster.centered[:, axis]) for axis in range(3)]
+        columns = caster.centered_columns()
 
         def coordinates(vertices: np.ndarray) -> list[np.ndarray]:
             return [column[vertices] for column in columns]

@@ -154,6 +154,14 @@ class Caster:
         relative = self.vertices[indices] - self.center
         return np.column_stack([relative, np.ones(len(relative))])
 
+    def centered_columns(self) -> list[np.ndarray]:
+        """The x, y and z columns of :attr:`centered` as contiguous arrays,
+        the same numbers, without making the (n, 4) array when it is not
+        there yet."""
+        if "centered" in self.__dict__:
+            return [np.ascontiguousarray(self.centered[:, axis]) for axis in range(3)]
+        return [self.vertices[:, axis] - self.center[axis] for axis in range(3)]
+
     @cached_property
     def face_offsets(self) -> np.ndarray:
         """(m,) ``face_normals . (first corner - center)``: with
@@ -228,9 +236,12 @@ class Caster:
         edge (corner k to k + 1) is each edge, lower slot first."""
         if not self.is_closed:
             raise ValueError("edge_face_slots needs a closed mesh")
+        # The sort leaves an edge's slots in ascending order (the slot rides in
+        # the key's low bits, or a stable argsort keeps it), so the pairs are
+        # the rows as they are: a view, no copy of 3 m numbers.
         pairs = self.edge_slots.reshape(-1, 2)
-        first, second = pairs[:, 0], pairs[:, 1]
-        return np.column_stack([np.minimum(first, second), np.maximum(first, second)])
+        pairs.flags.writeable = False
+        return pairs
 
     @property
     def has_edge_table(self) -> bool:

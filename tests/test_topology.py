@@ -310,3 +310,30 @@ print("numba" in sys.modules)
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=300, check=True
     )
     assert result.stdout.strip() == "False"
+
+
+def test_centred_columns_are_the_centred_arrays_columns_before_and_after_it_exists():
+    from shadowgeo.topology import Caster
+
+    rng = np.random.default_rng(5)
+    vertices = rng.normal(size=(1000, 3)) * 3.0 + [1e6, -2e5, 7.5]  # far from the origin
+    faces = rng.integers(0, 1000, size=(400, 3))
+    caster = Caster(vertices, faces)
+    before = caster.centered_columns()
+    assert "centered" not in caster.__dict__  # made without the (n, 4) array
+    for axis in range(3):
+        assert np.array_equal(before[axis], caster.centered[:, axis])
+        assert before[axis].flags.c_contiguous
+    after = caster.centered_columns()
+    assert all(np.array_equal(a, b) for a, b in zip(before, after, strict=True))
+
+
+def test_edge_face_slots_are_a_read_only_view_lower_slot_first():
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    faces = mesh.faces[np.random.default_rng(2).permutation(len(mesh.faces))]
+    caster = as_caster((mesh.vertices, faces))
+    slots = caster.edge_face_slots
+    assert np.all(slots[:, 0] < slots[:, 1])
+    assert not slots.flags.writeable
+    with pytest.raises(ValueError):
+        slots[0, 0] = 0
