@@ -18,6 +18,7 @@ from __future__ import annotations
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import partial
+from itertools import pairwise
 from typing import cast
 
 import numpy as np
@@ -299,11 +300,14 @@ def front_rows(caster: Caster, light_h: np.ndarray) -> np.ndarray:
     flags = rows.view(bool)
     # Caster.facing's arithmetic, into one buffer: ``normals @ l_xyz -
     # offsets l_w``; with l_w = 0 the subtraction changes no sign.
-    normals, offsets = caster.face_normals, caster.face_offsets
+    normals = caster.face_normals
+    # (suns alone need no face planes: one product per face less to make)
+    positional = bool(np.any(light_h[:, 3] != 0.0))
+    offsets = caster.face_offsets if positional else None
     facing = np.empty(caster.n_faces)
     for light in range(count):
         np.matmul(normals, light_h[light, :3], out=facing)
-        if light_h[light, 3] != 0.0:
+        if offsets is not None and light_h[light, 3] != 0.0:
             facing -= offsets * light_h[light, 3]
         np.greater(facing, 0.0, out=flags[light])
     return rows
@@ -464,7 +468,6 @@ def array_shadows(
         | np.any(projected.low < -half[:, None], axis=1)
         | np.any(projected.high > half[:, None], axis=1)
     ).tolist()
-    loops = pieces(projected.points, outlines.loop_lengths.tolist())
     whole = whole_outlines(
         projected.points, outlines.loop_lengths, outlines.loop_light, len(chunk)
     ).tolist()
@@ -494,15 +497,16 @@ def array_shadows(
             yield None
             continue
         first, last = loop_bounds[k], loop_bounds[k + 1]
-        own = loops[first:last]
         parts: list[list[np.ndarray]] | poly.FlatParts | None = None
         if whole[k] >= 0:  # one loop is the whole: no union to do (a copy: not a view of the chunk)
-            parts = [[loops[whole[k]].copy()]]
+            begin, end = corner_bounds[whole[k]], corner_bounds[whole[k] + 1]
+            parts = [[projected.points[begin:end].copy()]]
         else:  # many convex loops (a city) stay one array from here to the result
             corners = slice(corner_bounds[first], corner_bounds[last])
             lengths = outlines.loop_lengths[first:last]
             parts = poly.arranged_parts(projected.points[corners].copy(), lengths)
-        if parts is None:
+        if parts is None:  # the light's loops, as views of the chunk's points
+            own = [projected.points[a:b] for a, b in pairwise(corner_bounds[first : last + 1])]
             labels = partial(_part_labels, caster, firsts[first:last])
             parts = poly.clipper_parts(own, labels)
         bounded = not unbounded[k] and _reaches(parts, limits[k])
@@ -511,7 +515,7 @@ def array_shadows(
             clipped=dict(_NONE_CLIPPED if positional[k] else _NONE_CLIPPED_DIRECTIONAL),
             bounded_artificially=bounded,
             bound=bounds[k],
-            n_loops=len(own),
+            n_loops=last - first,
         )
         yield _array_result(
             plane, basis, lights[index], parts, scales[k], origins[k], lifts[k], info

@@ -145,6 +145,11 @@ def test_front_rows_are_the_faces_turned_to_each_light():
         side = np.einsum("ij,ij->i", normals, light[:3] - light[3] * corners[:, 0])
         clear = np.abs(side) > 1e-9 * np.abs(light).max()
         assert np.array_equal(rows[k][clear].astype(bool), side[clear] > 0)
+    # suns alone: the same rows, without the faces' planes
+    suns = as_caster(_sphere())
+    sun_h = light_h * [1, 1, 1, 0]
+    assert np.array_equal(front_rows(suns, sun_h), front_rows(caster, sun_h))
+    assert "face_offsets" not in suns.__dict__ and "face_offsets" in caster.__dict__
 
 
 # -- batch against single calls, each turn of the array path -------------------------------
