@@ -19,7 +19,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import partial
 from itertools import pairwise
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -33,6 +33,9 @@ from .shadow import Shadow, ShadowDiagnostics, triangulated
 from .silhouette import Outlines, check_light_outside, silhouette_outlines, vertex_components
 from .tolerance import Tolerance, resolution, scene_scales
 from .topology import Caster, empty_mesh
+
+if TYPE_CHECKING:
+    import trimesh
 
 # What the frame alone decides about a light.
 CASTS = 0  # the light reaches the plane's front: a shadow to compute
@@ -563,8 +566,11 @@ def _array_result(
             return Shadow(plane, light, empty_mesh(), [], 0.0, info)
         area = parts.area / scale / scale
         polygons = parts.parts(parts.cut(parts.points / scale + origin2d))
-        parts = parts.parts()
-        build = partial(triangulated, parts, scale, lift, basis)
+        flat = parts  # (cut into loops when the mesh is asked for: most callers never do)
+
+        def build() -> trimesh.Trimesh:
+            return triangulated(flat.parts(), scale, lift, basis)
+
         return Shadow(plane, light, build, polygons, area, info)
     if not parts:
         return Shadow(plane, light, empty_mesh(), [], 0.0, info)
