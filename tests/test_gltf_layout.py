@@ -112,3 +112,63 @@ def test_a_member_of_the_wrong_type_is_named_by_its_json_pointer(document, point
 
     with pytest.raises(sg.SceneError, match=f"malformed glTF: {pointer} is .*, not {wanted}"):
         check_types({"asset": {"version": "2.0"}, **document}, Path("scene.gltf"))
+
+
+@pytest.mark.parametrize(
+    ("document", "pointer", "wanted"),
+    [
+        ({"nodes": [{"translation": [0.5, float("nan"), 1.0]}]}, "/nodes/0/translation/1", "a"),
+        ({"nodes": [{"scale": [1.0, 1.0, "2"]}]}, "/nodes/0/scale/2", "a finite number"),
+        ({"nodes": [{"rotation": [0.0, 0.0, 0.0, True]}]}, "/nodes/0/rotation/3", "a finite"),
+        ({"nodes": [{"matrix": [1.0] * 15}]}, "/nodes/0/matrix", "an array of 16"),
+    ],
+)
+def test_number_arrays_are_checked_member_by_member(document, pointer, wanted):
+    from shadowgeo.io.gltf_layout import check_types
+
+    with pytest.raises(sg.SceneError, match=f"malformed glTF: {pointer} is .*, not {wanted}"):
+        check_types({"asset": {"version": "2.0"}, **document}, Path("scene.gltf"))
+    fine = {"nodes": [{"translation": [0.5, -2.0, 1e300], "scale": [1, 2.0, 3]}]}
+    check_types({"asset": {"version": "2.0"}, **fine}, Path("scene.gltf"))  # no error
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        b'{"asset": {"version": "2.0"}, "nodes": [{"translation": [0.1, 1e-310, -0.0]}]}',
+        b'{"asset": {"version": "2.0"}, "nodes": [{"name": "a", "name": "b"}]}',  # the last wins
+        b'{"asset": {"version": "2.0"}, "nodes": [{"translation": [NaN, 0, 0]}]}',
+        b'\xef\xbb\xbf{"asset": {"version": "2.0"}}',  # a byte-order mark
+        '{"asset": {"version": "2.0"}}'.encode("utf-16"),
+        b'{"asset": {"version": "2.0"}, "nodes": [{"name": "caf\xc3\xa9"}]}',
+    ],
+)
+def test_json_is_read_the_same_with_or_without_orjson(tmp_path, monkeypatch, text):
+    from shadowgeo.io import gltf_layout
+
+    path = tmp_path / "scene.gltf"
+    path.write_bytes(text)
+
+    def read():
+        try:
+            document, _ = gltf_layout.json_document(path)
+        except sg.SceneError as error:
+            return "refused", str(error)
+        return "read", json.dumps(document, sort_keys=True)  # (NaN and -0.0 spelled out)
+
+    fast = read()
+    monkeypatch.setattr(gltf_layout, "orjson", None)
+    assert read() == fast
+
+
+def test_an_integer_beyond_64_bits_is_read_either_way(tmp_path, monkeypatch):
+    # (orjson reads it as a float, json as an int: nowhere shadowgeo reads
+    # can such a number be valid, and check_types refuses it there either way)
+    from shadowgeo.io import gltf_layout
+
+    path = tmp_path / "scene.gltf"
+    path.write_text('{"asset": {"version": "2.0"}, "extras": {"big": 1234567890123456789012345}}')
+    for module in (gltf_layout.orjson, None):
+        monkeypatch.setattr(gltf_layout, "orjson", module)
+        document, _ = gltf_layout.json_document(path)
+        assert document["extras"]["big"] == pytest.approx(1234567890123456789012345)
