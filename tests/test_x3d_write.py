@@ -463,3 +463,39 @@ def test_every_encoding_writes_the_shapes_numbers_exactly(tmp_path, suffix):
 )
 def test_non_finite_attributes_are_found_without_parsing_every_number(value, non_finite):
     assert x3d_write._non_finite(value) == non_finite
+
+
+def test_shapes_sharing_a_look_or_not_each_get_their_own_materials_text(tmp_path):
+    # (a Material's text is made once per look: a cached value must never
+    # leak from one look to another)
+    box = sg.Shape(np.eye(3) * [1, 2, 3], np.array([[0, 1, 2]]))
+    looks = [
+        sg.Material((0.1, 0.2, 0.3)),
+        sg.Material((0.1, 0.2, 0.3), emissive_color=(0.5, 0.0, 0.0)),
+        sg.Material(np.array([0.1, 0.2, 0.3]), specular_color=(1, 1, 1), shininess=0.7),
+        sg.Material((0.1, 0.2, 0.3)),
+        sg.Material((0.1, 0.2, 0.3), transparency=0.5),
+    ]
+    shapes = []
+    for look in looks:
+        shape = sg.Shape(box.vertices, box.faces)
+        shape.material = look
+        shapes.append(shape)
+    out = tmp_path / "looks.x3d"
+    x3d_write.write(sg.Scene(shapes, []), out)
+    written = [dict(m.attrib) for m in etree.parse(str(out)).iter("Material")]
+    assert written == [
+        {"diffuseColor": "0.1 0.2 0.3", "transparency": "0.0"},
+        {"diffuseColor": "0.1 0.2 0.3", "emissiveColor": "0.5 0.0 0.0", "transparency": "0.0"},
+        {
+            "diffuseColor": "0.1 0.2 0.3",
+            "specularColor": "1.0 1.0 1.0",
+            "shininess": "0.7",
+            "transparency": "0.0",
+        },
+        {"diffuseColor": "0.1 0.2 0.3", "transparency": "0.0"},
+        {"diffuseColor": "0.1 0.2 0.3", "transparency": "0.5"},
+    ]
+    shapes[0].material = sg.Material((0.1, math.nan, 0.3))
+    with pytest.raises(sg.SceneError, match="non-finite"):
+        x3d_write.write(sg.Scene(shapes, []), tmp_path / "bad.x3d")

@@ -53,6 +53,7 @@ there raises :class:`~shadowgeo.SceneError`.
 from __future__ import annotations
 
 import copy
+import functools
 import gzip
 import math
 import os
@@ -357,6 +358,24 @@ def _numbers(values: ArrayLike) -> str:
     return " ".join(map(repr, values.tolist()))
 
 
+@functools.lru_cache(maxsize=1024)
+def _material_attributes(
+    key: tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...], float, float],
+) -> tuple[tuple[str, str], ...]:
+    """A Material's attributes from its diffuse, emissive and specular
+    colours, shininess and transparency (``key``): made once for the many
+    shapes that share a look."""
+    diffuse, emissive, specular, shininess, transparency = key
+    attributes = [("diffuseColor", _numbers(diffuse))]
+    if any(emissive):
+        attributes.append(("emissiveColor", _numbers(emissive)))
+    if any(specular):
+        attributes.append(("specularColor", _numbers(specular)))
+        attributes.append(("shininess", repr(shininess)))
+    attributes.append(("transparency", repr(transparency)))
+    return tuple(attributes)
+
+
 def _bool(value: bool) -> str:
     return "true" if value else "false"
 
@@ -376,14 +395,14 @@ def _shape_element(
         element.set("DEF", unique_name(shape.name, used))
     appearance = etree.SubElement(element, f"{namespace}Appearance")
     material = shape.material
-    attributes = {"diffuseColor": _numbers(material.diffuse_color)}
-    if any(material.emissive_color):
-        attributes["emissiveColor"] = _numbers(material.emissive_color)
-    if any(material.specular_color):
-        attributes["specularColor"] = _numbers(material.specular_color)
-        attributes["shininess"] = repr(float(material.shininess))
-    attributes["transparency"] = repr(float(material.transparency))
-    etree.SubElement(appearance, f"{namespace}Material", attributes)
+    key = (
+        tuple(map(float, material.diffuse_color)),
+        tuple(map(float, material.emissive_color)),
+        tuple(map(float, material.specular_color)),
+        float(material.shininess),
+        float(material.transparency),
+    )
+    etree.SubElement(appearance, f"{namespace}Material", dict(_material_attributes(key)))
     vertices = shape.world_vertices if world else shape.vertices
     geometry = etree.SubElement(element, f"{namespace}IndexedTriangleSet")
     coordinate = etree.SubElement(geometry, f"{namespace}Coordinate")
