@@ -30,7 +30,9 @@ files, in the same run:
   the *format yardstick* of each case (read its input, write its output).
 
 Times are CPU seconds of the process (the tools are single-threaded in these
-steps), the least of ``--repeat`` runs (3) of each case. Ratios are shadowgeo
+steps), the least of ``--repeat`` runs (3) of each case, taken in rounds (every
+case once, peers among them, then again) so that a drift in the machine's speed
+weighs on all alike. Ratios are shadowgeo
 over peer, from one run: the machine may be shared, so absolute times are noisy
 but the ratios are measured side by side. The memory
 yardstick is the raw float64 vertex + int64 face arrays of the scene.
@@ -189,10 +191,9 @@ def _number_text(numbers: np.ndarray) -> bytes:
 RUNNERS = {"shadowgeo": run_shadowgeo, "trimesh": run_trimesh, "lxml": run_lxml}
 
 
-def case(tool: str, source: Path, target: Path, repeat: int = 1) -> dict:
-    """Run one case ``repeat`` times, each in a fresh interpreter: the least of
-    each time, and the peak RSS (MB) of the run with the least total time."""
-    runs = [_case(tool, source, target) for _ in range(repeat)]
+def best_of(runs: list[dict]) -> dict:
+    """The least of each time over ``runs`` of one case, and the peak RSS (MB)
+    of the run with the least total time."""
     best = min(runs, key=lambda run: sum(v for k, v in run.items() if "MB" not in k))
     for key in best:
         if "MB" not in key and isinstance(best[key], float):
@@ -237,16 +238,31 @@ def measure(quick: bool, repeat: int = 1, only: str | None = None) -> list[dict]
                 "x3d MB": stem.with_suffix(".x3d").stat().st_size / 2**20,
                 "glb MB": stem.with_suffix(".glb").stat().st_size / 2**20,
             }
-            peer = case("trimesh", stem.with_suffix(".glb"), folder / "peer.glb", repeat)
-            parse = case("lxml", stem.with_suffix(".x3d"), folder / "numbers.x3d", repeat)
+            # Every case once a round, the peers among them: a machine whose
+            # speed drifts over the minutes of a run weighs on all alike (run
+            # one case's repeats after another's, and the ratios wandered by
+            # 0.5 between runs of the same code).
+            cases = {
+                "trimesh": ("trimesh", stem.with_suffix(".glb"), folder / "peer.glb"),
+                "lxml": ("lxml", stem.with_suffix(".x3d"), folder / "numbers.x3d"),
+                **{
+                    (source, target): (
+                        "shadowgeo", stem.with_suffix(source), folder / f"out{target}"
+                    )
+                    for source in (".x3d", ".glb")
+                    for target in (".glb", ".x3d")
+                },
+            }  # fmt: skip
+            runs: dict = {key: [] for key in cases}
+            for _ in range(repeat):
+                for key, (tool, source_path, target_path) in cases.items():
+                    runs[key].append(_case(tool, source_path, target_path))
+            best = {key: best_of(each) for key, each in runs.items()}
             for source in (".x3d", ".glb"):
                 for target in (".glb", ".x3d"):
-                    ours = case(
-                        "shadowgeo", stem.with_suffix(source), folder / f"out{target}", repeat
-                    )
                     rows.append(
-                        {**facts, "in": source, "out": target, "ours": ours, "trimesh": peer,
-                         "lxml": parse}
+                        {**facts, "in": source, "out": target, "ours": best[(source, target)],
+                         "trimesh": best["trimesh"], "lxml": best["lxml"]}
                     )  # fmt: skip
                     print(_line(rows[-1]), flush=True)
     return rows
@@ -318,7 +334,8 @@ def section(rows: list[dict], command: str) -> str:
         f"`{command}` (Python {platform.python_version()}, numpy {np.__version__}, "
         f"trimesh {trimesh.__version__}, lxml {etree.__version__}; times are CPU seconds of "
         "the process, the least of each case's runs, each run in a subprocess of its own, "
-        "peers in the same run; the machine is shared, so read the ratios). "
+        "every case once a round, peers among them; the machine is shared, so read the "
+        "ratios). "
         f"{scenes_text}.\n\n"
         "End-to-end = load + add_shadows (default sun onto y = 0) + save of the shadowed "
         "scene; *without shadows* = load + save of the scene as read. The trimesh peer is "
