@@ -42,6 +42,17 @@ def _pseudo_angle(dx: float, dy: float) -> float:
 
 
 @nb.njit(cache=True)
+def _mean(x: np.ndarray, y: np.ndarray, first: int, n: int) -> tuple[float, float]:
+    """The mean of the corners ``first .. first + n``, summed in order."""
+    sx = 0.0
+    sy = 0.0
+    for i in range(first, first + n):
+        sx += x[i]
+        sy += y[i]
+    return sx / n, sy / n
+
+
+@nb.njit(cache=True)
 def _star(
     x: np.ndarray, y: np.ndarray, first: int, n: int, margin: float, rel: np.ndarray
 ) -> tuple[bool, float, float]:
@@ -52,13 +63,7 @@ def _star(
     beyond the angles' rounding). Fills ``rel[:n]`` with each spoke's
     pseudo-angle from the first spoke's, in [0, 4) and rising; returns the
     mean too."""
-    cx = 0.0
-    cy = 0.0
-    for i in range(first, first + n):
-        cx += x[i]
-        cy += y[i]
-    cx /= n
-    cy /= n
+    cx, cy = _mean(x, y, first, n)
     falls = 0
     base = _pseudo_angle(x[first] - cx, y[first] - cy)
     previous = base
@@ -191,13 +196,7 @@ def _simple(
     """:func:`_monotone` along the loop's principal axis (a crescent's
     length), else along one of ``_DIRECTIONS`` directions half a turn apart
     from x."""
-    mx = 0.0
-    my = 0.0
-    for i in range(first, first + n):
-        mx += x[i]
-        my += y[i]
-    mx /= n
-    my /= n
+    mx, my = _mean(x, y, first, n)
     sxx = 0.0
     sxy = 0.0
     syy = 0.0

@@ -88,6 +88,14 @@ WRITERS = {
 }
 
 
+def optional_module(name: str) -> Any:
+    """The module ``name``, or None when it is not installed (an extra's)."""
+    try:
+        return importlib.import_module(name)
+    except ImportError:  # pragma: no cover - the fallbacks are tested by monkeypatching
+        return None
+
+
 def float_triple(values: Iterable[Any]) -> tuple[float, float, float]:
     """``tuple(float(v) for v in values)``, typed as the three it holds (an
     ``(x, y, z)`` or an ``(r, g, b)``)."""

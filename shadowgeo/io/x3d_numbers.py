@@ -15,27 +15,18 @@ same digits ten times faster).
 
 from __future__ import annotations
 
-import importlib
 import re
 import secrets
-from typing import Any, BinaryIO
+from typing import BinaryIO
 
 import numpy as np
 
 from ..errors import SceneError
+from . import optional_module
 from .x3d_fields import Element
 
-
-def _optional(name: str) -> Any:
-    """The module ``name``, or None when it is not installed."""
-    try:
-        return importlib.import_module(name)
-    except ImportError:  # pragma: no cover - the repr fallback is tested by monkeypatching
-        return None
-
-
 # The shortest float64 text (as repr), ten times faster: the `speed` extra.
-orjson = _optional("orjson")
+orjson = optional_module("orjson")
 
 
 def points_text(vertices: np.ndarray) -> bytes:
