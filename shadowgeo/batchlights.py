@@ -426,7 +426,7 @@ def settle(
         )
     if verdict != CASTS:
         info = ShadowDiagnostics(n_triangles=caster.n_faces, empty_reason=_EMPTY[verdict])
-        return Shadow(plane, light, empty_mesh(), [], 0.0, info)
+        return Shadow(plane, light, empty_mesh, [], 0.0, info)
     if frames.near[row]:
         position = cast("PointLight", light).position
         check_light_outside(caster, position, frames.tolerance(row, tolerance))
@@ -563,7 +563,7 @@ def _array_result(
     (local units), as the general path makes it."""
     if isinstance(parts, poly.FlatParts):  # scaled and moved as one array
         if not parts.groups:
-            return Shadow(plane, light, empty_mesh(), [], 0.0, info)
+            return Shadow(plane, light, empty_mesh, [], 0.0, info)
         area = parts.area / scale / scale
         polygons = parts.parts(parts.cut(parts.points / scale + origin2d))
         flat = parts  # (cut into loops when the mesh is asked for: most callers never do)
@@ -573,7 +573,7 @@ def _array_result(
 
         return Shadow(plane, light, build, polygons, area, info)
     if not parts:
-        return Shadow(plane, light, empty_mesh(), [], 0.0, info)
+        return Shadow(plane, light, empty_mesh, [], 0.0, info)
     area = _parts_area(parts) / scale / scale  # no square to over/underflow
     polygons = [[loop / scale + origin2d for loop in loops] for loops in parts]
     build = partial(triangulated, parts, scale, lift, basis)

@@ -448,7 +448,7 @@ class _Projector:
             limits=tuple(self.limits),
             empty_reason=reason,
         )
-        return Shadow(self.plane, self.light, empty_mesh(), [], 0.0, info)
+        return Shadow(self.plane, self.light, empty_mesh, [], 0.0, info)
 
     # -- the computation ------------------------------------------------------------------
 
@@ -814,7 +814,7 @@ class _Projector:
             n_loops=n_loops,
         )
         if not parts:
-            return Shadow(self.plane, self.light, empty_mesh(), [], 0.0, info)
+            return Shadow(self.plane, self.light, empty_mesh, [], 0.0, info)
         u, v = self.call.basis
         relative = self.origin + self.center - self.plane.origin
         origin2d = np.array([relative @ u, relative @ v])

@@ -75,6 +75,13 @@ assert "trimesh" not in sys.modules, "import shadowgeo imported trimesh"
 from cli.main import main
 for suffix in (".x3d", ".glb"):
     assert main(["convert", {str(EXAMPLE)!r}, {str(tmp_path)!r} + "/out" + suffix]) == 0
+# empty shadows (a light below the ground, a sun shining up), on either path
+corners = [[0, 2, 0], [1, 2, 0], [0, 3, 0], [0, 2, 1]]
+tetrahedron = (corners, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+ground, square = shadowgeo.Plane([0, 1, 0], 0), [[-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]]
+for light in (shadowgeo.PointLight([0, -5, 0]), shadowgeo.DirectionalLight([0, 1, 0])):
+    for receiver in (None, square):
+        assert shadowgeo.project_shadow(tetrahedron, light, ground, receiver=receiver).is_empty
 print(sorted(name for name in ("trimesh", "scipy", "numba", "pyvista") if name in sys.modules))
 """
     done = subprocess.run(
