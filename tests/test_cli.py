@@ -63,11 +63,11 @@ def converted(tmp_path_factory):
     return outputs
 
 
-def test_converting_an_x3d_scene_imports_no_mesh_library(tmp_path):
+def test_converting_an_x3d_or_plain_gltf_scene_imports_no_mesh_library(tmp_path):
     # trimesh (with scipy and networkx) takes about 1.4 s to import and
-    # numba 0.8 s: an X3D scene converted to X3D or glTF needs neither, nor
-    # does ``import shadowgeo``. They load when a caller asks for a mesh
-    # (Shadow.mesh, shadow_volume, a glTF or OBJ input).
+    # numba 0.8 s: an X3D or plain glTF scene converted to X3D or glTF needs
+    # neither, nor does ``import shadowgeo``. They load when a caller asks for
+    # a mesh (Shadow.mesh, shadow_volume, an OBJ input, a glTF trimesh decodes).
     script = f"""
 import sys
 import shadowgeo
@@ -75,6 +75,8 @@ assert "trimesh" not in sys.modules, "import shadowgeo imported trimesh"
 from cli.main import main
 for suffix in (".x3d", ".glb"):
     assert main(["convert", {str(EXAMPLE)!r}, {str(tmp_path)!r} + "/out" + suffix]) == 0
+# a plain glTF in (as shadowgeo and most tools write it) is decoded without trimesh too
+assert main(["convert", {str(tmp_path)!r} + "/out.glb", {str(tmp_path)!r} + "/again.x3d"]) == 0
 # empty shadows (a light below the ground, a sun shining up), on either path
 corners = [[0, 2, 0], [1, 2, 0], [0, 3, 0], [0, 2, 1]]
 tetrahedron = (corners, [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])

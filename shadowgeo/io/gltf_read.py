@@ -1,17 +1,21 @@
-"""glTF 2.0 input (``.glb``, ``.gltf``): triangles through trimesh, the rest
-from the JSON.
+"""glTF 2.0 input (``.glb``, ``.gltf``): triangles decoded by numpy or by
+trimesh, the rest from the JSON.
 
-trimesh decodes the triangles and the node graph (:mod:`.trimesh_formats`).
-This module reads the JSON itself for what trimesh drops or changes: the
-nodes' own names (trimesh renames duplicates), materials as float factors
-(trimesh keeps 8-bit colours), ``KHR_lights_punctual`` lights and the
-``extras["shadowgeo"]`` that :mod:`.gltf_write` writes (roles, light groups,
-X3D light fields; the layout is in :mod:`.gltf_layout`).
+A plain file (one triangle primitive per mesh, float positions, a tree of
+nodes: what shadowgeo and many exporters write) is decoded by
+:mod:`.gltf_native`, views of its buffers; anything else (Draco, sparse or
+quantized accessors, strips, vertex colours, several primitives to a mesh)
+by trimesh (:mod:`.trimesh_formats`), as before. Either way this module reads
+the JSON itself for what trimesh drops or changes: the nodes' own names
+(trimesh renames duplicates), materials as float factors (trimesh keeps 8-bit
+colours), ``KHR_lights_punctual`` lights and the ``extras["shadowgeo"]`` that
+:mod:`.gltf_write` writes (roles, light groups, X3D light fields; the layout
+is in :mod:`.gltf_layout`).
 
 Safety: a glTF's buffers and images may only be data URIs or relative paths
 that stay in the file's folder; anything else (``http:``, ``/etc/...``,
-``../``) is refused before trimesh sees the file, and trimesh never fetches
-remote resources. Textures play no part in shadows and are not decoded; a
+``../``) is refused before either decoder sees the file, and nothing remote
+is ever fetched. Textures play no part in shadows and are not decoded; a
 missing image is a warning, a missing buffer an error.
 
 glTF is Y-up in metres, so a glTF scene reads as ``up_axis="Y"``,
@@ -23,12 +27,12 @@ from __future__ import annotations
 import json
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 from urllib.parse import unquote
 
 import numpy as np
-import trimesh
 
 from .. import limits
 from ..errors import SceneError
@@ -45,7 +49,8 @@ from .gltf_layout import (
     shadowgeo_extras,
     shape_fields,
 )
-from .trimesh_formats import MALFORMED, load_scene, mesh_shape, triangle_meshes
+from .gltf_native import PlainMeshes, plain_meshes
+from .trimesh_formats import MALFORMED, checked_shape, load_scene, mesh_shape, triangle_meshes
 
 
 def _gltf_document(path: Path) -> tuple[dict[str, Any], bytes | memoryview | None]:
@@ -238,13 +243,18 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
         raise SceneError("no such file", path=str(path))
     document, binary = _gltf_document(path)
     warnings = _check_uris(document, path)
-    data, frames = _for_trimesh(document, binary)
-    loaded = load_scene(path, data)
     scene = Scene(path=str(path), warnings=warnings)
     nodes = document.get("nodes") or []
+    plain = plain_meshes(document, binary, path)
     try:
-        _read_shapes(scene, loaded, path, frames, nodes, document)
-        _read_lights(scene, loaded.graph, frames, nodes, document)
+        world: Callable[[int], np.ndarray | None]
+        if plain is not None:
+            keys = _read_plain_shapes(scene, plain, path, nodes, document)
+            world = plain.worlds.get
+        else:
+            keys, world = _read_shapes(scene, path, nodes, document, binary)
+        _read_empty_shapes(scene, world, nodes, keys)
+        _read_lights(scene, world, nodes, document)
         _read_cameras(scene, document)
     except MALFORMED as error:
         if isinstance(error, SceneError):
@@ -276,12 +286,15 @@ def _node_index(graph: Any, frame: str, frames: dict[str, int]) -> int | None:
 
 def _read_shapes(
     scene: Scene,
-    loaded: trimesh.Scene,
     path: Path,
-    frames: dict[str, int],
     nodes: list[dict[str, Any]],
     document: dict[str, Any],
-) -> None:
+    binary: bytes | memoryview | None,
+) -> tuple[list[int], Callable[[int], np.ndarray | None]]:
+    """Shapes decoded by trimesh, in node order; returns each shape's node
+    index and the world transform of a node (None when not in the scene)."""
+    data, frames = _for_trimesh(document, binary)
+    loaded = load_scene(path, data)
     graph = loaded.graph
     indices = {frame: _node_index(graph, frame, frames) for frame in graph.nodes_geometry}
     # In the file's node order (trimesh's graph order is not).
@@ -293,30 +306,62 @@ def _read_shapes(
         fields = {**_look(document, node), **shape_fields(shadowgeo_extras(node))}
         scene.shapes.append(mesh_shape(geometry, transform, node.get("name"), path, **fields))
         keys.append(index or 0)
-    _read_empty_shapes(scene, graph, frames, nodes, keys)
+
+    def world(index: int) -> np.ndarray | None:
+        frame = f"node{index}"
+        return np.asarray(graph.get(frame)[0]) if frame in graph.nodes else None
+
+    return keys, world
+
+
+def _read_plain_shapes(
+    scene: Scene,
+    plain: PlainMeshes,
+    path: Path,
+    nodes: list[dict[str, Any]],
+    document: dict[str, Any],
+) -> list[int]:
+    """Shapes of a plain glTF (:mod:`.gltf_native`), in node order; returns
+    each shape's node index. Nodes that share a mesh share its arrays."""
+    keys = []
+    for index in sorted(plain.worlds):
+        node = nodes[index]
+        if "mesh" not in node:
+            continue
+        vertices, faces, primitive = plain.meshes[node["mesh"]]
+        look = _look(document, node)
+        if not look:  # no material: what trimesh gives a mesh without colours
+            look = {"material": Material(), "solid": True}
+        fields = {**look, **shape_fields(shadowgeo_extras(node))}
+        name = node.get("name")
+        scene.shapes.append(
+            checked_shape(vertices, faces, plain.worlds[index], name, path, **fields)
+        )
+        keys.append(index)
+    return keys
 
 
 def _read_empty_shapes(
     scene: Scene,
-    graph: Any,
-    frames: dict[str, int],
+    world: Callable[[int], np.ndarray | None],
     nodes: list[dict[str, Any]],
     keys: list[int],
 ) -> None:
     """Shapes shadowgeo wrote without triangles are nodes without a mesh
     (glTF forbids empty accessors); put them back in node order."""
-    for frame, index in frames.items():
-        extras = shadowgeo_extras(nodes[index])
-        if "mesh" in nodes[index] or extras.get("role") not in ("geometry", "shadow", "volume"):
+    for index, node in enumerate(nodes):
+        extras = shadowgeo_extras(node)
+        if "mesh" in node or extras.get("role") not in ("geometry", "shadow", "volume"):
             continue
-        if frame not in graph.nodes:
+        transform = world(index)
+        if transform is None:
             continue
         scene.shapes.append(
             Shape(
                 np.zeros((0, 3)),
                 np.zeros((0, 3), dtype=np.int64),
-                np.asarray(graph.get(frame)[0], dtype=np.float64),
-                name=nodes[index].get("name"),
+                np.asarray(transform, dtype=np.float64),
+                name=node.get("name"),
                 **shape_fields(extras),
             )
         )
@@ -327,22 +372,24 @@ def _read_empty_shapes(
 
 def _read_lights(
     scene: Scene,
-    graph: Any,
-    frames: dict[str, int],
+    world: Callable[[int], np.ndarray | None],
     nodes: list[dict[str, Any]],
     document: dict[str, Any],
 ) -> None:
     entries = ((document.get("extensions") or {}).get(LIGHTS) or {}).get("lights") or []
-    for frame, index in frames.items():
-        node = nodes[index]
+    for index, node in enumerate(nodes):
         reference = (node.get("extensions") or {}).get(LIGHTS)
-        if reference is None or frame not in graph.nodes:
+        if reference is None:
             continue
-        world, _ = graph.get(frame)
+        transform = world(index)
+        if transform is None:
+            continue
         extras = shadowgeo_extras(node)
         limits.check_lights(len(scene.lights) + 1, str(scene.path))
         scene.lights.append(
-            scene_light(entries[reference["light"]], np.asarray(world), node.get("name"), extras)
+            scene_light(
+                entries[reference["light"]], np.asarray(transform), node.get("name"), extras
+            )
         )
 
 

@@ -13,14 +13,16 @@ import io
 import os
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike
 
 from ..errors import SceneError
 from ..scene import Material, Scene, Shape
+
+if TYPE_CHECKING:
+    import trimesh
 
 MALFORMED = (TypeError, ValueError, KeyError, IndexError, AttributeError)
 
@@ -29,6 +31,8 @@ def load_scene(path: Path, data: bytes | None = None) -> trimesh.Scene:
     """trimesh's scene of ``path``, or of ``data`` in its place (external
     resources then resolve from the file's folder); SceneError naming the
     file when trimesh cannot read it. Nothing remote is ever fetched."""
+    import trimesh  # here: 1.4 s to import, and plain glTF and X3D do without it
+
     try:
         if data is None:
             loaded = trimesh.load_scene(path, allow_remote=False)
@@ -75,6 +79,8 @@ def triangle_meshes(
     """``(frame, transform, geometry name, Trimesh)`` of each of ``frames``
     (frames of ``loaded``'s graph that hold geometry), skipping points and
     lines with a warning."""
+    import trimesh
+
     for frame in frames:
         try:
             transform, geometry_name = loaded.graph[frame]
@@ -95,14 +101,30 @@ def mesh_shape(
 ) -> Shape:
     """The :class:`Shape` of a ``trimesh.Trimesh`` placed by ``transform``
     (4, 4), named ``name`` in the file ``path``; its material and solidity
-    come from trimesh unless ``fields`` (other Shape arguments) give them.
-
-    A face that refers to a vertex the mesh does not have (trimesh keeps the
-    file's indices as they are) is a SceneError naming the node."""
+    come from trimesh unless ``fields`` (other Shape arguments) give them."""
     material, solid = trimesh_material(geometry)
     # trimesh's own arrays, not copies (the trimesh scene is dropped after reading)
     points = np.asarray(geometry.vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(geometry.faces, dtype=np.int64).reshape(-1, 3)
+    return checked_shape(
+        points, faces, transform, name, path, **{"material": material, "solid": solid, **fields}
+    )
+
+
+def checked_shape(
+    points: np.ndarray,
+    faces: np.ndarray,
+    transform: ArrayLike,
+    name: str | None,
+    path: Path,
+    **fields: Any,
+) -> Shape:
+    """The :class:`Shape` of float64 ``points`` (n, 3) and int64 ``faces``
+    (m, 3) read from node ``name`` of the file ``path``, placed by
+    ``transform`` (4, 4), with ``fields`` (other Shape arguments).
+
+    A face that refers to a vertex the mesh does not have (trimesh keeps the
+    file's indices as they are) is a SceneError naming the node."""
     if len(faces) and (faces.min() < 0 or faces.max() >= len(points)):
         bad = int(faces.max()) if faces.max() >= len(points) else int(faces.min())
         raise SceneError(
@@ -116,7 +138,7 @@ def mesh_shape(
         np.array(transform, dtype=np.float64),
         name=name,
         source=f"{path.name}, node {name!r}" if name else path.name,
-        **{"material": material, "solid": solid, **fields},
+        **fields,
     )
 
 

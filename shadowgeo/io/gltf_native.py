@@ -1,0 +1,304 @@
+"""glTF triangles decoded with numpy alone, for the plain files most tools
+write: the fast path of :mod:`.gltf_read`.
+
+trimesh builds a ``Trimesh`` object, a scene-graph edge and a cached
+transform for every glTF node: 10,000 small meshes took about a second to
+decode that way, where the accessors themselves are views of one buffer.
+:func:`plain_meshes` decodes a document here when everything it needs is
+plain: every mesh one primitive of triangles (``mode`` 4) with float
+``POSITION``, optional unsigned ``indices``, no ``COLOR_0`` (trimesh turns
+vertex colours into a material) and no primitive extensions (Draco); every
+accessor in bounds of its buffer view and buffer; the default scene a tree
+of nodes. Anything else returns None and trimesh decodes the file as before,
+with its own errors: this path never refuses a file the other would read.
+
+World transforms are the products of the nodes' local matrices, exactly as
+the file gives them (trimesh also drops near-identity factors and nudges
+near-rigid products to rigid ones, by 1e-8 at most).
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+from urllib.parse import unquote
+
+import numpy as np
+
+# glTF componentType -> numpy dtype (little-endian), for the types read here.
+_FLOAT = 5126
+_COMPONENTS: dict[int, np.dtype[Any]] = {
+    5121: np.dtype("<u1"),  # UNSIGNED_BYTE, UNSIGNED_SHORT, UNSIGNED_INT: indices
+    5123: np.dtype("<u2"),
+    5125: np.dtype("<u4"),
+    _FLOAT: np.dtype("<f4"),
+}
+_TRIANGLES = 4
+
+
+@dataclass
+class PlainMeshes:
+    """What :func:`plain_meshes` decodes: ``worlds`` maps every node of the
+    default scene to its (4, 4) world transform; ``meshes`` maps each mesh
+    index used by those nodes to its ``(vertices, faces, primitive)``
+    (float64 (n, 3), int64 (m, 3), the primitive's JSON object)."""
+
+    worlds: dict[int, np.ndarray]
+    meshes: dict[int, tuple[np.ndarray, np.ndarray, dict[str, Any]]]
+
+
+def plain_meshes(
+    document: dict[str, Any], binary: bytes | memoryview | None, path: Path
+) -> PlainMeshes | None:
+    """The default scene's world transforms and mesh triangles of a plain
+    glTF ``document`` (with a GLB's ``binary`` chunk), or None when the file
+    is not plain (see the module's text) and trimesh must decode it."""
+    worlds = _worlds(document)
+    if worlds is None:
+        return None
+    nodes = document.get("nodes", [])
+    used = sorted({nodes[index]["mesh"] for index in worlds if "mesh" in nodes[index]})
+    buffers: dict[int, bytes | memoryview] = {}
+    meshes = {}
+    for index in used:
+        decoded = _mesh(document, index, binary, path, buffers)
+        if decoded is None:
+            return None
+        meshes[index] = decoded
+    return PlainMeshes(worlds, meshes)
+
+
+def _is_index(value: Any, count: int) -> bool:
+    return type(value) is int and 0 <= value < count
+
+
+def _worlds(document: dict[str, Any]) -> dict[int, np.ndarray] | None:
+    """World transform of each node of the default scene, or None unless the
+    scene is a tree of nodes with plain local transforms."""
+    nodes = document.get("nodes", [])
+    scenes = document.get("scenes")
+    if not isinstance(nodes, list) or not isinstance(scenes, list) or not scenes:
+        return None
+    default = document.get("scene", 0)
+    if not _is_index(default, len(scenes)) or not isinstance(scenes[default], dict):
+        return None
+    roots = scenes[default].get("nodes", [])
+    if not isinstance(roots, list):
+        return None
+    worlds: dict[int, np.ndarray] = {}
+    pending: list[tuple[Any, np.ndarray | None]] = [(index, None) for index in reversed(roots)]
+    while pending:
+        index, parent = pending.pop()
+        if not _is_index(index, len(nodes)) or index in worlds:
+            return None  # a dangling index, or a node reached twice: not a tree
+        node = nodes[index]
+        local = _local(node) if isinstance(node, dict) else None
+        if local is None:
+            return None
+        worlds[index] = local if parent is None else parent @ local
+        children = node.get("children", [])
+        if not isinstance(children, list):
+            return None
+        pending.extend((child, worlds[index]) for child in reversed(children))
+    return worlds
+
+
+def _size(value: Any) -> int | None:
+    """``value`` if it is a non-negative JSON integer, else None."""
+    return value if type(value) is int and value >= 0 else None
+
+
+def _numbers(value: Any, count: int) -> list[float] | None:
+    """``value`` as ``count`` finite floats, or None."""
+    if not isinstance(value, list) or len(value) != count:
+        return None
+    if not all(type(v) in (int, float) and math.isfinite(v) for v in value):
+        return None
+    return [float(v) for v in value]
+
+
+def _local(node: dict[str, Any]) -> np.ndarray | None:
+    """A node's local 4x4 transform: its column-major ``matrix`` (affine), or
+    translation * rotation (x, y, z, w quaternion) * scale; None when it is
+    anything else."""
+    if "matrix" in node:
+        if any(key in node for key in ("translation", "rotation", "scale")):
+            return None
+        values = _numbers(node["matrix"], 16)
+        if values is None:
+            return None
+        matrix = np.array(values).reshape(4, 4).T
+        return matrix if matrix[3].tolist() == [0.0, 0.0, 0.0, 1.0] else None
+    translation = _numbers(node.get("translation", [0, 0, 0]), 3)
+    rotation = _numbers(node.get("rotation", [0, 0, 0, 1]), 4)
+    scale = _numbers(node.get("scale", [1, 1, 1]), 3)
+    if translation is None or rotation is None or scale is None:
+        return None
+    local = np.eye(4)
+    if rotation != [0.0, 0.0, 0.0, 1.0]:
+        local[:3, :3] = quaternion_matrix(rotation)
+    if scale != [1.0, 1.0, 1.0]:
+        local[:3, :3] *= scale
+    local[:3, 3] = translation
+    return local
+
+
+def quaternion_matrix(xyzw: list[float]) -> np.ndarray:
+    """(3, 3) rotation of the quaternion ``xyzw`` (glTF's order), normalised
+    first (the identity for a zero quaternion): products of the scaled
+    components, as trimesh's ``quaternion_matrix`` forms them, so that a
+    quarter turn written as (0.7071..., 0, 0, 0.7071...) gives exact zeros
+    and ones where ``1 - 2 x x`` would leave 2e-16."""
+    q = np.array([xyzw[3], xyzw[0], xyzw[1], xyzw[2]], dtype=np.float64)
+    norm = float(q @ q)
+    if norm < np.finfo(np.float64).eps * 4.0:
+        return np.eye(3)
+    q *= math.sqrt(2.0 / norm)
+    q = np.outer(q, q)
+    return np.array(
+        [
+            [1.0 - q[2, 2] - q[3, 3], q[1, 2] - q[3, 0], q[1, 3] + q[2, 0]],
+            [q[1, 2] + q[3, 0], 1.0 - q[1, 1] - q[3, 3], q[2, 3] - q[1, 0]],
+            [q[1, 3] - q[2, 0], q[2, 3] + q[1, 0], 1.0 - q[1, 1] - q[2, 2]],
+        ]
+    )
+
+
+def _mesh(
+    document: dict[str, Any],
+    index: int,
+    binary: bytes | memoryview | None,
+    path: Path,
+    buffers: dict[int, bytes | memoryview],
+) -> tuple[np.ndarray, np.ndarray, dict[str, Any]] | None:
+    """``(vertices, faces, primitive)`` of a mesh of one plain triangle
+    primitive, or None."""
+    meshes = document.get("meshes")
+    if not isinstance(meshes, list) or not _is_index(index, len(meshes)):
+        return None
+    primitives = meshes[index].get("primitives") if isinstance(meshes[index], dict) else None
+    if not isinstance(primitives, list) or len(primitives) != 1:
+        return None
+    primitive = primitives[0]
+    if not isinstance(primitive, dict) or "extensions" in primitive:
+        return None
+    attributes = primitive.get("attributes")
+    if primitive.get("mode", _TRIANGLES) != _TRIANGLES or not isinstance(attributes, dict):
+        return None
+    if "COLOR_0" in attributes:
+        return None
+    points = _accessor(document, attributes.get("POSITION"), "VEC3", binary, path, buffers)
+    if points is None or points.dtype != np.float32 or len(points) == 0:
+        return None
+    vertices = points.astype(np.float64)
+    if "indices" in primitive:
+        flat = _accessor(document, primitive["indices"], "SCALAR", binary, path, buffers)
+        if flat is None or flat.dtype.kind != "u" or len(flat) % 3:
+            return None
+        faces = flat.reshape(-1).astype(np.int64).reshape(-1, 3)
+    else:
+        if len(vertices) % 3:
+            return None
+        faces = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
+    return vertices, faces, primitive
+
+
+_WIDTHS = {"SCALAR": 1, "VEC3": 3}
+
+
+def _accessor(
+    document: dict[str, Any],
+    index: Any,
+    kind: str,
+    binary: bytes | memoryview | None,
+    path: Path,
+    buffers: dict[int, bytes | memoryview],
+) -> np.ndarray | None:
+    """The (count, width) array of accessor ``index`` (a view of its buffer,
+    strided or not), or None unless it is of ``kind`` and lies in bounds."""
+    accessors = document.get("accessors")
+    if not isinstance(accessors, list) or not _is_index(index, len(accessors)):
+        return None
+    accessor = accessors[index]
+    if not isinstance(accessor, dict) or accessor.get("type") != kind:
+        return None
+    if "sparse" in accessor or accessor.get("normalized", False) is not False:
+        return None
+    component = accessor.get("componentType")
+    dtype = _COMPONENTS.get(component) if type(component) is int else None
+    count, offset = _size(accessor.get("count")), _size(accessor.get("byteOffset", 0))
+    views = document.get("bufferViews")
+    if dtype is None or count is None or offset is None or not isinstance(views, list):
+        return None
+    view = (
+        views[accessor["bufferView"]] if _is_index(accessor.get("bufferView"), len(views)) else None
+    )
+    if not isinstance(view, dict):
+        return None
+    width = _WIDTHS[kind]
+    element = dtype.itemsize * width
+    start, length = _size(view.get("byteOffset", 0)), _size(view.get("byteLength"))
+    stride = _size(view.get("byteStride", element))
+    if start is None or length is None or stride is None:
+        return None
+    if stride < element or offset % dtype.itemsize or stride % dtype.itemsize:
+        return None
+    data = _buffer(document, view.get("buffer"), binary, path, buffers)
+    if data is None or start + length > len(data):
+        return None
+    if count and offset + stride * (count - 1) + element > length:
+        return None
+    return np.ndarray(
+        (count, width),
+        dtype=dtype,
+        buffer=data,
+        offset=start + offset,
+        strides=(stride, dtype.itemsize),
+    )
+
+
+def _buffer(
+    document: dict[str, Any],
+    index: Any,
+    binary: bytes | memoryview | None,
+    path: Path,
+    buffers: dict[int, bytes | memoryview],
+) -> bytes | memoryview | None:
+    """The bytes of buffer ``index``: the GLB chunk, a base64 data URI or a
+    file beside ``path`` (already checked to stay in its folder), at least
+    its declared ``byteLength`` long; None otherwise."""
+    if index in buffers:
+        return buffers[index]
+    entries = document.get("buffers")
+    if not isinstance(entries, list) or not _is_index(index, len(entries)):
+        return None
+    entry = entries[index]
+    length = entry.get("byteLength") if isinstance(entry, dict) else None
+    if type(length) is not int or length < 0:
+        return None
+    uri = entry.get("uri")
+    if uri is None:
+        data = binary if index == 0 else None
+    elif not isinstance(uri, str):
+        data = None
+    elif uri.startswith("data:"):
+        head, comma, text = uri.partition(",")
+        if not comma or not head.endswith(";base64"):
+            return None
+        try:
+            data = base64.b64decode(text, validate=True)
+        except ValueError:
+            return None
+    else:
+        try:
+            data = (path.resolve().parent / unquote(uri)).read_bytes()
+        except OSError:
+            return None
+    if data is None or len(data) < length:
+        return None
+    data = memoryview(data)[:length]
+    buffers[index] = data
+    return data
