@@ -36,6 +36,11 @@ class Caster:
     vertices : (n, 3) float64
     faces : (m, 3) int
         Indices into ``vertices``; the winding gives the outward side.
+    closed : bool, optional
+        :attr:`is_closed`, when the caller knows it: meshes with no vertex in
+        common stacked into one are closed exactly when each of them is, so
+        a scene of many copies of one mesh tests its topology once, not the
+        whole stack's edges.
     copy : bool
         Copy the arrays (the default), so that later changes to the caller's
         arrays cannot reach the cached topology. ``False`` uses float64 and
@@ -52,7 +57,14 @@ class Caster:
     vertices: NDArray[np.float64]
     faces: NDArray[np.int64]
 
-    def __init__(self, vertices: ArrayLike, faces: ArrayLike, *, copy: bool = True) -> None:
+    def __init__(
+        self,
+        vertices: ArrayLike,
+        faces: ArrayLike,
+        *,
+        copy: bool = True,
+        closed: bool | None = None,
+    ) -> None:
         vertices = np.array(vertices, dtype=np.float64, copy=True if copy else None)
         faces = np.array(faces, copy=True if copy else None)
         if vertices.size == 0:
@@ -90,6 +102,8 @@ class Caster:
         self.vertices = vertices
         self.faces = faces
         self._lit_before = False
+        if closed is not None:
+            self.__dict__["is_closed"] = bool(closed) and len(faces) > 0
 
     @property
     def n_faces(self) -> int:
@@ -422,7 +436,11 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
         key <<= np.int64(1)
         key |= start > end
     flat = keys.reshape(-1)
-    flat.sort()
+    # Timsort (numpy's "stable" for int64) finds the runs that a mesh's face
+    # order leaves in its edge keys: 3.9M keys of an icosphere sort in 0.07 s
+    # against 0.23 s by the default introsort (0.30 against 0.23 for keys in
+    # random order, a mesh whose faces were shuffled).
+    flat.sort(kind="stable")
     pairs = flat.reshape(-1, 2)
     for first in range(0, len(pairs), _BLOCK):
         block = pairs[first : first + _BLOCK]

@@ -180,3 +180,45 @@ def test_a_step_shadows_only_the_part_of_its_lower_top_the_upper_part_hides():
     )
     assert area == pytest.approx(1.5, rel=1e-9)
     assert triangles[:, :, 0].max() == pytest.approx(1.5, rel=1e-9)
+
+
+def _tetrahedron(offset: float, open_: bool = False) -> sg.Shape:
+    faces = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]
+    corners = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float) + offset
+    return sg.Shape(corners, faces[:3] if open_ else faces)
+
+
+@pytest.mark.parametrize("many_topologies", [False, True])
+def test_closedness_of_stacked_casters_is_each_shapes_whichever_way_it_is_found(
+    monkeypatch, many_topologies
+):
+    # Copies of one closed mesh and one open mesh: closedness found once per
+    # topology must agree with the stack's own edge test, for every mask of
+    # whole casters, and a mask that cuts a caster is tested on its faces.
+    import shadowgeo.scene.casters as casters_module
+    from shadowgeo.topology import Caster
+
+    if many_topologies:  # the per-topology test off: the stack's edges decide
+        monkeypatch.setattr(casters_module, "_TOPOLOGIES_TESTED", 1)
+    shapes = [_tetrahedron(2.0 * i, open_=(i == 3)) for i in range(6)]
+    stacked = CasterSet(shapes)
+    assert (stacked._shape_closed is None) == many_topologies
+    assert stacked.closed.tolist() == [True, True, True, False, True, True]
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        chosen = rng.random(6) < 0.5
+        faces = stacked.faces_of(chosen)
+        mesh = stacked.mesh(faces)
+        expected = Caster(stacked.vertices, stacked.faces[faces]).is_closed
+        assert mesh.is_closed == expected == (chosen.any() and not chosen[3])
+    cut = stacked.faces_of(np.ones(6, dtype=bool))
+    cut[0] = False  # one face of the first tetrahedron: the mesh is open
+    assert stacked.mesh(cut).is_closed is False
+
+
+def test_a_caster_told_it_is_closed_keeps_it_and_an_empty_one_never_is():
+    from shadowgeo.topology import Caster
+
+    shape = _tetrahedron(0.0)
+    assert Caster(shape.vertices, shape.faces, closed=True).is_closed is True
+    assert Caster(np.zeros((0, 3)), np.zeros((0, 3), dtype=int), closed=True).is_closed is False

@@ -84,6 +84,15 @@ def test_copies_of_a_shape_cast_and_receive_once():
     ]
     moved = sg.Shape(sphere.vertices + [1.0, 0, 0], sphere.faces)
     assert distinct([ground, *copies, moved]) == [ground, copies[0], moved]
+    # shapes that agree on the first and last vertex and all sizes, and differ
+    # only inside, in sidedness or in transform, are all kept
+    inner = sphere.vertices.copy()
+    inner[len(inner) // 2] += 0.5
+    dented = sg.Shape(inner, sphere.faces)
+    two_sided = sg.Shape(sphere.vertices, sphere.faces, solid=False)
+    turned = sg.Shape(sphere.vertices, sphere.faces, transform=np.diag([1.0, -1.0, 1.0, 1.0]))
+    shapes = [copies[0], dented, two_sided, turned, copies[1], dented, turned]
+    assert distinct(shapes) == [copies[0], dented, two_sided, turned]
     light = sg.SceneLight(sg.DirectionalLight([0, -1, 0]), name="sun", shadows=True)
     one = sg.add_shadows(sg.Scene([ground, copies[0]], [light]), surfaces=False)
     many = sg.add_shadows(sg.Scene([ground, *copies], [light]), surfaces=False)

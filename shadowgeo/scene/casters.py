@@ -23,7 +23,7 @@ from ..boxes import bounding_box
 from ..lights import Light, SpotLight, is_positional
 from ..plane import Plane
 from ..tolerance import Tolerance
-from ..topology import Caster
+from ..topology import Caster, closed_by_sort
 from .model import Shape, transformed
 
 # Stacked caster meshes kept for later lights (each holds its topology: a few
@@ -33,25 +33,58 @@ _MESHES_KEPT = 2
 # transform over all its shapes at once.
 _TRANSFORMS_BATCHED = 16
 _IDENTITY = np.eye(4).reshape(16)
+# Closedness is tested per shape, once per distinct face array, when every
+# shape has at most this many faces and there are at most this many
+# distinct face arrays (see _closed_by_topology).
+_SMALL_TOPOLOGY = 4096
+_TOPOLOGIES_TESTED = 64
 
 
 def distinct(shapes: list[Shape]) -> list[Shape]:
     """``shapes`` without those that repeat an earlier one's geometry exactly
     (vertices, faces, transform and sidedness): a node copied ten thousand
-    times over casts, and receives, one shadow."""
-    seen: set[bytes] = set()
+    times over casts, and receives, one shadow.
+
+    Shapes are first told apart by a cheap probe (array shapes, transform,
+    sidedness, first and last vertex); only shapes whose probes agree are
+    hashed whole, so ten thousand different meshes cost no hashing at all.
+    """
+    if len(shapes) < 2:
+        return list(shapes)
+    probes: dict[tuple[object, ...], Shape | dict[bytes, Shape]] = {}
     kept = []
     for shape in shapes:
-        digest = hashlib.blake2b(digest_size=16)
-        for array in (shape.vertices, shape.faces, shape.transform):
-            digest.update(str(array.shape).encode())
-            digest.update(np.ascontiguousarray(array).tobytes())
-        digest.update(b"s" if shape.solid else b"d")
-        key = digest.digest()
-        if key not in seen:
-            seen.add(key)
+        vertices = shape.vertices
+        probe = (
+            vertices.shape,
+            shape.faces.shape,
+            shape.transform.tobytes(),
+            shape.solid,
+            vertices[:1].tobytes(),
+            vertices[-1:].tobytes(),
+        )
+        earlier = probes.get(probe)
+        if earlier is None:
+            probes[probe] = shape
+            kept.append(shape)
+            continue
+        if not isinstance(earlier, dict):
+            earlier = probes[probe] = {_digest(earlier): earlier}
+        key = _digest(shape)
+        if key not in earlier:
+            earlier[key] = shape
             kept.append(shape)
     return kept
+
+
+def _digest(shape: Shape) -> bytes:
+    """A hash of a shape's vertices, faces, transform and sidedness."""
+    digest = hashlib.blake2b(digest_size=16)
+    for array in (shape.vertices, shape.faces, shape.transform):
+        digest.update(str(array.shape).encode())
+        digest.update(np.ascontiguousarray(array).data)  # no copy of a contiguous array
+    digest.update(b"s" if shape.solid else b"d")
+    return digest.digest()
 
 
 class SceneCaster:
@@ -102,6 +135,7 @@ class CasterSet:
         else:
             self.low = self.high = np.zeros((0, 3))
         self._meshes: dict[bytes, Caster] = {}
+        self._shape_closed = _closed_by_topology(shapes)
 
     @functools.cached_property
     def vertex_owner(self) -> np.ndarray:
@@ -245,7 +279,10 @@ class CasterSet:
     def closed(self) -> np.ndarray:
         """(k,) bool: True for a caster whose faces form a closed, consistently
         wound mesh (from the edge table of the whole stack, which the first
-        light reuses: shapes share no stacked vertex)."""
+        light reuses: shapes share no stacked vertex), or from each distinct
+        small topology once."""
+        if self._shape_closed is not None:
+            return self._shape_closed
         whole = self.mesh(np.ones(len(self.faces), dtype=bool))
         if not len(self.faces):
             return np.zeros(len(self), dtype=bool)
@@ -262,9 +299,40 @@ class CasterSet:
         if key not in self._meshes:
             if len(self._meshes) >= _MESHES_KEPT:
                 del self._meshes[next(iter(self._meshes))]  # the oldest
-            chosen = self.faces if faces.all() else self.faces[faces]
-            self._meshes[key] = Caster(self.vertices, chosen, copy=False)
+            everything = bool(faces.all())
+            chosen = self.faces if everything else self.faces[faces]
+            closed = None
+            if self._shape_closed is not None and len(self):
+                # whole casters only (each all in or all out): closed when each is
+                whole = np.logical_and.reduceat(faces, self.face_starts)
+                if everything or np.array_equal(
+                    whole, np.logical_or.reduceat(faces, self.face_starts)
+                ):
+                    closed = bool(self._shape_closed[whole].all())
+            self._meshes[key] = Caster(self.vertices, chosen, copy=False, closed=closed)
         return self._meshes[key]
+
+
+def _closed_by_topology(shapes: list[Shape]) -> np.ndarray | None:
+    """(k,) bool: whether each shape's faces are closed (:func:`closed_by_sort`),
+    tested once per distinct small face array: 10,000 copies of a cylinder
+    are one sort of 312 keys, not one of 3.1 million. None when the shapes
+    have more than ``_TOPOLOGIES_TESTED`` distinct small face arrays or any
+    big one: then the stack's own test is as quick."""
+    keys: list[tuple[int, bytes]] = []
+    found: dict[tuple[int, bytes], bool | None] = {}
+    for shape in shapes:
+        if len(shape.faces) > _SMALL_TOPOLOGY:
+            return None
+        key = (len(shape.vertices), shape.faces.tobytes())
+        if key not in found:
+            if len(found) >= _TOPOLOGIES_TESTED:
+                return None
+            found[key] = closed_by_sort(shape.faces, len(shape.vertices))
+        keys.append(key)
+    if any(closed is None for closed in found.values()):
+        return None
+    return np.array([bool(found[key]) for key in keys], dtype=bool)
 
 
 def _world_vertices(shapes: list[Shape], counts: np.ndarray) -> np.ndarray:
