@@ -210,3 +210,23 @@ def test_a_glb_buffer_shorter_than_declared_is_not_read_natively(tmp_path):
     path.write_bytes(head + struct.pack("<I4s", len(text), b"JSON") + text + rest)
     parsed, binary = gltf_read._gltf_document(path)
     assert gltf_native.plain_meshes(parsed, binary, path) is None
+
+
+def test_a_broken_mesh_no_node_shows_does_not_stop_the_scene(tmp_path):
+    document = _plain_document(tmp_path)
+    document["meshes"].append({"primitives": [{"attributes": {"POSITION": 5}}]})
+    document["accessors"].append(
+        {"bufferView": 3, "componentType": 5126, "count": 400, "type": "VEC3"}  # past its view
+    )
+    path = tmp_path / "unused.gltf"
+    path.write_text(json.dumps(document))
+    assert [shape.name for shape in sg.load(path).shapes] == [
+        "parent",
+        "child",
+        "triangle",
+        "loose",
+    ]
+    document["nodes"][3]["mesh"] = 3  # now a node shows it: trimesh reads, and refuses, the file
+    path.write_text(json.dumps(document))
+    with pytest.raises(sg.SceneError, match="unused.gltf"):
+        sg.load(path)

@@ -12,6 +12,10 @@ accessor in bounds of its buffer view and buffer; the default scene a tree
 of nodes. Anything else returns None and trimesh decodes the file as before,
 with its own errors: this path never refuses a file the other would read.
 
+Only the meshes that nodes of the default scene use are decoded: a broken
+mesh no node shows (an accessor past its buffer, a line strip) is no error
+here, where trimesh, which decodes every mesh, refuses the whole file.
+
 World transforms are the products of the nodes' local matrices, exactly as
 the file gives them (trimesh also drops near-identity factors and nudges
 near-rigid products to rigid ones, by 1e-8 at most).
