@@ -302,6 +302,23 @@ def test_def_use_expansion_bomb_is_refused(tmp_path):
         sg.load(scene(tmp_path, "\n".join(levels)))
 
 
+@pytest.mark.parametrize(
+    "body",
+    [
+        "<Shape><Box/></Shape>" * 10,  # no USE: the elements counted by XPath
+        '<Shape DEF="s"><Box/></Shape>' + '<Shape USE="s"/>' * 9,  # USE: expanded one by one
+    ],
+)
+def test_the_node_budget_counts_a_scene_exactly_with_or_without_use(tmp_path, monkeypatch, body):
+    # Scene + 10 Shapes + 10 Boxes = 21 nodes either way: refused with a budget of 20 only
+    path = scene(tmp_path, "<!-- a comment is no node -->" + body)
+    monkeypatch.setattr(x3d_read, "MAX_NODES", 21)
+    assert len(sg.load(path).shapes) == 10
+    monkeypatch.setattr(x3d_read, "MAX_NODES", 20)
+    with pytest.raises(sg.SceneError, match="expands .* to more than 20 nodes"):
+        sg.load(path)
+
+
 def test_inline_expansion_bomb_is_refused(tmp_path, monkeypatch):
     # no document is large, but each inlines the next twice: 2 ** 6 copies of the last
     monkeypatch.setattr(x3d_read, "MAX_NODES", 50)
