@@ -65,10 +65,10 @@ def plain_meshes(
         return None
     nodes = document.get("nodes", [])
     used = sorted({nodes[index]["mesh"] for index in worlds if "mesh" in nodes[index]})
-    buffers: dict[int, bytes | memoryview] = {}
+    decoder = _Decoder(document, binary, path)
     meshes = {}
     for index in used:
-        decoded = _mesh(document, index, binary, path, buffers)
+        decoded = decoder.mesh(index)
         if decoded is None:
             return None
         meshes[index] = decoded
@@ -171,138 +171,130 @@ def quaternion_matrix(xyzw: list[float]) -> np.ndarray:
     )
 
 
-def _mesh(
-    document: dict[str, Any],
-    index: int,
-    binary: bytes | memoryview | None,
-    path: Path,
-    buffers: dict[int, bytes | memoryview],
-) -> tuple[np.ndarray, np.ndarray, dict[str, Any]] | None:
-    """``(vertices, faces, primitive)`` of a mesh of one plain triangle
-    primitive, or None."""
-    meshes = document.get("meshes")
-    if not isinstance(meshes, list) or not _is_index(index, len(meshes)):
-        return None
-    primitives = meshes[index].get("primitives") if isinstance(meshes[index], dict) else None
-    if not isinstance(primitives, list) or len(primitives) != 1:
-        return None
-    primitive = primitives[0]
-    if not isinstance(primitive, dict) or "extensions" in primitive:
-        return None
-    attributes = primitive.get("attributes")
-    if primitive.get("mode", _TRIANGLES) != _TRIANGLES or not isinstance(attributes, dict):
-        return None
-    if "COLOR_0" in attributes:
-        return None
-    points = _accessor(document, attributes.get("POSITION"), "VEC3", binary, path, buffers)
-    if points is None or points.dtype != np.float32 or len(points) == 0:
-        return None
-    vertices = points.astype(np.float64)
-    if "indices" in primitive:
-        flat = _accessor(document, primitive["indices"], "SCALAR", binary, path, buffers)
-        if flat is None or flat.dtype.kind != "u" or len(flat) % 3:
-            return None
-        faces = flat.reshape(-1).astype(np.int64).reshape(-1, 3)
-    else:
-        if len(vertices) % 3:
-            return None
-        faces = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
-    return vertices, faces, primitive
-
-
 _WIDTHS = {"SCALAR": 1, "VEC3": 3}
 
 
-def _accessor(
-    document: dict[str, Any],
-    index: Any,
-    kind: str,
-    binary: bytes | memoryview | None,
-    path: Path,
-    buffers: dict[int, bytes | memoryview],
-) -> np.ndarray | None:
-    """The (count, width) array of accessor ``index`` (a view of its buffer,
-    strided or not), or None unless it is of ``kind`` and lies in bounds."""
-    accessors = document.get("accessors")
-    if not isinstance(accessors, list) or not _is_index(index, len(accessors)):
-        return None
-    accessor = accessors[index]
-    if not isinstance(accessor, dict) or accessor.get("type") != kind:
-        return None
-    if "sparse" in accessor or accessor.get("normalized", False) is not False:
-        return None
-    component = accessor.get("componentType")
-    dtype = _COMPONENTS.get(component) if type(component) is int else None
-    count, offset = _size(accessor.get("count")), _size(accessor.get("byteOffset", 0))
-    views = document.get("bufferViews")
-    if dtype is None or count is None or offset is None or not isinstance(views, list):
-        return None
-    view = (
-        views[accessor["bufferView"]] if _is_index(accessor.get("bufferView"), len(views)) else None
-    )
-    if not isinstance(view, dict):
-        return None
-    width = _WIDTHS[kind]
-    element = dtype.itemsize * width
-    start, length = _size(view.get("byteOffset", 0)), _size(view.get("byteLength"))
-    stride = _size(view.get("byteStride", element))
-    if start is None or length is None or stride is None:
-        return None
-    if stride < element or offset % dtype.itemsize or stride % dtype.itemsize:
-        return None
-    data = _buffer(document, view.get("buffer"), binary, path, buffers)
-    if data is None or start + length > len(data):
-        return None
-    if count and offset + stride * (count - 1) + element > length:
-        return None
-    return np.ndarray(
-        (count, width),
-        dtype=dtype,
-        buffer=data,
-        offset=start + offset,
-        strides=(stride, dtype.itemsize),
-    )
+class _Decoder:
+    """Meshes, accessors and buffers of one glTF ``document`` (a GLB's
+    ``binary`` chunk; ``path``, the file, for buffers beside it), each
+    buffer read once."""
 
+    def __init__(
+        self, document: dict[str, Any], binary: bytes | memoryview | None, path: Path
+    ) -> None:
+        self.document, self.binary, self.path = document, binary, path
+        self.buffers: dict[int, bytes | memoryview] = {}
 
-def _buffer(
-    document: dict[str, Any],
-    index: Any,
-    binary: bytes | memoryview | None,
-    path: Path,
-    buffers: dict[int, bytes | memoryview],
-) -> bytes | memoryview | None:
-    """The bytes of buffer ``index``: the GLB chunk, a base64 data URI or a
-    file beside ``path`` (already checked to stay in its folder), at least
-    its declared ``byteLength`` long; None otherwise."""
-    if index in buffers:
-        return buffers[index]
-    entries = document.get("buffers")
-    if not isinstance(entries, list) or not _is_index(index, len(entries)):
-        return None
-    entry = entries[index]
-    length = entry.get("byteLength") if isinstance(entry, dict) else None
-    if type(length) is not int or length < 0:
-        return None
-    uri = entry.get("uri")
-    if uri is None:
-        data = binary if index == 0 else None
-    elif not isinstance(uri, str):
-        data = None
-    elif uri.startswith("data:"):
-        head, comma, text = uri.partition(",")
-        if not comma or not head.endswith(";base64"):
+    def mesh(self, index: int) -> tuple[np.ndarray, np.ndarray, dict[str, Any]] | None:
+        """``(vertices, faces, primitive)`` of a mesh of one plain triangle
+        primitive, or None."""
+        meshes = self.document.get("meshes")
+        if not isinstance(meshes, list) or not _is_index(index, len(meshes)):
             return None
-        try:
-            data = base64.b64decode(text, validate=True)
-        except ValueError:
+        primitives = meshes[index].get("primitives") if isinstance(meshes[index], dict) else None
+        if not isinstance(primitives, list) or len(primitives) != 1:
             return None
-    else:
-        try:
-            data = (path.resolve().parent / unquote(uri)).read_bytes()
-        except OSError:
+        primitive = primitives[0]
+        if not isinstance(primitive, dict) or "extensions" in primitive:
             return None
-    if data is None or len(data) < length:
-        return None
-    data = memoryview(data)[:length]
-    buffers[index] = data
-    return data
+        attributes = primitive.get("attributes")
+        if primitive.get("mode", _TRIANGLES) != _TRIANGLES or not isinstance(attributes, dict):
+            return None
+        if "COLOR_0" in attributes:
+            return None
+        points = self.accessor(attributes.get("POSITION"), "VEC3")
+        if points is None or points.dtype != np.float32 or len(points) == 0:
+            return None
+        vertices = points.astype(np.float64)
+        if "indices" in primitive:
+            flat = self.accessor(primitive["indices"], "SCALAR")
+            if flat is None or flat.dtype.kind != "u" or len(flat) % 3:
+                return None
+            faces = flat.reshape(-1).astype(np.int64).reshape(-1, 3)
+        else:
+            if len(vertices) % 3:
+                return None
+            faces = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
+        return vertices, faces, primitive
+
+    def accessor(self, index: Any, kind: str) -> np.ndarray | None:
+        """The (count, width) array of accessor ``index`` (a view of its buffer,
+        strided or not), or None unless it is of ``kind`` and lies in bounds."""
+        accessors = self.document.get("accessors")
+        if not isinstance(accessors, list) or not _is_index(index, len(accessors)):
+            return None
+        accessor = accessors[index]
+        if not isinstance(accessor, dict) or accessor.get("type") != kind:
+            return None
+        if "sparse" in accessor or accessor.get("normalized", False) is not False:
+            return None
+        component = accessor.get("componentType")
+        dtype = _COMPONENTS.get(component) if type(component) is int else None
+        count, offset = _size(accessor.get("count")), _size(accessor.get("byteOffset", 0))
+        views = self.document.get("bufferViews")
+        if dtype is None or count is None or offset is None or not isinstance(views, list):
+            return None
+        view = (
+            views[accessor["bufferView"]]
+            if _is_index(accessor.get("bufferView"), len(views))
+            else None
+        )
+        if not isinstance(view, dict):
+            return None
+        width = _WIDTHS[kind]
+        element = dtype.itemsize * width
+        start, length = _size(view.get("byteOffset", 0)), _size(view.get("byteLength"))
+        stride = _size(view.get("byteStride", element))
+        if start is None or length is None or stride is None:
+            return None
+        if stride < element or offset % dtype.itemsize or stride % dtype.itemsize:
+            return None
+        data = self.buffer(view.get("buffer"))
+        if data is None or start + length > len(data):
+            return None
+        if count and offset + stride * (count - 1) + element > length:
+            return None
+        return np.ndarray(
+            (count, width),
+            dtype=dtype,
+            buffer=data,
+            offset=start + offset,
+            strides=(stride, dtype.itemsize),
+        )
+
+    def buffer(self, index: Any) -> bytes | memoryview | None:
+        """The bytes of buffer ``index``: the GLB chunk, a base64 data URI or a
+        file beside the glTF (already checked to stay in its folder), at least
+        its declared ``byteLength`` long; None otherwise."""
+        entries = self.document.get("buffers")
+        if not isinstance(entries, list) or not _is_index(index, len(entries)):
+            return None
+        if index in self.buffers:
+            return self.buffers[index]
+        entry = entries[index]
+        length = entry.get("byteLength") if isinstance(entry, dict) else None
+        if type(length) is not int or length < 0:
+            return None
+        uri = entry.get("uri")
+        if uri is None:
+            data = self.binary if index == 0 else None
+        elif not isinstance(uri, str):
+            data = None
+        elif uri.startswith("data:"):
+            head, comma, text = uri.partition(",")
+            if not comma or not head.endswith(";base64"):
+                return None
+            try:
+                data = base64.b64decode(text, validate=True)
+            except ValueError:
+                return None
+        else:
+            try:
+                data = (self.path.resolve().parent / unquote(uri)).read_bytes()
+            except OSError:
+                return None
+        if data is None or len(data) < length:
+            return None
+        data = memoryview(data)[:length]
+        self.buffers[index] = data
+        return data
