@@ -49,7 +49,7 @@ from .gltf_layout import (
     shadowgeo_extras,
     shape_fields,
 )
-from .gltf_native import PlainMeshes, plain_meshes
+from .gltf_native import PlainMeshes, plain_meshes, quaternion_matrix
 from .trimesh_formats import MALFORMED, checked_shape, load_scene, mesh_shape, triangle_meshes
 
 
@@ -255,7 +255,7 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
             keys, world = _read_shapes(scene, path, nodes, document, binary)
         _read_empty_shapes(scene, world, nodes, keys)
         _read_lights(scene, world, nodes, document)
-        _read_cameras(scene, document)
+        _read_cameras(scene, document, None if plain is None else plain.worlds)
     except MALFORMED as error:
         if isinstance(error, SceneError):
             raise
@@ -395,29 +395,28 @@ def _read_lights(
 
 def _local(node: dict[str, Any]) -> np.ndarray:
     """A glTF node's 4x4 local transform: its column-major ``matrix``, or
-    translation * rotation (x, y, z, w quaternion) * scale."""
+    translation * rotation (x, y, z, w quaternion) * scale, taken as they
+    come (for cameras, whatever the rest of the file holds)."""
     if "matrix" in node:
         return np.asarray(node["matrix"], dtype=np.float64).reshape(4, 4).T
-    x, y, z, w = (float(v) for v in node.get("rotation", (0, 0, 0, 1)))
-    rotation = np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
     local = np.eye(4)
-    local[:3, :3] = rotation * np.asarray(node.get("scale", (1, 1, 1)), dtype=np.float64)
+    local[:3, :3] = quaternion_matrix([float(v) for v in node.get("rotation", (0, 0, 0, 1))])
+    local[:3, :3] *= np.asarray(node.get("scale", (1, 1, 1)), dtype=np.float64)
     local[:3, 3] = np.asarray(node.get("translation", (0, 0, 0)), dtype=np.float64)
     return local
 
 
-def _camera_worlds(document: dict[str, Any]) -> list[tuple[int, np.ndarray]]:
+def _camera_worlds(
+    document: dict[str, Any], worlds: dict[int, np.ndarray] | None
+) -> list[tuple[int, np.ndarray]]:
     """(node index, world transform) of every camera node of the default
-    scene, in the file's node order (trimesh re-parents camera nodes)."""
+    scene, in the file's node order (trimesh re-parents camera nodes); from
+    ``worlds`` when the fast path has them."""
     nodes = document.get("nodes") or []
     if not any("camera" in node for node in nodes):
         return []  # no world transform to compute (10,000 nodes cost a second)
+    if worlds is not None:
+        return [(index, worlds[index]) for index in sorted(worlds) if "camera" in nodes[index]]
     scenes = document.get("scenes") or [{"nodes": list(range(len(nodes)))}]
     roots = scenes[int(document.get("scene", 0))].get("nodes") or []
     found: dict[int, np.ndarray] = {}
@@ -435,11 +434,13 @@ def _camera_worlds(document: dict[str, Any]) -> list[tuple[int, np.ndarray]]:
     return sorted(found.items(), key=lambda item: item[0])
 
 
-def _read_cameras(scene: Scene, document: dict[str, Any]) -> None:
+def _read_cameras(
+    scene: Scene, document: dict[str, Any], worlds: dict[int, np.ndarray] | None
+) -> None:
     """Each perspective camera as a Viewpoint, in the file's node order."""
     cameras = document.get("cameras") or []
     nodes = document.get("nodes") or []
-    for index, world in _camera_worlds(document):
+    for index, world in _camera_worlds(document, worlds):
         node = nodes[index]
         camera = cameras[node["camera"]]
         perspective = camera.get("perspective") if camera.get("type") == "perspective" else None
