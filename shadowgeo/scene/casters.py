@@ -342,7 +342,12 @@ def _world_vertices(shapes: list[Shape], counts: np.ndarray) -> np.ndarray:
     if not shapes:
         return np.zeros((0, 3))
     transforms = np.stack([shape.transform for shape in shapes]).reshape(len(shapes), 16)
-    distinct, group = np.unique(transforms, axis=0, return_inverse=True)
+    if np.array_equal(transforms, np.broadcast_to(transforms[0], transforms.shape)):
+        # one transform for all (the usual scene of many shapes): no sort of
+        # rows as void records (np.unique(axis=0): 31 ms for 10,000 shapes)
+        distinct, group = transforms[:1], np.zeros(len(shapes), dtype=np.int64)
+    else:
+        distinct, group = np.unique(transforms, axis=0, return_inverse=True)
     if len(distinct) > _TRANSFORMS_BATCHED:
         return np.concatenate([shape.world_vertices for shape in shapes])
     if len(distinct) == 1 and np.array_equal(distinct[0], _IDENTITY):
