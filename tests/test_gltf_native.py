@@ -137,10 +137,10 @@ def test_strided_indexed_nested_and_shared_meshes_read_natively_as_trimesh_reads
 @pytest.mark.parametrize(
     "change",
     [
-        "two primitives",
         "vertex colours",
         "sparse positions",
         "lines",
+        "lines beside triangles",
         "Draco extension",
         "node reached twice",
         "matrix and translation",
@@ -149,14 +149,14 @@ def test_strided_indexed_nested_and_shared_meshes_read_natively_as_trimesh_reads
 def test_files_outside_the_fast_path_still_go_to_trimesh(tmp_path, change):
     document = _plain_document(tmp_path)
     mesh = document["meshes"][0]["primitives"]
-    if change == "two primitives":
-        mesh.append(dict(mesh[0]))
-    elif change == "vertex colours":
+    if change == "vertex colours":
         mesh[0]["attributes"]["COLOR_0"] = 1
     elif change == "sparse positions":
         document["accessors"][0]["sparse"] = {"count": 0}
     elif change == "lines":
         document["meshes"][1]["primitives"][0]["mode"] = 1
+    elif change == "lines beside triangles":
+        mesh.append({**mesh[0], "mode": 1})
     elif change == "Draco extension":
         mesh[0]["extensions"] = {"KHR_draco_mesh_compression": {}}
     elif change == "node reached twice":
@@ -229,4 +229,63 @@ def test_a_broken_mesh_no_node_shows_does_not_stop_the_scene(tmp_path):
     document["nodes"][3]["mesh"] = 3  # now a node shows it: trimesh reads, and refuses, the file
     path.write_text(json.dumps(document))
     with pytest.raises(sg.SceneError, match="unused.gltf"):
+        sg.load(path)
+
+
+def test_a_mesh_of_several_primitives_reads_natively_one_shape_each_with_exact_colours(
+    tmp_path, monkeypatch
+):
+    # Two primitives of one mesh sharing its positions, each with its own
+    # material, on the two nodes that use the mesh: the same shapes as
+    # trimesh reads, in the same order, with the colours as the file gives them
+    document = _plain_document(tmp_path)
+    primitives = document["meshes"][0]["primitives"]
+    primitives[0]["material"] = 0
+    primitives.append({"attributes": {"POSITION": 0}, "indices": 3, "material": 1})
+    document["materials"] = [
+        {"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.1, 0.1, 1]}},
+        {
+            "name": "blue",
+            "pbrMetallicRoughness": {"baseColorFactor": [0.1, 0.2, 0.95, 1]},
+            "doubleSided": True,
+        },
+    ]
+    path = tmp_path / "parts.gltf"
+    path.write_text(json.dumps(document))
+    parsed, binary = gltf_read._gltf_document(path)
+    assert gltf_native.plain_meshes(parsed, binary, path) is not None
+    native = sg.load(path)
+    with monkeypatch.context() as patch:
+        patch.setattr(gltf_read, "plain_meshes", lambda *args: None)
+        reference = sg.load(path)
+    names = ["parent", "parent", "child", "child", "triangle", "loose"]
+    assert [s.name for s in native.shapes] == [s.name for s in reference.shapes] == names
+    # each node's primitives in the file's order (trimesh orders them by its frame names)
+    assert [s.material.name for s in native.shapes[:4]] == ["red", "blue", "red", "blue"]
+    colours = [None, "red", "blue"]
+    key = lambda shape: (names.index(shape.name), colours.index(shape.material.name))  # noqa: E731
+    for mine, theirs in zip(native.shapes, sorted(reference.shapes, key=key), strict=True):
+        np.testing.assert_array_equal(mine.vertices, theirs.vertices)
+        np.testing.assert_array_equal(mine.faces, theirs.faces)
+        np.testing.assert_allclose(mine.transform, theirs.transform, rtol=0, atol=1e-12)
+        assert mine.solid == theirs.solid and mine.material.name == theirs.material.name
+        # trimesh keeps 8-bit colours: within half a step of the exact ones
+        np.testing.assert_allclose(
+            mine.material.diffuse_color, theirs.material.diffuse_color, atol=0.5 / 255 + 1e-12
+        )
+    red, blue = native.shapes[0].material, native.shapes[1].material
+    assert red.diffuse_color == (0.9, 0.1, 0.1) and blue.diffuse_color == (0.1, 0.2, 0.95)
+    assert (native.shapes[0].solid, native.shapes[1].solid) == (True, False)
+    assert np.shares_memory(native.shapes[0].vertices, native.shapes[1].vertices)
+
+
+@pytest.mark.parametrize("value", [float("nan"), float("inf"), float("-inf")])
+def test_a_position_that_is_not_finite_is_refused_naming_the_node(tmp_path, value):
+    document = one_triangle_gltf()
+    corners = np.array([0, 0, 0, 1, 0, 0, value, 1, 0], dtype="<f4")
+    uri = "data:application/octet-stream;base64," + base64.b64encode(corners.tobytes()).decode()
+    document["buffers"][0]["uri"] = uri
+    path = tmp_path / "bad.gltf"
+    path.write_text(json.dumps(document))
+    with pytest.raises(sg.SceneError, match=r"bad.gltf.*node 'tri'.*point 2"):
         sg.load(path)

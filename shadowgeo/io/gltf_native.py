@@ -5,9 +5,10 @@ trimesh builds a ``Trimesh`` object, a scene-graph edge and a cached
 transform for every glTF node: 10,000 small meshes took about a second to
 decode that way, where the accessors themselves are views of one buffer.
 :func:`plain_meshes` decodes a document here when everything it needs is
-plain: every mesh one primitive of triangles (``mode`` 4) with float
-``POSITION``, optional unsigned ``indices``, no ``COLOR_0`` (trimesh turns
-vertex colours into a material) and no primitive extensions (Draco); every
+plain: every primitive of a mesh triangles (``mode`` 4) with float
+``POSITION`` (finite, within ``limits.LARGEST_COORDINATE``), optional
+unsigned ``indices``, no ``COLOR_0`` (trimesh turns
+vertex colours into a material) and no extensions (Draco); every
 accessor in bounds of its buffer view and buffer; the default scene a tree
 of nodes. Anything else returns None and trimesh decodes the file as before,
 with its own errors: this path never refuses a file the other would read.
@@ -32,6 +33,8 @@ from urllib.parse import unquote
 
 import numpy as np
 
+from ..limits import LARGEST_COORDINATE
+
 # glTF componentType -> numpy dtype (little-endian), for the types read here.
 _FLOAT = 5126
 _COMPONENTS: dict[int, np.dtype[Any]] = {
@@ -47,11 +50,12 @@ _TRIANGLES = 4
 class PlainMeshes:
     """What :func:`plain_meshes` decodes: ``worlds`` maps every node of the
     default scene to its (4, 4) world transform; ``meshes`` maps each mesh
-    index used by those nodes to its ``(vertices, faces, primitive)``
-    (float64 (n, 3), int64 (m, 3), the primitive's JSON object)."""
+    index used by those nodes to its primitives' ``(vertices, faces,
+    primitive)`` (float64 (n, 3), int64 (m, 3), the primitive's JSON object),
+    one shape each, as trimesh reads them."""
 
     worlds: dict[int, np.ndarray]
-    meshes: dict[int, tuple[np.ndarray, np.ndarray, dict[str, Any]]]
+    meshes: dict[int, list[tuple[np.ndarray, np.ndarray, dict[str, Any]]]]
 
 
 def plain_meshes(
@@ -184,17 +188,28 @@ class _Decoder:
     ) -> None:
         self.document, self.binary, self.path = document, binary, path
         self.buffers: dict[int, bytes | memoryview] = {}
+        self.vertices: dict[int, np.ndarray] = {}  # POSITION accessor -> float64 vertices
 
-    def mesh(self, index: int) -> tuple[np.ndarray, np.ndarray, dict[str, Any]] | None:
-        """``(vertices, faces, primitive)`` of a mesh of one plain triangle
-        primitive, or None."""
+    def mesh(self, index: int) -> list[tuple[np.ndarray, np.ndarray, dict[str, Any]]] | None:
+        """``(vertices, faces, primitive)`` of each primitive of a mesh whose
+        primitives are all plain triangles, or None."""
         meshes = self.document.get("meshes")
         if not isinstance(meshes, list) or not _is_index(index, len(meshes)):
             return None
         primitives = meshes[index].get("primitives") if isinstance(meshes[index], dict) else None
-        if not isinstance(primitives, list) or len(primitives) != 1:
+        if not isinstance(primitives, list) or not primitives:
             return None
-        primitive = primitives[0]
+        decoded = []
+        for primitive in primitives:
+            part = self.primitive(primitive)
+            if part is None:
+                return None
+            decoded.append(part)
+        return decoded
+
+    def primitive(self, primitive: Any) -> tuple[np.ndarray, np.ndarray, dict[str, Any]] | None:
+        """``(vertices, faces, primitive)`` of a plain triangle primitive, or
+        None. Primitives that share a POSITION accessor share its array."""
         if not isinstance(primitive, dict) or "extensions" in primitive:
             return None
         attributes = primitive.get("attributes")
@@ -202,10 +217,9 @@ class _Decoder:
             return None
         if "COLOR_0" in attributes:
             return None
-        points = self.accessor(attributes.get("POSITION"), "VEC3")
-        if points is None or points.dtype != np.float32 or len(points) == 0:
+        vertices = self.positions(attributes.get("POSITION"))
+        if vertices is None:
             return None
-        vertices = points.astype(np.float64)
         if "indices" in primitive:
             flat = self.accessor(primitive["indices"], "SCALAR")
             if flat is None or flat.dtype.kind != "u" or len(flat) % 3:
@@ -216,6 +230,23 @@ class _Decoder:
                 return None
             faces = np.arange(len(vertices), dtype=np.int64).reshape(-1, 3)
         return vertices, faces, primitive
+
+    def positions(self, index: Any) -> np.ndarray | None:
+        """The float64 (n, 3) vertices of POSITION accessor ``index`` (float,
+        not empty, finite and within ``limits.LARGEST_COORDINATE``: trimesh's
+        reading refuses others naming the node), decoded once; None
+        otherwise."""
+        if type(index) is int and index in self.vertices:
+            return self.vertices[index]
+        points = self.accessor(index, "VEC3")
+        if points is None or points.dtype != np.float32 or len(points) == 0:
+            return None
+        with np.errstate(invalid="ignore"):  # a signalling NaN, refused just below
+            vertices = points.astype(np.float64)
+        if not (vertices.max() <= LARGEST_COORDINATE and vertices.min() >= -LARGEST_COORDINATE):
+            return None  # NaN fails both comparisons
+        self.vertices[index] = vertices
+        return vertices
 
     def accessor(self, index: Any, kind: str) -> np.ndarray | None:
         """The (count, width) array of accessor ``index`` (a view of its buffer,

@@ -1,16 +1,15 @@
 """glTF 2.0 input (``.glb``, ``.gltf``): triangles decoded by numpy or by
 trimesh, the rest from the JSON.
 
-A plain file (one triangle primitive per mesh, float positions, a tree of
-nodes: what shadowgeo and many exporters write) is decoded by
-:mod:`.gltf_native`, views of its buffers; anything else (Draco, sparse or
-quantized accessors, strips, vertex colours, several primitives to a mesh)
-by trimesh (:mod:`.trimesh_formats`), as before. Either way this module reads
-the JSON itself for what trimesh drops or changes: the nodes' own names
-(trimesh renames duplicates), materials as float factors (trimesh keeps 8-bit
-colours), ``KHR_lights_punctual`` lights and the ``extras["shadowgeo"]`` that
-:mod:`.gltf_write` writes (roles, light groups, X3D light fields; the layout
-is in :mod:`.gltf_layout`).
+A plain file (triangle primitives, float positions, a tree of nodes: what
+shadowgeo and many exporters write) is decoded by :mod:`.gltf_native`,
+views of its buffers; anything else (Draco, sparse or quantized accessors,
+strips, lines, vertex colours) by trimesh (:mod:`.trimesh_formats`), as
+before. Either way this module reads the JSON itself for what trimesh drops
+or changes: the nodes' own names (trimesh renames duplicates), materials as
+float factors (trimesh keeps 8-bit colours), ``KHR_lights_punctual`` lights
+and the ``extras["shadowgeo"]`` that :mod:`.gltf_write` writes (roles, light
+groups, X3D light fields; the layout is in :mod:`.gltf_layout`).
 
 Safety: a glTF's buffers and images may only be data URIs or relative paths
 that stay in the file's folder; anything else (``http:``, ``/etc/...``,
@@ -272,9 +271,17 @@ def _look(document: dict[str, Any], node: dict[str, Any]) -> dict[str, Any]:
     primitives = (document.get("meshes") or [{}])[node["mesh"]] if "mesh" in node else {}
     primitives = primitives.get("primitives") or []
     if len(primitives) == 1 and "material" in primitives[0]:
-        material, solid = _material_from_gltf(document["materials"][primitives[0]["material"]])
-        return {"material": material, "solid": solid}
+        return _primitive_look(document, primitives[0])
     return {}
+
+
+def _primitive_look(document: dict[str, Any], primitive: dict[str, Any]) -> dict[str, Any]:
+    """``material`` and ``solid`` of a primitive: its glTF material (exact
+    float factors), else what trimesh gives a mesh without one or colours."""
+    if "material" not in primitive:
+        return {"material": Material(), "solid": True}
+    material, solid = _material_from_gltf(document["materials"][primitive["material"]])
+    return {"material": material, "solid": solid}
 
 
 def _node_index(graph: Any, frame: str, frames: dict[str, int]) -> int | None:
@@ -321,23 +328,25 @@ def _read_plain_shapes(
     nodes: list[dict[str, Any]],
     document: dict[str, Any],
 ) -> list[int]:
-    """Shapes of a plain glTF (:mod:`.gltf_native`), in node order; returns
-    each shape's node index. Nodes that share a mesh share its arrays."""
+    """Shapes of a plain glTF (:mod:`.gltf_native`), one per primitive, in
+    node order; returns each shape's node index. Nodes that share a mesh
+    share its arrays. A mesh of several primitives keeps each one's material
+    as exact floats (trimesh's reading gives them as 8-bit colours)."""
     keys = []
     for index in sorted(plain.worlds):
         node = nodes[index]
         if "mesh" not in node:
             continue
-        vertices, faces, primitive = plain.meshes[node["mesh"]]
-        look = _look(document, node)
-        if not look:  # no material: what trimesh gives a mesh without colours
-            look = {"material": Material(), "solid": True}
-        fields = {**look, **shape_fields(shadowgeo_extras(node))}
-        name = node.get("name")
-        scene.shapes.append(
-            checked_shape(vertices, faces, plain.worlds[index], name, path, **fields)
-        )
-        keys.append(index)
+        extras = shape_fields(shadowgeo_extras(node))
+        for vertices, faces, primitive in plain.meshes[node["mesh"]]:
+            fields = {**_primitive_look(document, primitive), **extras}
+            name = node.get("name")
+            scene.shapes.append(
+                checked_shape(
+                    vertices, faces, plain.worlds[index], name, path, in_range=True, **fields
+                )
+            )
+            keys.append(index)
     return keys
 
 

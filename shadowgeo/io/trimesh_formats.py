@@ -18,7 +18,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import SceneError
+from ..errors import GeometryError, SceneError
+from ..limits import check_coordinates
 from ..scene import Material, Scene, Shape
 
 if TYPE_CHECKING:
@@ -117,14 +118,25 @@ def checked_shape(
     transform: ArrayLike,
     name: str | None,
     path: Path,
+    *,
+    in_range: bool = False,
     **fields: Any,
 ) -> Shape:
     """The :class:`Shape` of float64 ``points`` (n, 3) and int64 ``faces``
     (m, 3) read from node ``name`` of the file ``path``, placed by
-    ``transform`` (4, 4), with ``fields`` (other Shape arguments).
+    ``transform`` (4, 4), with ``fields`` (other Shape arguments);
+    ``in_range``: the points are already known finite and within range.
 
     A face that refers to a vertex the mesh does not have (trimesh keeps the
-    file's indices as they are) is a SceneError naming the node."""
+    file's indices as they are), or a vertex that is not finite or beyond
+    ``limits.LARGEST_COORDINATE``, is a SceneError naming the node."""
+    try:
+        if not in_range:
+            check_coordinates(points, "the mesh's")
+    except GeometryError as error:
+        raise SceneError(
+            str(error), path=str(path), node=f"node {name!r}" if name else None
+        ) from None
     if len(faces) and (faces.min() < 0 or faces.max() >= len(points)):
         bad = int(faces.max()) if faces.max() >= len(points) else int(faces.min())
         raise SceneError(
