@@ -145,6 +145,12 @@ def _local(node: dict[str, Any]) -> np.ndarray | None:
     scale = _numbers(node.get("scale", [1, 1, 1]), 3)
     if translation is None or rotation is None or scale is None:
         return None
+    return trs_matrix(translation, rotation, scale)
+
+
+def trs_matrix(translation: list[float], rotation: list[float], scale: list[float]) -> np.ndarray:
+    """The 4x4 translation * rotation (x, y, z, w quaternion) * scale of a
+    glTF node (the identity parts skipped: they change no number)."""
     local = np.eye(4)
     if rotation != [0.0, 0.0, 0.0, 1.0]:
         local[:3, :3] = quaternion_matrix(rotation)

@@ -48,7 +48,7 @@ from .gltf_layout import (
     shadowgeo_extras,
     shape_fields,
 )
-from .gltf_native import PlainMeshes, plain_meshes, quaternion_matrix
+from .gltf_native import PlainMeshes, plain_meshes, trs_matrix
 from .trimesh_formats import MALFORMED, checked_shape, load_scene, mesh_shape, triangle_meshes
 
 
@@ -337,10 +337,9 @@ def _read_plain_shapes(
         node = nodes[index]
         if "mesh" not in node:
             continue
-        extras = shape_fields(shadowgeo_extras(node))
+        extras, name = shape_fields(shadowgeo_extras(node)), node.get("name")
         for vertices, faces, primitive in plain.meshes[node["mesh"]]:
             fields = {**_primitive_look(document, primitive), **extras}
-            name = node.get("name")
             scene.shapes.append(
                 checked_shape(
                     vertices, faces, plain.worlds[index], name, path, in_range=True, **fields
@@ -408,11 +407,11 @@ def _local(node: dict[str, Any]) -> np.ndarray:
     come (for cameras, whatever the rest of the file holds)."""
     if "matrix" in node:
         return np.asarray(node["matrix"], dtype=np.float64).reshape(4, 4).T
-    local = np.eye(4)
-    local[:3, :3] = quaternion_matrix([float(v) for v in node.get("rotation", (0, 0, 0, 1))])
-    local[:3, :3] *= np.asarray(node.get("scale", (1, 1, 1)), dtype=np.float64)
-    local[:3, 3] = np.asarray(node.get("translation", (0, 0, 0)), dtype=np.float64)
-    return local
+    return trs_matrix(
+        [float(v) for v in node.get("translation", (0, 0, 0))],
+        [float(v) for v in node.get("rotation", (0, 0, 0, 1))],
+        [float(v) for v in node.get("scale", (1, 1, 1))],
+    )
 
 
 def _camera_worlds(

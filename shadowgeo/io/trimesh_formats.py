@@ -130,19 +130,16 @@ def checked_shape(
     A face that refers to a vertex the mesh does not have (trimesh keeps the
     file's indices as they are), or a vertex that is not finite or beyond
     ``limits.LARGEST_COORDINATE``, is a SceneError naming the node."""
-    try:
-        if not in_range:
+    node = f"node {name!r}" if name else None
+    if not in_range:
+        try:
             check_coordinates(points, "the mesh's")
-    except GeometryError as error:
-        raise SceneError(
-            str(error), path=str(path), node=f"node {name!r}" if name else None
-        ) from None
+        except GeometryError as error:
+            raise SceneError(str(error), path=str(path), node=node) from None
     if len(faces) and (faces.min() < 0 or faces.max() >= len(points)):
         bad = int(faces.max()) if faces.max() >= len(points) else int(faces.min())
         raise SceneError(
-            f"a face refers to vertex {bad} of {len(points)}",
-            path=str(path),
-            node=f"node {name!r}" if name else None,
+            f"a face refers to vertex {bad} of {len(points)}", path=str(path), node=node
         )
     return Shape(
         points,

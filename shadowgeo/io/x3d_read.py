@@ -144,7 +144,11 @@ class _Reader:
         """Add the nodes ``element`` expands to to the budget, counted over every
         document and prototype copy read (Inlines and prototypes used again
         multiply too); refuse the scene beyond :data:`MAX_NODES`, naming ``at``."""
-        self.expanded += _expanded_size(context, element, self.sizes)
+        if element.get("USE") is None and not _USES_INSIDE(element):
+            # nothing to expand: the elements counted by libxml2, not a Python call each
+            self.expanded += min(int(_ELEMENTS_IN(element)), MAX_NODES + 1)
+        else:
+            self.expanded += _expanded_size(context, element, self.sizes)
         if self.expanded > MAX_NODES:
             raise context.error(
                 element if at is None else at,
@@ -412,8 +416,8 @@ def _why(tag: str) -> str:
     return "not modelled"
 
 
-# (XPath, evaluated by libxml2: 50,000 nodes counted in a few ms, not a
-# Python call per node)
+# (XPath, evaluated by libxml2 once per document or prototype copy counted:
+# 50,000 nodes in a few ms, not a Python call per node)
 _USES_INSIDE = etree.XPath("boolean(descendant::*[@USE])")
 _ELEMENTS_IN = etree.XPath("count(descendant-or-self::*)")
 
@@ -427,8 +431,6 @@ def _expanded_size(context: Context, element: Element, sizes: dict[Element, int]
         return 1
     if target in sizes:
         return sizes[target]
-    if not _USES_INSIDE(target):  # nothing to expand: count the elements in C
-        return min(int(_ELEMENTS_IN(target)), MAX_NODES + 1)
     sizes[target] = 0
     size = 1 + sum(_expanded_size(context, child, sizes) for child in target if local_name(child))
     sizes[target] = min(size, MAX_NODES + 1)
