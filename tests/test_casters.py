@@ -188,22 +188,28 @@ def _tetrahedron(offset: float, open_: bool = False) -> sg.Shape:
     return sg.Shape(corners, faces[:3] if open_ else faces)
 
 
-@pytest.mark.parametrize("many_topologies", [False, True])
+@pytest.mark.parametrize("way", ["per topology", "stack's edges", "each big shape alone"])
 def test_closedness_of_stacked_casters_is_each_shapes_whichever_way_it_is_found(
-    monkeypatch, many_topologies
+    monkeypatch, way
 ):
     # Copies of one closed mesh and one open mesh: closedness found once per
-    # topology must agree with the stack's own edge test, for every mask of
-    # whole casters, and a mask that cuts a caster is tested on its faces.
+    # topology, or shape by shape for big shapes, must agree with the stack's
+    # own edge test, for every mask of whole casters, and a mask that cuts a
+    # caster is tested on its faces.
     import shadowgeo.scene.casters as casters_module
     from shadowgeo.topology import Caster
 
-    if many_topologies:  # the per-topology test off: the stack's edges decide
+    if way != "per topology":  # the per-topology test off: the stack's edges decide
         monkeypatch.setattr(casters_module, "_TOPOLOGIES_TESTED", 1)
+    if way == "each big shape alone":  # ... unless every shape counts as big
+        monkeypatch.setattr(casters_module, "_SMALL_TOPOLOGY", 2)
     shapes = [_tetrahedron(2.0 * i, open_=(i == 3)) for i in range(6)]
     stacked = CasterSet(shapes)
-    assert (stacked._shape_closed is None) == many_topologies
+    assert (stacked._shape_closed is None) == (way == "stack's edges")
     assert stacked.closed.tolist() == [True, True, True, False, True, True]
+    whole = stacked.mesh(stacked.faces_of(np.ones(6, dtype=bool)))
+    # the stack's edge table is made only when no shape-by-shape test answers
+    assert ("edge_face_count" in whole.__dict__) == (way == "stack's edges")
     rng = np.random.default_rng(5)
     for _ in range(20):
         chosen = rng.random(6) < 0.5

@@ -76,6 +76,30 @@ def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size
         assert keep[0]
 
 
+def test_faces_binned_a_block_at_a_time_rule_out_the_same_shapes(monkeypatch):
+    """The histogram built from blocks of a few faces, cells merged across
+    blocks, decides as one built at once: sphere, ground and a sphere beside
+    a wall, each shape's faces split over several blocks."""
+    import shadowgeo.scene.receivers as receivers_module
+
+    wall = sg.Shape([[-3, 0, -3], [-3, 4, -3], [3, 4, -3], [3, 0, -3]], [[0, 1, 2], [0, 2, 3]])
+    ground = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]], [[0, 2, 1], [0, 3, 2]])
+    shapes = [_sphere(radius=2.0), ground, _sphere((4.0, 1.0, 0.0)), wall]
+    stacked = CasterSet(shapes)
+    everything = np.arange(len(shapes))
+    for size in (0.5, 2.0, 6.0):
+        whole = may_hold_patch(stacked, everything, size, TOLERANCE)
+        monkeypatch.setattr(receivers_module, "_BIN_BLOCK", 37)
+        blocks = may_hold_patch(stacked, everything, size, TOLERANCE)
+        monkeypatch.undo()
+        assert blocks.tolist() == whole.tolist()
+        # the flat shapes reach 14.1 and 7.2 across; the spheres' patches a
+        # face (their bound, the faces of the cells around a face's, less than 2)
+        assert whole[1] and whole[3] == (size <= 7.2)
+        if size >= 2.0:
+            assert not whole[0] and not whole[2]
+
+
 def test_copies_of_a_shape_cast_and_receive_once():
     ground = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]], [[0, 2, 1], [0, 3, 2]])
     sphere = _sphere((0.0, 2.0, 0.0))

@@ -33,9 +33,9 @@ _MESHES_KEPT = 2
 # transform over all its shapes at once.
 _TRANSFORMS_BATCHED = 16
 _IDENTITY = np.eye(4).reshape(16)
-# Closedness is tested per shape, once per distinct face array, when every
-# shape has at most this many faces and there are at most this many
-# distinct face arrays (see _closed_by_topology).
+# Closedness is tested per shape: once per distinct face array for shapes of
+# at most this many faces, while there are at most this many distinct ones
+# (see _closed_by_topology); a bigger shape by its own sort.
 _SMALL_TOPOLOGY = 4096
 _TOPOLOGIES_TESTED = 64
 
@@ -135,7 +135,13 @@ class CasterSet:
         else:
             self.low = self.high = np.zeros((0, 3))
         self._meshes: dict[bytes, Caster] = {}
-        self._shape_closed = _closed_by_topology(shapes)
+        self._shapes = shapes
+
+    @functools.cached_property
+    def _shape_closed(self) -> np.ndarray | None:
+        """(k,) each shape's closedness, shape by shape (None: too many
+        distinct small topologies, the stack's edge table decides)."""
+        return _closed_by_topology(self._shapes)
 
     @functools.cached_property
     def vertex_owner(self) -> np.ndarray:
@@ -302,12 +308,13 @@ class CasterSet:
             everything = bool(faces.all())
             chosen = self.faces if everything else self.faces[faces]
             closed = None
-            if self._shape_closed is not None and len(self):
+            if len(self):
                 # whole casters only (each all in or all out): closed when each is
                 whole = np.logical_and.reduceat(faces, self.face_starts)
-                if everything or np.array_equal(
-                    whole, np.logical_or.reduceat(faces, self.face_starts)
-                ):
+                if (
+                    everything
+                    or np.array_equal(whole, np.logical_or.reduceat(faces, self.face_starts))
+                ) and self._shape_closed is not None:
                     closed = bool(self._shape_closed[whole].all())
             self._meshes[key] = Caster(self.vertices, chosen, copy=False, closed=closed)
         return self._meshes[key]
@@ -316,18 +323,26 @@ class CasterSet:
 def _closed_by_topology(shapes: list[Shape]) -> np.ndarray | None:
     """(k,) bool: whether each shape's faces are closed (:func:`closed_by_sort`),
     tested once per distinct small face array: 10,000 copies of a cylinder
-    are one sort of 312 keys, not one of 3.1 million. None when the shapes
-    have more than ``_TOPOLOGIES_TESTED`` distinct small face arrays or any
-    big one: then the stack's own test is as quick."""
-    keys: list[tuple[int, bytes]] = []
-    found: dict[tuple[int, bytes], bool | None] = {}
+    are one sort of 312 keys, not one of 3.1 million. A big shape is tested
+    on its own: one sort of its edge keys, several times quicker than the
+    stack's edge table. None when the shapes have more than
+    ``_TOPOLOGIES_TESTED`` distinct small face arrays: then the stack's own
+    test is as quick."""
+    keys: list[tuple[int, int | bytes]] = []
+    found: dict[tuple[int, int | bytes], bool | None] = {}
+    small = 0
     for shape in shapes:
         if len(shape.faces) > _SMALL_TOPOLOGY:
-            return None
-        key = (len(shape.vertices), shape.faces.tobytes())
+            # tested alone, its bytes not hashed; shapes sharing one face
+            # array (DEF/USE, instancing) once
+            key: tuple[int, int | bytes] = (len(shape.vertices), id(shape.faces))
+        else:
+            key = (len(shape.vertices), shape.faces.tobytes())
         if key not in found:
-            if len(found) >= _TOPOLOGIES_TESTED:
-                return None
+            if isinstance(key[1], bytes):
+                if small >= _TOPOLOGIES_TESTED:
+                    return None
+                small += 1
             found[key] = closed_by_sort(shape.faces, len(shape.vertices))
         keys.append(key)
     if any(closed is None for closed in found.values()):

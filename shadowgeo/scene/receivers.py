@@ -457,96 +457,165 @@ def _patch_bound(
     side: int,
     offsets: np.ndarray,
 ) -> np.ndarray:
-    owners = []
-    triangles = []
-    for position, index in enumerate(indices):
-        caster = stacked.casters[int(index)]
-        triangles.append(caster.vertices[caster.shape.faces])
-        owners.append(np.full(len(caster.shape.faces), position, dtype=np.int64))
-    corners = np.concatenate(triangles)
-    owner = np.concatenate(owners)
-    low = np.minimum(np.minimum(corners[:, 0], corners[:, 1]), corners[:, 2])
-    high = np.maximum(np.maximum(corners[:, 0], corners[:, 1]), corners[:, 2])
-    first = corners[:, 1] - corners[:, 0]
-    second = corners[:, 2] - corners[:, 0]
-    third = corners[:, 2] - corners[:, 1]
-    normals = np.cross(first, second)
-    doubled = np.sqrt((normals * normals).sum(axis=1))
-    longest = np.sqrt(
-        np.maximum(
-            np.maximum((first * first).sum(axis=1), (second * second).sum(axis=1)),
-            (third * third).sum(axis=1),
-        )
-    )
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        unit = normals / doubled[:, None]
-        binned = np.isfinite(unit).all(axis=1) & (doubled > 0)
-        sharp = binned & (doubled >= width * longest)
+    """:func:`may_hold_patch` of the shapes ``indices``, a block of faces at a
+    time: each block's faces binned and their boxes reduced per cell, then
+    the cells of all blocks merged (the temporaries stay a few MB however
+    large the shape)."""
     count = len(indices)
-    # thin and degenerate faces: members of any patch of their shape
-    loose_low = np.full((count, 3), np.inf)
-    loose_high = np.full((count, 3), -np.inf)
-    loose = ~sharp
-    holder = owner[loose]  # non-decreasing: the shapes' faces follow each other
-    if len(holder):
-        runs = np.flatnonzero(np.concatenate([[True], holder[1:] != holder[:-1]]))
-        loose_low[holder[runs]] = np.minimum.reduceat(low[loose], runs, axis=0)
-        loose_high[holder[runs]] = np.maximum.reduceat(high[loose], runs, axis=0)
-    # every face with a normal (any seed) binned by it and by its opposite,
-    # and by its plane's offset from the middle of the faces: a member's
-    # offset is within (cell / 2) * reach + limit of its seed's
-    middle = 0.5 * (low.min(axis=0) + high.max(axis=0))
-    radius = float(np.sqrt(((high.max(axis=0) - low.min(axis=0)) ** 2).sum())) / 2.0
-    centroids = (corners[binned].sum(axis=1) / 3.0) - middle
-    offsets_of = (unit[binned] * centroids).sum(axis=1)
+    rows = np.concatenate(
+        [np.arange(stacked.face_starts[i], stacked.face_starts[i] + stacked.face_counts[i])
+         for i in indices.tolist()]
+    )  # fmt: skip
+    owner = np.repeat(np.arange(count), stacked.face_counts[indices])
+    # Offsets from the middle of the shapes' boxes: every face (its
+    # centroid) lies within ``radius`` of it, as the band below needs.
+    low_all, high_all = stacked.low[indices].min(axis=0), stacked.high[indices].max(axis=0)
+    middle = 0.5 * (low_all + high_all)
+    radius = float(np.sqrt(((high_all - low_all) ** 2).sum())) / 2.0
     band = 0.5 * _NORMAL_CELL * radius * (1.0 + 1e-9) + 2.0 * limit
     if not np.isfinite(band) or band <= 0:
         band = np.inf
     levels = int(min(np.ceil(radius / band), 1 << 20)) if np.isfinite(band) else 0
-    directions = np.concatenate([unit[binned], -unit[binned]])
-    heights = np.concatenate([offsets_of, -offsets_of])
-    cells = np.clip(np.floor(directions / _NORMAL_CELL), -side, side).astype(np.int64) + side + 1
-    level = (
-        np.clip(np.floor(heights / band), -levels, levels).astype(np.int64) + levels + 1
-        if levels
-        else np.ones(len(heights), dtype=np.int64)
-    )
     span = 2 * side + 3
     depth = 2 * levels + 3
     per_shape = span**3 * depth
-    keys = np.concatenate([owner[binned], owner[binned]]) * per_shape + (
-        cells[:, 0] + span * cells[:, 1] + span * span * cells[:, 2] + span**3 * level
-    )
-    order = np.argsort(keys, kind="stable")
-    keys = keys[order]
-    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]])) if len(keys) else keys
-    group_keys = keys[starts]
-    box_low = np.concatenate([low[binned], low[binned]])[order]
-    box_high = np.concatenate([high[binned], high[binned]])[order]
-    group_low = np.minimum.reduceat(box_low, starts, axis=0) if len(starts) else box_low[:0]
-    group_high = np.maximum.reduceat(box_high, starts, axis=0) if len(starts) else box_high[:0]
-    group_owner = group_keys // per_shape
-    near_low = loose_low[group_owner].copy()
-    near_high = loose_high[group_owner].copy()
-    for shift in offsets if len(group_keys) else ():
-        wanted = group_keys + int(
-            shift[0] + span * shift[1] + span * span * shift[2] + span**3 * shift[3]
-        )
-        at = np.minimum(np.searchsorted(group_keys, wanted), len(group_keys) - 1)
-        hit = group_keys[at] == wanted
-        np.minimum(near_low, np.where(hit[:, None], group_low[at], np.inf), out=near_low)
-        np.maximum(near_high, np.where(hit[:, None], group_high[at], -np.inf), out=near_high)
-    with np.errstate(invalid="ignore", over="ignore"):
-        reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=1))
-    large = ~(reach < size * (1.0 - 1e-9))  # NaN or inf: keep the shape
+    columns = [stacked.vertices[:, axis] - middle[axis] for axis in range(3)]
+    # thin and degenerate faces: members of any patch of their shape
+    loose_low = np.full((count, 3), np.inf)
+    loose_high = np.full((count, 3), -np.inf)
+    cells: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    for start in range(0, len(rows), _BIN_BLOCK):
+        block = rows[start : start + _BIN_BLOCK]
+        holder = owner[start : start + _BIN_BLOCK]
+        low, high, unit, height, binned, sharp = _face_bins(stacked.faces[block], columns, width)
+        loose = np.flatnonzero(~sharp)
+        if len(loose):  # owners are non-decreasing: the shapes' faces follow each other
+            held = holder[loose]
+            runs = np.flatnonzero(np.concatenate([[True], held[1:] != held[:-1]]))
+            for axis in range(3):
+                np.minimum.at(
+                    loose_low[:, axis], held[runs], np.minimum.reduceat(low[axis][loose], runs)
+                )
+                np.maximum.at(
+                    loose_high[:, axis], held[runs], np.maximum.reduceat(high[axis][loose], runs)
+                )
+        chosen = np.flatnonzero(binned)
+        if not len(chosen):
+            continue
+        # every face with a normal binned by it and by its opposite, and by
+        # its plane's offset from the middle: a member's offset is within
+        # (cell / 2) * reach + limit of its seed's
+        keys = []
+        for sign in (1.0, -1.0):
+            code = holder[chosen] * per_shape
+            for axis, weight in enumerate((1, span, span * span)):
+                cell = np.floor(sign * unit[axis][chosen] / _NORMAL_CELL)
+                code += (np.clip(cell, -side, side).astype(np.int64) + side + 1) * weight
+            if levels:
+                level = np.floor(sign * height[chosen] / band)
+                code += (np.clip(level, -levels, levels).astype(np.int64) + levels + 1) * span**3
+            else:
+                code += span**3
+            keys.append(code)
+        cells.append(_cell_boxes(np.concatenate(keys), np.concatenate([chosen, chosen]), low, high))
     keep = np.zeros(count, dtype=bool)
-    keep[group_owner[large]] = True
+    if cells:
+        if len(cells) == 1:
+            group_keys, group_low, group_high = cells[0]
+        else:  # the blocks' cells merged: one box per cell
+            merged = [np.concatenate(part) for part in zip(*cells, strict=True)]
+            group_keys, group_low, group_high = _merged_boxes(*merged)
+        group_owner = group_keys // per_shape
+        near_low = loose_low[group_owner]
+        near_high = loose_high[group_owner]
+        for shift in offsets:
+            wanted = group_keys + int(
+                shift[0] + span * shift[1] + span * span * shift[2] + span**3 * shift[3]
+            )
+            at = np.minimum(np.searchsorted(group_keys, wanted), len(group_keys) - 1)
+            hit = np.flatnonzero(group_keys[at] == wanted)
+            near_low[hit] = np.minimum(near_low[hit], group_low[at[hit]])
+            near_high[hit] = np.maximum(near_high[hit], group_high[at[hit]])
+        with np.errstate(invalid="ignore", over="ignore"):
+            reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=1))
+        large = ~(reach < size * (1.0 - 1e-9))  # NaN or inf: keep the shape
+        keep[group_owner[large]] = True
     # a shape whose faces are all thin or degenerate has no sharp seed
     # cell; its patches lie within its loose box
     with np.errstate(invalid="ignore", over="ignore"):
         loose_reach = np.sqrt(((loose_high - loose_low) ** 2).sum(axis=1))
     keep |= np.isfinite(loose_low).all(axis=1) & ~(loose_reach < size * (1.0 - 1e-9))
     return keep
+
+
+# Faces binned at a time by _patch_bound.
+_BIN_BLOCK = 1 << 16
+# x, y and z of points or vectors, one array each.
+_Columns = list[np.ndarray]
+
+
+def _face_bins(
+    faces: np.ndarray, columns: list[np.ndarray], width: float
+) -> tuple[_Columns, _Columns, _Columns, np.ndarray, np.ndarray, np.ndarray]:
+    """Per face of ``faces`` (rows of vertex indices into the coordinate
+    ``columns``): its box (low and high columns), unit normal (columns),
+    plane offset from the columns' origin (through the centroid), whether it
+    has a normal, and whether it is sharp (its smallest height at least
+    ``width``, so that it turns from a patch's plane by less than half a
+    cell)."""
+    first, second, third = faces[:, 0], faces[:, 1], faces[:, 2]
+    corners = [[column[first], column[second], column[third]] for column in columns]
+    low = [np.minimum(np.minimum(a, b), c) for a, b, c in corners]
+    high = [np.maximum(np.maximum(a, b), c) for a, b, c in corners]
+    one = [b - a for a, b, _ in corners]  # first corner to second
+    two = [c - a for a, _, c in corners]  # first corner to third
+    three = [c - b for _, b, c in corners]  # second corner to third
+    normal = [
+        one[1] * two[2] - one[2] * two[1],
+        one[2] * two[0] - one[0] * two[2],
+        one[0] * two[1] - one[1] * two[0],
+    ]
+    doubled = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+    longest = np.sqrt(
+        np.maximum(
+            np.maximum(sum(x * x for x in one), sum(x * x for x in two)),
+            sum(x * x for x in three),
+        )
+    )
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        unit = [axis / doubled for axis in normal]
+        binned = np.isfinite(unit[0]) & np.isfinite(unit[1]) & np.isfinite(unit[2])
+        binned &= doubled > 0
+        sharp = binned & (doubled >= width * longest)
+        height = sum(u * ((a + b) + c) for u, (a, b, c) in zip(unit, corners, strict=True)) / 3.0
+    return low, high, unit, height, binned, sharp
+
+
+def _cell_boxes(
+    keys: np.ndarray, faces: np.ndarray, low: list[np.ndarray], high: list[np.ndarray]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct ``keys`` (sorted) and the box of the faces filed under
+    each (``faces[i]`` under ``keys[i]``; boxes as columns)."""
+    order = np.argsort(keys, kind="stable")
+    keys, faces = keys[order], faces[order]
+    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+    box_low = np.column_stack([np.minimum.reduceat(column[faces], starts) for column in low])
+    box_high = np.column_stack([np.maximum.reduceat(column[faces], starts) for column in high])
+    return keys[starts], box_low, box_high
+
+
+def _merged_boxes(
+    keys: np.ndarray, low: np.ndarray, high: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Boxes under equal ``keys`` merged into one each, keys sorted."""
+    order = np.argsort(keys, kind="stable")
+    keys = keys[order]
+    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+    return (
+        keys[starts],
+        np.minimum.reduceat(low[order], starts, axis=0),
+        np.maximum.reduceat(high[order], starts, axis=0),
+    )
 
 
 def found(
