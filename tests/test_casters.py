@@ -189,9 +189,7 @@ def _tetrahedron(offset: float, open_: bool = False) -> sg.Shape:
 
 
 @pytest.mark.parametrize("way", ["per topology", "stack's edges", "each big shape alone"])
-def test_closedness_of_stacked_casters_is_each_shapes_whichever_way_it_is_found(
-    monkeypatch, way
-):
+def test_closedness_of_stacked_casters_is_each_shapes_whichever_way_it_is_found(monkeypatch, way):
     # Copies of one closed mesh and one open mesh: closedness found once per
     # topology, or shape by shape for big shapes, must agree with the stack's
     # own edge test, for every mask of whole casters, and a mask that cuts a
@@ -228,3 +226,56 @@ def test_a_caster_told_it_is_closed_keeps_it_and_an_empty_one_never_is():
     shape = _tetrahedron(0.0)
     assert Caster(shape.vertices, shape.faces, closed=True).is_closed is True
     assert Caster(np.zeros((0, 3)), np.zeros((0, 3), dtype=int), closed=True).is_closed is False
+
+
+def _box(low, high) -> sg.Shape:
+    corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+    faces = [
+        [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+        [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3],
+    ]  # fmt: skip
+    low, high = np.asarray(low, float), np.asarray(high, float)
+    return sg.Shape(low + corners * (high - low), faces, name="post")
+
+
+def _area(shape: sg.Shape) -> float:
+    triangles = shape.vertices[shape.faces]
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    return 0.5 * float(np.linalg.norm(normals, axis=1).sum())
+
+
+@pytest.mark.parametrize("top", [9.0, 5.0])
+def test_a_caster_reaching_a_point_lights_height_shadows_a_far_floor(top):
+    # A post from y = 1 to y = 9 (or to the lamp's height) beside a lamp at
+    # height 5: its shadow has no bound, and reaches a floor 15 to 25 away as
+    # the wedge |z| <= x / 9 (the rays through the post's near face x = 0.9,
+    # |z| <= 0.1), of area (25^2 - 15^2) / 9. The culling by the boxes of
+    # the corners' images once dropped the post (the images of corners
+    # above the lamp lie on its far side; at its height they are at
+    # infinity), and the floor stayed lit.
+    post = _box([0.9, 1.0, -0.1], [1.1, top, 0.1])
+    floor = sg.Shape(
+        [[15, 0, -5], [25, 0, -5], [25, 0, 5], [15, 0, 5]], [[0, 2, 1], [0, 3, 2]], name="floor"
+    )
+    lamp = sg.SceneLight(sg.PointLight([0, 5, 0]), name="lamp", shadows=True)
+    with np.errstate(all="raise"):
+        result = sg.add_shadows(
+            sg.Scene([post, floor], [lamp]), receivers=["floor"], surfaces=False, offset=0.0
+        )
+    (shadow,) = result.shapes_with_role("shadow")
+    assert _area(shadow) == pytest.approx(400 / 9, rel=1e-9)
+
+
+@pytest.mark.parametrize("direction", [[1, 0, 0], [1, 1e-300, 0], [0, 1, 0]])
+def test_culling_for_a_sun_along_or_below_a_finite_receiver_computes_no_nan(direction):
+    # The image of a vertex along a sun parallel to the floor is at infinity:
+    # the culling keeps what it cannot place rather than divide by the zero
+    # cosine (numpy's warnings raised).
+    box = _box([-0.5, 1.5, -0.5], [0.5, 2.5, 0.5])
+    stacked = CasterSet([box])
+    sun = sg.DirectionalLight(direction)
+    floor = sg.Plane([0, 1, 0], 0)
+    window = (np.array([-5.0, -5.0]), np.array([5.0, 5.0]))
+    with np.errstate(all="raise"):
+        keep = stacked.may_shadow(sun, floor, window, sg.Tolerance.for_points(box.vertices))
+    assert keep.tolist() == [True]

@@ -224,8 +224,15 @@ class CasterSet:
         if box2d is None:
             return keep
         # Casters with every vertex strictly between the plane and the light:
-        # the shadow is inside the hull of the vertices' images.
+        # the shadow is inside the hull of the vertices' images. (A caster
+        # reaching the light's height casts a shadow without bound.)
         boxed = keep & (lowest > tolerance.length)
+        if is_positional(light):
+            boxed &= self.per_caster(distance, np.maximum) < height - tolerance.length
+        else:
+            cosine = -float(plane.normal @ light.direction)
+            if not cosine > 0:  # a sun along the plane (or from behind): no images
+                return keep
         if not boxed.any():
             return keep
         inside = np.repeat(boxed, self.vertex_counts)
@@ -234,15 +241,17 @@ class CasterSet:
                 scale = np.where(inside, height / (height - distance), 1.0)
                 images = position + (self.vertices - position) * scale[:, None]
             else:
-                cosine = -float(plane.normal @ light.direction)
                 images = self.vertices + np.outer(
                     np.where(inside, distance, 0.0) / cosine, light.direction
                 )
-        image2d = plane.to_2d(images)
+            image2d = plane.to_2d(images)
         low, high = box2d
-        meets = np.all(self.per_caster(image2d, np.maximum) >= low, axis=1) & np.all(
-            self.per_caster(image2d, np.minimum) <= high, axis=1
-        )
+        reach_low = self.per_caster(image2d, np.minimum)
+        reach_high = self.per_caster(image2d, np.maximum)
+        meets = np.all(reach_high >= low, axis=1) & np.all(reach_low <= high, axis=1)
+        # images past float64's range (a caster a hair from the light's
+        # height): not ruled out
+        meets |= ~(np.isfinite(reach_low).all(axis=1) & np.isfinite(reach_high).all(axis=1))
         result: np.ndarray = keep & (~boxed | meets)
         return result
 
