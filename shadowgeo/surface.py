@@ -399,24 +399,24 @@ class _SurfaceProjector:
         full = np.zeros(len(corners), dtype=bool)
         extra: list[_Pieces] = []
         all_triangles = [caster_triangles]
-        base = len(caster_triangles)
+        # The faces each closed caster's outline does not settle meet its
+        # front triangles where their images overlap: one search for all
+        # casters (a few ms each, called per caster, was most of the time
+        # for a scene of a thousand boxes), then each pair kept only if its
+        # face is one of its own caster's others.
+        others_of: list[np.ndarray] = []
         for outline, front, bound in outlined:
-            front_triangles = front[0][front[1]]
             eligible = self._outline_faces(outline, bound, corners, lit)
             extra.append(self._apply_outline(outline, np.flatnonzero(eligible), corners, full))
             others = np.flatnonzero(lit & ~eligible)
-            others = others[outline.may_reach((self.vertices, self.faces[others]))]
-            found, their = candidate_pairs(
-                (self.vertices, self.faces[others]),
-                front,
-                self.light_point,
-                direction,
-                pad,
+            others_of.append(others[outline.may_reach((self.vertices, self.faces[others]))])
+            all_triangles.append(front[0][front[1]])
+        if outlined:
+            found_faces, found_triangles = self._outlined_pairs(
+                [front for _, front, _ in outlined], others_of, direction, pad
             )
-            receiver_parts.append(others[found])
-            triangle_parts.append(their + base)
-            all_triangles.append(front_triangles)
-            base += len(front_triangles)
+            receiver_parts.append(found_faces)
+            triangle_parts.append(found_triangles + len(caster_triangles))
         receivers, triangles = np.concatenate(receiver_parts), np.concatenate(triangle_parts)
         caster_triangles = np.concatenate(all_triangles)
         order = np.argsort(receivers, kind="stable")
@@ -434,6 +434,40 @@ class _SurfaceProjector:
         pieces = _pad_polygons([part[0] for part in extra])
         owners = np.concatenate([part[1] for part in extra] + [np.zeros(0, np.int64)])
         return receivers[front], triangles[front], caster_triangles, full, (pieces, owners), counts
+
+    def _outlined_pairs(
+        self,
+        fronts: list[tuple[np.ndarray, np.ndarray]],
+        others_of: list[np.ndarray],
+        direction: np.ndarray | None,
+        pad: float,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(face, front triangle) pairs, each face among ``others_of[k]``
+        and each triangle among caster k's ``fronts[k]`` (triangles numbered
+        one caster after another), whose images from the light overlap; sorted
+        by face, then triangle."""
+        everyone = np.unique(np.concatenate(others_of))
+        counts = [len(faces) for _, faces in fronts]
+        starts = np.cumsum([0, *(len(points) for points, _ in fronts[:-1])])
+        points = np.concatenate([points for points, _ in fronts])
+        faces = np.concatenate(
+            [faces + start for (_, faces), start in zip(fronts, starts, strict=True)]
+        )
+        found, their = candidate_pairs(
+            (self.vertices, self.faces[everyone]), (points, faces), self.light_point, direction, pad
+        )
+        face = everyone[found]
+        owner = np.repeat(np.arange(len(fronts)), counts)[their]
+        n_faces = np.int64(len(self.faces))
+        # (caster, face) keys of each caster's own others, sorted: casters in
+        # turn, each one's faces ascending
+        wanted = np.concatenate(
+            [k * n_faces + others for k, others in enumerate(others_of)] + [np.zeros(0, np.int64)]
+        )
+        key = owner * n_faces + face
+        at = np.minimum(np.searchsorted(wanted, key), max(len(wanted) - 1, 0))
+        own = wanted[at] == key if len(wanted) else np.zeros(len(key), dtype=bool)
+        return face[own], their[own]
 
     def _caster_triangles(self) -> tuple[np.ndarray, list[_Outlined]]:
         """(t, 3, 3) caster triangles handled one by one, in the centred frame
