@@ -399,24 +399,31 @@ class _SurfaceProjector:
         full = np.zeros(len(corners), dtype=bool)
         extra: list[_Pieces] = []
         all_triangles = [caster_triangles]
-        # The faces each closed caster's outline does not settle meet its
-        # front triangles where their images overlap: one search for all
-        # casters (a few ms each, called per caster, was most of the time
-        # for a scene of a thousand boxes), then each pair kept only if its
-        # face is one of its own caster's others.
+        # Each closed caster's front triangles meet the lit faces whose
+        # images overlap theirs, all casters in one search (a few ms each,
+        # called per caster, was most of the time for a scene of a thousand
+        # boxes). Only those faces can take the caster's shadow: its outline
+        # (whose image lies within its triangles') settles the faces it lies
+        # wholly in front of, and the others keep their pairs with its triangles.
         others_of: list[np.ndarray] = []
-        for outline, front, bound in outlined:
-            eligible = self._outline_faces(outline, bound, corners, lit)
-            extra.append(self._apply_outline(outline, np.flatnonzero(eligible), corners, full))
-            others = np.flatnonzero(lit & ~eligible)
-            others_of.append(others[outline.may_reach((self.vertices, self.faces[others]))])
-            all_triangles.append(front[0][front[1]])
         if outlined:
-            found_faces, found_triangles = self._outlined_pairs(
-                [front for _, front, _ in outlined], others_of, direction, pad
-            )
-            receiver_parts.append(found_faces)
-            triangle_parts.append(found_triangles + len(caster_triangles))
+            fronts = [front for _, front, _ in outlined]
+            pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
+            n_faces = np.int64(len(self.faces))
+            near = np.unique(owner[pair_triangles] * n_faces + pair_faces)
+            cuts = np.searchsorted(near, np.arange(len(outlined) + 1) * n_faces)
+            for k, (outline, front, bound) in enumerate(outlined):
+                faces = near[cuts[k] : cuts[k + 1]] - k * n_faces
+                eligible = self._outline_faces(outline, bound, corners, faces)
+                extra.append(self._apply_outline(outline, faces[eligible], corners, full))
+                others = faces[~eligible]
+                others_of.append(others[outline.may_reach((self.vertices, self.faces[others]))])
+                all_triangles.append(front[0][front[1]])
+            # the pairs of each caster's others, by face, then triangle
+            wanted = np.concatenate([k * n_faces + others for k, others in enumerate(others_of)])
+            own = np.isin(owner[pair_triangles] * n_faces + pair_faces, wanted)
+            receiver_parts.append(pair_faces[own])
+            triangle_parts.append(pair_triangles[own] + len(caster_triangles))
         receivers, triangles = np.concatenate(receiver_parts), np.concatenate(triangle_parts)
         caster_triangles = np.concatenate(all_triangles)
         order = np.argsort(receivers, kind="stable")
@@ -435,39 +442,31 @@ class _SurfaceProjector:
         owners = np.concatenate([part[1] for part in extra] + [np.zeros(0, np.int64)])
         return receivers[front], triangles[front], caster_triangles, full, (pieces, owners), counts
 
-    def _outlined_pairs(
+    def _front_pairs(
         self,
         fronts: list[tuple[np.ndarray, np.ndarray]],
-        others_of: list[np.ndarray],
+        faces: np.ndarray,
         direction: np.ndarray | None,
         pad: float,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """(face, front triangle) pairs, each face among ``others_of[k]``
-        and each triangle among caster k's ``fronts[k]`` (triangles numbered
-        one caster after another), whose images from the light overlap; sorted
-        by face, then triangle."""
-        everyone = np.unique(np.concatenate(others_of))
-        counts = [len(faces) for _, faces in fronts]
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(face, front triangle) pairs, faces among ``faces`` and triangles
+        numbered one caster's ``fronts`` after another, whose images from the
+        light overlap (sorted by face, then triangle); and the caster of each
+        triangle."""
         starts = np.cumsum([0, *(len(points) for points, _ in fronts[:-1])])
         points = np.concatenate([points for points, _ in fronts])
-        faces = np.concatenate(
-            [faces + start for (_, faces), start in zip(fronts, starts, strict=True)]
+        triangles = np.concatenate(
+            [front + start for (_, front), start in zip(fronts, starts, strict=True)]
         )
         found, their = candidate_pairs(
-            (self.vertices, self.faces[everyone]), (points, faces), self.light_point, direction, pad
+            (self.vertices, self.faces[faces]),
+            (points, triangles),
+            self.light_point,
+            direction,
+            pad,
         )
-        face = everyone[found]
-        owner = np.repeat(np.arange(len(fronts)), counts)[their]
-        n_faces = np.int64(len(self.faces))
-        # (caster, face) keys of each caster's own others, sorted: casters in
-        # turn, each one's faces ascending
-        wanted = np.concatenate(
-            [k * n_faces + others for k, others in enumerate(others_of)] + [np.zeros(0, np.int64)]
-        )
-        key = owner * n_faces + face
-        at = np.minimum(np.searchsorted(wanted, key), max(len(wanted) - 1, 0))
-        own = wanted[at] == key if len(wanted) else np.zeros(len(key), dtype=bool)
-        return face[own], their[own]
+        owner = np.repeat(np.arange(len(fronts)), [len(front) for _, front in fronts])
+        return faces[found], their, owner
 
     def _caster_triangles(self) -> tuple[np.ndarray, list[_Outlined]]:
         """(t, 3, 3) caster triangles handled one by one, in the centred frame
@@ -518,16 +517,16 @@ class _SurfaceProjector:
         outline: Outline,
         bound: tuple[np.ndarray, np.ndarray, float],
         corners: np.ndarray,
-        lit: np.ndarray,
+        faces: np.ndarray,
     ) -> np.ndarray:
-        """(m,) bool: lit faces that the caster lies wholly in front of (its box
-        or its bounding ball does) and whose corners lie ahead of the light in
-        the outline's frame. ``bound``: the caster's box half-sizes, centre
-        and bounding radius about that centre."""
+        """(len(faces),) bool: which of the lit ``faces`` the caster lies wholly
+        in front of (its box or its bounding ball does) with their corners
+        ahead of the light in the outline's frame. ``bound``: the caster's box
+        half-sizes, centre and bounding radius about that centre."""
         half, centre, radius = bound
-        unit = self.unit
+        unit = self.unit[faces]
         x, y, z = unit[:, 0], unit[:, 1], unit[:, 2]
-        first = corners[:, 0]
+        first = corners[faces, 0]
         # Each face plane's height of the caster's centre; the box's lowest
         # corner lies lower by the half-sizes along the normal's components.
         middle = (
@@ -537,8 +536,9 @@ class _SurfaceProjector:
         )
         reach = np.abs(x) * half[0] + np.abs(y) * half[1] + np.abs(z) * half[2]
         in_front = middle - np.minimum(reach, radius) > self.tol.length
-        ahead = corner_min(outline.ahead(self.vertices)[self.faces]) > self.tol.length
-        eligible: np.ndarray = lit & in_front & ahead
+        used, at = np.unique(self.faces[faces], return_inverse=True)
+        ahead = corner_min(outline.ahead(self.vertices[used])[at.reshape(-1, 3)]) > self.tol.length
+        eligible: np.ndarray = in_front & ahead
         return eligible
 
     def _apply_outline(
@@ -556,9 +556,10 @@ class _SurfaceProjector:
             return nothing
         # Each vertex once: the faces share their corners (those of other
         # faces, maybe behind the light, are not used).
+        used, corner_ids = np.unique(self.faces[faces], return_inverse=True)
+        corner_ids = corner_ids.reshape(-1, 3)
         with np.errstate(divide="ignore", invalid="ignore"):
-            vertex_images = outline.to_frame(self.vertices)
-        corner_ids = self.faces[faces]
+            vertex_images = outline.to_frame(self.vertices[used])
         x, y = vertex_images[:, 0][corner_ids], vertex_images[:, 1][corner_ids]
         low_x, low_y, high_x, high_y = outline.region.bounds
         near = ~(
