@@ -499,3 +499,44 @@ def test_shapes_sharing_a_look_or_not_each_get_their_own_materials_text(tmp_path
     shapes[0].material = sg.Material((0.1, math.nan, 0.3))
     with pytest.raises(sg.SceneError, match="non-finite"):
         x3d_write.write(sg.Scene(shapes, []), tmp_path / "bad.x3d")
+
+
+@pytest.mark.parametrize("scanned", [7, 64, 1 << 20])
+def test_a_long_run_of_digits_is_found_across_the_pieces_scanned(monkeypatch, scanned):
+    # 310 digits in a row overflow (1e309); two runs of 151 do not, and the
+    # text is not even parsed. The scan goes a piece at a time: a run across
+    # two pieces must still be found.
+    monkeypatch.setattr(x3d_write, "_SCANNED", scanned)
+    for lead in range(12):
+        assert x3d_write._non_finite("1 " * lead + "1" + "0" * 309 + "e0 2")
+        assert not x3d_write._non_finite("1 " * lead + "1" + "0" * 150 + "e0 " + "0" * 150 + "e0")
+
+
+def test_long_number_attributes_are_written_as_lxml_writes_them(tmp_path, monkeypatch):
+    # Long attributes of number characters reach the file from bytes, past
+    # lxml's buffers; text that XML escapes (& < " and newlines, in a text
+    # and among numbers) stays with lxml. The file is the same either way.
+    rng = np.random.default_rng(3)
+    points = " ".join(map(repr, rng.normal(size=30_000).tolist()))
+    # line breaks written as character references: a newline in the value,
+    # which XML writes back as &#10;
+    index = "&#10;".join(
+        " ".join(map(str, row)) for row in rng.integers(0, 10_000, (3_000, 10)).tolist()
+    )
+    info = "a &amp; b &lt; c &quot;quoted&quot; &#10; " * 4_000  # escaped in the file
+    source = tmp_path / "in.x3d"
+    source.write_text(
+        '<X3D version="4.0"><Scene>\n'
+        f'<WorldInfo title="big" info="{info}"/>\n'
+        f'<Shape><IndexedTriangleSet index="{index}"><Coordinate point="{points}"/>'
+        "</IndexedTriangleSet></Shape>\n</Scene></X3D>"
+    )
+    scene = sg.load(source)
+    spliced = tmp_path / "spliced.x3d"
+    sg.save(scene, spliced)
+    monkeypatch.setattr(x3d_write, "_SPLICED_LENGTH", 1 << 60)
+    plain = tmp_path / "plain.x3d"
+    sg.save(scene, plain)
+    assert spliced.read_bytes() == plain.read_bytes()
+    assert parse(spliced).find(".//Coordinate").get("point") == points
+    assert parse(spliced).find(".//WorldInfo").get("info").startswith('a & b < c "quoted" \n')
