@@ -534,7 +534,7 @@ def test_long_number_attributes_are_written_as_lxml_writes_them(tmp_path, monkey
     scene = sg.load(source)
     spliced = tmp_path / "spliced.x3d"
     sg.save(scene, spliced)
-    monkeypatch.setattr(x3d_write, "_SPLICED_LENGTH", 1 << 60)
+    monkeypatch.setattr(x3d_write, "LONG_VALUE", 1 << 60)
     plain = tmp_path / "plain.x3d"
     sg.save(scene, plain)
     assert spliced.read_bytes() == plain.read_bytes()

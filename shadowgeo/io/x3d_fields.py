@@ -79,6 +79,10 @@ class Context:
     # Values built from a node's attributes alone, by (kind, tag, attributes):
     # ten thousand identical Materials are read once.
     by_content: dict[tuple[Any, ...], Any] = field(default_factory=dict)
+    # The scene's long number attributes, held as bytes (an x3d_numbers
+    # Splicer), and the root of the document they are held for.
+    kept: Any = None
+    kept_root: Element | None = None
 
     def definition(self, element: Element) -> Element | None:
         """The element a ``USE`` names: the latest DEF of that name before it in
@@ -187,10 +191,15 @@ class Context:
             default = X3D3_DEFAULTS.get((tag, name), default)
         text = element.get(name)
         if text is not None:
+            written = text
+            if self.kept is not None:
+                text = self.kept.held(text)  # (a node read again)
             try:
                 value = parse(text, kind)
                 if name in ANGLE_FIELDS or kind in ("SFRotation", "MFRotation"):
                     value = self._radians(kind, value)
+                elif text is written and self.kept is not None and kind in WIDTH:
+                    self.kept.hold(element, name, text, self.kept_root)
                 return value
             except ValueError as problem:
                 shown = text if len(text) <= 40 else text[:37] + "..."

@@ -15,15 +15,17 @@ same digits ten times faster).
 
 from __future__ import annotations
 
+import copy
 import re
 import secrets
 from typing import BinaryIO
 
 import numpy as np
+from lxml import etree
 
 from ..errors import SceneError
 from . import optional_module
-from .x3d_fields import Element
+from .x3d_fields import Element, Tree
 
 # The shortest float64 text (as repr), ten times faster: the `speed` extra.
 orjson = optional_module("orjson")
@@ -70,6 +72,13 @@ def integers_text(values: np.ndarray) -> bytes:
     return " ".join(map(str, values.tolist())).encode("ascii")
 
 
+# Attribute values at least this long made only of number characters (which
+# XML escapes nowhere) are held as bytes beside the lxml tree: the reader's
+# (see Splicer.hold) and the writer's (see x3d_write._spliced_out).
+LONG_VALUE = 1 << 16
+NUMBER_CHARACTERS = b"0123456789+-.eE ,"
+
+
 class Splicer:
     """Number attributes kept out of the lxml tree until the file is written.
 
@@ -78,26 +87,76 @@ class Splicer:
     wraps the output file so that each placeholder lxml writes becomes the
     numbers; :meth:`fill` sets the real text instead, for the encodings that
     read the tree (JSON, ClassicVRML).
+
+    The reader holds a document's long number attributes the same way
+    (:meth:`hold`; :attr:`shadowgeo.Scene.numbers`): a writer's splicer made
+    from it (``Splicer(inherited)``) knows their placeholders too, and the
+    big texts are never copied with the tree nor escaped by lxml.
     """
 
-    def __init__(self) -> None:
-        self.prefix = f"shadowgeo-numbers-{secrets.token_hex(8)}-".encode("ascii")
+    def __init__(self, inherited: Splicer | None = None) -> None:
+        if inherited is None:
+            self.prefix = f"shadowgeo-numbers-{secrets.token_hex(8)}-".encode("ascii")
+            self.texts: list[bytes] = []
+        else:
+            self.prefix = inherited.prefix
+            self.texts = list(inherited.texts)  # the same bytes, not copied
+        self.inherited = len(self.texts)
         self.pattern = re.compile(re.escape(self.prefix) + rb"(\d{9})")
-        self.texts: list[bytes] = []
+        self._head = self.prefix.decode("ascii")
         self.places: list[tuple[Element, str]] = []
 
     def set(self, element: Element, name: str, text: bytes) -> None:
         """Give ``element``'s attribute ``name`` the numbers ``text`` (ASCII)."""
+        self.places.append((element, name))
+        self._put(element, name, text)
+
+    def _put(self, element: Element, name: str, text: bytes) -> None:
         token = self.prefix + b"%09d" % len(self.texts)
         self.texts.append(text)
-        self.places.append((element, name))
         element.set(name, token.decode("ascii"))
 
-    def fill(self) -> None:
-        """Set every placeholder's attribute to its numbers, in the tree."""
-        for (element, name), text in zip(self.places, self.texts, strict=True):
+    def hold(self, element: Element, name: str, text: str, root: Element) -> None:
+        """Keep ``text``, the value of ``element``'s attribute ``name`` read as
+        numbers, as bytes, a placeholder in its place: when it is long, of
+        number characters only, and ``element`` is in the tree of ``root``
+        (not a prototype's copy, nor an Inline's document)."""
+        if len(text) < LONG_VALUE or not text.isascii():
+            return
+        if element.getroottree().getroot() is not root:
+            return
+        data = text.encode("ascii")
+        if not data.translate(None, NUMBER_CHARACTERS):
+            self._put(element, name, data)
+
+    def held(self, text: str) -> str:
+        """``text``, or the numbers it holds the place of."""
+        if text.startswith(self._head):
+            found = self.pattern.fullmatch(text.encode("ascii"))
+            if found is not None and int(found.group(1)) < len(self.texts):
+                return self.texts[int(found.group(1))].decode("ascii")
+        return text
+
+    def fill(self, tree: Tree | None = None) -> None:
+        """Set every placeholder's attribute to its numbers, in the tree
+        (``tree``: where the inherited placeholders are, a copy of the
+        reader's document)."""
+        for (element, name), text in zip(self.places, self.texts[self.inherited :], strict=True):
             element.set(name, text.decode("ascii"))
-        self.places, self.texts = [], []
+        self.places = []
+        if self.inherited and tree is not None:
+            for element in tree.getroot().iter(etree.Element):
+                for name, value in element.items():
+                    if value.startswith(self._head):
+                        element.set(name, self.held(value))
+        del self.texts[self.inherited :]
+
+    def filled_copy(self, tree: Tree) -> Tree:
+        """A copy of ``tree`` (the document this splicer holds numbers of)
+        with the numbers in place of their placeholders."""
+        copied = copy.deepcopy(tree)
+        Splicer(self).fill(copied)
+        return copied
 
     def splice(self, data: bytes) -> bytes:
         """``data`` (serialised XML) with every placeholder replaced."""
@@ -106,7 +165,7 @@ class Splicer:
     def writer(self, handle: BinaryIO) -> _SplicingWriter:
         """A file-like object that writes to ``handle`` with the placeholders
         replaced; :meth:`_SplicingWriter.close` writes the rest and checks
-        that every placeholder was met once."""
+        that every placeholder set (not inherited) was met once."""
         return _SplicingWriter(self, handle)
 
 
@@ -128,8 +187,9 @@ class _SplicingWriter:
         done = 0
         for match in self.splicer.pattern.finditer(buffer):
             self.handle.write(view[done : match.start()])
-            self.handle.write(self.splicer.texts[int(match.group(1))])
-            self.met += 1
+            index = int(match.group(1))
+            self.handle.write(self.splicer.texts[index])
+            self.met += index >= self.splicer.inherited
             done = match.end()
         keep = self._start_of_token(buffer, max(done, len(buffer) - self.held))
         self.handle.write(view[done:keep])
@@ -152,7 +212,6 @@ class _SplicingWriter:
     def close(self) -> None:
         self.handle.write(self.pending)
         self.pending = b""
-        if self.met != len(self.splicer.texts):
-            raise SceneError(
-                f"internal error: {self.met} of {len(self.splicer.texts)} number fields written"
-            )
+        own = len(self.splicer.texts) - self.splicer.inherited
+        if self.met != own:
+            raise SceneError(f"internal error: {self.met} of {own} number fields written")

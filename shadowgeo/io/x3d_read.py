@@ -73,6 +73,7 @@ from .x3d_fields import Context, Element, Tree, local_name, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
 from .x3d_inline import URL_SCHEME, load_inline
 from .x3d_lights import LIGHTS, material, scene_light
+from .x3d_numbers import Splicer
 from .x3d_proto import Prototypes
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
@@ -127,6 +128,9 @@ class _Reader:
         root = tree.getroot()
         display = str(path)
         context = Context(display, _version(root, display, self.warnings), warnings=self.warnings)
+        if scene is not None:  # the scene's own document: its long numbers held as bytes
+            scene.numbers = Splicer()
+            context.kept, context.kept_root = scene.numbers, root
         self._units(context, root, scene)
         context.defs = _definitions(context, root)
         context.prototypes = Prototypes(root)

@@ -71,7 +71,7 @@ from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
 from .x3d_fields import Element, Tree, numbers_or_none
-from .x3d_numbers import Splicer, integers_text, points_text
+from .x3d_numbers import LONG_VALUE, NUMBER_CHARACTERS, Splicer, integers_text, points_text
 
 ADDED_ROLES = ("shadow", "volume")
 # Written in the ClassicVRML encoding (the same tree, another syntax).
@@ -103,7 +103,9 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
     """
     path = Path(path)
     doctype = None
-    splicer = Splicer()  # the shapes' numbers, kept out of the tree (see .x3d_numbers)
+    # the shapes' numbers, and the long ones the reader held, kept out of the
+    # tree (see .x3d_numbers)
+    splicer = Splicer(scene.numbers if scene.document is not None else None)
     if scene.document is not None:
         tree = _with_added(scene, splicer)
         doctype = _clean(tree, scene.warnings, Path(scene.path).name if scene.path else "input")
@@ -111,10 +113,10 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
         tree = _fresh(scene, splicer)
     name = path.name.lower()
     if x3d_json.is_x3d_json(path):
-        splicer.fill()
+        splicer.fill(tree)
         parts = [x3d_json.dumps(tree)]
     elif name.endswith(CLASSIC_SUFFIXES + VRML97_SUFFIXES):
-        splicer.fill()
+        splicer.fill(tree)
         vrml97 = name.endswith(VRML97_SUFFIXES)
         try:
             parts = [x3d_classic_write.classic_text(tree, vrml97=vrml97).encode("utf-8")]
@@ -291,15 +293,11 @@ def _spliced_out(tree: Tree, splicer: Splicer) -> None:
     for element in tree.getroot().iter(etree.Element):
         for name in element.keys():
             value = element.get(name)
-            if value is not None and len(value) >= _SPLICED_LENGTH and value.isascii():
+            if value is not None and len(value) >= LONG_VALUE and value.isascii():
                 data = value.encode("ascii")
                 del value
-                if not data.translate(None, _NUMBER_CHARACTERS):
+                if not data.translate(None, NUMBER_CHARACTERS):
                     splicer.set(element, name, data)
-
-
-_SPLICED_LENGTH = 1 << 16
-_NUMBER_CHARACTERS = b"0123456789+-.eE ,"
 
 
 # What the added nodes need beyond the Core profile (Interchange and up have it).

@@ -259,7 +259,11 @@ class Scene:
 
     ``document`` keeps the reader's own representation (for X3D, the parsed XML
     tree) so a writer of the same format can keep everything shadowgeo does not
-    model (scripts, routes, viewpoints, metadata, comments).
+    model (scripts, routes, viewpoints, metadata, comments). The X3D reader
+    keeps the long number fields it reads (64 KB of text and more: a big
+    mesh's points and indices) as bytes in ``numbers``, a placeholder in their
+    place in ``document``; ``scene.numbers.filled_copy(scene.document)`` is
+    the tree with them in place.
     """
 
     shapes: list[Shape] = field(default_factory=list)
@@ -270,6 +274,7 @@ class Scene:
     warnings: list[str] = field(default_factory=list)
     document: Any = None
     viewpoints: list[Viewpoint] = field(default_factory=list)
+    numbers: Any = None
 
     def shapes_with_role(self, role: str) -> list[Shape]:
         return [shape for shape in self.shapes if shape.role == role]
