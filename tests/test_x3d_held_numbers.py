@@ -109,3 +109,16 @@ def test_held_numbers_are_written_in_every_encoding(tmp_path, monkeypatch, suffi
     if suffix == ".x3dz":
         expected = gzip.decompress(expected)
     assert data == expected
+
+
+def test_only_a_placeholder_of_held_numbers_is_replaced():
+    splicer = x3d_numbers.Splicer()
+    root = etree.Element("Coordinate")
+    text = "1 2 3, " * 20_000
+    splicer.hold(root, "point", text, root)
+    token = root.get("point")
+    assert token.startswith("shadowgeo-numbers-") and splicer.held(token) == text
+    head = token[:-9]
+    # text that only looks like a placeholder is left as it is
+    for other in ["1 2 3", head + "é", head + "000000001", head + "00000000x", token + " "]:
+        assert splicer.held(other) == other

@@ -132,7 +132,7 @@ class Splicer:
     def held(self, text: str) -> str:
         """``text``, or the numbers it holds the place of."""
         if text.startswith(self._head):
-            found = self.pattern.fullmatch(text.encode("ascii"))
+            found = self.pattern.fullmatch(text.encode("utf-8"))
             if found is not None and int(found.group(1)) < len(self.texts):
                 return self.texts[int(found.group(1))].decode("ascii")
         return text
