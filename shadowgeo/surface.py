@@ -561,7 +561,7 @@ class _SurfaceProjector:
         with np.errstate(divide="ignore", invalid="ignore"):
             vertex_images = outline.to_frame(self.vertices[used])
         x, y = vertex_images[:, 0][corner_ids], vertex_images[:, 1][corner_ids]
-        low_x, low_y, high_x, high_y = outline.region.bounds
+        low_x, low_y, high_x, high_y = outline.bounds
         near = ~(
             (corner_min(x) > high_x)
             | (corner_min(y) > high_y)
