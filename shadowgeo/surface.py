@@ -479,13 +479,15 @@ class _SurfaceProjector:
         direction = (
             None if self.light_point is not None else cast(DirectionalLight, self.light).direction
         )
+        closed = [caster for caster in self.casters if caster.n_faces and caster.is_closed]
+        found = closed_silhouettes(closed, self.light)
+        silhouettes = dict(zip(map(id, closed), found, strict=True))
         for caster in self.casters:
             if caster.n_faces == 0:
                 continue
             faces = caster.faces
             if caster.is_closed:
-                front = caster.facing(light_homogeneous(caster, self.light)) > 0
-                loops, _ = silhouette_loops(caster, front)
+                front, loops = silhouettes[id(caster)]
                 vertices = caster.vertices - self.center
                 outline = make_outline(
                     vertices, loops, vertices, self.light_point, direction, self.tol.length
@@ -922,6 +924,40 @@ class _SurfaceProjector:
                 inverse.reshape(-1, 3), self.unit[face_index], len(used)
             )
         return vertices + self.center, inverse.reshape(-1, 3)
+
+
+def closed_silhouettes(
+    casters: list[Caster], light: Light
+) -> list[tuple[np.ndarray, list[np.ndarray]]]:
+    """Each closed caster's front faces (in its own frame, as
+    :meth:`Caster.facing` has them) and silhouette loops (its own vertex
+    indices), as :func:`~shadowgeo.silhouette.silhouette_loops` gives them
+    caster by caster, the loops of all found at once: the casters stacked,
+    which share no vertex, give each one's loops in the same order and from
+    the same corner as alone (the outline's edges keep their order, and the
+    walk starts each cycle at its lowest edge)."""
+    fronts = [caster.facing(light_homogeneous(caster, light)) > 0 for caster in casters]
+    if len(casters) < 2:
+        return [
+            (front, silhouette_loops(caster, front)[0])
+            for caster, front in zip(casters, fronts, strict=True)
+        ]
+    sizes = np.array([len(caster.vertices) for caster in casters], dtype=np.int64)
+    starts = np.cumsum(sizes) - sizes
+    stacked = Caster(
+        np.concatenate([caster.vertices for caster in casters]),
+        np.concatenate(
+            [caster.faces + start for caster, start in zip(casters, starts, strict=True)]
+        ),
+        copy=False,
+        closed=True,  # each is, and they share no vertex
+    )
+    loops, _ = silhouette_loops(stacked, np.concatenate(fronts))
+    owners = np.searchsorted(starts, [int(loop[0]) for loop in loops], side="right") - 1
+    each: list[list[np.ndarray]] = [[] for _ in casters]
+    for loop, owner in zip(loops, owners.tolist(), strict=True):
+        each[owner].append(loop - starts[owner])
+    return list(zip(fronts, each, strict=True))
 
 
 def _bounding_radius(caster: Caster) -> float:

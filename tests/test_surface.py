@@ -572,3 +572,36 @@ def test_faces_turned_away_are_wholly_shadowed_and_inputs_may_be_pairs():
     assert np.all(shadow.fraction[~away & (ball.face_normals[:, 1] > 1e-9)] == 0.0)
     pair = shadow_on_surface((ball.vertices, ball.faces), light, ball)
     assert pair.area == 0.0  # a convex ball does not shadow its own lit side
+
+
+@pytest.mark.parametrize(
+    "light", [PointLight([0.3, 6.0, -0.2]), DirectionalLight([0.4, -1.0, 0.25])]
+)
+def test_closed_casters_silhouettes_found_together_are_each_ones_alone(light):
+    # Boxes, spheres and a torus (a caster with two loops, one inside the
+    # other from above) stacked: each one's front faces and loops, in order
+    # and from the same corner, as silhouette_loops gives them one by one.
+    from shadowgeo.silhouette import light_homogeneous, silhouette_loops
+    from shadowgeo.surface import closed_silhouettes
+    from shadowgeo.topology import Caster
+
+    rng = np.random.default_rng(11)
+    meshes = [
+        trimesh.creation.box(extents=rng.uniform(0.2, 1.0, 3)),
+        trimesh.creation.icosphere(subdivisions=2, radius=0.6),
+        trimesh.creation.torus(1.0, 0.3),
+        trimesh.creation.box(extents=[2.0, 0.1, 0.5]),
+        trimesh.creation.icosphere(subdivisions=1, radius=0.3),
+    ]
+    casters = []
+    for mesh in meshes:
+        mesh.apply_translation(rng.uniform(-3, 3, 3))
+        casters.append(Caster(mesh.vertices, mesh.faces))
+    together = closed_silhouettes(casters, light)
+    for caster, (front, loops) in zip(casters, together, strict=True):
+        alone_front = caster.facing(light_homogeneous(caster, light)) > 0
+        alone_loops, _ = silhouette_loops(caster, alone_front)
+        assert np.array_equal(front, alone_front)
+        assert len(loops) == len(alone_loops) >= 1
+        for loop, alone in zip(loops, alone_loops, strict=True):
+            assert np.array_equal(loop, alone)
