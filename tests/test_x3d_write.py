@@ -13,7 +13,7 @@ from lxml import etree
 from x3d_schema import new_schema_errors, x3d_schema_errors
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_write
+from shadowgeo.io import x3d_numbers, x3d_write
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "scenes" / "courtyard.x3d"
@@ -363,7 +363,6 @@ def test_non_finite_numbers_of_the_input_are_not_copied(tmp_path):
 
 @pytest.mark.parametrize("fast", [True, False])
 def test_point_and_index_text_reads_back_exactly(monkeypatch, fast):
-    from shadowgeo.io import x3d_numbers
     from shadowgeo.io.x3d_fields import parse as parse_field
 
     if not fast:
@@ -531,12 +530,28 @@ def test_long_number_attributes_are_written_as_lxml_writes_them(tmp_path, monkey
         f'<Shape><IndexedTriangleSet index="{index}"><Coordinate point="{points}"/>'
         "</IndexedTriangleSet></Shape>\n</Scene></X3D>"
     )
-    scene = sg.load(source)
+    with monkeypatch.context() as patch:  # the reader holds nothing: the writer's part
+        patch.setattr(x3d_numbers, "LONG_VALUE", 1 << 60)
+        scene = sg.load(source)
+    assert not scene.numbers.texts
+    handed = []
+    splicer_set = x3d_numbers.Splicer.set
+
+    def counted(self, element, name, text):
+        handed.append(name)
+        splicer_set(self, element, name, text)
+
+    monkeypatch.setattr(x3d_numbers.Splicer, "set", counted)
+    for suffix in (".x3d", ".x3dz", ".x3dj", ".x3dv"):  # (JSON and Classic: filled back)
+        handed.clear()
+        spliced = tmp_path / f"spliced{suffix}"
+        sg.save(scene, spliced)
+        assert handed == ["point"]  # the point went past lxml; the others did not
+        with monkeypatch.context() as patch:
+            patch.setattr(x3d_write, "LONG_VALUE", 1 << 60)
+            plain = tmp_path / f"plain{suffix}"
+            sg.save(scene, plain)
+        assert spliced.read_bytes() == plain.read_bytes()
     spliced = tmp_path / "spliced.x3d"
-    sg.save(scene, spliced)
-    monkeypatch.setattr(x3d_write, "LONG_VALUE", 1 << 60)
-    plain = tmp_path / "plain.x3d"
-    sg.save(scene, plain)
-    assert spliced.read_bytes() == plain.read_bytes()
     assert parse(spliced).find(".//Coordinate").get("point") == points
     assert parse(spliced).find(".//WorldInfo").get("info").startswith('a & b < c "quoted" \n')

@@ -79,6 +79,16 @@ LONG_VALUE = 1 << 16
 NUMBER_CHARACTERS = b"0123456789+-.eE ,"
 
 
+def long_number_bytes(value: str) -> bytes | None:
+    """``value`` as ASCII bytes when it is at least :data:`LONG_VALUE` long
+    and made of number characters only (which XML escapes nowhere), else
+    None."""
+    if len(value) < LONG_VALUE or not value.isascii():
+        return None
+    data = value.encode("ascii")
+    return None if data.translate(None, NUMBER_CHARACTERS) else data
+
+
 class Splicer:
     """Number attributes kept out of the lxml tree until the file is written.
 
@@ -121,12 +131,10 @@ class Splicer:
         numbers, as bytes, a placeholder in its place: when it is long, of
         number characters only, and ``element`` is in the tree of ``root``
         (not a prototype's copy, nor an Inline's document)."""
-        if len(text) < LONG_VALUE or not text.isascii():
+        if len(text) < LONG_VALUE or element.getroottree().getroot() is not root:
             return
-        if element.getroottree().getroot() is not root:
-            return
-        data = text.encode("ascii")
-        if not data.translate(None, NUMBER_CHARACTERS):
+        data = long_number_bytes(text)
+        if data is not None:
             self._put(element, name, data)
 
     def held(self, text: str) -> str:

@@ -71,7 +71,7 @@ from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
 from .x3d_fields import Element, Tree, numbers_or_none
-from .x3d_numbers import LONG_VALUE, NUMBER_CHARACTERS, Splicer, integers_text, points_text
+from .x3d_numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
 
 ADDED_ROLES = ("shadow", "volume")
 # Written in the ClassicVRML encoding (the same tree, another syntax).
@@ -108,7 +108,8 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
     splicer = Splicer(scene.numbers if scene.document is not None else None)
     if scene.document is not None:
         tree = _with_added(scene, splicer)
-        doctype = _clean(tree, scene.warnings, Path(scene.path).name if scene.path else "input")
+        source = Path(scene.path).name if scene.path else "input"
+        doctype = _clean(tree, scene.warnings, source, splicer)
     else:
         tree = _fresh(scene, splicer)
     name = path.name.lower()
@@ -124,7 +125,6 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
             raise SceneError(problem.message, path=str(path)) from None
     elif not name.endswith((".x3dz", ".gz")):
         # XML streamed into the file: a big document is never held as bytes
-        _spliced_out(tree, splicer)
         with atomic_path(path) as temporary, open(temporary, "wb") as handle:
             handle.write(_DECLARATION)
             spliced = splicer.writer(handle)
@@ -177,9 +177,13 @@ _STANDARD_DOCTYPE = re.compile(
 _TEXT_ATTRIBUTES = {"DEF", "USE", "class", "id", "style", "name", "description", "containerField"}
 
 
-def _clean(tree: Tree, notes: list[str], source: str) -> str | None:
+def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str | None:
     """Strip from ``tree`` (a copy) what must never be copied (see the module
-    notes), noting each; returns the DOCTYPE to write (None: none)."""
+    notes), noting each; returns the DOCTYPE to write (None: none). Long
+    number attributes go to ``splicer``: the file then gets their bytes as
+    they are, where lxml would first copy and escape them into its own
+    buffers (values of number characters alone, which XML escapes nowhere,
+    so the file is the same)."""
     info = tree.docinfo
     doctype = None
     if info.doctype:
@@ -232,6 +236,8 @@ def _clean(tree: Tree, notes: list[str], source: str) -> str | None:
                     f"{name}='{shown}' is not finite; not written (the field's default applies)"
                 )
                 del element.attrib[name]
+            elif len(value) >= LONG_VALUE and (data := long_number_bytes(value)) is not None:
+                splicer.set(element, name, data)
     return doctype
 
 
@@ -282,22 +288,6 @@ def _long_run(value: str) -> bool:
 
 
 _SCANNED = 1 << 20
-
-
-def _spliced_out(tree: Tree, splicer: Splicer) -> None:
-    """Hand ``splicer`` the long number attributes of ``tree`` (a copy):
-    the file then gets their bytes as they are, where lxml would first copy
-    and escape them into its own buffers (a 1.3M-triangle mesh's 60 MB of
-    text, more than once). Only values of number characters alone, which
-    XML escapes nowhere, so the file is the same."""
-    for element in tree.getroot().iter(etree.Element):
-        for name in element.keys():
-            value = element.get(name)
-            if value is not None and len(value) >= LONG_VALUE and value.isascii():
-                data = value.encode("ascii")
-                del value
-                if not data.translate(None, NUMBER_CHARACTERS):
-                    splicer.set(element, name, data)
 
 
 # What the added nodes need beyond the Core profile (Interchange and up have it).
