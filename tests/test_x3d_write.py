@@ -555,3 +555,31 @@ def test_long_number_attributes_are_written_as_lxml_writes_them(tmp_path, monkey
     spliced = tmp_path / "spliced.x3d"
     assert parse(spliced).find(".//Coordinate").get("point") == points
     assert parse(spliced).find(".//WorldInfo").get("info").startswith('a & b < c "quoted" \n')
+
+
+def test_instructions_and_foreign_elements_are_noted_in_document_order_once(tmp_path):
+    # An instruction before the root and two inside, a foreign element
+    # holding another (noted once, as the outer one) and one deep in a
+    # Transform: each left out, in the order a reader meets them.
+    source = tmp_path / "in.x3d"
+    source.write_text(
+        '<?xml version="1.0"?>\n<?first a?>\n'
+        '<X3D version="4.0" xmlns:ext="https://example.org/ext"><Scene>\n'
+        "<?second b?>\n"
+        "<ext:outer><ext:inner/></ext:outer>\n"
+        "<Transform><?third c?><ext:deep/><Shape><Box/></Shape></Transform>\n"
+        "</Scene></X3D>\n"
+    )
+    scene = sg.load(source)
+    target = tmp_path / "out.x3d"
+    sg.save(scene, target)
+    text = target.read_text()
+    assert "<?" not in text.split("\n", 1)[1] and "ext:" not in text
+    notes = [note for note in scene.warnings if "not written" in note]
+    assert [note.split(": ", 1)[1] for note in notes] == [
+        "processing instruction <?first ...?> not written",
+        "processing instruction <?second ...?> not written",
+        "processing instruction <?third ...?> not written",
+        "<ext:outer> is not X3D (never followed); not written",
+        "<ext:deep> is not X3D (never followed); not written",
+    ]

@@ -203,20 +203,22 @@ def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str |
         info.clear()
     root = tree.getroot()
     namespace = etree.QName(root).namespace
-    for instruction in [*root.itersiblings(preceding=True), *root.itersiblings(), *root.iter()]:
-        if isinstance(instruction, etree._ProcessingInstruction):
-            line = f" line {instruction.sourceline}" if instruction.sourceline else ""
-            notes.append(
-                f"{source}{line}: processing instruction <?{instruction.target} ...?> not written"
-            )
+    # Found by XPath, in C: a Python loop over the nodes of a document of
+    # 10,000 shapes took a tenth of a second each time.
+    around = [*root.itersiblings(preceding=True), *root.itersiblings()]
+    for instruction in [
+        *(node for node in around if isinstance(node, etree._ProcessingInstruction)),
+        *root.xpath(".//processing-instruction()"),
+    ]:
+        line = f" line {instruction.sourceline}" if instruction.sourceline else ""
+        notes.append(
+            f"{source}{line}: processing instruction <?{instruction.target} ...?> not written"
+        )
     etree.strip_elements(tree, etree.PI, with_tail=False)
-    foreign = [
-        element
-        for element in root.iter(etree.Element)
-        if etree.QName(element).namespace != namespace
-    ]
+    foreign = root.xpath(".//*[namespace-uri() != $namespace]", namespace=namespace or "")
+    dropped = set(foreign)
     for element in foreign:
-        if element.getparent() is None or any(a in foreign for a in element.iterancestors()):
+        if any(ancestor in dropped for ancestor in element.iterancestors()):
             continue
         notes.append(
             f"{source} line {element.sourceline}: <{element.prefix or ''}"
