@@ -515,6 +515,23 @@ def test_def_given_again_in_a_prototype_and_in_the_scene(tmp_path):
     assert centres == pytest.approx([0, 1, 2, 2])  # the USE takes the later DEF
 
 
+def test_each_use_of_a_name_defined_many_times_takes_the_latest_def_before_it(tmp_path):
+    # 300 DEFs of one name, each followed by a USE (moved up by 10), and
+    # USEs before the first DEF and after the last: each USE takes the
+    # latest DEF before it, one before any takes the first.
+    count = 300
+    body = '<Transform translation="0 10 0"><Transform USE="a"/></Transform>' + "".join(
+        f'<Transform DEF="a" translation="{k} 0 0"><Shape><Box/></Shape></Transform>'
+        f'<Transform translation="0 10 0"><Transform USE="a"/></Transform>'
+        for k in range(count)
+    )
+    scene = scene_of(tmp_path, body)
+    centres = np.array([shape.world_vertices.mean(axis=0) for shape in scene.shapes])
+    used = centres[centres[:, 1] > 5]
+    assert used[:, 0].tolist() == pytest.approx([0.0, *range(count)])
+    assert centres[centres[:, 1] < 5][:, 0].tolist() == pytest.approx(list(range(count)))
+
+
 def test_corpus_prototype_of_a_material(corpus_dir):
     scene = sg.load(corpus_dir / "x3d" / "proto_of_material.x3d")
     (shape,) = scene.shapes
