@@ -49,6 +49,16 @@ def floats(text):
     return np.array(text.replace(",", " ").split(), dtype=np.float64)
 
 
+def written(tmp_path, text):
+    """The scene read from X3D ``text`` and the path it was written back to."""
+    source = tmp_path / "in.x3d"
+    source.write_text(text)
+    scene = sg.load(source)
+    target = tmp_path / "out.x3d"
+    sg.save(scene, target)
+    return scene, target
+
+
 def test_document_is_kept_and_one_group_per_light_is_added(tmp_path, x3d_schema):
     scene = document_scene(shapes=[shadow_shape(), shadow_shape("other", transparency=0.5)])
     original = etree.tostring(scene.document)
@@ -334,18 +344,15 @@ def test_fresh_document_states_a_unit_other_than_metres(tmp_path, x3d_schema):
 
 
 def test_non_finite_numbers_of_the_input_are_not_copied(tmp_path):
-    source = tmp_path / "in.x3d"
-    source.write_text(
+    scene, target = written(
+        tmp_path,
         '<X3D version="4.0"><Scene>\n'
         '<Transform DEF="nan" translation="0 INF 0" scale="1e5 1E-5 2" rotation="0 1 0 -Infinity">'
         '<Shape><Appearance><Material diffuseColor="NaN 0 0" emissiveColor="0.1 0.2 0.3"/>'
         '</Appearance><TriangleSet><Coordinate point="0 0 0, 1 0 0, 0 1e999 0"/></TriangleSet>'
         '</Shape></Transform>\n<WorldInfo title="inf and nan" info=\'"nan"\'/>\n'
-        "</Scene></X3D>"
+        "</Scene></X3D>",
     )
-    scene = sg.load(source)
-    target = tmp_path / "out.x3d"
-    sg.save(scene, target)
     transform = parse(target).find(".//Transform")
     # non-finite values (spelled or overflowing) dropped; finite ones and text kept
     assert "translation" not in transform.attrib and "rotation" not in transform.attrib
@@ -561,18 +568,15 @@ def test_instructions_and_foreign_elements_are_noted_in_document_order_once(tmp_
     # An instruction before the root and two inside, a foreign element
     # holding another (noted once, as the outer one) and one deep in a
     # Transform: each left out, in the order a reader meets them.
-    source = tmp_path / "in.x3d"
-    source.write_text(
+    scene, target = written(
+        tmp_path,
         '<?xml version="1.0"?>\n<?first a?>\n'
         '<X3D version="4.0" xmlns:ext="https://example.org/ext"><Scene>\n'
         "<?second b?>\n"
         "<ext:outer><ext:inner/></ext:outer>\n"
         "<Transform><?third c?><ext:deep/><Shape><Box/></Shape></Transform>\n"
-        "</Scene></X3D>\n"
+        "</Scene></X3D>\n",
     )
-    scene = sg.load(source)
-    target = tmp_path / "out.x3d"
-    sg.save(scene, target)
     text = target.read_text()
     assert "<?" not in text.split("\n", 1)[1] and "ext:" not in text
     notes = [note for note in scene.warnings if "not written" in note]
