@@ -410,7 +410,8 @@ class _SurfaceProjector:
             fronts = [front for _, front, _ in outlined]
             pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
             n_faces = np.int64(len(self.faces))
-            near = np.unique(owner[pair_triangles] * n_faces + pair_faces)
+            keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
+            near = np.unique(keys)
             cuts = np.searchsorted(near, np.arange(len(outlined) + 1) * n_faces)
             for k, (outline, front, bound) in enumerate(outlined):
                 faces = near[cuts[k] : cuts[k + 1]] - k * n_faces
@@ -421,7 +422,7 @@ class _SurfaceProjector:
                 all_triangles.append(front[0][front[1]])
             # the pairs of each caster's others, by face, then triangle
             wanted = np.concatenate([k * n_faces + others for k, others in enumerate(others_of)])
-            own = np.isin(owner[pair_triangles] * n_faces + pair_faces, wanted)
+            own = np.isin(keys, wanted)
             receiver_parts.append(pair_faces[own])
             triangle_parts.append(pair_triangles[own] + len(caster_triangles))
         receivers, triangles = np.concatenate(receiver_parts), np.concatenate(triangle_parts)
