@@ -434,7 +434,7 @@ def may_hold_patch(
         ],
         dtype=np.int64,
     )
-    counts = np.array([len(stacked.casters[int(i)].shape.faces) for i in indices], np.int64)
+    counts = stacked.face_counts[indices]
     start = 0
     while start < len(indices):
         stop = start + 1
@@ -483,7 +483,7 @@ def _patch_bound(
     # thin and degenerate faces: members of any patch of their shape
     loose_low = np.full((count, 3), np.inf)
     loose_high = np.full((count, 3), -np.inf)
-    cells: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+    cells: list[tuple[np.ndarray, _Columns, _Columns]] = []
     for start in range(0, len(rows), _BIN_BLOCK):
         block = rows[start : start + _BIN_BLOCK]
         holder = owner[start : start + _BIN_BLOCK]
@@ -520,11 +520,16 @@ def _patch_bound(
         cells.append(_cell_boxes(np.concatenate(keys), np.concatenate([chosen, chosen]), low, high))
     keep = np.zeros(count, dtype=bool)
     if cells:
-        if len(cells) == 1:
-            group_keys, group_low, group_high = cells[0]
-        else:  # the blocks' cells merged: one box per cell
-            merged = [np.concatenate(part) for part in zip(*cells, strict=True)]
-            group_keys, group_low, group_high = _merged_boxes(*merged)
+        group_keys, group_low, group_high = cells[0]
+        if len(cells) > 1:  # the blocks' cells merged: one box per cell
+            group_keys = np.concatenate([keys for keys, _, _ in cells])
+            group_low = [np.concatenate([c[1][axis] for c in cells]) for axis in range(3)]
+            group_high = [np.concatenate([c[2][axis] for c in cells]) for axis in range(3)]
+            everyone = np.arange(len(group_keys))
+            group_keys, group_low, group_high = _cell_boxes(
+                group_keys, everyone, group_low, group_high
+            )
+        box_low, box_high = np.column_stack(group_low), np.column_stack(group_high)
         group_owner = group_keys // per_shape
         near_low = loose_low[group_owner]
         near_high = loose_high[group_owner]
@@ -534,8 +539,8 @@ def _patch_bound(
             )
             at = np.minimum(np.searchsorted(group_keys, wanted), len(group_keys) - 1)
             hit = np.flatnonzero(group_keys[at] == wanted)
-            near_low[hit] = np.minimum(near_low[hit], group_low[at[hit]])
-            near_high[hit] = np.maximum(near_high[hit], group_high[at[hit]])
+            near_low[hit] = np.minimum(near_low[hit], box_low[at[hit]])
+            near_high[hit] = np.maximum(near_high[hit], box_high[at[hit]])
         with np.errstate(invalid="ignore", over="ignore"):
             reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=1))
         large = ~(reach < size * (1.0 - 1e-9))  # NaN or inf: keep the shape
@@ -592,30 +597,17 @@ def _face_bins(
 
 
 def _cell_boxes(
-    keys: np.ndarray, faces: np.ndarray, low: list[np.ndarray], high: list[np.ndarray]
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The distinct ``keys`` (sorted) and the box of the faces filed under
-    each (``faces[i]`` under ``keys[i]``; boxes as columns)."""
+    keys: np.ndarray, faces: np.ndarray, low: _Columns, high: _Columns
+) -> tuple[np.ndarray, _Columns, _Columns]:
+    """The distinct ``keys`` (sorted) and the box of the boxes filed under
+    each (box ``faces[i]`` of the columns ``low``, ``high`` under
+    ``keys[i]``): a block's faces into cells, and the blocks' cells into one."""
     order = np.argsort(keys, kind="stable")
     keys, faces = keys[order], faces[order]
     starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
-    box_low = np.column_stack([np.minimum.reduceat(column[faces], starts) for column in low])
-    box_high = np.column_stack([np.maximum.reduceat(column[faces], starts) for column in high])
+    box_low = [np.minimum.reduceat(column[faces], starts) for column in low]
+    box_high = [np.maximum.reduceat(column[faces], starts) for column in high]
     return keys[starts], box_low, box_high
-
-
-def _merged_boxes(
-    keys: np.ndarray, low: np.ndarray, high: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Boxes under equal ``keys`` merged into one each, keys sorted."""
-    order = np.argsort(keys, kind="stable")
-    keys = keys[order]
-    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
-    return (
-        keys[starts],
-        np.minimum.reduceat(low[order], starts, axis=0),
-        np.maximum.reduceat(high[order], starts, axis=0),
-    )
 
 
 def found(
