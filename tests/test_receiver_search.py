@@ -51,16 +51,24 @@ def test_a_curved_shape_is_ruled_out_and_a_flat_one_is_not():
     st.integers(1, 30),
     st.floats(0.0, 1e-9),
     st.sampled_from([0.5, 1.0, 2.0, 4.0]),
+    st.booleans(),
+    st.booleans(),
 )
-def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size):
-    """Bound against brute force: tiles of one (slightly tilted) plane,
-    slivers lying in it, scattered triangles; whenever a patch reaches
-    ``size``, the shape is kept."""
+def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size, coarse, turn):
+    """Bound against brute force: tiles of one (slightly tilted) plane, some
+    of them facing the other way, slivers lying in it, scattered triangles,
+    the whole turned at random or not (a normal on the cells' edges); whenever
+    a patch reaches ``size``, the shape is kept, by the histogram of normals
+    and offsets and by the coarser one big shapes are tried by first."""
+    import shadowgeo.scene.receivers as receivers_module
+
     rng = np.random.default_rng(seed)
     triangles = []
     for _ in range(n_tiles):  # separate tiles of the plane y = tilt * x
         corner = rng.uniform(-4, 4, 2)
         tile = corner + rng.uniform(0, 1, (3, 2))
+        if rng.random() < 0.3:
+            tile = tile[::-1]  # facing the other way
         triangles.append(np.column_stack([tile[:, 0], tilt * tile[:, 0], tile[:, 1]]))
     for _ in range(rng.integers(0, 4)):  # slivers in the plane, any direction
         start, end = rng.uniform(-4, 4, (2, 2))
@@ -70,10 +78,69 @@ def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size
     for _ in range(rng.integers(0, 20)):  # noise
         triangles.append(rng.uniform(-4, 4, (3, 3)))
     vertices = np.concatenate(triangles)
+    if turn:
+        rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        vertices = vertices @ rotation.T
     shape = sg.Shape(vertices, np.arange(len(vertices)).reshape(-1, 3))
-    keep = may_hold_patch(CasterSet([shape]), np.array([0]), size, TOLERANCE)
+    with pytest.MonkeyPatch.context() as patch:
+        if coarse:  # every shape tried by the coarse bound first
+            patch.setattr(receivers_module, "_COARSE_FACES", 1)
+        keep = may_hold_patch(CasterSet([shape]), np.array([0]), size, TOLERANCE)
     if _largest_patch(shape) >= size:
         assert keep[0]
+
+
+@pytest.mark.parametrize("coarse", [False, True])
+@pytest.mark.parametrize("turn", [False, True])
+def test_a_patch_of_faces_facing_both_ways_is_kept(coarse, turn):
+    """Two small tiles of one plane at opposite corners, one facing down:
+    neither reaches 8 across, the patch of both (11.3) does. Turned, the
+    normals fall inside cells; not turned, on the cells' edges."""
+    import shadowgeo.scene.receivers as receivers_module
+
+    tile = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    vertices = np.concatenate([tile - [4.0, 0, 4.0], (tile + [3.0, 0, 3.0])[::-1]])
+    if turn:
+        rotation, _ = np.linalg.qr(np.random.default_rng(5).normal(size=(3, 3)))
+        vertices = vertices @ rotation.T
+    shape = sg.Shape(vertices, [[0, 1, 2], [3, 4, 5]])
+    assert _largest_patch(shape) > 8.0
+    with pytest.MonkeyPatch.context() as patch:
+        if coarse:
+            patch.setattr(receivers_module, "_COARSE_FACES", 1)
+        assert may_hold_patch(CasterSet([shape]), np.array([0]), 8.0, TOLERANCE)[0]
+
+
+def test_a_big_curved_shape_is_ruled_out_by_its_normals_alone(monkeypatch):
+    """A sphere of 81,920 faces (past ``_COARSE_FACES``) is ruled out before
+    the finer histogram is built; a flat ring of 80,000 faces, a third of
+    them flipped, is kept for a size its box reaches (8.49 across)."""
+    import shadowgeo.scene.receivers as receivers_module
+
+    def finer(*args, **kwargs):
+        raise AssertionError("the finer histogram was built")
+
+    sphere = trimesh.creation.icosphere(subdivisions=6, radius=2.0)
+    assert len(sphere.faces) >= receivers_module._COARSE_FACES
+    stacked = CasterSet([sg.Shape(sphere.vertices, sphere.faces)])
+    monkeypatch.setattr(receivers_module, "_patch_bound", finer)
+    assert may_hold_patch(stacked, np.array([0]), 2.0, TOLERANCE).tolist() == [False]
+    monkeypatch.undo()
+    # a ring of far more faces than the sphere's largest patch: the bound
+    # keeps it at a size its patch reaches and rules it out above the ring
+    angles = np.linspace(0.0, 2.0 * np.pi, 40_001)[:-1]
+    circle = np.column_stack([np.cos(angles), np.zeros_like(angles), np.sin(angles)])
+    ring = np.concatenate([circle, 0.9 * circle])
+    k = np.arange(len(angles))
+    nxt = (k + 1) % len(angles)
+    inner = k + len(angles)
+    faces = np.concatenate(
+        [np.column_stack([k, nxt, inner]), np.column_stack([nxt, nxt + len(angles), inner])]
+    )
+    faces[::3] = faces[::3, ::-1]  # a third of them facing down
+    disc = CasterSet([sg.Shape(ring * 3.0, faces)])
+    assert may_hold_patch(disc, np.array([0]), 5.9, TOLERANCE).tolist() == [True]
+    assert may_hold_patch(disc, np.array([0]), 8.6, TOLERANCE).tolist() == [False]
 
 
 def test_faces_binned_a_block_at_a_time_rule_out_the_same_shapes(monkeypatch):

@@ -435,6 +435,14 @@ def may_hold_patch(
         dtype=np.int64,
     )
     counts = stacked.face_counts[indices]
+    # A big shape is first tried by its normals' cells alone (no offsets, no
+    # sort): a sphere of a million faces is ruled out in one pass.
+    coarse = np.flatnonzero(counts >= _COARSE_FACES)
+    ruled_out = np.zeros(len(indices), dtype=bool)
+    for k in coarse.tolist():
+        ruled_out[k] = not _normal_bound(stacked, int(indices[k]), size, limit)
+    remaining = np.flatnonzero(~ruled_out)
+    indices, counts = indices[remaining], counts[remaining]
     start = 0
     while start < len(indices):
         stop = start + 1
@@ -443,9 +451,110 @@ def may_hold_patch(
             total += counts[stop]
             stop += 1
         chunk = np.arange(start, stop)
-        keep[chunk] = _patch_bound(stacked, indices[chunk], size, limit, width, side, offsets)
+        keep[remaining[chunk]] = _patch_bound(
+            stacked, indices[chunk], size, limit, width, side, offsets
+        )
         start = stop
     return keep
+
+
+def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> bool:
+    """Whether shape ``index`` may hold a patch ``size`` across, by a bound
+    coarser than :func:`_patch_bound`'s and with no sort: faces binned by
+    their unit normal in cells of side ``_COARSE_CELL`` and by their plane's
+    offset in levels of ``band``, each cell's box accumulated in a dense grid.
+
+    With ``C = _COARSE_CELL``, a face is sharp here when its smallest height
+    ``w`` is at least ``2 pi limit / C``. A sharp member of a patch turns
+    from the seed's plane by ``t`` with ``sin t <= 2 limit / w <= C / pi``
+    (:func:`may_hold_patch`), so two sharp members' unit normals differ by
+    less than ``2 asin(C / pi) < C`` in each component, or their opposites
+    do, and their offsets (from the middle of the shape's box, ``R`` away at
+    most) by less than ``R 2 asin(C / pi) + 2 limit < band``. Take any sharp
+    member's cell ``c``: every other sharp member lies in the cells within
+    one of ``c``, or within one of the cell of its opposite normal and
+    offset, which is the mirrored cell (the grid flipped along each axis) or
+    the one before it along an axis (a value on a cell's edge mirrors to an
+    edge), so within two of the mirror of ``c``. The patch therefore lies in
+    the box of those cells and of the thin faces; a patch with no sharp face
+    lies in the thin faces' box. A shape where all such boxes are smaller
+    than ``size`` has no patch that large."""
+    start, count = int(stacked.face_starts[index]), int(stacked.face_counts[index])
+    low_box, high_box = stacked.low[index], stacked.high[index]
+    middle = 0.5 * (low_box + high_box)
+    radius = float(np.sqrt(((high_box - low_box) ** 2).sum())) / 2.0
+    cell = _COARSE_CELL
+    band = cell * radius * (1.0 + 1e-9) + 2.0 * limit
+    if not (np.isfinite(band) and band > 0):
+        return True
+    side = int(np.ceil(1.0 / cell))
+    levels = int(np.ceil(radius / band))
+    span, depth = 2 * side + 3, 2 * levels + 3  # an empty cell past each end
+    columns = [stacked.vertices[:, axis] - middle[axis] for axis in range(3)]
+    grid_low = np.full((3, depth * span**3), np.inf)
+    grid_high = np.full((3, depth * span**3), -np.inf)
+    loose_low = np.full(3, np.inf)
+    loose_high = np.full(3, -np.inf)
+    faces = stacked.faces[start : start + count]
+    width = 2.0 * np.pi * limit / cell
+    for first in range(0, count, _BIN_BLOCK):
+        block = faces[first : first + _BIN_BLOCK]
+        low, high, unit, height, _, sharp = _face_bins(block, columns, width)
+        loose = ~sharp
+        if loose.any():
+            for axis in range(3):
+                loose_low[axis] = min(loose_low[axis], float(low[axis][loose].min()))
+                loose_high[axis] = max(loose_high[axis], float(high[axis][loose].max()))
+        chosen = np.flatnonzero(sharp)
+        if not len(chosen):
+            continue
+        level = np.floor(height[chosen] / band)
+        key = (np.clip(level, -levels, levels).astype(np.int64) + levels + 1) * span**3
+        for axis, weight in enumerate((1, span, span * span)):
+            bin_ = np.floor(unit[axis][chosen] / cell)
+            key += (np.clip(bin_, -side, side).astype(np.int64) + side + 1) * weight
+        for axis in range(3):
+            np.minimum.at(grid_low[axis], key, low[axis][chosen])
+            np.maximum.at(grid_high[axis], key, high[axis][chosen])
+    shape = (3, depth, span, span, span)
+    grid_low, grid_high = grid_low.reshape(shape), grid_high.reshape(shape)
+    occupied = np.isfinite(grid_low[0])
+    flip = (slice(None), slice(None, None, -1), slice(None, None, -1), slice(None, None, -1),
+            slice(None, None, -1))  # fmt: skip
+    near_low = np.minimum(
+        _window(grid_low, 1, np.minimum)[:, occupied],
+        _window(grid_low, 2, np.minimum)[flip][:, occupied],
+    )
+    near_high = np.maximum(
+        _window(grid_high, 1, np.maximum)[:, occupied],
+        _window(grid_high, 2, np.maximum)[flip][:, occupied],
+    )
+    near_low = np.minimum(near_low, loose_low[:, None])
+    near_high = np.maximum(near_high, loose_high[:, None])
+    with np.errstate(invalid="ignore", over="ignore"):
+        reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=0))
+        loose_reach = float(np.sqrt(((loose_high - loose_low) ** 2).sum()))
+    if np.any(~(reach < size * (1.0 - 1e-9))):  # NaN or inf: keep the shape
+        return True
+    return bool(np.isfinite(loose_low).all() and not loose_reach < size * (1.0 - 1e-9))
+
+
+def _window(grid: np.ndarray, reach: int, pick: np.ufunc) -> np.ndarray:
+    """``pick`` (minimum or maximum) of the cells of ``grid`` (a leading axis
+    of rows, then the cells' axes) within ``reach`` cells of each cell along
+    every axis, row by row."""
+    result = grid
+    for axis in range(1, grid.ndim):
+        out = result.copy()
+        length = result.shape[axis]
+        for shift in range(1, reach + 1):
+            ahead = [slice(None)] * grid.ndim
+            behind = [slice(None)] * grid.ndim
+            ahead[axis], behind[axis] = slice(shift, length), slice(0, length - shift)
+            pick(out[tuple(behind)], result[tuple(ahead)], out=out[tuple(behind)])
+            pick(out[tuple(ahead)], result[tuple(behind)], out=out[tuple(ahead)])
+        result = out
+    return result
 
 
 def _patch_bound(
@@ -553,8 +662,12 @@ def _patch_bound(
     return keep
 
 
-# Faces binned at a time by _patch_bound.
-_BIN_BLOCK = 1 << 16
+# Faces binned at a time by _patch_bound and _normal_bound.
+_BIN_BLOCK = 1 << 14
+# Shapes of this many faces or more are tried by _normal_bound first, with
+# normal cells of this side (its grid: 19 x 19 x 19 cells by 19 levels).
+_COARSE_FACES = 1 << 16
+_COARSE_CELL = 1.0 / 8.0
 # x, y and z of points or vectors, one array each.
 _Columns = list[np.ndarray]
 
