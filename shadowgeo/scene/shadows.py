@@ -61,6 +61,7 @@ from ..lights import DirectionalLight, Light, is_positional
 from ..limits import check_coordinates, check_light
 from ..plane import Plane
 from ..projection import project_shadow
+from ..threads import one_blas_thread
 from ..tolerance import Tolerance
 from ..topology import Caster
 from ..volume import shadow_volume
@@ -169,6 +170,35 @@ def add_shadows(
     >>> shadow.name, shadow.group, round(float(shadow.vertices[:, 1].max()), 4)
     ('shadow_sun_ground', 'shadows_sun', 0.0142)
     """
+    with one_blas_thread():  # thin products: see shadowgeo.threads
+        return _add_shadows(
+            scene,
+            method=method,
+            lights=lights,
+            receivers=receivers,
+            plane=plane,
+            tolerance=tolerance,
+            offset=offset,
+            progress=progress,
+            extra_lights=extra_lights,
+            surfaces=surfaces,
+        )
+
+
+def _add_shadows(
+    scene: Scene,
+    *,
+    method: Literal["planar", "volume"],
+    lights: Sequence[str] | None,
+    receivers: Sequence[str] | None,
+    plane: Plane | ArrayLike | None,
+    tolerance: Tolerance | float | None,
+    offset: float | None,
+    progress: Progress | None,
+    extra_lights: Sequence[SceneLight],
+    surfaces: bool | None,
+) -> Scene:
+    """:func:`add_shadows`, its arguments checked and passed on by name."""
     if method not in ("planar", "volume"):
         raise GeometryError(f"method must be 'planar' or 'volume', got {method!r}")
     if receivers is not None and plane is not None:
