@@ -28,7 +28,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight
 from .limits import LARGEST_COORDINATE, check_light
 from .plane import Plane
-from .polygons import MAX_COORDINATE
+from .polygons import MAX_COORDINATE, POINT_SLACK, PRODUCT_SLACK
 from .shadow import Shadow, ShadowDiagnostics, triangulated
 from .silhouette import Outlines, check_light_outside, silhouette_outlines, vertex_components
 from .tolerance import Tolerance, resolution, scene_scales
@@ -663,27 +663,6 @@ def pieces(rows: np.ndarray, counts: list[int]) -> list[np.ndarray]:
     return [rows[end - count : end] for count, end in zip(counts, ends, strict=True)]
 
 
-# Coordinates of the 2-D loops stay within +-MAX_COORDINATE (the window), so
-# a difference of two of them is off by at most this much (a few units in
-# the last place of MAX_COORDINATE) ...
-_POINT_SLACK = 8 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
-# ... and a product of two differences by this much relative.
-_PRODUCT_SLACK = 1e-13
-
-
-def _turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(sign, cross): +1 where ``origin -> one -> two`` certainly turns left,
-    -1 certainly right, 0 when rounding could decide it; and the cross
-    product ``(one - origin) x (two - origin)`` itself."""
-    a, b = one - origin, two - origin
-    cross: np.ndarray = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    size_a = np.abs(a[:, 0]) + np.abs(a[:, 1])
-    size_b = np.abs(b[:, 0]) + np.abs(b[:, 1])
-    margin = 2 * _POINT_SLACK * (size_a + size_b) + _PRODUCT_SLACK * size_a * size_b
-    sign: np.ndarray = np.where(cross > margin, 1, np.where(cross < -margin, -1, 0))
-    return sign, cross
-
-
 # Lights of at most this many outline loops are tried for one loop holding
 # the others (a dented caster's folds); a light of more (a city, many shapes
 # as one caster) is not: its largest loop would not hold them.
@@ -744,8 +723,8 @@ def whole_outlines(
         np.asarray(loop_lengths[loops], dtype=np.int64),
         np.asarray(loop_light[loops], dtype=np.int64),
         count,
-        _POINT_SLACK,
-        _PRODUCT_SLACK,
+        POINT_SLACK,
+        PRODUCT_SLACK,
         float(np.finfo(np.float64).eps),
     )
     found = held >= 0
@@ -784,10 +763,8 @@ def _star_shaped_alone(
     one loop only and that loop is certainly simple and counter-clockwise,
     else -1 (the first certificate of :func:`whole_outlines`).
 
-    The loop is star-shaped around the mean of its corners c: every edge
-    turns left around c beyond rounding (``c -> p_i -> p_i+1``) and the
-    edges go round c once in all, so they lie in wedges from c that do not
-    overlap: no two edges meet but neighbours at their corner.
+    The loop is star-shaped around the mean of its corners
+    (:func:`shadowgeo.polygons.star_shaped_flat`).
     """
     result = np.full(count, -1, dtype=np.int64)
     light_loops = np.bincount(loop_light, minlength=count)
@@ -798,15 +775,6 @@ def _star_shaped_alone(
     firsts = (np.cumsum(loop_lengths) - loop_lengths)[alone]
     starts = np.cumsum(lengths) - lengths  # in the loops taken out
     corner = np.repeat(firsts - starts, lengths) + np.arange(int(lengths.sum()))
-    mine = points[corner]
-    position = np.arange(len(mine))
-    ends = np.repeat(starts + lengths, lengths)
-    after = np.where(position + 1 == ends, np.repeat(starts, lengths), position + 1)
-    middle = np.repeat(np.add.reduceat(mine, starts) / lengths[:, None], lengths, axis=0)
-    sign, cross = _turns(middle, mine, mine[after])
-    spoke, next_spoke = mine - middle, mine[after] - middle
-    dot = spoke[:, 0] * next_spoke[:, 0] + spoke[:, 1] * next_spoke[:, 1]
-    sweep = np.add.reduceat(np.arctan2(cross, dot), starts)
-    star = (np.minimum.reduceat(sign, starts) == 1) & (np.abs(sweep - 2 * np.pi) < 1.0)
+    star = poly.star_shaped_flat(points[corner], starts, lengths)
     result[loop_light[alone[star]]] = alone[star]
     return result

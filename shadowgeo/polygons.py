@@ -26,6 +26,153 @@ from .plane import Plane
 MAX_COORDINATE = 1e8
 
 
+# Coordinates of the 2-D loops stay within +-MAX_COORDINATE (the window), so
+# a difference of two of them is off by at most this much (a few units in
+# the last place of MAX_COORDINATE) ...
+POINT_SLACK = 8 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
+# ... and a product of two differences by this much relative.
+PRODUCT_SLACK = 1e-13
+
+
+def turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sign, cross): +1 where ``origin -> one -> two`` certainly turns left,
+    -1 certainly right, 0 when rounding could decide it; and the cross
+    product ``(one - origin) x (two - origin)`` itself (rows of (n, 2)
+    points within +-MAX_COORDINATE)."""
+    a, b = one - origin, two - origin
+    cross: np.ndarray = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    size_a = np.abs(a[:, 0]) + np.abs(a[:, 1])
+    size_b = np.abs(b[:, 0]) + np.abs(b[:, 1])
+    margin = 2 * POINT_SLACK * (size_a + size_b) + PRODUCT_SLACK * size_a * size_b
+    sign: np.ndarray = np.where(cross > margin, 1, np.where(cross < -margin, -1, 0))
+    return sign, cross
+
+
+def star_shaped_flat(points: np.ndarray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(l,) bool: whether each loop (``lengths[i]`` rows of ``points`` from
+    ``starts[i]``, one loop after another, within +-MAX_COORDINATE) is
+    certainly simple and counter-clockwise.
+
+    Certified when the loop is star-shaped around the mean of its corners
+    c: every edge turns left around c beyond rounding (``c -> p_i ->
+    p_i+1``) and the edges go round c once in all, so they lie in wedges
+    from c that do not overlap: no two edges meet but neighbours at their
+    corner. Such a loop's inside is its region of positive winding as it is,
+    with no 2-D union to find it (a convex loop is one; so is a star of
+    50,000 spikes, whose union takes Clipper2 a quadratic sweep).
+    """
+    if not len(lengths):
+        return np.zeros(0, dtype=bool)
+    position = np.arange(len(points))
+    ends = np.repeat(starts + lengths, lengths)
+    after = np.where(position + 1 == ends, np.repeat(starts, lengths), position + 1)
+    middle = np.repeat(_loop_means(points, starts, lengths), lengths, axis=0)
+    sign, cross = turns(middle, points, points[after])
+    spoke, next_spoke = points - middle, points[after] - middle
+    dot = spoke[:, 0] * next_spoke[:, 0] + spoke[:, 1] * next_spoke[:, 1]
+    sweep = np.add.reduceat(np.arctan2(cross, dot), starts)
+    star: np.ndarray = (np.minimum.reduceat(sign, starts) == 1) & (np.abs(sweep - 2 * np.pi) < 1.0)
+    return star & (lengths >= 3)
+
+
+def _loop_means(points: np.ndarray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(l, 2) the mean of each loop's corners: the centre the star-shaped
+    certificate is given for (:func:`star_shaped_flat`, :func:`star_triangles`)."""
+    means: np.ndarray = np.add.reduceat(points, starts) / lengths[:, None]
+    return means
+
+
+def star_triangles(loop: np.ndarray) -> np.ndarray | None:
+    """(k - 2, 3) counter-clockwise triangles of corners of the (k, 2)
+    ``loop``, meeting only at their sides, when it is certainly star-shaped
+    round the mean ``c`` of its corners (:func:`star_shaped_flat`); None for
+    any other loop. Linear in the corners, however many are reflex.
+
+    Ears are cut in one pass with a stack, as a Graham scan walks a hull:
+    corner ``b`` between ``a`` and ``d`` is cut when it turns left and ``c``
+    lies left of ``a -> d``, both beyond rounding. Such a triangle is an
+    ear: it lies in the wedge from ``c`` between ``a`` and ``d``, narrower
+    than half a turn, and no other corner is in that wedge (the corners go
+    round ``c`` once, in order); the loop left is again star-shaped round
+    ``c``. Corners that no certain ear removes (a rectangle, whose diagonals
+    run through ``c``) go to manifold3d's triangulation, a small remainder.
+
+    The loop is first scaled by a power of two (exactly) so that its
+    largest coordinate from ``c`` is about :data:`MAX_COORDINATE`, the range
+    the rounding margins of :func:`turns` are set for.
+    """
+    loop = np.asarray(loop, dtype=np.float64)
+    n = len(loop)
+    if n < 3:
+        return None
+    extent = float(np.abs(loop - loop.mean(axis=0)).max())
+    if not (np.isfinite(extent) and extent > 0):
+        return None
+    local = np.ldexp(loop, int(np.floor(np.log2(MAX_COORDINATE / extent))))
+    if not np.all(np.isfinite(local)) or np.abs(local).max() > 4 * MAX_COORDINATE:
+        return None
+    starts, lengths = np.zeros(1, dtype=np.int64), np.array([n])
+    if not star_shaped_flat(local, starts, lengths)[0]:
+        return None
+    cx, cy = (float(value) for value in _loop_means(local, starts, lengths)[0])
+    xs, ys = local[:, 0].tolist(), local[:, 1].tolist()
+
+    def left(i: int, j: int, px: float, py: float) -> bool:
+        """``i -> j -> p`` certainly turns left (:func:`turns`, one row)."""
+        ax, ay = xs[j] - xs[i], ys[j] - ys[i]
+        bx, by = px - xs[i], py - ys[i]
+        size_a, size_b = abs(ax) + abs(ay), abs(bx) + abs(by)
+        margin = 2 * POINT_SLACK * (size_a + size_b) + PRODUCT_SLACK * size_a * size_b
+        return bool(ax * by - ay * bx > margin)
+
+    triangles: list[tuple[int, int, int]] = []
+    stack: list[int] = []
+    for index in [*range(n), 0]:  # the first corner again closes the loop
+        stack.append(index)
+        while len(stack) >= 3:
+            a, b, d = stack[-3], stack[-2], stack[-1]
+            if not (left(a, b, xs[d], ys[d]) and left(a, d, cx, cy)):
+                break
+            triangles.append((a, b, d))
+            del stack[-2]
+    rest = stack[:-1]  # the loop left (its first corner was pushed twice)
+    if len(rest) == 3 and left(rest[0], rest[1], xs[rest[2]], ys[rest[2]]):
+        triangles.append((rest[0], rest[1], rest[2]))
+    elif len(rest) >= 3:
+        remainder = np.asarray(triangulate([local[rest]]), dtype=np.int64).reshape(-1, 3)
+        triangles.extend(map(tuple, np.asarray(rest, dtype=np.int64)[remainder].tolist()))
+    result = np.array(triangles, dtype=np.int64).reshape(-1, 3)
+    return result if len(result) == n - 2 else None
+
+
+def whole_loop(loops: list[np.ndarray]) -> bool:
+    """Whether ``loops`` are one loop whose inside is certainly their region
+    of positive winding (:func:`star_shaped_flat`): no union needed."""
+    if len(loops) != 1 or len(loops[0]) < 3:
+        return False
+    loop = np.asarray(loops[0], dtype=np.float64)
+    return bool(star_shaped_flat(loop, np.zeros(1, dtype=np.int64), np.array([len(loop)]))[0])
+
+
+def holds_box(region: CrossSection, low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether ``region`` certainly holds the box ``low``-``high`` (2-D,
+    within +-MAX_COORDINATE): it is one convex counter-clockwise loop and
+    every corner of the box lies left of each of its edges beyond rounding.
+    Then the region's intersection with anything in the box is that thing,
+    and the intersection (a sweep over both) can be skipped."""
+    loops = region_loops(region)
+    if not whole_loop(loops):
+        return False
+    loop = loops[0]
+    after = np.roll(loop, -1, axis=0)
+    if not np.all(turns(loop, after, np.roll(after, -1, axis=0))[0] == 1):
+        return False  # not convex beyond rounding
+    corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]], dtype=np.float64)
+    origin = np.repeat(loop, 4, axis=0)
+    sign, _ = turns(origin, np.repeat(after, 4, axis=0), np.tile(corners, (len(loop), 1)))
+    return bool(np.all(sign == 1))
+
+
 def local_scale(extent: float) -> float:
     """Units per length that put the largest coordinate that will occur,
     ``extent``, at ``MAX_COORDINATE``: Clipper2's fixed 1e-8 grid is then
@@ -417,6 +564,9 @@ def region_loops(region: CrossSection) -> list[np.ndarray]:
     return [loop for loop in loops if len(loop) >= 3]
 
 
+# A polygon of one star-shaped loop with this many reflex corners or more is
+# triangulated by star_triangles, not by manifold3d (_spiked_triangles).
+_SPIKED_REFLEX = 64
 # Candidate edges one batch of nest's point-in-loop tests visits at most.
 _NEST_EDGES = 4_000_000
 # union_parts: loops above this are united cell by cell first, about
@@ -679,7 +829,9 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     vertices, faces, base = [], [], 0
     for part in parts:
         for loops in _tiles(part) if len(part) > _TILE_LOOPS else [part]:
-            tris = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
+            tris = _spiked_triangles(loops)
+            if tris is None:
+                tris = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
             points = np.concatenate(loops)
             vertices.append(points)
             faces.append(tris + base)
@@ -687,6 +839,25 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     if not vertices:
         return np.zeros((0, 2)), np.zeros((0, 3), dtype=np.int64)
     return np.concatenate(vertices), np.concatenate(faces)
+
+
+def _spiked_triangles(loops: list[np.ndarray]) -> np.ndarray | None:
+    """:func:`star_triangles` of a polygon that is one loop of at least
+    :data:`_SPIKED_REFLEX` certain reflex corners, else None. manifold3d's
+    ear clipping is quadratic in such corners (a star of 50,000 spikes:
+    7 s; a circle of as many corners: 0.04 s)."""
+    if len(loops) != 1 or len(loops[0]) < 2 * _SPIKED_REFLEX:
+        return None
+    loop = np.asarray(loops[0], dtype=np.float64)
+    scale = float(np.abs(loop - loop.mean(axis=0)).max())
+    if not (np.isfinite(scale) and scale > 0):
+        return None
+    local = loop * (MAX_COORDINATE / scale)  # only to count reflex corners
+    after = np.roll(local, -1, axis=0)
+    sign, _ = turns(local, after, np.roll(after, -1, axis=0))
+    if np.count_nonzero(sign == -1) < _SPIKED_REFLEX:
+        return None
+    return star_triangles(loop)
 
 
 def _tiles(part: list[np.ndarray]) -> list[list[np.ndarray]]:
@@ -728,6 +899,9 @@ def polygon_triangles(points: np.ndarray) -> np.ndarray:
     u, v = Plane(normal).basis  # u x v = normal: the polygon runs CCW in (u, v)
     centred = points - points.mean(axis=0)
     flat = np.column_stack([centred @ u, centred @ v])
+    spiked = _spiked_triangles([flat])
+    if spiked is not None:
+        return spiked
     return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)
 
 

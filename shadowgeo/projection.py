@@ -486,6 +486,10 @@ class _Projector:
                 corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
                 limit_regions.append(poly.fill([corners]))
         groups = partial(self._loop_groups, outline_loops)
+        if poly.whole_loop(loops):  # one simple loop: no union, and no cut when inside
+            low2d, high2d = loops[0].min(axis=0), loops[0].max(axis=0)
+            if all(poly.holds_box(limit, low2d, high2d) for limit in limit_regions):
+                return self._result([loops], 1)
         if not limit_regions:
             return self._result(poly.union_parts(loops, groups), len(loops))
         region = poly.union_region(loops, groups)

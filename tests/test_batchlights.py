@@ -465,14 +465,15 @@ def test_whenever_a_loop_is_certified_the_union_is_that_loop(corners, notch, sma
     # The box test that keeps separate shapes from the compiled test never
     # turns away a light the compiled test certifies.
     from shadowgeo import kernels
-    from shadowgeo.batchlights import _POINT_SLACK, _PRODUCT_SLACK, _one_box_holds_all
+    from shadowgeo.batchlights import _one_box_holds_all
+    from shadowgeo.polygons import POINT_SLACK, PRODUCT_SLACK
 
     points = np.concatenate(loops)
     lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
     light = np.zeros(len(loops), dtype=np.int64)
     held = kernels.whole_loops(
         *(np.ascontiguousarray(points[:, k]) for k in (0, 1)),
-        lengths, light, 1, _POINT_SLACK, _PRODUCT_SLACK, float(np.finfo(float).eps),
+        lengths, light, 1, POINT_SLACK, PRODUCT_SLACK, float(np.finfo(float).eps),
     )  # fmt: skip
     assert held[0] < 0 or _one_box_holds_all(points, lengths, light, 1)[0]
     if not _one_box_holds_all(points, lengths, light, 1)[0]:

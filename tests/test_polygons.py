@@ -307,3 +307,94 @@ def test_flat_parts_give_the_area_and_reach_of_their_nested_loops():
     moved = flat.parts(flat.cut(flat.points + 1.0))
     pairs = [(a, b) for p, q in zip(parts, moved, strict=True) for a, b in zip(p, q, strict=True)]
     assert all(np.array_equal(a + 1.0, b) for a, b in pairs)
+
+
+def _star(n: int, rng: np.random.Generator, spikes: bool = True) -> np.ndarray:
+    """A loop of ``n`` (even) corners star-shaped round the mean of its
+    corners: nearly even angles, radii alternating long and short (spikes)
+    or drawn from [0.6, 1] (a wobbly disc)."""
+    gaps = rng.uniform(0.95, 1.05, n)
+    angles = np.cumsum(gaps) / gaps.sum() * 2 * np.pi
+    if spikes:
+        radius = np.where(np.arange(n) % 2 == 0, 1.0, 0.3) + rng.uniform(-0.01, 0.01, n)
+    else:
+        radius = rng.uniform(0.6, 1.0, n)
+    return np.column_stack([radius * np.cos(angles), radius * np.sin(angles)])
+
+
+def _check_triangulation(loop: np.ndarray, faces: np.ndarray) -> None:
+    """``faces`` tile ``loop``: k - 2 counter-clockwise triangles of its
+    corners whose areas add up to the loop's and whose union is the loop."""
+    assert faces.shape == (len(loop) - 2, 3)
+    corners = loop[faces]
+    edge, other = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    doubled = edge[:, 0] * other[:, 1] - edge[:, 1] * other[:, 0]
+    assert np.all(doubled > 0)
+    polygon = shapely.Polygon(loop)
+    assert np.isclose(0.5 * doubled.sum(), polygon.area, rtol=1e-12)
+    union = shapely.union_all([shapely.Polygon(t) for t in corners])
+    assert union.symmetric_difference(polygon).area < 1e-9 * polygon.area
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("spikes", [True, False])
+def test_a_star_shaped_loop_is_cut_into_ears_of_its_own_corners(seed, spikes):
+    from shadowgeo.polygons import star_triangles
+
+    rng = np.random.default_rng(seed)
+    n = 2 * int(rng.integers(3, 200)) if spikes else 2 * int(rng.integers(3, 30))
+    loop = _star(n, rng, spikes) * 10.0 ** rng.uniform(-6, 6)
+    loop += rng.uniform(-1, 1, 2) * np.abs(loop).max()  # the mean off the origin
+    faces = star_triangles(loop)
+    assert faces is not None
+    _check_triangulation(loop, faces)
+
+
+def test_loops_not_star_shaped_round_their_mean_are_left_to_the_general_way():
+    from shadowgeo.polygons import star_triangles
+
+    # a C whose corners' mean lies in its gap; the same loop clockwise; a
+    # star that winds twice
+    c_shape = np.array([[0, 0], [4, 0], [4, 1], [1, 1], [1, 3], [4, 3], [4, 4], [0, 4]], float)
+    assert star_triangles(c_shape) is None
+    rng = np.random.default_rng(1)
+    assert star_triangles(_star(50, rng)[::-1]) is None
+    angles = np.arange(5) * 4 * np.pi / 5
+    assert star_triangles(np.column_stack([np.cos(angles), np.sin(angles)])) is None
+
+
+def test_a_rectangle_whose_diagonals_meet_at_its_mean_is_still_triangulated():
+    from shadowgeo.polygons import star_triangles
+
+    square = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float)
+    faces = star_triangles(square)
+    assert faces is not None
+    _check_triangulation(square, faces)
+
+
+def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
+    """manifold3d's ear clipping is quadratic in reflex corners (a star of
+    50,000 spikes takes it 7 s): polygon_triangles and triangulate_parts cut
+    such a loop themselves, and still tile it exactly."""
+    import shadowgeo.polygons as polygons
+
+    rng = np.random.default_rng(3)
+    loop = _star(4000, rng)
+
+    def refuse(loops):
+        raise AssertionError("manifold3d triangulated the star")
+
+    monkeypatch.setattr(polygons, "triangulate", refuse)
+    points, faces = polygons.triangulate_parts([[loop * 1e6]])
+    _check_triangulation(points / 1e6, faces)
+    spatial = np.column_stack([loop[:, 0], np.full(len(loop), 2.0), loop[:, 1]])
+    # counter-clockwise in (x, z) is clockwise seen from +y: its normal is -y
+    for corners, sign in ((spatial, -1.0), (spatial[::-1], 1.0)):
+        faces = polygons.polygon_triangles(corners)
+        triangles = corners[faces]
+        normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+        assert len(faces) == len(loop) - 2
+        assert np.all(sign * normals[:, 1] > 0)  # wound as the polygon is
+        assert np.allclose(normals[:, [0, 2]], 0.0)
+        area = 0.5 * np.abs(normals[:, 1]).sum()
+        assert np.isclose(area, shapely.Polygon(loop).area, rtol=1e-12)

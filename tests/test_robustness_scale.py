@@ -200,3 +200,52 @@ def test_g2_a_grazing_sun_casts_the_prism_or_nothing(grazing):
         sweep = volume.metadata["shadowgeo"]["sweep"]
         assert volume.is_watertight
         assert math.isclose(volume.volume, 0.5 * sweep * grazing, rel_tol=1e-3)
+
+
+def test_a_star_of_many_spikes_casts_its_exact_shadow_without_a_quadratic_sweep(
+    tmp_path, monkeypatch
+):
+    """A flat star of 4,000 corners (one non-convex X3D polygon) over a
+    ground quad under a sun. Clipper2's sweep and manifold3d's ear clipping
+    are quadratic in its spikes (50,000 corners: 118 s to convert, now 2 s):
+    its outline is certified simple, inside the receiver, and cut into ears
+    by shadowgeo itself, so neither sees more than a few corners. The
+    shadow's area is the star's, 0.25 n sin(2 pi / n)."""
+    import shadowgeo.polygons as polygons
+
+    n = 4000
+    k = np.arange(n)
+    radius = np.where(k % 2 == 0, 1.0, 0.5)
+    angle = 2 * np.pi * k / n
+    star = np.column_stack([radius * np.cos(angle), np.ones(n), radius * np.sin(angle)])
+    point = " ".join(repr(float(x)) for x in star.ravel())
+    index = " ".join(map(str, k))
+    path = tmp_path / "star.x3d"
+    path.write_text(
+        '<X3D version="4.0"><Scene>'
+        '<DirectionalLight direction="0.3 -1 0.2" shadows="true"/>'
+        '<Shape DEF="ground"><IndexedFaceSet coordIndex="0 1 2 3 -1">'
+        '<Coordinate point="-5 0 -5 -5 0 5 5 0 5 5 0 -5"/></IndexedFaceSet></Shape>'
+        f'<Shape DEF="star"><IndexedFaceSet convex="false" solid="false" coordIndex="{index}">'
+        f'<Coordinate point="{point}"/></IndexedFaceSet></Shape></Scene></X3D>'
+    )
+
+    def few(function):
+        def checked(loops, *args):
+            assert sum(len(loop) for loop in loops) < 100, "a sweep over the star"
+            return function(loops, *args)
+
+        return checked
+
+    monkeypatch.setattr(polygons, "fill", few(polygons.fill))
+    monkeypatch.setattr(polygons, "triangulate", few(polygons.triangulate))
+    scene = sg.load(path)
+    (star_shape,) = [shape for shape in scene.shapes if shape.name == "star"]
+    assert len(star_shape.faces) == n - 2
+    result = sg.add_shadows(scene, surfaces=False)
+    (shadow,) = result.shapes_with_role("shadow")
+    corners = shadow.world_vertices[shadow.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(normals[:, 1] > 0)  # facing up, no triangle turned over
+    area = 0.5 * float(normals[:, 1].sum())
+    assert area == pytest.approx(0.25 * n * np.sin(2 * np.pi / n), rel=1e-12)

@@ -530,7 +530,8 @@ def _shadow_on(
     if region2d is not None:
         extent = max(extent, float(np.abs(region2d.reshape(-1, 2) - center).max()))
     scale = poly.local_scale(max(extent, tolerance.length))
-    region = poly.fill([(loop - center) * scale for loop in loops])
+    local = [(loop - center) * scale for loop in loops]
+    receiving = None
     if region2d is not None:
         triangles = (region2d - center) * scale
         areas = poly.signed_areas(list(triangles))
@@ -538,8 +539,16 @@ def _shadow_on(
         oriented = [
             t if a > 0 else t[::-1] for t, a in zip(triangles[keep], areas[keep], strict=True)
         ]
-        region = poly.intersect(region, poly.fill(oriented))
-    parts = poly.components(region)
+        receiving = poly.fill(oriented)
+    if poly.whole_loop(local) and (
+        receiving is None or poly.holds_box(receiving, local[0].min(axis=0), local[0].max(axis=0))
+    ):  # one simple loop on the receiver: no union and no cut (a sweep over the loop each)
+        parts = [local]
+    else:
+        region = poly.fill(local)
+        if receiving is not None:
+            region = poly.intersect(region, receiving)
+        parts = poly.components(region)
     if not parts:
         return None
     flat_points, faces = poly.triangulate_parts(parts)
