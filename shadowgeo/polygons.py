@@ -147,11 +147,22 @@ def star_triangles(loop: np.ndarray) -> np.ndarray | None:
 
 def whole_loop(loops: list[np.ndarray]) -> bool:
     """Whether ``loops`` are one loop whose inside is certainly their region
-    of positive winding (:func:`star_shaped_flat`): no union needed."""
+    of positive winding, so that no union is needed: a counter-clockwise loop
+    star-shaped round the mean of its corners (:func:`star_shaped_flat`), or
+    one of :data:`_SPIKED_REFLEX` reflex corners or more that the sweep of
+    :func:`shadowgeo.sweep.simple_triangles` certifies simple (Clipper2's
+    own sweep is quadratic in such loops; the test costs a union of a
+    thousand corners or fewer more than it saves, so they are not tried)."""
     if len(loops) != 1 or len(loops[0]) < 3:
         return False
     loop = np.asarray(loops[0], dtype=np.float64)
-    return bool(star_shaped_flat(loop, np.zeros(1, dtype=np.int64), np.array([len(loop)]))[0])
+    if star_shaped_flat(loop, np.zeros(1, dtype=np.int64), np.array([len(loop)]))[0]:
+        return True
+    if not _many_reflex(loop):
+        return False
+    from .sweep import simple_triangles
+
+    return simple_triangles(loop, triangles=False)[0]
 
 
 def holds_box(region: CrossSection, low: np.ndarray, high: np.ndarray) -> bool:
@@ -841,23 +852,36 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     return np.concatenate(vertices), np.concatenate(faces)
 
 
-def _spiked_triangles(loops: list[np.ndarray]) -> np.ndarray | None:
-    """:func:`star_triangles` of a polygon that is one loop of at least
-    :data:`_SPIKED_REFLEX` certain reflex corners, else None. manifold3d's
-    ear clipping is quadratic in such corners (a star of 50,000 spikes:
-    7 s; a circle of as many corners: 0.04 s)."""
-    if len(loops) != 1 or len(loops[0]) < 2 * _SPIKED_REFLEX:
-        return None
-    loop = np.asarray(loops[0], dtype=np.float64)
+def _many_reflex(loop: np.ndarray) -> bool:
+    """Whether the (k, 2) loop has :data:`_SPIKED_REFLEX` certain reflex
+    corners or more (turned clockwise, for a loop run counter-clockwise)."""
+    if len(loop) < 2 * _SPIKED_REFLEX:
+        return False
     scale = float(np.abs(loop - loop.mean(axis=0)).max())
     if not (np.isfinite(scale) and scale > 0):
-        return None
-    local = loop * (MAX_COORDINATE / scale)  # only to count reflex corners
+        return False
+    local = (loop - loop.mean(axis=0)) * (MAX_COORDINATE / scale)  # only to count them
     after = np.roll(local, -1, axis=0)
     sign, _ = turns(local, after, np.roll(after, -1, axis=0))
-    if np.count_nonzero(sign == -1) < _SPIKED_REFLEX:
+    return int(np.count_nonzero(sign == -1)) >= _SPIKED_REFLEX
+
+
+def _spiked_triangles(loops: list[np.ndarray]) -> np.ndarray | None:
+    """Triangles of a polygon that is one loop of at least
+    :data:`_SPIKED_REFLEX` certain reflex corners, by :func:`star_triangles`
+    or else the sweep of :func:`shadowgeo.sweep.simple_triangles`; None for
+    another polygon or one neither certifies. manifold3d's ear clipping is
+    quadratic in such corners (a star of 50,000 spikes: 7 s; a comb of
+    12,000 teeth: 17 s; a circle of 50,000 corners: 0.04 s)."""
+    if len(loops) != 1 or not _many_reflex(np.asarray(loops[0], dtype=np.float64)):
         return None
-    return star_triangles(loop)
+    loop = np.asarray(loops[0], dtype=np.float64)
+    triangles = star_triangles(loop)
+    if triangles is not None:
+        return triangles
+    from .sweep import simple_triangles
+
+    return simple_triangles(loop)[1]
 
 
 def _tiles(part: list[np.ndarray]) -> list[list[np.ndarray]]:

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+import shapely
 
 import shadowgeo as sg
 from cli.main import main
@@ -202,37 +203,55 @@ def test_g2_a_grazing_sun_casts_the_prism_or_nothing(grazing):
         assert math.isclose(volume.volume, 0.5 * sweep * grazing, rel_tol=1e-3)
 
 
-def test_a_star_of_many_spikes_casts_its_exact_shadow_without_a_quadratic_sweep(
-    tmp_path, monkeypatch
-):
-    """A flat star of 4,000 corners (one non-convex X3D polygon) over a
-    ground quad under a sun. Clipper2's sweep and manifold3d's ear clipping
-    are quadratic in its spikes (50,000 corners: 118 s to convert, now 2 s):
-    its outline is certified simple, inside the receiver, and cut into ears
-    by shadowgeo itself, so neither sees more than a few corners. The
-    shadow's area is the star's, 0.25 n sin(2 pi / n)."""
-    import shadowgeo.polygons as polygons
-
-    n = 4000
+def _star(n: int = 4000) -> np.ndarray:
+    """A flat star of ``n`` corners, radii 1 and 0.5 by turns."""
     k = np.arange(n)
     radius = np.where(k % 2 == 0, 1.0, 0.5)
     angle = 2 * np.pi * k / n
-    star = np.column_stack([radius * np.cos(angle), np.ones(n), radius * np.sin(angle)])
-    point = " ".join(repr(float(x)) for x in star.ravel())
-    index = " ".join(map(str, k))
-    path = tmp_path / "star.x3d"
+    return np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
+
+
+def _comb(teeth: int = 1000) -> np.ndarray:
+    """A comb: a spine along x and ``teeth`` teeth, their feet in line."""
+    xs = np.linspace(-3.9, 3.9, 2 * teeth)
+    corners = []
+    for x0, x1 in zip(xs[0::2], xs[1::2], strict=True):
+        corners += [(x0, 0.5), (x0, 3.0), (x1, 3.0), (x1, 0.5)]
+    return np.array([(4.0, 0.0), (4.0, 0.5), *corners[::-1], (-4.0, 0.5), (-4.0, 0.0)]) - [0, 1.5]
+
+
+@pytest.mark.parametrize("outline", [_star, _comb])
+def test_a_polygon_of_many_reflex_corners_casts_its_exact_shadow_without_a_quadratic_sweep(
+    tmp_path, monkeypatch, outline
+):
+    """A flat star of 4,000 corners and a comb of 1,000 teeth (each one
+    non-convex X3D polygon) over a ground quad under a sun. Clipper2's
+    sweep and manifold3d's ear clipping are quadratic in their reflex
+    corners (50,000 spikes: 118 s to convert, now 1.7 s; 12,000 teeth: 85 s,
+    now 6 s): the outline is certified simple (star-shaped, or by the
+    sweep of shadowgeo.sweep), inside the receiver, and cut into triangles
+    by shadowgeo itself, so neither sees more than a few corners. The
+    shadow's area is the polygon's."""
+    import shadowgeo.polygons as polygons
+
+    flat = outline()
+    n = len(flat)
+    corners = np.column_stack([flat[:, 0], np.ones(n), flat[:, 1]])
+    point = " ".join(repr(float(x)) for x in corners.ravel())
+    index = " ".join(map(str, range(n)))
+    path = tmp_path / "flat.x3d"
     path.write_text(
         '<X3D version="4.0"><Scene>'
         '<DirectionalLight direction="0.3 -1 0.2" shadows="true"/>'
         '<Shape DEF="ground"><IndexedFaceSet coordIndex="0 1 2 3 -1">'
         '<Coordinate point="-5 0 -5 -5 0 5 5 0 5 5 0 -5"/></IndexedFaceSet></Shape>'
-        f'<Shape DEF="star"><IndexedFaceSet convex="false" solid="false" coordIndex="{index}">'
+        f'<Shape DEF="flat"><IndexedFaceSet convex="false" solid="false" coordIndex="{index}">'
         f'<Coordinate point="{point}"/></IndexedFaceSet></Shape></Scene></X3D>'
     )
 
     def few(function):
         def checked(loops, *args):
-            assert sum(len(loop) for loop in loops) < 100, "a sweep over the star"
+            assert sum(len(loop) for loop in loops) < 100, "a sweep over the whole outline"
             return function(loops, *args)
 
         return checked
@@ -240,12 +259,12 @@ def test_a_star_of_many_spikes_casts_its_exact_shadow_without_a_quadratic_sweep(
     monkeypatch.setattr(polygons, "fill", few(polygons.fill))
     monkeypatch.setattr(polygons, "triangulate", few(polygons.triangulate))
     scene = sg.load(path)
-    (star_shape,) = [shape for shape in scene.shapes if shape.name == "star"]
-    assert len(star_shape.faces) == n - 2
+    (shape,) = [shape for shape in scene.shapes if shape.name == "flat"]
+    assert len(shape.faces) == n - 2
     result = sg.add_shadows(scene, surfaces=False)
     (shadow,) = result.shapes_with_role("shadow")
-    corners = shadow.world_vertices[shadow.faces]
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    triangles = shadow.world_vertices[shadow.faces]
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     assert np.all(normals[:, 1] > 0)  # facing up, no triangle turned over
     area = 0.5 * float(normals[:, 1].sum())
-    assert area == pytest.approx(0.25 * n * np.sin(2 * np.pi / n), rel=1e-12)
+    assert area == pytest.approx(abs(shapely.Polygon(flat).area), rel=1e-12)
