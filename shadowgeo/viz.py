@@ -69,12 +69,14 @@ class _Item:
         role: str,
         color: Sequence[float] = (0.8, 0.8, 0.8),
         opacity: float = 1.0,
+        unlit: bool = False,
     ) -> None:
         self.vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
         self.faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
         self.role = role
         self.color = tuple(float(c) for c in color)
         self.opacity = float(opacity)
+        self.unlit = unlit
 
 
 def _is_trimesh(thing: object) -> TypeGuard[trimesh.Trimesh]:
@@ -97,9 +99,15 @@ def _collect(
     elif isinstance(things, Shape):
         shape_role = things.role if role == "geometry" else role
         material = things.material
-        color = SHADOW_COLOR if shape_role == "shadow" else material.diffuse_color
+        # X3D's colour is the emissive plus the lit diffuse; with no diffuse
+        # (a Shape without Appearance: unlit white) it is drawn unlit
+        unlit = not any(material.diffuse_color) and any(material.emissive_color)
+        lit = np.clip(np.add(material.diffuse_color, material.emissive_color), 0.0, 1.0)
+        color = SHADOW_COLOR if shape_role == "shadow" else tuple(lit.tolist())
         opacity = VOLUME_OPACITY if shape_role == "volume" else 1.0 - material.transparency
-        items.append(_Item(things.world_vertices, things.faces, shape_role, color, opacity))
+        items.append(
+            _Item(things.world_vertices, things.faces, shape_role, color, opacity, unlit=unlit)
+        )
     elif isinstance(things, Shadow):
         items.append(_Item(things.mesh.vertices, things.mesh.faces, "shadow", SHADOW_COLOR))
         lights.append(things.light)
@@ -394,7 +402,7 @@ def _add_meshes(plotter: pv.Plotter, items: list[_Item], pbr: bool) -> None:
         if not len(item.faces):
             continue
         mesh = _polydata(item)
-        if item.role == "shadow":
+        if item.role == "shadow" or item.unlit:
             plotter.add_mesh(mesh, color=item.color, opacity=item.opacity, lighting=False)
         elif item.role == "volume":
             plotter.add_mesh(mesh, color=item.color, opacity=item.opacity, smooth_shading=False)

@@ -494,3 +494,27 @@ def test_render_viewpoint_option_and_view_override(tmp_path, capsys):
     assert main(["render", str(path), str(out), "--viewpoint", "nope"]) == 1
     error = capsys.readouterr().err.strip().splitlines()
     assert error[-1].endswith("no Viewpoint named or described 'nope' (viewpoints: side, front)")
+
+
+def test_a_shape_without_appearance_is_drawn_unlit_white(tmp_path):
+    """X3D draws a Shape with no Appearance unlit, in white (the reader's
+    Material: no diffuse, emissive 1 1 1): here with the light under the
+    ground, which lights a grey ground's top not at all."""
+    path = tmp_path / "bare.x3d"
+    path.write_text(
+        '<X3D version="4.0"><Scene><PointLight location="0 -5 0"/>'
+        '<Shape DEF="bare"><IndexedFaceSet coordIndex="0 1 2 3 -1">'
+        '<Coordinate point="-3 0 -3 -3 0 3 3 0 3 3 0 -3"/></IndexedFaceSet></Shape>'
+        '<Shape DEF="grey"><Appearance><Material diffuseColor="0.8 0.8 0.8"/></Appearance>'
+        '<IndexedFaceSet coordIndex="0 1 2 3 -1">'
+        '<Coordinate point="4 0 -3 4 0 3 10 0 3 10 0 -3"/></IndexedFaceSet></Shape>'
+        "</Scene></X3D>"
+    )
+    scene = sg.load(path)
+    plotter, image = render(scene, view="top")
+    try:
+        bare, grey = to_pixels(plotter, [[0.0, 0.0, 0.0], [7.0, 0.0, 0.0]])
+        assert brightness(image, bare) > 250
+        assert brightness(image, grey) < 100
+    finally:
+        plotter.close()
