@@ -48,6 +48,16 @@ def turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndar
     return sign, cross
 
 
+def turn_sign(ax: float, ay: float, bx: float, by: float) -> int:
+    """:func:`turns` of one pair, from its two differences ``a = one -
+    origin`` and ``b = two - origin``: +1, -1, or 0 when rounding could
+    decide it."""
+    size_a, size_b = abs(ax) + abs(ay), abs(bx) + abs(by)
+    margin = 2 * POINT_SLACK * (size_a + size_b) + PRODUCT_SLACK * size_a * size_b
+    cross = ax * by - ay * bx
+    return 1 if cross > margin else -1 if cross < -margin else 0
+
+
 def star_shaped_flat(points: np.ndarray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
     """(l,) bool: whether each loop (``lengths[i]`` rows of ``points`` from
     ``starts[i]``, one loop after another, within +-MAX_COORDINATE) is
@@ -118,12 +128,8 @@ def star_triangles(loop: np.ndarray) -> np.ndarray | None:
     xs, ys = local[:, 0].tolist(), local[:, 1].tolist()
 
     def left(i: int, j: int, px: float, py: float) -> bool:
-        """``i -> j -> p`` certainly turns left (:func:`turns`, one row)."""
-        ax, ay = xs[j] - xs[i], ys[j] - ys[i]
-        bx, by = px - xs[i], py - ys[i]
-        size_a, size_b = abs(ax) + abs(ay), abs(bx) + abs(by)
-        margin = 2 * POINT_SLACK * (size_a + size_b) + PRODUCT_SLACK * size_a * size_b
-        return bool(ax * by - ay * bx > margin)
+        """``i -> j -> p`` certainly turns left."""
+        return turn_sign(xs[j] - xs[i], ys[j] - ys[i], px - xs[i], py - ys[i]) == 1
 
     triangles: list[tuple[int, int, int]] = []
     stack: list[int] = []
@@ -151,8 +157,8 @@ def whole_loop(loops: list[np.ndarray]) -> bool:
     star-shaped round the mean of its corners (:func:`star_shaped_flat`), or
     one of :data:`_SPIKED_REFLEX` reflex corners or more that the sweep of
     :func:`shadowgeo.sweep.simple_triangles` certifies simple (Clipper2's
-    own sweep is quadratic in such loops; the test costs a union of a
-    thousand corners or fewer more than it saves, so they are not tried)."""
+    own sweep is quadratic in such loops; loops of fewer reflex corners are
+    left to it)."""
     if len(loops) != 1 or len(loops[0]) < 3:
         return False
     loop = np.asarray(loops[0], dtype=np.float64)
@@ -575,8 +581,9 @@ def region_loops(region: CrossSection) -> list[np.ndarray]:
     return [loop for loop in loops if len(loop) >= 3]
 
 
-# A polygon of one star-shaped loop with this many reflex corners or more is
-# triangulated by star_triangles, not by manifold3d (_spiked_triangles).
+# A polygon of one loop with this many reflex corners or more is triangulated
+# by star_triangles or the sweep of shadowgeo.sweep, not by manifold3d's ear
+# clipping (_spiked_triangles), and whole_loop sweeps it.
 _SPIKED_REFLEX = 64
 # Candidate edges one batch of nest's point-in-loop tests visits at most.
 _NEST_EDGES = 4_000_000

@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from .polygons import MAX_COORDINATE, POINT_SLACK, PRODUCT_SLACK
+from .polygons import MAX_COORDINATE, turn_sign, turns
 
 # Corner kinds along the sweep (top to bottom).
 _START, _SPLIT, _END, _MERGE, _LEFT, _RIGHT = range(6)
@@ -115,16 +115,10 @@ class _Sweep:
         """+1 when ``i -> j -> (x, y)`` certainly turns left, -1 right;
         raises :class:`_Uncertain` when rounding could decide it."""
         xs, ys = self.xs, self.ys
-        ax, ay = xs[j] - xs[i], ys[j] - ys[i]
-        bx, by = x - xs[i], y - ys[i]
-        size_a, size_b = abs(ax) + abs(ay), abs(bx) + abs(by)
-        margin = 2 * POINT_SLACK * (size_a + size_b) + PRODUCT_SLACK * size_a * size_b
-        cross = ax * by - ay * bx
-        if cross > margin:
-            return 1
-        if cross < -margin:
-            return -1
-        raise _Uncertain
+        sign = turn_sign(xs[j] - xs[i], ys[j] - ys[i], x - xs[i], y - ys[i])
+        if sign == 0:
+            raise _Uncertain
+        return sign
 
     def turn(self, i: int, j: int, k: int) -> int:
         return self.orient(i, j, self.xs[k], self.ys[k])
@@ -391,16 +385,11 @@ def _tiles(points: np.ndarray, triangles: np.ndarray) -> bool:
     """Every triangle certainly counter-clockwise and their areas adding up
     to the loop's (to rounding)."""
     a, b, c = points[triangles[:, 0]], points[triangles[:, 1]], points[triangles[:, 2]]
-    u, w = b - a, c - a
-    cross = u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]
-    size_u = np.abs(u).sum(axis=1)
-    size_w = np.abs(w).sum(axis=1)
-    margin = 2 * POINT_SLACK * (size_u + size_w) + PRODUCT_SLACK * size_u * size_w
-    if not np.all(cross > margin):
+    sign, cross = turns(a, b, c)
+    if not np.all(sign == 1):
         return False
     doubled = _doubled_area(points)
-    total = float(cross.sum())
-    return abs(total - doubled) <= 1e-9 * abs(doubled)
+    return abs(float(cross.sum()) - doubled) <= 1e-9 * abs(doubled)
 
 
 def _doubled_area(points: np.ndarray) -> float:
