@@ -155,10 +155,10 @@ def whole_loop(loops: list[np.ndarray]) -> bool:
     """Whether ``loops`` are one loop whose inside is certainly their region
     of positive winding, so that no union is needed: a counter-clockwise loop
     star-shaped round the mean of its corners (:func:`star_shaped_flat`), or
-    one of :data:`_SPIKED_REFLEX` reflex corners or more that the sweep of
-    :func:`shadowgeo.sweep.simple_triangles` certifies simple (Clipper2's
-    own sweep is quadratic in such loops; loops of fewer reflex corners are
-    left to it)."""
+    one of :data:`_SPIKED_CORNERS` corners or more, many reflex, that the
+    sweep of :func:`shadowgeo.sweep.simple_triangles` certifies simple
+    (Clipper2's own sweep is quadratic in such loops; smaller ones are left
+    to it)."""
     if len(loops) != 1 or len(loops[0]) < 3:
         return False
     loop = np.asarray(loops[0], dtype=np.float64)
@@ -581,9 +581,12 @@ def region_loops(region: CrossSection) -> list[np.ndarray]:
     return [loop for loop in loops if len(loop) >= 3]
 
 
-# A polygon of one loop with this many reflex corners or more is triangulated
-# by star_triangles or the sweep of shadowgeo.sweep, not by manifold3d's ear
-# clipping (_spiked_triangles), and whole_loop sweeps it.
+# A polygon of one loop of this many corners or more, this many of them
+# reflex, is triangulated by star_triangles or the sweep of shadowgeo.sweep,
+# not by manifold3d's ear clipping (_spiked_triangles), and whole_loop sweeps
+# it. Below, manifold3d and Clipper2 are as fast or faster
+# (benchmarks/bench_polygons.py: equal near 4,000 corners of a comb).
+_SPIKED_CORNERS = 4096
 _SPIKED_REFLEX = 64
 # Candidate edges one batch of nest's point-in-loop tests visits at most.
 _NEST_EDGES = 4_000_000
@@ -860,9 +863,10 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
 
 
 def _many_reflex(loop: np.ndarray) -> bool:
-    """Whether the (k, 2) loop has :data:`_SPIKED_REFLEX` certain reflex
-    corners or more (turned clockwise, for a loop run counter-clockwise)."""
-    if len(loop) < 2 * _SPIKED_REFLEX:
+    """Whether the (k, 2) loop has :data:`_SPIKED_CORNERS` corners or more
+    and :data:`_SPIKED_REFLEX` certain reflex ones (turned clockwise, for a
+    loop run counter-clockwise)."""
+    if len(loop) < _SPIKED_CORNERS:
         return False
     scale = float(np.abs(loop - loop.mean(axis=0)).max())
     if not (np.isfinite(scale) and scale > 0):
@@ -874,8 +878,8 @@ def _many_reflex(loop: np.ndarray) -> bool:
 
 
 def _spiked_triangles(loops: list[np.ndarray]) -> np.ndarray | None:
-    """Triangles of a polygon that is one loop of at least
-    :data:`_SPIKED_REFLEX` certain reflex corners, by :func:`star_triangles`
+    """Triangles of a polygon that is one loop of :data:`_SPIKED_CORNERS`
+    corners or more, many reflex (:func:`_many_reflex`), by :func:`star_triangles`
     or else the sweep of :func:`shadowgeo.sweep.simple_triangles`; None for
     another polygon or one neither certifies. manifold3d's ear clipping is
     quadratic in such corners (a star of 50,000 spikes: 7 s; a comb of

@@ -379,7 +379,7 @@ def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
     import shadowgeo.polygons as polygons
 
     rng = np.random.default_rng(3)
-    loop = _star(4000, rng)
+    loop = _star(8000, rng)
 
     def refuse(loops):
         raise AssertionError("manifold3d triangulated the star")

@@ -203,7 +203,7 @@ def test_g2_a_grazing_sun_casts_the_prism_or_nothing(grazing):
         assert math.isclose(volume.volume, 0.5 * sweep * grazing, rel_tol=1e-3)
 
 
-def _star(n: int = 4000) -> np.ndarray:
+def _star(n: int = 8000) -> np.ndarray:
     """A flat star of ``n`` corners, radii 1 and 0.5 by turns."""
     k = np.arange(n)
     radius = np.where(k % 2 == 0, 1.0, 0.5)
@@ -211,7 +211,7 @@ def _star(n: int = 4000) -> np.ndarray:
     return np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
 
 
-def _comb(teeth: int = 1000) -> np.ndarray:
+def _comb(teeth: int = 2000) -> np.ndarray:
     """A comb: a spine along x and ``teeth`` teeth, their feet in line."""
     xs = np.linspace(-3.9, 3.9, 2 * teeth)
     corners = []
@@ -224,7 +224,7 @@ def _comb(teeth: int = 1000) -> np.ndarray:
 def test_a_polygon_of_many_reflex_corners_casts_its_exact_shadow_without_a_quadratic_sweep(
     tmp_path, monkeypatch, outline
 ):
-    """A flat star of 4,000 corners and a comb of 1,000 teeth (each one
+    """A flat star of 8,000 corners and a comb of 2,000 teeth (each one
     non-convex X3D polygon) over a ground quad under a sun. Clipper2's
     sweep and manifold3d's ear clipping are quadratic in their reflex
     corners (50,000 spikes: 118 s to convert, now 1.7 s; 12,000 teeth: 85 s,
