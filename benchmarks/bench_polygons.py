@@ -49,7 +49,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from shadowgeo import polygons  # noqa: E402
 from shadowgeo.sweep import simple_triangles  # noqa: E402
 
-REPORT = Path(__file__).resolve().parent / "REPORT.md"
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from common import write_section  # noqa: E402
+
 TITLE = "## One polygon of many reflex corners"
 
 
@@ -200,17 +202,6 @@ add up).
 """
 
 
-def write_section(text: str) -> None:
-    report = REPORT.read_text()
-    start = report.find(TITLE)
-    if start < 0:
-        report = report.rstrip("\n") + "\n\n" + text
-    else:
-        end = report.find("\n## ", start + len(TITLE))
-        report = report[:start] + text + ("" if end < 0 else report[end:])
-    REPORT.write_text(report)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small polygons; print only")
@@ -223,7 +214,7 @@ def main() -> None:
     text = section(rows, command, args.cap)
     print(text)
     if not args.quick:
-        write_section(text)
+        write_section(TITLE, text)
 
 
 if __name__ == "__main__":

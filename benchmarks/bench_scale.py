@@ -54,10 +54,10 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from common import write_section
 from lxml import etree
 
 ROOT = Path(__file__).resolve().parents[1]
-REPORT = Path(__file__).resolve().parent / "REPORT.md"
 TITLE = "## Scenes at scale: big files in and out"
 PLANE = (0.0, 1.0, 0.0, 0.0)
 # CPU time of the process (every thread): on a shared machine it wanders far
@@ -366,19 +366,6 @@ def section(rows: list[dict], command: str) -> str:
     )
 
 
-def write_section(text: str) -> None:
-    """Put ``text`` in REPORT.md in place of the section with the same title
-    (up to the next ``## `` heading), or at the end."""
-    report = REPORT.read_text()
-    start = report.find(TITLE)
-    if start < 0:
-        report = report.rstrip("\n") + "\n\n" + text
-    else:
-        end = report.find("\n## ", start + len(TITLE))
-        report = report[:start] + text + ("" if end < 0 else report[end:])
-    REPORT.write_text(report)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="small scenes; print only")
@@ -394,7 +381,7 @@ def main() -> None:
     text = section(rows, command)
     print(text)
     if not arguments.quick and arguments.scene is None:
-        write_section(text)
+        write_section(TITLE, text)
 
 
 if __name__ == "__main__":

@@ -8,9 +8,25 @@ from __future__ import annotations
 
 import statistics
 import time
+from pathlib import Path
 
 import numpy as np
 import trimesh
+
+REPORT = Path(__file__).resolve().parent / "REPORT.md"
+
+
+def write_section(title: str, text: str) -> None:
+    """Put ``text`` in REPORT.md in place of the section headed ``title``
+    (up to the next ``## `` heading), or at the end."""
+    report = REPORT.read_text()
+    start = report.find(title)
+    if start < 0:
+        report = report.rstrip("\n") + "\n\n" + text
+    else:
+        end = report.find("\n## ", start + len(title))
+        report = report[:start] + text + ("" if end < 0 else report[end:])
+    REPORT.write_text(report)
 
 
 def median_time(function, repeat: int = 3) -> tuple[float, object]:

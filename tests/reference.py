@@ -76,3 +76,19 @@ def segment_hits_mesh(starts, end, triangles, eps=1e-12):
         inside = ok & (bu >= 0) & (bv >= 0) & (bu + bv <= 1) & (t > eps) & (t < 1 - eps)
         hits[i] = bool(np.any(inside))
     return hits
+
+
+def check_tiling(loop, faces) -> None:
+    """Assert that ``faces`` tile the 2-D ``loop``: k - 2 counter-clockwise
+    triangles of its corners whose areas add up to the loop's (shapely's)
+    and whose union (GEOS) is the loop."""
+    loop, faces = np.asarray(loop, dtype=float), np.asarray(faces)
+    assert faces.shape == (len(loop) - 2, 3)
+    corners = loop[faces]
+    edge, other = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    doubled = edge[:, 0] * other[:, 1] - edge[:, 1] * other[:, 0]
+    assert np.all(doubled > 0)
+    polygon = shapely.Polygon(loop)
+    assert abs(0.5 * doubled.sum() - polygon.area) <= 1e-12 * polygon.area
+    union = shapely.union_all(shapely.polygons(corners))
+    assert union.symmetric_difference(polygon).area < 1e-9 * polygon.area

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
+from reference import check_tiling
 
 from shadowgeo.polygons import fan, is_convex, polygons_triangles
 from shadowgeo.topology import empty_mesh
@@ -322,20 +323,6 @@ def _star(n: int, rng: np.random.Generator, spikes: bool = True) -> np.ndarray:
     return np.column_stack([radius * np.cos(angles), radius * np.sin(angles)])
 
 
-def _check_triangulation(loop: np.ndarray, faces: np.ndarray) -> None:
-    """``faces`` tile ``loop``: k - 2 counter-clockwise triangles of its
-    corners whose areas add up to the loop's and whose union is the loop."""
-    assert faces.shape == (len(loop) - 2, 3)
-    corners = loop[faces]
-    edge, other = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    doubled = edge[:, 0] * other[:, 1] - edge[:, 1] * other[:, 0]
-    assert np.all(doubled > 0)
-    polygon = shapely.Polygon(loop)
-    assert np.isclose(0.5 * doubled.sum(), polygon.area, rtol=1e-12)
-    union = shapely.union_all([shapely.Polygon(t) for t in corners])
-    assert union.symmetric_difference(polygon).area < 1e-9 * polygon.area
-
-
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("spikes", [True, False])
 def test_a_star_shaped_loop_is_cut_into_ears_of_its_own_corners(seed, spikes):
@@ -347,7 +334,7 @@ def test_a_star_shaped_loop_is_cut_into_ears_of_its_own_corners(seed, spikes):
     loop += rng.uniform(-1, 1, 2) * np.abs(loop).max()  # the mean off the origin
     faces = star_triangles(loop)
     assert faces is not None
-    _check_triangulation(loop, faces)
+    check_tiling(loop, faces)
 
 
 def test_loops_not_star_shaped_round_their_mean_are_left_to_the_general_way():
@@ -369,7 +356,7 @@ def test_a_rectangle_whose_diagonals_meet_at_its_mean_is_still_triangulated():
     square = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float)
     faces = star_triangles(square)
     assert faces is not None
-    _check_triangulation(square, faces)
+    check_tiling(square, faces)
 
 
 def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
@@ -386,7 +373,7 @@ def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
 
     monkeypatch.setattr(polygons, "triangulate", refuse)
     points, faces = polygons.triangulate_parts([[loop * 1e6]])
-    _check_triangulation(points / 1e6, faces)
+    check_tiling(points / 1e6, faces)
     spatial = np.column_stack([loop[:, 0], np.full(len(loop), 2.0), loop[:, 1]])
     # counter-clockwise in (x, z) is clockwise seen from +y: its normal is -y
     for corners, sign in ((spatial, -1.0), (spatial[::-1], 1.0)):

@@ -8,6 +8,7 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from reference import check_tiling
 
 from shadowgeo.sweep import simple_triangles
 
@@ -16,20 +17,6 @@ def _counter_clockwise(polygon: shapely.Polygon) -> np.ndarray:
     """The polygon's outer ring, counter-clockwise, without the repeated corner."""
     ring = np.asarray(shapely.geometry.polygon.orient(polygon, 1.0).exterior.coords)[:-1]
     return ring
-
-
-def _check_tiles(loop: np.ndarray, faces: np.ndarray) -> None:
-    """k - 2 counter-clockwise triangles of the loop's corners, areas adding
-    up to the loop's, covering it exactly."""
-    assert faces.shape == (len(loop) - 2, 3)
-    corners = loop[faces]
-    edge, other = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
-    doubled = edge[:, 0] * other[:, 1] - edge[:, 1] * other[:, 0]
-    assert np.all(doubled > 0)
-    polygon = shapely.Polygon(loop)
-    assert 0.5 * doubled.sum() == pytest.approx(polygon.area, rel=1e-12)
-    union = shapely.union_all(shapely.polygons(corners))
-    assert union.symmetric_difference(polygon).area < 1e-9 * polygon.area
 
 
 @settings(max_examples=80, deadline=None)
@@ -46,7 +33,7 @@ def test_a_random_simple_polygon_is_certified_and_tiled(seed, count, ratio):
     simple, faces = simple_triangles(loop)
     assert simple
     if faces is not None:  # (three corners in line a triangle needs: not certified)
-        _check_tiles(loop, faces)
+        check_tiling(loop, faces)
 
 
 @settings(max_examples=80, deadline=None)
@@ -62,7 +49,7 @@ def test_a_loop_that_crosses_itself_is_never_called_simple(seed, count):
         assert ring_simple
         assert shapely.LinearRing(loop).is_ccw
         if faces is not None:
-            _check_tiles(loop, faces)
+            check_tiling(loop, faces)
 
 
 @pytest.mark.parametrize("scale", [1e-200, 1e-8, 1.0, 1e12, 1e200])
@@ -84,7 +71,7 @@ def test_combs_and_spirals_at_any_scale(scale):
         simple, faces = simple_triangles(moved)
         assert simple
         assert faces is not None
-        _check_tiles(moved / scale, faces)
+        check_tiling(moved / scale, faces)
 
 
 def test_loops_that_touch_or_run_clockwise_are_not_certified():
@@ -96,7 +83,7 @@ def test_loops_that_touch_or_run_clockwise_are_not_certified():
     assert simple_triangles(square[::-1]) == (False, None)
     simple, faces = simple_triangles(square)
     assert simple and faces is not None
-    _check_tiles(square, faces)
+    check_tiling(square, faces)
 
 
 def test_a_crossing_is_found_by_the_neighbours_test():
