@@ -43,6 +43,47 @@ def jobs_for(
     return jobs, skipped
 
 
+def distinct_targets(
+    jobs: list[tuple[Path, Path]],
+) -> tuple[list[tuple[Path, Path]], list[tuple[Path, Path]]]:
+    """``jobs`` with every target its own, and the jobs renamed to make it so.
+
+    Inputs that differ only in their scene extension (``table.x3dv``,
+    ``table.x3dv.gz`` and ``table.x3dvz`` of one folder, all ``table.glb``
+    under ``--format glb``) keep their whole name before the new extension
+    (``table.x3dv.glb``, ...); an input already in the output's format keeps
+    its plain name. Targets are compared case-folded: on a case-insensitive
+    file system ``Table.glb`` and ``table.glb`` are one file. Raises
+    :class:`shadowgeo.SceneError` naming the inputs when two still share a
+    target (the same name in two input folders)."""
+
+    def clashes(pairs: list[tuple[Path, Path]]) -> dict[str, list[int]]:
+        seen: dict[str, list[int]] = {}
+        for index, (_, target) in enumerate(pairs):
+            seen.setdefault(str(target).casefold(), []).append(index)
+        return {key: indices for key, indices in seen.items() if len(indices) > 1}
+
+    result = list(jobs)
+    renamed = []
+    for indices in clashes(result).values():
+        for index in indices:
+            source, target = result[index]
+            if source.name.casefold() == target.name.casefold():
+                continue  # already in the output's format: the plain name stays
+            chosen = target.name[len(target.name) - len(scene_suffix(target) or "") :]
+            result[index] = (source, target.with_name(source.name + chosen))
+            renamed.append(result[index])
+    left = clashes(result)
+    if left:
+        indices = next(iter(left.values()))
+        sources = ", ".join(str(result[index][0]) for index in indices)
+        raise shadowgeo.SceneError(
+            f"{sources} would be written to the same output file {result[indices[0]][1]}; "
+            "convert them into different folders"
+        )
+    return result, renamed
+
+
 def _renamed(relative: Path, suffix: str | None) -> Path:
     """``relative`` with its scene extension replaced by ``suffix`` (kept when
     None and writable, else ``.glb``)."""
@@ -65,6 +106,13 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
         return 1
     if skipped:
         print(f"note: skipped {skipped} file(s) no reader takes", file=sys.stderr)
+    jobs, renamed = distinct_targets(jobs)
+    for source, target in renamed:
+        print(
+            f"note: {source} is written as {target.name}: another input has the same name "
+            "but for its extension",
+            file=sys.stderr,
+        )
     options = options_of(args)
     scheduler = None if args.serial else (args.scheduler or "local")
     where = (

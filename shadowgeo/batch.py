@@ -157,7 +157,14 @@ def convert_files(
     """
     total = len(jobs)
     if len({target for _, target in jobs}) != total:
-        raise SceneError("two inputs would be written to the same output file")
+        first: dict[Path, Path] = {}
+        for source, target in jobs:
+            if target in first:
+                raise SceneError(
+                    f"{first[target]} and {source} would be written to the same output "
+                    f"file {target}"
+                )
+            first[target] = source
     if scheduler is None:
         outcomes = []
         for done, (source, target) in enumerate(jobs, start=1):

@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 from needs import need
 
-from cli.batch import jobs_for
+import shadowgeo as sg
+from cli.batch import distinct_targets, jobs_for
 from cli.main import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -137,6 +138,44 @@ def test_outputs_are_named_after_their_inputs(tmp_path):
     assert [t.name for _, t in jobs] == ["one.usda", "three.usda", "two.usda"]
 
 
+def test_inputs_differing_only_in_extension_keep_it_in_their_outputs_name(tmp_path):
+    """A folder holding one scene in three encodings (as the corpus's
+    IkeaTable.x3dv, .x3dv.gz and .x3dvz) and a glb twin, under --format glb:
+    each written, the glb under its own name, the others under their whole
+    names; names compared case-folded. The same name in two input folders
+    cannot be told apart by a rename and is refused, both inputs named."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    for name in ("table.x3dv", "table.x3dv.gz", "Table.x3dvz", "table.glb", "chair.x3d"):
+        (folder / name).write_bytes(b"")
+    out = tmp_path / "out"
+    jobs, renamed = distinct_targets(jobs_for([folder], out, ".glb")[0])
+    names = {source.name: target.relative_to(out).as_posix() for source, target in jobs}
+    assert names == {
+        "Table.x3dvz": "Table.x3dvz.glb",
+        "chair.x3d": "chair.glb",  # no twin: the plain name
+        "table.glb": "table.glb",
+        "table.x3dv": "table.x3dv.glb",
+        "table.x3dv.gz": "table.x3dv.gz.glb",
+    }
+    assert sorted(source.name for source, _ in renamed) == [
+        "Table.x3dvz",
+        "table.x3dv",
+        "table.x3dv.gz",
+    ]
+    assert len({str(target).casefold() for _, target in jobs}) == len(jobs)
+    # without twins nothing is renamed
+    assert distinct_targets(jobs_for([folder / "chair.x3d"], out, None)[0])[1] == []
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "chair.x3d").write_bytes(b"")
+    with pytest.raises(sg.SceneError) as error:
+        distinct_targets(jobs_for([folder / "chair.x3d", other / "chair.x3d"], out, None)[0])
+    assert str(folder / "chair.x3d") in str(error.value)
+    assert str(other / "chair.x3d") in str(error.value)
+    assert "same output file" in str(error.value)
+
+
 def test_usage_errors(capsys, tmp_path):
     for args in (
         ["convert", str(BASIC)],  # no OUT
@@ -155,3 +194,4 @@ def test_usage_errors(capsys, tmp_path):
     shutil.copy(BASIC, twin / "basic.x3d")
     done = in_process(capsys, "convert", BASIC, twin / "basic.x3d", tmp_path / "o", "--serial")
     assert done.returncode == 1 and "same output file" in done.stderr
+    assert str(BASIC) in done.stderr and str(twin / "basic.x3d") in done.stderr
