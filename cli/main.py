@@ -16,7 +16,7 @@ import sys
 import shadowgeo
 
 # Command modules, in the order --help lists them.
-COMMANDS = ("convert", "info", "render", "view")
+COMMANDS = ("convert", "sun", "info", "render", "view")
 
 
 def build_parser() -> argparse.ArgumentParser:

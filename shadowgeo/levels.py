@@ -219,6 +219,9 @@ def _parts(region: CrossSection) -> Parts:
     nesting needed."""
     loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
     areas = signed_areas(loops)
+    if np.any(areas == 0):  # a loop folded onto itself: no area, no part
+        loops = [loop for loop, area in zip(loops, areas, strict=True) if area != 0]
+        areas = areas[areas != 0]
     if np.all(areas > 0):
         return [[loop] for loop in loops]
     return nest(loops)

@@ -103,7 +103,10 @@ def _collect(
         # (a Shape without Appearance: unlit white) it is drawn unlit
         unlit = not any(material.diffuse_color) and any(material.emissive_color)
         lit = np.clip(np.add(material.diffuse_color, material.emissive_color), 0.0, 1.0)
-        color = SHADOW_COLOR if shape_role == "shadow" else tuple(lit.tolist())
+        # a baked shadow is drawn in the shadow colour; one that glows (a sun
+        # study's map of sunlight hours, emissive) in its own colour
+        dark = shape_role == "shadow" and not any(material.emissive_color)
+        color = SHADOW_COLOR if dark else tuple(lit.tolist())
         opacity = VOLUME_OPACITY if shape_role == "volume" else 1.0 - material.transparency
         items.append(
             _Item(things.world_vertices, things.faces, shape_role, color, opacity, unlit=unlit)

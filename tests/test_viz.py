@@ -518,3 +518,35 @@ def test_a_shape_without_appearance_is_drawn_unlit_white(tmp_path):
         assert brightness(image, grey) < 100
     finally:
         plotter.close()
+
+
+def test_the_map_is_drawn_in_its_colours_and_shadows_stay_dark():
+    """In a picture the map keeps its colours (emissive shadow-role shapes;
+    black ones, baked shadows, are still drawn dark: the test above): half a
+    day of sun next to a cube shows bluer than a whole day's yellow."""
+    import dataclasses
+    import datetime as dt
+
+    from test_sunlight import LONDON, slab_and_cube
+
+    from shadowgeo.scene.sunlight import study_scene, sunlight_shapes
+    from shadowgeo.sun import hourly
+
+    scene = slab_and_cube()
+    times = hourly(dt.datetime(2026, 6, 21, tzinfo=dt.UTC), dt.datetime(2026, 6, 22, tzinfo=dt.UTC))
+    inputs, studies = study_scene(scene, times, **LONDON)
+    (study,) = studies.days.values()
+    mapped = dataclasses.replace(scene, shapes=[*scene.shapes[1:], *sunlight_shapes(study, 20.0)])
+    plotter, image = render(mapped, view="top")
+    try:
+        # just north of the cube (-z) 8 of 16 sunlit hours; the slab's corner all 16
+        near, far = [[2.0, 0.0, 0.45]], [[-9.0, 0.0, 9.0]]
+        hours = study.sunlit_hours(inputs.plane.to_2d(np.array(near + far)))
+        assert hours.tolist() == [8.0, 16.0]
+        shaded, sunny = to_pixels(plotter, near + far)
+        shaded_rgb = image[shaded].astype(float)[:3]
+        sunny_rgb = image[sunny].astype(float)[:3]
+        assert sunny_rgb[0] > 200 and sunny_rgb[2] < 100  # yellow
+        assert shaded_rgb[0] < sunny_rgb[0] - 40 and shaded_rgb[2] > sunny_rgb[2] + 20  # bluer
+    finally:
+        plotter.close()

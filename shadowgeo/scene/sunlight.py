@@ -1,0 +1,294 @@
+"""Sun studies of a scene: its floor, its casters, its hours of sunlight baked in.
+
+:func:`shadowgeo.sun_study` works on a caster, a plane and a region given by
+hand. Here they come from a scene, as ``shadowgeo convert`` finds its
+receivers: the floor is the largest flat surface found that faces up and lies
+under the scene (a ground slab, a courtyard's paving; :func:`receivers.select`,
+then :func:`receivers.is_floor`), or a named shape, or a given plane, or else
+the ground plane under the scene's lowest point. The region studied is the
+floor's outline (its largest part; holes in it are studied too), or for an
+unbounded plane the scene's plan (its bounding box on the plane). Every other
+face of the scene casts; the floor's own faces, lying in the plane, do not.
+
+:func:`sunlight_shapes` turns a day's study into shapes, one per duration of
+sunlight, coloured from dark purple (no sun) to yellow (sun all day), lifted off
+the floor as baked shadows are: a map of sunlight hours a viewer can open.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import shapely
+from shapely.geometry.polygon import orient
+
+from .. import polygons as poly
+from ..errors import SceneError
+from ..plane import Plane
+from ..sunstudy import SunStudies, SunStudy, sun_study_by_day
+from ..tolerance import Tolerance
+from ..topology import Caster
+from .casters import CasterSet, distinct
+from .model import Material, Scene, Shape
+from .receivers import FLOOR_COSINE, Receiver, ground, is_floor
+from .receivers import select as select_receivers
+
+# Lift of the sunlight map off its floor, relative to the scene's size (as
+# shadows are lifted: shadowgeo.scene.shadows).
+_LIFT = 1e-3
+# The map's colours, from no sun to sun all day: matplotlib's viridis at five
+# stops (dark purple, blue, teal, green, yellow), evenly spaced, between
+# which the colour is interpolated: each step of sunlight reads as a step of
+# colour, as a heat map's reader expects.
+_RAMP = np.array(
+    [
+        [0.267, 0.005, 0.329],
+        [0.229, 0.322, 0.546],
+        [0.128, 0.567, 0.551],
+        [0.369, 0.789, 0.383],
+        [0.993, 0.906, 0.144],
+    ]
+)
+
+
+def ramp_colour(share: float) -> tuple[float, float, float]:
+    """The map's colour for ``share`` (0: no sun, 1: sun all day)."""
+    position = float(np.clip(share, 0.0, 1.0)) * (len(_RAMP) - 1)
+    low = min(int(position), len(_RAMP) - 2)
+    red, green, blue = (
+        float(c) for c in _RAMP[low] + (_RAMP[low + 1] - _RAMP[low]) * (position - low)
+    )
+    return red, green, blue
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneStudy:
+    """What a scene's sun study is made of.
+
+    Attributes
+    ----------
+    caster : Caster
+        Every face of the scene's geometry but those lying in ``plane``.
+    plane : Plane
+        The floor's plane, its normal up.
+    region : (n, 3) float64
+        The polygon studied, on ``plane``.
+    floor : str
+        What the floor is, for messages (``"shape 'ground'"``, ``"the ground
+        plane y = 0"``).
+    up : str
+        The scene's up axis, ``"Y"`` or ``"Z"``.
+    scale : float
+        The scene's size (for the lift of :func:`sunlight_shapes`).
+    notes : list of str
+        What was chosen and why.
+    """
+
+    caster: Caster
+    plane: Plane
+    region: np.ndarray
+    floor: str
+    up: str
+    scale: float
+    notes: list[str]
+
+
+def scene_study(
+    scene: Scene,
+    *,
+    receivers: Sequence[str] | None = None,
+    plane: Plane | None = None,
+) -> SceneStudy:
+    """The caster, floor and region of ``scene``'s sun study (see the module
+    notes). ``receivers``: DEF names, the first of them that is a floor (its
+    largest patch facing up) is studied; ``plane``: study that plane instead,
+    over the scene's plan.
+
+    Raises
+    ------
+    SceneError
+        When the scene has no geometry, a named shape has no patch facing
+        up, or the plane is vertical.
+    """
+    notes: list[str] = []
+    shapes = [s for s in scene.shapes if s.role == "geometry" and s.n_faces and s.casts_shadow]
+    geometry = distinct(shapes)
+    if not geometry:
+        raise SceneError("the scene has no geometry: nothing casts a shadow to study")
+    axis = scene.up_index
+    up_name = "YZ"[axis - 1]
+    stacked = CasterSet(geometry)
+    bounds = stacked.bounds
+    tolerance = Tolerance.for_points(bounds)
+    floor = _floor(scene, geometry, stacked, receivers, plane, tolerance, notes)
+    facing = floor.plane
+    if facing.normal[axis] < 0:
+        facing = facing.flipped()
+    if floor.triangles is not None:
+        region = _outline(facing, floor.triangles, notes, floor.name)
+        what = f"the floor '{floor.name}'"
+        notes.append(f"sun study: over {what}, within its outline")
+    else:
+        region = _plan(facing, bounds)
+        what = "the plane given" if plane is not None else "the ground plane"
+        notes.append(f"sun study: over {what}, within the scene's plan (its bounding box)")
+    faces = stacked.off_plane(facing, tolerance)
+    caster = stacked.mesh(faces)
+    return SceneStudy(caster, facing, region, what, up_name, tolerance.scale, notes)
+
+
+def _floor(
+    scene: Scene,
+    geometry: list[Shape],
+    stacked: CasterSet,
+    receivers: Sequence[str] | None,
+    plane: Plane | None,
+    tolerance: Tolerance,
+    notes: list[str],
+) -> Receiver:
+    """The receiver studied: the plane given, the first named patch or found
+    floor facing up, else the ground plane under the scene."""
+    axis = scene.up_index
+    if plane is not None:
+        if abs(float(plane.normal[axis])) <= tolerance.angle:
+            raise SceneError(
+                f"the plane {plane.normal.tolist()} is vertical: a sun study needs a plane "
+                "the sun shines down on"
+            )
+        return Receiver(plane, "plane")
+    own = dataclasses.replace(scene, shapes=geometry)
+    found = select_receivers(own, geometry, receivers, None, tolerance, [], stacked, False)
+    bounds = stacked.bounds
+    lowest = stacked.vertices[int(np.argmin(stacked.vertices[:, axis]))]
+    floors = []
+    for receiver in found:
+        up = float(receiver.plane.normal[axis])
+        facing_up = (abs(up) if receiver.two_sided else up) >= FLOOR_COSINE
+        if facing_up and (receivers is not None or is_floor(receiver, bounds, lowest, axis)):
+            floors.append(receiver)
+    if floors:
+        # the first named, else the largest found (the scene's order among equals)
+        return floors[0] if receivers is not None else max(floors, key=lambda r: r.area)
+    if receivers is not None:
+        raise SceneError(
+            f"no patch of {', '.join(receivers)} faces up (within 30 degrees): a sun study "
+            "needs a floor (--plane a,b,c,d studies a plane)"
+        )
+    return ground(scene, geometry, notes, bounds)
+
+
+def _outline(plane: Plane, triangles: np.ndarray, notes: list[str], name: str) -> np.ndarray:
+    """The outer loop of the largest part of a patch's ``triangles`` (world
+    corners), on ``plane``, as (n, 3) points."""
+    flat = plane.to_2d(triangles.reshape(-1, 3)).reshape(-1, 3, 2)
+    center = 0.5 * (flat.reshape(-1, 2).min(axis=0) + flat.reshape(-1, 2).max(axis=0))
+    extent = float(np.abs(flat.reshape(-1, 2) - center).max()) or 1.0
+    scale = poly.local_scale(extent)
+    local = (flat - center) * scale
+    areas = poly.signed_areas(list(local))
+    loops = [t if a > 0 else t[::-1] for t, a in zip(local, areas, strict=True) if a != 0]
+    parts = poly.components(poly.fill(loops))
+    if not parts:
+        raise SceneError(f"the floor '{name}' has no area")
+    sizes = [float(poly.signed_areas(part).sum()) for part in parts]
+    largest = parts[int(np.argmax(sizes))]
+    if len(parts) > 1:
+        notes.append(
+            f"sun study: the floor '{name}' is in {len(parts)} parts; the largest is studied"
+        )
+    return plane.to_3d(largest[0] / scale + center)
+
+
+def _plan(plane: Plane, bounds: np.ndarray) -> np.ndarray:
+    """The scene's bounding box seen on ``plane``: the convex hull of its
+    eight corners on it, counter-clockwise, as (n, 3) points."""
+    corners = np.array(
+        [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
+    )
+    flat = plane.to_2d(corners)
+    hull = shapely.MultiPoint(flat).convex_hull
+    if not isinstance(hull, shapely.Polygon) or hull.area == 0:
+        raise SceneError("the scene is flat in the plane studied: its plan has no area")
+    loop = np.asarray(orient(hull, 1.0).exterior.coords)[:-1]
+    return plane.to_3d(loop)
+
+
+def study_scene(
+    scene: Scene,
+    times: Sequence[_dt.datetime],
+    *,
+    latitude: float,
+    longitude: float,
+    step: _dt.timedelta | None = None,
+    receivers: Sequence[str] | None = None,
+    plane: Plane | None = None,
+    tz: _dt.tzinfo | None = None,
+    scheduler: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> tuple[SceneStudy, SunStudies]:
+    """:func:`shadowgeo.sun_study_by_day` of a scene's casters over its floor
+    (:func:`scene_study`): one study a calendar day (in ``tz``) of ``times``,
+    serially or on Dask (``scheduler``, as there)."""
+    inputs = scene_study(scene, receivers=receivers, plane=plane)
+    studies = sun_study_by_day(
+        inputs.caster,
+        inputs.plane,
+        inputs.region,
+        times,
+        latitude=latitude,
+        longitude=longitude,
+        step=step,
+        up=inputs.up,
+        tz=tz,
+        scheduler=scheduler,
+        progress=progress,
+    )
+    return inputs, studies
+
+
+def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> list[Shape]:
+    """A day's study as shapes: one per duration of sunlight with area, named
+    ``{name}_{hours}h``, coloured by :func:`ramp_colour` from dark purple (none)
+    to yellow (every sample),
+    lifted ``1e-3`` of ``scale`` off the plane, emissive (unlit in a viewer),
+    two-sided, casting nothing,
+    role ``"shadow"`` (``shadowgeo convert`` replaces them as baked shadows).
+    The triangles of each shape are the level's exact polygons."""
+    plane = study.plane
+    lift = _LIFT * scale * plane.normal
+    most = max(len(study.times), 1)  # every sample sunlit: the brightest
+    shapes = []
+    for k, parts in sorted(study.levels.items()):
+        if not parts:
+            continue
+        points = np.concatenate([loop for part in parts for loop in part])
+        center = 0.5 * (points.min(axis=0) + points.max(axis=0))
+        extent = float(np.abs(points - center).max()) or 1.0
+        local_scale = poly.local_scale(extent)
+        local = [[(loop - center) * local_scale for loop in part] for part in parts]
+        flat, faces = poly.triangulate_parts(local)
+        if not len(faces):
+            continue
+        vertices = plane.to_3d(flat / local_scale + center) + lift
+        red, green, blue = ramp_colour(k / most)
+        hours = study.hours(k)
+        label = f"{hours:g}".replace(".", "_")
+        shapes.append(
+            Shape(
+                vertices,
+                faces.astype(np.int64),
+                # emissive: the same colour in every viewer, whatever its lights
+                material=Material(diffuse_color=(0.0, 0.0, 0.0), emissive_color=(red, green, blue)),
+                name=f"{name}_{label}h",
+                solid=False,
+                role="shadow",
+                group=name,
+                source=f"sun study: {hours:g} h of sunlight",
+                casts_shadow=False,
+            )
+        )
+    return shapes
