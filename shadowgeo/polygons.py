@@ -8,6 +8,8 @@ then costs about 1e-16 of the region's size.
 
 from __future__ import annotations
 
+import collections
+import hashlib
 import itertools
 import math
 from collections.abc import Callable
@@ -151,14 +153,18 @@ def star_triangles(loop: np.ndarray) -> np.ndarray | None:
     return result if len(result) == n - 2 else None
 
 
-def whole_loop(loops: list[np.ndarray]) -> bool:
+def whole_loop(loops: list[np.ndarray], keep_triangles: bool = False) -> bool:
     """Whether ``loops`` are one loop whose inside is certainly their region
     of positive winding, so that no union is needed: a counter-clockwise loop
     star-shaped round the mean of its corners (:func:`star_shaped_flat`), or
     one of :data:`_SPIKED_CORNERS` corners or more, many reflex, that the
     sweep of :func:`shadowgeo.sweep.simple_triangles` certifies simple
     (Clipper2's own sweep is quadratic in such loops; smaller ones are left
-    to it)."""
+    to it).
+
+    ``keep_triangles``: the caller triangulates the loop next
+    (:func:`triangulate_parts`); the sweep then cuts it into triangles as it
+    certifies it and keeps them for that call, one sweep for both."""
     if len(loops) != 1 or len(loops[0]) < 3:
         return False
     loop = np.asarray(loops[0], dtype=np.float64)
@@ -168,7 +174,26 @@ def whole_loop(loops: list[np.ndarray]) -> bool:
         return False
     from .sweep import simple_triangles
 
-    return simple_triangles(loop, triangles=False)[0]
+    simple, triangles = simple_triangles(loop, triangles=keep_triangles)
+    if simple and triangles is not None:
+        _SWEPT[_loop_key(loop)] = triangles
+        while len(_SWEPT) > _SWEPT_KEPT:
+            _SWEPT.popitem(last=False)  # the oldest
+    return simple
+
+
+# Triangles of the loops whole_loop certified last by the sweep (keep_triangles),
+# by their content (:func:`_loop_key`), for _spiked_triangles to take.
+_SWEPT: collections.OrderedDict[bytes, np.ndarray] = collections.OrderedDict()
+_SWEPT_KEPT = 2
+
+
+def _loop_key(loop: np.ndarray) -> bytes:
+    """A digest of a (k, 2) float64 loop's corners, bit for bit."""
+    data = np.ascontiguousarray(loop, dtype=np.float64)
+    return (
+        len(data).to_bytes(8, "little") + hashlib.blake2b(data.tobytes(), digest_size=16).digest()
+    )
 
 
 def holds_box(region: CrossSection, low: np.ndarray, high: np.ndarray) -> bool:
@@ -890,6 +915,9 @@ def _spiked_triangles(loops: list[np.ndarray]) -> np.ndarray | None:
     triangles = star_triangles(loop)
     if triangles is not None:
         return triangles
+    kept = _SWEPT.pop(_loop_key(loop), None) if _SWEPT else None
+    if kept is not None:  # cut by the sweep that certified it (whole_loop)
+        return kept
     from .sweep import simple_triangles
 
     return simple_triangles(loop)[1]

@@ -97,3 +97,38 @@ def test_a_crossing_is_found_by_the_neighbours_test():
     sweep.run()
     assert sweep.crossed
     assert simple_triangles(bow_tie) == (False, None)
+
+
+def test_a_certified_outline_is_cut_by_the_sweep_that_certified_it(monkeypatch):
+    """A shadow's outline is certified (whole_loop) and then triangulated: with
+    keep_triangles the certifying sweep's triangles serve the triangulation,
+    so a comb of 4,096 teeth is swept once, not twice; a loop that differs in
+    one bit is swept again (the kept triangles are found by content)."""
+    import shadowgeo.polygons as polygons
+    import shadowgeo.sweep as sweep
+
+    xs = np.linspace(-3.9, 3.9, 2 * 4096)
+    teeth = []
+    for x0, x1 in zip(xs[0::2], xs[1::2], strict=True):
+        teeth += [(x0, 0.5), (x0, 3.0), (x1, 3.0), (x1, 0.5)]
+    comb = np.array([(4.0, 0.0), (4.0, 0.5), *teeth[::-1], (-4.0, 0.5), (-4.0, 0.0)])
+    assert shapely.Polygon(comb).is_valid and shapely.Polygon(comb).exterior.is_ccw
+    calls = []
+    original = sweep.simple_triangles
+
+    def counted(loop, triangles=True):
+        calls.append(triangles)
+        return original(loop, triangles)
+
+    monkeypatch.setattr(sweep, "simple_triangles", counted)
+    assert polygons.whole_loop([comb], keep_triangles=True)
+    _, faces = polygons.triangulate_parts([[comb]])
+    assert calls == [True]  # one sweep for the certificate and the triangles
+    assert np.array_equal(faces, original(comb)[1])
+    check_tiling(comb, faces)
+    nudged = comb.copy()
+    nudged[5, 1] = np.nextafter(nudged[5, 1], 2.0)
+    polygons.triangulate_parts([[nudged]])
+    assert calls == [True, True]  # not the kept triangles of another loop
+    assert polygons.whole_loop([comb])  # without keep_triangles: a certificate only
+    assert calls == [True, True, False]

@@ -540,7 +540,7 @@ def _shadow_on(
             t if a > 0 else t[::-1] for t, a in zip(triangles[keep], areas[keep], strict=True)
         ]
         receiving = poly.fill(oriented)
-    if poly.whole_loop(local) and (
+    if poly.whole_loop(local, keep_triangles=True) and (
         receiving is None or poly.holds_box(receiving, local[0].min(axis=0), local[0].max(axis=0))
     ):  # one simple loop on the receiver: no union and no cut (a sweep over the loop each)
         parts = [local]
