@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import datetime as dt
+import math
 import os
 import sys
 from pathlib import Path
@@ -24,13 +25,15 @@ EPILOG = """\
 examples:
   shadowgeo sun courtyard.x3d --at 51.5,-0.12                  (21 March: BRE's 2-hour test)
   shadowgeo sun courtyard.x3d map.x3d --at 51.5,-0.12 --date 2026-06-21
+  shadowgeo sun courtyard.x3d --at 51.5,-0.12 --region=-3,-3,3,-3,3,3,-3,3
   shadowgeo sun city.glb --at 40.7,-74.0 --date 2026-01-01 --days 365 --hours 4
   shadowgeo sun city.glb --at 40.7,-74.0 --days 30 --scheduler tcp://10.0.0.5:8786
 
 The floor is the largest flat surface found that faces up under the scene
 (--receiver DEF names one, --plane a,b,c,d gives a plane), else the ground
 plane under the scene's lowest point; the region studied is the floor's
-outline, or the scene's plan for a plane. Every other face casts. The sun is
+outline, or the scene's plan for a plane, or the --region given (corners
+in plan, dropped onto the floor's plane). Every other face casts. The sun is
 sampled every --every minutes (60), each sample standing for the minutes
 around it, over whole days of local mean time (the longitude's hour zone).
 It prints, for one day, the area sunlit for each duration and the share of
@@ -110,6 +113,13 @@ def register(subparsers) -> None:
         help="study the plane a x + b y + c z + d = 0 over the scene's plan",
     )
     parser.add_argument(
+        "--region",
+        type=region_argument,
+        metavar="X,Z,X,Z,...",
+        help="study only this polygon, corners in plan (x,z for a Y-up scene, x,y for Z "
+        "up); write --region=-5,0,... when the first number is negative",
+    )
+    parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
     where = parser.add_mutually_exclusive_group()
@@ -139,6 +149,18 @@ def place_argument(text: str) -> tuple[float, float]:
             f"expected LAT,LON in degrees (-90..90, -180..180), got {text!r}"
         )
     return latitude, longitude
+
+
+def region_argument(text: str) -> list[tuple[float, float]]:
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) < 6 or len(values) % 2 or not all(map(math.isfinite, values)):
+        raise argparse.ArgumentTypeError(
+            f"expected three or more plan corners X,Z,X,Z,X,Z,..., got {text!r}"
+        )
+    return list(zip(values[0::2], values[1::2], strict=True))
 
 
 def date_argument(text: str) -> dt.date:
@@ -265,6 +287,7 @@ def _study(args, scene, times, step, zone, scheduler, bar):
         step=step,
         receivers=args.receiver,
         plane=args.plane,
+        region=args.region,
         tz=zone,
         scheduler=scheduler,
         progress=bar,

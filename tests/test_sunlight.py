@@ -214,3 +214,64 @@ def test_a_scene_study_equals_the_hand_made_one():
     assert sorted(ours) == sorted(theirs)
     for hours in ours:
         assert ours[hours] == pytest.approx(theirs[hours], rel=1e-9, abs=1e-12)
+
+
+def test_a_basement_under_the_floor_leaves_the_study_as_it_was():
+    """A box wholly under the slab (a basement reaching far below it, deeper
+    than the buildings are tall): the slab is still the floor, and what lies
+    under it shades nothing."""
+    scene = slab_and_cube()
+    basement = trimesh.creation.box([4.0, 2.0, 4.0])
+    basement.apply_translation([-4.0, -3.0, -4.0])
+    below = Shape(np.array(basement.vertices), np.array(basement.faces), name="basement")
+    deep = dataclasses.replace(scene, shapes=[*scene.shapes, below])
+    times = hourly(dt.datetime(2026, 3, 21, tzinfo=dt.UTC), dt.datetime(2026, 3, 22, tzinfo=dt.UTC))
+    (plain,) = study_scene(scene, times, **LONDON)[1].days.values()
+    inputs, studies = study_scene(deep, times, **LONDON)
+    (study,) = studies.days.values()
+    assert inputs.floor.startswith("the floor 'slab")
+    assert study.area == pytest.approx(400.0, rel=1e-12)
+    ours, theirs = study.level_areas(), plain.level_areas()
+    assert sorted(ours) == sorted(theirs)
+    for hours in ours:
+        assert ours[hours] == pytest.approx(theirs[hours], rel=1e-9, abs=1e-9)
+
+
+def test_a_region_in_plan_is_dropped_onto_the_floor_and_studied_alone(capsys):
+    """--region: a 6 x 6 square in plan (x, z) over the courtyard; in the
+    library, the same square over the slab is sg.sun_study's over it, and for
+    the scene turned Z-up the square is in (x, y) and the levels the same."""
+    done = in_process(
+        capsys, "sun", COURTYARD, "--at", "51.5,-0.12", "--region=-3,-3,3,-3,3,3,-3,3"
+    )
+    assert done.returncode == 0, done.stderr
+    assert "region 36 square units" in done.stdout
+    assert "within the region given" in done.stderr
+    square = [(-3.0, -3.0), (3.0, -3.0), (3.0, 3.0), (-3.0, 3.0)]
+    times = hourly(dt.datetime(2026, 3, 21, tzinfo=dt.UTC), dt.datetime(2026, 3, 22, tzinfo=dt.UTC))
+    areas = []
+    for z_up in (False, True):
+        inputs, studies = study_scene(slab_and_cube(z_up), times, region=square, **LONDON)
+        (study,) = studies.days.values()
+        up = 2 if z_up else 1
+        across = [0, 1] if z_up else [0, 2]
+        assert np.allclose(inputs.region[:, up], 0.0)  # on the slab's top
+        assert np.allclose(inputs.region[:, across], square)
+        assert study.area == pytest.approx(36.0, rel=1e-12)
+        areas.append(study.level_areas())
+    cube = slab_and_cube().shapes[1]
+    corners = np.array([[x, 0.0, z] for x, z in square])
+    by_hand = sg.sun_study(
+        (cube.vertices, cube.faces), sg.Plane([0, 1, 0], 0), corners, times, **LONDON
+    ).level_areas()
+    for ours in areas:
+        assert sorted(ours) == sorted(by_hand)
+        for hours in ours:
+            assert ours[hours] == pytest.approx(by_hand[hours], rel=1e-9, abs=1e-9)
+    for args in (["--region", "1,2,3,4"], ["--region", "a,b,c,d,e,f"]):
+        with pytest.raises(SystemExit) as exit_:
+            main(["sun", str(COURTYARD), "--at", "51,0", *args])
+        assert exit_.value.code == 2
+    capsys.readouterr()
+    with pytest.raises(sg.SceneError, match="no area"):
+        scene_study(slab_and_cube(), region=[(0, 0), (1, 1), (2, 2)])

@@ -4,7 +4,8 @@
 hand. Here they come from a scene, as ``shadowgeo convert`` finds its
 receivers: the floor is the largest flat surface found that faces up and lies
 under the scene (a ground slab, a courtyard's paving; :func:`receivers.select`,
-then :func:`receivers.is_floor`), or a named shape, or a given plane, or else
+then :func:`receivers.is_floor`, or covering half the scene's plan whatever
+lies under it: a basement), or a named shape, or a given plane, or else
 the ground plane under the scene's lowest point. The region studied is the
 floor's outline (its largest part; holes in it are studied too), or for an
 unbounded plane the scene's plan (its bounding box on the plane). Every other
@@ -24,6 +25,7 @@ from typing import Any
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike
 from shapely.geometry.polygon import orient
 
 from .. import polygons as poly
@@ -34,7 +36,7 @@ from ..tolerance import Tolerance
 from ..topology import Caster
 from .casters import CasterSet, distinct
 from .model import Material, Scene, Shape
-from .receivers import FLOOR_COSINE, Receiver, ground, is_floor
+from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
 
 # Lift of the sunlight map off its floor, relative to the scene's size (as
@@ -102,11 +104,15 @@ def scene_study(
     *,
     receivers: Sequence[str] | None = None,
     plane: Plane | None = None,
+    region: ArrayLike | None = None,
 ) -> SceneStudy:
     """The caster, floor and region of ``scene``'s sun study (see the module
     notes). ``receivers``: DEF names, the first of them that is a floor (its
     largest patch facing up) is studied; ``plane``: study that plane instead,
-    over the scene's plan.
+    over the scene's plan; ``region``: (n, 2) corners in plan (the two
+    horizontal axes, x and z for a Y-up scene, x and y for Z up), the part of
+    the floor's plane studied (straight down onto it; it may reach past the
+    floor's edges, where the plane is studied as well).
 
     Raises
     ------
@@ -128,17 +134,21 @@ def scene_study(
     facing = floor.plane
     if facing.normal[axis] < 0:
         facing = facing.flipped()
-    if floor.triangles is not None:
-        region = _outline(facing, floor.triangles, notes, floor.name)
+    if region is not None:
+        polygon = _plan_polygon(facing, region, axis)
+        what = f"the floor '{floor.name}'" if floor.triangles is not None else "the plane"
+        notes.append(f"sun study: over {what}, within the region given")
+    elif floor.triangles is not None:
+        polygon = _outline(facing, floor.triangles, notes, floor.name)
         what = f"the floor '{floor.name}'"
         notes.append(f"sun study: over {what}, within its outline")
     else:
-        region = _plan(facing, bounds)
+        polygon = _plan(facing, bounds)
         what = "the plane given" if plane is not None else "the ground plane"
         notes.append(f"sun study: over {what}, within the scene's plan (its bounding box)")
     faces = stacked.off_plane(facing, tolerance)
     caster = stacked.mesh(faces)
-    return SceneStudy(caster, facing, region, what, up_name, tolerance.scale, notes)
+    return SceneStudy(caster, facing, polygon, what, up_name, tolerance.scale, notes)
 
 
 def _floor(
@@ -164,11 +174,17 @@ def _floor(
     found = select_receivers(own, geometry, receivers, None, tolerance, [], stacked, False)
     bounds = stacked.bounds
     lowest = stacked.vertices[int(np.argmin(stacked.vertices[:, axis]))]
+    across = [k for k in range(3) if k != axis]
+    plan = float(np.prod(bounds[1, across] - bounds[0, across]))
     floors = []
     for receiver in found:
         up = float(receiver.plane.normal[axis])
         facing_up = (abs(up) if receiver.two_sided else up) >= FLOOR_COSINE
-        if facing_up and (receivers is not None or is_floor(receiver, bounds, lowest, axis)):
+        if facing_up and (
+            receivers is not None
+            or is_floor(receiver, bounds, lowest, axis)
+            or receiver.area * abs(up) >= FLOOR_COVER * plan  # over a deep basement
+        ):
             floors.append(receiver)
     if floors:
         # the first named, else the largest found (the scene's order among equals)
@@ -203,6 +219,24 @@ def _outline(plane: Plane, triangles: np.ndarray, notes: list[str], name: str) -
     return plane.to_3d(largest[0] / scale + center)
 
 
+def _plan_polygon(plane: Plane, region: ArrayLike, axis: int) -> np.ndarray:
+    """(n, 2) plan corners (the axes other than ``axis``, in order) dropped
+    along ``axis`` onto ``plane``, as (n, 3) points."""
+    corners = np.asarray(region, dtype=np.float64)
+    if corners.ndim != 2 or corners.shape[1] != 2 or len(corners) < 3:
+        raise SceneError(f"region must be three or more plan corners (n, 2), got {corners.shape}")
+    if not np.all(np.isfinite(corners)):
+        raise SceneError("region has NaN or infinite corners")
+    if shapely.Polygon(corners).area == 0:
+        raise SceneError("the region has no area")
+    across = [k for k in range(3) if k != axis]
+    points = np.zeros((len(corners), 3))
+    points[:, across] = corners
+    normal = plane.normal
+    points[:, axis] = -(plane.offset + corners @ normal[across]) / normal[axis]
+    return points
+
+
 def _plan(plane: Plane, bounds: np.ndarray) -> np.ndarray:
     """The scene's bounding box seen on ``plane``: the convex hull of its
     eight corners on it, counter-clockwise, as (n, 3) points."""
@@ -226,6 +260,7 @@ def study_scene(
     step: _dt.timedelta | None = None,
     receivers: Sequence[str] | None = None,
     plane: Plane | None = None,
+    region: ArrayLike | None = None,
     tz: _dt.tzinfo | None = None,
     scheduler: Any = None,
     progress: Callable[[int, int], None] | None = None,
@@ -233,7 +268,7 @@ def study_scene(
     """:func:`shadowgeo.sun_study_by_day` of a scene's casters over its floor
     (:func:`scene_study`): one study a calendar day (in ``tz``) of ``times``,
     serially or on Dask (``scheduler``, as there)."""
-    inputs = scene_study(scene, receivers=receivers, plane=plane)
+    inputs = scene_study(scene, receivers=receivers, plane=plane, region=region)
     studies = sun_study_by_day(
         inputs.caster,
         inputs.plane,
