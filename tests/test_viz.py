@@ -367,6 +367,7 @@ EXAMPLES = ROOT / "examples"
         ("tilted_plane.py", "picture.png"),
         ("shadow_volume.py", "picture.png"),
         ("converted_scene.py", "converted_scene.png"),
+        ("sunlight_map.py", "picture.png"),
     ],
 )
 def test_examples_draw_their_pictures(script, picture, tmp_path, monkeypatch, capsys):
@@ -377,8 +378,16 @@ def test_examples_draw_their_pictures(script, picture, tmp_path, monkeypatch, ca
     runpy.run_path(str(EXAMPLES / script), run_name="__main__")
     image = np.asarray(Image.open(tmp_path / picture).convert("RGB"))
     assert len(np.unique(image.reshape(-1, 3), axis=0)) > 20
-    assert (image.mean(axis=2) < 90).mean() > 0.005  # a shadow is in the picture
     printed = capsys.readouterr().out
+    if script == "sunlight_map.py":
+        # the map's full sun (yellow) and its shaded hours (green to purple)
+        red, green, blue = (image[..., k].astype(float) for k in range(3))
+        assert ((red > 200) & (green > 180) & (blue < 90)).mean() > 0.2
+        assert ((green > red + 30) & (green > blue)).mean() > 0.01
+        share = float(re.search(r"([\d.]+)% of the ground has at least 2 hours", printed)[1])
+        assert 0 < share < 100
+        return
+    assert (image.mean(axis=2) < 90).mean() > 0.005  # a shadow is in the picture
     if script == "shadow_volume.py":
         # The volume sliced at the ground has the planar shadow's area
         # (manifold3d slices in float32: agreement to a few parts in 1e7).
