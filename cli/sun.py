@@ -18,6 +18,7 @@ from pathlib import Path
 
 import shadowgeo
 from shadowgeo.scene.sunlight import study_scene, sunlight_shapes
+from shadowgeo.sunstudy import days_table
 
 from .convert import ProgressBar, plane_argument, positive_int
 
@@ -229,7 +230,7 @@ def run(args) -> int:
         print(f"note: {note}", file=sys.stderr)
     hours = args.hours
     place = f"{latitude:g}, {longitude:g}"
-    if len(studies.days) == 1:
+    if args.days == 1 and len(studies.days) == 1:
         ((day, study),) = studies.days.items()
         print(
             f"{args.input}: {len(study.times)} of {len(times)} samples with the sun up on "
@@ -265,11 +266,11 @@ def run(args) -> int:
             print(f"wrote {args.output}: {len(shapes)} sunlight shape(s), {triangles} triangles")
         return 0
     print(
-        f"{args.input}: {len(studies.days)} days from {first} at {place} "
+        f"{args.input}: {len(studies)} days from {first} at {place} "
         f"(UTC{_offset(zone)}), every {args.every} min\n"
     )
-    print(studies.table(hours))
-    shares = list(studies.fraction_meeting(hours).values())
+    print(days_table(studies, hours))
+    shares = [summary.fraction_meeting(hours) for summary in studies.values()]
     print(
         f"\nshare of the region with at least {hours:g} h of sun: {min(shares):.2%} to "
         f"{max(shares):.2%} over the days"
@@ -291,6 +292,7 @@ def _study(args, scene, times, step, zone, scheduler, bar):
         tz=zone,
         scheduler=scheduler,
         progress=bar,
+        summaries=args.days > 1,  # a table only: no day's polygons kept
     )
 
 

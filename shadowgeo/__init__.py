@@ -14,7 +14,14 @@ from .scene import Material, Scene, SceneLight, Shape, Viewpoint
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
 from .sun import sun_direction
-from .sunstudy import SunStudies, SunStudy, sun_study, sun_study_by_day
+from .sunstudy import (
+    DaySummary,
+    SunStudies,
+    SunStudy,
+    sun_study,
+    sun_study_by_day,
+    sun_summaries_by_day,
+)
 from .surface import SurfaceShadow, shadow_on_surface
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster
@@ -23,6 +30,7 @@ from .volume import shadow_volume
 
 __all__ = [
     "Caster",
+    "DaySummary",
     "DirectionalLight",
     "GeometryError",
     "Light",
@@ -56,6 +64,7 @@ __all__ = [
     "sun_direction",
     "sun_study",
     "sun_study_by_day",
+    "sun_summaries_by_day",
 ]
 
 __version__ = "0.1.0"

@@ -105,9 +105,7 @@ class SunStudy:
 
     def area_with_at_least(self, hours: float) -> float:
         """Area of the part of the region sunlit for at least ``hours``."""
-        return sum(
-            _area(parts) for k, parts in self.levels.items() if self.hours(k) >= hours - 1e-9
-        )
+        return _at_least(self.level_areas(), hours)
 
     def fraction_meeting(self, hours: float) -> float:
         """Fraction of the region's area sunlit for at least ``hours`` (0 for
@@ -125,6 +123,43 @@ class SunStudy:
             shadowed += _inside(uv, shadow)
         lit = (len(self.times) - shadowed) * self.step.total_seconds() / 3600.0
         return np.where(inside_region, lit, np.nan)
+
+
+def _at_least(level_areas: dict[float, float], hours: float) -> float:
+    """The areas of the durations of at least ``hours``, summed in rising order."""
+    return float(sum(area for duration, area in level_areas.items() if duration >= hours - 1e-9))
+
+
+@dataclass(frozen=True)
+class DaySummary:
+    """A day's :class:`SunStudy` without its polygons: what a table of many
+    days needs (a year's level polygons over a city are millions of arrays;
+    its summaries are a few numbers a day). Its figures are the study's, bit
+    for bit."""
+
+    samples: int
+    area: float
+    level_areas: dict[float, float]
+
+    @classmethod
+    def of(cls, study: SunStudy) -> DaySummary:
+        return cls(len(study.times), study.area, study.level_areas())
+
+    def area_with_at_least(self, hours: float) -> float:
+        """As :meth:`SunStudy.area_with_at_least`."""
+        return _at_least(self.level_areas, hours)
+
+    def fraction_meeting(self, hours: float) -> float:
+        """As :meth:`SunStudy.fraction_meeting`."""
+        return self.area_with_at_least(hours) / self.area if self.area > 0 else 0.0
+
+
+def days_table(summaries: dict[_dt.date, DaySummary], hours: float) -> str:
+    """A Markdown table: day, samples with sun, fraction meeting ``hours``."""
+    lines = [f"| day | sun samples | fraction with >= {hours:g} h |", "|---|---:|---:|"]
+    for day, summary in summaries.items():
+        lines.append(f"| {day} | {summary.samples} | {summary.fraction_meeting(hours):.4f} |")
+    return "\n".join(lines)
 
 
 def _inside(uv: NDArray[np.float64], polygons: Polygons) -> NDArray[np.bool_]:
@@ -277,10 +312,11 @@ class SunStudies:
 
     def table(self, hours: float) -> str:
         """A Markdown table: day, samples with sun, fraction meeting ``hours``."""
-        lines = [f"| day | sun samples | fraction with >= {hours:g} h |", "|---|---:|---:|"]
-        for day, study in self.days.items():
-            lines.append(f"| {day} | {len(study.times)} | {study.fraction_meeting(hours):.4f} |")
-        return "\n".join(lines)
+        return days_table(self.summaries(), hours)
+
+    def summaries(self) -> dict[_dt.date, DaySummary]:
+        """Each day's :class:`DaySummary`."""
+        return {day: DaySummary.of(study) for day, study in self.days.items()}
 
 
 def sun_study_by_day(
@@ -307,6 +343,59 @@ def sun_study_by_day(
     Results are identical either way. ``progress(done, total)`` is called as
     days finish.
     """
+    return SunStudies(
+        _by_day(sun_study, casters, plane, region, times, latitude, longitude, step, up, north, tz,
+                scheduler, progress)
+    )  # fmt: skip
+
+
+def sun_summaries_by_day(
+    casters: Any,
+    plane: Plane,
+    region: ArrayLike,
+    times: Sequence[_dt.datetime],
+    *,
+    latitude: float,
+    longitude: float,
+    step: _dt.timedelta | None = None,
+    up: str = "Y",
+    north: ArrayLike | None = None,
+    tz: _dt.tzinfo | None = None,
+    scheduler: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[_dt.date, DaySummary]:
+    """:func:`sun_study_by_day`, each day's study summarised where it was
+    made (:class:`DaySummary`): on Dask only the summaries travel back, and
+    memory holds one day's polygons at a time, whatever the number of days.
+    The summaries are those of :func:`sun_study_by_day`'s studies, bit for bit."""
+    return _by_day(
+        _summary, casters, plane, region, times, latitude, longitude, step, up, north, tz,
+        scheduler, progress,
+    )  # fmt: skip
+
+
+def _summary(*args: Any, **options: Any) -> DaySummary:
+    """:func:`sun_study`'s :class:`DaySummary` (a task of its own on Dask)."""
+    return DaySummary.of(sun_study(*args, **options))
+
+
+def _by_day(
+    function: Callable[..., Any],
+    casters: Any,
+    plane: Plane,
+    region: ArrayLike,
+    times: Sequence[_dt.datetime],
+    latitude: float,
+    longitude: float,
+    step: _dt.timedelta | None,
+    up: str,
+    north: ArrayLike | None,
+    tz: _dt.tzinfo | None,
+    scheduler: Any,
+    progress: Callable[[int, int], None] | None,
+) -> dict[_dt.date, Any]:
+    """``function`` (:func:`sun_study` or :func:`_summary`) of each calendar
+    day of ``times``, here or on Dask (see :func:`sun_study_by_day`)."""
     caster = _one_caster(casters)
     groups = days(times, tz)
     options: dict[str, Any] = dict(
@@ -317,28 +406,29 @@ def sun_study_by_day(
     if scheduler is None:
         results = {}
         for done, (day, day_times) in enumerate(chosen.items(), start=1):
-            results[day] = sun_study(caster, plane, region, day_times, **options)
+            results[day] = function(caster, plane, region, day_times, **options)
             if progress:
                 progress(done, total)
-        return SunStudies(results)
+        return results
     from .parallel import client_for
 
+    name = "sun-study" if function is sun_study else "sun-summary"
     with client_for(scheduler) as client:
         shared = client.scatter(caster, broadcast=True)
         futures = {
             day: client.submit(
-                sun_study, shared, plane, region, day_times, key=f"sun-study-{day}", **options
+                function, shared, plane, region, day_times, key=f"{name}-{day}", **options
             )
             for day, day_times in chosen.items()
         }
         from dask.distributed import as_completed
 
         day_of = {future.key: day for day, future in futures.items()}
-        finished: dict[_dt.date, SunStudy] = {}
+        finished: dict[_dt.date, Any] = {}
         # each result is fetched as it comes, so the workers let go of it
         for future in as_completed(list(futures.values())):
             finished[day_of[future.key]] = future.result()
             future.release()
             if progress:
                 progress(len(finished), total)
-        return SunStudies({day: finished[day] for day in futures})
+        return {day: finished[day] for day in futures}

@@ -13,7 +13,13 @@ import trimesh
 
 from shadowgeo import GeometryError, Plane
 from shadowgeo.sun import frame, hourly, sun_direction, sun_lights, sun_position
-from shadowgeo.sunstudy import sun_study, sun_study_by_day
+from shadowgeo.sunstudy import (
+    DaySummary,
+    days_table,
+    sun_study,
+    sun_study_by_day,
+    sun_summaries_by_day,
+)
 
 UTC = dt.UTC
 LONDON = dict(latitude=51.5, longitude=-0.12)
@@ -161,6 +167,28 @@ def test_days_on_dask_equal_the_serial_run():
                 for loop, other_loop in zip(part, other_part, strict=True):
                     np.testing.assert_array_equal(loop, other_loop)
     assert serial.fraction_meeting(10.0) == parallel.fraction_meeting(10.0)
+
+
+def test_day_summaries_are_the_studies_figures_here_and_on_dask():
+    """sun_summaries_by_day keeps a few numbers a day, made where the day
+    was studied: the same figures as the full studies', bit for bit, in this
+    process and on Dask; the durations' areas add up to the plot's."""
+    box = _floating_box([0.0, 1.5, 0.0], [1.0, 1.0, 1.0])
+    times = hourly(dt.datetime(2026, 12, 20, tzinfo=UTC), dt.datetime(2026, 12, 23, tzinfo=UTC))
+    full = sun_study_by_day(box, GROUND, PLOT, times, **LONDON)
+    serial = sun_summaries_by_day(box, GROUND, PLOT, times, **LONDON)
+    assert serial == full.summaries()
+    assert all(isinstance(summary, DaySummary) for summary in serial.values())
+    for day, summary in serial.items():
+        study = full.days[day]
+        assert summary.samples == len(study.times) > 0
+        assert sum(summary.level_areas.values()) == pytest.approx(1600.0, rel=1e-12)
+        for hours in (0.0, 2.0, 4.5, 8.0):
+            assert summary.fraction_meeting(hours) == study.fraction_meeting(hours)
+    parallel = sun_summaries_by_day(box, GROUND, PLOT, times, **LONDON, scheduler="local")
+    assert parallel == serial
+    assert days_table(serial, 2.0) == full.table(2.0)
+    assert days_table(serial, 2.0).count("\n| 2026-12-") == 3
 
 
 def test_a_block_of_boxes_cut_into_tiles_agrees_with_rays():

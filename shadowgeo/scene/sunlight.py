@@ -31,7 +31,7 @@ from shapely.geometry.polygon import orient
 from .. import polygons as poly
 from ..errors import SceneError
 from ..plane import Plane
-from ..sunstudy import SunStudies, SunStudy, sun_study_by_day
+from ..sunstudy import SunStudy, sun_study_by_day, sun_summaries_by_day
 from ..tolerance import Tolerance
 from ..topology import Caster
 from .casters import CasterSet, distinct
@@ -264,12 +264,16 @@ def study_scene(
     tz: _dt.tzinfo | None = None,
     scheduler: Any = None,
     progress: Callable[[int, int], None] | None = None,
-) -> tuple[SceneStudy, SunStudies]:
+    summaries: bool = False,
+) -> tuple[SceneStudy, Any]:
     """:func:`shadowgeo.sun_study_by_day` of a scene's casters over its floor
     (:func:`scene_study`): one study a calendar day (in ``tz``) of ``times``,
-    serially or on Dask (``scheduler``, as there)."""
+    serially or on Dask (``scheduler``, as there), as :class:`SunStudies`;
+    with ``summaries``, :func:`shadowgeo.sun_summaries_by_day`'s
+    ``{day: DaySummary}`` instead (no polygons kept: for many days)."""
     inputs = scene_study(scene, receivers=receivers, plane=plane, region=region)
-    studies = sun_study_by_day(
+    by_day = sun_summaries_by_day if summaries else sun_study_by_day
+    studies = by_day(
         inputs.caster,
         inputs.plane,
         inputs.region,
