@@ -180,6 +180,52 @@ def cover_levels(
     return dict(sorted(levels.items()))
 
 
+def cover_level_areas(
+    regions: list[list[NDArray[np.float64]]],
+    window: CrossSection,
+    *,
+    tile_vertices: int = TILE_VERTICES,
+) -> dict[int, float]:
+    """The area of ``window`` covered by exactly ``m`` of ``regions``, for
+    each ``m`` with area: :func:`cover_levels`' areas without its polygons.
+
+    The same unions, tile by tile, but each level's area is the difference
+    of the areas covered at least ``m`` and ``m + 1`` times: no difference
+    of regions is formed, no polygon is taken out of Clipper2 or nested.
+    The areas agree with those of :func:`cover_levels`' polygons to
+    rounding (a few units in the last place of the window's area).
+    """
+    if window.is_empty():
+        return {}
+    bounds = window.bounds()
+    low, high = np.array(bounds[:2], dtype=np.float64), np.array(bounds[2:], dtype=np.float64)
+    loops = _Loops.pack(regions)
+    for axis in (0, 1):
+        loops = loops.clip(axis, low[axis], below=False).clip(axis, high[axis], below=True)
+    areas: dict[int, float] = {}
+    for tile_low, tile_high, tile_loops in _tiles(loops, low, high, tile_vertices):
+        rectangle = CrossSection([_rectangle(tile_low, tile_high)], FillRule.Positive)
+        tile = window ^ rectangle
+        if tile.is_empty():
+            continue
+        whole = (rectangle - window).is_empty()
+        loop_list = tile_loops.unpack()
+        deepest = len(np.unique(tile_loops.owner))
+        margin = 1.0 + float(np.max(tile_high - tile_low))
+        clockwise = _rectangle(tile_low - margin, tile_high + margin)[::-1].copy()
+        previous, m = float(tile.area()), 0
+        while previous > 0:
+            upper = 0.0
+            if m + 1 <= deepest:
+                union = CrossSection(loop_list + [clockwise] * m, FillRule.Positive)
+                upper = float((union if whole else union ^ tile).area())
+            exactly = previous - upper
+            if exactly > 0:
+                areas[m] = areas.get(m, 0.0) + exactly
+            previous, m = upper, m + 1
+    return dict(sorted(areas.items()))
+
+
 def _tile_levels(
     tile: CrossSection,
     whole: bool,

@@ -30,7 +30,7 @@ from manifold3d import CrossSection, FillRule
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
-from .levels import cover_levels
+from .levels import cover_level_areas, cover_levels
 from .plane import Plane
 from .polygons import components, local_scale, signed_areas
 from .projection import project_shadow
@@ -132,10 +132,13 @@ def _at_least(level_areas: dict[float, float], hours: float) -> float:
 
 @dataclass(frozen=True)
 class DaySummary:
-    """A day's :class:`SunStudy` without its polygons: what a table of many
-    days needs (a year's level polygons over a city are millions of arrays;
-    its summaries are a few numbers a day). Its figures are the study's, bit
-    for bit."""
+    """A day's sunlight without its polygons: what a table of many days needs
+    (a year's level polygons over a city are millions of arrays; its
+    summaries are a few numbers a day). ``level_areas``: hours of sunlight
+    -> area, rising. :meth:`of` takes a :class:`SunStudy`'s own figures;
+    :func:`sun_summaries_by_day` computes them from the levels' areas alone,
+    which agree with the study's polygons to rounding (about 1e-15 of the
+    region)."""
 
     samples: int
     area: float
@@ -262,6 +265,31 @@ def sun_study(
     (12, 100.0)
     """
     step = step or _dt.timedelta(hours=1)
+    frame, region_cs, kept, shadows = _day_shadows(
+        casters, plane, region, times, latitude, longitude, up, north
+    )
+    return SunStudy(
+        plane=plane,
+        region=frame.polygons(region_cs),
+        times=tuple(kept),
+        step=step,
+        shadows=tuple(shadows),
+        levels=_levels(frame, region_cs, shadows),
+    )
+
+
+def _day_shadows(
+    casters: Any,
+    plane: Plane,
+    region: ArrayLike,
+    times: Sequence[_dt.datetime],
+    latitude: float,
+    longitude: float,
+    up: str,
+    north: ArrayLike | None,
+) -> tuple[_Frame, CrossSection, list[_dt.datetime], list[Polygons]]:
+    """The local frame, the region in it, the samples with the sun up and
+    their exact shadows on the region (plane coordinates)."""
     polygon = _region_polygon(plane, region)
     caster = _one_caster(casters)
     kept, lights = sun_lights(latitude, longitude, times, up=up, north=north)
@@ -274,15 +302,7 @@ def sun_study(
     # one call for the day: the caster is checked and prepared once for every sun position
     cast = project_shadow(caster, lights, plane, receiver=polygon) if lights else []
     # each shadow is already cut to the region, a union of non-overlapping parts
-    shadows = [shadow.polygons for shadow in cast]
-    return SunStudy(
-        plane=plane,
-        region=frame.polygons(region_cs),
-        times=tuple(kept),
-        step=step,
-        shadows=tuple(shadows),
-        levels=_levels(frame, region_cs, shadows),
-    )
+    return frame, region_cs, kept, [shadow.polygons for shadow in cast]
 
 
 def _one_caster(casters: Any) -> Any:
@@ -364,19 +384,48 @@ def sun_summaries_by_day(
     scheduler: Any = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> dict[_dt.date, DaySummary]:
-    """:func:`sun_study_by_day`, each day's study summarised where it was
-    made (:class:`DaySummary`): on Dask only the summaries travel back, and
-    memory holds one day's polygons at a time, whatever the number of days.
-    The summaries are those of :func:`sun_study_by_day`'s studies, bit for bit."""
+    """:func:`sun_study_by_day`'s figures without its polygons, a
+    :class:`DaySummary` a day made where the day is studied: the level sets'
+    areas only (no difference of regions, no polygon taken out of Clipper2:
+    a third less time on a summer day over a city), and on Dask only the
+    summaries travel back, so memory holds one day's shadows at a time
+    however many days. The areas agree with the full studies' to rounding
+    (about 1e-15 of the region); serial and Dask runs are identical."""
     return _by_day(
         _summary, casters, plane, region, times, latitude, longitude, step, up, north, tz,
         scheduler, progress,
     )  # fmt: skip
 
 
-def _summary(*args: Any, **options: Any) -> DaySummary:
-    """:func:`sun_study`'s :class:`DaySummary` (a task of its own on Dask)."""
-    return DaySummary.of(sun_study(*args, **options))
+def _summary(
+    casters: Any,
+    plane: Plane,
+    region: ArrayLike,
+    times: Sequence[_dt.datetime],
+    *,
+    latitude: float,
+    longitude: float,
+    step: _dt.timedelta | None = None,
+    up: str = "Y",
+    north: ArrayLike | None = None,
+) -> DaySummary:
+    """A day's :class:`DaySummary`, from the areas of its levels only
+    (:func:`shadowgeo.levels.cover_level_areas`: no level polygon is made)."""
+    step = step or _dt.timedelta(hours=1)
+    frame, region_cs, kept, shadows = _day_shadows(
+        casters, plane, region, times, latitude, longitude, up, north
+    )
+    count = len(shadows)
+    loops = [loop for shadow in shadows for part in shadow for loop in part]
+    local = iter(_map_loops(frame.to_local, loops))
+    regions = [[next(local) for part in shadow for _ in part] for shadow in shadows]
+    unit = 1.0 / (frame.scale * frame.scale)  # a local area in plane units
+    seconds = step.total_seconds()
+    covered = cover_level_areas(regions, region_cs)
+    # durations as SunStudy.hours gives them
+    level_areas = {(count - m) * seconds / 3600.0: area * unit for m, area in covered.items()}
+    area = _area(frame.polygons(region_cs))
+    return DaySummary(len(kept), area, dict(sorted(level_areas.items())))
 
 
 def _by_day(

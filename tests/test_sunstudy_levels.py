@@ -8,7 +8,7 @@ import pytest
 import shapely
 from manifold3d import CrossSection, FillRule
 
-from shadowgeo.levels import cover_levels
+from shadowgeo.levels import cover_level_areas, cover_levels
 
 
 def _loops(polygon: shapely.Polygon | shapely.MultiPolygon) -> list[np.ndarray]:
@@ -91,6 +91,30 @@ def test_levels_count_the_regions_covering_each_point(tile_vertices):
     assert clear.sum() > 3900
     np.testing.assert_array_equal(level[clear & inside], count[clear & inside])
     assert np.all(level[clear & ~inside] == -1)
+
+
+@pytest.mark.parametrize("tile_vertices", [30, 100_000])
+def test_level_areas_alone_are_the_levels_areas(tile_vertices):
+    """cover_level_areas: each level's area without its polygons, against the
+    areas of cover_levels' polygons (checked point by point above), and two
+    identities of GEOS's areas: the levels add up to the window, and their
+    sum weighted by m to the regions' areas within it."""
+    regions = _regions(seed=3, count=12)
+    window = shapely.Polygon([(-10, -10), (90, -10), (90, 50), (40, 50), (40, 115), (-10, 115)])
+    loops = [_loops(region) for region in regions]
+    section = CrossSection(_loops(window), FillRule.Positive)
+    areas = cover_level_areas(loops, section, tile_vertices=tile_vertices)
+    polygons = cover_levels(loops, section, tile_vertices=tile_vertices)
+    exact = {m: _multipolygon(parts).area for m, parts in polygons.items()}
+    assert len(areas) >= 5
+    assert {m for m, a in areas.items() if a > 1e-9} == {m for m, a in exact.items() if a > 1e-9}
+    for m, area in areas.items():
+        assert area == pytest.approx(exact.get(m, 0.0), rel=1e-9, abs=1e-9 * window.area)
+    assert sum(areas.values()) == pytest.approx(window.area, rel=1e-12)
+    expected = sum(shapely.intersection(region, window).area for region in regions)
+    assert sum(m * a for m, a in areas.items()) == pytest.approx(expected, rel=1e-9)
+    empty = CrossSection(_loops(shapely.box(0, 0, 1, 1)), FillRule.Positive) - section
+    assert cover_level_areas(loops, empty) == {}
 
 
 def test_no_regions_and_empty_window():
