@@ -1,7 +1,10 @@
 """A sun study over a city block: exact sunlight hours, serial and on Dask.
 
 ``python benchmarks/bench_sunstudy.py`` (a year of hourly sun positions over
-1,000 buildings, several minutes) or ``--days 14`` for a shorter run. The same
+1,000 buildings, several minutes) or ``--days 14`` for a shorter run;
+``--summaries`` keeps each day's figures only (``sun_summaries_by_day``, the
+level sets' areas without their polygons, as ``shadowgeo sun`` runs many
+days), compared between the runs with ``==``. The same
 study runs serially in this process and on a Dask ``LocalCluster`` of
 single-threaded workers (``--workers 1 2``, 2 by default); the table gives the
 wall time, the CPU time of this process and the workers (the machine is
@@ -22,7 +25,7 @@ import trimesh
 from shadowgeo import Plane
 from shadowgeo.parallel import client_for
 from shadowgeo.sun import hourly
-from shadowgeo.sunstudy import SunStudies, sun_study_by_day
+from shadowgeo.sunstudy import SunStudies, sun_study_by_day, sun_summaries_by_day
 
 
 def city(n_buildings: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray, float]:
@@ -83,7 +86,13 @@ def main() -> None:
     parser.add_argument(
         "--workers", type=int, nargs="+", default=[2], help="Dask LocalCluster sizes to run"
     )
+    parser.add_argument(
+        "--summaries",
+        action="store_true",
+        help="each day's figures only (sun_summaries_by_day, as shadowgeo sun runs many days)",
+    )
     args = parser.parse_args()
+    by_day = sun_summaries_by_day if args.summaries else sun_study_by_day
 
     vertices, faces, half = city(args.buildings)
     region = np.array([[-half, 0, half], [half, 0, half], [half, 0, -half], [-half, 0, -half]])
@@ -97,17 +106,19 @@ def main() -> None:
     )
 
     begin, cpu = time.perf_counter(), time.process_time()
-    serial = sun_study_by_day(
-        (vertices, faces), ground, region, times, **site, progress=_progress("serial")
-    )
+    serial = by_day((vertices, faces), ground, region, times, **site, progress=_progress("serial"))
     serial_time, serial_cpu = time.perf_counter() - begin, time.process_time() - cpu
-    samples = sum(len(study.times) for study in serial.days.values())
-    loops = sum(
-        len(part)
-        for study in serial.days.values()
-        for parts in study.levels.values()
-        for part in parts
-    )
+    if args.summaries:
+        samples = sum(summary.samples for summary in serial.values())
+        loops = 0  # no polygons made
+    else:
+        samples = sum(len(study.times) for study in serial.days.values())
+        loops = sum(
+            len(part)
+            for study in serial.days.values()
+            for parts in study.levels.values()
+            for part in parts
+        )
     print(f"serial: {serial_time:.1f} s wall, {serial_cpu:.1f} s CPU", flush=True)
     rows = [("serial, this process", serial_time, serial_cpu, 1.0, "")]
     for workers in args.workers:
@@ -115,7 +126,7 @@ def main() -> None:
             client.wait_for_workers(workers)
             before = sum(client.run(time.process_time).values())  # the workers' start-up
             begin, cpu = time.perf_counter(), time.process_time()
-            parallel = sun_study_by_day(
+            parallel = by_day(
                 (vertices, faces),
                 ground,
                 region,
@@ -126,7 +137,7 @@ def main() -> None:
             )
             elapsed = time.perf_counter() - begin
             spent = time.process_time() - cpu + sum(client.run(time.process_time).values()) - before
-        same = identical(serial, parallel)
+        same = serial == parallel if args.summaries else identical(serial, parallel)
         del parallel
         print(f"{workers} worker(s): {elapsed:.1f} s wall, identical: {same}", flush=True)
         rows.append(
@@ -139,7 +150,8 @@ def main() -> None:
             )
         )
 
-    print(f"\n{samples:,} samples with the sun up; {loops:,} level polygons\n")
+    made = "day summaries, no polygons" if args.summaries else f"{loops:,} level polygons"
+    print(f"\n{samples:,} samples with the sun up; {made}\n")
     print(
         "| run | wall time | CPU (this process + workers) | speed-up vs serial | per worker "
         "| identical to serial |"
@@ -151,7 +163,10 @@ def main() -> None:
             f"| {name} | {elapsed:.1f} s | {spent:.1f} s | {speedup:.2f}x | {per_worker} "
             f"| {same or '(reference)'} |"
         )
-    fractions = serial.fraction_meeting(args.hours)
+    if args.summaries:
+        fractions = {day: summary.fraction_meeting(args.hours) for day, summary in serial.items()}
+    else:
+        fractions = serial.fraction_meeting(args.hours)
     march = dt.date(2026, 3, 21)
     if march in fractions:
         print(f"\n21 March: {fractions[march]:.1%} of the block has >= {args.hours:g} h of sun")
