@@ -125,6 +125,14 @@ def test_no_floor_studies_the_ground_plane_over_the_scene_plan():
     assert any("no receiver found" in note for note in inputs.notes)
     with pytest.raises(sg.SceneError, match="vertical"):
         scene_study(scene, plane=sg.Plane([1, 0, 0], 0))
+    # a floor and nothing on it, or only shapes that cast no shadow
+    quad = np.array([[0.0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]])
+    floor = Shape(quad, np.array([[0, 1, 2], [0, 2, 3]]))
+    with pytest.raises(sg.SceneError, match="nothing in the scene casts"):
+        scene_study(Scene(shapes=[floor]))
+    ghost = dataclasses.replace(scene.shapes[0], casts_shadow=False)
+    with pytest.raises(sg.SceneError, match="nothing in the scene casts"):
+        scene_study(Scene(shapes=[floor, ghost]))
     # a named floor may be any patch facing up (a roof terrace: the cube's top)...
     terrace = scene_study(slab_and_cube(), receivers=["cube"])
     assert terrace.floor.startswith("the floor 'cube")  # its top patch, as convert names it

@@ -74,14 +74,15 @@ class SceneStudy:
     Attributes
     ----------
     caster : Caster
-        Every face of the scene's geometry but those lying in ``plane``.
+        Every face of the scene's geometry that casts (``Shape.casts_shadow``)
+        but those lying in ``plane`` facing up.
     plane : Plane
         The floor's plane, its normal up.
     region : (n, 3) float64
         The polygon studied, on ``plane``.
     floor : str
-        What the floor is, for messages (``"shape 'ground'"``, ``"the ground
-        plane y = 0"``).
+        What the floor is, for messages (``"the floor 'ground'"``, ``"the
+        ground plane"``, ``"the plane given"``).
     up : str
         The scene's up axis, ``"Y"`` or ``"Z"``.
     scale : float
@@ -121,7 +122,7 @@ def scene_study(
         up, or the plane is vertical.
     """
     notes: list[str] = []
-    shapes = [s for s in scene.shapes if s.role == "geometry" and s.n_faces and s.casts_shadow]
+    shapes = [s for s in scene.shapes if s.role == "geometry" and s.n_faces]
     geometry = distinct(shapes)
     if not geometry:
         raise SceneError("the scene has no geometry: nothing casts a shadow to study")
@@ -146,7 +147,13 @@ def scene_study(
         polygon = _plan(facing, bounds)
         what = "the plane given" if plane is not None else "the ground plane"
         notes.append(f"sun study: over {what}, within the scene's plan (its bounding box)")
-    faces = stacked.off_plane(facing, tolerance)
+    casting = np.array([shape.casts_shadow for shape in geometry], dtype=bool)
+    faces = stacked.off_plane(facing, tolerance) & stacked.faces_of(casting)
+    if not faces.any():
+        raise SceneError(
+            "nothing in the scene casts a shadow on the floor studied (it has the sun "
+            "whenever the sun is up)"
+        )
     caster = stacked.mesh(faces)
     return SceneStudy(caster, facing, polygon, what, up_name, tolerance.scale, notes)
 
