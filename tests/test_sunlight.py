@@ -130,6 +130,12 @@ def test_no_floor_studies_the_ground_plane_over_the_scene_plan():
     floor = Shape(quad, np.array([[0, 1, 2], [0, 2, 3]]))
     with pytest.raises(sg.SceneError, match="nothing in the scene casts"):
         scene_study(Scene(shapes=[floor]))
+    # a floor that casts no shadow is still the floor
+    plain = slab_and_cube()
+    quiet = dataclasses.replace(plain.shapes[0], casts_shadow=False)
+    inputs = scene_study(dataclasses.replace(plain, shapes=[quiet, plain.shapes[1]]))
+    assert inputs.floor.startswith("the floor 'slab")
+    assert len(inputs.caster.faces) == 12  # the cube's, all of them
     ghost = dataclasses.replace(scene.shapes[0], casts_shadow=False)
     with pytest.raises(sg.SceneError, match="nothing in the scene casts"):
         scene_study(Scene(shapes=[floor, ghost]))
