@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 
 import shadowgeo
@@ -32,9 +33,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# A value that is a list of numbers starting with a minus sign: "-0.3,-1,0.2".
+_NEGATIVE_LIST = re.compile(r"^-\.?\d[\d.eE+\-,]*$")
+
+
+def negative_values_joined(argv: list[str]) -> list[str]:
+    """``--sun -0.3,-1,0.2`` as ``--sun=-0.3,-1,0.2``: argparse takes a value
+    that starts with a minus sign for an option unless it is one plain
+    number, so a list of numbers (a direction, a southern latitude, plan
+    corners) would be refused after its flag."""
+    joined: list[str] = []
+    for token in argv:
+        previous = joined[-1] if joined else ""
+        if (
+            _NEGATIVE_LIST.match(token)
+            and previous.startswith("--")
+            and "=" not in previous
+            and previous != "--"
+        ):
+            joined[-1] = f"{previous}={token}"
+        else:
+            joined.append(token)
+    return joined
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(negative_values_joined(sys.argv[1:] if argv is None else argv))
     if args.command is None:
         parser.print_help(sys.stderr)
         return 2

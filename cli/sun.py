@@ -26,7 +26,8 @@ EPILOG = """\
 examples:
   shadowgeo sun courtyard.x3d --at 51.5,-0.12                  (21 March: BRE's 2-hour test)
   shadowgeo sun courtyard.x3d map.x3d --at 51.5,-0.12 --date 2026-06-21
-  shadowgeo sun courtyard.x3d --at 51.5,-0.12 --region=-3,-3,3,-3,3,3,-3,3
+  shadowgeo sun courtyard.x3d --at 51.5,-0.12 --region -3,-3,3,-3,3,3,-3,3
+  shadowgeo sun garden.glb --at -33.9,151.2 --date 2026-06-21          (Sydney, midwinter)
   shadowgeo sun city.glb --at 40.7,-74.0 --date 2026-01-01 --days 365 --hours 4
   shadowgeo sun city.glb --at 40.7,-74.0 --days 30 --scheduler tcp://10.0.0.5:8786
 
@@ -117,8 +118,7 @@ def register(subparsers) -> None:
         "--region",
         type=region_argument,
         metavar="X,Z,X,Z,...",
-        help="study only this polygon, corners in plan (x,z for a Y-up scene, x,y for Z "
-        "up); write --region=-5,0,... when the first number is negative",
+        help="study only this polygon, corners in plan (x,z for a Y-up scene, x,y for Z up)",
     )
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"

@@ -355,3 +355,36 @@ def test_lenient_x3d_converts_with_notes_and_a_truncated_one_fails_in_one_line(c
     truncated = tmp_path / "truncated.x3d"
     truncated.write_text(scene.read_text()[:80])
     one_line_error(in_process(capsys, "convert", truncated, out), "truncated.x3d", "malformed XML")
+
+
+def test_values_that_start_with_a_minus_sign_follow_their_flag(capsys, tmp_path):
+    """A sun travelling west (-x), a site south of the equator, plan corners
+    left of the origin: lists of numbers that start with "-" are values, as a
+    user types them, not options argparse does not know."""
+    from cli.main import negative_values_joined
+
+    assert negative_values_joined(["--sun", "-0.3,-1,0.2", "--at", "-33.9,151.2", "-h"]) == [
+        "--sun=-0.3,-1,0.2",
+        "--at=-33.9,151.2",
+        "-h",
+    ]
+    assert negative_values_joined(["--plane=0,1,0,-2", "-1e-3,2"]) == [
+        "--plane=0,1,0,-2",
+        "-1e-3,2",
+    ]
+    assert negative_values_joined(["--", "-1,2"]) == ["--", "-1,2"]
+    out = tmp_path / "west.x3d"
+    done = in_process(capsys, "convert", EXAMPLE, out, "--sun", "-0.3,-1,0.2", "--plane", "0,1,0,0")
+    assert done.returncode == 0, done.stderr
+    (shadow,) = [s for s in sg.load(out).shapes if s.role == "shadow"]
+    other = tmp_path / "east.x3d"
+    east = in_process(
+        capsys, "convert", EXAMPLE, other, "--sun", "0.3,-1,0.2", "--plane", "0,1,0,0"
+    )
+    assert east.returncode == 0
+    (mirror,) = [s for s in sg.load(other).shapes if s.role == "shadow"]
+    # the sun from the east throws the shadows the other way along x
+    assert shadow.world_vertices[:, 0].mean() < mirror.world_vertices[:, 0].mean()
+    done = in_process(capsys, "sun", EXAMPLE, "--at", "-33.9,151.2", "--date", "2026-06-21")
+    assert done.returncode == 0, done.stderr
+    assert "at -33.9, 151.2" in done.stdout
