@@ -192,7 +192,8 @@ def run(args) -> int:
     if args.workers and (args.serial or args.scheduler):
         args.parser.error("--workers is for the LocalCluster, not --serial or --scheduler")
     if args.output is not None:
-        if args.output.exists() and os.path.samefile(args.input, args.output):
+        same = args.output.exists() and args.input.exists()
+        if same and os.path.samefile(args.input, args.output):
             raise shadowgeo.SceneError(
                 "OUT is the input file; it is never overwritten", path=str(args.output)
             )

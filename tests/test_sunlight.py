@@ -212,6 +212,10 @@ def test_shadowgeo_sun_usage(capsys, tmp_path):
     assert done.returncode == 1 and "vertical" in done.stderr
     done = in_process(capsys, "sun", tmp_path / "none.x3d", "--at", "51,0")
     assert done.returncode == 1 and "none.x3d" in done.stderr
+    (tmp_path / "there.x3d").write_text("")  # OUT exists, SCENE does not: no traceback
+    done = in_process(capsys, "sun", tmp_path / "none.x3d", tmp_path / "there.x3d", "--at", "51,0")
+    assert done.returncode == 1 and "none.x3d" in done.stderr
+    assert (tmp_path / "there.x3d").read_text() == ""
 
 
 def test_a_scene_study_equals_the_hand_made_one():
