@@ -18,7 +18,7 @@ import shadowgeo
 from shadowgeo.batch import Outcome, convert_files, scene_suffix
 from shadowgeo.io import WRITERS
 
-from .convert import ProgressBar, options_of
+from .convert import ProgressBar, dask_failure, options_of
 
 
 def jobs_for(
@@ -130,12 +130,8 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
         outcomes = convert_files(
             jobs, options, scheduler=scheduler, workers=args.workers, progress=bar
         )
-    except ImportError as error:
-        print(f"shadowgeo convert: {error} (or --serial)", file=sys.stderr)
-        return 2
-    except OSError as error:
-        print(f"shadowgeo convert: cannot reach the Dask scheduler: {error}", file=sys.stderr)
-        return 1
+    except (ImportError, OSError) as error:
+        return dask_failure("convert", error)
     finally:
         if bar is not None:
             bar.close()

@@ -121,22 +121,39 @@ def register(subparsers) -> None:
         metavar="EXT",
         help="write every output in this format (glb, x3d, usda, ...); default: the input's",
     )
-    where = batch.add_mutually_exclusive_group()
+    add_dask_arguments(batch, "file", "a LocalCluster here")
+    parser.set_defaults(func=run, parser=parser)
+
+
+def add_dask_arguments(group, item: str, default: str) -> None:
+    """``--scheduler ADDRESS | --serial`` and ``--workers N`` on ``group``:
+    where the items (``item``: a file, a day) run; ``default``: where they
+    run without either."""
+    where = group.add_mutually_exclusive_group()
     where.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="a running Dask scheduler (tcp://host:8786); default: a LocalCluster here",
+        help=f"a running Dask scheduler (tcp://host:8786); default: {default}",
     )
     where.add_argument(
-        "--serial", action="store_true", help="no Dask: one file after another in this process"
+        "--serial", action="store_true", help=f"no Dask: one {item} after another in this process"
     )
-    batch.add_argument(
+    group.add_argument(
         "--workers",
         type=positive_int,
         metavar="N",
         help="worker processes of the LocalCluster (default: one per core)",
     )
-    parser.set_defaults(func=run, parser=parser)
+
+
+def dask_failure(command: str, error: ImportError | OSError) -> int:
+    """The one line and exit code for Dask missing (2: install it, or
+    --serial) or a scheduler out of reach (1)."""
+    if isinstance(error, ImportError):
+        print(f"shadowgeo {command}: {error} (or --serial)", file=sys.stderr)
+        return 2
+    print(f"shadowgeo {command}: cannot reach the Dask scheduler: {error}", file=sys.stderr)
+    return 1
 
 
 def plane_argument(text: str) -> shadowgeo.Plane:

@@ -20,7 +20,13 @@ import shadowgeo
 from shadowgeo.scene.sunlight import study_scene, sunlight_shapes
 from shadowgeo.sunstudy import days_table
 
-from .convert import ProgressBar, plane_argument, positive_int
+from .convert import (
+    ProgressBar,
+    add_dask_arguments,
+    dask_failure,
+    plane_argument,
+    positive_int,
+)
 
 EPILOG = """\
 examples:
@@ -123,20 +129,7 @@ def register(subparsers) -> None:
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
-    where = parser.add_mutually_exclusive_group()
-    where.add_argument(
-        "--scheduler",
-        metavar="ADDRESS",
-        help="a running Dask scheduler (tcp://host:8786); default for several days: a "
-        "LocalCluster here",
-    )
-    where.add_argument("--serial", action="store_true", help="no Dask: one day after another")
-    parser.add_argument(
-        "--workers",
-        type=positive_int,
-        metavar="N",
-        help="worker processes of the LocalCluster (default: one per core)",
-    )
+    add_dask_arguments(parser, "day", "a LocalCluster here for several days")
     parser.set_defaults(func=run, parser=parser)
 
 
@@ -218,12 +211,8 @@ def run(args) -> int:
                 inputs, studies = _study(args, scene, times, step, zone, client, bar)
         else:
             inputs, studies = _study(args, scene, times, step, zone, scheduler, bar)
-    except ImportError as error:
-        print(f"shadowgeo sun: {error} (or --serial)", file=sys.stderr)
-        return 2
-    except OSError as error:
-        print(f"shadowgeo sun: cannot reach the Dask scheduler: {error}", file=sys.stderr)
-        return 1
+    except (ImportError, OSError) as error:
+        return dask_failure("sun", error)
     finally:
         if bar is not None:
             bar.close()

@@ -25,6 +25,7 @@ one level do not overlap, and together they are its exact region.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -160,22 +161,9 @@ def cover_levels(
     >>> {m: sum(CrossSection(p).area() for p in parts) for m, parts in sorted(levels.items())}
     {0: 1.5, 1: 1.0, 2: 0.5}
     """
-    if window.is_empty():
-        return {}
-    bounds = window.bounds()  # (xmin, ymin, xmax, ymax)
-    low, high = np.array(bounds[:2], dtype=np.float64), np.array(bounds[2:], dtype=np.float64)
-    loops = _Loops.pack(regions)
-    for axis in (0, 1):  # within the window's box, as every tile's loops are within the tile
-        loops = loops.clip(axis, low[axis], below=False).clip(axis, high[axis], below=True)
     levels: dict[int, Parts] = {}
-    for tile_low, tile_high, tile_loops in _tiles(loops, low, high, tile_vertices):
-        rectangle = CrossSection([_rectangle(tile_low, tile_high)], FillRule.Positive)
-        tile = window ^ rectangle
-        if tile.is_empty():
-            continue
-        # the loops are cut to the rectangle: a window covering it limits nothing
-        whole = (rectangle - window).is_empty()
-        for m, parts in _tile_levels(tile, whole, tile_loops, tile_low, tile_high).items():
+    for tile, whole, winding in _window_tiles(regions, window, tile_vertices):
+        for m, parts in _tile_levels(tile, whole, winding).items():
             levels.setdefault(m, []).extend(parts)
     return dict(sorted(levels.items()))
 
@@ -195,30 +183,11 @@ def cover_level_areas(
     The areas agree with those of :func:`cover_levels`' polygons to
     rounding (a few units in the last place of the window's area).
     """
-    if window.is_empty():
-        return {}
-    bounds = window.bounds()
-    low, high = np.array(bounds[:2], dtype=np.float64), np.array(bounds[2:], dtype=np.float64)
-    loops = _Loops.pack(regions)
-    for axis in (0, 1):
-        loops = loops.clip(axis, low[axis], below=False).clip(axis, high[axis], below=True)
     areas: dict[int, float] = {}
-    for tile_low, tile_high, tile_loops in _tiles(loops, low, high, tile_vertices):
-        rectangle = CrossSection([_rectangle(tile_low, tile_high)], FillRule.Positive)
-        tile = window ^ rectangle
-        if tile.is_empty():
-            continue
-        whole = (rectangle - window).is_empty()
-        loop_list = tile_loops.unpack()
-        deepest = len(np.unique(tile_loops.owner))
-        margin = 1.0 + float(np.max(tile_high - tile_low))
-        clockwise = _rectangle(tile_low - margin, tile_high + margin)[::-1].copy()
+    for tile, whole, winding in _window_tiles(regions, window, tile_vertices):
         previous, m = float(tile.area()), 0
         while previous > 0:
-            upper = 0.0
-            if m + 1 <= deepest:
-                union = CrossSection(loop_list + [clockwise] * m, FillRule.Positive)
-                upper = float((union if whole else union ^ tile).area())
+            upper = float(winding.at_least(m + 1, tile, whole).area())
             exactly = previous - upper
             if exactly > 0:
                 areas[m] = areas.get(m, 0.0) + exactly
@@ -226,30 +195,57 @@ def cover_level_areas(
     return dict(sorted(areas.items()))
 
 
-def _tile_levels(
-    tile: CrossSection,
-    whole: bool,
-    loops: _Loops,
-    low: NDArray[np.float64],
-    high: NDArray[np.float64],
-) -> dict[int, Parts]:
-    """The winding trick on one tile: ``tile`` covered exactly ``m`` times
-    (``whole``: the tile is the rectangle [low, high] the loops are cut to)."""
-    loop_list = loops.unpack()
-    deepest = len(np.unique(loops.owner))  # no point is covered more often
-    margin = 1.0 + float(np.max(high - low))
-    clockwise = _rectangle(low - margin, high + margin)[::-1].copy()
+@dataclass(frozen=True)
+class _Winding:
+    """One tile's loops, cut to its rectangle, for the winding trick."""
 
-    def covered_at_least(m: int) -> CrossSection:
-        if m > deepest:
+    loops: list[NDArray[np.float64]]
+    deepest: int  # no point is covered by more regions than hold loops here
+    clockwise: NDArray[np.float64]  # a rectangle round the tile, clockwise
+
+    @classmethod
+    def of(cls, loops: _Loops, low: NDArray[np.float64], high: NDArray[np.float64]) -> _Winding:
+        margin = 1.0 + float(np.max(high - low))
+        clockwise = _rectangle(low - margin, high + margin)[::-1].copy()
+        return cls(loops.unpack(), len(np.unique(loops.owner)), clockwise)
+
+    def at_least(self, m: int, tile: CrossSection, whole: bool) -> CrossSection:
+        """The part of ``tile`` covered by at least ``m`` regions (``whole``:
+        the tile is the rectangle the loops are cut to)."""
+        if m > self.deepest:
             return CrossSection()
-        union = CrossSection(loop_list + [clockwise] * (m - 1), FillRule.Positive)
+        union = CrossSection(self.loops + [self.clockwise] * (m - 1), FillRule.Positive)
         return union if whole else union ^ tile
 
+
+def _window_tiles(
+    regions: list[list[NDArray[np.float64]]], window: CrossSection, tile_vertices: int
+) -> Iterator[tuple[CrossSection, bool, _Winding]]:
+    """Each non-empty tile of ``window`` (:func:`_tiles`), whether it is its
+    whole rectangle, and its loops ready for the winding trick."""
+    if window.is_empty():
+        return
+    bounds = window.bounds()  # (xmin, ymin, xmax, ymax)
+    low, high = np.array(bounds[:2], dtype=np.float64), np.array(bounds[2:], dtype=np.float64)
+    loops = _Loops.pack(regions)
+    for axis in (0, 1):  # within the window's box, as every tile's loops are within the tile
+        loops = loops.clip(axis, low[axis], below=False).clip(axis, high[axis], below=True)
+    for tile_low, tile_high, tile_loops in _tiles(loops, low, high, tile_vertices):
+        rectangle = CrossSection([_rectangle(tile_low, tile_high)], FillRule.Positive)
+        tile = window ^ rectangle
+        if tile.is_empty():
+            continue
+        # the loops are cut to the rectangle: a window covering it limits nothing
+        whole = (rectangle - window).is_empty()
+        yield tile, whole, _Winding.of(tile_loops, tile_low, tile_high)
+
+
+def _tile_levels(tile: CrossSection, whole: bool, winding: _Winding) -> dict[int, Parts]:
+    """The winding trick on one tile: ``tile`` covered exactly ``m`` times."""
     levels: dict[int, Parts] = {}
     previous, m = tile, 0
     while not previous.is_empty():
-        upper = covered_at_least(m + 1)
+        upper = winding.at_least(m + 1, tile, whole)
         exactly = previous - upper
         if not exactly.is_empty():
             parts = _parts(exactly)

@@ -21,6 +21,7 @@ Dask when a scheduler is given, with results identical to the serial run.
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -101,11 +102,16 @@ class SunStudy:
 
     def level_areas(self) -> dict[float, float]:
         """Area of the region sunlit for each duration (hours -> area)."""
+        return dict(self._level_areas)
+
+    @functools.cached_property
+    def _level_areas(self) -> dict[float, float]:
+        # measured once: a day's levels over a city are thousands of polygons
         return {self.hours(k): _area(parts) for k, parts in sorted(self.levels.items())}
 
     def area_with_at_least(self, hours: float) -> float:
         """Area of the part of the region sunlit for at least ``hours``."""
-        return _at_least(self.level_areas(), hours)
+        return _at_least(self._level_areas, hours)
 
     def fraction_meeting(self, hours: float) -> float:
         """Fraction of the region's area sunlit for at least ``hours`` (0 for
