@@ -220,7 +220,7 @@ def run(args) -> int:
         print(f"note: {note}", file=sys.stderr)
     hours = args.hours
     place = f"{latitude:g}, {longitude:g}"
-    if args.days == 1 and len(studies.days) == 1:
+    if args.days == 1:  # a SunStudies of the one day (every sample lies in it)
         ((day, study),) = studies.days.items()
         print(
             f"{args.input}: {len(study.times)} of {len(times)} samples with the sun up on "
