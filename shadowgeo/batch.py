@@ -156,15 +156,13 @@ def convert_files(
         In the order of ``jobs``, whatever order they finished in.
     """
     total = len(jobs)
-    if len({target for _, target in jobs}) != total:
-        first: dict[Path, Path] = {}
-        for source, target in jobs:
-            if target in first:
-                raise SceneError(
-                    f"{first[target]} and {source} would be written to the same output "
-                    f"file {target}"
-                )
-            first[target] = source
+    first: dict[Path, Path] = {}
+    for source, target in jobs:
+        if target in first:
+            raise SceneError(
+                f"{first[target]} and {source} would be written to the same output file {target}"
+            )
+        first[target] = source
     if scheduler is None:
         outcomes = []
         for done, (source, target) in enumerate(jobs, start=1):

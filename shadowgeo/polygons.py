@@ -434,6 +434,16 @@ def without_copies(loops: list[np.ndarray]) -> list[np.ndarray]:
     return kept
 
 
+def triangles_region(triangles: np.ndarray) -> CrossSection:
+    """The region a (m, 3, 2) stack of triangles covers (a receiving patch
+    seen in its plane): each turned counter-clockwise, those of no area
+    dropped, filled as one region."""
+    areas = signed_areas(list(triangles))
+    keep = areas != 0
+    oriented = [t if a > 0 else t[::-1] for t, a in zip(triangles[keep], areas[keep], strict=True)]
+    return fill(oriented)
+
+
 def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
     """The region of points whose winding number over ``loops`` passes ``rule``
     (``"positive"``: > 0, ``"nonzero"``, ``"evenodd"``).

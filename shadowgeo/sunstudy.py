@@ -98,7 +98,7 @@ class SunStudy:
 
     def hours(self, k: int) -> float:
         """Sunlight duration, in hours, of level ``k``."""
-        return k * self.step.total_seconds() / 3600.0
+        return _hours(k, self.step)
 
     def level_areas(self) -> dict[float, float]:
         """Area of the region sunlit for each duration (hours -> area)."""
@@ -129,6 +129,11 @@ class SunStudy:
             shadowed += _inside(uv, shadow)
         lit = (len(self.times) - shadowed) * self.step.total_seconds() / 3600.0
         return np.where(inside_region, lit, np.nan)
+
+
+def _hours(k: int, step: _dt.timedelta) -> float:
+    """The duration, in hours, of ``k`` samples of ``step`` each."""
+    return k * step.total_seconds() / 3600.0
 
 
 def _at_least(level_areas: dict[float, float], hours: float) -> float:
@@ -200,13 +205,17 @@ def _levels(
     """Exactly-``k``-samples-sunlit parts of ``region`` (:func:`cover_levels`
     of the shadows: ``k`` sunlit is ``count - k`` shadowed)."""
     count = len(shadows)
-    loops = [loop for shadow in shadows for part in shadow for loop in part]
-    local = iter(_map_loops(frame.to_local, loops))
-    regions = [[next(local) for part in shadow for _ in part] for shadow in shadows]
-    covered = sorted(cover_levels(regions, region).items(), reverse=True)
+    covered = sorted(cover_levels(_local_regions(frame, shadows), region).items(), reverse=True)
     flat = [loop for _, parts in covered for part in parts for loop in part]
     plane = iter(_map_loops(frame.to_plane, flat))
     return {count - m: [[next(plane) for _ in part] for part in parts] for m, parts in covered}
+
+
+def _local_regions(frame: _Frame, shadows: Sequence[Polygons]) -> list[list[NDArray[np.float64]]]:
+    """Each shadow's loops in ``frame``'s local coordinates, one region each."""
+    loops = [loop for shadow in shadows for part in shadow for loop in part]
+    local = iter(_map_loops(frame.to_local, loops))
+    return [[next(local) for part in shadow for _ in part] for shadow in shadows]
 
 
 def _map_loops(
@@ -369,10 +378,10 @@ def sun_study_by_day(
     Results are identical either way. ``progress(done, total)`` is called as
     days finish.
     """
+    options = dict(latitude=latitude, longitude=longitude, step=step, up=up, north=north)
     return SunStudies(
-        _by_day(sun_study, casters, plane, region, times, latitude, longitude, step, up, north, tz,
-                scheduler, progress)
-    )  # fmt: skip
+        _by_day(sun_study, casters, plane, region, times, tz, scheduler, progress, options)
+    )
 
 
 def sun_summaries_by_day(
@@ -397,10 +406,8 @@ def sun_summaries_by_day(
     summaries travel back, so memory holds one day's shadows at a time
     however many days. The areas agree with the full studies' to rounding
     (about 1e-15 of the region); serial and Dask runs are identical."""
-    return _by_day(
-        _summary, casters, plane, region, times, latitude, longitude, step, up, north, tz,
-        scheduler, progress,
-    )  # fmt: skip
+    options = dict(latitude=latitude, longitude=longitude, step=step, up=up, north=north)
+    return _by_day(_summary, casters, plane, region, times, tz, scheduler, progress, options)
 
 
 def _summary(
@@ -422,14 +429,9 @@ def _summary(
         casters, plane, region, times, latitude, longitude, up, north
     )
     count = len(shadows)
-    loops = [loop for shadow in shadows for part in shadow for loop in part]
-    local = iter(_map_loops(frame.to_local, loops))
-    regions = [[next(local) for part in shadow for _ in part] for shadow in shadows]
     unit = 1.0 / (frame.scale * frame.scale)  # a local area in plane units
-    seconds = step.total_seconds()
-    covered = cover_level_areas(regions, region_cs)
-    # durations as SunStudy.hours gives them
-    level_areas = {(count - m) * seconds / 3600.0: area * unit for m, area in covered.items()}
+    covered = cover_level_areas(_local_regions(frame, shadows), region_cs)
+    level_areas = {_hours(count - m, step): area * unit for m, area in covered.items()}
     area = _area(frame.polygons(region_cs))
     return DaySummary(len(kept), area, dict(sorted(level_areas.items())))
 
@@ -440,22 +442,16 @@ def _by_day(
     plane: Plane,
     region: ArrayLike,
     times: Sequence[_dt.datetime],
-    latitude: float,
-    longitude: float,
-    step: _dt.timedelta | None,
-    up: str,
-    north: ArrayLike | None,
     tz: _dt.tzinfo | None,
     scheduler: Any,
     progress: Callable[[int, int], None] | None,
+    options: dict[str, Any],
 ) -> dict[_dt.date, Any]:
     """``function`` (:func:`sun_study` or :func:`_summary`) of each calendar
-    day of ``times``, here or on Dask (see :func:`sun_study_by_day`)."""
+    day of ``times`` with the keywords ``options`` (the site, step and
+    frame), here or on Dask (see :func:`sun_study_by_day`)."""
     caster = _one_caster(casters)
     groups = days(times, tz)
-    options: dict[str, Any] = dict(
-        latitude=latitude, longitude=longitude, step=step, up=up, north=north
-    )
     chosen = {day: [times[i] for i in indices] for day, indices in groups.items()}
     total = len(chosen)
     if scheduler is None:

@@ -533,13 +533,7 @@ def _shadow_on(
     local = [(loop - center) * scale for loop in loops]
     receiving = None
     if region2d is not None:
-        triangles = (region2d - center) * scale
-        areas = poly.signed_areas(list(triangles))
-        keep = areas != 0
-        oriented = [
-            t if a > 0 else t[::-1] for t, a in zip(triangles[keep], areas[keep], strict=True)
-        ]
-        receiving = poly.fill(oriented)
+        receiving = poly.triangles_region((region2d - center) * scale)
     if poly.whole_loop(local, keep_triangles=True) and (
         receiving is None or poly.holds_box(receiving, local[0].min(axis=0), local[0].max(axis=0))
     ):  # one simple loop on the receiver: no union and no cut (a sweep over the loop each)

@@ -211,10 +211,7 @@ def _outline(plane: Plane, triangles: np.ndarray, notes: list[str], name: str) -
     center = 0.5 * (flat.reshape(-1, 2).min(axis=0) + flat.reshape(-1, 2).max(axis=0))
     extent = float(np.abs(flat.reshape(-1, 2) - center).max()) or 1.0
     scale = poly.local_scale(extent)
-    local = (flat - center) * scale
-    areas = poly.signed_areas(list(local))
-    loops = [t if a > 0 else t[::-1] for t, a in zip(local, areas, strict=True) if a != 0]
-    parts = poly.components(poly.fill(loops))
+    parts = poly.components(poly.triangles_region((flat - center) * scale))
     if not parts:
         raise SceneError(f"the floor '{name}' has no area")
     sizes = [float(poly.signed_areas(part).sum()) for part in parts]
