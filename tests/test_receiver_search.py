@@ -143,6 +143,44 @@ def test_a_big_curved_shape_is_ruled_out_by_its_normals_alone(monkeypatch):
     assert may_hold_patch(disc, np.array([0]), 8.6, TOLERANCE).tolist() == [False]
 
 
+def test_the_normals_the_coarse_bound_keeps_are_the_casters_own():
+    """The coarse bound writes the face normals it computes for the casters'
+    mesh to take: the same numbers, bit for bit, as the mesh computes alone,
+    beside a small shape whose normals it did not compute."""
+    sphere = trimesh.creation.icosphere(subdivisions=6, radius=2.0)
+    rng = np.random.default_rng(3)
+    order = rng.permutation(len(sphere.faces))  # faces in no order of the surface
+    big = sg.Shape(sphere.vertices + [0.1, 2.3, -0.7], sphere.faces[order])
+    box = trimesh.creation.box()
+    stacked = CasterSet([sg.Shape(box.vertices, box.faces), big])
+    assert may_hold_patch(stacked, np.array([1]), 2.0, TOLERANCE).tolist() == [False]
+    everything = np.ones(len(stacked.faces), dtype=bool)
+    kept = stacked.mesh(everything).face_normals
+    alone = sg.Caster(stacked.vertices, stacked.faces).face_normals
+    assert np.array_equal(kept, alone)
+    assert "face_normals" in stacked.mesh(everything).__dict__
+
+
+def test_a_window_at_some_cells_is_the_whole_windows_values_there():
+    """_window_at takes the window over the occupied cells' box only; at any
+    cell, occupied or its mirror, it gives the whole grid's window."""
+    from shadowgeo.scene.receivers import _window, _window_at
+
+    rng = np.random.default_rng(5)
+    for pick, empty in ((np.minimum, np.inf), (np.maximum, -np.inf)):
+        grid = np.full((3, 9, 7, 7, 7), empty)
+        cells = tuple(rng.integers(1, 4, 40) + offset for offset in (4, 2, 1, 3))
+        grid[(slice(None), *cells)] = rng.normal(size=(3, 40))
+        occupied = np.nonzero(np.isfinite(grid[0]))
+        mirrored = tuple(n - 1 - at for n, at in zip(grid.shape[1:], occupied, strict=True))
+        for reach in (1, 2):
+            whole = _window(grid, reach, pick)
+            for at in (occupied, mirrored):
+                assert np.array_equal(
+                    _window_at(grid, reach, pick, occupied, at), whole[(slice(None), *at)]
+                )
+
+
 def test_faces_binned_a_block_at_a_time_rule_out_the_same_shapes(monkeypatch):
     """The histogram built from blocks of a few faces, cells merged across
     blocks, decides as one built at once: sphere, ground and a sphere beside

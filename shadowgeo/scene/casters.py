@@ -23,7 +23,7 @@ from ..boxes import bounding_box
 from ..lights import Light, SpotLight, is_positional
 from ..plane import Plane
 from ..tolerance import Tolerance
-from ..topology import Caster, closed_by_sort
+from ..topology import Caster, block_normals, closed_by_sort
 from .model import Shape, transformed
 
 # Stacked caster meshes kept for later lights (each holds its topology: a few
@@ -38,6 +38,8 @@ _IDENTITY = np.eye(4).reshape(16)
 # (see _closed_by_topology); a bigger shape by its own sort.
 _SMALL_TOPOLOGY = 4096
 _TOPOLOGIES_TESTED = 64
+# Faces per block where the face normals are computed.
+_NORMALS_BLOCK = 1 << 16
 
 
 def distinct(shapes: list[Shape]) -> list[Shape]:
@@ -135,6 +137,7 @@ class CasterSet:
         else:
             self.low = self.high = np.zeros((0, 3))
         self._meshes: dict[bytes, Caster] = {}
+        self._normals_known = np.zeros(len(shapes), dtype=bool)
         self._shapes = shapes
 
     @functools.cached_property
@@ -266,10 +269,14 @@ class CasterSet:
         near = np.abs(plane.signed_distance(self.vertices)) <= tolerance.coplanar_length
         if not near.any():
             return np.ones(len(self.faces), dtype=bool)
-        off: np.ndarray = ~np.all(near[self.faces], axis=1)
-        if off.all():
+        # a face lies in the plane when its three corners do: the first
+        # corner's test rules out all but a few faces in one pass
+        lying = np.flatnonzero(near[self.faces[:, 0]])
+        lying = lying[near[self.faces[lying, 1]] & near[self.faces[lying, 2]]]
+        off: np.ndarray = np.ones(len(self.faces), dtype=bool)
+        if not len(lying):
             return off
-        lying = np.flatnonzero(~off)
+        off[lying] = False
         corners = self.vertices[self.faces[lying]]
         normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
         resting = normals @ plane.normal < 0  # turned away from the light's side
@@ -307,6 +314,47 @@ class CasterSet:
         closed[self.face_owner[bad_face]] = False
         return closed
 
+    @functools.cached_property
+    def columns(self) -> np.ndarray:
+        """(3, n) the stacked vertices' x, y and z, each contiguous."""
+        return np.ascontiguousarray(self.vertices.T)
+
+    @functools.cached_property
+    def _normal_rows(self) -> np.ndarray:
+        return np.empty((len(self.faces), 3))
+
+    def normal_rows(self, index: int) -> np.ndarray:
+        """(k, 3) the rows of :attr:`face_normals` for caster ``index``'s
+        faces, to be written by a caller (the receiver search) with
+        :func:`~shadowgeo.topology.block_normals`' arithmetic and then
+        declared known (:meth:`normals_known`): :attr:`face_normals` takes
+        them as they are."""
+        start, count = int(self.face_starts[index]), int(self.face_counts[index])
+        rows: np.ndarray = self._normal_rows[start : start + count]
+        return rows
+
+    def normals_known(self, index: int) -> None:
+        """Caster ``index``'s :meth:`normal_rows` are written."""
+        self._normals_known[index] = True
+
+    @functools.cached_property
+    def face_normals(self) -> np.ndarray:
+        """(m, 3) every stacked face's unnormalised normal, the numbers of
+        :attr:`Caster.face_normals`: those the receiver search kept, the
+        others computed here; the casters' mesh takes them (or its faces'
+        rows) once they are made."""
+        normals = self._normal_rows
+        missing = np.repeat(~self._normals_known, self.face_counts)
+        for start in range(0, len(self.faces), _NORMALS_BLOCK):
+            stop = start + _NORMALS_BLOCK
+            wanted = missing[start:stop]
+            if wanted.all():
+                normals[start:stop] = block_normals(self.columns, self.faces[start:stop])
+            elif wanted.any():
+                rows = start + np.flatnonzero(wanted)
+                normals[rows] = block_normals(self.columns, self.faces[rows])
+        return normals
+
     def mesh(self, faces: np.ndarray) -> Caster:
         """The stacked vertices with the face mask ``faces`` as one caster, its
         topology cached for the next light with the same faces."""
@@ -325,7 +373,15 @@ class CasterSet:
                     or np.array_equal(whole, np.logical_or.reduceat(faces, self.face_starts))
                 ) and self._shape_closed is not None:
                     closed = bool(self._shape_closed[whole].all())
-            self._meshes[key] = Caster(self.vertices, chosen, copy=False, closed=closed)
+            caster = Caster(self.vertices, chosen, copy=False, closed=closed)
+            if "columns" in self.__dict__:
+                caster.__dict__["_columns"] = self.columns
+            if "face_normals" in self.__dict__ or self._normals_known.any():
+                # (some) computed already: the same numbers
+                caster.__dict__["face_normals"] = (
+                    self.face_normals if everything else self.face_normals[faces]
+                )
+            self._meshes[key] = caster
         return self._meshes[key]
 
 

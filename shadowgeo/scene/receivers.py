@@ -490,44 +490,62 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     side = int(np.ceil(1.0 / cell))
     levels = int(np.ceil(radius / band))
     span, depth = 2 * side + 3, 2 * levels + 3  # an empty cell past each end
-    columns = [stacked.vertices[:, axis] - middle[axis] for axis in range(3)]
     grid_low = np.full((3, depth * span**3), np.inf)
     grid_high = np.full((3, depth * span**3), -np.inf)
     loose_low = np.full(3, np.inf)
     loose_high = np.full(3, -np.inf)
     faces = stacked.faces[start : start + count]
+    # the face normals, kept for the casters' mesh of the first light
+    normals = stacked.normal_rows(index)
     width = 2.0 * np.pi * limit / cell
     for first in range(0, count, _BIN_BLOCK):
-        block = faces[first : first + _BIN_BLOCK]
-        low, high, unit, height, _, sharp = _face_bins(block, columns, width)
-        loose = ~sharp
-        if loose.any():
+        stop = first + _BIN_BLOCK
+        low, high, unit, height, _, sharp = _face_bins(
+            faces[first:stop], stacked.columns, middle, width, normals[first:stop]
+        )
+        every = bool(sharp.all())
+        if not every:
+            loose = ~sharp
             for axis in range(3):
                 loose_low[axis] = min(loose_low[axis], float(low[axis][loose].min()))
                 loose_high[axis] = max(loose_high[axis], float(high[axis][loose].max()))
-        chosen = np.flatnonzero(sharp)
-        if not len(chosen):
-            continue
-        level = np.floor(height[chosen] / band)
-        key = (np.clip(level, -levels, levels).astype(np.int64) + levels + 1) * span**3
+            chosen = np.flatnonzero(sharp)
+            if not len(chosen):
+                continue
+            low, high = [x[chosen] for x in low], [x[chosen] for x in high]
+            unit, height = [x[chosen] for x in unit], height[chosen]
+        # the cell's number, in floats (whole numbers, exact) until the end
+        key = np.floor(height / band)
+        np.clip(key, -levels, levels, out=key)
+        key += levels + 1
+        key *= span**3
         for axis, weight in enumerate((1, span, span * span)):
-            bin_ = np.floor(unit[axis][chosen] / cell)
-            key += (np.clip(bin_, -side, side).astype(np.int64) + side + 1) * weight
+            bin_ = np.floor(unit[axis] / cell)
+            np.clip(bin_, -side, side, out=bin_)
+            bin_ += side + 1
+            bin_ *= weight
+            key += bin_
+        cells = key.astype(np.int64)
+        # runs of faces in one cell (a mesh's faces mostly follow each other
+        # across its surface) reduced first, each run's box filed once
+        runs = np.flatnonzero(np.concatenate([[True], cells[1:] != cells[:-1]]))
+        cells = cells[runs]
         for axis in range(3):
-            np.minimum.at(grid_low[axis], key, low[axis][chosen])
-            np.maximum.at(grid_high[axis], key, high[axis][chosen])
+            np.minimum.at(grid_low[axis], cells, np.minimum.reduceat(low[axis], runs))
+            np.maximum.at(grid_high[axis], cells, np.maximum.reduceat(high[axis], runs))
+    stacked.normals_known(index)
     shape = (3, depth, span, span, span)
     grid_low, grid_high = grid_low.reshape(shape), grid_high.reshape(shape)
-    occupied = np.isfinite(grid_low[0])
-    flip = (slice(None), slice(None, None, -1), slice(None, None, -1), slice(None, None, -1),
-            slice(None, None, -1))  # fmt: skip
+    occupied = np.nonzero(np.isfinite(grid_low[0]))
+    # the mirror of each occupied cell (the grid flipped along each axis)
+    mirrored = tuple(length - 1 - at for length, at in zip(shape[1:], occupied, strict=True))
     near_low = np.minimum(
-        _window(grid_low, 1, np.minimum)[:, occupied],
-        _window(grid_low, 2, np.minimum)[flip][:, occupied],
+        _window_at(grid_low, 1, np.minimum, occupied, occupied),
+        _window_at(grid_low, 2, np.minimum, occupied, mirrored),
     )
     near_high = np.maximum(
-        _window(grid_high, 1, np.maximum)[:, occupied],
-        _window(grid_high, 2, np.maximum)[flip][:, occupied],
+        _window_at(grid_high, 1, np.maximum, occupied, occupied),
+        _window_at(grid_high, 2, np.maximum, occupied, mirrored),
     )
     near_low = np.minimum(near_low, loose_low[:, None])
     near_high = np.maximum(near_high, loose_high[:, None])
@@ -537,6 +555,40 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     if np.any(~(reach < size * (1.0 - 1e-9))):  # NaN or inf: keep the shape
         return True
     return bool(np.isfinite(loose_low).all() and not loose_reach < size * (1.0 - 1e-9))
+
+
+def _window_at(
+    grid: np.ndarray,
+    reach: int,
+    pick: np.ufunc,
+    occupied: tuple[np.ndarray, ...],
+    cells: tuple[np.ndarray, ...],
+) -> np.ndarray:
+    """(rows, k) :func:`_window` of ``grid`` at the ``cells`` (index arrays,
+    one per cell axis), its ``occupied`` cells given (every other cell holds
+    ``pick``'s identity, inf or -inf): the window is taken over the box of
+    the occupied cells and ``reach`` around it only, and a cell beyond that
+    box has no occupied cell within reach."""
+    empty = np.inf if pick is np.minimum else -np.inf
+    if not len(occupied[0]):
+        return np.full((grid.shape[0], len(cells[0])), empty)
+    starts = [max(int(at.min()) - reach, 0) for at in occupied]
+    stops = [
+        min(int(at.max()) + reach + 1, length)
+        for at, length in zip(occupied, grid.shape[1:], strict=True)
+    ]
+    crop = (slice(None), *(slice(a, b) for a, b in zip(starts, stops, strict=True)))
+    window = _window(grid[crop], reach, pick)
+    inside = np.ones(len(cells[0]), dtype=bool)
+    for at, a, b in zip(cells, starts, stops, strict=True):
+        inside &= (at >= a) & (at < b)
+    result = np.full((grid.shape[0], len(inside)), empty)
+    local: tuple[slice | np.ndarray, ...] = (
+        slice(None),
+        *(at[inside] - a for at, a in zip(cells, starts, strict=True)),
+    )
+    result[:, inside] = window[local]
+    return result
 
 
 def _window(grid: np.ndarray, reach: int, pick: np.ufunc) -> np.ndarray:
@@ -588,7 +640,6 @@ def _patch_bound(
     span = 2 * side + 3
     depth = 2 * levels + 3
     per_shape = span**3 * depth
-    columns = [stacked.vertices[:, axis] - middle[axis] for axis in range(3)]
     # thin and degenerate faces: members of any patch of their shape
     loose_low = np.full((count, 3), np.inf)
     loose_high = np.full((count, 3), -np.inf)
@@ -596,7 +647,9 @@ def _patch_bound(
     for start in range(0, len(rows), _BIN_BLOCK):
         block = rows[start : start + _BIN_BLOCK]
         holder = owner[start : start + _BIN_BLOCK]
-        low, high, unit, height, binned, sharp = _face_bins(stacked.faces[block], columns, width)
+        low, high, unit, height, binned, sharp = _face_bins(
+            stacked.faces[block], stacked.columns, middle, width
+        )
         loose = np.flatnonzero(~sharp)
         if len(loose):  # owners are non-decreasing: the shapes' faces follow each other
             held = holder[loose]
@@ -673,39 +726,46 @@ _Columns = list[np.ndarray]
 
 
 def _face_bins(
-    faces: np.ndarray, columns: list[np.ndarray], width: float
+    faces: np.ndarray,
+    columns: np.ndarray,
+    middle: np.ndarray,
+    width: float,
+    normals: np.ndarray | None = None,
 ) -> tuple[_Columns, _Columns, _Columns, np.ndarray, np.ndarray, np.ndarray]:
     """Per face of ``faces`` (rows of vertex indices into the coordinate
-    ``columns``): its box (low and high columns), unit normal (columns),
-    plane offset from the columns' origin (through the centroid), whether it
-    has a normal, and whether it is sharp (its smallest height at least
-    ``width``, so that it turns from a patch's plane by less than half a
-    cell)."""
+    ``columns``, (3, n)): its box (low and high columns), unit normal
+    (columns), the offset of its plane from ``middle`` (through its first
+    corner), whether it has a normal, and whether it is sharp (its smallest
+    height at least ``width``, so that it turns from a patch's plane by less
+    than half a cell). ``normals``, when given, (k, 3): the faces'
+    unnormalised normals written into it, the numbers of
+    :func:`shadowgeo.topology.block_normals`.
+
+    A face is taken for sharp when twice its area is at least ``width``
+    times its box's diagonal, which is at least its longest side: a face
+    taken is sharp, and one on the edge counts as thin, which only widens a
+    bound."""
     first, second, third = faces[:, 0], faces[:, 1], faces[:, 2]
     corners = [[column[first], column[second], column[third]] for column in columns]
     low = [np.minimum(np.minimum(a, b), c) for a, b, c in corners]
     high = [np.maximum(np.maximum(a, b), c) for a, b, c in corners]
-    one = [b - a for a, b, _ in corners]  # first corner to second
-    two = [c - a for a, _, c in corners]  # first corner to third
-    three = [c - b for _, b, c in corners]  # second corner to third
-    normal = [
-        one[1] * two[2] - one[2] * two[1],
-        one[2] * two[0] - one[0] * two[2],
-        one[0] * two[1] - one[1] * two[0],
-    ]
+    # block_normals' arithmetic, on the corners gathered here
+    (ux, uy, uz), (vx, vy, vz) = ([b - a for a, b, _ in corners], [c - a for a, _, c in corners])
+    normal = [uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx]
+    if normals is not None:
+        for axis in range(3):
+            normals[:, axis] = normal[axis]
     doubled = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
-    longest = np.sqrt(
-        np.maximum(
-            np.maximum(sum(x * x for x in one), sum(x * x for x in two)),
-            sum(x * x for x in three),
-        )
-    )
+    extent = [b - a for a, b in zip(low, high, strict=True)]
+    diagonal = np.sqrt(extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2])
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         unit = [axis / doubled for axis in normal]
         binned = np.isfinite(unit[0]) & np.isfinite(unit[1]) & np.isfinite(unit[2])
         binned &= doubled > 0
-        sharp = binned & (doubled >= width * longest)
-        height = sum(u * ((a + b) + c) for u, (a, b, c) in zip(unit, corners, strict=True)) / 3.0
+        sharp = binned & (doubled >= width * diagonal)
+        height = sum(
+            u * (a - m) for u, (a, _, _), m in zip(unit, corners, middle.tolist(), strict=True)
+        )
     return low, high, unit, height, binned, sharp
 
 
