@@ -182,8 +182,13 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
     has_back = np.zeros(n_vertices, dtype=bool)
     for start in range(0, len(faces), _BLOCK):
         block, lit = faces[start : start + _BLOCK], front[start : start + _BLOCK]
-        has_front[block[lit]] = True
-        has_back[block[~lit]] = True
+        # corner by corner: a column gathered by face numbers, not rows
+        # picked by a mask (twice as quick)
+        lit_faces, unlit_faces = np.flatnonzero(lit), np.flatnonzero(~lit)
+        for corner in range(3):
+            column = block[:, corner]
+            has_front[column[lit_faces]] = True
+            has_back[column[unlit_faces]] = True
     mixed = has_front & has_back
     near_parts = []
     for start in range(0, len(faces), _BLOCK):

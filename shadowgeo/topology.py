@@ -432,16 +432,23 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
         return None
     if count == 0 or count % 2:  # an odd number of face edges cannot pair
         return False
-    keys = np.empty((count, 3), dtype=np.int64)
-    for first in range(0, count, _BLOCK):  # small temporaries, reused
+    # one row of keys per corner k, for the edges from corner k to k + 1,
+    # worked out as 2 (min n + max) + (start > end), a block at a time
+    # (small temporaries, reused)
+    keys = np.empty((3, count), dtype=np.int64)
+    larger = np.empty(min(count, _BLOCK), dtype=np.int64)
+    for first in range(0, count, _BLOCK):
         block = faces[first : first + _BLOCK]
-        start, end = block, np.roll(block, -1, axis=1)
-        key = keys[first : first + _BLOCK]
-        np.minimum(start, end, out=key)
-        key *= np.int64(n)
-        key += np.maximum(start, end)
-        key <<= np.int64(1)
-        key |= start > end
+        high = larger[: len(block)]
+        for corner in range(3):
+            start, end = block[:, corner], block[:, (corner + 1) % 3]
+            key = keys[corner, first : first + len(block)]
+            np.minimum(start, end, out=key)
+            key *= np.int64(2 * n)
+            np.maximum(start, end, out=high)
+            high <<= np.int64(1)
+            key += high
+            key += start > end
     flat = keys.reshape(-1)
     # numpy's default sort, not its stable one: only the keys are sorted, so
     # order among equals is moot, and on x86 with AVX2/AVX-512 the default is

@@ -138,6 +138,7 @@ class CasterSet:
             self.low = self.high = np.zeros((0, 3))
         self._meshes: dict[bytes, Caster] = {}
         self._normals_known = np.zeros(len(shapes), dtype=bool)
+        self._used_boxes: dict[int, np.ndarray] = {}
         self._shapes = shapes
 
     @functools.cached_property
@@ -333,9 +334,13 @@ class CasterSet:
         rows: np.ndarray = self._normal_rows[start : start + count]
         return rows
 
-    def normals_known(self, index: int) -> None:
-        """Caster ``index``'s :meth:`normal_rows` are written."""
+    def normals_known(self, index: int, used_box: np.ndarray) -> None:
+        """Caster ``index``'s :meth:`normal_rows` are written; ``used_box``
+        (2, 3): the box of its faces' corners, which the casters' mesh of
+        every face takes for :attr:`Caster.bounds` once every caster's is
+        known (the same numbers: the box of the vertices its faces use)."""
         self._normals_known[index] = True
+        self._used_boxes[index] = used_box
 
     @functools.cached_property
     def face_normals(self) -> np.ndarray:
@@ -380,6 +385,11 @@ class CasterSet:
                 # (some) computed already: the same numbers
                 caster.__dict__["face_normals"] = (
                     self.face_normals if everything else self.face_normals[faces]
+                )
+            if everything and len(self._used_boxes) == len(self) and len(self):
+                boxes = np.array(list(self._used_boxes.values()))
+                caster.__dict__["bounds"] = np.array(
+                    [boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)]
                 )
             self._meshes[key] = caster
         return self._meshes[key]

@@ -497,12 +497,16 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     faces = stacked.faces[start : start + count]
     # the face normals, kept for the casters' mesh of the first light
     normals = stacked.normal_rows(index)
+    used_low, used_high = [np.inf] * 3, [-np.inf] * 3  # the box of the faces' corners
     width = 2.0 * np.pi * limit / cell
     for first in range(0, count, _BIN_BLOCK):
         stop = first + _BIN_BLOCK
         low, high, unit, height, _, sharp = _face_bins(
-            faces[first:stop], stacked.columns, middle, width, normals[first:stop]
+            faces[first:stop], stacked.columns, middle, width, 2.0 * radius, normals[first:stop]
         )
+        for axis in range(3):
+            used_low[axis] = min(used_low[axis], float(low[axis].min()))
+            used_high[axis] = max(used_high[axis], float(high[axis].max()))
         every = bool(sharp.all())
         if not every:
             loose = ~sharp
@@ -533,7 +537,7 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
         for axis in range(3):
             np.minimum.at(grid_low[axis], cells, np.minimum.reduceat(low[axis], runs))
             np.maximum.at(grid_high[axis], cells, np.maximum.reduceat(high[axis], runs))
-    stacked.normals_known(index)
+    stacked.normals_known(index, np.array([used_low, used_high]))
     shape = (3, depth, span, span, span)
     grid_low, grid_high = grid_low.reshape(shape), grid_high.reshape(shape)
     occupied = np.nonzero(np.isfinite(grid_low[0]))
@@ -648,7 +652,7 @@ def _patch_bound(
         block = rows[start : start + _BIN_BLOCK]
         holder = owner[start : start + _BIN_BLOCK]
         low, high, unit, height, binned, sharp = _face_bins(
-            stacked.faces[block], stacked.columns, middle, width
+            stacked.faces[block], stacked.columns, middle, width, 2.0 * radius
         )
         loose = np.flatnonzero(~sharp)
         if len(loose):  # owners are non-decreasing: the shapes' faces follow each other
@@ -730,6 +734,7 @@ def _face_bins(
     columns: np.ndarray,
     middle: np.ndarray,
     width: float,
+    reach: float,
     normals: np.ndarray | None = None,
 ) -> tuple[_Columns, _Columns, _Columns, np.ndarray, np.ndarray, np.ndarray]:
     """Per face of ``faces`` (rows of vertex indices into the coordinate
@@ -737,7 +742,8 @@ def _face_bins(
     (columns), the offset of its plane from ``middle`` (through its first
     corner), whether it has a normal, and whether it is sharp (its smallest
     height at least ``width``, so that it turns from a patch's plane by less
-    than half a cell). ``normals``, when given, (k, 3): the faces'
+    than half a cell). ``reach``: the diagonal of a box holding every face
+    (the shapes'). ``normals``, when given, (k, 3): the faces'
     unnormalised normals written into it, the numbers of
     :func:`shadowgeo.topology.block_normals`.
 
@@ -756,13 +762,19 @@ def _face_bins(
         for axis in range(3):
             normals[:, axis] = normal[axis]
     doubled = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
-    extent = [b - a for a, b in zip(low, high, strict=True)]
-    diagonal = np.sqrt(extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2])
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         unit = [axis / doubled for axis in normal]
         binned = np.isfinite(unit[0]) & np.isfinite(unit[1]) & np.isfinite(unit[2])
         binned &= doubled > 0
-        sharp = binned & (doubled >= width * diagonal)
+        # every face's box lies in the shapes' box: past its diagonal, a
+        # face is sharp whatever its own (most faces of a fine mesh)
+        sharp = binned & (doubled >= width * reach)
+        if not np.array_equal(sharp, binned):
+            extent = [b - a for a, b in zip(low, high, strict=True)]
+            diagonal = np.sqrt(
+                extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2]
+            )
+            sharp = binned & (doubled >= width * diagonal)
         height = sum(
             u * (a - m) for u, (a, _, _), m in zip(unit, corners, middle.tolist(), strict=True)
         )
