@@ -388,6 +388,13 @@ def test_point_and_index_text_reads_back_exactly(monkeypatch, fast):
     assert np.array_equal(parse_field(indices, "MFInt32"), faces.ravel())
     assert x3d_numbers.points_text(np.zeros((0, 3))) == b""
     assert x3d_numbers.integers_text(np.zeros(0)) == b""
+    # many points: spaces only (orjson's one pass), the same numbers
+    many = rng.normal(size=(x3d_numbers._FLAT_POINTS, 3)) * 10.0 ** rng.integers(-60, 60)
+    text = x3d_numbers.points_text(many).decode("ascii")
+    assert ("," not in text) == fast and np.array_equal(parse_field(text, "MFVec3f"), many)
+    many[-1, 2] = np.nan
+    with pytest.raises(sg.SceneError, match="non-finite"):
+        x3d_numbers.points_text(many)
 
 
 def test_spliced_numbers_reach_the_file_whatever_the_chunks():

@@ -33,7 +33,9 @@ orjson = optional_module("orjson")
 
 def points_text(vertices: np.ndarray) -> bytes:
     """An MFVec3f's text, ``x y z, x y z, ...``, each number the shortest that
-    reads back as the same float64.
+    reads back as the same float64; from ``_FLAT_POINTS`` points on, with
+    spaces only (``x y z x y z ...``: X3D reads a comma as a space), which
+    orjson writes in one pass instead of three.
 
     Raises
     ------
@@ -46,10 +48,16 @@ def points_text(vertices: np.ndarray) -> bytes:
     b'0.1 -2.0 3e-20, 1.0 0.0 5.0'
     """
     values = np.ascontiguousarray(vertices, dtype=np.float64).reshape(-1, 3)  # orjson needs it
-    if not np.isfinite(values).all():
+    # a NaN or an infinity makes the sum one (a finite sum rules them out)
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = np.add.reduce(values.ravel())
+    if not np.isfinite(total) and not np.isfinite(values).all():
         finite = np.isfinite(values).all(axis=1)
         bad = values[np.argmin(finite)].tolist()
         raise SceneError(f"cannot write a non-finite number in X3D: {bad}")
+    if orjson is not None and len(values) >= _FLAT_POINTS:
+        flat: bytes = orjson.dumps(values.ravel(), option=orjson.OPT_SERIALIZE_NUMPY)
+        return flat[1:-1].replace(b",", b" ")
     if orjson is not None and len(values):
         listed: bytes = orjson.dumps(values, option=orjson.OPT_SERIALIZE_NUMPY)
         # [[x,y,z],[x,y,z]] -> x y z] [x y z -> x y z, x y z: two passes in C
@@ -57,6 +65,10 @@ def points_text(vertices: np.ndarray) -> bytes:
     words = list(map(repr, values.ravel().tolist()))
     triples = map(" ".join, zip(words[0::3], words[1::3], words[2::3], strict=True))
     return ", ".join(triples).encode("ascii")
+
+
+# Points from which points_text leaves out the commas between them.
+_FLAT_POINTS = 1 << 14
 
 
 def integers_text(values: np.ndarray) -> bytes:
