@@ -502,7 +502,7 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     for first in range(0, count, _BIN_BLOCK):
         stop = first + _BIN_BLOCK
         low, high, unit, height, _, sharp = _face_bins(
-            faces[first:stop], stacked.columns, middle, width, 2.0 * radius, normals[first:stop]
+            faces[first:stop], stacked.columns, middle, width, normals[first:stop]
         )
         for axis in range(3):
             used_low[axis] = min(used_low[axis], float(low[axis].min()))
@@ -652,7 +652,7 @@ def _patch_bound(
         block = rows[start : start + _BIN_BLOCK]
         holder = owner[start : start + _BIN_BLOCK]
         low, high, unit, height, binned, sharp = _face_bins(
-            stacked.faces[block], stacked.columns, middle, width, 2.0 * radius
+            stacked.faces[block], stacked.columns, middle, width
         )
         loose = np.flatnonzero(~sharp)
         if len(loose):  # owners are non-decreasing: the shapes' faces follow each other
@@ -734,7 +734,6 @@ def _face_bins(
     columns: np.ndarray,
     middle: np.ndarray,
     width: float,
-    reach: float,
     normals: np.ndarray | None = None,
 ) -> tuple[_Columns, _Columns, _Columns, np.ndarray, np.ndarray, np.ndarray]:
     """Per face of ``faces`` (rows of vertex indices into the coordinate
@@ -742,8 +741,7 @@ def _face_bins(
     (columns), the offset of its plane from ``middle`` (through its first
     corner), whether it has a normal, and whether it is sharp (its smallest
     height at least ``width``, so that it turns from a patch's plane by less
-    than half a cell). ``reach``: the diagonal of a box holding every face
-    (the shapes'). ``normals``, when given, (k, 3): the faces'
+    than half a cell). ``normals``, when given, (k, 3): the faces'
     unnormalised normals written into it, the numbers of
     :func:`shadowgeo.topology.block_normals`.
 
@@ -766,15 +764,9 @@ def _face_bins(
         unit = [axis / doubled for axis in normal]
         binned = np.isfinite(unit[0]) & np.isfinite(unit[1]) & np.isfinite(unit[2])
         binned &= doubled > 0
-        # every face's box lies in the shapes' box: past its diagonal, a
-        # face is sharp whatever its own (most faces of a fine mesh)
-        sharp = binned & (doubled >= width * reach)
-        if not np.array_equal(sharp, binned):
-            extent = [b - a for a, b in zip(low, high, strict=True)]
-            diagonal = np.sqrt(
-                extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2]
-            )
-            sharp = binned & (doubled >= width * diagonal)
+        extent = [b - a for a, b in zip(low, high, strict=True)]
+        diagonal = np.sqrt(extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2])
+        sharp = binned & (doubled >= width * diagonal)
         height = sum(
             u * (a - m) for u, (a, _, _), m in zip(unit, corners, middle.tolist(), strict=True)
         )
