@@ -516,3 +516,42 @@ def test_an_open_shell_over_the_scene_is_no_terrain():
     names = [s.name for s in result.shapes_with_role("shadow")]
     assert "shadow_sun_ground" in names
     assert not any("spans the scene" in note for note in result.warnings)
+
+
+def test_every_surface_sees_only_the_casters_a_light_reaches(monkeypatch):
+    """A point light of radius 6 over a ground with steps: a box far past the
+    radius is not handed to the every-surface shadow (it can shadow no lit
+    point: a ray to one runs inside the radius), one straddling it is, and
+    the shadows are those of the scene without the far box."""
+    import shadowgeo.scene.surfaces as surfaces_module
+
+    def box(centre, size):
+        mesh = trimesh.creation.box(extents=size)
+        mesh.apply_translation(centre)
+        return sg.Shape(mesh.vertices, mesh.faces, name=f"box{centre[0]:g}")
+
+    ground = box([0.0, -0.5, 0.0], [60.0, 1.0, 60.0])
+    step = box([-1.0, 0.25, 0.0], [1.0, 0.5, 4.0])  # a surface the near box shades
+    near = box([0.0, 1.0, 0.0], [0.6, 2.0, 0.6])
+    edge = box([5.8, 1.0, 0.0], [1.0, 2.0, 1.0])  # its box meets the light's sphere
+    far = box([25.0, 1.0, 0.0], [1.0, 2.0, 1.0])  # inside the scene's box: the same lift
+    lamp = sg.SceneLight(sg.PointLight([0.5, 4.0, 0.0], radius=6.0), name="lamp")
+    handed: list[int] = []
+    original = surfaces_module.shadow_on_surface
+
+    def counting(casters, *args, **kwargs):
+        handed.append(len(casters))
+        return original(casters, *args, **kwargs)
+
+    monkeypatch.setattr(surfaces_module, "shadow_on_surface", counting)
+    with_far = sg.add_shadows(sg.Scene(shapes=[ground, step, near, edge, far], lights=[lamp]))
+    assert handed == [4]  # ground, step, near box and the one on the edge
+    without = sg.add_shadows(sg.Scene(shapes=[ground, step, near, edge], lights=[lamp]))
+    shadows = [
+        {s.name: (s.world_vertices, s.faces) for s in result.shapes_with_role("shadow")}
+        for result in (with_far, without)
+    ]
+    assert shadows[0].keys() == shadows[1].keys() and any("surfaces" in k for k in shadows[0])
+    for name, (vertices, faces) in shadows[0].items():
+        assert np.array_equal(vertices, shadows[1][name][0]), name
+        assert np.array_equal(faces, shadows[1][name][1]), name

@@ -299,8 +299,18 @@ def _add_shadows(
                 shape.group = group
                 added.append(shape)
             if surface is not None:
+                # only casters the light reaches (its radius, its cone): a
+                # ray to a lit point runs inside them; each caster's
+                # topology made once for every light
+                reached = np.flatnonzero(stacked.lit(light.light))
                 shape = surface_shadow(
-                    surface, geometry, light, tolerance, height, notes, light_name
+                    surface,
+                    [stacked.casters[int(k)].caster for k in reached],
+                    light,
+                    tolerance,
+                    height,
+                    notes,
+                    light_name,
                 )
                 if shape is not None:
                     shape.name = names.unique(f"shadow_{light_name}_surfaces")

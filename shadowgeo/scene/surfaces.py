@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import GeometryError
 from ..surface import shadow_on_surface
 from ..tolerance import Tolerance
-from ..topology import row_groups, unique_integers
+from ..topology import Caster, row_groups, unique_integers
 from .casters import CasterSet
 from .model import SceneLight, Shape, shadow_shape
 from .receivers import Receiver, repeated_faces
@@ -85,19 +85,19 @@ def receiving_faces(
 
 def surface_shadow(
     surface: tuple[np.ndarray, np.ndarray],
-    geometry: list[Shape],
+    casters: list[Caster],
     scene_light: SceneLight,
     tolerance: Tolerance,
     lift: float,
     notes: list[str],
     light_name: str,
 ) -> Shape | None:
-    """The shadow of every shape of ``geometry`` on ``surface`` as one shape
-    (role ``"shadow"``), or None when no shadow falls on it."""
+    """The shadow of ``casters`` (in world coordinates) on ``surface`` as one
+    shape (role ``"shadow"``), or None when no shadow falls on it."""
     vertices, faces = surface
-    if not len(faces):
+    casters = [caster for caster in casters if caster.n_faces]
+    if not len(faces) or not casters:
         return None
-    casters = [(shape.world_vertices, shape.faces) for shape in geometry if shape.n_faces]
     try:
         result = shadow_on_surface(
             casters, scene_light.light, (vertices, faces), offset=lift, tolerance=tolerance
