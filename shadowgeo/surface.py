@@ -58,6 +58,7 @@ from . import polygons as poly
 from .errors import GeometryError
 from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
+from .limits import MAX_CURVE_SEGMENTS
 from .outline import Outline, make_outline
 from .seams import Loops, loops_of, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
@@ -675,6 +676,28 @@ class _SurfaceProjector:
             return self._regions_one_by_one(faces_with, lit, flat, owner, full)
         return self._regions_tiled(faces_with, lit, flat, owner, full)
 
+    def _inside_range(self, faces: np.ndarray, outlines: np.ndarray) -> np.ndarray:
+        """(f,) bool: True where the light's lit disc on the face's plane (the
+        inscribed polygon :meth:`_range_disc` makes) surely holds the box of
+        the face's lit ``outlines`` (f, k, 2, padded), so that
+        :func:`_disc_near` would leave the face alone: the box lies within
+        the disc's radius less the polygon's sagitta (at most the chord
+        length, or that of ``MAX_CURVE_SEGMENTS`` sides where the count is
+        capped), with a margin for rounding."""
+        light = cast("PointLight | SpotLight", self.light)
+        height = self.height[faces]
+        radius = np.sqrt(np.maximum(light.radius**2 - height**2, 0.0))
+        capped = radius * (1.0 - math.cos(math.pi / MAX_CURVE_SEGMENTS))
+        inner = radius - np.maximum(self.tol.chord_length, capped) - 1e-9 * radius
+        foot = self.light_point - height[:, None] * self.unit[faces] - self.origin[faces]
+        centre_x = np.einsum("ij,ij->i", foot, self.u[faces])
+        centre_y = np.einsum("ij,ij->i", foot, self.v[faces])
+        low, high = outlines.min(axis=1), outlines.max(axis=1)
+        reach_x = np.maximum(np.abs(low[:, 0] - centre_x), np.abs(high[:, 0] - centre_x))
+        reach_y = np.maximum(np.abs(low[:, 1] - centre_y), np.abs(high[:, 1] - centre_y))
+        inside: np.ndarray = (inner > 0) & (reach_x * reach_x + reach_y * reach_y < inner * inner)
+        return inside
+
     def _regions_tiled(
         self,
         faces_with: np.ndarray,
@@ -758,13 +781,15 @@ class _SurfaceProjector:
         regions: list[list[np.ndarray]] = []
         region_faces: list[int] = []
         outlines, counts = lit
-        for face, first, stop, padded, count in zip(
-            faces_with, starts, stops, outlines, counts, strict=True
+        # faces the range surely holds need no disc (the same loops)
+        inside = self._inside_range(faces_with, outlines).tolist()
+        for face, first, stop, padded, count, held in zip(
+            faces_with, starts, stops, outlines, counts, inside, strict=True
         ):
             if count < 3:
                 continue
             outline = padded[:count]
-            disc = _disc_near(self._range_disc(face), outline)
+            disc = None if held else _disc_near(self._range_disc(face), outline)
             if disc is not None and len(disc) < 3:
                 continue  # the light's range misses the face
             if full[face] and disc is None:

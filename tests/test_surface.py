@@ -546,6 +546,44 @@ def test_spot_cone_and_range_limit_the_shadow():
     assert ranged.area == pytest.approx(planar.area, rel=1e-6)
 
 
+@pytest.mark.parametrize("chord", [None, 1e-7])
+def test_faces_the_range_surely_holds_skip_its_disc_and_change_nothing(monkeypatch, chord):
+    """A point light of radius 4.15 over a floor: every face _inside_range
+    passes is one _disc_near leaves alone, faces of both kinds occur, and the
+    shadow is the same, bit for bit, as with every face cut by the disc."""
+    import shadowgeo.surface as surface_module
+
+    floor = grid(12, 3.0)
+    ball = sphere([0.5, 1.2, 0.0], 0.6, 2)
+    light = PointLight([0.5, 4.0, 0.0], radius=4.15)  # its disc on the floor just holds the shadow
+    tolerance = None
+    if chord is not None:  # a fine chord: many sides, the sagitta far below it
+        tolerance = Tolerance.for_points(floor.bounds, [light.position], chord=chord)
+    original = surface_module._SurfaceProjector._inside_range
+    seen = []
+
+    def checked(self, faces, outlines):
+        inside = original(self, faces, outlines)
+        for face, outline, held in zip(faces, outlines, inside, strict=True):
+            if held:
+                assert surface_module._disc_near(self._range_disc(face), outline) is None
+        seen.extend(inside.tolist())
+        return inside
+
+    monkeypatch.setattr(surface_module._SurfaceProjector, "_inside_range", checked)
+    quick = shadow_on_surface(ball, light, floor, tolerance=tolerance)
+    assert any(seen) and not all(seen)
+    monkeypatch.setattr(
+        surface_module._SurfaceProjector,
+        "_inside_range",
+        lambda self, faces, outlines: np.zeros(len(faces), dtype=bool),
+    )
+    every = shadow_on_surface(ball, light, floor, tolerance=tolerance)
+    assert quick.area > 0
+    assert np.array_equal(quick.mesh.vertices, every.mesh.vertices)
+    assert np.array_equal(quick.mesh.faces, every.mesh.faces)
+
+
 def test_light_in_the_plane_of_the_faces_receives_nothing_and_stays_finite():
     floor = grid(4, 1.0)
     light = PointLight([3.0, 0.0, 0.5])
