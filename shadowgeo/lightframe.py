@@ -265,6 +265,9 @@ def _meets(boxes: np.ndarray, box: list[float]) -> np.ndarray:
     return meets
 
 
+# Box pairs up to which overlapping_boxes tests every pair (a caster's outline
+# against the few faces near it) rather than build a grid.
+_DIRECT_PAIRS = 4096
 # Pairs one STRtree query may return (64 MB of indices), so that a query
 # that would exceed the pair budget stops before filling memory.
 _QUERY_PAIRS = 4_000_000
@@ -296,6 +299,13 @@ def overlapping_boxes(
     theirs = np.flatnonzero(_meets(second, _overall(first)))
     if len(mine) == 0 or len(theirs) == 0:
         return empty
+    if len(mine) * len(theirs) <= _DIRECT_PAIRS:  # few: every pair, no grid
+        a, b = first[mine], second[theirs]
+        overlap = (a[:, None, 0] <= b[None, :, 2]) & (a[:, None, 1] <= b[None, :, 3])
+        overlap &= (b[None, :, 0] <= a[:, None, 2]) & (b[None, :, 1] <= a[:, None, 3])
+        i, j = np.nonzero(overlap)  # sorted by i, then j, as the grid's pairs
+        _check_pairs(len(i), budget)
+        return mine[i], theirs[j]
     found = _grid_pairs(first[mine], second[theirs])
     if found is None:
         found = _tree_pairs(first[mine], second[theirs], budget)

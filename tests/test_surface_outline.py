@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 import shapely
 
+from shadowgeo import GeometryError
 from shadowgeo.lightframe import candidate_pairs, clip_batch, overlapping_boxes
 from shadowgeo.outline import Outline, padded_loops
 from shadowgeo.seams import loops_of, stitch
@@ -152,6 +153,26 @@ def test_overlapping_boxes_finds_every_pair_once(sizes):
     found = list(zip(i.tolist(), j.tolist(), strict=True))
     assert len(found) == len(set(found))
     assert set(found) == brute_pairs(first, second)
+
+
+@pytest.mark.parametrize(("count_a", "count_b"), [(6, 15), (40, 100), (64, 64)])
+def test_few_boxes_are_paired_directly_as_the_grid_pairs_them(count_a, count_b):
+    """Up to _DIRECT_PAIRS candidate pairs every pair is tested (a caster's
+    outline against the faces near it): the grid's pairs, in its order."""
+    from shadowgeo import lightframe
+
+    assert count_a * count_b <= lightframe._DIRECT_PAIRS
+    rng = np.random.default_rng(count_a)
+    low_a, low_b = rng.uniform(0, 1, (count_a, 2)), rng.uniform(0, 1, (count_b, 2))
+    first = np.column_stack([low_a, low_a + rng.uniform(0, 0.3, (count_a, 2))])
+    second = np.column_stack([low_b, low_b + rng.uniform(0, 0.2, (count_b, 2))])
+    second[0] = [first[0, 2], first[0, 3], 2.0, 2.0]  # touching at a corner: a pair
+    i, j = overlapping_boxes(first, second)
+    grid_i, grid_j = lightframe._grid_pairs(first, second)
+    assert len(i) > 0 and np.array_equal(i, grid_i) and np.array_equal(j, grid_j)
+    assert set(zip(i.tolist(), j.tolist(), strict=True)) == brute_pairs(first, second)
+    with pytest.raises(GeometryError, match="MAX_SURFACE_PAIRS"):
+        overlapping_boxes(first, second, budget=len(i) - 1)
 
 
 @pytest.mark.parametrize("light", ["point", "sun"])
