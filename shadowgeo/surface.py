@@ -577,7 +577,8 @@ class _SurfaceProjector:
         x, y = images[:, :, 0], images[:, :, 1]
         # The map from the frame back to a face keeps or flips orientation as
         # the face's image does (the face runs counter-clockwise in its frame).
-        flips = np.sum(x * np.roll(y, -1, axis=1) - np.roll(x, -1, axis=1) * y, axis=1) < 0
+        after = [1, 2, 0]  # each corner's next
+        flips = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
         extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
         covered, pieces, owners = outline.cut(images, 1e-9 * extent)
         full[faces[covered]] = True

@@ -324,6 +324,17 @@ class CasterSet:
     def _normal_rows(self) -> np.ndarray:
         return np.empty((len(self.faces), 3))
 
+    def caster(self, index: int) -> Caster:
+        """Caster ``index`` alone, as a :class:`Caster` of its world vertices
+        (made once, kept for every light), its closedness the set's
+        (:attr:`closed`: one test per distinct topology, not one a shape)."""
+        scene_caster = self.casters[index]
+        if "caster" not in scene_caster.__dict__:
+            scene_caster.__dict__["caster"] = Caster(
+                scene_caster.vertices, scene_caster.shape.faces, closed=bool(self.closed[index])
+            )
+        return scene_caster.caster
+
     def normal_rows(self, index: int) -> np.ndarray:
         """(k, 3) the rows of :attr:`face_normals` for caster ``index``'s
         faces, to be written by a caller (the receiver search) with

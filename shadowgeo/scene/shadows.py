@@ -305,7 +305,7 @@ def _add_shadows(
                 reached = np.flatnonzero(stacked.lit(light.light))
                 shape = surface_shadow(
                     surface,
-                    [stacked.casters[int(k)].caster for k in reached],
+                    [stacked.caster(int(k)) for k in reached],
                     light,
                     tolerance,
                     height,
