@@ -307,13 +307,22 @@ def front_rows(caster: Caster, light_h: np.ndarray) -> np.ndarray:
     # (suns alone need no face planes: one product per face less to make)
     positional = bool(np.any(light_h[:, 3] != 0.0))
     offsets = caster.face_offsets if positional else None
-    facing = np.empty(caster.n_faces)
+    # a block of faces at a time: one small buffer, reused, not a fresh
+    # array the size of a big mesh's faces
+    buffer = np.empty(min(caster.n_faces, _FRONT_BLOCK))
     for light in range(count):
-        np.matmul(normals, light_h[light, :3], out=facing)
-        if offsets is not None and light_h[light, 3] != 0.0:
-            facing -= offsets * light_h[light, 3]
-        np.greater(facing, 0.0, out=flags[light])
+        for start in range(0, caster.n_faces, _FRONT_BLOCK):
+            stop = min(start + _FRONT_BLOCK, caster.n_faces)
+            facing = buffer[: stop - start]
+            np.matmul(normals[start:stop], light_h[light, :3], out=facing)
+            if offsets is not None and light_h[light, 3] != 0.0:
+                facing -= offsets[start:stop] * light_h[light, 3]
+            np.greater(facing, 0.0, out=flags[light, start:stop])
     return rows
+
+
+# Faces whose front bits front_rows works out at a time.
+_FRONT_BLOCK = 1 << 16
 
 
 @dataclass(frozen=True)

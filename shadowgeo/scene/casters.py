@@ -267,7 +267,11 @@ class CasterSet:
         closed caster keeps the faces it rests on the plane with (turned away
         from the light's side): they shadow its footprint, as it would anyway,
         and it stays closed, so its outline comes from its silhouette."""
-        near = np.abs(plane.signed_distance(self.vertices)) <= tolerance.coplanar_length
+        near = np.empty(len(self.vertices), dtype=bool)
+        for start in range(0, len(self.vertices), _NORMALS_BLOCK):  # small temporaries
+            block = self.vertices[start : start + _NORMALS_BLOCK]
+            distance = np.abs(plane.signed_distance(block))
+            np.less_equal(distance, tolerance.coplanar_length, out=near[start : start + len(block)])
         if not near.any():
             return np.ones(len(self.faces), dtype=bool)
         # a face lies in the plane when its three corners do: the first
