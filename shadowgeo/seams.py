@@ -39,6 +39,50 @@ def loops_of(regions: list[list[np.ndarray]]) -> Loops:
     return points, sizes, region.astype(np.int64)
 
 
+def without_collinear(regions: Loops, eps: float) -> Loops:
+    """``regions`` without the loop points that lie within ``eps`` of the line
+    through their neighbours (a shadow edge split where the pieces that made
+    it met, a point where a loop runs on along a face edge, a zero-width
+    spike): each region is the same up to ``eps`` times its edges' lengths,
+    and :func:`stitch` still splits every shared edge alike (it inserts the
+    points either side keeps). A pass drops every other such point of a
+    loop, never two neighbours; a loop left with fewer than three points (no
+    area) goes with them."""
+    points, sizes, region = regions
+    for turn in range(_COLLINEAR_PASSES):
+        if not len(sizes):
+            break
+        starts = np.cumsum(sizes) - sizes
+        index = np.arange(len(points))
+        local = index - np.repeat(starts, sizes)
+        length = np.repeat(sizes, sizes)
+        before = index + np.where(local == 0, length - 1, -1)
+        after = index + np.where(local == length - 1, 1 - length, 1)
+        chord = points[after] - points[before]
+        offset = points - points[before]
+        cross = np.abs(offset[:, 0] * chord[:, 1] - offset[:, 1] * chord[:, 0])
+        drop = cross <= eps * np.hypot(chord[:, 0], chord[:, 1])
+        if not drop.any():
+            break
+        # every other point of a loop in one pass (never two neighbours, so
+        # each point dropped keeps the neighbours it was tested with)
+        # (even places, then odd ones: in an odd loop the last place is the
+        # first's neighbour and waits)
+        drop &= (local + turn) % 2 == 0
+        if turn % 2 == 0:
+            drop &= ~((local == length - 1) & (length % 2 == 1))
+        owner = np.repeat(np.arange(len(sizes)), sizes)
+        kept = sizes - np.bincount(owner[drop], minlength=len(sizes))
+        alive = kept >= 3
+        keep = ~drop & np.repeat(alive, sizes)
+        points, sizes, region = points[keep], kept[alive], region[alive]
+    return points, sizes, region
+
+
+# Passes of without_collinear at most (each drops at most every other point).
+_COLLINEAR_PASSES = 32
+
+
 def stitch(
     vertices: np.ndarray,
     faces: np.ndarray,

@@ -60,7 +60,7 @@ from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import MAX_CURVE_SEGMENTS
 from .outline import Outline, make_outline
-from .seams import Loops, loops_of, stitch
+from .seams import Loops, loops_of, stitch, without_collinear
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
@@ -305,6 +305,7 @@ class _SurfaceProjector:
         regions, region_faces = self._regions(
             receivers, triangles, caster_triangles, corners, full, extra
         )
+        regions = without_collinear(regions, self.tol.length)
         points, shadow_faces, face_index = stitch(
             self.vertices,
             self.faces,

@@ -190,6 +190,82 @@ def test_candidate_pairs_of_shared_points_equal_those_of_corners(light):
     assert len(shared[0]) > 0
 
 
+def _loop_area(points):
+    x, y = points[:, 0], points[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def test_points_on_a_straight_run_are_dropped_and_corners_kept():
+    """A square whose sides carry extra points (a run of three on one side,
+    a duplicate, a zero-width spike), a hole with one extra point, and a
+    sliver loop of three points on a line: the corners alone are left, in
+    order, the same areas, and the sliver goes."""
+    from shadowgeo.seams import without_collinear
+
+    square = np.array(
+        [[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [4, 2], [4, 2], [4, 4], [2, 4],
+         [2, 5], [2, 4], [0, 4], [0, 1]], dtype=float,
+    )  # fmt: skip
+    hole = np.array([[1, 1], [1, 3], [3, 3], [3, 2], [3, 1]], dtype=float)  # clockwise
+    sliver = np.array([[5, 5], [6, 6], [7, 7]], dtype=float)
+    loops = [square, hole, sliver]
+    regions = (np.concatenate(loops), np.array([len(x) for x in loops]), np.array([0, 0, 1]))
+    points, sizes, region = without_collinear(regions, 1e-9)
+    assert sizes.tolist() == [4, 4] and region.tolist() == [0, 0]
+    outer, inner = points[:4], points[4:]
+    assert outer.tolist() == [[0, 0], [4, 0], [4, 4], [0, 4]]
+    assert inner.tolist() == [[1, 1], [1, 3], [3, 3], [3, 1]]
+    assert _loop_area(outer) == _loop_area(square) and _loop_area(inner) == _loop_area(hole)
+
+
+def _distance_to_loop(points, loop):
+    """Each point's distance to the closed polyline ``loop``."""
+    a, b = loop, np.roll(loop, -1, axis=0)
+    step = b - a
+    t = np.einsum("pkd,kd->pk", points[:, None] - a[None], step) / np.sum(step * step, axis=1)
+    near = a[None] + np.clip(t, 0, 1)[:, :, None] * step[None]
+    return np.linalg.norm(points[:, None] - near, axis=2).min(axis=1)
+
+
+def test_dropping_points_moves_a_region_by_at_most_a_few_eps():
+    """Rectangles whose sides carry points nudged off them by less than eps
+    and by several eps: the corners stay, every point left is one of the
+    loop's in its order, no point left is within eps of its neighbours'
+    line (a second pass changes nothing), every point dropped lies within a
+    few eps of what is left, and each loop's area moves by no more than eps
+    times its perimeter."""
+    from shadowgeo.seams import without_collinear
+
+    rng = np.random.default_rng(11)
+    eps = 1e-6
+    loops, corner_sets = [], []
+    for _ in range(40):
+        corners = rng.uniform(-5, 5, (1, 2)) + np.array([[0, 0], [3, 0], [3, 2], [0, 2]])
+        corner_sets.append(corners)
+        points = []
+        for a, b in zip(corners, np.roll(corners, -1, axis=0), strict=True):
+            points.append(a)
+            normal = np.array([-(b - a)[1], (b - a)[0]]) / np.linalg.norm(b - a)
+            for t in np.sort(rng.uniform(0.1, 0.9, rng.integers(0, 6))):
+                off = rng.uniform(3, 9) if rng.random() < 0.3 else rng.uniform(-0.4, 0.4)
+                points.append(a + t * (b - a) + normal * off * eps)
+        loops.append(np.array(points))
+    regions = (np.concatenate(loops), np.array([len(x) for x in loops]), np.arange(len(loops)))
+    points, sizes, region = without_collinear(regions, eps)
+    assert region.tolist() == list(range(len(loops))) and len(points) < len(regions[0])
+    again = without_collinear((points, sizes, region), eps)
+    assert np.array_equal(again[0], points) and np.array_equal(again[1], sizes)
+    starts = np.cumsum(sizes) - sizes
+    for k, (loop, corners) in enumerate(zip(loops, corner_sets, strict=True)):
+        left = points[starts[k] : starts[k] + sizes[k]]
+        index = [int(np.flatnonzero((loop == p).all(axis=1))[0]) for p in left]
+        assert index == sorted(index)  # the loop's own points, in order
+        assert all(np.any(np.all(left == c, axis=1)) for c in corners)  # the corners stay
+        assert _distance_to_loop(loop, left).max() <= 4 * eps
+        perimeter = np.sum(np.linalg.norm(loop - np.roll(loop, -1, axis=0), axis=1))
+        assert abs(_loop_area(left) - _loop_area(loop)) <= eps * perimeter
+
+
 @pytest.mark.parametrize("touches_shared_edge", [False, True])
 def test_stitch_gives_a_whole_face_back_as_itself(touches_shared_edge):
     vertices = np.array([[0.0, 0, 0], [1.0, 0, 0], [0.0, 1, 0], [1.0, 1, 0]])
