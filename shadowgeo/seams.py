@@ -40,47 +40,116 @@ def loops_of(regions: list[list[np.ndarray]]) -> Loops:
 
 
 def without_collinear(regions: Loops, eps: float) -> Loops:
-    """``regions`` without the loop points that lie within ``eps`` of the line
-    through their neighbours (a shadow edge split where the pieces that made
-    it met, a point where a loop runs on along a face edge, a zero-width
-    spike): each region is the same up to ``eps`` times its edges' lengths,
-    and :func:`stitch` still splits every shared edge alike (it inserts the
-    points either side keeps). A pass drops every other such point of a
-    loop, never two neighbours; a loop left with fewer than three points (no
-    area) goes with them."""
+    """``regions`` without the loop points that a straight run between two
+    kept points passes within ``eps`` of (a shadow edge split where the
+    pieces that made it met, a point where a loop runs on along a face
+    edge, a zero-width spike): each region is the same up to ``eps`` times
+    its edges' lengths, and :func:`stitch` still splits every shared edge
+    alike (it inserts the points either side keeps).
+
+    The points off the line through their neighbours by more than ``eps``
+    are kept; between two kept points, the point farthest from the line
+    joining them is kept too while it is farther than ``eps`` (Douglas and
+    Peucker's rule, every stretch of every loop at once), so every point
+    dropped lies within ``eps`` of the loop that is left. A loop with no
+    such point starts from its first point and the one farthest from it; a
+    loop left with fewer than three points (no area) goes. Repeated points
+    and the tips of zero-width spikes go first (:func:`_without_spikes`)."""
+    points, sizes, region = _without_spikes(regions, eps)
+    if not len(sizes):
+        return points, sizes, region
+    count = len(points)
+    starts = np.cumsum(sizes) - sizes
+    ends = starts + sizes
+    loop = np.repeat(np.arange(len(sizes)), sizes)
+    index = np.arange(count)
+    before, after = index - 1, index + 1
+    before[starts], after[ends - 1] = ends - 1, starts
+    kept = _off_line(points, points[before], points[after]) > eps
+    # a loop every point of which is on its neighbours' line: its first
+    # point and the one farthest from it
+    bare = ~np.logical_or.reduceat(kept, starts)
+    if bare.any():
+        reach = np.hypot(*(points - points[starts[loop]]).T)
+        farthest = reach == np.maximum.reduceat(reach, starts)[loop]
+        seed = bare[loop] & ((index == starts[loop]) | farthest)
+        kept |= seed
+    for _ in range(_DOUGLAS_PEUCKER_ROUNDS):
+        at = np.where(kept, index, -1)
+        back = np.maximum.accumulate(at)
+        last = np.maximum.reduceat(at, starts)
+        back = np.where(back >= starts[loop], back, last[loop])
+        ahead = np.where(kept, index, count)
+        ahead = np.minimum.accumulate(ahead[::-1])[::-1]
+        first = np.minimum.reduceat(np.where(kept, index, count), starts)
+        ahead = np.where(ahead < ends[loop], ahead, first[loop])
+        gap = np.where(kept, 0.0, _off_line(points, points[back], points[ahead]))
+        worst = np.full(count, -1.0)
+        np.maximum.at(worst, back, gap)
+        far = ~kept & (gap > eps) & (gap == worst[back])
+        if not far.any():
+            break
+        # the first farthest point of each stretch
+        stretch, chosen = np.unique(back[far], return_index=True)
+        kept[np.flatnonzero(far)[chosen]] = True
+    else:  # rounds spent: the stretches still too far from their chords stay whole
+        kept |= np.isin(back, np.unique(back[~kept & (gap > eps)]))
+    counts = np.add.reduceat(kept.astype(np.int64), starts)
+    alive = counts >= 3
+    keep = kept & alive[loop]
+    return points[keep], counts[alive], region[alive]
+
+
+def _without_spikes(regions: Loops, eps: float) -> Loops:
+    """``regions`` without repeated points (within ``eps`` of the one before)
+    and the tips of zero-width spikes (points whose neighbours are one
+    point): neither changes a region's area; never two neighbours in one
+    pass, a loop left with fewer than three points going."""
     points, sizes, region = regions
-    for turn in range(_COLLINEAR_PASSES):
+    for turn in range(_SPIKE_PASSES):
         if not len(sizes):
             break
         starts = np.cumsum(sizes) - sizes
+        length = np.repeat(sizes, sizes)
         index = np.arange(len(points))
         local = index - np.repeat(starts, sizes)
-        length = np.repeat(sizes, sizes)
         before = index + np.where(local == 0, length - 1, -1)
         after = index + np.where(local == length - 1, 1 - length, 1)
-        chord = points[after] - points[before]
-        offset = points - points[before]
-        cross = np.abs(offset[:, 0] * chord[:, 1] - offset[:, 1] * chord[:, 0])
-        drop = cross <= eps * np.hypot(chord[:, 0], chord[:, 1])
+        repeat = np.hypot(*(points - points[before]).T) <= eps
+        tip = np.hypot(*(points[after] - points[before]).T) <= eps
+        drop = repeat | tip
         if not drop.any():
             break
-        # every other point of a loop in one pass (never two neighbours, so
-        # each point dropped keeps the neighbours it was tested with)
-        # (even places, then odd ones: in an odd loop the last place is the
-        # first's neighbour and waits)
-        drop &= (local + turn) % 2 == 0
-        if turn % 2 == 0:
-            drop &= ~((local == length - 1) & (length % 2 == 1))
+        # one colour of the loop's places a pass: even, odd, and the last
+        # place of an odd loop (the first's neighbour) on its own
+        colour = np.where((local == length - 1) & (length % 2 == 1), 2, local % 2)
+        drop &= colour == turn % 3
         owner = np.repeat(np.arange(len(sizes)), sizes)
-        kept = sizes - np.bincount(owner[drop], minlength=len(sizes))
-        alive = kept >= 3
+        counts = sizes - np.bincount(owner[drop], minlength=len(sizes))
+        alive = counts >= 3
         keep = ~drop & np.repeat(alive, sizes)
-        points, sizes, region = points[keep], kept[alive], region[alive]
+        points, sizes, region = points[keep], counts[alive], region[alive]
     return points, sizes, region
 
 
-# Passes of without_collinear at most (each drops at most every other point).
-_COLLINEAR_PASSES = 32
+# Passes of _without_spikes at most (each drops the such points of one colour).
+_SPIKE_PASSES = 24
+# Rounds of Douglas and Peucker's rule in without_collinear (each keeps one
+# more point of every stretch still too far from its chord).
+_DOUGLAS_PEUCKER_ROUNDS = 48
+
+
+def _off_line(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """(n,) distance of each point from the line through ``start`` and
+    ``end`` (from ``start`` where the two are one point)."""
+    chord = end - start
+    offset = points - start
+    length = np.hypot(chord[:, 0], chord[:, 1])
+    cross = np.abs(offset[:, 0] * chord[:, 1] - offset[:, 1] * chord[:, 0])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        distance = np.where(length > 0, cross / length, np.hypot(offset[:, 0], offset[:, 1]))
+    result: np.ndarray = distance
+    return result
 
 
 def stitch(
