@@ -19,9 +19,9 @@ face by face, with the same clipping before the divide as
    :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
    own cell of one plane); spot cones and a light's range are applied as
    exact 2-D intersections.
-4. **Stitch** (:mod:`shadowgeo.seams`): corners within the tolerance length
-   of the line through their neighbours are dropped (where clipped pieces
-   met along one shadow edge), region corners on a face edge are
+4. **Stitch** (:mod:`shadowgeo.seams`): corners that a straight run between
+   two kept corners passes within the tolerance length of are dropped (where
+   clipped pieces met along one shadow edge), region corners on a face edge are
    snapped to one parameter along that edge, shared by both faces, and every
    such point is inserted on both sides, so the triangulated shadow has no
    cracks or T-junctions where the surface has none.
@@ -212,8 +212,8 @@ def shadow_on_surface(
         Finite; for each light-facing face, the region hidden by caster
         triangles strictly between the face and the light, clipped to the
         face, triangulated without overlaps and without cracks along edges
-        the faces share (corners within the tolerance length of their
-        neighbours' line dropped first: the region up to that length).
+        the faces share (corners a straight run passes within the
+        tolerance length of dropped first: the region up to that length).
 
     Raises
     ------
