@@ -28,6 +28,10 @@ from .plane import Plane
 MAX_COORDINATE = 1e8
 
 
+# A corner this close (local units) to the straight run between its
+# neighbours is dropped before triangulating: a few hundred units in the last
+# place of MAX_COORDINATE, far below any length a shadow resolves.
+STRAIGHT_SLACK = 64 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
 # Coordinates of the 2-D loops stay within +-MAX_COORDINATE (the window), so
 # a difference of two of them is off by at most this much (a few units in
 # the last place of MAX_COORDINATE) ...
@@ -887,6 +891,9 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
         for loops in _tiles(part) if len(part) > _TILE_LOOPS else [part]:
             tris = _spiked_triangles(loops)
             if tris is None:
+                loops = _straightened(loops)
+                if not loops:
+                    continue
                 tris = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
             points = np.concatenate(loops)
             vertices.append(points)
@@ -895,6 +902,23 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     if not vertices:
         return np.zeros((0, 2)), np.zeros((0, 3), dtype=np.int64)
     return np.concatenate(vertices), np.concatenate(faces)
+
+
+def _straightened(loops: list[np.ndarray]) -> list[np.ndarray]:
+    """``loops`` (local units) without the corners that lie on a straight run
+    between their neighbours to within the window's rounding
+    (:data:`STRAIGHT_SLACK`): a caster's edge cut into many collinear pieces
+    (a box made of many small triangles) casts one straight shadow edge, not
+    one triangle per piece. The same region, to rounding."""
+    from .seams import without_collinear
+
+    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    points, sizes, left = without_collinear(
+        (np.concatenate(loops), sizes, np.arange(len(loops))), STRAIGHT_SLACK
+    )
+    if not len(left) or left[0] != 0:  # the outer loop was a sliver: so is the part
+        return []
+    return np.split(points, np.cumsum(sizes)[:-1])
 
 
 def _many_reflex(loop: np.ndarray) -> bool:

@@ -683,3 +683,23 @@ def test_thousands_of_buildings_are_united_exactly():
     # the same region, holes (courtyards) and all
     assert region(shadow).symmetric_difference(expected).area < 1e-9 * expected.area
     assert len(shadow.polygons) == len(getattr(expected, "geoms", [expected]))
+
+
+def test_a_box_made_of_many_triangles_casts_a_shadow_of_few():
+    """A box whose faces are cut into 512 triangles each: its silhouette runs
+    through many collinear corners, but the shadow's mesh is the hexagon's
+    four triangles, with the exact area (the hull of the corners' images),
+    while the polygons keep every corner the union gave."""
+    mesh = trimesh.creation.box(extents=[2.0, 2.0, 2.0])
+    for _ in range(4):
+        mesh = mesh.subdivide()
+    mesh.apply_translation([0.0, 2.0, 0.0])
+    light = DirectionalLight([0.3, -1.0, 0.2])
+    shadow = project_shadow(mesh, light, GROUND)
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (1, 3) for z in (-1, 1)], float)
+    images = corners - (corners[:, 1:2] / light.direction[1]) * light.direction
+    hull = shapely.MultiPoint(images[:, [0, 2]]).convex_hull
+    assert len(shadow.mesh.faces) == 4
+    assert shadow.mesh.area == pytest.approx(hull.area, rel=1e-14)
+    assert shadow.area == pytest.approx(hull.area, rel=1e-14)
+    assert sum(len(loop) for part in shadow.polygons for loop in part) > 6

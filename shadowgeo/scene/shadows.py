@@ -556,6 +556,8 @@ def _shadow_on(
     if not parts:
         return None
     flat_points, faces = poly.triangulate_parts(parts)
+    if not len(faces):
+        return None  # slivers narrower than rounding: no shadow to draw
     vertices = plane.to_3d(flat_points / scale + center) + lift * plane.normal
     return shadow_shape(
         vertices, faces, scene_light, f"shadow of light {light_name} on {receiver.name}"
