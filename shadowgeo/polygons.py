@@ -887,13 +887,10 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     are rounded to its 1e-8 grid), so the cost stays near linear.
     """
     vertices, faces, base = [], [], 0
-    for part in parts:
+    for part in _straightened(parts):
         for loops in _tiles(part) if len(part) > _TILE_LOOPS else [part]:
             tris = _spiked_triangles(loops)
             if tris is None:
-                loops = _straightened(loops)
-                if not loops:
-                    continue
                 tris = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
             points = np.concatenate(loops)
             vertices.append(points)
@@ -904,21 +901,38 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     return np.concatenate(vertices), np.concatenate(faces)
 
 
-def _straightened(loops: list[np.ndarray]) -> list[np.ndarray]:
-    """``loops`` (local units) without the corners that lie on a straight run
+def _straightened(parts: list[list[np.ndarray]]) -> list[list[np.ndarray]]:
+    """``parts`` (local units) without the corners that lie on a straight run
     between their neighbours to within the window's rounding
-    (:data:`STRAIGHT_SLACK`): a caster's edge cut into many collinear pieces
-    (a box made of many small triangles) casts one straight shadow edge, not
-    one triangle per piece. The same region, to rounding."""
+    (:data:`STRAIGHT_SLACK`), all loops in one pass: a caster's edge cut
+    into many collinear pieces (a box made of many small triangles) casts
+    one straight shadow edge, not one triangle per piece. The same regions,
+    to rounding; a part whose outer loop was a sliver goes. A part of one
+    many-reflex loop (:func:`_spiked_triangles`' certified sweep) is left
+    as it is."""
     from .seams import without_collinear
 
+    as_is = [len(part) == 1 and _many_reflex(np.asarray(part[0], np.float64)) for part in parts]
+    chosen = [k for k, flag in enumerate(as_is) if not flag]
+    if not chosen:
+        return parts
+    counts = [len(parts[k]) for k in chosen]
+    loops = [np.asarray(loop, dtype=np.float64) for k in chosen for loop in parts[k]]
+    owner = np.repeat(np.array(chosen, dtype=np.int64), counts)  # each loop's part
+    outer = np.zeros(len(loops), dtype=bool)
+    outer[np.cumsum([0, *counts])[:-1]] = True
     sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
     points, sizes, left = without_collinear(
         (np.concatenate(loops), sizes, np.arange(len(loops))), STRAIGHT_SLACK
     )
-    if not len(left) or left[0] != 0:  # the outer loop was a sliver: so is the part
-        return []
-    return np.split(points, np.cumsum(sizes)[:-1])
+    pieces = np.split(points, np.cumsum(sizes)[:-1]) if len(sizes) else []
+    rebuilt: dict[int, list[np.ndarray]] = {}
+    for index, piece in zip(left.tolist(), pieces, strict=True):
+        part = int(owner[index])
+        if outer[index] or part in rebuilt:  # holes only under their outer loop
+            rebuilt.setdefault(part, []).append(piece)
+    kept = [k for k in range(len(parts)) if as_is[k] or k in rebuilt]
+    return [parts[k] if as_is[k] else rebuilt[k] for k in kept]
 
 
 def _many_reflex(loop: np.ndarray) -> bool:
