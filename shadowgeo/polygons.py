@@ -887,9 +887,10 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     are rounded to its 1e-8 grid), so the cost stays near linear.
     """
     vertices, faces, base = [], [], 0
-    for part in _straightened(parts):
+    spiked = [len(part) == 1 and _many_reflex(np.asarray(part[0], np.float64)) for part in parts]
+    for part, is_spiked in _straightened(parts, spiked):
         for loops in _tiles(part) if len(part) > _TILE_LOOPS else [part]:
-            tris = _spiked_triangles(loops)
+            tris = _spiked_triangles(loops[0]) if is_spiked else None
             if tris is None:
                 tris = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
             points = np.concatenate(loops)
@@ -901,21 +902,23 @@ def triangulate_parts(parts: list[list[np.ndarray]]) -> tuple[np.ndarray, np.nda
     return np.concatenate(vertices), np.concatenate(faces)
 
 
-def _straightened(parts: list[list[np.ndarray]]) -> list[list[np.ndarray]]:
+def _straightened(
+    parts: list[list[np.ndarray]], spiked: list[bool]
+) -> list[tuple[list[np.ndarray], bool]]:
     """``parts`` (local units) without the corners that lie on a straight run
     between their neighbours to within the window's rounding
     (:data:`STRAIGHT_SLACK`), all loops in one pass: a caster's edge cut
     into many collinear pieces (a box made of many small triangles) casts
     one straight shadow edge, not one triangle per piece. The same regions,
     to rounding; a part whose outer loop was a sliver goes. A part of one
-    many-reflex loop (:func:`_spiked_triangles`' certified sweep) is left
-    as it is."""
+    many-reflex loop (``spiked``: :func:`_spiked_triangles`' certified
+    sweep) is left as it is. Returns each part left with its ``spiked``."""
     from .seams import without_collinear
 
-    as_is = [len(part) == 1 and _many_reflex(np.asarray(part[0], np.float64)) for part in parts]
+    as_is = spiked
     chosen = [k for k, flag in enumerate(as_is) if not flag]
     if not chosen:
-        return parts
+        return list(zip(parts, spiked, strict=True))
     counts = [len(parts[k]) for k in chosen]
     loops = [np.asarray(loop, dtype=np.float64) for k in chosen for loop in parts[k]]
     owner = np.repeat(np.array(chosen, dtype=np.int64), counts)  # each loop's part
@@ -932,7 +935,7 @@ def _straightened(parts: list[list[np.ndarray]]) -> list[list[np.ndarray]]:
         if outer[index] or part in rebuilt:  # holes only under their outer loop
             rebuilt.setdefault(part, []).append(piece)
     kept = [k for k in range(len(parts)) if as_is[k] or k in rebuilt]
-    return [parts[k] if as_is[k] else rebuilt[k] for k in kept]
+    return [(parts[k], True) if as_is[k] else (rebuilt[k], False) for k in kept]
 
 
 def _many_reflex(loop: np.ndarray) -> bool:
@@ -950,16 +953,15 @@ def _many_reflex(loop: np.ndarray) -> bool:
     return int(np.count_nonzero(sign == -1)) >= _SPIKED_REFLEX
 
 
-def _spiked_triangles(loops: list[np.ndarray]) -> np.ndarray | None:
+def _spiked_triangles(loop: np.ndarray) -> np.ndarray | None:
     """Triangles of a polygon that is one loop of :data:`_SPIKED_CORNERS`
-    corners or more, many reflex (:func:`_many_reflex`), by :func:`star_triangles`
-    or else the sweep of :func:`shadowgeo.sweep.simple_triangles`; None for
-    another polygon or one neither certifies. manifold3d's ear clipping is
-    quadratic in such corners (a star of 50,000 spikes: 7 s; a comb of
-    12,000 teeth: 17 s; a circle of 50,000 corners: 0.04 s)."""
-    if len(loops) != 1 or not _many_reflex(np.asarray(loops[0], dtype=np.float64)):
-        return None
-    loop = np.asarray(loops[0], dtype=np.float64)
+    corners or more, many reflex (:func:`_many_reflex`, which the caller has
+    found), by :func:`star_triangles` or else the sweep of
+    :func:`shadowgeo.sweep.simple_triangles`; None for one neither
+    certifies. manifold3d's ear clipping is quadratic in such corners (a
+    star of 50,000 spikes: 7 s; a comb of 12,000 teeth: 17 s; a circle of
+    50,000 corners: 0.04 s)."""
+    loop = np.asarray(loop, dtype=np.float64)
     triangles = star_triangles(loop)
     if triangles is not None:
         return triangles
@@ -1010,7 +1012,7 @@ def polygon_triangles(points: np.ndarray) -> np.ndarray:
     u, v = Plane(normal).basis  # u x v = normal: the polygon runs CCW in (u, v)
     centred = points - points.mean(axis=0)
     flat = np.column_stack([centred @ u, centred @ v])
-    spiked = _spiked_triangles([flat])
+    spiked = _spiked_triangles(flat) if _many_reflex(flat) else None
     if spiked is not None:
         return spiked
     return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)

@@ -59,12 +59,9 @@ def without_collinear(regions: Loops, eps: float) -> Loops:
     if not len(sizes):
         return points, sizes, region
     count = len(points)
-    starts = np.cumsum(sizes) - sizes
+    starts, loop, _, before, after = _ring(sizes)
     ends = starts + sizes
-    loop = np.repeat(np.arange(len(sizes)), sizes)
     index = np.arange(count)
-    before, after = index - 1, index + 1
-    before[starts], after[ends - 1] = ends - 1, starts
     kept = _off_line(points, points[before], points[after]) > eps
     # a loop every point of which is on its neighbours' line: its first
     # point and the one farthest from it
@@ -90,7 +87,7 @@ def without_collinear(regions: Loops, eps: float) -> Loops:
         if not far.any():
             break
         # the first farthest point of each stretch
-        stretch, chosen = np.unique(back[far], return_index=True)
+        _, chosen = np.unique(back[far], return_index=True)
         kept[np.flatnonzero(far)[chosen]] = True
     else:  # rounds spent: the stretches still too far from their chords stay whole
         kept |= np.isin(back, np.unique(back[~kept & (gap > eps)]))
@@ -109,12 +106,8 @@ def _without_spikes(regions: Loops, eps: float) -> Loops:
     for turn in range(_SPIKE_PASSES):
         if not len(sizes):
             break
-        starts = np.cumsum(sizes) - sizes
-        length = np.repeat(sizes, sizes)
-        index = np.arange(len(points))
-        local = index - np.repeat(starts, sizes)
-        before = index + np.where(local == 0, length - 1, -1)
-        after = index + np.where(local == length - 1, 1 - length, 1)
+        _, owner, local, before, after = _ring(sizes)
+        length = sizes[owner]
         repeat = np.hypot(*(points - points[before]).T) <= eps
         tip = np.hypot(*(points[after] - points[before]).T) <= eps
         drop = repeat | tip
@@ -124,12 +117,24 @@ def _without_spikes(regions: Loops, eps: float) -> Loops:
         # place of an odd loop (the first's neighbour) on its own
         colour = np.where((local == length - 1) & (length % 2 == 1), 2, local % 2)
         drop &= colour == turn % 3
-        owner = np.repeat(np.arange(len(sizes)), sizes)
         counts = sizes - np.bincount(owner[drop], minlength=len(sizes))
         alive = counts >= 3
         keep = ~drop & np.repeat(alive, sizes)
         points, sizes, region = points[keep], counts[alive], region[alive]
     return points, sizes, region
+
+
+def _ring(sizes: np.ndarray) -> tuple[np.ndarray, ...]:
+    """For loops of ``sizes`` points laid one after another: each loop's
+    start, and per point its loop, its place in it, and the index of the
+    point before and after it round the loop."""
+    starts = np.cumsum(sizes) - sizes
+    loop = np.repeat(np.arange(len(sizes)), sizes)
+    index = np.arange(int(sizes.sum()))
+    local = index - starts[loop]
+    before, after = index - 1, index + 1
+    before[starts], after[starts + sizes - 1] = starts + sizes - 1, starts
+    return starts, loop, local, before, after
 
 
 # Passes of _without_spikes at most (each drops the such points of one colour).

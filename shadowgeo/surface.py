@@ -689,14 +689,9 @@ class _SurfaceProjector:
         the disc's radius less the polygon's sagitta (at most the chord
         length, or that of ``MAX_CURVE_SEGMENTS`` sides where the count is
         capped), with a margin for rounding."""
-        light = cast("PointLight | SpotLight", self.light)
-        height = self.height[faces]
-        radius = np.sqrt(np.maximum(light.radius**2 - height**2, 0.0))
+        (centre_x, centre_y), radius = self._range_circles(faces)
         capped = radius * (1.0 - math.cos(math.pi / MAX_CURVE_SEGMENTS))
         inner = radius - np.maximum(self.tol.chord_length, capped) - 1e-9 * radius
-        foot = self.light_point - height[:, None] * self.unit[faces] - self.origin[faces]
-        centre_x = np.einsum("ij,ij->i", foot, self.u[faces])
-        centre_y = np.einsum("ij,ij->i", foot, self.v[faces])
         low, high = outlines.min(axis=1), outlines.max(axis=1)
         reach_x = np.maximum(np.abs(low[:, 0] - centre_x), np.abs(high[:, 0] - centre_x))
         reach_y = np.maximum(np.abs(low[:, 1] - centre_y), np.abs(high[:, 1] - centre_y))
@@ -908,13 +903,26 @@ class _SurfaceProjector:
         light = self.light
         if not (is_positional(light) and math.isfinite(light.radius)):
             return None
-        height = self.height[face]
-        radius = math.sqrt(max(light.radius**2 - height**2, 0.0))
+        (centre_x, centre_y), radii = self._range_circles(np.array([face]))
+        radius = float(radii[0])
         count = self.tol.segments(radius)
         angles = np.linspace(0.0, 2 * np.pi, count, endpoint=False)
-        foot = self.light_point - height * self.unit[face] - self.origin[face]
-        center = np.array([foot @ self.u[face], foot @ self.v[face]])
+        center = np.array([centre_x[0], centre_y[0]])
         return center + radius * np.column_stack([np.cos(angles), np.sin(angles)])
+
+    def _range_circles(self, faces: np.ndarray) -> tuple[tuple[np.ndarray, np.ndarray], np.ndarray]:
+        """The circles where the light's range meets the faces' planes: each
+        face frame's centre (x and y columns) and radius (0 where the range
+        does not reach the plane)."""
+        light = cast("PointLight | SpotLight", self.light)
+        height = self.height[faces]
+        radius = np.sqrt(np.maximum(light.radius**2 - height**2, 0.0))
+        foot = self.light_point - height[:, None] * self.unit[faces] - self.origin[faces]
+        centre = (
+            np.einsum("ij,ij->i", foot, self.u[faces]),
+            np.einsum("ij,ij->i", foot, self.v[faces]),
+        )
+        return centre, radius
 
     def _limit_planes(self, faces: np.ndarray) -> np.ndarray | None:
         """(f, p, 4) half-spaces of the spot cone (an inscribed pyramid), or None."""

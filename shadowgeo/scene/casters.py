@@ -38,8 +38,9 @@ _IDENTITY = np.eye(4).reshape(16)
 # (see _closed_by_topology); a bigger shape by its own sort.
 _SMALL_TOPOLOGY = 4096
 _TOPOLOGIES_TESTED = 64
-# Faces per block where the face normals are computed.
-_NORMALS_BLOCK = 1 << 16
+# Faces (or vertices) per block where per-face (per-vertex) arrays are
+# worked out a block at a time: small temporaries, reused.
+_BLOCK = 1 << 16
 
 
 def distinct(shapes: list[Shape]) -> list[Shape]:
@@ -98,10 +99,13 @@ class SceneCaster:
         self.shape = shape
         self.vertices = vertices
         self.name = shape.name or shape.source or "unnamed shape"
+        # whether its faces are closed, when the set knows it before the
+        # caster is made (CasterSet.caster): the caster then does not test it
+        self.closed: bool | None = None
 
     @functools.cached_property
     def caster(self) -> Caster:
-        return Caster(self.vertices, self.shape.faces)
+        return Caster(self.vertices, self.shape.faces, closed=self.closed)
 
 
 class CasterSet:
@@ -137,7 +141,8 @@ class CasterSet:
         else:
             self.low = self.high = np.zeros((0, 3))
         self._meshes: dict[bytes, Caster] = {}
-        self._normals_known = np.zeros(len(shapes), dtype=bool)
+        # the shapes whose face normals the receiver search wrote, with the
+        # box of their faces' corners (see normals_known)
         self._used_boxes: dict[int, np.ndarray] = {}
         self._shapes = shapes
 
@@ -268,8 +273,8 @@ class CasterSet:
         from the light's side): they shadow its footprint, as it would anyway,
         and it stays closed, so its outline comes from its silhouette."""
         near = np.empty(len(self.vertices), dtype=bool)
-        for start in range(0, len(self.vertices), _NORMALS_BLOCK):  # small temporaries
-            block = self.vertices[start : start + _NORMALS_BLOCK]
+        for start in range(0, len(self.vertices), _BLOCK):
+            block = self.vertices[start : start + _BLOCK]
             distance = np.abs(plane.signed_distance(block))
             np.less_equal(distance, tolerance.coplanar_length, out=near[start : start + len(block)])
         if not near.any():
@@ -333,10 +338,8 @@ class CasterSet:
         (made once, kept for every light), its closedness the set's
         (:attr:`closed`: one test per distinct topology, not one a shape)."""
         scene_caster = self.casters[index]
-        if "caster" not in scene_caster.__dict__:
-            scene_caster.__dict__["caster"] = Caster(
-                scene_caster.vertices, scene_caster.shape.faces, closed=bool(self.closed[index])
-            )
+        if scene_caster.closed is None:
+            scene_caster.closed = bool(self.closed[index])
         return scene_caster.caster
 
     def normal_rows(self, index: int) -> np.ndarray:
@@ -354,7 +357,6 @@ class CasterSet:
         (2, 3): the box of its faces' corners, which the casters' mesh of
         every face takes for :attr:`Caster.bounds` once every caster's is
         known (the same numbers: the box of the vertices its faces use)."""
-        self._normals_known[index] = True
         self._used_boxes[index] = used_box
 
     @functools.cached_property
@@ -364,9 +366,11 @@ class CasterSet:
         others computed here; the casters' mesh takes them (or its faces'
         rows) once they are made."""
         normals = self._normal_rows
-        missing = np.repeat(~self._normals_known, self.face_counts)
-        for start in range(0, len(self.faces), _NORMALS_BLOCK):
-            stop = start + _NORMALS_BLOCK
+        known = np.zeros(len(self), dtype=bool)
+        known[list(self._used_boxes)] = True
+        missing = np.repeat(~known, self.face_counts)
+        for start in range(0, len(self.faces), _BLOCK):
+            stop = start + _BLOCK
             wanted = missing[start:stop]
             if wanted.all():
                 normals[start:stop] = block_normals(self.columns, self.faces[start:stop])
@@ -396,7 +400,7 @@ class CasterSet:
             caster = Caster(self.vertices, chosen, copy=False, closed=closed)
             if "columns" in self.__dict__:
                 caster.__dict__["_columns"] = self.columns
-            if "face_normals" in self.__dict__ or self._normals_known.any():
+            if "face_normals" in self.__dict__ or self._used_boxes:
                 # (some) computed already: the same numbers
                 caster.__dict__["face_normals"] = (
                     self.face_normals if everything else self.face_normals[faces]
