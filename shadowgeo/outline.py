@@ -17,7 +17,7 @@ from typing import cast
 import numpy as np
 import shapely
 
-from .lightframe import Triangles, corner_max, corner_min, indexed_triangles, overlapping_boxes
+from .lightframe import corner_max, corner_min, overlapping_boxes
 from .polygons import MAX_COORDINATE, components, fill
 
 
@@ -65,7 +65,258 @@ def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndar
     return position
 
 
-class Outline:
+class _Cutter:
+    """What cuts the region of one outline, or of several outlines in one
+    frame, to triangles: :class:`Outline` and :class:`OutlineSet`.
+
+    Subclasses set ``segments`` (s, 2, 2), ``segment_boxes`` (s, 4),
+    ``segment_loop`` and ``segment_next`` (s,) and ``n_loops``, and say
+    which boundary segments may meet which triangles, which region each
+    triangle is cut by, and how a triangle is cut by Clipper2 alone."""
+
+    segments: np.ndarray
+    segment_boxes: np.ndarray
+    segment_loop: np.ndarray
+    segment_next: np.ndarray
+    n_loops: int
+
+    def _segment_pairs(
+        self, boxes: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(triangle, segment) pairs whose boxes overlap, sorted by triangle,
+        the segments of each triangle's own outline (``owner``) only."""
+        raise NotImplementedError
+
+    def _region_of(
+        self, triangles: np.ndarray, owner: np.ndarray | None
+    ) -> shapely.Geometry | np.ndarray:
+        """The region (or, per triangle, the regions) that cuts ``triangles``."""
+        raise NotImplementedError
+
+    def _clip_unsure(
+        self, images: np.ndarray, triangles: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        """The region of each of ``triangles`` (indices into ``images``) cut to
+        it by Clipper2: loops, and the triangle of each."""
+        raise NotImplementedError
+
+    def cut(
+        self, images: np.ndarray, margin: float | np.ndarray, owner: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The region cut to each of (f, 3, 2) triangles in the frame (for an
+        :class:`OutlineSet`, triangle i by the outline ``owner[i]``).
+
+        1. Triangles whose box meets no boundary segment's box lie wholly
+           inside or wholly outside the region, as their first corner does;
+           the others are tested as polygons (shapely).
+        2. A triangle the boundary crosses is cut from the boundary segments
+           whose boxes meet a box around it (:meth:`_local_cut`): the work per
+           triangle grows with the boundary near it, not with the whole
+           outline. Its reference point ``r`` (the centroid) must be sure to
+           lie off the boundary: farther than its ``margin``.
+        3. A triangle whose ``r`` lies within its ``margin`` of the boundary is
+           cut against the whole outline by Clipper2 instead.
+
+        Returns
+        -------
+        covered : (f,) bool
+            Triangles wholly inside the region (they get no pieces).
+        pieces : (n, k, 2) float64
+            The region's loops inside each other triangle, in the frame (outer
+            loops counter-clockwise, holes clockwise), padded by repeating the
+            last corner.
+        owners : (n,) int64
+            The triangle of each loop.
+        """
+        count = len(images)
+        covered = np.zeros(count, dtype=bool)
+        nothing = (covered, np.zeros((0, 3, 2)), np.zeros(0, np.int64))
+        if count == 0 or self.n_loops == 0:
+            return nothing
+        boxes = np.column_stack([corner_min(images), corner_max(images)])
+        tri, seg = self._segment_pairs(boxes, owner)
+        crossing = np.zeros(count, dtype=bool)
+        crossing[tri] = True
+        clear = np.flatnonzero(~crossing)
+        region = self._region_of(clear, owner)
+        covered[clear] = shapely.contains_xy(region, images[clear, 0, 0], images[clear, 0, 1])
+        near = np.flatnonzero(crossing)
+        polygons = shapely.polygons(images[near])
+        region = self._region_of(near, owner)
+        inside = shapely.covers(region, polygons)
+        covered[near] = inside
+        touched = np.zeros(count, dtype=bool)
+        touched[near] = shapely.intersects(region, polygons) & ~inside
+        if not touched.any():
+            return nothing
+        x, y = images[:, :, 0], images[:, :, 1]
+        after = [1, 2, 0]  # each triangle corner's next (np.roll's numbers, without its cost)
+        clockwise = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
+        images = np.where(clockwise[:, None, None], images[:, ::-1], images)
+        keep = touched[tri]
+        tri, seg = tri[keep], seg[keep]
+
+        # 2. each triangle's own stretch of the boundary, closed around it
+        reference = images.mean(axis=1)
+        a, b, r = self.segments[seg, 0], self.segments[seg, 1], reference[tri]
+        ab, ar = b - a, r - a
+        length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        along = np.clip(np.einsum("ij,ij->i", ar, ab) / length2, 0.0, 1.0)
+        gap = np.hypot(*(ar - along[:, None] * ab).T)  # from r to the segment
+        unsure = np.zeros(count, dtype=bool)
+        unsure[tri[gap <= np.broadcast_to(margin, (count,))[tri]]] = True
+        sure = np.flatnonzero(touched & ~unsure)
+        points, sizes, owners = self._local_cut(images, reference, sure, tri, seg, owner)
+
+        # 3. Clipper2 where the reference point is not sure
+        exact, exact_owners = self._clip_unsure(images, np.flatnonzero(unsure), owner)
+        if exact:
+            points = np.concatenate([points, *exact])
+            sizes = np.concatenate([sizes, [len(loop) for loop in exact]])
+            owners = np.concatenate([owners, exact_owners])
+        return covered, padded_loops(points, sizes), owners.astype(np.int64)
+
+    def _local_cut(
+        self,
+        images: np.ndarray,
+        reference: np.ndarray,
+        sure: np.ndarray,
+        tri: np.ndarray,
+        seg: np.ndarray,
+        owner: np.ndarray | None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The region cut to each triangle ``sure`` (counter-clockwise in
+        ``images``), from the boundary segments near it only (pairs ``tri``,
+        ``seg``, sorted).
+
+        Each segment is clipped to a box around the triangle; consecutive
+        pieces of one loop are joined along the box's edge, counter-clockwise.
+        Inside the box that polygon winds as the region does, up to one
+        constant (the ways around the box it took or missed): the region's
+        winding at the reference point, against the polygon's there, gives it,
+        and as many loops of the box put it right. The triangle's part of that
+        is then cut by Clipper2: every triangle in its own cell of one plane,
+        one call. Returns the loops' points, their sizes, and their triangles.
+        """
+        if len(sure) == 0:
+            return np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+        low, high = corner_min(images[sure]), corner_max(images[sure])
+        pad = 0.05 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1])[:, None]
+        box_low = np.zeros((len(images), 2))
+        box_high = np.zeros((len(images), 2))
+        box_low[sure], box_high[sure] = low - pad, high + pad
+        is_sure = np.zeros(len(images), dtype=bool)
+        is_sure[sure] = True
+        keep = is_sure[tri]
+        order = np.lexsort((seg[keep], tri[keep]))
+        tri, seg = tri[keep][order], seg[keep][order]
+        a, b = self.segments[seg, 0], self.segments[seg, 1]
+        step = b - a
+        # Liang-Barsky: the part a + t (b - a), t0 <= t <= t1, inside the box.
+        t0, t1 = np.zeros(len(tri)), np.ones(len(tri))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for axis in range(2):
+                first = (box_low[tri, axis] - a[:, axis]) / step[:, axis]
+                second = (box_high[tri, axis] - a[:, axis]) / step[:, axis]
+                flat = step[:, axis] == 0
+                within = (a[:, axis] >= box_low[tri, axis]) & (a[:, axis] <= box_high[tri, axis])
+                enter = np.where(flat, np.where(within, -np.inf, np.inf), np.minimum(first, second))
+                leave = np.where(flat, np.where(within, np.inf, -np.inf), np.maximum(first, second))
+                t0, t1 = np.maximum(t0, enter), np.minimum(t1, leave)
+        keep = t0 < t1
+        tri, seg, a, b, step, t0, t1 = (x[keep] for x in (tri, seg, a, b, step, t0, t1))
+        start = np.where((t0 == 0)[:, None], a, a + t0[:, None] * step)
+        end = np.where((t1 == 1)[:, None], b, a + t1[:, None] * step)
+        # Pieces grouped by (triangle, loop); each followed by the next of its group.
+        group_key = tri * self.n_loops + self.segment_loop[seg]
+        new_group = np.ones(len(tri), dtype=bool)
+        new_group[1:] = group_key[1:] != group_key[:-1]
+        group = np.cumsum(new_group) - 1
+        group_start = np.flatnonzero(new_group)
+        following = np.arange(len(tri)) + 1
+        last = np.append(group_start[1:], len(tri)) - 1
+        following[last] = group_start
+        joined = (seg[following] == self.segment_next[seg]) & (t1 == 1)
+        # The way along the box, counter-clockwise, from each piece's end to
+        # the next piece's start: the box corners passed.
+        lo, hi = box_low[tri], box_high[tri]
+        leave_at = _perimeter(end, lo, hi)
+        enter_at = _perimeter(start[following], lo, hi)
+        travel = np.mod(enter_at - leave_at, 4.0)
+        steps = np.floor(leave_at)[:, None] + np.arange(1, 5)[None, :]
+        passed = ((steps - leave_at[:, None]) < travel[:, None]) & ~joined[:, None]
+        corner = np.mod(steps, 4).astype(np.int64)
+        corner_x = np.where((corner == 1) | (corner == 2), hi[:, :1], lo[:, :1])
+        corner_y = np.where(corner >= 2, hi[:, 1:], lo[:, 1:])
+        # Each piece: its start, its end, the corners it passes (masked).
+        points = np.concatenate(
+            [start[:, None], end[:, None], np.stack([corner_x, corner_y], axis=2)], axis=1
+        )
+        used = np.concatenate([np.ones((len(tri), 2), dtype=bool), passed], axis=1)
+        flat_points = points[used]
+        point_group = np.repeat(group, used.sum(axis=1))
+        point_tri = tri[group_start][point_group]
+        # The polygon's winding at each triangle's reference point.
+        sizes = np.bincount(point_group, minlength=len(group_start))
+        offsets = np.cumsum(sizes) - sizes
+        successor = np.arange(len(flat_points)) + 1
+        successor[offsets + sizes - 1] = offsets
+        p, q = flat_points, flat_points[successor]
+        rp = reference[point_tri]
+        side = (q[:, 0] - p[:, 0]) * (rp[:, 1] - p[:, 1]) - (rp[:, 0] - p[:, 0]) * (
+            q[:, 1] - p[:, 1]
+        )
+        up = (p[:, 1] <= rp[:, 1]) & (rp[:, 1] < q[:, 1]) & (side > 0)
+        down = (q[:, 1] <= rp[:, 1]) & (rp[:, 1] < p[:, 1]) & (side < 0)
+        winding = np.bincount(point_tri, weights=up.astype(float) - down, minlength=len(images))
+        region = self._region_of(np.arange(len(images)), owner)
+        truth = shapely.contains_xy(region, reference[:, 0], reference[:, 1])
+        boxes_needed = np.rint(truth - winding).astype(np.int64)
+        # One Clipper2 call: triangle k in cell k of a square grid, scaled alike
+        # along x and y, its box within the cell.
+        columns = int(np.ceil(np.sqrt(len(sure))))
+        cell = 2.0 * MAX_COORDINATE / columns
+        slot = np.full(len(images), -1, dtype=np.int64)
+        slot[sure] = np.arange(len(sure))
+        centre = np.column_stack(
+            [
+                -MAX_COORDINATE + cell * (slot % columns + 0.5),
+                -MAX_COORDINATE + cell * (slot // columns + 0.5),
+            ]
+        )
+        middle = 0.5 * (box_low + box_high)
+        size = np.maximum((box_high - box_low).max(axis=1), 1e-300)
+        scale = 0.45 * cell / size
+        mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
+        subject = [mapped[o : o + n] for o, n in zip(offsets.tolist(), sizes.tolist(), strict=True)]
+        square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+        for k in np.flatnonzero(boxes_needed[sure] != 0):
+            face = sure[k]
+            half = 0.5 * (box_high[face] - box_low[face])
+            loop = (square * half) * scale[face] + centre[face]
+            count = int(boxes_needed[face])
+            subject += [loop if count > 0 else loop[::-1]] * abs(count)
+        clip = (images[sure] - middle[sure][:, None]) * scale[sure][:, None, None]
+        clip = clip + centre[sure][:, None]
+        region = fill(subject) ^ fill(list(clip))
+        out = [loop for loop in region.to_polygons() if len(loop) >= 3]
+        nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
+        if not out:
+            return nothing
+        out_sizes = np.array([len(loop) for loop in out], dtype=np.int64)
+        out_points = np.concatenate(out)
+        first_points = out_points[np.cumsum(out_sizes) - out_sizes]
+        column = np.clip(np.floor((first_points[:, 0] + MAX_COORDINATE) / cell), 0, columns - 1)
+        row = np.clip(np.floor((first_points[:, 1] + MAX_COORDINATE) / cell), 0, columns - 1)
+        owner = sure[np.minimum((row * columns + column).astype(np.int64), len(sure) - 1)]
+        point_owner = np.repeat(owner, out_sizes)
+        out_points = (out_points - centre[point_owner]) / scale[point_owner, None] + middle[
+            point_owner
+        ]
+        return out_points, out_sizes, owner
+
+
+class Outline(_Cutter):
     """A closed caster's shadow seen from the light: its silhouette loops
     projected once into a 2-D frame across the light's rays, and united.
 
@@ -115,6 +366,21 @@ class Outline:
         self.segment_next = np.arange(len(start)) + 1
         self.segment_next[np.cumsum(sizes) - 1] = first[np.cumsum(sizes) - 1]
         self.segment_boxes = np.column_stack([np.minimum(start, end), np.maximum(start, end)])
+        self.n_loops = len(self.loops)
+
+    def _segment_pairs(
+        self, boxes: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        return overlapping_boxes(boxes, self.segment_boxes)
+
+    def _region_of(self, triangles: np.ndarray, owner: np.ndarray | None) -> shapely.Geometry:
+        return self.region
+
+    def _clip_unsure(
+        self, images: np.ndarray, triangles: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        loops, owners = self.clip_to(images[triangles])
+        return loops, triangles[owners]
 
     @functools.cached_property
     def region(self) -> shapely.MultiPolygon:
@@ -139,216 +405,6 @@ class Outline:
         low, high = self.segment_boxes[:, :2].min(axis=0), self.segment_boxes[:, 2:].max(axis=0)
         return float(low[0]), float(low[1]), float(high[0]), float(high[1])
 
-    def cut(
-        self, images: np.ndarray, margin: float | np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The region cut to each of (f, 3, 2) triangles in the frame.
-
-        1. Triangles whose box meets no boundary segment's box lie wholly
-           inside or wholly outside the region, as their first corner does;
-           the others are tested as polygons (shapely).
-        2. A triangle the boundary crosses is cut from the boundary segments
-           whose boxes meet a box around it (:meth:`_local_cut`): the work per
-           triangle grows with the boundary near it, not with the whole
-           outline. Its reference point ``r`` (the centroid) must be sure to
-           lie off the boundary: farther than its ``margin``.
-        3. A triangle whose ``r`` lies within its ``margin`` of the boundary is
-           cut against the whole outline by Clipper2 instead.
-
-        Returns
-        -------
-        covered : (f,) bool
-            Triangles wholly inside the region (they get no pieces).
-        pieces : (n, k, 2) float64
-            The region's loops inside each other triangle, in the frame (outer
-            loops counter-clockwise, holes clockwise), padded by repeating the
-            last corner.
-        owners : (n,) int64
-            The triangle of each loop.
-        """
-        count = len(images)
-        covered = np.zeros(count, dtype=bool)
-        nothing = (covered, np.zeros((0, 3, 2)), np.zeros(0, np.int64))
-        if count == 0 or not self.loops:
-            return nothing
-        boxes = np.column_stack([corner_min(images), corner_max(images)])
-        tri, seg = overlapping_boxes(boxes, self.segment_boxes)
-        crossing = np.zeros(count, dtype=bool)
-        crossing[tri] = True
-        clear = np.flatnonzero(~crossing)
-        covered[clear] = shapely.contains_xy(self.region, images[clear, 0, 0], images[clear, 0, 1])
-        near = np.flatnonzero(crossing)
-        polygons = shapely.polygons(images[near])
-        inside = shapely.covers(self.region, polygons)
-        covered[near] = inside
-        touched = np.zeros(count, dtype=bool)
-        touched[near] = shapely.intersects(self.region, polygons) & ~inside
-        if not touched.any():
-            return nothing
-        x, y = images[:, :, 0], images[:, :, 1]
-        after = [1, 2, 0]  # each triangle corner's next (np.roll's numbers, without its cost)
-        clockwise = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
-        images = np.where(clockwise[:, None, None], images[:, ::-1], images)
-        keep = touched[tri]
-        tri, seg = tri[keep], seg[keep]
-
-        # 2. each triangle's own stretch of the boundary, closed around it
-        reference = images.mean(axis=1)
-        a, b, r = self.segments[seg, 0], self.segments[seg, 1], reference[tri]
-        ab, ar = b - a, r - a
-        length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
-        along = np.clip(np.einsum("ij,ij->i", ar, ab) / length2, 0.0, 1.0)
-        gap = np.hypot(*(ar - along[:, None] * ab).T)  # from r to the segment
-        unsure = np.zeros(count, dtype=bool)
-        unsure[tri[gap <= np.broadcast_to(margin, (count,))[tri]]] = True
-        sure = np.flatnonzero(touched & ~unsure)
-        points, sizes, owners = self._local_cut(images, reference, sure, tri, seg)
-
-        # 3. Clipper2 where the reference point is not sure
-        exact, exact_owners = self.clip_to(images[unsure])
-        if exact:
-            points = np.concatenate([points, *exact])
-            sizes = np.concatenate([sizes, [len(loop) for loop in exact]])
-            owners = np.concatenate([owners, np.flatnonzero(unsure)[exact_owners]])
-        return covered, padded_loops(points, sizes), owners.astype(np.int64)
-
-    def _local_cut(
-        self,
-        images: np.ndarray,
-        reference: np.ndarray,
-        sure: np.ndarray,
-        tri: np.ndarray,
-        seg: np.ndarray,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The region cut to each triangle ``sure`` (counter-clockwise in
-        ``images``), from the boundary segments near it only (pairs ``tri``,
-        ``seg``, sorted).
-
-        Each segment is clipped to a box around the triangle; consecutive
-        pieces of one loop are joined along the box's edge, counter-clockwise.
-        Inside the box that polygon winds as the region does, up to one
-        constant (the ways around the box it took or missed): the region's
-        winding at the reference point, against the polygon's there, gives it,
-        and as many loops of the box put it right. The triangle's part of that
-        is then cut by Clipper2: every triangle in its own cell of one plane,
-        one call. Returns the loops' points, their sizes, and their triangles.
-        """
-        if len(sure) == 0:
-            return np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64)
-        low, high = corner_min(images[sure]), corner_max(images[sure])
-        pad = 0.05 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1])[:, None]
-        box_low = np.zeros((len(images), 2))
-        box_high = np.zeros((len(images), 2))
-        box_low[sure], box_high[sure] = low - pad, high + pad
-        is_sure = np.zeros(len(images), dtype=bool)
-        is_sure[sure] = True
-        keep = is_sure[tri]
-        order = np.lexsort((seg[keep], tri[keep]))
-        tri, seg = tri[keep][order], seg[keep][order]
-        a, b = self.segments[seg, 0], self.segments[seg, 1]
-        step = b - a
-        # Liang-Barsky: the part a + t (b - a), t0 <= t <= t1, inside the box.
-        t0, t1 = np.zeros(len(tri)), np.ones(len(tri))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            for axis in range(2):
-                first = (box_low[tri, axis] - a[:, axis]) / step[:, axis]
-                second = (box_high[tri, axis] - a[:, axis]) / step[:, axis]
-                flat = step[:, axis] == 0
-                within = (a[:, axis] >= box_low[tri, axis]) & (a[:, axis] <= box_high[tri, axis])
-                enter = np.where(flat, np.where(within, -np.inf, np.inf), np.minimum(first, second))
-                leave = np.where(flat, np.where(within, np.inf, -np.inf), np.maximum(first, second))
-                t0, t1 = np.maximum(t0, enter), np.minimum(t1, leave)
-        keep = t0 < t1
-        tri, seg, a, b, step, t0, t1 = (x[keep] for x in (tri, seg, a, b, step, t0, t1))
-        start = np.where((t0 == 0)[:, None], a, a + t0[:, None] * step)
-        end = np.where((t1 == 1)[:, None], b, a + t1[:, None] * step)
-        # Pieces grouped by (triangle, loop); each followed by the next of its group.
-        group_key = tri * len(self.loops) + self.segment_loop[seg]
-        new_group = np.ones(len(tri), dtype=bool)
-        new_group[1:] = group_key[1:] != group_key[:-1]
-        group = np.cumsum(new_group) - 1
-        group_start = np.flatnonzero(new_group)
-        following = np.arange(len(tri)) + 1
-        last = np.append(group_start[1:], len(tri)) - 1
-        following[last] = group_start
-        joined = (seg[following] == self.segment_next[seg]) & (t1 == 1)
-        # The way along the box, counter-clockwise, from each piece's end to
-        # the next piece's start: the box corners passed.
-        lo, hi = box_low[tri], box_high[tri]
-        leave_at = _perimeter(end, lo, hi)
-        enter_at = _perimeter(start[following], lo, hi)
-        travel = np.mod(enter_at - leave_at, 4.0)
-        steps = np.floor(leave_at)[:, None] + np.arange(1, 5)[None, :]
-        passed = ((steps - leave_at[:, None]) < travel[:, None]) & ~joined[:, None]
-        corner = np.mod(steps, 4).astype(np.int64)
-        corner_x = np.where((corner == 1) | (corner == 2), hi[:, :1], lo[:, :1])
-        corner_y = np.where(corner >= 2, hi[:, 1:], lo[:, 1:])
-        # Each piece: its start, its end, the corners it passes (masked).
-        points = np.concatenate(
-            [start[:, None], end[:, None], np.stack([corner_x, corner_y], axis=2)], axis=1
-        )
-        used = np.concatenate([np.ones((len(tri), 2), dtype=bool), passed], axis=1)
-        flat_points = points[used]
-        point_group = np.repeat(group, used.sum(axis=1))
-        point_tri = tri[group_start][point_group]
-        # The polygon's winding at each triangle's reference point.
-        sizes = np.bincount(point_group, minlength=len(group_start))
-        offsets = np.cumsum(sizes) - sizes
-        successor = np.arange(len(flat_points)) + 1
-        successor[offsets + sizes - 1] = offsets
-        p, q = flat_points, flat_points[successor]
-        rp = reference[point_tri]
-        side = (q[:, 0] - p[:, 0]) * (rp[:, 1] - p[:, 1]) - (rp[:, 0] - p[:, 0]) * (
-            q[:, 1] - p[:, 1]
-        )
-        up = (p[:, 1] <= rp[:, 1]) & (rp[:, 1] < q[:, 1]) & (side > 0)
-        down = (q[:, 1] <= rp[:, 1]) & (rp[:, 1] < p[:, 1]) & (side < 0)
-        winding = np.bincount(point_tri, weights=up.astype(float) - down, minlength=len(images))
-        truth = shapely.contains_xy(self.region, reference[:, 0], reference[:, 1])
-        boxes_needed = np.rint(truth - winding).astype(np.int64)
-        # One Clipper2 call: triangle k in cell k of a square grid, scaled alike
-        # along x and y, its box within the cell.
-        columns = int(np.ceil(np.sqrt(len(sure))))
-        cell = 2.0 * MAX_COORDINATE / columns
-        slot = np.full(len(images), -1, dtype=np.int64)
-        slot[sure] = np.arange(len(sure))
-        centre = np.column_stack(
-            [
-                -MAX_COORDINATE + cell * (slot % columns + 0.5),
-                -MAX_COORDINATE + cell * (slot // columns + 0.5),
-            ]
-        )
-        middle = 0.5 * (box_low + box_high)
-        size = np.maximum((box_high - box_low).max(axis=1), 1e-300)
-        scale = 0.45 * cell / size
-        mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
-        subject = [mapped[o : o + n] for o, n in zip(offsets.tolist(), sizes.tolist(), strict=True)]
-        square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-        for k in np.flatnonzero(boxes_needed[sure] != 0):
-            face = sure[k]
-            half = 0.5 * (box_high[face] - box_low[face])
-            loop = (square * half) * scale[face] + centre[face]
-            count = int(boxes_needed[face])
-            subject += [loop if count > 0 else loop[::-1]] * abs(count)
-        clip = (images[sure] - middle[sure][:, None]) * scale[sure][:, None, None]
-        clip = clip + centre[sure][:, None]
-        region = fill(subject) ^ fill(list(clip))
-        out = [loop for loop in region.to_polygons() if len(loop) >= 3]
-        nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
-        if not out:
-            return nothing
-        out_sizes = np.array([len(loop) for loop in out], dtype=np.int64)
-        out_points = np.concatenate(out)
-        first_points = out_points[np.cumsum(out_sizes) - out_sizes]
-        column = np.clip(np.floor((first_points[:, 0] + MAX_COORDINATE) / cell), 0, columns - 1)
-        row = np.clip(np.floor((first_points[:, 1] + MAX_COORDINATE) / cell), 0, columns - 1)
-        owner = sure[np.minimum((row * columns + column).astype(np.int64), len(sure) - 1)]
-        point_owner = np.repeat(owner, out_sizes)
-        out_points = (out_points - centre[point_owner]) / scale[point_owner, None] + middle[
-            point_owner
-        ]
-        return out_points, out_sizes, owner
-
     def clip_to(self, images: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
         """The region cut to each of (f, 3, 2) counter-clockwise triangles in
         the frame: loops, and (n,) the triangle of each loop."""
@@ -368,30 +424,6 @@ class Outline:
             return np.full(points.shape[:-1], np.inf)
         distance: np.ndarray = (points - self.light_point) @ self.axis
         return distance
-
-    def may_reach(self, triangles: Triangles) -> np.ndarray:
-        """(n,) bool for n triangles: False where the caster surely casts
-        nothing on it -- the triangle lies ahead of the light and its image
-        misses the outline's box (the caster's image lies in it)."""
-        points, faces = indexed_triangles(triangles)
-        if len(faces) == 0:
-            return np.zeros(0, dtype=bool)
-        ahead = corner_min(self.ahead(points)[faces]) > 0
-        out = np.ones(len(faces), dtype=bool)
-        if not ahead.any():
-            return out
-        with np.errstate(divide="ignore", invalid="ignore"):
-            images = self.to_frame(points)  # only the points ahead are used
-        x, y = images[:, 0][faces[ahead]], images[:, 1][faces[ahead]]
-        low_x, low_y, high_x, high_y = self.bounds
-        misses = (
-            (corner_min(x) > high_x)
-            | (corner_min(y) > high_y)
-            | (corner_max(x) < low_x)
-            | (corner_max(y) < low_y)
-        )
-        out[np.flatnonzero(ahead)[misses]] = False
-        return out
 
     def to_frame(self, points: np.ndarray) -> np.ndarray:
         """(..., 3) points to (..., 2) frame coordinates (their rays)."""
@@ -416,6 +448,111 @@ class Outline:
         along = -height / np.einsum("ij,ij->i", rays, normals)
         met: np.ndarray = self.light_point + rays * along[:, None]
         return met
+
+
+class OutlineSet(_Cutter):
+    """Several casters' :class:`Outline` in one frame (a directional light's:
+    the frame is the light's alone), cut to triangles all at once.
+
+    Each triangle is cut by its own caster's outline (``owner``), as that
+    outline's :meth:`Outline.cut` would, but the boundary segments of all
+    the outlines are paired with the triangles in one search, and the cuts
+    go through one Clipper2 call: a scene of a thousand buildings pays the
+    per-call costs once, not once per building.
+    """
+
+    def __init__(self, outlines: list[Outline]) -> None:
+        self.outlines = outlines
+        segment_counts = [len(outline.segments) for outline in outlines]
+        loop_counts = np.array([outline.n_loops for outline in outlines], dtype=np.int64)
+        segment_start = np.cumsum([0, *segment_counts[:-1]]).astype(np.int64)
+        loop_start = np.cumsum(loop_counts) - loop_counts
+        self.segments = np.concatenate([o.segments for o in outlines] + [np.zeros((0, 2, 2))])
+        self.segment_boxes = np.concatenate(
+            [o.segment_boxes for o in outlines] + [np.zeros((0, 4))]
+        )
+        sizes = np.array(segment_counts, dtype=np.int64)
+        self.segment_owner = np.repeat(np.arange(len(outlines)), sizes)
+        self.segment_loop = np.concatenate(
+            [o.segment_loop + start for o, start in zip(outlines, loop_start, strict=True)]
+            + [np.zeros(0, np.int64)]
+        )
+        self.segment_next = np.concatenate(
+            [o.segment_next + start for o, start in zip(outlines, segment_start, strict=True)]
+            + [np.zeros(0, np.int64)]
+        )
+        self.n_loops = int(loop_counts.sum())
+        self._regions: np.ndarray | None = None
+
+    @functools.cached_property
+    def bounds(self) -> np.ndarray:
+        """(k, 4) each outline's :attr:`Outline.bounds`."""
+        return np.array([outline.bounds for outline in self.outlines]).reshape(-1, 4)
+
+    def may_reach(self, points: np.ndarray, faces: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """(n,) bool for the n triangles ``points[faces]``: False where caster
+        ``owner[i]`` surely casts nothing on triangle i (the triangle lies
+        ahead of the light and its image misses the outline's box, in which
+        the caster's image lies), every pair at once."""
+        out = np.ones(len(faces), dtype=bool)
+        if len(faces) == 0:
+            return out
+        frame = self.outlines[0]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if frame.light_point is None:  # one frame: each point once
+                images = frame.to_frame(points)
+                x, y = images[:, 0][faces], images[:, 1][faces]
+                ahead = np.ones(len(faces), dtype=bool)
+            else:
+                frames = np.array(
+                    [(outline.axis, outline.first, outline.second) for outline in self.outlines]
+                )[owner]
+                relative = points[faces] - frame.light_point
+                depth = np.einsum("pcd,pd->pc", relative, frames[:, 0])
+                ahead = corner_min(depth) > 0
+                x = np.einsum("pcd,pd->pc", relative, frames[:, 1]) / depth
+                y = np.einsum("pcd,pd->pc", relative, frames[:, 2]) / depth
+        low_x, low_y, high_x, high_y = self.bounds[owner].T
+        misses = (
+            (corner_min(x) > high_x)
+            | (corner_min(y) > high_y)
+            | (corner_max(x) < low_x)
+            | (corner_max(y) < low_y)
+        )
+        out[ahead & misses] = False
+        return out
+
+    @property
+    def regions(self) -> np.ndarray:
+        """(k,) each outline's prepared region, made when first asked for."""
+        if self._regions is None:
+            regions = np.empty(len(self.outlines), dtype=object)
+            regions[:] = [outline.region for outline in self.outlines]
+            self._regions = regions
+        return self._regions
+
+    def _segment_pairs(
+        self, boxes: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        tri, seg = overlapping_boxes(boxes, self.segment_boxes)
+        own = self.segment_owner[seg] == cast(np.ndarray, owner)[tri]
+        return tri[own], seg[own]
+
+    def _region_of(self, triangles: np.ndarray, owner: np.ndarray | None) -> np.ndarray:
+        regions: np.ndarray = self.regions[cast(np.ndarray, owner)[triangles]]
+        return regions
+
+    def _clip_unsure(
+        self, images: np.ndarray, triangles: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        loops: list[np.ndarray] = []
+        owners: list[np.ndarray] = []
+        for triangle in triangles.tolist():
+            outline = self.outlines[int(cast(np.ndarray, owner)[triangle])]
+            found, _ = outline.clip_to(images[triangle : triangle + 1])
+            loops += found
+            owners.append(np.full(len(found), triangle, dtype=np.int64))
+        return loops, np.concatenate([*owners, np.zeros(0, np.int64)])
 
 
 def make_outline(

@@ -61,7 +61,7 @@ from .errors import GeometryError
 from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import MAX_CURVE_SEGMENTS
-from .outline import Outline, make_outline
+from .outline import Outline, OutlineSet, make_outline
 from .seams import Loops, loops_of, stitch, without_collinear
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
@@ -410,23 +410,37 @@ class _SurfaceProjector:
         # boxes). Only those faces can take the caster's shadow: its outline
         # (whose image lies within its triangles') settles the faces it lies
         # wholly in front of, and the others keep their pairs with its triangles.
-        others_of: list[np.ndarray] = []
         if outlined:
             fronts = [front for _, front, _ in outlined]
             pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
             n_faces = np.int64(len(self.faces))
             keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
             near = np.unique(keys)
-            cuts = np.searchsorted(near, np.arange(len(outlined) + 1) * n_faces)
-            for k, (outline, front, bound) in enumerate(outlined):
-                faces = near[cuts[k] : cuts[k + 1]] - k * n_faces
-                eligible = self._outline_faces(outline, bound, corners, faces)
-                extra.append(self._apply_outline(outline, faces[eligible], corners, full))
-                others = faces[~eligible]
-                others_of.append(others[outline.may_reach((self.vertices, self.faces[others]))])
-                all_triangles.append(front[0][front[1]])
-            # the pairs of each caster's others, by face, then triangle
-            wanted = np.concatenate([k * n_faces + others for k, others in enumerate(others_of)])
+            # (caster, face) pairs, by caster, then face
+            owner_of, faces = np.divmod(near, n_faces)
+            eligible = self._outline_faces(outlined, owner_of, faces, corners)
+            outlines = [outline for outline, _, _ in outlined]
+            together = OutlineSet(outlines)
+            if self.light_point is None:
+                # Under a directional light every outline is in the light's
+                # one frame: their cuts go all at once, not a call per caster.
+                extra.append(
+                    self._apply_outline(
+                        together, faces[eligible], corners, full, owner_of[eligible]
+                    )
+                )
+            else:
+                bounds = np.searchsorted(owner_of[eligible], np.arange(len(outlined) + 1))
+                chosen = faces[eligible]
+                for k, outline in enumerate(outlines):
+                    mine = chosen[bounds[k] : bounds[k + 1]]
+                    extra.append(self._apply_outline(outline, mine, corners, full))
+            all_triangles += [front[0][front[1]] for _, front, _ in outlined]
+            # the pairs of each caster's others that it may shadow, by face,
+            # then triangle
+            others = np.flatnonzero(~eligible)
+            reach = together.may_reach(self.vertices, self.faces[faces[others]], owner_of[others])
+            wanted = near[others[reach]]
             own = np.isin(keys, wanted)
             receiver_parts.append(pair_faces[own])
             triangle_parts.append(pair_triangles[own] + len(caster_triangles))
@@ -522,54 +536,67 @@ class _SurfaceProjector:
 
     def _outline_faces(
         self,
-        outline: Outline,
-        bound: tuple[np.ndarray, np.ndarray, float],
-        corners: np.ndarray,
+        outlined: list[_Outlined],
+        owner: np.ndarray,
         faces: np.ndarray,
+        corners: np.ndarray,
     ) -> np.ndarray:
-        """(len(faces),) bool: which of the lit ``faces`` the caster lies wholly
-        in front of (its box or its bounding ball does) with their corners
-        ahead of the light in the outline's frame. ``bound``: the caster's box
-        half-sizes, centre and bounding radius about that centre."""
-        half, centre, radius = bound
+        """(len(faces),) bool: for each pair of a closed caster ``owner[i]``
+        and a lit face ``faces[i]``, whether the caster lies wholly in front
+        of the face (its box or its bounding ball does) with the face's
+        corners ahead of the light in the caster outline's frame."""
+        bounds = [bound for _, _, bound in outlined]
+        half = np.array([b[0] for b in bounds]).reshape(-1, 3)[owner]
+        centre = np.array([b[1] for b in bounds]).reshape(-1, 3)[owner]
+        radius = np.array([b[2] for b in bounds], dtype=float)[owner]
         unit = self.unit[faces]
         x, y, z = unit[:, 0], unit[:, 1], unit[:, 2]
         first = corners[faces, 0]
         # Each face plane's height of the caster's centre; the box's lowest
         # corner lies lower by the half-sizes along the normal's components.
         middle = (
-            x * (centre[0] - first[:, 0])
-            + y * (centre[1] - first[:, 1])
-            + z * (centre[2] - first[:, 2])
+            x * (centre[:, 0] - first[:, 0])
+            + y * (centre[:, 1] - first[:, 1])
+            + z * (centre[:, 2] - first[:, 2])
         )
-        reach = np.abs(x) * half[0] + np.abs(y) * half[1] + np.abs(z) * half[2]
-        in_front = middle - np.minimum(reach, radius) > self.tol.length
-        used, at = np.unique(self.faces[faces], return_inverse=True)
-        ahead = corner_min(outline.ahead(self.vertices[used])[at.reshape(-1, 3)]) > self.tol.length
-        eligible: np.ndarray = in_front & ahead
+        reach = np.abs(x) * half[:, 0] + np.abs(y) * half[:, 1] + np.abs(z) * half[:, 2]
+        eligible: np.ndarray = middle - np.minimum(reach, radius) > self.tol.length
+        if self.light_point is not None:
+            # (ahead of a directional light is everything)
+            axis = np.array([outline.axis for outline, _, _ in outlined]).reshape(-1, 3)[owner]
+            relative = corners[faces] - self.light_point
+            ahead = np.einsum("pcd,pd->pc", relative, axis)
+            eligible &= corner_min(ahead) > self.tol.length
         return eligible
 
     def _apply_outline(
         self,
-        outline: Outline,
+        outline: Outline | OutlineSet,
         faces: np.ndarray,
         corners: np.ndarray,
         full: np.ndarray,
+        owner: np.ndarray | None = None,
     ) -> _Pieces:
         """Mark faces wholly inside the outline as full; return the outline's
         part of the others, mapped onto each face: signed pieces (their
-        winding numbers add up to it) and their faces."""
+        winding numbers add up to it) and their faces. For an
+        :class:`OutlineSet` (its outlines in one frame), face i is cut by
+        the outline ``owner[i]``."""
         nothing = (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
         if len(faces) == 0:
             return nothing
+        frame = outline.outlines[0] if isinstance(outline, OutlineSet) else outline
         # Each vertex once: the faces share their corners (those of other
         # faces, maybe behind the light, are not used).
         used, corner_ids = np.unique(self.faces[faces], return_inverse=True)
         corner_ids = corner_ids.reshape(-1, 3)
         with np.errstate(divide="ignore", invalid="ignore"):
-            vertex_images = outline.to_frame(self.vertices[used])
+            vertex_images = frame.to_frame(self.vertices[used])
         x, y = vertex_images[:, 0][corner_ids], vertex_images[:, 1][corner_ids]
-        low_x, low_y, high_x, high_y = outline.bounds
+        if isinstance(outline, OutlineSet):
+            low_x, low_y, high_x, high_y = outline.bounds[cast(np.ndarray, owner)].T
+        else:
+            low_x, low_y, high_x, high_y = outline.bounds
         near = ~(
             (corner_min(x) > high_x)
             | (corner_min(y) > high_y)
@@ -577,6 +604,7 @@ class _SurfaceProjector:
             | (corner_max(y) < low_y)
         )
         faces = faces[near]
+        owner = None if owner is None else owner[near]
         images = vertex_images[corner_ids[near]]
         x, y = images[:, :, 0], images[:, :, 1]
         # The map from the frame back to a face keeps or flips orientation as
@@ -584,7 +612,7 @@ class _SurfaceProjector:
         after = [1, 2, 0]  # each corner's next
         flips = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
         extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
-        covered, pieces, owners = outline.cut(images, 1e-9 * extent)
+        covered, pieces, owners = outline.cut(images, 1e-9 * extent, owner)
         full[faces[covered]] = True
         if len(pieces) == 0:
             return nothing
@@ -592,7 +620,7 @@ class _SurfaceProjector:
         point_face = faces[np.repeat(owners, width)]
         normal = self.unit[point_face]
         offset = -np.einsum("ij,ij->i", normal, corners[point_face, 0])
-        points = outline.onto_planes(pieces.reshape(-1, 2), normal, offset)
+        points = frame.onto_planes(pieces.reshape(-1, 2), normal, offset)
         points -= self.origin[point_face]
         flat = np.column_stack(
             [

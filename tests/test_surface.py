@@ -457,6 +457,35 @@ def test_open_curved_sheet_lit_from_its_underside():
     check_rays(shadow, sheet, casters, light, 2000, 6, 6.0)
 
 
+def test_many_floating_boxes_under_the_sun_cut_each_face_by_its_own_outlines():
+    # Forty boxes over a floor, their shadows over one another and over the
+    # boxes below them: under a directional light every outline is cut in one
+    # go (OutlineSet), each face by the outlines of the casters wholly in
+    # front of it only. The floor's shadow is the planar one, clipped.
+    rng = np.random.default_rng(5)
+    floor = grid(12, 3.0)
+    casters = [
+        box([*rng.uniform(-2.2, 2.2, 1), rng.uniform(0.6, 2.5), *rng.uniform(-2.2, 2.2, 1)],
+            rng.uniform(0.1, 0.5, 3))
+        for _ in range(40)
+    ]  # fmt: skip
+    light = DirectionalLight([0.35, -1.0, 0.25])
+    on_floor = shadow_on_surface(casters, light, floor)
+    square = [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]]
+    planar = project_shadow(
+        trimesh.util.concatenate(casters), light, Plane([0, 1, 0], 0), receiver=square
+    )
+    assert on_floor.diagnostics.n_outlined_casters == 40
+    assert on_floor.area == pytest.approx(planar.area, rel=1e-9)
+    # every surface at once: the boxes shadow one another, rays agree
+    scene = trimesh.util.concatenate([floor, *casters])
+    everything = shadow_on_surface(casters, light, scene)
+    floor_faces = len(floor.faces)
+    assert everything.fraction[:floor_faces] == pytest.approx(on_floor.fraction, abs=1e-9)
+    assert np.any(everything.fraction[floor_faces:][everything.fraction[floor_faces:] < 1] > 0)
+    check_rays(everything, scene, casters, light, 3000, 6, 3.0)
+
+
 @pytest.mark.parametrize(
     "light",
     [

@@ -4,6 +4,8 @@
   light (wholly covered faces, and the exact part of the others) against
   shapely's intersection, including faces whose centre lies on the outline's
   edge (cut by Clipper2 instead) and faces the outline crosses many times;
+  ``OutlineSet.cut``: each triangle by its own caster's outline, where the
+  outlines overlap one another;
 * ``overlapping_boxes``: every overlapping pair, against all pairs tested;
 * ``candidate_pairs``: triangles given as shared points and faces pair exactly
   as the same triangles given corner by corner;
@@ -19,7 +21,7 @@ import shapely
 
 from shadowgeo import GeometryError
 from shadowgeo.lightframe import candidate_pairs, clip_batch, overlapping_boxes
-from shadowgeo.outline import Outline, padded_loops
+from shadowgeo.outline import Outline, OutlineSet, padded_loops
 from shadowgeo.seams import loops_of, stitch
 
 
@@ -55,14 +57,17 @@ def signed_area(loop):
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
-def check_cut(outline, triangles, margin):
-    covered, pieces, owners = outline.cut(triangles, margin)
+def check_cut(outline, triangles, margin, owner=None):
+    """``outline.cut`` against shapely (for an OutlineSet, triangle k by the
+    region of its outline ``owner[k]``)."""
+    covered, pieces, owners = outline.cut(triangles, margin, owner)
     assert pieces.shape[0] == owners.shape[0]
     for k, triangle in enumerate(triangles):
         polygon = shapely.Polygon(triangle)
-        exact = outline.region.intersection(polygon).area
+        region = outline.region if owner is None else outline.outlines[owner[k]].region
+        exact = region.intersection(polygon).area
         if covered[k]:
-            assert outline.region.covers(polygon)
+            assert region.covers(polygon)
             assert not np.any(owners == k)
             continue
         mine = pieces[owners == k]
@@ -109,6 +114,31 @@ def test_cut_of_a_square_from_every_side_and_corner():
     triangles = np.array([base + spot for spot in spots] + [base * 8 + (0.5, 0.5)])
     check_cut(outline, triangles, 1e-12)
     check_cut(outline, triangles[:, ::-1], 1e-12)
+
+
+def test_outline_set_cuts_each_triangle_by_its_own_outline():
+    # three casters' outlines over one another in the light's one frame; each
+    # triangle is cut by one of them, not by their union
+    outlines = [
+        outline_of([star((0.0, 0.0), 1.0)]),
+        outline_of([star((0.8, 0.2), 0.9, count=31), star((0.8, 0.2), 0.3)[::-1]]),
+        outline_of([np.array([[-1.5, -1.0], [1.5, -1.0], [1.5, -0.2], [-1.5, -0.2]])]),
+    ]
+    together = OutlineSet(outlines)
+    rng = np.random.default_rng(11)
+    centres = rng.uniform(-1.8, 1.8, (300, 2))
+    sizes = rng.uniform(0.02, 0.8, 300)
+    triangles = centres[:, None, :] + sizes[:, None, None] * rng.normal(size=(300, 3, 2))
+    owner = rng.integers(0, 3, 300)
+    check_cut(together, triangles, 1e-12, owner)
+    # and a triangle's centre on its own outline's edge goes to Clipper2
+    points = np.concatenate(outlines[1].loops)[::9]
+    near = points[:, None, :] + np.array([[0.05, 0.0], [-0.025, 0.04], [-0.025, -0.04]])[None]
+    check_cut(together, near, 1e-9, np.ones(len(near), dtype=np.int64))
+    # the same triangles covered as by each outline alone
+    covered, _, _ = together.cut(triangles, 1e-12, owner)
+    for k, outline in enumerate(outlines):
+        assert np.array_equal(covered[owner == k], outline.cut(triangles[owner == k], 1e-12)[0])
 
 
 def test_padded_loops_repeat_the_last_point():
