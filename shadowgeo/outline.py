@@ -417,14 +417,6 @@ class Outline(_Cutter):
                 owners.append(k)
         return loops, np.array(owners, dtype=np.int64)
 
-    def ahead(self, points: np.ndarray) -> np.ndarray:
-        """(..., ) distance of points ahead of the light along the frame's axis
-        (positive for a directional light)."""
-        if self.light_point is None:
-            return np.full(points.shape[:-1], np.inf)
-        distance: np.ndarray = (points - self.light_point) @ self.axis
-        return distance
-
     def to_frame(self, points: np.ndarray) -> np.ndarray:
         """(..., 3) points to (..., 2) frame coordinates (their rays)."""
         if self.light_point is None:
@@ -451,14 +443,15 @@ class Outline(_Cutter):
 
 
 class OutlineSet(_Cutter):
-    """Several casters' :class:`Outline` in one frame (a directional light's:
-    the frame is the light's alone), cut to triangles all at once.
+    """Several casters' :class:`Outline` of one light, cut to triangles all
+    at once.
 
-    Each triangle is cut by its own caster's outline (``owner``), as that
-    outline's :meth:`Outline.cut` would, but the boundary segments of all
-    the outlines are paired with the triangles in one search, and the cuts
-    go through one Clipper2 call: a scene of a thousand buildings pays the
-    per-call costs once, not once per building.
+    Each triangle is cut by its own caster's outline (``owner``), in that
+    outline's frame, as its :meth:`Outline.cut` would, but the cuts go
+    through one Clipper2 call, and under a directional light (whose frame
+    all the outlines share) the boundary segments of all the outlines are
+    paired with the triangles in one search: a scene of a thousand
+    buildings pays the per-call costs once, not once per building.
     """
 
     def __init__(self, outlines: list[Outline]) -> None:
@@ -482,12 +475,45 @@ class OutlineSet(_Cutter):
             + [np.zeros(0, np.int64)]
         )
         self.n_loops = int(loop_counts.sum())
+        self._segment_start = np.append(segment_start, sum(segment_counts))
         self._regions: np.ndarray | None = None
+        # A directional light's outlines share its frame; a point light's
+        # each have their own (the axis towards their caster).
+        self.shared = not outlines or outlines[0].light_point is None
+        self._light = None if self.shared else outlines[0].light_point
+        self._frames = np.array([(o.axis, o.first, o.second) for o in outlines]).reshape(-1, 3, 3)
 
     @functools.cached_property
     def bounds(self) -> np.ndarray:
         """(k, 4) each outline's :attr:`Outline.bounds`."""
         return np.array([outline.bounds for outline in self.outlines]).reshape(-1, 4)
+
+    def to_frame(self, points: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """(p, c, 3) points to (p, c, 2) coordinates in the frame of outline
+        ``owner[i]`` (p,) for row i (under a directional light, every
+        outline's frame is one and ``points`` may be (n, 3), ``owner`` unused)."""
+        if self.shared:
+            return self.outlines[0].to_frame(points)
+        frames = self._frames[owner]
+        relative = points - self._light
+        depth = np.einsum("pcd,pd->pc", relative, frames[:, 0])
+        x = np.einsum("pcd,pd->pc", relative, frames[:, 1]) / depth
+        y = np.einsum("pcd,pd->pc", relative, frames[:, 2]) / depth
+        return np.stack([x, y], axis=-1)
+
+    def onto_planes(
+        self, flat: np.ndarray, normals: np.ndarray, offsets: np.ndarray, owner: np.ndarray
+    ) -> np.ndarray:
+        """:meth:`Outline.onto_planes`, point i from the frame of outline
+        ``owner[i]``."""
+        if self.shared:
+            return self.outlines[0].onto_planes(flat, normals, offsets)
+        frames = self._frames[owner]
+        rays = frames[:, 0] + flat[:, :1] * frames[:, 1] + flat[:, 1:] * frames[:, 2]
+        height = normals @ self._light + offsets
+        along = -height / np.einsum("ij,ij->i", rays, normals)
+        met: np.ndarray = self._light + rays * along[:, None]
+        return met
 
     def may_reach(self, points: np.ndarray, faces: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """(n,) bool for the n triangles ``points[faces]``: False where caster
@@ -497,21 +523,17 @@ class OutlineSet(_Cutter):
         out = np.ones(len(faces), dtype=bool)
         if len(faces) == 0:
             return out
-        frame = self.outlines[0]
         with np.errstate(divide="ignore", invalid="ignore"):
-            if frame.light_point is None:  # one frame: each point once
-                images = frame.to_frame(points)
+            if self.shared:  # ahead of the light is everything; each point once
+                images = self.to_frame(points, owner)
                 x, y = images[:, 0][faces], images[:, 1][faces]
                 ahead = np.ones(len(faces), dtype=bool)
             else:
-                frames = np.array(
-                    [(outline.axis, outline.first, outline.second) for outline in self.outlines]
-                )[owner]
-                relative = points[faces] - frame.light_point
-                depth = np.einsum("pcd,pd->pc", relative, frames[:, 0])
+                corners = points[faces]
+                depth = np.einsum("pcd,pd->pc", corners - self._light, self._frames[owner, 0])
                 ahead = corner_min(depth) > 0
-                x = np.einsum("pcd,pd->pc", relative, frames[:, 1]) / depth
-                y = np.einsum("pcd,pd->pc", relative, frames[:, 2]) / depth
+                images = self.to_frame(corners, owner)
+                x, y = images[..., 0], images[..., 1]
         low_x, low_y, high_x, high_y = self.bounds[owner].T
         misses = (
             (corner_min(x) > high_x)
@@ -534,9 +556,25 @@ class OutlineSet(_Cutter):
     def _segment_pairs(
         self, boxes: np.ndarray, owner: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray]:
-        tri, seg = overlapping_boxes(boxes, self.segment_boxes)
-        own = self.segment_owner[seg] == cast(np.ndarray, owner)[tri]
-        return tri[own], seg[own]
+        owner = cast(np.ndarray, owner)
+        if self.shared:  # one frame: one search, then each its own segments
+            tri, seg = overlapping_boxes(boxes, self.segment_boxes)
+            own = self.segment_owner[seg] == owner[tri]
+            return tri[own], seg[own]
+        # Frames of their own: each outline's triangles against its segments.
+        order = np.argsort(owner, kind="stable")
+        present, first = np.unique(owner[order], return_index=True)
+        found_tri, found_seg = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+        ends = np.append(first[1:], len(order)).tolist()
+        for k, begin, end in zip(present.tolist(), first.tolist(), ends, strict=True):
+            mine = order[begin:end]
+            low, high = int(self._segment_start[k]), int(self._segment_start[k + 1])
+            tri, seg = overlapping_boxes(boxes[mine], self.segment_boxes[low:high])
+            found_tri.append(mine[tri])
+            found_seg.append(seg + low)
+        tri, seg = np.concatenate(found_tri), np.concatenate(found_seg)
+        by_triangle = np.argsort(tri, kind="stable")
+        return tri[by_triangle], seg[by_triangle]
 
     def _region_of(self, triangles: np.ndarray, owner: np.ndarray | None) -> np.ndarray:
         regions: np.ndarray = self.regions[cast(np.ndarray, owner)[triangles]]

@@ -421,20 +421,9 @@ class _SurfaceProjector:
             eligible = self._outline_faces(outlined, owner_of, faces, corners)
             outlines = [outline for outline, _, _ in outlined]
             together = OutlineSet(outlines)
-            if self.light_point is None:
-                # Under a directional light every outline is in the light's
-                # one frame: their cuts go all at once, not a call per caster.
-                extra.append(
-                    self._apply_outline(
-                        together, faces[eligible], corners, full, owner_of[eligible]
-                    )
-                )
-            else:
-                bounds = np.searchsorted(owner_of[eligible], np.arange(len(outlined) + 1))
-                chosen = faces[eligible]
-                for k, outline in enumerate(outlines):
-                    mine = chosen[bounds[k] : bounds[k + 1]]
-                    extra.append(self._apply_outline(outline, mine, corners, full))
+            extra.append(
+                self._apply_outline(together, faces[eligible], owner_of[eligible], corners, full)
+            )
             all_triangles += [front[0][front[1]] for _, front, _ in outlined]
             # the pairs of each caster's others that it may shadow, by face,
             # then triangle
@@ -571,48 +560,44 @@ class _SurfaceProjector:
 
     def _apply_outline(
         self,
-        outline: Outline | OutlineSet,
+        outlines: OutlineSet,
         faces: np.ndarray,
+        owner: np.ndarray,
         corners: np.ndarray,
         full: np.ndarray,
-        owner: np.ndarray | None = None,
     ) -> _Pieces:
-        """Mark faces wholly inside the outline as full; return the outline's
-        part of the others, mapped onto each face: signed pieces (their
-        winding numbers add up to it) and their faces. For an
-        :class:`OutlineSet` (its outlines in one frame), face i is cut by
-        the outline ``owner[i]``."""
+        """Mark faces wholly inside their caster's outline (face i, outline
+        ``owner[i]``) as full; return the outlines' part of the others,
+        mapped onto each face: signed pieces (their winding numbers add up
+        to it) and their faces."""
         nothing = (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
         if len(faces) == 0:
             return nothing
-        frame = outline.outlines[0] if isinstance(outline, OutlineSet) else outline
-        # Each vertex once: the faces share their corners (those of other
-        # faces, maybe behind the light, are not used).
-        used, corner_ids = np.unique(self.faces[faces], return_inverse=True)
-        corner_ids = corner_ids.reshape(-1, 3)
         with np.errstate(divide="ignore", invalid="ignore"):
-            vertex_images = frame.to_frame(self.vertices[used])
-        x, y = vertex_images[:, 0][corner_ids], vertex_images[:, 1][corner_ids]
-        if isinstance(outline, OutlineSet):
-            low_x, low_y, high_x, high_y = outline.bounds[cast(np.ndarray, owner)].T
-        else:
-            low_x, low_y, high_x, high_y = outline.bounds
+            if outlines.shared:
+                # Each vertex once: the faces share their corners (those of
+                # other faces, maybe behind the light, are not used).
+                used, corner_ids = np.unique(self.faces[faces], return_inverse=True)
+                vertex_images = outlines.to_frame(self.vertices[used], owner)
+                images = vertex_images[corner_ids.reshape(-1, 3)]
+            else:
+                images = outlines.to_frame(corners[faces], owner)
+        x, y = images[:, :, 0], images[:, :, 1]
+        low_x, low_y, high_x, high_y = outlines.bounds[owner].T
         near = ~(
             (corner_min(x) > high_x)
             | (corner_min(y) > high_y)
             | (corner_max(x) < low_x)
             | (corner_max(y) < low_y)
         )
-        faces = faces[near]
-        owner = None if owner is None else owner[near]
-        images = vertex_images[corner_ids[near]]
+        faces, owner, images = faces[near], owner[near], images[near]
         x, y = images[:, :, 0], images[:, :, 1]
         # The map from the frame back to a face keeps or flips orientation as
         # the face's image does (the face runs counter-clockwise in its frame).
         after = [1, 2, 0]  # each corner's next
         flips = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
         extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
-        covered, pieces, owners = outline.cut(images, 1e-9 * extent, owner)
+        covered, pieces, owners = outlines.cut(images, 1e-9 * extent, owner)
         full[faces[covered]] = True
         if len(pieces) == 0:
             return nothing
@@ -620,7 +605,8 @@ class _SurfaceProjector:
         point_face = faces[np.repeat(owners, width)]
         normal = self.unit[point_face]
         offset = -np.einsum("ij,ij->i", normal, corners[point_face, 0])
-        points = frame.onto_planes(pieces.reshape(-1, 2), normal, offset)
+        point_owner = owner[np.repeat(owners, width)]
+        points = outlines.onto_planes(pieces.reshape(-1, 2), normal, offset, point_owner)
         points -= self.origin[point_face]
         flat = np.column_stack(
             [

@@ -457,11 +457,17 @@ def test_open_curved_sheet_lit_from_its_underside():
     check_rays(shadow, sheet, casters, light, 2000, 6, 6.0)
 
 
-def test_many_floating_boxes_under_the_sun_cut_each_face_by_its_own_outlines():
+@pytest.mark.parametrize(
+    "light",
+    [DirectionalLight([0.35, -1.0, 0.25]), PointLight([0.4, 7.0, -0.3])],
+    ids=["sun", "point"],
+)
+def test_many_floating_boxes_cut_each_face_by_its_own_outlines(light):
     # Forty boxes over a floor, their shadows over one another and over the
-    # boxes below them: under a directional light every outline is cut in one
-    # go (OutlineSet), each face by the outlines of the casters wholly in
-    # front of it only. The floor's shadow is the planar one, clipped.
+    # boxes below them: every outline is cut in one go (OutlineSet; in the
+    # sun's one frame, or each in its own frame from a point light), each
+    # face by the outlines of the casters wholly in front of it only. The
+    # floor's shadow is the planar one, clipped.
     rng = np.random.default_rng(5)
     floor = grid(12, 3.0)
     casters = [
@@ -469,7 +475,6 @@ def test_many_floating_boxes_under_the_sun_cut_each_face_by_its_own_outlines():
             rng.uniform(0.1, 0.5, 3))
         for _ in range(40)
     ]  # fmt: skip
-    light = DirectionalLight([0.35, -1.0, 0.25])
     on_floor = shadow_on_surface(casters, light, floor)
     square = [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]]
     planar = project_shadow(
