@@ -5,6 +5,7 @@ Run from the repository root::
     python benchmarks/bench_buildings.py                 # 1,000 and 10,000 buildings
     python benchmarks/bench_buildings.py --sizes 1000    # one size
     python benchmarks/bench_buildings.py --phases        # where shadowgeo's time goes
+    python benchmarks/bench_buildings.py --surfaces --sizes 1000   # every surface receiving
 
 The city is ``n`` random boxes (8-16 m wide, 3-40 m tall, turned at random)
 standing on the ground y = 0, scattered over a square whose side grows with
@@ -27,6 +28,14 @@ of its eight projected corners, exact for a convex box standing on the
 ground), computed with GEOS's ``union_all`` in float64. Times are medians of
 ``--repeat`` runs. The last column, CPU time / (n log n), should stay flat if
 the cost grows as n log n.
+``--surfaces`` times the shadow on every surface instead: the ``n`` boxes as
+separate casters (each closed: each goes by its outline) over a ground
+square, every face of the ground and of the boxes receiving
+(``shadow_on_surface``), under the sun and under a point light high over the
+city, beside ``project_shadow`` of the same boxes onto the ground and the
+per-building + GEOS union (the planar shadow alone, same run); the ground's
+shadowed area against the exact reference under the sun (the ground holds
+every shadow, footprints included).
 ``--phases`` times the steps of ``project_shadow`` calls (CPU time, each
 step's functions wrapped with a timer; steps nest), after one call to warm
 up, and prints the median call of ``--repeat``.
@@ -51,7 +60,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_lights import timed_phases  # noqa: E402
 
-from shadowgeo import DirectionalLight, Plane, project_shadow  # noqa: E402
+from shadowgeo import (  # noqa: E402
+    DirectionalLight,
+    Plane,
+    PointLight,
+    project_shadow,
+    shadow_on_surface,
+)
 
 SUN = DirectionalLight([0.45, -0.75, 0.3])
 GROUND = Plane([0, 1, 0], 0)
@@ -143,6 +158,46 @@ def phases(sizes: list[int], repeat: int) -> None:
         print(f"| {label} | " + " | ".join(f"{s[label] * 1e3:.1f}" for _, s in results) + " |")
 
 
+def surfaces(sizes: list[int], repeat: int) -> None:
+    """Print the every-surface table (see the module's docstring)."""
+    print(
+        "| buildings | light | shadow_on_surface CPU s | project_shadow CPU s "
+        "| per-building + GEOS CPU s | shadow triangles | ground rel. area error |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for n in sizes:
+        corners = buildings(n)
+        boxes = [(box, _FACES) for box in corners]
+        half = 15.0 * math.sqrt(n)  # the city is 25 sqrt(n) across, shadows reach ~30 m out
+        square = np.array([[-half, 0, half], [half, 0, half], [half, 0, -half], [-half, 0, -half]])
+        vertices = np.concatenate([square, corners.reshape(-1, 3)])
+        faces = np.concatenate([[[0, 1, 2], [0, 2, 3]], as_mesh(corners)[1] + 4])
+        mesh = as_mesh(corners)
+        lights = [("sun", SUN), ("point", PointLight([30.0, 300.0, -50.0]))]
+        for name, light in lights:
+            every = partial(shadow_on_surface, boxes, light, (vertices, faces))
+            planar = partial(project_shadow, mesh, light, GROUND)
+            runs: dict[str, list[float]] = {"every": [], "planar": [], "geos": []}
+            every(), planar()
+            for _ in range(repeat):  # in turn, so that all see the same load
+                runs["every"].append(timed(every)[1])
+                runs["planar"].append(timed(planar)[1])
+                if light is SUN:
+                    runs["geos"].append(timed(partial(per_building_union, corners))[1])
+            shadow = every()
+            ground = float(shadow.fraction[:2] @ (0.5 * np.array([2 * half, 2 * half]) ** 2))
+            error = "—"
+            if light is SUN:
+                reference = exact_area(corners)
+                error = f"{abs(ground - reference) / reference:.1e}"
+            geos = f"{statistics.median(runs['geos']):.3f}" if runs["geos"] else "—"
+            print(
+                f"| {n:,} | {name} | {statistics.median(runs['every']):.3f} "
+                f"| {statistics.median(runs['planar']):.3f} | {geos} | {len(shadow.faces):,} "
+                f"| {error} |"
+            )
+
+
 def timed(function: Callable[[], object]) -> tuple[float, float, object]:
     """Wall-clock and process-CPU seconds of one call, and its result."""
     wall, cpu = time.perf_counter(), time.process_time()
@@ -169,9 +224,15 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1000, 10000])
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--phases", action="store_true", help="time shadowgeo's steps")
+    parser.add_argument(
+        "--surfaces", action="store_true", help="every surface receiving (shadow_on_surface)"
+    )
     args = parser.parse_args()
     if args.phases:
         phases(args.sizes, args.repeat)
+        return
+    if args.surfaces:
+        surfaces(args.sizes, args.repeat)
         return
     print(
         "| buildings | shadowgeo s | per-building + GEOS s | ratio | shadowgeo CPU s "
