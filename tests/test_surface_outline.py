@@ -125,6 +125,11 @@ def test_outline_set_cuts_each_triangle_by_its_own_outline():
         outline_of([np.array([[-1.5, -1.0], [1.5, -1.0], [1.5, -0.2], [-1.5, -0.2]])]),
     ]
     together = OutlineSet(outlines)
+    # the set's regions, made in one call, are each outline's own
+    two_parts = outline_of([star((0.0, 0.0), 1.0), star((0.0, 0.0), 0.4)[::-1], star((3, 0), 0.5)])
+    everyone = [*outlines, two_parts]
+    for outline, region in zip(everyone, OutlineSet(everyone).regions, strict=True):
+        assert shapely.equals_exact(outline.region, region, tolerance=0.0)
     rng = np.random.default_rng(11)
     centres = rng.uniform(-1.8, 1.8, (300, 2))
     sizes = rng.uniform(0.02, 0.8, 300)
