@@ -170,9 +170,9 @@ def surfaces(sizes: list[int], repeat: int) -> None:
         boxes = [(box, _FACES) for box in corners]
         half = 15.0 * math.sqrt(n)  # the city is 25 sqrt(n) across, shadows reach ~30 m out
         square = np.array([[-half, 0, half], [half, 0, half], [half, 0, -half], [-half, 0, -half]])
-        vertices = np.concatenate([square, corners.reshape(-1, 3)])
-        faces = np.concatenate([[[0, 1, 2], [0, 2, 3]], as_mesh(corners)[1] + 4])
         mesh = as_mesh(corners)
+        vertices = np.concatenate([square, mesh[0]])
+        faces = np.concatenate([[[0, 1, 2], [0, 2, 3]], mesh[1] + 4])
         lights = [("sun", SUN), ("point", PointLight([30.0, 300.0, -50.0]))]
         for name, light in lights:
             every = partial(shadow_on_surface, boxes, light, (vertices, faces))
@@ -185,7 +185,8 @@ def surfaces(sizes: list[int], repeat: int) -> None:
                 if light is SUN:
                     runs["geos"].append(timed(partial(per_building_union, corners))[1])
             shadow = every()
-            ground = float(shadow.fraction[:2] @ (0.5 * np.array([2 * half, 2 * half]) ** 2))
+            # the ground's two triangles, each (2 half)^2 / 2
+            ground = float(shadow.fraction[:2].sum()) * 2.0 * half * half
             error = "—"
             if light is SUN:
                 reference = exact_area(corners)

@@ -32,7 +32,7 @@ from .polygons import MAX_COORDINATE, POINT_SLACK, PRODUCT_SLACK
 from .shadow import Shadow, ShadowDiagnostics, triangulated
 from .silhouette import Outlines, check_light_outside, silhouette_outlines, vertex_components
 from .tolerance import Tolerance, resolution, scene_scales
-from .topology import Caster, empty_mesh
+from .topology import BLOCK, Caster, empty_mesh
 
 if TYPE_CHECKING:
     import trimesh
@@ -309,20 +309,16 @@ def front_rows(caster: Caster, light_h: np.ndarray) -> np.ndarray:
     offsets = caster.face_offsets if positional else None
     # a block of faces at a time: one small buffer, reused, not a fresh
     # array the size of a big mesh's faces
-    buffer = np.empty(min(caster.n_faces, _FRONT_BLOCK))
+    buffer = np.empty(min(caster.n_faces, BLOCK))
     for light in range(count):
-        for start in range(0, caster.n_faces, _FRONT_BLOCK):
-            stop = min(start + _FRONT_BLOCK, caster.n_faces)
+        for start in range(0, caster.n_faces, BLOCK):
+            stop = min(start + BLOCK, caster.n_faces)
             facing = buffer[: stop - start]
             np.matmul(normals[start:stop], light_h[light, :3], out=facing)
             if offsets is not None and light_h[light, 3] != 0.0:
                 facing -= offsets[start:stop] * light_h[light, 3]
             np.greater(facing, 0.0, out=flags[light, start:stop])
     return rows
-
-
-# Faces whose front bits front_rows works out at a time.
-_FRONT_BLOCK = 1 << 16
 
 
 @dataclass(frozen=True)

@@ -66,8 +66,8 @@ def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndar
 
 
 class _Cutter:
-    """What cuts the region of one outline, or of several outlines in one
-    frame, to triangles: :class:`Outline` and :class:`OutlineSet`.
+    """What cuts the region of one outline, or of several casters' outlines
+    of one light, to triangles: :class:`Outline` and :class:`OutlineSet`.
 
     Subclasses set ``segments`` (s, 2, 2), ``segment_boxes`` (s, 4),
     ``segment_loop`` and ``segment_next`` (s,) and ``n_loops``, and say
@@ -421,9 +421,7 @@ class Outline(_Cutter):
         """(..., 3) points to (..., 2) frame coordinates (their rays)."""
         if self.light_point is None:
             return np.stack([points @ self.first, points @ self.second], axis=-1)
-        relative = points - self.light_point
-        depth = relative @ self.axis
-        return np.stack([relative @ self.first / depth, relative @ self.second / depth], axis=-1)
+        return _central_images(points - self.light_point, self.axis, self.first, self.second)[0]
 
     def onto_planes(self, flat: np.ndarray, normals: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """(n, 2) frame points to (n, 3) points where their rays meet the planes
@@ -435,11 +433,8 @@ class Outline(_Cutter):
             direction = cast(np.ndarray, self.direction)
             lowered: np.ndarray = base - (height / (normals @ direction))[:, None] * direction
             return lowered
-        rays = self.axis + np.outer(flat[:, 0], self.first) + np.outer(flat[:, 1], self.second)
-        height = normals @ self.light_point + offsets
-        along = -height / np.einsum("ij,ij->i", rays, normals)
-        met: np.ndarray = self.light_point + rays * along[:, None]
-        return met
+        frame = (self.axis, self.first, self.second)
+        return _central_onto_planes(flat, normals, offsets, self.light_point, *frame)
 
 
 class OutlineSet(_Cutter):
@@ -481,7 +476,8 @@ class OutlineSet(_Cutter):
         # each have their own (the axis towards their caster).
         self.shared = not outlines or outlines[0].light_point is None
         self._light = None if self.shared else outlines[0].light_point
-        self._frames = np.array([(o.axis, o.first, o.second) for o in outlines]).reshape(-1, 3, 3)
+        # (k, 3, 3) each outline's axis, first and second frame vector
+        self.frames = np.array([(o.axis, o.first, o.second) for o in outlines]).reshape(-1, 3, 3)
 
     @functools.cached_property
     def bounds(self) -> np.ndarray:
@@ -494,12 +490,13 @@ class OutlineSet(_Cutter):
         outline's frame is one and ``points`` may be (n, 3), ``owner`` unused)."""
         if self.shared:
             return self.outlines[0].to_frame(points)
-        frames = self._frames[owner]
-        relative = points - self._light
-        depth = np.einsum("pcd,pd->pc", relative, frames[:, 0])
-        x = np.einsum("pcd,pd->pc", relative, frames[:, 1]) / depth
-        y = np.einsum("pcd,pd->pc", relative, frames[:, 2]) / depth
-        return np.stack([x, y], axis=-1)
+        return self._central(points, owner)[0]
+
+    def _central(self, points: np.ndarray, owner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(p, c, 2) images of (p, c, 3) points from the point light, row i
+        in the frame of outline ``owner[i]``, and (p, c) their depths."""
+        frames = self.frames[owner][:, None]  # against each row's points
+        return _central_images(points - self._light, frames[..., 0, :], *_sides(frames))
 
     def onto_planes(
         self, flat: np.ndarray, normals: np.ndarray, offsets: np.ndarray, owner: np.ndarray
@@ -508,12 +505,9 @@ class OutlineSet(_Cutter):
         ``owner[i]``."""
         if self.shared:
             return self.outlines[0].onto_planes(flat, normals, offsets)
-        frames = self._frames[owner]
-        rays = frames[:, 0] + flat[:, :1] * frames[:, 1] + flat[:, 1:] * frames[:, 2]
-        height = normals @ self._light + offsets
-        along = -height / np.einsum("ij,ij->i", rays, normals)
-        met: np.ndarray = self._light + rays * along[:, None]
-        return met
+        frames = self.frames[owner]
+        light = cast(np.ndarray, self._light)  # not shared: a point light's
+        return _central_onto_planes(flat, normals, offsets, light, frames[:, 0], *_sides(frames))
 
     def may_reach(self, points: np.ndarray, faces: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """(n,) bool for the n triangles ``points[faces]``: False where caster
@@ -529,11 +523,9 @@ class OutlineSet(_Cutter):
                 x, y = images[:, 0][faces], images[:, 1][faces]
                 ahead = np.ones(len(faces), dtype=bool)
             else:
-                corners = points[faces]
-                depth = np.einsum("pcd,pd->pc", corners - self._light, self._frames[owner, 0])
-                ahead = corner_min(depth) > 0
-                images = self.to_frame(corners, owner)
+                images, depth = self._central(points[faces], owner)
                 x, y = images[..., 0], images[..., 1]
+                ahead = corner_min(depth) > 0
         low_x, low_y, high_x, high_y = self.bounds[owner].T
         misses = (
             (corner_min(x) > high_x)
@@ -605,6 +597,47 @@ class OutlineSet(_Cutter):
             loops += found
             owners.append(np.full(len(found), triangle, dtype=np.int64))
         return loops, np.concatenate([*owners, np.zeros(0, np.int64)])
+
+
+def _sides(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first and second vectors of (..., 3, 3) frames (axis, first, second)."""
+    return frames[..., 1, :], frames[..., 2, :]
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot products along the last axis, broadcast."""
+    dots: np.ndarray = np.einsum("...d,...d->...", a, b)
+    return dots
+
+
+def _central_images(
+    relative: np.ndarray, axis: np.ndarray, first: np.ndarray, second: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(..., 2) frame coordinates of points ``relative`` to a point light (its
+    rays' slopes), and (...) their depths along ``axis``; the frame vectors
+    (3,) or broadcast against the points."""
+    depth = _dot(relative, axis)
+    images = np.stack([_dot(relative, first) / depth, _dot(relative, second) / depth], axis=-1)
+    return images, depth
+
+
+def _central_onto_planes(
+    flat: np.ndarray,
+    normals: np.ndarray,
+    offsets: np.ndarray,
+    light: np.ndarray,
+    axis: np.ndarray,
+    first: np.ndarray,
+    second: np.ndarray,
+) -> np.ndarray:
+    """(n, 3) points where the point light's rays through (n, 2) frame points
+    ``flat`` meet the planes ``normals[i] . x + offsets[i] = 0``; the frame
+    vectors (3,) or one per point (n, 3)."""
+    rays = axis + flat[:, :1] * first + flat[:, 1:] * second
+    height = normals @ light + offsets
+    along = -height / np.einsum("ij,ij->i", rays, normals)
+    met: np.ndarray = light + rays * along[:, None]
+    return met
 
 
 def make_outline(

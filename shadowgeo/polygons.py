@@ -915,8 +915,7 @@ def _straightened(
     sweep) is left as it is. Returns each part left with its ``spiked``."""
     from .seams import without_collinear
 
-    as_is = spiked
-    chosen = [k for k, flag in enumerate(as_is) if not flag]
+    chosen = [k for k, flag in enumerate(spiked) if not flag]
     if not chosen:
         return list(zip(parts, spiked, strict=True))
     counts = [len(parts[k]) for k in chosen]
@@ -934,8 +933,8 @@ def _straightened(
         part = int(owner[index])
         if outer[index] or part in rebuilt:  # holes only under their outer loop
             rebuilt.setdefault(part, []).append(piece)
-    kept = [k for k in range(len(parts)) if as_is[k] or k in rebuilt]
-    return [(parts[k], True) if as_is[k] else (rebuilt[k], False) for k in kept]
+    kept = [k for k in range(len(parts)) if spiked[k] or k in rebuilt]
+    return [(parts[k], True) if spiked[k] else (rebuilt[k], False) for k in kept]
 
 
 def _many_reflex(loop: np.ndarray) -> bool:

@@ -23,10 +23,7 @@ from .errors import GeometryError
 from .lights import DirectionalLight, Light, require_light
 from .limits import check_geometry
 from .tolerance import Tolerance
-from .topology import Caster, MeshLike, as_caster, compiled_walk, cycle_walk
-
-# Faces per block where a pass over every face goes a block at a time.
-_BLOCK = 1 << 16
+from .topology import BLOCK, Caster, MeshLike, as_caster, compiled_walk, cycle_walk
 
 
 @dataclass(frozen=True, eq=False)
@@ -180,8 +177,8 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
     # a block of faces at a time: a few small temporaries, reused
     has_front = np.zeros(n_vertices, dtype=bool)
     has_back = np.zeros(n_vertices, dtype=bool)
-    for start in range(0, len(faces), _BLOCK):
-        block, lit = faces[start : start + _BLOCK], front[start : start + _BLOCK]
+    for start in range(0, len(faces), BLOCK):
+        block, lit = faces[start : start + BLOCK], front[start : start + BLOCK]
         # corner by corner: a column gathered by face numbers, not rows
         # picked by a mask (twice as quick)
         lit_faces, unlit_faces = np.flatnonzero(lit), np.flatnonzero(~lit)
@@ -191,8 +188,8 @@ def _mixed_outline_slots(caster: Caster, front: np.ndarray) -> np.ndarray:
             has_back[column[unlit_faces]] = True
     mixed = has_front & has_back
     near_parts = []
-    for start in range(0, len(faces), _BLOCK):
-        first, second, third = mixed[faces[start : start + _BLOCK]].T
+    for start in range(0, len(faces), BLOCK):
+        first, second, third = mixed[faces[start : start + BLOCK]].T
         near_parts.append(
             start + np.flatnonzero((first & second) | (second & third) | (third & first))
         )
@@ -588,8 +585,8 @@ def vertex_components(caster: Caster) -> np.ndarray:
     faces = caster.faces
     while True:
         joined = False
-        for start in range(0, len(faces), _COMPONENT_BLOCK):
-            block = faces[start : start + _COMPONENT_BLOCK]
+        for start in range(0, len(faces), BLOCK):
+            block = faces[start : start + BLOCK]
             for one, other in ((0, 1), (1, 2)):
                 a, b = label[block[:, one]], label[block[:, other]]
                 differ = a != b
@@ -604,7 +601,3 @@ def vertex_components(caster: Caster) -> np.ndarray:
             if np.array_equal(jumped, label):
                 break
             label, jumped = jumped, label
-
-
-# Faces whose edges vertex_components takes at a time.
-_COMPONENT_BLOCK = 1 << 16

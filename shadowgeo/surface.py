@@ -418,9 +418,9 @@ class _SurfaceProjector:
             near = np.unique(keys)
             # (caster, face) pairs, by caster, then face
             owner_of, faces = np.divmod(near, n_faces)
-            eligible = self._outline_faces(outlined, owner_of, faces, corners)
-            outlines = [outline for outline, _, _ in outlined]
-            together = OutlineSet(outlines)
+            together = OutlineSet([outline for outline, _, _ in outlined])
+            bounds = [bound for _, _, bound in outlined]
+            eligible = self._outline_faces(together, bounds, owner_of, faces, corners)
             extra.append(
                 self._apply_outline(together, faces[eligible], owner_of[eligible], corners, full)
             )
@@ -525,16 +525,17 @@ class _SurfaceProjector:
 
     def _outline_faces(
         self,
-        outlined: list[_Outlined],
+        outlines: OutlineSet,
+        bounds: list[tuple[np.ndarray, np.ndarray, float]],
         owner: np.ndarray,
         faces: np.ndarray,
         corners: np.ndarray,
     ) -> np.ndarray:
         """(len(faces),) bool: for each pair of a closed caster ``owner[i]``
         and a lit face ``faces[i]``, whether the caster lies wholly in front
-        of the face (its box or its bounding ball does) with the face's
-        corners ahead of the light in the caster outline's frame."""
-        bounds = [bound for _, _, bound in outlined]
+        of the face (its box or its bounding ball does: ``bounds``, each
+        caster's box half-sizes, centre and bounding radius about it) with
+        the face's corners ahead of the light in the caster outline's frame."""
         half = np.array([b[0] for b in bounds]).reshape(-1, 3)[owner]
         centre = np.array([b[1] for b in bounds]).reshape(-1, 3)[owner]
         radius = np.array([b[2] for b in bounds], dtype=float)[owner]
@@ -552,9 +553,8 @@ class _SurfaceProjector:
         eligible: np.ndarray = middle - np.minimum(reach, radius) > self.tol.length
         if self.light_point is not None:
             # (ahead of a directional light is everything)
-            axis = np.array([outline.axis for outline, _, _ in outlined]).reshape(-1, 3)[owner]
             relative = corners[faces] - self.light_point
-            ahead = np.einsum("pcd,pd->pc", relative, axis)
+            ahead = np.einsum("pcd,pd->pc", relative, outlines.frames[owner, 0])
             eligible &= corner_min(ahead) > self.tol.length
         return eligible
 

@@ -23,8 +23,10 @@ if TYPE_CHECKING:
     import trimesh
 
 _CACHE_KEY = "shadowgeo_caster"
-# Faces per block where per-face arrays are computed a block at a time.
-_BLOCK = 1 << 16
+# Faces (or vertices) per block where per-face (per-vertex) arrays are
+# worked out a block at a time: small temporaries, reused, instead of fresh
+# memory the size of a big mesh for every step.
+BLOCK = 1 << 16
 _T = TypeVar("_T")
 
 
@@ -126,6 +128,25 @@ class Caster:
         if closed is not None:
             self.__dict__["is_closed"] = bool(closed) and len(faces) > 0
 
+    def take_known(
+        self,
+        *,
+        face_normals: np.ndarray | None = None,
+        bounds: np.ndarray | None = None,
+        columns: np.ndarray | None = None,
+    ) -> None:
+        """Take arrays a caller has worked out already, the very numbers the
+        caster would (a caster set's stacked face normals, the box of the
+        vertices its faces use, the (3, n) coordinate columns): the caster
+        then does not compute them again. None leaves one as it is."""
+        for name, value in (
+            ("face_normals", face_normals),
+            ("bounds", bounds),
+            ("_columns", columns),
+        ):
+            if value is not None:
+                self.__dict__[name] = value  # the cached properties' slots
+
     @property
     def n_faces(self) -> int:
         return len(self.faces)
@@ -139,8 +160,8 @@ class Caster:
     def face_normals(self) -> np.ndarray:
         """(m, 3) unnormalised face normals (twice the area, by the winding)."""
         normals = np.empty((len(self.faces), 3))
-        for start in range(0, len(self.faces), _BLOCK):
-            normals[start : start + _BLOCK] = self._normals(start, start + _BLOCK)
+        for start in range(0, len(self.faces), BLOCK):
+            normals[start : start + BLOCK] = self._normals(start, start + BLOCK)
         return normals
 
     def _normals(self, start: int, stop: int) -> np.ndarray:
@@ -188,8 +209,8 @@ class Caster:
         """(m,) ``face_normals . (first corner - center)``: with
         :attr:`face_normals`, each face's plane in the :attr:`centered` frame."""
         offsets = np.empty(len(self.faces))
-        for start in range(0, len(self.faces), _BLOCK):
-            stop = start + _BLOCK
+        for start in range(0, len(self.faces), BLOCK):
+            stop = start + BLOCK
             offsets[start:stop] = self._offsets(self.face_normals[start:stop], start, stop)
         return offsets
 
@@ -215,8 +236,8 @@ class Caster:
         if not self._lit_before and "face_normals" not in self.__dict__:
             self._lit_before = True
             facing: np.ndarray = np.empty(len(self.faces))
-            for start in range(0, len(self.faces), _BLOCK):
-                stop = start + _BLOCK
+            for start in range(0, len(self.faces), BLOCK):
+                stop = start + BLOCK
                 normals = self._normals(start, stop)
                 block = facing[start:stop]
                 np.multiply(normals[:, 0], light[0], out=block)
@@ -436,9 +457,9 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
     # worked out as 2 (min n + max) + (start > end), a block at a time
     # (small temporaries, reused)
     keys = np.empty((3, count), dtype=np.int64)
-    larger = np.empty(min(count, _BLOCK), dtype=np.int64)
-    for first in range(0, count, _BLOCK):
-        block = faces[first : first + _BLOCK]
+    larger = np.empty(min(count, BLOCK), dtype=np.int64)
+    for first in range(0, count, BLOCK):
+        block = faces[first : first + BLOCK]
         high = larger[: len(block)]
         for corner in range(3):
             start, end = block[:, corner], block[:, (corner + 1) % 3]
@@ -457,8 +478,8 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
     # 531 ms with the faces shuffled (the sphere of benchmarks/bench_scale.py).
     flat.sort()
     pairs = flat.reshape(-1, 2)
-    for first in range(0, len(pairs), _BLOCK):
-        block = pairs[first : first + _BLOCK]
+    for first in range(0, len(pairs), BLOCK):
+        block = pairs[first : first + BLOCK]
         if not np.all((block[:, 0] ^ block[:, 1]) == 1):
             return False
     return True

@@ -23,7 +23,7 @@ from ..boxes import bounding_box
 from ..lights import Light, SpotLight, is_positional
 from ..plane import Plane
 from ..tolerance import Tolerance
-from ..topology import Caster, block_normals, closed_by_sort
+from ..topology import BLOCK, Caster, block_normals, closed_by_sort
 from .model import Shape, transformed
 
 # Stacked caster meshes kept for later lights (each holds its topology: a few
@@ -38,9 +38,6 @@ _IDENTITY = np.eye(4).reshape(16)
 # (see _closed_by_topology); a bigger shape by its own sort.
 _SMALL_TOPOLOGY = 4096
 _TOPOLOGIES_TESTED = 64
-# Faces (or vertices) per block where per-face (per-vertex) arrays are
-# worked out a block at a time: small temporaries, reused.
-_BLOCK = 1 << 16
 
 
 def distinct(shapes: list[Shape]) -> list[Shape]:
@@ -273,8 +270,8 @@ class CasterSet:
         from the light's side): they shadow its footprint, as it would anyway,
         and it stays closed, so its outline comes from its silhouette."""
         near = np.empty(len(self.vertices), dtype=bool)
-        for start in range(0, len(self.vertices), _BLOCK):
-            block = self.vertices[start : start + _BLOCK]
+        for start in range(0, len(self.vertices), BLOCK):
+            block = self.vertices[start : start + BLOCK]
             distance = np.abs(plane.signed_distance(block))
             np.less_equal(distance, tolerance.coplanar_length, out=near[start : start + len(block)])
         if not near.any():
@@ -369,8 +366,8 @@ class CasterSet:
         known = np.zeros(len(self), dtype=bool)
         known[list(self._used_boxes)] = True
         missing = np.repeat(~known, self.face_counts)
-        for start in range(0, len(self.faces), _BLOCK):
-            stop = start + _BLOCK
+        for start in range(0, len(self.faces), BLOCK):
+            stop = start + BLOCK
             wanted = missing[start:stop]
             if wanted.all():
                 normals[start:stop] = block_normals(self.columns, self.faces[start:stop])
@@ -398,18 +395,18 @@ class CasterSet:
                 ) and self._shape_closed is not None:
                     closed = bool(self._shape_closed[whole].all())
             caster = Caster(self.vertices, chosen, copy=False, closed=closed)
-            if "columns" in self.__dict__:
-                caster.__dict__["_columns"] = self.columns
+            normals = bounds = None
             if "face_normals" in self.__dict__ or self._used_boxes:
                 # (some) computed already: the same numbers
-                caster.__dict__["face_normals"] = (
-                    self.face_normals if everything else self.face_normals[faces]
-                )
+                normals = self.face_normals if everything else self.face_normals[faces]
             if everything and len(self._used_boxes) == len(self) and len(self):
                 boxes = np.array(list(self._used_boxes.values()))
-                caster.__dict__["bounds"] = np.array(
-                    [boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)]
-                )
+                bounds = np.array([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
+            caster.take_known(
+                face_normals=normals,
+                bounds=bounds,
+                columns=self.__dict__.get("columns"),  # when made already
+            )
             self._meshes[key] = caster
         return self._meshes[key]
 
