@@ -153,15 +153,42 @@ def _strictly_convex(step: np.ndarray, following: np.ndarray, starts: np.ndarray
     """Every loop turns left at each corner, by more than rounding, and its
     edges' directions go round once (so it is simple); ``step``: the edges
     as complex numbers."""
+    return bool(np.all(_convex_each(step, following, starts)))
+
+
+def strictly_convex_loops(points: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """(l,) bool: whether each loop of ``points`` (n, 2), ``sizes[i]`` points
+    each in turn, is strictly convex and counter-clockwise beyond rounding:
+    the test :func:`convex_union` makes of its loops, loop by loop."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    if len(sizes) == 0:
+        return np.zeros(0, dtype=bool)
+    if sizes.min() < 3:
+        result = np.zeros(len(sizes), dtype=bool)
+        enough = sizes >= 3
+        point_enough = np.repeat(enough, sizes)
+        result[enough] = strictly_convex_loops(points[point_enough], sizes[enough])
+        return result
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    starts = np.cumsum(sizes) - sizes
+    following = np.arange(1, len(points) + 1)
+    following[starts + sizes - 1] = starts
+    step = points.view(np.complex128).ravel()
+    return _convex_each(step[following] - step, following, starts)
+
+
+def _convex_each(step: np.ndarray, following: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """:func:`_strictly_convex` loop by loop."""
     after = step[following]
     turn = step.real * after.imag - step.imag * after.real
     scale = np.abs(step.real * after.imag) + np.abs(step.imag * after.real)
-    if not np.all(turn > 2 * _ORIENTATION_ERROR * scale):
-        return False
+    left: np.ndarray = np.logical_and.reduceat(turn > 2 * _ORIENTATION_ERROR * scale, starts)
     # With every turn to the left (by less than a half turn), the direction
     # passes the +x axis once for each time the loop winds round.
     passes = (step.imag < 0) & (after.imag >= 0)
-    return bool(np.all(np.add.reduceat(passes.astype(np.int64), starts) == 1))
+    once = np.add.reduceat(passes.astype(np.int64), starts) == 1
+    convex: np.ndarray = left & once
+    return convex
 
 
 def _main_frame(points: np.ndarray, step: np.ndarray) -> tuple[np.ndarray, float]:

@@ -12,13 +12,18 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import cast
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import shapely
 
+from .arrangement import strictly_convex_loops
 from .lightframe import corner_max, corner_min, overlapping_boxes
 from .polygons import MAX_COORDINATE, components, fill
+
+if TYPE_CHECKING:
+    from manifold3d import CrossSection
 
 
 def padded_loops(points: np.ndarray, sizes: np.ndarray) -> np.ndarray:
@@ -65,20 +70,57 @@ def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndar
     return position
 
 
+@dataclass(frozen=True)
+class _Rings:
+    """An outline's boundary loops as segments, one after another.
+
+    Attributes
+    ----------
+    segments : (s, 2, 2) float64
+        Each segment's start and end, in frame coordinates.
+    boxes : (s, 4) float64
+        Each segment's (xmin, ymin, xmax, ymax) box.
+    loop : (s,) int64
+        The loop of each segment.
+    following : (s,) int64
+        The segment after each one on its loop.
+    n_loops : int
+    """
+
+    segments: np.ndarray
+    boxes: np.ndarray
+    loop: np.ndarray
+    following: np.ndarray
+    n_loops: int
+
+    @classmethod
+    def of(cls, points: np.ndarray, sizes: np.ndarray) -> _Rings:
+        """The rings of loops given as (n, 2) ``points``, ``sizes[i]`` in turn."""
+        sizes = np.asarray(sizes, dtype=np.int64)
+        starts = np.cumsum(sizes) - sizes
+        following = np.arange(len(points)) + 1
+        following[starts + sizes - 1] = starts
+        end = points[following]
+        return cls(
+            np.stack([points, end], axis=1),
+            np.column_stack([np.minimum(points, end), np.maximum(points, end)]),
+            np.repeat(np.arange(len(sizes)), sizes),
+            following,
+            len(sizes),
+        )
+
+
 class _Cutter:
     """What cuts the region of one outline, or of several casters' outlines
     of one light, to triangles: :class:`Outline` and :class:`OutlineSet`.
 
-    Subclasses set ``segments`` (s, 2, 2), ``segment_boxes`` (s, 4),
-    ``segment_loop`` and ``segment_next`` (s,) and ``n_loops``, and say
-    which boundary segments may meet which triangles, which region each
-    triangle is cut by, and how a triangle is cut by Clipper2 alone."""
+    Subclasses give their :meth:`boundary` and say which boundary
+    segments may meet which triangles, which region each triangle is cut
+    by, and how a triangle is cut by Clipper2 alone."""
 
-    segments: np.ndarray
-    segment_boxes: np.ndarray
-    segment_loop: np.ndarray
-    segment_next: np.ndarray
-    n_loops: int
+    def boundary(self) -> _Rings:
+        """The boundary's segments, loop after loop."""
+        raise NotImplementedError
 
     def _segment_pairs(
         self, boxes: np.ndarray, owner: np.ndarray | None
@@ -131,7 +173,8 @@ class _Cutter:
         count = len(images)
         covered = np.zeros(count, dtype=bool)
         nothing = (covered, np.zeros((0, 3, 2)), np.zeros(0, np.int64))
-        if count == 0 or self.n_loops == 0:
+        rings = self.boundary()
+        if count == 0 or rings.n_loops == 0:
             return nothing
         boxes = np.column_stack([corner_min(images), corner_max(images)])
         tri, seg = self._segment_pairs(boxes, owner)
@@ -158,7 +201,7 @@ class _Cutter:
 
         # 2. each triangle's own stretch of the boundary, closed around it
         reference = images.mean(axis=1)
-        a, b, r = self.segments[seg, 0], self.segments[seg, 1], reference[tri]
+        a, b, r = rings.segments[seg, 0], rings.segments[seg, 1], reference[tri]
         ab, ar = b - a, r - a
         length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
         along = np.clip(np.einsum("ij,ij->i", ar, ab) / length2, 0.0, 1.0)
@@ -210,7 +253,8 @@ class _Cutter:
         keep = is_sure[tri]
         order = np.lexsort((seg[keep], tri[keep]))
         tri, seg = tri[keep][order], seg[keep][order]
-        a, b = self.segments[seg, 0], self.segments[seg, 1]
+        rings = self.boundary()
+        a, b = rings.segments[seg, 0], rings.segments[seg, 1]
         step = b - a
         # Liang-Barsky: the part a + t (b - a), t0 <= t <= t1, inside the box.
         t0, t1 = np.zeros(len(tri)), np.ones(len(tri))
@@ -228,7 +272,7 @@ class _Cutter:
         start = np.where((t0 == 0)[:, None], a, a + t0[:, None] * step)
         end = np.where((t1 == 1)[:, None], b, a + t1[:, None] * step)
         # Pieces grouped by (triangle, loop); each followed by the next of its group.
-        group_key = tri * self.n_loops + self.segment_loop[seg]
+        group_key = tri * rings.n_loops + rings.loop[seg]
         new_group = np.ones(len(tri), dtype=bool)
         new_group[1:] = group_key[1:] != group_key[:-1]
         group = np.cumsum(new_group) - 1
@@ -236,7 +280,7 @@ class _Cutter:
         following = np.arange(len(tri)) + 1
         last = np.append(group_start[1:], len(tri)) - 1
         following[last] = group_start
-        joined = (seg[following] == self.segment_next[seg]) & (t1 == 1)
+        joined = (seg[following] == rings.following[seg]) & (t1 == 1)
         # The way along the box, counter-clockwise, from each piece's end to
         # the next piece's start: the box corners passed.
         lo, hi = box_low[tri], box_high[tri]
@@ -346,32 +390,45 @@ class Outline(_Cutter):
 
     def unite(self, points2d_loops: list[np.ndarray]) -> None:
         """Set the region: the positive-winding union of the projected loops."""
-        extent = max(float(np.abs(np.concatenate(points2d_loops)).max()), 1e-300)
-        self.scale = MAX_COORDINATE / extent / 4.0
+        self.scale = _scale_of(points2d_loops)
         united = fill([loop * self.scale for loop in points2d_loops])
-        self.parts = components(united)
-        self.cross_section = united
-        # The region's loops in frame coordinates, and each boundary
-        # segment's (xmin, ymin, xmax, ymax) box.
+        self.__dict__["cross_section"] = united
+        self._hold(components(united))
+
+    def take_convex(self, loop: np.ndarray, scale: float) -> None:
+        """Set the region to the inside of one projected ``loop`` that is
+        strictly convex and counter-clockwise (beyond rounding: the caller
+        has tested it), which is what :meth:`unite` would make of it, without
+        a Clipper2 call; ``scale``: Clipper2's scale of it, as :meth:`unite`
+        sets it."""
+        self.scale = scale
+        self._hold([[loop * scale]])
+        self.loops = [loop]  # exactly (not scaled there and back)
+
+    def _hold(self, parts: list[list[np.ndarray]]) -> None:
+        """Keep the region's ``parts`` (scaled for Clipper2) and its loops."""
+        self.parts = parts
         self.loops = [loop / self.scale for part in self.parts for loop in part]
-        if self.loops:
-            start = np.concatenate(self.loops)
-            end = np.concatenate([step for loop in self.loops for step in (loop[1:], loop[:1])])
-        else:
-            start = end = np.zeros((0, 2))
-        self.segments = np.stack([start, end], axis=1)  # (s, 2, 2)
-        sizes = np.array([len(loop) for loop in self.loops], dtype=np.int64)
-        self.segment_loop = np.repeat(np.arange(len(sizes)), sizes)
-        first = np.repeat(np.cumsum(sizes) - sizes, sizes)
-        self.segment_next = np.arange(len(start)) + 1
-        self.segment_next[np.cumsum(sizes) - 1] = first[np.cumsum(sizes) - 1]
-        self.segment_boxes = np.column_stack([np.minimum(start, end), np.maximum(start, end)])
         self.n_loops = len(self.loops)
+
+    @functools.cached_property
+    def cross_section(self) -> CrossSection:
+        """The region scaled by ``scale``, for Clipper2 (made from
+        :attr:`parts` when :meth:`take_convex` set the region)."""
+        return fill([loop for part in self.parts for loop in part])
+
+    def boundary(self) -> _Rings:
+        return self._rings
+
+    @functools.cached_property
+    def _rings(self) -> _Rings:
+        sizes = np.array([len(loop) for loop in self.loops], dtype=np.int64)
+        return _Rings.of(np.concatenate([*self.loops, np.zeros((0, 2))]), sizes)
 
     def _segment_pairs(
         self, boxes: np.ndarray, owner: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray]:
-        return overlapping_boxes(boxes, self.segment_boxes)
+        return overlapping_boxes(boxes, self._rings.boxes)
 
     def _region_of(self, triangles: np.ndarray, owner: np.ndarray | None) -> shapely.Geometry:
         return self.region
@@ -402,7 +459,8 @@ class Outline(_Cutter):
         ``bounds`` (NaN when it is empty)."""
         if not self.loops:
             return (math.nan,) * 4
-        low, high = self.segment_boxes[:, :2].min(axis=0), self.segment_boxes[:, 2:].max(axis=0)
+        points = np.concatenate(self.loops)
+        low, high = points.min(axis=0), points.max(axis=0)
         return float(low[0]), float(low[1]), float(high[0]), float(high[1])
 
     def clip_to(self, images: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
@@ -451,26 +509,15 @@ class OutlineSet(_Cutter):
 
     def __init__(self, outlines: list[Outline]) -> None:
         self.outlines = outlines
-        segment_counts = [len(outline.segments) for outline in outlines]
+        loops = [loop for outline in outlines for loop in outline.loops]
+        sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+        self._rings = _Rings.of(np.concatenate([*loops, np.zeros((0, 2))]), sizes)
         loop_counts = np.array([outline.n_loops for outline in outlines], dtype=np.int64)
-        segment_start = np.cumsum([0, *segment_counts[:-1]]).astype(np.int64)
-        loop_start = np.cumsum(loop_counts) - loop_counts
-        self.segments = np.concatenate([o.segments for o in outlines] + [np.zeros((0, 2, 2))])
-        self.segment_boxes = np.concatenate(
-            [o.segment_boxes for o in outlines] + [np.zeros((0, 4))]
-        )
-        sizes = np.array(segment_counts, dtype=np.int64)
-        self.segment_owner = np.repeat(np.arange(len(outlines)), sizes)
-        self.segment_loop = np.concatenate(
-            [o.segment_loop + start for o, start in zip(outlines, loop_start, strict=True)]
-            + [np.zeros(0, np.int64)]
-        )
-        self.segment_next = np.concatenate(
-            [o.segment_next + start for o, start in zip(outlines, segment_start, strict=True)]
-            + [np.zeros(0, np.int64)]
-        )
-        self.n_loops = int(loop_counts.sum())
-        self._segment_start = np.append(segment_start, sum(segment_counts))
+        loop_owner = np.repeat(np.arange(len(outlines)), loop_counts)
+        segment_counts = np.bincount(loop_owner, weights=sizes, minlength=len(outlines))
+        segment_counts = segment_counts.astype(np.int64)
+        self.segment_owner = np.repeat(np.arange(len(outlines)), segment_counts)
+        self._segment_start = np.concatenate([[0], np.cumsum(segment_counts)]).astype(np.int64)
         self._regions: np.ndarray | None = None
         # A directional light's outlines share its frame; a point light's
         # each have their own (the axis towards their caster).
@@ -479,10 +526,21 @@ class OutlineSet(_Cutter):
         # (k, 3, 3) each outline's axis, first and second frame vector
         self.frames = np.array([(o.axis, o.first, o.second) for o in outlines]).reshape(-1, 3, 3)
 
+    def boundary(self) -> _Rings:
+        return self._rings
+
     @functools.cached_property
     def bounds(self) -> np.ndarray:
-        """(k, 4) each outline's :attr:`Outline.bounds`."""
-        return np.array([outline.bounds for outline in self.outlines]).reshape(-1, 4)
+        """(k, 4) each outline's :attr:`Outline.bounds`, all at once."""
+        bounds = np.full((len(self.outlines), 4), np.nan)
+        counts = np.diff(self._segment_start)
+        present = np.flatnonzero(counts > 0)
+        if len(present):
+            starts = self._segment_start[present]  # (the segments' starts: the loops' points)
+            points = self._rings.segments[:, 0]
+            bounds[present, :2] = np.minimum.reduceat(points, starts, axis=0)
+            bounds[present, 2:] = np.maximum.reduceat(points, starts, axis=0)
+        return bounds
 
     def to_frame(self, points: np.ndarray, owner: np.ndarray) -> np.ndarray:
         """(p, c, 3) points to (p, c, 2) coordinates in the frame of outline
@@ -564,7 +622,7 @@ class OutlineSet(_Cutter):
     ) -> tuple[np.ndarray, np.ndarray]:
         owner = cast(np.ndarray, owner)
         if self.shared:  # one frame: one search, then each its own segments
-            tri, seg = overlapping_boxes(boxes, self.segment_boxes)
+            tri, seg = overlapping_boxes(boxes, self._rings.boxes)
             own = self.segment_owner[seg] == owner[tri]
             return tri[own], seg[own]
         # Frames of their own: each outline's triangles against its segments.
@@ -575,7 +633,7 @@ class OutlineSet(_Cutter):
         for k, begin, end in zip(present.tolist(), first.tolist(), ends, strict=True):
             mine = order[begin:end]
             low, high = int(self._segment_start[k]), int(self._segment_start[k + 1])
-            tri, seg = overlapping_boxes(boxes[mine], self.segment_boxes[low:high])
+            tri, seg = overlapping_boxes(boxes[mine], self._rings.boxes[low:high])
             found_tri.append(mine[tri])
             found_seg.append(seg + low)
         tri, seg = np.concatenate(found_tri), np.concatenate(found_seg)
@@ -597,6 +655,13 @@ class OutlineSet(_Cutter):
             loops += found
             owners.append(np.full(len(found), triangle, dtype=np.int64))
         return loops, np.concatenate([*owners, np.zeros(0, np.int64)])
+
+
+def _scale_of(loops: list[np.ndarray]) -> float:
+    """Clipper2's scale for a region of ``loops`` (frame coordinates): its
+    largest coordinate at a quarter of MAX_COORDINATE."""
+    extent = max(float(np.abs(np.concatenate(loops)).max()), 1e-300)
+    return MAX_COORDINATE / extent / 4.0
 
 
 def _sides(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -640,20 +705,78 @@ def _central_onto_planes(
     return met
 
 
-def make_outline(
-    vertices: np.ndarray,
-    loops: list[np.ndarray],
+def make_outlines(
+    casters: list[tuple[np.ndarray, list[np.ndarray]]],
+    light_point: np.ndarray | None,
+    direction: np.ndarray | None,
+    margin: float,
+) -> list[Outline | None]:
+    """The :class:`Outline` of each closed caster given as (vertices, its
+    silhouette loops, indices into them), every caster at once; None for a
+    caster with no loops, or when a point light is not wholly behind one
+    plane through the light and the caster, which a central projection
+    needs.
+
+    Under a directional light, whose frame every outline shares, all the
+    loops are projected in one product. A caster whose silhouette is one
+    loop, strictly convex and counter-clockwise in the frame beyond
+    rounding (a box, a cylinder: most buildings), takes that loop as its
+    region with no Clipper2 call (:meth:`Outline.take_convex`), the test
+    made on all such loops at once; the others are united by Clipper2
+    (:meth:`Outline.unite`).
+    """
+    outlines: list[Outline | None] = [None] * len(casters)
+    images: list[list[np.ndarray]] = [[] for _ in casters]
+    if light_point is None:
+        shared = _framed(np.zeros((0, 3)), None, direction, margin)
+        chosen = [k for k, (_, loops) in enumerate(casters) if loops]
+        every = [casters[k][0][loop] for k in chosen for loop in casters[k][1]]
+        if every:
+            counts = [len(loop) for loop in every]
+            flat = cast(Outline, shared).to_frame(np.concatenate(every))
+            pieces = np.split(flat, np.cumsum(counts)[:-1])
+            at = 0
+            for k in chosen:
+                count = len(casters[k][1])
+                images[k], at = pieces[at : at + count], at + count
+                outlines[k] = Outline(None, *_frame_of(shared), direction)
+    else:
+        for k, (vertices, loops) in enumerate(casters):
+            outline = _framed(vertices, light_point, None, margin) if loops else None
+            if outline is not None:
+                outlines[k] = outline
+                images[k] = [outline.to_frame(vertices[loop]) for loop in loops]
+    single = [k for k, made in enumerate(outlines) if made is not None and len(images[k]) == 1]
+    convex, scales = np.zeros(0, dtype=bool), []
+    if single:
+        loops = [images[k][0] for k in single]
+        sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+        points = np.concatenate(loops)
+        convex = strictly_convex_loops(points, sizes)
+        starts = np.cumsum(sizes) - sizes
+        extent = np.maximum(np.maximum.reduceat(np.abs(points).max(axis=1), starts), 1e-300)
+        scales = (MAX_COORDINATE / extent / 4.0).tolist()  # as _scale_of gives them
+    taken = set()
+    for position in np.flatnonzero(convex).tolist():
+        k = single[position]
+        cast(Outline, outlines[k]).take_convex(images[k][0], scales[position])
+        taken.add(k)
+    for k, outline in enumerate(outlines):
+        if outline is not None and k not in taken:
+            outline.unite(images[k])
+    return outlines
+
+
+def _framed(
     all_vertices: np.ndarray,
     light_point: np.ndarray | None,
     direction: np.ndarray | None,
     margin: float,
 ) -> Outline | None:
-    """The :class:`Outline` of a caster whose silhouette ``loops`` index
-    ``vertices``; None when a point light is not wholly behind one plane
-    through the light and the caster (``all_vertices``), which a central
-    projection needs."""
-    if not loops:
-        return None
+    """An :class:`Outline` with its frame and no region yet: a directional
+    light's (its ``direction``), or a point light's towards the middle of a
+    caster's ``all_vertices``; None when they are not wholly ahead of the
+    light by ``margin`` along that axis."""
     axis: np.ndarray
     if light_point is None:
         # A directional light: the caller passes its direction.
@@ -669,9 +792,13 @@ def make_outline(
     first /= np.linalg.norm(first)
     # first x second = -axis: loops counter-clockwise seen from the light stay so.
     second = _cross(first, axis)
-    outline = Outline(light_point, axis, first, second, direction)
-    outline.unite([outline.to_frame(vertices[loop]) for loop in loops])
-    return outline
+    return Outline(light_point, axis, first, second, direction)
+
+
+def _frame_of(outline: Outline | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """An outline's (axis, first, second) frame vectors."""
+    outline = cast(Outline, outline)
+    return outline.axis, outline.first, outline.second
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -61,12 +61,12 @@ from .errors import GeometryError
 from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import MAX_CURVE_SEGMENTS
-from .outline import Outline, OutlineSet, make_outline
+from .outline import Outline, OutlineSet, make_outlines
 from .seams import Loops, loops_of, stitch, without_collinear
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
-from .topology import Caster, MeshLike, as_caster, unique_integers
+from .topology import Caster, MeshLike, as_caster, closed_each, unique_integers
 
 if TYPE_CHECKING:
     import trimesh
@@ -236,6 +236,7 @@ def shadow_on_surface(
     require_light(light)
     receiver = as_caster(surface)
     caster_list = [as_caster(caster) for caster in _as_list(casters)]
+    _test_closedness(caster_list)
     offset = float(offset)
     if not math.isfinite(offset):
         raise GeometryError(f"offset must be finite, got {offset!r}")
@@ -251,6 +252,19 @@ def shadow_on_surface(
                 position = cast("PointLight | SpotLight", light).position
                 check_light_outside(caster, position, tolerance)
     return _SurfaceProjector(caster_list, light, receiver, offset, tolerance).run()
+
+
+def _test_closedness(casters: list[Caster]) -> None:
+    """Settle :attr:`Caster.is_closed` of the casters that have not yet
+    (separate meshes a caller passed), all of them by one sort of their edge
+    keys (:func:`~shadowgeo.topology.closed_each`) instead of one each."""
+    unknown = [c for c in casters if c.n_faces and not c.closedness_known]
+    if len(unknown) < 2:
+        return
+    found = closed_each([(caster.faces, len(caster.vertices)) for caster in unknown])
+    if found is not None:
+        for caster, closed in zip(unknown, found.tolist(), strict=True):
+            caster.take_known(closed=closed)
 
 
 def _as_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
@@ -490,21 +504,29 @@ class _SurfaceProjector:
         )
         closed = [caster for caster in self.casters if caster.n_faces and caster.is_closed]
         found = closed_silhouettes(closed, self.light)
-        silhouettes = dict(zip(map(id, closed), found, strict=True))
+        centred = [caster.vertices - self.center for caster in closed]
+        outlines = make_outlines(
+            [(vertices, loops) for vertices, (_, loops) in zip(centred, found, strict=True)],
+            self.light_point,
+            direction,
+            self.tol.length,
+        )
+        radii = _bounding_radii(closed)
+        silhouettes = {
+            id(caster): (front, vertices, outline, radius)
+            for caster, (front, _), vertices, outline, radius in zip(
+                closed, found, centred, outlines, radii, strict=True
+            )
+        }
         for caster in self.casters:
             if caster.n_faces == 0:
                 continue
             faces = caster.faces
             if caster.is_closed:
-                front, loops = silhouettes[id(caster)]
-                vertices = caster.vertices - self.center
-                outline = make_outline(
-                    vertices, loops, vertices, self.light_point, direction, self.tol.length
-                )
+                front, vertices, outline, radius = silhouettes[id(caster)]
                 if outline is not None:
                     low, high = caster.bounds - self.center
                     centre = 0.5 * (low + high)
-                    radius = caster.derived("bounding_radius", _bounding_radius)
                     half = 0.5 * (high - low)
                     outlined.append((outline, (vertices, faces[front]), (half, centre, radius)))
                     continue
@@ -989,8 +1011,8 @@ def closed_silhouettes(
     which share no vertex, give each one's loops in the same order and from
     the same corner as alone (the outline's edges keep their order, and the
     walk starts each cycle at its lowest edge)."""
-    fronts = [caster.facing(light_homogeneous(caster, light)) > 0 for caster in casters]
     if len(casters) < 2:
+        fronts = [caster.facing(light_homogeneous(caster, light)) > 0 for caster in casters]
         return [
             (front, silhouette_loops(caster, front)[0])
             for caster, front in zip(casters, fronts, strict=True)
@@ -1005,7 +1027,10 @@ def closed_silhouettes(
         copy=False,
         closed=True,  # each is, and they share no vertex
     )
-    loops, _ = silhouette_loops(stacked, np.concatenate(fronts))
+    face_counts = [caster.n_faces for caster in casters]
+    stacked_front = _stacked_facing(stacked, casters, face_counts, light) > 0
+    fronts = np.split(stacked_front, np.cumsum(face_counts)[:-1])
+    loops, _ = silhouette_loops(stacked, stacked_front)
     owners = np.searchsorted(starts, [int(loop[0]) for loop in loops], side="right") - 1
     each: list[list[np.ndarray]] = [[] for _ in casters]
     for loop, owner in zip(loops, owners.tolist(), strict=True):
@@ -1013,10 +1038,41 @@ def closed_silhouettes(
     return list(zip(fronts, each, strict=True))
 
 
-def _bounding_radius(caster: Caster) -> float:
-    """The largest distance of a vertex from the centre of the mesh's box."""
-    relative = caster.vertices - caster.center
-    return float(np.sqrt(relative[:, 0] ** 2 + relative[:, 1] ** 2 + relative[:, 2] ** 2).max())
+def _stacked_facing(
+    stacked: Caster, casters: list[Caster], face_counts: list[int], light: Light
+) -> np.ndarray:
+    """(m,) each caster's :meth:`Caster.facing` of ``light`` (in its own
+    centred frame), the casters' faces one after another in ``stacked``, all
+    at once: the same products, a row each (a point light's position, and
+    the face planes, relative to each caster's own centre)."""
+    normals = stacked.face_normals  # each face's own numbers (stacked or alone)
+    if isinstance(light, DirectionalLight):
+        toward: np.ndarray = light_homogeneous(stacked, light)[:3]  # the same for all
+    else:  # light_homogeneous of each caster, face by face
+        centres = np.repeat(np.array([caster.center for caster in casters]), face_counts, axis=0)
+        toward = light.position - centres
+    # products written out, as Caster.facing writes them
+    facing: np.ndarray = normals[:, 0] * toward[..., 0]
+    facing += normals[:, 1] * toward[..., 1]
+    facing += normals[:, 2] * toward[..., 2]
+    if not isinstance(light, DirectionalLight):
+        corners = stacked.vertices[stacked.faces[:, 0]] - centres  # as Caster.face_offsets
+        facing -= np.einsum("ij,ij->i", normals, corners)
+    return facing
+
+
+def _bounding_radii(casters: list[Caster]) -> list[float]:
+    """Each caster's largest distance of a vertex from the centre of its
+    mesh's box, all at once."""
+    if not casters:
+        return []
+    sizes = np.array([len(caster.vertices) for caster in casters], dtype=np.int64)
+    centres = np.repeat(np.array([caster.center for caster in casters]), sizes, axis=0)
+    relative = np.concatenate([caster.vertices for caster in casters]) - centres
+    squared = relative[:, 0] ** 2 + relative[:, 1] ** 2 + relative[:, 2] ** 2
+    # (the root of the largest square is the largest root: both are rounded once)
+    radii: list[float] = np.sqrt(np.maximum.reduceat(squared, np.cumsum(sizes) - sizes)).tolist()
+    return radii
 
 
 def _pad_polygons(polygons: list[np.ndarray]) -> np.ndarray:

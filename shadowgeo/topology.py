@@ -134,15 +134,18 @@ class Caster:
         face_normals: np.ndarray | None = None,
         bounds: np.ndarray | None = None,
         columns: np.ndarray | None = None,
+        closed: bool | None = None,
     ) -> None:
-        """Take arrays a caller has worked out already, the very numbers the
+        """Take what a caller has worked out already, the very values the
         caster would (a caster set's stacked face normals, the box of the
-        vertices its faces use, the (3, n) coordinate columns): the caster
-        then does not compute them again. None leaves one as it is."""
+        vertices its faces use, the (3, n) coordinate columns, whether it is
+        closed by :func:`closed_each`): the caster then does not compute them
+        again. None leaves one as it is."""
         for name, value in (
             ("face_normals", face_normals),
             ("bounds", bounds),
             ("_columns", columns),
+            ("is_closed", closed),
         ):
             if value is not None:
                 self.__dict__[name] = value  # the cached properties' slots
@@ -392,6 +395,12 @@ class Caster:
             return bool(np.all(self.edge_face_count == 2) and np.all(self.edge_net_direction == 0))
         return closed
 
+    @property
+    def closedness_known(self) -> bool:
+        """Whether :attr:`is_closed` is settled already (given, taken or
+        worked out), so that asking costs nothing."""
+        return "is_closed" in self.__dict__
+
     def derived(self, key: str, compute: Callable[[Caster], _T]) -> _T:
         """``compute(self)``, computed once per mesh and ``key`` and kept, as
         the cached properties are (the arrays are read-only): for derived data
@@ -453,9 +462,28 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
         return None
     if count == 0 or count % 2:  # an odd number of face edges cannot pair
         return False
-    # one row of keys per corner k, for the edges from corner k to k + 1,
-    # worked out as 2 (min n + max) + (start > end), a block at a time
-    # (small temporaries, reused)
+    keys = _edge_keys(faces, n)
+    flat = keys.reshape(-1)
+    # numpy's default sort, not its stable one: only the keys are sorted, so
+    # order among equals is moot, and on x86 with AVX2/AVX-512 the default is
+    # a vectorised quicksort. The 3.9M edge keys of a 1.3M-triangle icosphere
+    # sort in 56 ms against 247 ms by timsort in the mesh's face order, and
+    # 531 ms with the faces shuffled (the sphere of benchmarks/bench_scale.py).
+    flat.sort()
+    pairs = flat.reshape(-1, 2)
+    for first in range(0, len(pairs), BLOCK):
+        block = pairs[first : first + BLOCK]
+        if not np.all((block[:, 0] ^ block[:, 1]) == 1):
+            return False
+    return True
+
+
+def _edge_keys(faces: np.ndarray, n: int) -> np.ndarray:
+    """(3, m) int64 :func:`closed_by_sort`'s key of each face edge, row k
+    for the edges from corner k to k + 1, worked out a block at a time
+    (small temporaries, reused); ``n``: at least the vertex count."""
+    count = len(faces)
+    # 2 (min n + max) + (start > end)
     keys = np.empty((3, count), dtype=np.int64)
     larger = np.empty(min(count, BLOCK), dtype=np.int64)
     for first in range(0, count, BLOCK):
@@ -470,19 +498,50 @@ def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:
             high <<= np.int64(1)
             key += high
             key += start > end
-    flat = keys.reshape(-1)
-    # numpy's default sort, not its stable one: only the keys are sorted, so
-    # order among equals is moot, and on x86 with AVX2/AVX-512 the default is
-    # a vectorised quicksort. The 3.9M edge keys of a 1.3M-triangle icosphere
-    # sort in 56 ms against 247 ms by timsort in the mesh's face order, and
-    # 531 ms with the faces shuffled (the sphere of benchmarks/bench_scale.py).
-    flat.sort()
-    pairs = flat.reshape(-1, 2)
-    for first in range(0, len(pairs), BLOCK):
-        block = pairs[first : first + BLOCK]
-        if not np.all((block[:, 0] ^ block[:, 1]) == 1):
-            return False
-    return True
+    return keys
+
+
+def closed_each(meshes: list[tuple[np.ndarray, int]]) -> np.ndarray | None:
+    """(k,) bool: :func:`closed_by_sort` of each of ``meshes`` ((m, 3)
+    faces indexing their own vertices, vertex count), by one sort of all
+    their edge keys; None when their vertices together are too many for
+    the key.
+
+    With the meshes' vertices numbered one mesh after another, each mesh's
+    keys sort into one run of the sorted keys, in the meshes' order (a key
+    orders first by its edge's lower vertex), so each mesh's pairs are
+    checked within its own run, as :func:`closed_by_sort` checks them.
+
+    Examples
+    --------
+    >>> tetrahedron = np.array([[1, 0, 3], [2, 1, 3], [0, 2, 3], [0, 1, 2]])
+    >>> closed_each([(tetrahedron, 4), (tetrahedron[:3], 4), (tetrahedron, 4)]).tolist()
+    [True, False, True]
+    """
+    counts = np.array([len(faces) for faces, _ in meshes], dtype=np.int64)
+    n_vertices = np.array([max(int(n), 0) for _, n in meshes], dtype=np.int64)
+    n = max(int(n_vertices.sum()), 1)
+    if (2 * n * n).bit_length() > 63:
+        return None
+    result = np.zeros(len(meshes), dtype=bool)
+    tried = np.flatnonzero((counts > 0) & (counts % 2 == 0))  # odd: cannot pair
+    if not len(tried):
+        return result
+    first_vertex = np.cumsum(n_vertices) - n_vertices
+    faces = np.concatenate(
+        [np.asarray(meshes[k][0], dtype=np.int64) + first_vertex[k] for k in tried.tolist()]
+    )
+    flat = _edge_keys(faces, n).reshape(-1)
+    flat.sort()  # numpy's default sort, as in closed_by_sort
+    # each tried mesh's run of 3 m keys, checked in pairs from its start
+    pairs = 3 * counts[tried] // 2
+    run_start = 3 * (np.cumsum(counts[tried]) - counts[tried])
+    first = np.repeat(run_start - 2 * (np.cumsum(pairs) - pairs), pairs) + 2 * np.arange(
+        int(pairs.sum())
+    )
+    paired = (flat[first] ^ flat[first + 1]) == 1
+    result[tried] = np.logical_and.reduceat(paired, np.cumsum(pairs) - pairs)
+    return result
 
 
 def point_ids(points: ArrayLike) -> np.ndarray:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import shapely
 
-from shadowgeo.arrangement import convex_union
+from shadowgeo.arrangement import convex_union, strictly_convex_loops
 from shadowgeo.polygons import nest, parts_area, union_parts, union_region
 
 
@@ -137,6 +137,26 @@ def test_uncertain_signs_are_handed_back_and_the_cells_unite_them(case):
 )
 def test_loops_that_are_not_strictly_convex_are_handed_back(loop):
     assert convex_union([loop, _square(5, 5, 6, 6)]) is None
+    # and the test loop by loop says so of that loop alone
+    loops = [_square(5, 5, 6, 6), loop, _square(7, 7, 8, 9)]
+    sizes = np.array([len(each) for each in loops])
+    assert strictly_convex_loops(np.concatenate(loops), sizes).tolist() == [True, False, True]
+
+
+def test_convexity_loop_by_loop_sees_rounding_and_short_loops():
+    triangle = np.array([[0.0, 0], [1, 0], [0, 1]])
+    # a corner straight to within rounding of its products is not certainly
+    # a left turn; one bent by more is
+    nearly = np.array([[0.0, 0], [3, 1], [6, 2 + 1e-15], [1, 3]])
+    bent = np.array([[0.0, 0], [3, 1], [6, 2 + 1e-9], [1, 3]])
+    loops = [triangle, nearly, triangle[:2], bent]
+    sizes = np.array([len(each) for each in loops])
+    assert strictly_convex_loops(np.concatenate(loops), sizes).tolist() == [
+        True,
+        False,
+        False,
+        True,
+    ]
 
 
 def test_union_parts_takes_the_arrangement_for_a_city_and_matches_shapely():

@@ -5,7 +5,8 @@
   shapely's intersection, including faces whose centre lies on the outline's
   edge (cut by Clipper2 instead) and faces the outline crosses many times;
   ``OutlineSet.cut``: each triangle by its own caster's outline, where the
-  outlines overlap one another;
+  outlines overlap one another; ``make_outlines``: each caster's region the
+  union of its own loops, a convex loop taken as it is;
 * ``overlapping_boxes``: every overlapping pair, against all pairs tested;
 * ``candidate_pairs``: triangles given as shared points and faces pair exactly
   as the same triangles given corner by corner;
@@ -21,7 +22,7 @@ import shapely
 
 from shadowgeo import GeometryError
 from shadowgeo.lightframe import candidate_pairs, clip_batch, overlapping_boxes
-from shadowgeo.outline import Outline, OutlineSet, padded_loops
+from shadowgeo.outline import Outline, OutlineSet, make_outlines, padded_loops
 from shadowgeo.seams import loops_of, stitch
 
 
@@ -130,6 +131,11 @@ def test_outline_set_cuts_each_triangle_by_its_own_outline():
     everyone = [*outlines, two_parts]
     for outline, region in zip(everyone, OutlineSet(everyone).regions, strict=True):
         assert shapely.equals_exact(outline.region, region, tolerance=0.0)
+    # and so are their boxes, an empty outline's NaN among them
+    empty = outline_of([star((0.0, 0.0), 1.0)[::-1]])  # clockwise: nothing inside
+    boxes = [outline.bounds for outline in [empty, *everyone, empty]]
+    assert empty.n_loops == 0
+    assert np.array_equal(OutlineSet([empty, *everyone, empty]).bounds, boxes, equal_nan=True)
     rng = np.random.default_rng(11)
     centres = rng.uniform(-1.8, 1.8, (300, 2))
     sizes = rng.uniform(0.02, 0.8, 300)
@@ -144,6 +150,51 @@ def test_outline_set_cuts_each_triangle_by_its_own_outline():
     covered, _, _ = together.cut(triangles, 1e-12, owner)
     for k, outline in enumerate(outlines):
         assert np.array_equal(covered[owner == k], outline.cut(triangles[owner == k], 1e-12)[0])
+
+
+@pytest.mark.parametrize("light_point", [None, np.array([0.3, 0.2, 9.0])])
+def test_outlines_made_together_are_each_casters_own_union(light_point):
+    """make_outlines: a caster of one convex loop takes it without Clipper2,
+    others are united; each region is the union of its own loops' images."""
+    rng = np.random.default_rng(5)
+    down = np.array([0.0, 0.0, -1.0])
+    casters = []
+    for index in range(12):
+        # prisms' top rings at z = 1 (only the ring is projected): hexagons,
+        # a concave dart, two overlapping squares, and a clockwise square
+        centre = rng.uniform(-3, 3, 2)
+        angles = np.linspace(0, 2 * np.pi, 6, endpoint=False) + rng.uniform(0, 1)
+        hexagon = np.column_stack([np.cos(angles), np.sin(angles)]) * 0.5 + centre
+        rings = {
+            0: [hexagon],
+            1: [np.array([[0.0, 0], [2, 1], [4, 0], [2, 3]]) * 0.2 + centre],
+            2: [_square(*centre, *(centre + 1)), _square(*(centre + 0.5), *(centre + 1.5))],
+            3: [_square(*centre, *(centre + 1))[::-1]],
+        }[index % 4]
+        vertices = np.concatenate([np.column_stack([r, np.ones(len(r))]) for r in rings])
+        starts = np.cumsum([0] + [len(r) for r in rings])
+        loops = [np.arange(a, b) for a, b in zip(starts[:-1], starts[1:], strict=True)]
+        casters.append((vertices, loops))
+    casters.append((np.zeros((3, 3)), []))  # no silhouette: no outline
+    made = make_outlines(casters, light_point, None if light_point is not None else down, 1e-9)
+    assert made[-1] is None
+    for (vertices, loops), outline in zip(casters[:-1], made[:-1], strict=True):
+        images = [outline.to_frame(vertices[loop]) for loop in loops]
+        expected = shapely.union_all(
+            [shapely.Polygon(image) for image in images if signed_area(image) > 0]
+        )
+        got = outline.region
+        assert got.symmetric_difference(expected).area <= 1e-12 * max(expected.area, 1.0)
+        assert outline.cross_section.area() == pytest.approx(
+            expected.area * outline.scale**2, rel=1e-12, abs=1e-9
+        )
+    # the hexagons took the fast path: their region is their loop exactly
+    vertices, loops = casters[0]
+    assert np.array_equal(made[0].loops[0], made[0].to_frame(vertices[loops[0]]))
+
+
+def _square(x0, y0, x1, y1):
+    return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=float)
 
 
 def test_padded_loops_repeat_the_last_point():

@@ -189,6 +189,24 @@ def test_closedness_by_one_sort_matches_a_dictionary_of_edges(vertices, faces):
     assert with_table.is_closed == expected
 
 
+def test_closedness_of_many_meshes_by_one_sort_is_each_ones_own():
+    from shadowgeo.topology import closed_each
+
+    cases = list(_closedness_cases())
+    rng = np.random.default_rng(11)
+    # every case several times, in a random order, some meshes with unused
+    # vertices past their faces' (their neighbours' keys come right after)
+    order = rng.permutation(np.repeat(np.arange(len(cases)), 3))
+    meshes = []
+    for k in order.tolist():
+        _, vertices, faces = cases[k]
+        meshes.append((np.asarray(faces), len(vertices) + int(rng.integers(0, 3))))
+    meshes.append((np.zeros((0, 3), dtype=np.int64), 3))
+    expected = [_closed_by_dictionary(faces) for faces, _ in meshes[:-1]] + [False]
+    assert closed_each(meshes).tolist() == expected
+    assert closed_each([(np.array([[0, 1, 2]]), 2**31 + 1)]) is None
+
+
 def test_closedness_by_sort_declines_keys_that_do_not_fit():
     from shadowgeo.topology import closed_by_sort
 
