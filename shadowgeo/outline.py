@@ -625,20 +625,37 @@ class OutlineSet(_Cutter):
             tri, seg = overlapping_boxes(boxes, self._rings.boxes)
             own = self.segment_owner[seg] == owner[tri]
             return tri[own], seg[own]
-        # Frames of their own: each outline's triangles against its segments.
-        order = np.argsort(owner, kind="stable")
-        present, first = np.unique(owner[order], return_index=True)
-        found_tri, found_seg = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
-        ends = np.append(first[1:], len(order)).tolist()
-        for k, begin, end in zip(present.tolist(), first.tolist(), ends, strict=True):
-            mine = order[begin:end]
-            low, high = int(self._segment_start[k]), int(self._segment_start[k + 1])
-            tri, seg = overlapping_boxes(boxes[mine], self._rings.boxes[low:high])
-            found_tri.append(mine[tri])
-            found_seg.append(seg + low)
-        tri, seg = np.concatenate(found_tri), np.concatenate(found_seg)
-        by_triangle = np.argsort(tri, kind="stable")
-        return tri[by_triangle], seg[by_triangle]
+        # Frames of their own: each outline's boxes moved into a cell of its
+        # own along x (one search, and no pair across outlines), the
+        # triangles' boxes first cut to their outline's box, which holds all
+        # its segments' boxes.
+        bounds = self.bounds  # (NaN for an outline with no loops: its boxes drop out)
+        mine = bounds[owner]
+        low = np.maximum(boxes[:, :2], mine[:, :2])
+        high = np.minimum(boxes[:, 2:], mine[:, 2:])
+        kept = np.flatnonzero(np.all(low <= high, axis=1))
+        if not len(kept):
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        width = np.nan_to_num(bounds[:, 2] - bounds[:, 0])
+        height = np.nan_to_num(bounds[:, 3] - bounds[:, 1])
+        step = 2.0 * float(max(width.max(), height.max(), 1e-300))
+        # Moved by cell: rounding of the moved corners is within a few ulps
+        # of the largest coordinate; boxes grown by more keep every overlap.
+        shift = np.column_stack([np.arange(len(bounds)) * step, np.zeros(len(bounds))])
+        shift -= np.nan_to_num(bounds[:, :2])
+        pad = 8.0 * float(np.spacing(step * (len(bounds) + 1)))
+        tri_boxes = np.column_stack(
+            [low[kept] + shift[owner[kept]] - pad, high[kept] + shift[owner[kept]] + pad]
+        )
+        theirs = shift[self.segment_owner]
+        segment_boxes = self._rings.boxes
+        segment_boxes = np.column_stack(
+            [segment_boxes[:, :2] + theirs - pad, segment_boxes[:, 2:] + theirs + pad]
+        )
+        tri, seg = overlapping_boxes(tri_boxes, segment_boxes)
+        tri = kept[tri]
+        own = self.segment_owner[seg] == owner[tri]  # (cells apart: always)
+        return tri[own], seg[own]
 
     def _region_of(self, triangles: np.ndarray, owner: np.ndarray | None) -> np.ndarray:
         regions: np.ndarray = self.regions[cast(np.ndarray, owner)[triangles]]
@@ -717,8 +734,10 @@ def make_outlines(
     plane through the light and the caster, which a central projection
     needs.
 
-    Under a directional light, whose frame every outline shares, all the
-    loops are projected in one product. A caster whose silhouette is one
+    All the loops are projected at once: under a directional light in the
+    frame every outline shares, under a point light each caster's in its
+    own (its axis from the light to the mean of its vertices). A caster
+    whose silhouette is one
     loop, strictly convex and counter-clockwise in the frame beyond
     rounding (a box, a cylinder: most buildings), takes that loop as its
     region with no Clipper2 call (:meth:`Outline.take_convex`), the test
@@ -728,24 +747,20 @@ def make_outlines(
     outlines: list[Outline | None] = [None] * len(casters)
     images: list[list[np.ndarray]] = [[] for _ in casters]
     if light_point is None:
-        shared = _framed(np.zeros((0, 3)), None, direction, margin)
+        shared = _framed(cast(np.ndarray, direction))  # a directional light: it has one
         chosen = [k for k, (_, loops) in enumerate(casters) if loops]
         every = [casters[k][0][loop] for k in chosen for loop in casters[k][1]]
         if every:
             counts = [len(loop) for loop in every]
-            flat = cast(Outline, shared).to_frame(np.concatenate(every))
+            flat = shared.to_frame(np.concatenate(every))
             pieces = np.split(flat, np.cumsum(counts)[:-1])
             at = 0
             for k in chosen:
                 count = len(casters[k][1])
                 images[k], at = pieces[at : at + count], at + count
-                outlines[k] = Outline(None, *_frame_of(shared), direction)
+                outlines[k] = Outline(None, shared.axis, shared.first, shared.second, direction)
     else:
-        for k, (vertices, loops) in enumerate(casters):
-            outline = _framed(vertices, light_point, None, margin) if loops else None
-            if outline is not None:
-                outlines[k] = outline
-                images[k] = [outline.to_frame(vertices[loop]) for loop in loops]
+        _point_lit(casters, light_point, margin, outlines, images)
     single = [k for k, made in enumerate(outlines) if made is not None and len(images[k]) == 1]
     convex, scales = np.zeros(0, dtype=bool), []
     if single:
@@ -767,38 +782,62 @@ def make_outlines(
     return outlines
 
 
-def _framed(
-    all_vertices: np.ndarray,
-    light_point: np.ndarray | None,
-    direction: np.ndarray | None,
+def _point_lit(
+    casters: list[tuple[np.ndarray, list[np.ndarray]]],
+    light_point: np.ndarray,
     margin: float,
-) -> Outline | None:
-    """An :class:`Outline` with its frame and no region yet: a directional
-    light's (its ``direction``), or a point light's towards the middle of a
-    caster's ``all_vertices``; None when they are not wholly ahead of the
-    light by ``margin`` along that axis."""
-    axis: np.ndarray
-    if light_point is None:
-        # A directional light: the caller passes its direction.
-        axis = cast(np.ndarray, direction)
-    else:
-        axis = all_vertices.mean(axis=0) - light_point
-        axis = axis / np.linalg.norm(axis)
-        if float(((all_vertices - light_point) @ axis).min()) <= margin:
-            return None
+    outlines: list[Outline | None],
+    images: list[list[np.ndarray]],
+) -> None:
+    """:func:`make_outlines`' frames and loop images under a point light,
+    every caster at once: each caster's axis from the light to the mean of
+    its vertices (which must all lie ahead of the light by ``margin``
+    along it), its frame as :func:`_framed` makes one, and its loops'
+    points projected in it. Sets ``outlines[k]`` and ``images[k]``."""
+    chosen = [k for k, (_, loops) in enumerate(casters) if loops]
+    if not chosen:
+        return
+    counts = np.array([len(casters[k][0]) for k in chosen], dtype=np.int64)
+    starts = np.cumsum(counts) - counts
+    relative = np.concatenate([casters[k][0] for k in chosen]) - light_point
+    axes = np.add.reduceat(relative, starts, axis=0) / counts[:, None]
+    axes /= np.sqrt(np.einsum("ij,ij->i", axes, axes))[:, None]
+    depth = np.einsum("ij,ij->i", relative, np.repeat(axes, counts, axis=0))
+    ahead = np.minimum.reduceat(depth, starts) > margin
+    helper = np.zeros_like(axes)
+    helper[np.arange(len(axes)), np.argmin(np.abs(axes), axis=1)] = 1.0
+    first = np.cross(axes, helper)
+    first /= np.sqrt(np.einsum("ij,ij->i", first, first))[:, None]
+    # first x second = -axis: loops counter-clockwise seen from the light stay so.
+    second = np.cross(first, axes)
+    kept = np.flatnonzero(ahead)
+    loops = [casters[chosen[i]][0][loop] for i in kept.tolist() for loop in casters[chosen[i]][1]]
+    if not loops:
+        return
+    loop_counts = [len(casters[chosen[i]][1]) for i in kept.tolist()]
+    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    owner = np.repeat(np.repeat(kept, loop_counts), sizes)
+    flat = _central_images(
+        np.concatenate(loops) - light_point, axes[owner], first[owner], second[owner]
+    )[0]
+    pieces = np.split(flat, np.cumsum(sizes)[:-1])
+    at = 0
+    for i, count in zip(kept.tolist(), loop_counts, strict=True):
+        k = chosen[i]
+        outlines[k] = Outline(light_point, axes[i], first[i], second[i], None)
+        images[k], at = pieces[at : at + count], at + count
+
+
+def _framed(direction: np.ndarray) -> Outline:
+    """An :class:`Outline` of a directional light travelling along
+    ``direction``, with its frame and no region yet."""
     helper = np.zeros(3)
-    helper[int(np.argmin(np.abs(axis)))] = 1.0
-    first = _cross(axis, helper)
+    helper[int(np.argmin(np.abs(direction)))] = 1.0
+    first = _cross(direction, helper)
     first /= np.linalg.norm(first)
     # first x second = -axis: loops counter-clockwise seen from the light stay so.
-    second = _cross(first, axis)
-    return Outline(light_point, axis, first, second, direction)
-
-
-def _frame_of(outline: Outline | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """An outline's (axis, first, second) frame vectors."""
-    outline = cast(Outline, outline)
-    return outline.axis, outline.first, outline.second
+    second = _cross(first, direction)
+    return Outline(None, direction, first, second, direction)
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -236,7 +236,7 @@ def shadow_on_surface(
     require_light(light)
     receiver = as_caster(surface)
     caster_list = [as_caster(caster) for caster in _as_list(casters)]
-    _test_closedness(caster_list)
+    _settle_casters(caster_list)
     offset = float(offset)
     if not math.isfinite(offset):
         raise GeometryError(f"offset must be finite, got {offset!r}")
@@ -254,17 +254,33 @@ def shadow_on_surface(
     return _SurfaceProjector(caster_list, light, receiver, offset, tolerance).run()
 
 
-def _test_closedness(casters: list[Caster]) -> None:
-    """Settle :attr:`Caster.is_closed` of the casters that have not yet
-    (separate meshes a caller passed), all of them by one sort of their edge
-    keys (:func:`~shadowgeo.topology.closed_each`) instead of one each."""
-    unknown = [c for c in casters if c.n_faces and not c.closedness_known]
-    if len(unknown) < 2:
+def _settle_casters(casters: list[Caster]) -> None:
+    """Work out for many separate casters at once what each would work out
+    alone when first asked: :attr:`Caster.is_closed` of those that do not
+    know it yet, by one sort of all their edge keys
+    (:func:`~shadowgeo.topology.closed_each`), and the boxes of the vertices
+    their faces use (:attr:`Caster.bounds`), by one reduction."""
+    with_faces = [caster for caster in casters if caster.n_faces]
+    if len(with_faces) < 2:
         return
-    found = closed_each([(caster.faces, len(caster.vertices)) for caster in unknown])
-    if found is not None:
-        for caster, closed in zip(unknown, found.tolist(), strict=True):
-            caster.take_known(closed=closed)
+    unknown = [caster for caster in with_faces if not caster.closedness_known]
+    if len(unknown) >= 2:
+        found = closed_each([(caster.faces, len(caster.vertices)) for caster in unknown])
+        if found is not None:
+            for caster, closed in zip(unknown, found.tolist(), strict=True):
+                caster.take_known(closed=closed)
+    sizes = np.array([len(caster.vertices) for caster in with_faces], dtype=np.int64)
+    starts = np.cumsum(sizes) - sizes
+    used = np.zeros(int(sizes.sum()), dtype=bool)
+    for caster, start in zip(with_faces, starts.tolist(), strict=True):
+        used[caster.faces.reshape(-1) + start] = True
+    vertices = np.concatenate([caster.vertices for caster in with_faces])
+    low = np.where(used[:, None], vertices, np.inf)
+    high = np.where(used[:, None], vertices, -np.inf)
+    lows = np.minimum.reduceat(low, starts, axis=0)
+    highs = np.maximum.reduceat(high, starts, axis=0)
+    for k, caster in enumerate(with_faces):
+        caster.take_known(bounds=np.array([lows[k], highs[k]]))
 
 
 def _as_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:

@@ -457,6 +457,32 @@ def test_open_curved_sheet_lit_from_its_underside():
     check_rays(shadow, sheet, casters, light, 2000, 6, 6.0)
 
 
+def test_separate_casters_settled_at_once_know_what_each_works_out_alone():
+    """The closedness and boxes of many casters, worked out together, are
+    each caster's own: open and closed meshes, some with vertices no face
+    uses (outside the box), one that knew its closedness already."""
+    from shadowgeo.surface import _settle_casters
+    from shadowgeo.topology import Caster
+
+    rng = np.random.default_rng(4)
+    meshes = []
+    for index in range(9):
+        box = trimesh.creation.box(extents=rng.uniform(0.5, 2, 3))
+        vertices, faces = box.vertices + rng.uniform(-9, 9, 3), box.faces
+        if index % 3 == 1:
+            faces = faces[:-1]  # open
+        if index % 3 == 2:  # a far vertex no face uses
+            vertices = np.vstack([vertices, [100.0, -100.0, 100.0]])
+        meshes.append((vertices, faces))
+    casters = [Caster(v, f) for v, f in meshes]
+    casters[4] = Caster(*meshes[4], closed=True)  # told (wrongly): kept as told
+    _settle_casters(casters)
+    for k, (caster, (vertices, faces)) in enumerate(zip(casters, meshes, strict=True)):
+        alone = Caster(vertices, faces)
+        assert np.array_equal(caster.bounds, alone.bounds)
+        assert caster.is_closed == (True if k == 4 else alone.is_closed)
+
+
 @pytest.mark.parametrize(
     "light",
     [DirectionalLight([0.35, -1.0, 0.25]), PointLight([0.4, 7.0, -0.3])],
