@@ -142,6 +142,17 @@ class _Cutter:
         it by Clipper2: loops, and the triangle of each."""
         raise NotImplementedError
 
+    def _region_boxes(self, triangles: np.ndarray, owner: np.ndarray | None) -> np.ndarray:
+        """(t, 4) the box of the region that cuts each of ``triangles``."""
+        raise NotImplementedError
+
+    def _region_loops(
+        self, triangles: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        """The loops of the region that cuts each of ``triangles``, whole, and
+        the triangle of each loop."""
+        raise NotImplementedError
+
     def cut(
         self, images: np.ndarray, margin: float | np.ndarray, owner: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -196,6 +207,11 @@ class _Cutter:
         after = [1, 2, 0]  # each triangle corner's next (np.roll's numbers, without its cost)
         clockwise = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
         images = np.where(clockwise[:, None, None], images[:, ::-1], images)
+        # A region wholly inside its triangle (a small caster's outline on a
+        # large face) is its own cut: its loops as they are, no clipping.
+        candidates = np.flatnonzero(touched)
+        held = candidates[_box_within(images[candidates], self._region_boxes(candidates, owner))]
+        touched[held] = False
         keep = touched[tri]
         tri, seg = tri[keep], seg[keep]
 
@@ -213,10 +229,12 @@ class _Cutter:
 
         # 3. Clipper2 where the reference point is not sure
         exact, exact_owners = self._clip_unsure(images, np.flatnonzero(unsure), owner)
-        if exact:
-            points = np.concatenate([points, *exact])
-            sizes = np.concatenate([sizes, [len(loop) for loop in exact]])
-            owners = np.concatenate([owners, exact_owners])
+        whole, whole_owners = self._region_loops(held, owner)
+        found = exact + whole
+        if found:
+            points = np.concatenate([points, *found])
+            sizes = np.concatenate([sizes, [len(loop) for loop in found]])
+            owners = np.concatenate([owners, exact_owners, whole_owners])
         return covered, padded_loops(points, sizes), owners.astype(np.int64)
 
     def _local_cut(
@@ -439,6 +457,14 @@ class Outline(_Cutter):
         loops, owners = self.clip_to(images[triangles])
         return loops, triangles[owners]
 
+    def _region_boxes(self, triangles: np.ndarray, owner: np.ndarray | None) -> np.ndarray:
+        return np.broadcast_to(np.array(self.bounds), (len(triangles), 4))
+
+    def _region_loops(
+        self, triangles: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        return self.loops * len(triangles), np.repeat(triangles, self.n_loops)
+
     @functools.cached_property
     def region(self) -> shapely.MultiPolygon:
         """The united outline as a prepared shapely geometry, in frame
@@ -621,14 +647,12 @@ class OutlineSet(_Cutter):
         self, boxes: np.ndarray, owner: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray]:
         owner = cast(np.ndarray, owner)
-        if self.shared:  # one frame: one search, then each its own segments
-            tri, seg = overlapping_boxes(boxes, self._rings.boxes)
-            own = self.segment_owner[seg] == owner[tri]
-            return tri[own], seg[own]
-        # Frames of their own: each outline's boxes moved into a cell of its
-        # own along x (one search, and no pair across outlines), the
-        # triangles' boxes first cut to their outline's box, which holds all
-        # its segments' boxes.
+        # Each outline's boxes moved into a cell of its own along x: one
+        # search, and no pair across outlines (whose frames may differ, and
+        # which, in one frame, may lie over one another: a face under a
+        # thousand casters would be paired with all their segments). The
+        # triangles' boxes are first cut to their outline's box, which holds
+        # all its segments' boxes.
         bounds = self.bounds  # (NaN for an outline with no loops: its boxes drop out)
         mine = bounds[owner]
         low = np.maximum(boxes[:, :2], mine[:, :2])
@@ -672,6 +696,45 @@ class OutlineSet(_Cutter):
             loops += found
             owners.append(np.full(len(found), triangle, dtype=np.int64))
         return loops, np.concatenate([*owners, np.zeros(0, np.int64)])
+
+    def _region_boxes(self, triangles: np.ndarray, owner: np.ndarray | None) -> np.ndarray:
+        boxes: np.ndarray = self.bounds[cast(np.ndarray, owner)[triangles]]
+        return boxes
+
+    def _region_loops(
+        self, triangles: np.ndarray, owner: np.ndarray | None
+    ) -> tuple[list[np.ndarray], np.ndarray]:
+        outlines = [self.outlines[k] for k in cast(np.ndarray, owner)[triangles].tolist()]
+        loops = [loop for outline in outlines for loop in outline.loops]
+        counts = [outline.n_loops for outline in outlines]
+        return loops, np.repeat(triangles, counts)
+
+
+def _box_within(triangles: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """(t,) bool: whether each box (t, 4) lies strictly inside its
+    counter-clockwise triangle (t, 3, 2), beyond the rounding of the tests:
+    each box corner left of each triangle edge."""
+    low_x, low_y, high_x, high_y = boxes.T
+    corners = np.stack(
+        [
+            np.column_stack([low_x, low_y]),
+            np.column_stack([high_x, low_y]),
+            np.column_stack([high_x, high_y]),
+            np.column_stack([low_x, high_y]),
+        ],
+        axis=1,
+    )  # (t, 4, 2)
+    start = triangles[:, :, None, :]  # (t, 3, 1, 2): each edge's start
+    step = (triangles[:, [1, 2, 0]] - triangles)[:, :, None, :]
+    to_corner = corners[:, None, :, :] - start  # (t, 3, 4, 2)
+    first = step[..., 0] * to_corner[..., 1]
+    second = step[..., 1] * to_corner[..., 0]
+    # each difference is rounded once (relative), then two products and
+    # their difference: a few eps of the products' size, far below 1e-12
+    with np.errstate(invalid="ignore"):  # (NaN boxes: an outline with no loops)
+        left = first - second > 1e-12 * (np.abs(first) + np.abs(second))
+    within: np.ndarray = np.all(left, axis=(1, 2))
+    return within
 
 
 def _scale_of(loops: list[np.ndarray]) -> float:

@@ -571,7 +571,8 @@ class _SurfaceProjector:
     ) -> np.ndarray:
         """(len(faces),) bool: for each pair of a closed caster ``owner[i]``
         and a lit face ``faces[i]``, whether the caster lies wholly in front
-        of the face (its box or its bounding ball does: ``bounds``, each
+        of the face, or under a directional light rests on it (its box or
+        its bounding ball does: ``bounds``, each
         caster's box half-sizes, centre and bounding radius about it) with
         the face's corners ahead of the light in the caster outline's frame."""
         half = np.array([b[0] for b in bounds]).reshape(-1, 3)[owner]
@@ -588,7 +589,17 @@ class _SurfaceProjector:
             + z * (centre[:, 2] - first[:, 2])
         )
         reach = np.abs(x) * half[:, 0] + np.abs(y) * half[:, 1] + np.abs(z) * half[:, 2]
-        eligible: np.ndarray = middle - np.minimum(reach, radius) > self.tol.length
+        lowest = middle - np.minimum(reach, radius)
+        if self.light_point is None:
+            # A caster resting on the face (a building on the ground) may dip
+            # below its plane by rounding: its outline then reaches past its
+            # true shadow by that depth over the light's cosine on the face,
+            # which is kept within the tolerance length.
+            along = cast(DirectionalLight, self.light).direction
+            cosine = np.abs(x * along[0] + y * along[1] + z * along[2])
+            eligible: np.ndarray = lowest > -self.tol.length * cosine
+        else:
+            eligible = lowest > self.tol.length
         if self.light_point is not None:
             # (ahead of a directional light is everything)
             relative = corners[faces] - self.light_point

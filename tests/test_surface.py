@@ -517,6 +517,36 @@ def test_many_floating_boxes_cut_each_face_by_its_own_outlines(light):
     check_rays(everything, scene, casters, light, 3000, 6, 3.0)
 
 
+@pytest.mark.parametrize("sunk", [0.0, 1e-3], ids=["standing", "sunk"])
+def test_boxes_standing_on_the_floor_cast_by_their_outlines_exactly(sunk):
+    # Boxes standing on the floor (their bottoms on its plane) under a low
+    # sun are cut to it by their outlines, not triangle by triangle; boxes
+    # sunk into it (far past the tolerance) by their triangles, clipped to
+    # the floor's front. Either way the floor's shadow is the planar one.
+    rng = np.random.default_rng(8)
+    floor = grid(10, 3.0)
+    casters = []
+    for _ in range(12):
+        size = rng.uniform(0.1, 0.4, 3)
+        centre = [*rng.uniform(-2.4, 2.4, 1), size[1] / 2 - sunk, *rng.uniform(-2.4, 2.4, 1)]
+        casters.append(box(centre, size))
+    sun = DirectionalLight([1.0, -0.2, 0.3])  # about 11 degrees up
+    shadow = shadow_on_surface(casters, sun, floor)
+    square = [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]]
+    above = [
+        trimesh.intersections.slice_mesh_plane(c, [0, 1, 0], [0, 0, 0], cap=True) for c in casters
+    ]
+    planar = project_shadow(
+        trimesh.util.concatenate(above), sun, Plane([0, 1, 0], 0), receiver=square
+    )
+    assert shadow.area == pytest.approx(planar.area, rel=1e-9)
+    assert shadow.diagnostics.n_outlined_casters == 12
+    if sunk:
+        assert shadow.diagnostics.n_clipped_pairs > 0
+    else:
+        assert shadow.diagnostics.n_clipped_pairs == 0  # every box by its outline
+
+
 @pytest.mark.parametrize(
     "light",
     [

@@ -146,6 +146,15 @@ def test_outline_set_cuts_each_triangle_by_its_own_outline():
     points = np.concatenate(outlines[1].loops)[::9]
     near = points[:, None, :] + np.array([[0.05, 0.0], [-0.025, 0.04], [-0.025, -0.04]])[None]
     check_cut(together, near, 1e-9, np.ones(len(near), dtype=np.int64))
+    # triangles that hold their outline whole (a small caster's outline on
+    # a large face, either winding) get its loops as they are, holes too
+    large = np.array([[-40.0, -30.0], [40.0, -30.0], [0.0, 50.0]])
+    holding = np.stack([large, large[::-1], large + 0.5])
+    check_cut(together, holding, 1e-12, np.array([1, 1, 0]))
+    _, pieces, owners = together.cut(holding, 1e-12, np.array([1, 1, 0]))
+    kept = [pieces[owners == 0][k][: len(loop)] for k, loop in enumerate(outlines[1].loops)]
+    for mine, loop in zip(kept, outlines[1].loops, strict=True):
+        assert np.array_equal(mine, loop)
     # the same triangles covered as by each outline alone
     covered, _, _ = together.cut(triangles, 1e-12, owner)
     for k, outline in enumerate(outlines):
