@@ -116,7 +116,8 @@ class _Cutter:
 
     Subclasses give their :meth:`boundary` and say which boundary
     segments may meet which triangles, which region each triangle is cut
-    by, and how a triangle is cut by Clipper2 alone."""
+    by (its shapely geometry, its box and its loops), and how a triangle is
+    cut by Clipper2 alone."""
 
     def boundary(self) -> _Rings:
         """The boundary's segments, loop after loop."""
@@ -161,7 +162,9 @@ class _Cutter:
 
         1. Triangles whose box meets no boundary segment's box lie wholly
            inside or wholly outside the region, as their first corner does;
-           the others are tested as polygons (shapely).
+           the others are tested as polygons (shapely). A triangle that
+           holds the region's box beyond rounding gets the region's loops
+           as they are.
         2. A triangle the boundary crosses is cut from the boundary segments
            whose boxes meet a box around it (:meth:`_local_cut`): the work per
            triangle grows with the boundary near it, not with the whole
