@@ -571,10 +571,10 @@ class _SurfaceProjector:
     ) -> np.ndarray:
         """(len(faces),) bool: for each pair of a closed caster ``owner[i]``
         and a lit face ``faces[i]``, whether the caster lies wholly in front
-        of the face, or under a directional light rests on it (its box or
-        its bounding ball does: ``bounds``, each
-        caster's box half-sizes, centre and bounding radius about it) with
-        the face's corners ahead of the light in the caster outline's frame."""
+        of the face or rests on it (its box or its bounding ball does:
+        ``bounds``, each caster's box half-sizes, centre and bounding radius
+        about it) with the face's corners ahead of the light in the caster
+        outline's frame."""
         half = np.array([b[0] for b in bounds]).reshape(-1, 3)[owner]
         centre = np.array([b[1] for b in bounds]).reshape(-1, 3)[owner]
         radius = np.array([b[2] for b in bounds], dtype=float)[owner]
@@ -590,16 +590,22 @@ class _SurfaceProjector:
         )
         reach = np.abs(x) * half[:, 0] + np.abs(y) * half[:, 1] + np.abs(z) * half[:, 2]
         lowest = middle - np.minimum(reach, radius)
+        # A caster resting on the face (a building on the ground) may dip
+        # below its plane by rounding: its outline then reaches past its true
+        # shadow by at most that depth over the cosine of the light's rays
+        # through it with the face's normal, which is kept within the
+        # tolerance length.
         if self.light_point is None:
-            # A caster resting on the face (a building on the ground) may dip
-            # below its plane by rounding: its outline then reaches past its
-            # true shadow by that depth over the light's cosine on the face,
-            # which is kept within the tolerance length.
             along = cast(DirectionalLight, self.light).direction
             cosine = np.abs(x * along[0] + y * along[1] + z * along[2])
-            eligible: np.ndarray = lowest > -self.tol.length * cosine
         else:
-            eligible = lowest > self.tol.length
+            # rays from the light to the caster's ball: the light's height over
+            # the face's plane against the farthest the ball reaches from it
+            toward = self.light_point - first
+            height = x * toward[:, 0] + y * toward[:, 1] + z * toward[:, 2]
+            reach_out = np.linalg.norm(self.light_point - centre, axis=1) + radius
+            cosine = np.clip(height / reach_out, 0.0, 1.0)
+        eligible: np.ndarray = lowest > -self.tol.length * cosine
         if self.light_point is not None:
             # (ahead of a directional light is everything)
             relative = corners[faces] - self.light_point

@@ -518,11 +518,17 @@ def test_many_floating_boxes_cut_each_face_by_its_own_outlines(light):
 
 
 @pytest.mark.parametrize("sunk", [0.0, 1e-3], ids=["standing", "sunk"])
-def test_boxes_standing_on_the_floor_cast_by_their_outlines_exactly(sunk):
+@pytest.mark.parametrize(
+    "sun",
+    [DirectionalLight([1.0, -0.2, 0.3]), PointLight([-9.0, 1.5, 2.0])],
+    ids=["low sun", "low lamp"],
+)
+def test_boxes_standing_on_the_floor_cast_by_their_outlines_exactly(sunk, sun):
     # Boxes standing on the floor (their bottoms on its plane) under a low
-    # sun are cut to it by their outlines, not triangle by triangle; boxes
-    # sunk into it (far past the tolerance) by their triangles, clipped to
-    # the floor's front. Either way the floor's shadow is the planar one.
+    # sun (about 11 degrees up) or a low lamp are cut to it by their
+    # outlines, not triangle by triangle; boxes sunk into it (far past the
+    # tolerance) by their triangles, clipped to the floor's front. Either
+    # way the floor's shadow is the planar one.
     rng = np.random.default_rng(8)
     floor = grid(10, 3.0)
     casters = []
@@ -530,7 +536,6 @@ def test_boxes_standing_on_the_floor_cast_by_their_outlines_exactly(sunk):
         size = rng.uniform(0.1, 0.4, 3)
         centre = [*rng.uniform(-2.4, 2.4, 1), size[1] / 2 - sunk, *rng.uniform(-2.4, 2.4, 1)]
         casters.append(box(centre, size))
-    sun = DirectionalLight([1.0, -0.2, 0.3])  # about 11 degrees up
     shadow = shadow_on_surface(casters, sun, floor)
     square = [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]]
     above = [
