@@ -408,6 +408,9 @@ class Outline(_Cutter):
         self.light_point = light_point
         self.axis, self.first, self.second = axis, first, second
         self.direction = direction
+        # a point light's: the least depth of the caster's vertices along the
+        # axis (no ray from the light reaches it any shallower)
+        self.nearest = 0.0
 
     def unite(self, points2d_loops: list[np.ndarray]) -> None:
         """Set the region: the positive-winding union of the projected loops."""
@@ -554,6 +557,7 @@ class OutlineSet(_Cutter):
         self._light = None if self.shared else outlines[0].light_point
         # (k, 3, 3) each outline's axis, first and second frame vector
         self.frames = np.array([(o.axis, o.first, o.second) for o in outlines]).reshape(-1, 3, 3)
+        self.nearest = np.array([outline.nearest for outline in outlines], dtype=float)
 
     def boundary(self) -> _Rings:
         return self._rings
@@ -869,7 +873,8 @@ def _point_lit(
     axes = np.add.reduceat(relative, starts, axis=0) / counts[:, None]
     axes /= np.sqrt(np.einsum("ij,ij->i", axes, axes))[:, None]
     depth = np.einsum("ij,ij->i", relative, np.repeat(axes, counts, axis=0))
-    ahead = np.minimum.reduceat(depth, starts) > margin
+    nearest = np.minimum.reduceat(depth, starts)
+    ahead = nearest > margin
     helper = np.zeros_like(axes)
     helper[np.arange(len(axes)), np.argmin(np.abs(axes), axis=1)] = 1.0
     first = np.cross(axes, helper)
@@ -890,8 +895,9 @@ def _point_lit(
     at = 0
     for i, count in zip(kept.tolist(), loop_counts, strict=True):
         k = chosen[i]
-        outlines[k] = Outline(light_point, axes[i], first[i], second[i], None)
-        images[k], at = pieces[at : at + count], at + count
+        outline = Outline(light_point, axes[i], first[i], second[i], None)
+        outline.nearest = float(nearest[i])
+        outlines[k], images[k], at = outline, pieces[at : at + count], at + count
 
 
 def _framed(direction: np.ndarray) -> Outline:

@@ -450,10 +450,19 @@ class _SurfaceProjector:
             owner_of, faces = np.divmod(near, n_faces)
             together = OutlineSet([outline for outline, _, _ in outlined])
             bounds = [bound for _, _, bound in outlined]
-            eligible = self._outline_faces(together, bounds, owner_of, faces, corners)
+            in_front, ahead = self._outline_faces(together, bounds, owner_of, faces, corners)
+            eligible = in_front & ahead
             extra.append(
                 self._apply_outline(together, faces[eligible], owner_of[eligible], corners, full)
             )
+            # A face reaching behind the light in the caster's frame (a floor
+            # far wider than the lamp is high): its part ahead, the only part
+            # the caster can shade, cut by the outline.
+            partly = in_front & ~ahead
+            extra.append(
+                self._apply_outline_ahead(together, faces[partly], owner_of[partly], corners)
+            )
+            eligible |= partly
             all_triangles += [front[0][front[1]] for _, front, _ in outlined]
             # the pairs of each caster's others that it may shadow, by face,
             # then triangle
@@ -568,13 +577,14 @@ class _SurfaceProjector:
         owner: np.ndarray,
         faces: np.ndarray,
         corners: np.ndarray,
-    ) -> np.ndarray:
-        """(len(faces),) bool: for each pair of a closed caster ``owner[i]``
-        and a lit face ``faces[i]``, whether the caster lies wholly in front
-        of the face or rests on it (its box or its bounding ball does:
-        ``bounds``, each caster's box half-sizes, centre and bounding radius
-        about it) with the face's corners ahead of the light in the caster
-        outline's frame."""
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Two (len(faces),) bool: for each pair of a closed caster
+        ``owner[i]`` and a lit face ``faces[i]``, whether the caster lies
+        wholly in front of the face or rests on it (its box or its bounding
+        ball does: ``bounds``, each caster's box half-sizes, centre and
+        bounding radius about it), and whether the face's corners lie ahead
+        of the light in the caster outline's frame, at least half as deep
+        along its axis as the caster."""
         half = np.array([b[0] for b in bounds]).reshape(-1, 3)[owner]
         centre = np.array([b[1] for b in bounds]).reshape(-1, 3)[owner]
         radius = np.array([b[2] for b in bounds], dtype=float)[owner]
@@ -605,13 +615,16 @@ class _SurfaceProjector:
             height = x * toward[:, 0] + y * toward[:, 1] + z * toward[:, 2]
             reach_out = np.linalg.norm(self.light_point - centre, axis=1) + radius
             cosine = np.clip(height / reach_out, 0.0, 1.0)
-        eligible: np.ndarray = lowest > -self.tol.length * cosine
+        in_front: np.ndarray = lowest > -self.tol.length * cosine
+        ahead = np.ones(len(faces), dtype=bool)  # (ahead of a directional light is everything)
         if self.light_point is not None:
-            # (ahead of a directional light is everything)
+            # corners at least half as deep as the caster along its outline's
+            # axis: their images (slopes) stay bounded by the face's reach over
+            # that depth (others: _apply_outline_ahead cuts the face there)
             relative = corners[faces] - self.light_point
-            ahead = np.einsum("pcd,pd->pc", relative, outlines.frames[owner, 0])
-            eligible &= corner_min(ahead) > self.tol.length
-        return eligible
+            depth = np.einsum("pcd,pd->pc", relative, outlines.frames[owner, 0])
+            ahead = corner_min(depth) >= 0.5 * outlines.nearest[owner]
+        return in_front, ahead
 
     def _apply_outline(
         self,
@@ -656,21 +669,107 @@ class _SurfaceProjector:
         full[faces[covered]] = True
         if len(pieces) == 0:
             return nothing
+        return self._onto_faces(
+            outlines, pieces, faces[owners], owner[owners], flips[owners], corners
+        )
+
+    def _onto_faces(
+        self,
+        outlines: OutlineSet,
+        pieces: np.ndarray,
+        faces: np.ndarray,
+        owner: np.ndarray,
+        flips: np.ndarray,
+        corners: np.ndarray,
+    ) -> _Pieces:
+        """(n, k, 2) outline pieces in the frames of outlines ``owner`` mapped
+        onto their ``faces`` (into the faces' 2-D frames), each reversed
+        where ``flips``; and the faces."""
         width = pieces.shape[1]
-        point_face = faces[np.repeat(owners, width)]
+        point_face = np.repeat(faces, width)
         normal = self.unit[point_face]
         offset = -np.einsum("ij,ij->i", normal, corners[point_face, 0])
-        point_owner = owner[np.repeat(owners, width)]
+        point_owner = np.repeat(owner, width)
         points = outlines.onto_planes(pieces.reshape(-1, 2), normal, offset, point_owner)
-        points -= self.origin[point_face]
-        flat = np.column_stack(
+        flat = self._in_face_frames(points, point_face).reshape(-1, width, 2)
+        flat = np.where(flips[:, None, None], flat[:, ::-1], flat)
+        return flat, faces
+
+    def _in_face_frames(self, points: np.ndarray, point_face: np.ndarray) -> np.ndarray:
+        """(n, 2) coordinates of (n, 3) points in the frames of their faces."""
+        points = points - self.origin[point_face]
+        return np.column_stack(
             [
                 np.einsum("ij,ij->i", points, self.u[point_face]),
                 np.einsum("ij,ij->i", points, self.v[point_face]),
             ]
-        ).reshape(-1, width, 2)
-        flat = np.where(flips[owners][:, None, None], flat[:, ::-1], flat)
-        return flat, faces[owners]
+        )
+
+    def _apply_outline_ahead(
+        self, outlines: OutlineSet, faces: np.ndarray, owner: np.ndarray, corners: np.ndarray
+    ) -> _Pieces:
+        """Under a point light, the outlines' part (face i, outline
+        ``owner[i]``) of faces that reach behind the light in the outline's
+        frame: each face cut first to where its depth along the outline's
+        axis passes half the caster's least depth. A ray to the light from a
+        point of the face shallower than the caster misses it: only the part
+        kept can be shaded, and it is cut as a face wholly ahead is, its
+        images (slopes) bounded. Its pieces on the faces, signed as
+        :meth:`_apply_outline` gives them (a sub-triangle wholly inside the
+        outline as itself)."""
+        nothing = (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
+        if len(faces) == 0:
+            return nothing
+        light = cast(np.ndarray, self.light_point)
+        axis = outlines.frames[owner, 0]
+        shallowest = 0.5 * outlines.nearest[owner]
+        planes = np.column_stack([axis, -np.einsum("ij,j->i", axis, light) - shallowest])
+        homogeneous = np.concatenate([corners[faces], np.ones((len(faces), 3, 1))], axis=2)
+        clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes[:, None, :])
+        # each kept polygon (convex, three or four corners) as a fan of triangles
+        parent, first = [], []
+        for corner in range(1, int(counts.max(initial=0)) - 1):
+            rows = np.flatnonzero(counts >= corner + 2)
+            parent.append(rows)
+            first.append(np.full(len(rows), corner))
+        if not parent:
+            return nothing
+        rows, second = np.concatenate(parent), np.concatenate(first)
+        triangles = np.stack(
+            [clipped[rows, 0, :3], clipped[rows, second, :3], clipped[rows, second + 1, :3]], axis=1
+        )
+        faces, owner = faces[rows], owner[rows]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            images = outlines.to_frame(triangles, owner)
+        x, y = images[:, :, 0], images[:, :, 1]
+        after = [1, 2, 0]  # each corner's next
+        area = np.sum(x * y[:, after] - x[:, after] * y, axis=1)
+        solid = area != 0  # (a sliver of no area casts nothing)
+        triangles, images, faces, owner = (
+            triangles[solid],
+            images[solid],
+            faces[solid],
+            owner[solid],
+        )
+        flips = area[solid] < 0
+        extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
+        covered, pieces, owners = outlines.cut(images, 1e-9 * extent, owner)
+        parts = [nothing]
+        if len(pieces):
+            parts.append(
+                self._onto_faces(
+                    outlines, pieces, faces[owners], owner[owners], flips[owners], corners
+                )
+            )
+        if covered.any():  # wholly inside: the sub-triangle itself, counter-clockwise
+            whole = np.flatnonzero(covered)
+            point_face = np.repeat(faces[whole], 3)
+            flat = self._in_face_frames(triangles[whole].reshape(-1, 3), point_face)
+            flat = flat.reshape(-1, 3, 2)
+            u, v = flat[:, :, 0], flat[:, :, 1]
+            clockwise = np.sum(u * v[:, after] - u[:, after] * v, axis=1) < 0
+            parts.append((np.where(clockwise[:, None, None], flat[:, ::-1], flat), faces[whole]))
+        return _pad_polygons([part[0] for part in parts]), np.concatenate([p[1] for p in parts])
 
     def _side_planes(self, faces: np.ndarray, corners: np.ndarray) -> np.ndarray:
         """(f, 4, 4) unit half-spaces of the region between each face and the

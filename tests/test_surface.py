@@ -517,6 +517,25 @@ def test_many_floating_boxes_cut_each_face_by_its_own_outlines(light):
     check_rays(everything, scene, casters, light, 3000, 6, 3.0)
 
 
+def test_a_lamp_over_a_floor_far_wider_than_it_is_high_casts_by_outlines_exactly():
+    # A floor of two triangles reaching far behind a low lamp in every
+    # caster's frame: each caster's outline still cuts the part of the floor
+    # deep enough to be shaded (no triangle pair is clipped), exactly.
+    floor = trimesh.Trimesh(
+        [[-20, 0, 20], [20, 0, 20], [20, 0, -20], [-20, 0, -20]], [[0, 1, 2], [0, 2, 3]]
+    )
+    casters = [sphere([1.0, 0.8, 0.5], 0.5, 5), box([-1.5, 0.6, -0.8], [0.6, 1.2, 0.4])]
+    lamp = PointLight([0.0, 3.0, 0.0])
+    shadow = shadow_on_surface(casters, lamp, floor)
+    planar = project_shadow(trimesh.util.concatenate(casters), lamp, Plane([0, 1, 0], 0))
+    assert shadow.area == pytest.approx(planar.area, rel=1e-12)
+    assert shadow.diagnostics.n_outlined_casters == 2
+    assert shadow.diagnostics.n_clipped_pairs == 0
+    ours = shapely.union_all([shapely.Polygon(t[:, [0, 2]]) for t in shadow.mesh.triangles])
+    theirs = shapely.union_all([shapely.Polygon(t[:, [0, 2]]) for t in planar.mesh.triangles])
+    assert ours.symmetric_difference(theirs).area < 1e-10 * planar.area
+
+
 @pytest.mark.parametrize("sunk", [0.0, 1e-3], ids=["standing", "sunk"])
 @pytest.mark.parametrize(
     "sun",
