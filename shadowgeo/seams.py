@@ -101,17 +101,45 @@ def _without_spikes(regions: Loops, eps: float) -> Loops:
     """``regions`` without repeated points (within ``eps`` of the one before)
     and the tips of zero-width spikes (points whose neighbours are one
     point): neither changes a region's area; never two neighbours in one
-    pass, a loop left with fewer than three points going."""
+    pass, a loop left with fewer than three points going.
+
+    A loop with nothing to drop in a pass is final (the loops do not touch
+    one another): later passes work on the loops still changing only, and
+    the loops are put back in their order at the end."""
     points, sizes, region = regions
+    # (final loops: their points, sizes, regions and places in the input)
+    finished: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+    place = np.arange(len(sizes))
     for turn in range(_SPIKE_PASSES):
         if not len(sizes):
             break
         _, owner, local, before, after = _ring(sizes)
         length = sizes[owner]
-        repeat = np.hypot(*(points - points[before]).T) <= eps
-        tip = np.hypot(*(points[after] - points[before]).T) <= eps
+        # (the coordinates as contiguous columns: np.hypot of strided views
+        # of the points was most of a pass)
+        x, y = np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1])
+        x_before, y_before = x[before], y[before]
+        repeat = np.hypot(x - x_before, y - y_before) <= eps
+        tip = np.hypot(x[after] - x_before, y[after] - y_before) <= eps
         drop = repeat | tip
-        if not drop.any():
+        changing = np.bincount(owner[drop], minlength=len(sizes)) > 0
+        if not changing.all():  # set the final loops aside
+            done = ~changing
+            at = np.repeat(done, sizes)
+            finished.append((points[at], sizes[done], region[done], place[done]))
+            points, sizes, region, place = (
+                points[~at],
+                sizes[changing],
+                region[changing],
+                place[changing],
+            )
+            owner, local, length, drop = (
+                np.repeat(np.arange(len(sizes)), sizes),
+                local[~at],
+                length[~at],
+                drop[~at],
+            )
+        if not len(sizes):
             break
         # one colour of the loop's places a pass: even, odd, and the last
         # place of an odd loop (the first's neighbour) on its own
@@ -120,8 +148,22 @@ def _without_spikes(regions: Loops, eps: float) -> Loops:
         counts = sizes - np.bincount(owner[drop], minlength=len(sizes))
         alive = counts >= 3
         keep = ~drop & np.repeat(alive, sizes)
-        points, sizes, region = points[keep], counts[alive], region[alive]
-    return points, sizes, region
+        points, sizes, region, place = points[keep], counts[alive], region[alive], place[alive]
+    finished.append((points, sizes, region, place))
+    if len(finished) == 1:
+        return points, sizes, region
+    # every loop back in its place in the input
+    all_points = np.concatenate([part[0] for part in finished])
+    all_sizes = np.concatenate([part[1] for part in finished])
+    all_region = np.concatenate([part[2] for part in finished])
+    all_place = np.concatenate([part[3] for part in finished])
+    order = np.argsort(all_place, kind="stable")
+    starts = np.cumsum(all_sizes) - all_sizes
+    sizes = all_sizes[order]
+    index = np.repeat(starts[order] - (np.cumsum(sizes) - sizes), sizes) + np.arange(
+        int(sizes.sum())
+    )
+    return all_points[index], sizes, all_region[order]
 
 
 def _ring(sizes: np.ndarray) -> tuple[np.ndarray, ...]:

@@ -290,6 +290,47 @@ def _loop_area(points):
     return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
+def test_repeated_points_and_spike_tips_go_loop_by_loop_as_each_loop_alone():
+    """seams._without_spikes on many loops at once: each loop comes out as
+    it does alone (loops that settle early are set aside, the others go on),
+    in its place; no point repeats the one before, no tip of a zero-width
+    spike is left, and each loop keeps its area."""
+    from shadowgeo.seams import _without_spikes
+
+    rng = np.random.default_rng(3)
+    eps = 1e-9
+    loops = []
+    for index in range(60):
+        corners = star((index, 0.0), 1.0, count=int(rng.integers(3, 12)), lobes=2, depth=0.2)
+        rows = []
+        for corner in corners:
+            rows.append(corner)
+            kind = index % 4
+            if kind == 1:  # a run of repeats, a few passes' worth
+                rows += [corner + rng.uniform(-1e-10, 1e-10, 2)] * int(rng.integers(0, 9))
+            elif kind == 2 and rng.random() < 0.5:  # out to a spike's tip and back
+                rows += [corner + rng.normal(size=2), corner.copy()]
+        loops.append(np.array(rows))
+    loops.append(np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0], [1.0, 1.0]]))  # goes
+    sizes = np.array([len(loop) for loop in loops])
+    regions = (np.concatenate(loops), sizes, np.arange(len(loops)) // 2)
+    points, out_sizes, out_region = _without_spikes(regions, eps)
+    alone = [
+        _without_spikes((loop, np.array([len(loop)]), np.array([k // 2])), eps)
+        for k, loop in enumerate(loops)
+    ]
+    assert np.array_equal(points, np.concatenate([a[0] for a in alone]))
+    assert np.array_equal(out_sizes, np.concatenate([a[1] for a in alone]))
+    assert np.array_equal(out_region, np.concatenate([a[2] for a in alone]))
+    assert len(out_sizes) == len(loops) - 1  # the last loop had no area to keep
+    kept = np.split(points, np.cumsum(out_sizes)[:-1])
+    survivors = [loop for loop, a in zip(loops, alone, strict=True) if len(a[1])]
+    for before, after in zip(survivors, kept, strict=True):
+        assert np.all(np.hypot(*(after - np.roll(after, 1, axis=0)).T) > eps)
+        assert np.all(np.hypot(*(np.roll(after, -1, axis=0) - np.roll(after, 1, axis=0)).T) > eps)
+        assert signed_area(after) == pytest.approx(signed_area(before), rel=1e-8)
+
+
 def test_points_on_a_straight_run_are_dropped_and_corners_kept():
     """A square whose sides carry extra points (a run of three on one side,
     a duplicate, a zero-width spike), a hole with one extra point, and a
