@@ -299,7 +299,9 @@ _BOX_BOUND_LOOPS = 512
 _SAMPLE_BLOCK = 1 << 13
 
 
-def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
+def crossings_estimate(
+    loops: list[np.ndarray], cells: np.ndarray | None = None
+) -> tuple[float, int]:
     """(estimated edge crossings, sampled crossings) among the edges of the
     (k, 2) ``loops``. Exact (0, 0) when there are too few pairs to pass
     :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS`.
@@ -310,6 +312,11 @@ def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
     crossings, times half the edges; the count returned is then the number
     of sampled edges that cross something).
 
+    ``cells``, when given, (len(loops),) non-decreasing labels of loops
+    laid out apart (no edge of one cell's loops meets another cell's, as
+    many faces' pieces in cells of one plane): only pairs within a cell are
+    counted, sampled and tested.
+
     Examples
     --------
     >>> square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
@@ -318,11 +325,22 @@ def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
     """
     lengths = np.array([len(loop) for loop in loops])
     n_edges = int(lengths.sum())
-    pairs = n_edges * (n_edges - 1) / 2
+    if cells is None:
+        pairs = n_edges * (n_edges - 1) / 2
+    else:  # each cell's edges, and where they begin
+        cell_of_loop = np.unique(np.asarray(cells), return_inverse=True)[1].reshape(-1)
+        cell_edges = np.bincount(cell_of_loop, weights=lengths).astype(np.int64)
+        cell_first = np.cumsum(cell_edges) - cell_edges
+        cell_pairs = cell_edges * (cell_edges - 1) / 2
+        pairs = float(cell_pairs.sum())
     if pairs <= MAX_UNION_CROSSINGS:
         return 0.0, 0
     start = np.concatenate(loops).astype(np.float64).reshape(-1, 2)
-    if len(loops) <= _BOX_BOUND_LOOPS and _box_pairs_bound(start, lengths) <= MAX_UNION_CROSSINGS:
+    if (
+        cells is None
+        and len(loops) <= _BOX_BOUND_LOOPS
+        and _box_pairs_bound(start, lengths) <= MAX_UNION_CROSSINGS
+    ):
         return 0.0, 0
     following = np.arange(1, n_edges + 1)
     firsts = np.cumsum(lengths) - lengths
@@ -330,8 +348,18 @@ def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
     following[(firsts + lengths - 1)[nonempty]] = firsts[nonempty]  # each loop closes
     end = start[following]
     rng = np.random.default_rng(0)  # fixed: the same loops always get the same answer
-    first = rng.integers(n_edges, size=_CROSSING_SAMPLES)
-    second = rng.integers(n_edges, size=_CROSSING_SAMPLES)
+    if cells is None:
+        first = rng.integers(n_edges, size=_CROSSING_SAMPLES)
+        second = rng.integers(n_edges, size=_CROSSING_SAMPLES)
+    else:  # a cell by its share of the pairs, then two distinct edges of it
+        paired = np.flatnonzero(cell_pairs > 0)  # cells of two edges or more
+        share = np.cumsum(cell_pairs[paired])
+        chosen = np.searchsorted(share, rng.random(_CROSSING_SAMPLES) * share[-1], side="right")
+        cell = paired[np.minimum(chosen, len(paired) - 1)]
+        size = cell_edges[cell]
+        one = rng.integers(size)
+        other = (one + 1 + rng.integers(size - 1)) % size
+        first, second = cell_first[cell] + one, cell_first[cell] + other
     # points as complex numbers: numpy gathers one far faster than a row
     start_z, end_z = start.view(np.complex128).ravel(), end.view(np.complex128).ravel()
     sampled = 0
@@ -344,13 +372,19 @@ def crossings_estimate(loops: list[np.ndarray]) -> tuple[float, int]:
     if sampled >= _FEWEST_SAMPLED_CROSSINGS or resolvable <= MAX_UNION_CROSSINGS:
         return estimate, sampled
     low, high = np.minimum(start, end), np.maximum(start, end)
+    edge_cell = None if cells is None else np.repeat(cell_of_loop, lengths)
     counts = []
-    for edge in rng.integers(n_edges, size=max(16, _EDGE_TESTS // n_edges)):
-        near = np.flatnonzero(
-            (low[:, 0] <= high[edge, 0])
-            & (high[:, 0] >= low[edge, 0])
-            & (low[:, 1] <= high[edge, 1])
-            & (high[:, 1] >= low[edge, 1])
+    for edge in rng.integers(n_edges, size=max(16, _EDGE_TESTS // n_edges)).tolist():
+        begin, stop = 0, n_edges
+        if edge_cell is not None:  # (the edges of its own cell only)
+            begin = int(cell_first[edge_cell[edge]])
+            stop = begin + int(cell_edges[edge_cell[edge]])
+        lo, hi = low[begin:stop], high[begin:stop]
+        near = begin + np.flatnonzero(
+            (lo[:, 0] <= high[edge, 0])
+            & (hi[:, 0] >= low[edge, 0])
+            & (lo[:, 1] <= high[edge, 1])
+            & (hi[:, 1] >= low[edge, 1])
         )  # only edges whose boxes meet this one's can cross it
         hits = _proper_crossings(start_z[edge], end_z[edge], start_z[near], end_z[near])
         counts.append(int(np.count_nonzero(hits)))
@@ -394,10 +428,20 @@ def without_copies(loops: list[np.ndarray]) -> list[np.ndarray]:
     >>> len(without_copies([square, np.roll(square, 1, axis=0), square[::-1]]))
     3
     """
+    kept = _without_copies_kept(loops)
+    return loops if kept is None else [loops[i] for i in kept]
+
+
+def _without_copies_kept(loops: list[np.ndarray]) -> list[int] | None:
+    """:func:`without_copies` as the indices of the loops it keeps (empty
+    loops dropped too), or None when it keeps every loop."""
     lengths = np.array([len(loop) for loop in loops], dtype=np.int64)
-    if not lengths.all():
-        loops = [loop for loop, length in zip(loops, lengths, strict=True) if length]
-        lengths = lengths[lengths > 0]
+    index = np.flatnonzero(lengths)  # the loops with points
+    some_empty = len(index) < len(loops)
+    if some_empty:
+        loops = [loops[i] for i in index.tolist()]
+        lengths = lengths[index]
+    every = index.tolist() if some_empty else None  # (when no copy goes)
     points = np.concatenate(loops).astype(np.float64).reshape(-1, 2)
     starts = np.cumsum(lengths) - lengths
     following = np.arange(1, len(points) + 1)
@@ -406,7 +450,7 @@ def without_copies(loops: list[np.ndarray]) -> list[np.ndarray]:
         cross = points[:, 0] * points[following, 1] - points[:, 1] * points[following, 0]
         doubled = np.add.reduceat(cross, starts)
     if not np.all(doubled >= 0):  # a clockwise loop (or an overflow): copies count
-        return loops
+        return every
     # extremes do not depend on where a loop starts: equal for copies
     keys = np.column_stack(
         [
@@ -420,14 +464,14 @@ def without_copies(loops: list[np.ndarray]) -> list[np.ndarray]:
     order = np.lexsort(keys.T[::-1])
     same = np.all(keys[order][1:] == keys[order][:-1], axis=1)
     if not same.any():
-        return loops
+        return every
     suspects = np.zeros(len(loops), dtype=bool)
     suspects[order[1:][same]] = True
     suspects[order[:-1][same]] = True
     seen: set[bytes] = set()
     kept = []
-    for index, loop in enumerate(loops):
-        if suspects[index]:
+    for position, loop in enumerate(loops):
+        if suspects[position]:
             rows = np.ascontiguousarray(loop, dtype=np.float64).reshape(-1, 2)
             first = int(np.lexsort((rows[:, 1], rows[:, 0]))[0])
             # np.roll's rows, without its cost (most of this loop's)
@@ -435,7 +479,7 @@ def without_copies(loops: list[np.ndarray]) -> list[np.ndarray]:
             if key in seen:
                 continue
             seen.add(key)
-        kept.append(loop)
+        kept.append(int(index[position]))
     return kept
 
 
@@ -449,9 +493,12 @@ def triangles_region(triangles: np.ndarray) -> CrossSection:
     return fill(oriented)
 
 
-def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
+def fill(
+    loops: list[np.ndarray], rule: str = "positive", cells: np.ndarray | None = None
+) -> CrossSection:
     """The region of points whose winding number over ``loops`` passes ``rule``
-    (``"positive"``: > 0, ``"nonzero"``, ``"evenodd"``).
+    (``"positive"``: > 0, ``"nonzero"``, ``"evenodd"``). ``cells``: labels of
+    loops laid out apart, as :func:`crossings_estimate` takes them.
 
     Raises
     ------
@@ -464,8 +511,11 @@ def fill(loops: list[np.ndarray], rule: str = "positive") -> CrossSection:
     if not loops:
         return CrossSection()
     if rule != "evenodd" and len(loops) >= _COPIES_CHECKED:
-        loops = without_copies(loops)
-    estimate, sampled = crossings_estimate(loops)
+        kept = _without_copies_kept(loops)
+        if kept is not None:
+            loops = [loops[i] for i in kept]
+            cells = None if cells is None else np.asarray(cells)[kept]
+    estimate, sampled = crossings_estimate(loops, cells)
     if estimate > MAX_UNION_CROSSINGS and sampled >= _FEWEST_CROSSING_EDGES:
         n_edges = sum(len(loop) for loop in loops)
         raise GeometryError(

@@ -912,7 +912,10 @@ class _SurfaceProjector:
             mine = index[owner[rows]]
             pieces = flat[rows] * scales[mine, None, :] + centers[mine, None, :]
             limits = limits * scales[:, None, :] + centers[:, None, :]
-            region = poly.intersect(poly.fill(list(pieces)), poly.fill(list(limits)))
+            # (faces in cells apart: crossings are counted within cells)
+            region = poly.intersect(
+                poly.fill(list(pieces), cells=mine), poly.fill(list(limits), cells=slot)
+            )
             loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
             if loops:
                 sizes = np.array([len(loop) for loop in loops], dtype=np.int64)

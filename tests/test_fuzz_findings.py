@@ -245,6 +245,32 @@ def test_crossings_estimate_sees_many_small_unions_side_by_side():
         polygons.fill(loops)
 
 
+def test_crossings_estimate_within_cells_counts_each_cells_crossings_only():
+    # The same loops with their cells named (as the faces' pieces of an
+    # every-surface shadow are, in cells of one plane): pairs are sampled
+    # within cells, so the estimate comes from the pair sample alone, and a
+    # layout whose cells together hold fewer pairs than the budget needs no
+    # sample at all.
+    loops = rotated_triangle_cells(16_000, 8)
+    cells = np.repeat(np.arange(16_000), 8)
+    estimate, sampled = polygons.crossings_estimate(loops, cells)
+    assert estimate == pytest.approx(16_000 * 28 * 6, rel=0.02)
+    assert sampled > 30_000  # most sampled pairs cross: the pairs are within cells
+    with pytest.raises(sg.GeometryError, match="MAX_UNION_CROSSINGS"):
+        polygons.fill(loops, cells=cells)
+    few = rotated_triangle_cells(4_000, 4)
+    assert polygons.crossings_estimate(few, np.repeat(np.arange(4_000), 4)) == (0.0, 0)
+    # one cell holding a tangle past the budget, beside many quiet ones
+    tangle = random_triangles(900, seed=4)
+    starts = np.concatenate(tangle)
+    ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in tangle])
+    exact = brute_force_crossings(starts, ends)
+    quiet = [loop + [10.0, 0.0] for loop in rotated_triangle_cells(2_000, 2)]
+    cells = np.concatenate([np.zeros(900, np.int64), 1 + np.repeat(np.arange(2_000), 2)])
+    estimate, _ = polygons.crossings_estimate(tangle + quiet, cells)
+    assert abs(estimate - exact - 2_000 * 6) < 0.05 * exact
+
+
 def test_many_small_unions_under_the_budget_are_united():
     loops = rotated_triangle_cells(4_000, 4)  # 144,000 crossings in all
     region = polygons.fill(loops)
