@@ -468,18 +468,27 @@ def _without_copies_kept(loops: list[np.ndarray]) -> list[int] | None:
     suspects = np.zeros(len(loops), dtype=bool)
     suspects[order[1:][same]] = True
     suspects[order[:-1][same]] = True
-    seen: set[bytes] = set()
-    kept = []
-    for position, loop in enumerate(loops):
-        if suspects[position]:
-            rows = np.ascontiguousarray(loop, dtype=np.float64).reshape(-1, 2)
-            first = int(np.lexsort((rows[:, 1], rows[:, 0]))[0])
-            # np.roll's rows, without its cost (most of this loop's)
-            key = rows[first:].tobytes() + rows[:first].tobytes()
-            if key in seen:
-                continue
-            seen.add(key)
-        kept.append(int(index[position]))
+    # Each suspect from its least point (by x, then y; the first of equal
+    # ones), bit for bit: a copy is a later suspect of the same length with
+    # the same points from there. Suspects of one length at a time.
+    dropped = np.zeros(len(loops), dtype=bool)
+    chosen = np.flatnonzero(suspects)
+    for length in np.unique(lengths[chosen]).tolist():
+        members = chosen[lengths[chosen] == length]
+        rows = points[starts[members][:, None] + np.arange(length)]  # (m, length, 2)
+        x, y = rows[:, :, 0], rows[:, :, 1]
+        least = np.where(x == x.min(axis=1, keepdims=True), y, np.inf)
+        first = np.argmin(least, axis=1)  # (the first of the least)
+        turned = np.take_along_axis(
+            rows, ((np.arange(length) + first[:, None]) % length)[:, :, None], axis=1
+        )
+        flat = np.ascontiguousarray(turned).reshape(len(members), 2 * length)
+        keys = flat.view(np.dtype((np.void, 16 * length))).ravel()
+        _, earliest = np.unique(keys, return_index=True)
+        copy = np.ones(len(members), dtype=bool)
+        copy[earliest] = False
+        dropped[members[copy]] = True
+    kept: list[int] = index[~dropped].tolist()
     return kept
 
 

@@ -385,3 +385,24 @@ def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
         assert np.allclose(normals[:, [0, 2]], 0.0)
         area = 0.5 * np.abs(normals[:, 1]).sum()
         assert np.isclose(area, shapely.Polygon(loop).area, rtol=1e-12)
+
+
+def test_copies_of_loops_from_any_start_are_dropped_the_first_kept():
+    from shadowgeo.polygons import without_copies
+
+    square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    with_repeat = np.array([[0.0, 0], [1, 0], [1, 0], [0, 1]])  # a corner twice
+    loops = [
+        square,
+        np.zeros((0, 2)),  # empty: dropped
+        square + 5,
+        np.roll(square, 3, axis=0),  # a copy of the first, from another corner
+        np.roll(with_repeat, 2, axis=0),
+        with_repeat,  # a copy of the one before, its repeated corner too
+        square[[0, 1, 3, 2]],  # the same points in another order: not a copy
+        np.roll(square + 5, 1, axis=0),  # a copy of the third
+    ]
+    kept = without_copies(loops)
+    assert [id(loop) for loop in kept] == [id(loops[k]) for k in (0, 2, 4, 6)]
+    # with a clockwise loop the copies count, and all are kept
+    assert len(without_copies([*loops, square[::-1]])) == len(loops) - 1 + 1
