@@ -28,12 +28,18 @@ face by face, with the same clipping before the divide as
 
 Closed casters (the light outside them) contribute their light-facing
 triangles only: every blocked ray leaves the caster through one of them last.
-A closed caster wholly in front of a face needs no triangles at all: its
-silhouette, projected once into the light's frame
+A closed caster wholly in front of a face, or resting on it (a building on
+the ground, dipping below it by no more than rounding), needs no triangles at
+all: its silhouette, projected once into the light's frame
 (:class:`shadowgeo.outline.Outline`), is cut to the face's image there and
 mapped back; faces wholly inside it are shadowed whole, and a face its edge
 crosses is cut from the few edge segments near it (:meth:`Outline.cut`), so
 the cost follows the outline's length near the surface, not faces x outline.
+Under a point light a face reaching behind the light in the caster's frame is
+first cut to the part deep enough for the caster to shade. All closed casters
+of a light are handled together (:class:`shadowgeo.outline.OutlineSet`): their
+outlines made, paired with faces and cut in a few numpy passes and one
+Clipper2 call, not one Python call each.
 
 Per-mesh work on the surface (merged vertices, normals, face frames, whether
 it is a single sheet) is kept on the mesh (:func:`shadowgeo.sheets.surface_geometry`):
