@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from .topology import cycle_walk
+from .topology import cycle_walk, loops_taken
 
 # Rounding error bound of a 2-D orientation (a 2x2 determinant of coordinate
 # differences) as a multiple of the squared extent of the points involved:
@@ -109,12 +109,7 @@ def convex_union_arrays(
         return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
     if sizes.min() < 3:
         return None
-    points = np.ascontiguousarray(points, dtype=np.float64)
-    starts = np.cumsum(sizes) - sizes
-    following = np.arange(1, len(points) + 1)
-    following[starts + sizes - 1] = starts
-    step = points.view(np.complex128).ravel()
-    step = step[following] - step  # each edge, as a complex number
+    points, starts, following, step = _loop_edges(points, sizes)
     if not _strictly_convex(step, following, starts):
         return None
     low = np.minimum.reduceat(points, starts, axis=0)
@@ -133,11 +128,10 @@ def convex_union_arrays(
         return points, starts
     # Loops renumbered in the grid's order: neighbours sit close in memory,
     # and the gathers below run several times faster.
-    sizes, low, high = sizes[order], low[order], high[order]
-    new_starts = np.cumsum(sizes) - sizes
-    source = np.repeat(starts[order] - new_starts, sizes) + np.arange(len(points))
+    source, sizes = loops_taken(sizes, order)
+    low, high = low[order], high[order]
     points = points.view(np.complex128).ravel()[source].view(np.float64).reshape(-1, 2)
-    starts = new_starts
+    starts = np.cumsum(sizes) - sizes
     following = np.arange(1, len(points) + 1)
     following[starts + sizes - 1] = starts
     if int(np.sum(sizes[first] * sizes[second])) > _TABLE_ENTRIES:
@@ -169,12 +163,22 @@ def strictly_convex_loops(points: np.ndarray, sizes: np.ndarray) -> np.ndarray:
         point_enough = np.repeat(enough, sizes)
         result[enough] = strictly_convex_loops(points[point_enough], sizes[enough])
         return result
+    _, starts, following, step = _loop_edges(points, sizes)
+    return _convex_each(step, following, starts)
+
+
+def _loop_edges(
+    points: np.ndarray, sizes: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Loops laid one after another (``sizes[i]`` points each): the points
+    as contiguous float64, each loop's start, each point's next on its loop,
+    and each edge (to that next point) as a complex number."""
     points = np.ascontiguousarray(points, dtype=np.float64)
     starts = np.cumsum(sizes) - sizes
     following = np.arange(1, len(points) + 1)
     following[starts + sizes - 1] = starts
     step = points.view(np.complex128).ravel()
-    return _convex_each(step[following] - step, following, starts)
+    return points, starts, following, step[following] - step
 
 
 def _convex_each(step: np.ndarray, following: np.ndarray, starts: np.ndarray) -> np.ndarray:

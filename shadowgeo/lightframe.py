@@ -45,6 +45,29 @@ def corner_max(values: np.ndarray) -> np.ndarray:
     return high
 
 
+def twice_areas(triangles: np.ndarray) -> np.ndarray:
+    """(n,) twice the signed area of each (n, 3, 2) triangle, positive
+    counter-clockwise (the shoelace sum, corner by corner)."""
+    x, y = triangles[:, :, 0], triangles[:, :, 1]
+    after = [1, 2, 0]  # each corner's next (np.roll's numbers, without its cost)
+    doubled: np.ndarray = np.sum(x * y[:, after] - x[:, after] * y, axis=1)
+    return doubled
+
+
+def misses_boxes(images: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """(n,) bool: whether each (n, 3, 2) triangle's box misses its box
+    ``boxes[i]`` (xmin, ymin, xmax, ymax); NaN boxes are missed by none."""
+    x, y = images[:, :, 0], images[:, :, 1]
+    low_x, low_y, high_x, high_y = boxes.T
+    misses: np.ndarray = (
+        (corner_min(x) > high_x)
+        | (corner_min(y) > high_y)
+        | (corner_max(x) < low_x)
+        | (corner_max(y) < low_y)
+    )
+    return misses
+
+
 def clip_batch(
     points: np.ndarray, counts: np.ndarray, planes: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,7 @@ import numpy as np
 import shapely
 
 from .arrangement import strictly_convex_loops
-from .lightframe import corner_max, corner_min, overlapping_boxes
+from .lightframe import corner_max, corner_min, misses_boxes, overlapping_boxes, twice_areas
 from .polygons import MAX_COORDINATE, components, fill
 
 if TYPE_CHECKING:
@@ -206,9 +206,7 @@ class _Cutter:
         touched[near] = shapely.intersects(region, polygons) & ~inside
         if not touched.any():
             return nothing
-        x, y = images[:, :, 0], images[:, :, 1]
-        after = [1, 2, 0]  # each triangle corner's next (np.roll's numbers, without its cost)
-        clockwise = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
+        clockwise = twice_areas(images) < 0
         images = np.where(clockwise[:, None, None], images[:, ::-1], images)
         # A region wholly inside its triangle (a small caster's outline on a
         # large face) is its own cut: its loops as they are, no clipping.
@@ -414,7 +412,7 @@ class Outline(_Cutter):
 
     def unite(self, points2d_loops: list[np.ndarray]) -> None:
         """Set the region: the positive-winding union of the projected loops."""
-        self.scale = _scale_of(points2d_loops)
+        self.scale = float(_scale_for(np.abs(np.concatenate(points2d_loops)).max()))
         united = fill([loop * self.scale for loop in points2d_loops])
         self.__dict__["cross_section"] = united
         self._hold(components(united))
@@ -426,14 +424,16 @@ class Outline(_Cutter):
         a Clipper2 call; ``scale``: Clipper2's scale of it, as :meth:`unite`
         sets it."""
         self.scale = scale
-        self._hold([[loop * scale]])
-        self.loops = [loop]  # exactly (not scaled there and back)
+        self._hold([[loop * scale]], [loop])  # (the loop exactly, not scaled and back)
 
-    def _hold(self, parts: list[list[np.ndarray]]) -> None:
-        """Keep the region's ``parts`` (scaled for Clipper2) and its loops."""
+    def _hold(self, parts: list[list[np.ndarray]], loops: list[np.ndarray] | None = None) -> None:
+        """Keep the region's ``parts`` (scaled for Clipper2) and its loops in
+        frame coordinates (``loops``, or the parts' scaled back)."""
         self.parts = parts
-        self.loops = [loop / self.scale for part in self.parts for loop in part]
-        self.n_loops = len(self.loops)
+        if loops is None:
+            loops = [loop / self.scale for part in parts for loop in part]
+        self.loops = loops
+        self.n_loops = len(loops)
 
     @functools.cached_property
     def cross_section(self) -> CrossSection:
@@ -610,21 +610,12 @@ class OutlineSet(_Cutter):
             return out
         with np.errstate(divide="ignore", invalid="ignore"):
             if self.shared:  # ahead of the light is everything; each point once
-                images = self.to_frame(points, owner)
-                x, y = images[:, 0][faces], images[:, 1][faces]
+                images = self.to_frame(points, owner)[faces]
                 ahead = np.ones(len(faces), dtype=bool)
             else:
                 images, depth = self._central(points[faces], owner)
-                x, y = images[..., 0], images[..., 1]
                 ahead = corner_min(depth) > 0
-        low_x, low_y, high_x, high_y = self.bounds[owner].T
-        misses = (
-            (corner_min(x) > high_x)
-            | (corner_min(y) > high_y)
-            | (corner_max(x) < low_x)
-            | (corner_max(y) < low_y)
-        )
-        out[ahead & misses] = False
+        out[ahead & misses_boxes(images, self.bounds[owner])] = False
         return out
 
     @property
@@ -744,11 +735,11 @@ def _box_within(triangles: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     return within
 
 
-def _scale_of(loops: list[np.ndarray]) -> float:
-    """Clipper2's scale for a region of ``loops`` (frame coordinates): its
-    largest coordinate at a quarter of MAX_COORDINATE."""
-    extent = max(float(np.abs(np.concatenate(loops)).max()), 1e-300)
-    return MAX_COORDINATE / extent / 4.0
+def _scale_for(extent: np.ndarray) -> np.ndarray:
+    """Clipper2's scale for regions whose largest coordinates (frame
+    coordinates) are ``extent``: those at a quarter of MAX_COORDINATE."""
+    scale: np.ndarray = MAX_COORDINATE / np.maximum(extent, 1e-300) / 4.0
+    return scale
 
 
 def _sides(frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -839,8 +830,7 @@ def make_outlines(
         points = np.concatenate(loops)
         convex = strictly_convex_loops(points, sizes)
         starts = np.cumsum(sizes) - sizes
-        extent = np.maximum(np.maximum.reduceat(np.abs(points).max(axis=1), starts), 1e-300)
-        scales = (MAX_COORDINATE / extent / 4.0).tolist()  # as _scale_of gives them
+        scales = _scale_for(np.maximum.reduceat(np.abs(points).max(axis=1), starts)).tolist()
     taken = set()
     for position in np.flatnonzero(convex).tolist():
         k = single[position]
@@ -862,8 +852,9 @@ def _point_lit(
     """:func:`make_outlines`' frames and loop images under a point light,
     every caster at once: each caster's axis from the light to the mean of
     its vertices (which must all lie ahead of the light by ``margin``
-    along it), its frame as :func:`_framed` makes one, and its loops'
-    points projected in it. Sets ``outlines[k]`` and ``images[k]``."""
+    along it), its frame (:func:`_frame_vectors`), and its loops' points
+    projected in it. Sets ``outlines[k]`` and ``images[k]``, and each
+    outline's least depth of its caster (:attr:`Outline.nearest`)."""
     chosen = [k for k, (_, loops) in enumerate(casters) if loops]
     if not chosen:
         return
@@ -875,12 +866,7 @@ def _point_lit(
     depth = np.einsum("ij,ij->i", relative, np.repeat(axes, counts, axis=0))
     nearest = np.minimum.reduceat(depth, starts)
     ahead = nearest > margin
-    helper = np.zeros_like(axes)
-    helper[np.arange(len(axes)), np.argmin(np.abs(axes), axis=1)] = 1.0
-    first = np.cross(axes, helper)
-    first /= np.sqrt(np.einsum("ij,ij->i", first, first))[:, None]
-    # first x second = -axis: loops counter-clockwise seen from the light stay so.
-    second = np.cross(first, axes)
+    first, second = _frame_vectors(axes)
     kept = np.flatnonzero(ahead)
     loops = [casters[chosen[i]][0][loop] for i in kept.tolist() for loop in casters[chosen[i]][1]]
     if not loops:
@@ -903,17 +889,16 @@ def _point_lit(
 def _framed(direction: np.ndarray) -> Outline:
     """An :class:`Outline` of a directional light travelling along
     ``direction``, with its frame and no region yet."""
-    helper = np.zeros(3)
-    helper[int(np.argmin(np.abs(direction)))] = 1.0
-    first = _cross(direction, helper)
-    first /= np.linalg.norm(first)
-    # first x second = -axis: loops counter-clockwise seen from the light stay so.
-    second = _cross(first, direction)
-    return Outline(None, direction, first, second, direction)
+    first, second = _frame_vectors(direction[None])
+    return Outline(None, direction, first[0], second[0], direction)
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.cross`` of two 3-vectors, the same numbers without its checks and
-    reshaping (a tenth of a millisecond per call, two per caster and light)."""
-    (a0, a1, a2), (b0, b1, b2) = a.tolist(), b.tolist()
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+def _frame_vectors(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(k, 3) each unit axis's first and second frame vectors: across it,
+    from the world axis it leans on least, and with first x second = -axis,
+    so loops counter-clockwise seen from the light stay so."""
+    helper = np.zeros_like(axes)
+    helper[np.arange(len(axes)), np.argmin(np.abs(axes), axis=1)] = 1.0
+    first = np.cross(axes, helper)
+    first /= np.sqrt(np.einsum("ij,ij->i", first, first))[:, None]
+    return first, np.cross(first, axes)

@@ -488,6 +488,8 @@ def _without_copies_kept(loops: list[np.ndarray]) -> list[int] | None:
         copy = np.ones(len(members), dtype=bool)
         copy[earliest] = False
         dropped[members[copy]] = True
+    if not dropped.any():
+        return every
     kept: list[int] = index[~dropped].tolist()
     return kept
 

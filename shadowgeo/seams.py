@@ -22,7 +22,7 @@ import numpy as np
 from manifold3d import triangulate
 
 from .polygons import MAX_COORDINATE
-from .topology import unique_integers
+from .topology import loops_taken, unique_integers
 
 # Loops of many regions at once: (P, 2) points, loop after loop; (L,) the
 # number of points of each loop; (L,) the region of each loop.
@@ -158,11 +158,7 @@ def _without_spikes(regions: Loops, eps: float) -> Loops:
     all_region = np.concatenate([part[2] for part in finished])
     all_place = np.concatenate([part[3] for part in finished])
     order = np.argsort(all_place, kind="stable")
-    starts = np.cumsum(all_sizes) - all_sizes
-    sizes = all_sizes[order]
-    index = np.repeat(starts[order] - (np.cumsum(sizes) - sizes), sizes) + np.arange(
-        int(sizes.sum())
-    )
+    index, sizes = loops_taken(all_sizes, order)
     return all_points[index], sizes, all_region[order]
 
 

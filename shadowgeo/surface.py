@@ -64,7 +64,14 @@ import shapely
 
 from . import polygons as poly
 from .errors import GeometryError
-from .lightframe import candidate_pairs, clip_batch, corner_max, corner_min
+from .lightframe import (
+    candidate_pairs,
+    clip_batch,
+    corner_max,
+    corner_min,
+    misses_boxes,
+    twice_areas,
+)
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import MAX_CURVE_SEGMENTS
 from .outline import Outline, OutlineSet, make_outlines
@@ -72,7 +79,7 @@ from .seams import Loops, loops_of, stitch, without_collinear
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
-from .topology import Caster, MeshLike, as_caster, closed_each, unique_integers
+from .topology import Caster, MeshLike, as_caster, closed_each, loops_taken, unique_integers
 
 if TYPE_CHECKING:
     import trimesh
@@ -656,28 +663,35 @@ class _SurfaceProjector:
                 images = vertex_images[corner_ids.reshape(-1, 3)]
             else:
                 images = outlines.to_frame(corners[faces], owner)
-        x, y = images[:, :, 0], images[:, :, 1]
-        low_x, low_y, high_x, high_y = outlines.bounds[owner].T
-        near = ~(
-            (corner_min(x) > high_x)
-            | (corner_min(y) > high_y)
-            | (corner_max(x) < low_x)
-            | (corner_max(y) < low_y)
-        )
-        faces, owner, images = faces[near], owner[near], images[near]
-        x, y = images[:, :, 0], images[:, :, 1]
+        near = ~misses_boxes(images, outlines.bounds[owner])
+        faces, owner = faces[near], owner[near]
+        covered, pieces = self._cut_onto_faces(outlines, images[near], faces, owner, corners)
+        full[faces[covered]] = True
+        return pieces
+
+    def _cut_onto_faces(
+        self,
+        outlines: OutlineSet,
+        images: np.ndarray,
+        faces: np.ndarray,
+        owner: np.ndarray,
+        corners: np.ndarray,
+    ) -> tuple[np.ndarray, _Pieces]:
+        """Triangles' ``images`` (each within face ``faces[i]``, in the frame
+        of outline ``owner[i]``) cut by their outlines: which are wholly
+        inside, and the outlines' part of the others mapped onto the faces
+        (signed pieces, their winding numbers adding up to it)."""
         # The map from the frame back to a face keeps or flips orientation as
-        # the face's image does (the face runs counter-clockwise in its frame).
-        after = [1, 2, 0]  # each corner's next
-        flips = np.sum(x * y[:, after] - x[:, after] * y, axis=1) < 0
+        # the triangle's image does (it runs counter-clockwise in the face's frame).
+        flips = twice_areas(images) < 0
         extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
         covered, pieces, owners = outlines.cut(images, 1e-9 * extent, owner)
-        full[faces[covered]] = True
         if len(pieces) == 0:
-            return nothing
-        return self._onto_faces(
+            return covered, (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
+        mapped = self._onto_faces(
             outlines, pieces, faces[owners], owner[owners], flips[owners], corners
         )
+        return covered, mapped
 
     def _onto_faces(
         self,
@@ -747,35 +761,16 @@ class _SurfaceProjector:
         faces, owner = faces[rows], owner[rows]
         with np.errstate(divide="ignore", invalid="ignore"):
             images = outlines.to_frame(triangles, owner)
-        x, y = images[:, :, 0], images[:, :, 1]
-        after = [1, 2, 0]  # each corner's next
-        area = np.sum(x * y[:, after] - x[:, after] * y, axis=1)
-        solid = area != 0  # (a sliver of no area casts nothing)
-        triangles, images, faces, owner = (
-            triangles[solid],
-            images[solid],
-            faces[solid],
-            owner[solid],
-        )
-        flips = area[solid] < 0
-        extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
-        covered, pieces, owners = outlines.cut(images, 1e-9 * extent, owner)
-        parts = [nothing]
-        if len(pieces):
-            parts.append(
-                self._onto_faces(
-                    outlines, pieces, faces[owners], owner[owners], flips[owners], corners
-                )
-            )
-        if covered.any():  # wholly inside: the sub-triangle itself, counter-clockwise
-            whole = np.flatnonzero(covered)
-            point_face = np.repeat(faces[whole], 3)
-            flat = self._in_face_frames(triangles[whole].reshape(-1, 3), point_face)
-            flat = flat.reshape(-1, 3, 2)
-            u, v = flat[:, :, 0], flat[:, :, 1]
-            clockwise = np.sum(u * v[:, after] - u[:, after] * v, axis=1) < 0
-            parts.append((np.where(clockwise[:, None, None], flat[:, ::-1], flat), faces[whole]))
-        return _pad_polygons([part[0] for part in parts]), np.concatenate([p[1] for p in parts])
+        solid = twice_areas(images) != 0  # (a sliver of no area casts nothing)
+        triangles, faces, owner = triangles[solid], faces[solid], owner[solid]
+        covered, cut = self._cut_onto_faces(outlines, images[solid], faces, owner, corners)
+        # a part wholly inside: the sub-triangle itself, counter-clockwise in
+        # its face's frame (it keeps the face's winding)
+        whole = np.flatnonzero(covered)
+        point_face = np.repeat(faces[whole], 3)
+        flat = self._in_face_frames(triangles[whole].reshape(-1, 3), point_face).reshape(-1, 3, 2)
+        flat = np.where((twice_areas(flat) < 0)[:, None, None], flat[:, ::-1], flat)
+        return _pad_polygons([cut[0], flat]), np.concatenate([cut[1], faces[whole]])
 
     def _side_planes(self, faces: np.ndarray, corners: np.ndarray) -> np.ndarray:
         """(f, 4, 4) unit half-spaces of the region between each face and the
@@ -937,10 +932,8 @@ class _SurfaceProjector:
         loop_face = np.concatenate([chunk[2] for chunk in chunks])
         # Loops region by region.
         order = np.argsort(loop_face, kind="stable")
-        starts = np.cumsum(sizes) - sizes
-        sizes = sizes[order]
-        shift = starts[order] - (np.cumsum(sizes) - sizes)
-        points = points[np.arange(int(sizes.sum())) + np.repeat(shift, sizes)]
+        index, sizes = loops_taken(sizes, order)
+        points = points[index]
         region_faces, loop_region = unique_integers(loop_face[order], return_inverse=True)
         return (points, sizes, loop_region), region_faces
 

@@ -544,6 +544,25 @@ def closed_each(meshes: list[tuple[np.ndarray, int]]) -> np.ndarray | None:
     return result
 
 
+def loops_taken(sizes: np.ndarray, order: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For loops laid one after another, ``sizes[i]`` points each: the
+    index that takes their points loop by loop in ``order`` (some or all
+    of the loops), and the loops' sizes in that order.
+
+    Examples
+    --------
+    >>> index, sizes = loops_taken(np.array([2, 3, 1]), np.array([2, 0]))
+    >>> index.tolist(), sizes.tolist()
+    ([5, 0, 1], [1, 2])
+    """
+    sizes = np.asarray(sizes, dtype=np.int64)
+    starts = np.cumsum(sizes) - sizes
+    taken = sizes[order]
+    index = np.repeat(starts[order] - (np.cumsum(taken) - taken), taken)
+    index += np.arange(int(taken.sum()))
+    return index, taken
+
+
 def point_ids(points: ArrayLike) -> np.ndarray:
     """(n,) int64 ids of ``points`` (n, k): equal for points with equal
     coordinates (compared as numbers: -0.0 is 0.0), numbered in sorted order.
