@@ -90,6 +90,128 @@ def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size
         assert keep[0]
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(4, 30),
+    st.sampled_from([0.5, 1.0, 2.0, 4.0, 6.0]),
+    st.sampled_from([0.0, 1e-12, 1e-7, 1e-3, 0.05]),
+    st.booleans(),
+)
+def test_runs_of_faces_taken_whole_keep_every_shape_with_a_patch_that_large(
+    seed, n, size, slope, turn
+):
+    """Bound against brute force on a folded sheet whose faces follow each
+    other across it, so that the coarse bound files runs of them whole: a
+    grid of ``n`` by ``n`` squares whose height is bent at random columns by
+    ``slope`` at most (folds finer than the tolerance, and coarser), its
+    normals on the cells' edges (not turned) or turned at random, with a few
+    squares flipped; whenever a patch reaches ``size``, the shape is kept."""
+    import shadowgeo.scene.receivers as receivers_module
+
+    rng = np.random.default_rng(seed)
+    x = np.linspace(-4.0, 4.0, n + 1)
+    steps = rng.uniform(-slope, slope, n) * (rng.random(n) < 0.3)
+    height = np.concatenate([[0.0], np.cumsum(steps * np.diff(x))])
+    grid_x, grid_z = np.meshgrid(x, x, indexing="ij")
+    vertices = np.column_stack([grid_x.ravel(), np.repeat(height, n + 1), grid_z.ravel()])
+    corner = (np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]).ravel()
+    faces = (
+        np.concatenate(
+            [
+                np.column_stack([corner, corner + 1, corner + n + 2]),
+                np.column_stack([corner, corner + n + 2, corner + n + 1]),
+            ]
+        )
+        .reshape(2, -1, 3)
+        .transpose(1, 0, 2)
+        .reshape(-1, 3)
+    )  # each square's two in turn
+    flipped = rng.random(len(faces)) < 0.05
+    faces[flipped] = faces[flipped, ::-1]
+    if turn:
+        rotation, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        vertices = vertices @ rotation.T
+    shape = sg.Shape(vertices + rng.uniform(-3, 3, 3), faces)
+    largest = _largest_patch(shape)
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(receivers_module, "_COARSE_FACES", 1)
+        # the sampled size, and the largest patch's own (the tightest case)
+        for wanted in (size, largest):
+            keep = may_hold_patch(CasterSet([shape]), np.array([0]), wanted, TOLERANCE)
+            if largest >= wanted:
+                assert keep[0]
+
+
+def _triangle(centre, normal, radius):
+    """An equilateral triangle about ``centre``, counter-clockwise seen from
+    ``normal``'s side, its corners ``radius`` from the centre."""
+    normal = np.asarray(normal, dtype=np.float64) / np.linalg.norm(normal)
+    first = np.cross(normal, [0.0, 0.0, 1.0])
+    first /= np.linalg.norm(first)
+    second = np.cross(normal, first)
+    turns = 2.0 * np.pi * np.arange(3) / 3.0
+    return np.asarray(centre) + radius * (
+        np.cos(turns)[:, None] * first + np.sin(turns)[:, None] * second
+    )
+
+
+@pytest.mark.parametrize(
+    ("member", "wider"), [("tilted", False), ("tilted", True), ("sliver", False)]
+)
+def test_a_run_of_faces_spanning_two_cells_is_filed_under_both(member, wider):
+    """Two faces of one patch 3 apart, each tilted within the tolerance from
+    the seed's plane, whose normals fall in neighbouring cells (x component
+    0.12 and 0.13, cells of 1/8): the seed's run of 32 faces also holds faces
+    in the cell below (0.01 below 0). Filed only under its lowest cell, no
+    window around an occupied cell would hold both members, and the shape
+    would be ruled out for a size its patch reaches. With one of them two
+    cells below (``wider``), the run spans three and must go face by face.
+    With the member a sliver lying in the plane (its smallest height below
+    the tolerance) whose normal is its run's, far from the seed's, its run
+    must go face by face too, the sliver a member of any patch."""
+    import shadowgeo.scene.receivers as receivers_module
+
+    def unit(x, z=0.06):
+        return np.array([x, np.sqrt(1.0 - x * x - z * z), z])
+
+    seed_normal = unit(0.12)
+    along = np.cross(seed_normal, [0.0, 0.0, 1.0])
+    along /= np.linalg.norm(along)
+    far = 3.0 * along  # in the seed's plane
+    # the seed, the largest face, and its run's other faces, in the cell
+    # below, stacked off its plane (a run taken whole: small, of wide faces)
+    triangles = [_triangle([0.0, 0.0, 0.0], seed_normal, 6e-3)]
+    triangles += [_triangle(1e-4 * k * seed_normal, unit(-0.01), 5e-3) for k in range(1, 32)]
+    if wider:  # one of them two cells below: the run is filed face by face
+        triangles[5] = _triangle(5e-4 * seed_normal, unit(-0.13), 5e-3)
+    # the member, tilted from the seed's plane by 0.01, and its run's others
+    if member == "tilted":
+        triangles.append(_triangle(far, unit(0.13), 3e-3))
+        others = unit(0.13)
+    else:  # a sliver in the seed's plane whose normal is its run's, far from the seed's
+        others = unit(-0.5)
+        length = np.cross(seed_normal, others)
+        length /= np.linalg.norm(length)
+        triangles.append(
+            np.array(
+                [far - 0.01 * length, far + 0.01 * length, far + 2e-5 * np.cross(others, length)]
+            )
+        )
+    triangles += [_triangle(far + 1e-4 * k * seed_normal, others, 3e-3) for k in range(1, 32)]
+    # a run far the other way, of other normals, so that the shape's middle
+    # (where offsets are measured from) is near the seed: its run's
+    # offsets a level or two apart
+    away = 0.5 * seed_normal - far
+    triangles += [_triangle(away + 1e-4 * k * seed_normal, unit(0.5, 0.5), 3e-3) for k in range(32)]
+    vertices = np.concatenate(triangles)
+    shape = sg.Shape(vertices, np.arange(len(vertices)).reshape(-1, 3))
+    assert _largest_patch(shape) > 2.9
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(receivers_module, "_COARSE_FACES", 1)
+        assert may_hold_patch(CasterSet([shape]), np.array([0]), 2.0, TOLERANCE)[0]
+
+
 @pytest.mark.parametrize("coarse", [False, True])
 @pytest.mark.parametrize("turn", [False, True])
 def test_a_patch_of_faces_facing_both_ways_is_kept(coarse, turn):

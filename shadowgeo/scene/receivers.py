@@ -32,7 +32,7 @@ shape receives on whichever side a light is on.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -478,7 +478,14 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     edge), so within two of the mirror of ``c``. The patch therefore lies in
     the box of those cells and of the thin faces; a patch with no sharp face
     lies in the thin faces' box. A shape where all such boxes are smaller
-    than ``size`` has no patch that large."""
+    than ``size`` has no patch that large.
+
+    Most faces are filed a run of ``_CHUNK`` at a time (:meth:`_Cells.runs`):
+    a run whose faces all fall within two cells along each axis is filed
+    under each of those cells with the run's box, which holds each face's;
+    every cell a face would be filed under then holds a box at least as
+    large, so the bound stands (a cell filed with no face of its own only
+    adds boxes to look at)."""
     start, count = int(stacked.face_starts[index]), int(stacked.face_counts[index])
     low_box, high_box = stacked.low[index], stacked.high[index]
     middle = 0.5 * (low_box + high_box)
@@ -498,17 +505,40 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     # the face normals, kept for the casters' mesh of the first light
     normals = stacked.normal_rows(index)
     used_low, used_high = [np.inf] * 3, [-np.inf] * 3  # the box of the faces' corners
-    width = 2.0 * np.pi * limit / cell
+    cells = _Cells(
+        scales=(1.0 / cell, 1.0 / cell, 1.0 / cell, 1.0 / band),
+        bounds=(side, side, side, levels),
+        weights=(1, span, span * span, span**3),
+        width=2.0 * np.pi * limit / cell,
+    )
+    records: list[_Records] = []
     for first in range(0, count, _BIN_BLOCK):
         stop = first + _BIN_BLOCK
-        low, high, unit, height, _, sharp = _face_bins(
-            faces[first:stop], stacked.columns, middle, width, normals[first:stop]
-        )
+        corners, normal = _corner_normals(faces[first:stop], stacked.columns, normals[first:stop])
+        low = [np.minimum(np.minimum(a, b), c) for a, b, c in corners]
+        high = [np.maximum(np.maximum(a, b), c) for a, b, c in corners]
+        doubled = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            unit = [axis / doubled for axis in normal]
+            height = sum(
+                u * (a - m) for u, (a, _, _), m in zip(unit, corners, middle.tolist(), strict=True)
+            )
+        values = [*unit, height]
+        whole, runs = cells.runs(low, high, values, doubled, size)
+        records.append(runs)
         for axis in range(3):
             used_low[axis] = min(used_low[axis], float(low[axis].min()))
             used_high[axis] = max(used_high[axis], float(high[axis].max()))
-        every = bool(sharp.all())
-        if not every:
+        if whole.all():
+            continue
+        # the other runs' faces one by one, each under its own cell
+        rest = np.flatnonzero(np.repeat(~whole, _CHUNK)[: len(doubled)])
+        low, high = [x[rest] for x in low], [x[rest] for x in high]
+        values, doubled = [x[rest] for x in values], doubled[rest]
+        with np.errstate(invalid="ignore", over="ignore"):
+            binned = np.isfinite(values[0]) & np.isfinite(values[1]) & np.isfinite(values[2])
+            sharp = binned & (doubled > 0) & (doubled >= cells.width * _diagonal(low, high))
+        if not sharp.all():
             loose = ~sharp
             for axis in range(3):
                 loose_low[axis] = min(loose_low[axis], float(low[axis][loose].min()))
@@ -517,26 +547,12 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
             if not len(chosen):
                 continue
             low, high = [x[chosen] for x in low], [x[chosen] for x in high]
-            unit, height = [x[chosen] for x in unit], height[chosen]
-        # the cell's number, in floats (whole numbers, exact) until the end
-        key = np.floor(height / band)
-        np.clip(key, -levels, levels, out=key)
-        key += levels + 1
-        key *= span**3
-        for axis, weight in enumerate((1, span, span * span)):
-            bin_ = np.floor(unit[axis] / cell)
-            np.clip(bin_, -side, side, out=bin_)
-            bin_ += side + 1
-            bin_ *= weight
-            key += bin_
-        cells = key.astype(np.int64)
-        # runs of faces in one cell (a mesh's faces mostly follow each other
-        # across its surface) reduced first, each run's box filed once
-        runs = np.flatnonzero(np.concatenate([[True], cells[1:] != cells[:-1]]))
-        cells = cells[runs]
+            values = [x[chosen] for x in values]
+        records.append(cells.faces(low, high, values))
+    for offset, at, box_low, box_high in _Records.filed(records, cells.weights):
         for axis in range(3):
-            np.minimum.at(grid_low[axis], cells, np.minimum.reduceat(low[axis], runs))
-            np.maximum.at(grid_high[axis], cells, np.maximum.reduceat(high[axis], runs))
+            np.minimum.at(grid_low[axis], at + offset, box_low[axis])
+            np.maximum.at(grid_high[axis], at + offset, box_high[axis])
     stacked.normals_known(index, np.array([used_low, used_high]))
     shape = (3, depth, span, span, span)
     grid_low, grid_high = grid_low.reshape(shape), grid_high.reshape(shape)
@@ -610,6 +626,130 @@ def _window(grid: np.ndarray, reach: int, pick: np.ufunc) -> np.ndarray:
             pick(out[tuple(behind)], result[tuple(ahead)], out=out[tuple(behind)])
             pick(out[tuple(ahead)], result[tuple(behind)], out=out[tuple(ahead)])
         result = out
+    return result
+
+
+@dataclasses.dataclass(frozen=True)
+class _Records:
+    """Boxes filed under cells of :func:`_normal_bound`'s grid: ``cells``
+    (k,) each box's lowest cell, ``spans`` (k,) a bit per axis of the four
+    (normal x, y, z, offset) along which it is filed under the next cell
+    too, and the boxes' ``low`` and ``high`` columns."""
+
+    cells: np.ndarray
+    spans: np.ndarray
+    low: _Columns
+    high: _Columns
+
+    @staticmethod
+    def filed(
+        records: list[_Records], weights: tuple[int, ...]
+    ) -> Iterator[tuple[int, np.ndarray, _Columns, _Columns]]:
+        """Every ``(offset, cells, low, high)`` to file, for each of the 16
+        ways of stepping to the next cell along some of the axes: the boxes
+        spanning those axes, under their lowest cell plus ``offset``."""
+        if not records:
+            return
+        cells = np.concatenate([r.cells for r in records])
+        spans = np.concatenate([r.spans for r in records])
+        low = [np.concatenate([r.low[axis] for r in records]) for axis in range(3)]
+        high = [np.concatenate([r.high[axis] for r in records]) for axis in range(3)]
+        for step in range(16):
+            at = np.flatnonzero((spans & step) == step) if step else np.arange(len(cells))
+            if len(at):
+                offset = sum(weights[k] for k in range(4) if step >> k & 1)
+                yield offset, cells[at], [x[at] for x in low], [x[at] for x in high]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Cells:
+    """The cells of :func:`_normal_bound`'s grid along its four axes (a
+    face's unit normal x, y and z, and its plane's offset): ``scales``,
+    the inverse cell sides; ``bounds``, the highest cell each way (values
+    past it are clipped to it); ``weights``, each axis's step in a cell's
+    number; ``width``, the smallest height of a sharp face."""
+
+    scales: tuple[float, ...]
+    bounds: tuple[int, ...]
+    weights: tuple[int, ...]
+    width: float
+
+    @property
+    def base(self) -> int:
+        """The number of the cell of all values 0 (cells count from an empty
+        one below each axis's lowest)."""
+        return sum((b + 1) * w for b, w in zip(self.bounds, self.weights, strict=True))
+
+    def runs(
+        self,
+        low: _Columns,
+        high: _Columns,
+        values: _Columns,
+        doubled: np.ndarray,
+        size: float,
+    ) -> tuple[np.ndarray, _Records]:
+        """Runs of ``_CHUNK`` consecutive faces (a mesh's faces mostly follow
+        each other across its surface) filed whole: the run's box under every
+        cell its faces' values (the four axes' columns) may fall in, where
+        that is a cell or two along each axis, every face is sharp by the
+        run's box (a face's diagonal is at most the run's) and the run is
+        small beside ``size``. Returns (runs,) bool, the runs taken whole, and
+        their records; ``low``, ``high``: the faces' boxes, ``doubled``:
+        twice their areas."""
+        starts = np.arange(0, len(doubled), _CHUNK)
+        box_low = [_runs_reduced(np.minimum, x, starts) for x in low]
+        box_high = [_runs_reduced(np.maximum, x, starts) for x in high]
+        with np.errstate(invalid="ignore", over="ignore"):
+            diagonal = _diagonal(box_low, box_high)
+            least = _runs_reduced(np.minimum, doubled, starts)
+            whole = (least > 0) & (least >= self.width * diagonal)
+            whole &= diagonal <= size * _CHUNK_REACH
+            whole &= _runs_reduced(np.maximum, doubled, starts) < np.inf
+            cells = np.full(len(starts), self.base, dtype=np.int64)
+            spans = np.zeros(len(starts), dtype=np.int64)
+            for k, (column, scale, bound) in enumerate(
+                zip(values, self.scales, self.bounds, strict=True)
+            ):
+                a = np.floor(_runs_reduced(np.minimum, column, starts) * scale)
+                b = np.floor(_runs_reduced(np.maximum, column, starts) * scale)
+                whole &= b - a <= 1  # False for NaN
+                np.clip(a, -bound, bound, out=a)
+                np.clip(b, -bound, bound, out=b)
+                a[~whole] = 0  # (runs not taken: any whole number)
+                cells += a.astype(np.int64) * self.weights[k]
+                spans |= (b > a).astype(np.int64) << k
+        taken = np.flatnonzero(whole)
+        return whole, _Records(
+            cells[taken], spans[taken], [x[taken] for x in box_low], [x[taken] for x in box_high]
+        )
+
+    def faces(self, low: _Columns, high: _Columns, values: _Columns) -> _Records:
+        """Sharp faces each filed under its own cell, runs of faces in one
+        cell reduced first (each run's box filed once)."""
+        key = np.full(len(values[0]), float(self.base))
+        for column, scale, bound, weight in zip(
+            values, self.scales, self.bounds, self.weights, strict=True
+        ):
+            bin_ = np.floor(column * scale)
+            np.clip(bin_, -bound, bound, out=bin_)
+            bin_ *= weight
+            key += bin_  # whole numbers, exact in floats
+        cells = key.astype(np.int64)
+        runs = np.flatnonzero(np.concatenate([[True], cells[1:] != cells[:-1]]))
+        return _Records(
+            cells[runs],
+            np.zeros(len(runs), dtype=np.int64),
+            [np.minimum.reduceat(x, runs) for x in low],
+            [np.maximum.reduceat(x, runs) for x in high],
+        )
+
+
+def _diagonal(low: _Columns, high: _Columns) -> np.ndarray:
+    """The diagonals of boxes given by their ``low`` and ``high`` columns."""
+    extent = [b - a for a, b in zip(low, high, strict=True)]
+    result: np.ndarray = np.sqrt(
+        extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2]
+    )
     return result
 
 
@@ -725,6 +865,10 @@ _BIN_BLOCK = 1 << 14
 # normal cells of this side (its grid: 19 x 19 x 19 cells by 19 levels).
 _COARSE_FACES = 1 << 16
 _COARSE_CELL = 1.0 / 8.0
+# _normal_bound files runs of this many consecutive faces whole, when a run's
+# box is at most _CHUNK_REACH of the size looked for across.
+_CHUNK = 32
+_CHUNK_REACH = 1.0 / 16.0
 # x, y and z of points or vectors, one array each.
 _Columns = list[np.ndarray]
 
@@ -749,28 +893,50 @@ def _face_bins(
     times its box's diagonal, which is at least its longest side: a face
     taken is sharp, and one on the edge counts as thin, which only widens a
     bound."""
-    first, second, third = faces[:, 0], faces[:, 1], faces[:, 2]
-    corners = [[column[first], column[second], column[third]] for column in columns]
+    corners, normal = _corner_normals(faces, columns, normals)
     low = [np.minimum(np.minimum(a, b), c) for a, b, c in corners]
     high = [np.maximum(np.maximum(a, b), c) for a, b, c in corners]
-    # block_normals' arithmetic, on the corners gathered here
-    (ux, uy, uz), (vx, vy, vz) = ([b - a for a, b, _ in corners], [c - a for a, _, c in corners])
-    normal = [uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx]
-    if normals is not None:
-        for axis in range(3):
-            normals[:, axis] = normal[axis]
     doubled = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         unit = [axis / doubled for axis in normal]
         binned = np.isfinite(unit[0]) & np.isfinite(unit[1]) & np.isfinite(unit[2])
         binned &= doubled > 0
-        extent = [b - a for a, b in zip(low, high, strict=True)]
-        diagonal = np.sqrt(extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2])
-        sharp = binned & (doubled >= width * diagonal)
+        sharp = binned & (doubled >= width * _diagonal(low, high))
         height = sum(
             u * (a - m) for u, (a, _, _), m in zip(unit, corners, middle.tolist(), strict=True)
         )
     return low, high, unit, height, binned, sharp
+
+
+def _runs_reduced(pick: np.ufunc, values: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """``pick`` (minimum or maximum) of each run of ``_CHUNK`` consecutive
+    ``values`` (``starts``: every run's first), the last run perhaps shorter:
+    ``pick.reduceat(values, starts)``, by halving the whole runs (twice as
+    quick). NaN propagates, as it does through reduceat."""
+    whole = len(values) // _CHUNK * _CHUNK
+    if whole < len(values) or _CHUNK & (_CHUNK - 1):
+        return pick.reduceat(values, starts)
+    runs = values
+    while len(runs) > len(starts):
+        runs = pick(runs[0::2], runs[1::2])
+    return runs
+
+
+def _corner_normals(
+    faces: np.ndarray, columns: np.ndarray, normals: np.ndarray | None = None
+) -> tuple[list[_Columns], _Columns]:
+    """The corners of ``faces`` (rows of vertex indices into the coordinate
+    ``columns``, (3, n)), as ``corners[axis][corner]``, and their unnormalised
+    normals (columns), by :func:`shadowgeo.topology.block_normals`'
+    arithmetic; written into ``normals`` ((k, 3)) when given."""
+    first, second, third = faces[:, 0], faces[:, 1], faces[:, 2]
+    corners = [[column[first], column[second], column[third]] for column in columns]
+    (ux, uy, uz), (vx, vy, vz) = ([b - a for a, b, _ in corners], [c - a for a, _, c in corners])
+    normal = [uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx]
+    if normals is not None:
+        for axis in range(3):
+            normals[:, axis] = normal[axis]
+    return corners, normal
 
 
 def _cell_boxes(
