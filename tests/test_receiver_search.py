@@ -14,8 +14,10 @@ from hypothesis import strategies as st
 import shadowgeo as sg
 from shadowgeo import limits
 from shadowgeo.polygons import fill, without_copies
+from shadowgeo.scene import patchbound
 from shadowgeo.scene.casters import CasterSet, distinct
-from shadowgeo.scene.receivers import MAX_FOUND, found, may_hold_patch, patches
+from shadowgeo.scene.patchbound import may_hold_patch
+from shadowgeo.scene.receivers import MAX_FOUND, found, patches
 
 TOLERANCE = sg.Tolerance.for_points([[-10, -10, -10], [10, 10, 10]])
 
@@ -60,7 +62,6 @@ def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size
     the whole turned at random or not (a normal on the cells' edges); whenever
     a patch reaches ``size``, the shape is kept, by the histogram of normals
     and offsets and by the coarser one big shapes are tried by first."""
-    import shadowgeo.scene.receivers as receivers_module
 
     rng = np.random.default_rng(seed)
     triangles = []
@@ -84,7 +85,7 @@ def test_no_shape_with_a_patch_that_large_is_ruled_out(seed, n_tiles, tilt, size
     shape = sg.Shape(vertices, np.arange(len(vertices)).reshape(-1, 3))
     with pytest.MonkeyPatch.context() as patch:
         if coarse:  # every shape tried by the coarse bound first
-            patch.setattr(receivers_module, "_COARSE_FACES", 1)
+            patch.setattr(patchbound, "_COARSE_FACES", 1)
         keep = may_hold_patch(CasterSet([shape]), np.array([0]), size, TOLERANCE)
     if _largest_patch(shape) >= size:
         assert keep[0]
@@ -107,7 +108,6 @@ def test_runs_of_faces_taken_whole_keep_every_shape_with_a_patch_that_large(
     ``slope`` at most (folds finer than the tolerance, and coarser), its
     normals on the cells' edges (not turned) or turned at random, with a few
     squares flipped; whenever a patch reaches ``size``, the shape is kept."""
-    import shadowgeo.scene.receivers as receivers_module
 
     rng = np.random.default_rng(seed)
     x = np.linspace(-4.0, 4.0, n + 1)
@@ -135,7 +135,7 @@ def test_runs_of_faces_taken_whole_keep_every_shape_with_a_patch_that_large(
     shape = sg.Shape(vertices + rng.uniform(-3, 3, 3), faces)
     largest = _largest_patch(shape)
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(receivers_module, "_COARSE_FACES", 1)
+        patch.setattr(patchbound, "_COARSE_FACES", 1)
         # the sampled size, and the largest patch's own (the tightest case)
         for wanted in (size, largest):
             keep = may_hold_patch(CasterSet([shape]), np.array([0]), wanted, TOLERANCE)
@@ -170,7 +170,6 @@ def test_a_run_of_faces_spanning_two_cells_is_filed_under_both(member, wider):
     With the member a sliver lying in the plane (its smallest height below
     the tolerance) whose normal is its run's, far from the seed's, its run
     must go face by face too, the sliver a member of any patch."""
-    import shadowgeo.scene.receivers as receivers_module
 
     def unit(x, z=0.06):
         return np.array([x, np.sqrt(1.0 - x * x - z * z), z])
@@ -208,7 +207,7 @@ def test_a_run_of_faces_spanning_two_cells_is_filed_under_both(member, wider):
     shape = sg.Shape(vertices, np.arange(len(vertices)).reshape(-1, 3))
     assert _largest_patch(shape) > 2.9
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(receivers_module, "_COARSE_FACES", 1)
+        patch.setattr(patchbound, "_COARSE_FACES", 1)
         assert may_hold_patch(CasterSet([shape]), np.array([0]), 2.0, TOLERANCE)[0]
 
 
@@ -218,7 +217,6 @@ def test_a_patch_of_faces_facing_both_ways_is_kept(coarse, turn):
     """Two small tiles of one plane at opposite corners, one facing down:
     neither reaches 8 across, the patch of both (11.3) does. Turned, the
     normals fall inside cells; not turned, on the cells' edges."""
-    import shadowgeo.scene.receivers as receivers_module
 
     tile = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
     vertices = np.concatenate([tile - [4.0, 0, 4.0], (tile + [3.0, 0, 3.0])[::-1]])
@@ -229,7 +227,7 @@ def test_a_patch_of_faces_facing_both_ways_is_kept(coarse, turn):
     assert _largest_patch(shape) > 8.0
     with pytest.MonkeyPatch.context() as patch:
         if coarse:
-            patch.setattr(receivers_module, "_COARSE_FACES", 1)
+            patch.setattr(patchbound, "_COARSE_FACES", 1)
         assert may_hold_patch(CasterSet([shape]), np.array([0]), 8.0, TOLERANCE)[0]
 
 
@@ -237,15 +235,14 @@ def test_a_big_curved_shape_is_ruled_out_by_its_normals_alone(monkeypatch):
     """A sphere of 81,920 faces (past ``_COARSE_FACES``) is ruled out before
     the finer histogram is built; a flat ring of 80,000 faces, a third of
     them flipped, is kept for a size its box reaches (8.49 across)."""
-    import shadowgeo.scene.receivers as receivers_module
 
     def finer(*args, **kwargs):
         raise AssertionError("the finer histogram was built")
 
     sphere = trimesh.creation.icosphere(subdivisions=6, radius=2.0)
-    assert len(sphere.faces) >= receivers_module._COARSE_FACES
+    assert len(sphere.faces) >= patchbound._COARSE_FACES
     stacked = CasterSet([sg.Shape(sphere.vertices, sphere.faces)])
-    monkeypatch.setattr(receivers_module, "_patch_bound", finer)
+    monkeypatch.setattr(patchbound, "_patch_bound", finer)
     assert may_hold_patch(stacked, np.array([0]), 2.0, TOLERANCE).tolist() == [False]
     monkeypatch.undo()
     # a ring of far more faces than the sphere's largest patch: the bound
@@ -286,7 +283,7 @@ def test_the_normals_the_coarse_bound_keeps_are_the_casters_own():
 def test_a_window_at_some_cells_is_the_whole_windows_values_there():
     """_window_at takes the window over the occupied cells' box only; at any
     cell, occupied or its mirror, it gives the whole grid's window."""
-    from shadowgeo.scene.receivers import _window, _window_at
+    from shadowgeo.scene.patchbound import _window, _window_at
 
     rng = np.random.default_rng(5)
     for pick, empty in ((np.minimum, np.inf), (np.maximum, -np.inf)):
@@ -307,7 +304,6 @@ def test_faces_binned_a_block_at_a_time_rule_out_the_same_shapes(monkeypatch):
     """The histogram built from blocks of a few faces, cells merged across
     blocks, decides as one built at once: sphere, ground and a sphere beside
     a wall, each shape's faces split over several blocks."""
-    import shadowgeo.scene.receivers as receivers_module
 
     wall = sg.Shape([[-3, 0, -3], [-3, 4, -3], [3, 4, -3], [3, 0, -3]], [[0, 1, 2], [0, 2, 3]])
     ground = sg.Shape([[-5, 0, -5], [5, 0, -5], [5, 0, 5], [-5, 0, 5]], [[0, 2, 1], [0, 3, 2]])
@@ -316,7 +312,7 @@ def test_faces_binned_a_block_at_a_time_rule_out_the_same_shapes(monkeypatch):
     everything = np.arange(len(shapes))
     for size in (0.5, 2.0, 6.0):
         whole = may_hold_patch(stacked, everything, size, TOLERANCE)
-        monkeypatch.setattr(receivers_module, "_BIN_BLOCK", 37)
+        monkeypatch.setattr(patchbound, "_BIN_BLOCK", 37)
         blocks = may_hold_patch(stacked, everything, size, TOLERANCE)
         monkeypatch.undo()
         assert blocks.tolist() == whole.tolist()
