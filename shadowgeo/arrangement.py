@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from .topology import cycle_walk, loops_taken
+from .topology import cycle_walk, loop_rings, loops_taken
 
 # Rounding error bound of a 2-D orientation (a 2x2 determinant of coordinate
 # differences) as a multiple of the squared extent of the points involved:
@@ -131,9 +131,7 @@ def convex_union_arrays(
     source, sizes = loops_taken(sizes, order)
     low, high = low[order], high[order]
     points = points.view(np.complex128).ravel()[source].view(np.float64).reshape(-1, 2)
-    starts = np.cumsum(sizes) - sizes
-    following = np.arange(1, len(points) + 1)
-    following[starts + sizes - 1] = starts
+    starts, following = loop_rings(sizes)
     if int(np.sum(sizes[first] * sizes[second])) > _TABLE_ENTRIES:
         return None
     frame = (_turned(points, axes), grow, turned_low[order], turned_high[order])
@@ -174,9 +172,7 @@ def _loop_edges(
     as contiguous float64, each loop's start, each point's next on its loop,
     and each edge (to that next point) as a complex number."""
     points = np.ascontiguousarray(points, dtype=np.float64)
-    starts = np.cumsum(sizes) - sizes
-    following = np.arange(1, len(points) + 1)
-    following[starts + sizes - 1] = starts
+    starts, following = loop_rings(sizes)
     step = points.view(np.complex128).ravel()
     return points, starts, following, step[following] - step
 

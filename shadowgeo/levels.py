@@ -33,6 +33,7 @@ from manifold3d import CrossSection, FillRule
 from numpy.typing import NDArray
 
 from .polygons import nest, signed_areas
+from .topology import loop_rings
 
 Parts = list[list[NDArray[np.float64]]]
 
@@ -73,9 +74,7 @@ class _Loops:
         if not len(self.lengths):
             return self
         points = self.points
-        starts = np.concatenate([[0], np.cumsum(self.lengths)[:-1]])
-        following = np.arange(1, len(points) + 1)
-        following[starts + self.lengths - 1] = starts
+        starts, following = loop_rings(self.lengths)
         coordinate = points[:, axis]
         inside = coordinate <= value if below else coordinate >= value
         crossing = inside != inside[following]

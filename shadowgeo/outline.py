@@ -21,6 +21,7 @@ import shapely
 from .arrangement import strictly_convex_loops
 from .lightframe import corner_max, corner_min, misses_boxes, overlapping_boxes, twice_areas
 from .polygons import MAX_COORDINATE, components, fill
+from .topology import loop_rings
 
 if TYPE_CHECKING:
     from manifold3d import CrossSection
@@ -97,9 +98,7 @@ class _Rings:
     def of(cls, points: np.ndarray, sizes: np.ndarray) -> _Rings:
         """The rings of loops given as (n, 2) ``points``, ``sizes[i]`` in turn."""
         sizes = np.asarray(sizes, dtype=np.int64)
-        starts = np.cumsum(sizes) - sizes
-        following = np.arange(len(points)) + 1
-        following[starts + sizes - 1] = starts
+        starts, following = loop_rings(sizes)
         end = points[following]
         return cls(
             np.stack([points, end], axis=1),

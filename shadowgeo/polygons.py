@@ -22,6 +22,7 @@ from .arrangement import convex_union_arrays, convex_union_flat
 from .errors import GeometryError
 from .limits import MAX_UNION_CROSSINGS
 from .plane import Plane
+from .topology import loop_rings
 
 # Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
 # its 1e8 fixed-point scaling overflows int64's safe range).
@@ -239,13 +240,10 @@ def signed_areas(loops: list[np.ndarray]) -> np.ndarray:
         return np.array([0.5 * np.add.reduce(cross)])
     points = np.concatenate(loops).reshape(-1, 2)
     lengths = np.array([len(loop) for loop in loops])
-    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-    nonempty = lengths > 0
-    following = np.arange(1, len(points) + 1)
-    # each loop closes on its own first point
-    following[(starts + lengths - 1)[nonempty]] = starts[nonempty]
+    starts, following = loop_rings(lengths)  # each loop closes on its own first point
     cross = points[:, 0] * points[following, 1] - points[following, 0] * points[:, 1]
     out = np.zeros(len(loops))
+    nonempty = lengths > 0
     out[nonempty] = 0.5 * np.add.reduceat(cross, starts[nonempty]) if len(cross) else 0.0
     return out
 
@@ -342,10 +340,7 @@ def crossings_estimate(
         and _box_pairs_bound(start, lengths) <= MAX_UNION_CROSSINGS
     ):
         return 0.0, 0
-    following = np.arange(1, n_edges + 1)
-    firsts = np.cumsum(lengths) - lengths
-    nonempty = lengths > 0
-    following[(firsts + lengths - 1)[nonempty]] = firsts[nonempty]  # each loop closes
+    firsts, following = loop_rings(lengths)  # each loop closes
     end = start[following]
     rng = np.random.default_rng(0)  # fixed: the same loops always get the same answer
     if cells is None:
@@ -443,9 +438,7 @@ def _without_copies_kept(loops: list[np.ndarray]) -> list[int] | None:
         lengths = lengths[index]
     every = index.tolist() if some_empty else None  # (when no copy goes)
     points = np.concatenate(loops).astype(np.float64).reshape(-1, 2)
-    starts = np.cumsum(lengths) - lengths
-    following = np.arange(1, len(points) + 1)
-    following[starts + lengths - 1] = starts  # each loop closes
+    starts, following = loop_rings(lengths)  # each loop closes
     with np.errstate(over="ignore", invalid="ignore"):
         cross = points[:, 0] * points[following, 1] - points[:, 1] * points[following, 0]
         doubled = np.add.reduceat(cross, starts)
@@ -771,8 +764,7 @@ class FlatParts:
         lengths = np.diff(np.append(starts, len(points)))
         if len(starts) == 0:
             return cls(points, starts, lengths, np.zeros(0), [])
-        following = np.arange(1, len(points) + 1)
-        following[starts + lengths - 1] = starts
+        _, following = loop_rings(lengths)
         cross = points[:, 0] * points[following, 1] - points[following, 0] * points[:, 1]
         areas = 0.5 * np.add.reduceat(cross, starts)
         outers = np.flatnonzero(areas > 0)

@@ -544,6 +544,28 @@ def closed_each(meshes: list[tuple[np.ndarray, int]]) -> np.ndarray | None:
     return result
 
 
+def loop_rings(sizes: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """For loops laid one after another, ``sizes[i]`` points each: each
+    loop's first point, and each point's next one on its loop (the last
+    point's is its loop's first; an empty loop holds no point).
+
+    Examples
+    --------
+    >>> starts, following = loop_rings([3, 0, 2])
+    >>> starts.tolist(), following.tolist()
+    ([0, 3, 3], [1, 2, 0, 4, 3])
+    """
+    sizes = np.asarray(sizes, dtype=np.int64)
+    starts = np.cumsum(sizes) - sizes
+    following = np.arange(1, int(sizes.sum()) + 1)
+    if len(sizes) and sizes.min() > 0:
+        following[starts + sizes - 1] = starts
+    else:
+        nonempty = sizes > 0
+        following[(starts + sizes - 1)[nonempty]] = starts[nonempty]
+    return starts, following
+
+
 def loops_taken(sizes: np.ndarray, order: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """For loops laid one after another, ``sizes[i]`` points each: the
     index that takes their points loop by loop in ``order`` (some or all
