@@ -173,7 +173,9 @@ class Caster:
 
     @cached_property
     def _columns(self) -> np.ndarray:
-        return np.ascontiguousarray(self.vertices.T)
+        # a view: gathered by the corners, strided columns are as quick as
+        # contiguous ones (CasterSet.columns), and no copy is made
+        return self.vertices.T
 
     @cached_property
     def center(self) -> np.ndarray:
