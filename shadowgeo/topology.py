@@ -133,18 +133,16 @@ class Caster:
         *,
         face_normals: np.ndarray | None = None,
         bounds: np.ndarray | None = None,
-        columns: np.ndarray | None = None,
         closed: bool | None = None,
     ) -> None:
         """Take what a caller has worked out already, the very values the
         caster would (a caster set's stacked face normals, the box of the
-        vertices its faces use, the (3, n) coordinate columns, whether it is
-        closed by :func:`closed_each`): the caster then does not compute them
-        again. None leaves one as it is."""
+        vertices its faces use, whether it is closed by
+        :func:`closed_each`): the caster then does not compute them again.
+        None leaves one as it is."""
         for name, value in (
             ("face_normals", face_normals),
             ("bounds", bounds),
-            ("_columns", columns),
             ("is_closed", closed),
         ):
             if value is not None:
@@ -560,11 +558,8 @@ def loop_rings(sizes: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     sizes = np.asarray(sizes, dtype=np.int64)
     starts = np.cumsum(sizes) - sizes
     following = np.arange(1, int(sizes.sum()) + 1)
-    if len(sizes) and sizes.min() > 0:
-        following[starts + sizes - 1] = starts
-    else:
-        nonempty = sizes > 0
-        following[(starts + sizes - 1)[nonempty]] = starts[nonempty]
+    nonempty = sizes > 0
+    following[(starts + sizes - 1)[nonempty]] = starts[nonempty]
     return starts, following
 
 

@@ -406,11 +406,7 @@ class CasterSet:
             if everything and len(self._used_boxes) == len(self) and len(self):
                 boxes = np.array(list(self._used_boxes.values()))
                 bounds = np.array([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
-            caster.take_known(
-                face_normals=normals,
-                bounds=bounds,
-                columns=self.__dict__.get("columns"),  # when made already
-            )
+            caster.take_known(face_normals=normals, bounds=bounds)
             self._meshes[key] = caster
         return self._meshes[key]
 

@@ -143,15 +143,9 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     records: list[_Records] = []
     for first in range(0, count, _BIN_BLOCK):
         stop = first + _BIN_BLOCK
-        corners, normal = _corner_normals(faces[first:stop], stacked.columns, normals[first:stop])
-        low = [np.minimum(np.minimum(a, b), c) for a, b, c in corners]
-        high = [np.maximum(np.maximum(a, b), c) for a, b, c in corners]
-        doubled = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            unit = [axis / doubled for axis in normal]
-            height = sum(
-                u * (a - m) for u, (a, _, _), m in zip(unit, corners, middle.tolist(), strict=True)
-            )
+        low, high, unit, height, doubled = _face_values(
+            faces[first:stop], stacked.columns, middle, normals[first:stop]
+        )
         values = [*unit, height]
         whole, runs = cells.runs(low, high, values, doubled, size)
         records.append(runs)
@@ -164,9 +158,7 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
         rest = np.flatnonzero(np.repeat(~whole, _CHUNK)[: len(doubled)])
         low, high = [x[rest] for x in low], [x[rest] for x in high]
         values, doubled = [x[rest] for x in values], doubled[rest]
-        with np.errstate(invalid="ignore", over="ignore"):
-            binned = np.isfinite(values[0]) & np.isfinite(values[1]) & np.isfinite(values[2])
-            sharp = binned & (doubled > 0) & (doubled >= cells.width * _diagonal(low, high))
+        _, sharp = _sharpness(low, high, values[:3], doubled, cells.width)
         if not sharp.all():
             loose = ~sharp
             for axis in range(3):
@@ -420,9 +412,10 @@ def _patch_bound(
     for start in range(0, len(rows), _BIN_BLOCK):
         block = rows[start : start + _BIN_BLOCK]
         holder = owner[start : start + _BIN_BLOCK]
-        low, high, unit, height, binned, sharp = _face_bins(
-            stacked.faces[block], stacked.columns, middle, width
+        low, high, unit, height, doubled = _face_values(
+            stacked.faces[block], stacked.columns, middle
         )
+        binned, sharp = _sharpness(low, high, unit, doubled, width)
         loose = np.flatnonzero(~sharp)
         if len(loose):  # owners are non-decreasing: the shapes' faces follow each other
             held = holder[loose]
@@ -502,39 +495,53 @@ _CHUNK_REACH = 1.0 / 16.0
 _Columns = list[np.ndarray]
 
 
-def _face_bins(
+def _face_values(
     faces: np.ndarray,
     columns: np.ndarray,
     middle: np.ndarray,
-    width: float,
     normals: np.ndarray | None = None,
-) -> tuple[_Columns, _Columns, _Columns, np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[_Columns, _Columns, _Columns, np.ndarray, np.ndarray]:
     """Per face of ``faces`` (rows of vertex indices into the coordinate
     ``columns``, (3, n)): its box (low and high columns), unit normal
     (columns), the offset of its plane from ``middle`` (through its first
-    corner), whether it has a normal, and whether it is sharp (its smallest
-    height at least ``width``, so that it turns from a patch's plane by less
-    than half a cell). ``normals``, when given, (k, 3): the faces'
+    corner) and twice its area. ``normals``, when given, (k, 3): the faces'
     unnormalised normals written into it, the numbers of
-    :func:`shadowgeo.topology.block_normals`.
-
-    A face is taken for sharp when twice its area is at least ``width``
-    times its box's diagonal, which is at least its longest side: a face
-    taken is sharp, and one on the edge counts as thin, which only widens a
-    bound."""
-    corners, normal = _corner_normals(faces, columns, normals)
+    :func:`shadowgeo.topology.block_normals`."""
+    first, second, third = faces[:, 0], faces[:, 1], faces[:, 2]
+    corners = [[column[first], column[second], column[third]] for column in columns]
+    # block_normals' arithmetic, on the corners gathered here
+    (ux, uy, uz), (vx, vy, vz) = ([b - a for a, b, _ in corners], [c - a for a, _, c in corners])
+    normal = [uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx]
+    if normals is not None:
+        for axis in range(3):
+            normals[:, axis] = normal[axis]
     low = [np.minimum(np.minimum(a, b), c) for a, b, c in corners]
     high = [np.maximum(np.maximum(a, b), c) for a, b, c in corners]
     doubled = np.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         unit = [axis / doubled for axis in normal]
-        binned = np.isfinite(unit[0]) & np.isfinite(unit[1]) & np.isfinite(unit[2])
-        binned &= doubled > 0
-        sharp = binned & (doubled >= width * _diagonal(low, high))
         height = sum(
             u * (a - m) for u, (a, _, _), m in zip(unit, corners, middle.tolist(), strict=True)
         )
-    return low, high, unit, height, binned, sharp
+    return low, high, unit, height, doubled
+
+
+def _sharpness(
+    low: _Columns, high: _Columns, unit: _Columns, doubled: np.ndarray, width: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per face (its :func:`_face_values`): whether it has a normal, and
+    whether it is sharp (its smallest height at least ``width``, so that it
+    turns from a patch's plane by less than half a cell).
+
+    A face is taken for sharp when twice its area is at least ``width``
+    times its box's diagonal, which is at least its longest side: a face
+    taken is sharp, and one on the edge counts as thin, which only widens a
+    bound."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        binned = np.isfinite(unit[0]) & np.isfinite(unit[1]) & np.isfinite(unit[2])
+        binned &= doubled > 0
+        sharp = binned & (doubled >= width * _diagonal(low, high))
+    return binned, sharp
 
 
 def _runs_reduced(pick: np.ufunc, values: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -549,23 +556,6 @@ def _runs_reduced(pick: np.ufunc, values: np.ndarray, starts: np.ndarray) -> np.
     while len(runs) > len(starts):
         runs = pick(runs[0::2], runs[1::2])
     return runs
-
-
-def _corner_normals(
-    faces: np.ndarray, columns: np.ndarray, normals: np.ndarray | None = None
-) -> tuple[list[_Columns], _Columns]:
-    """The corners of ``faces`` (rows of vertex indices into the coordinate
-    ``columns``, (3, n)), as ``corners[axis][corner]``, and their unnormalised
-    normals (columns), by :func:`shadowgeo.topology.block_normals`'
-    arithmetic; written into ``normals`` ((k, 3)) when given."""
-    first, second, third = faces[:, 0], faces[:, 1], faces[:, 2]
-    corners = [[column[first], column[second], column[third]] for column in columns]
-    (ux, uy, uz), (vx, vy, vz) = ([b - a for a, b, _ in corners], [c - a for a, _, c in corners])
-    normal = [uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx]
-    if normals is not None:
-        for axis in range(3):
-            normals[:, axis] = normal[axis]
-    return corners, normal
 
 
 def _cell_boxes(
