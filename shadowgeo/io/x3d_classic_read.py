@@ -15,7 +15,9 @@ containerField and units for every encoding:
   Script and shader interface declarations become ``<field>`` elements;
 - ``PROFILE``, ``COMPONENT``, ``UNIT``, ``META`` become ``<head>`` entries,
   the header's version the ``version`` attribute; comments become XML
-  comments; every element's ``sourceline`` is its line in the file.
+  comments; every element's ``sourceline`` is its line in the file;
+- the tree is laid out as XML is written, one element a line, indented by
+  depth (:mod:`.x3d_layout`), so the XML writer gives a readable file.
 
 VRML 97 (``#VRML V2.0 utf8``) is read as X3D 3.0: ``exposedField``,
 ``eventIn``, ``eventOut`` and ``field`` become X3D's access types, and the
@@ -48,6 +50,7 @@ from ..errors import SceneError
 from .x3d_classic_tokens import Token, is_number, number_text, quote, tokens
 from .x3d_field_types import CONTAINER_FIELDS, field_type
 from .x3d_fields import Element
+from .x3d_layout import lay_out
 
 MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000
@@ -138,6 +141,7 @@ def parse_bytes(data: bytes, path: str, notes: list[str] | None = None) -> etree
     version = "3.0" if vrml97 else f"{major}.{minor}"
     parser = _Parser(tokens(text, path)[1:], path, vrml97)
     tree = parser.document(version)
+    lay_out(tree.getroot())  # written as XML, one element a line
     if notes is not None:
         notes.extend(parser.notes)
     return tree

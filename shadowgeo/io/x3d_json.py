@@ -44,6 +44,7 @@ from ..errors import SceneError
 from . import x3d_parse
 from .x3d_fields import Element, Tree
 from .x3d_json_fields import NODES
+from .x3d_layout import lay_out
 
 JSON_SUFFIXES = {".x3dj", ".json"}
 # Nodes nested at most this deep. libxml2 refuses XML deeper than 256; JSON
@@ -133,7 +134,7 @@ def parse(path: Path) -> etree._ElementTree:
         raise
     except ValueError as problem:  # text lxml refuses, e.g. a lone surrogate in a comment
         raise SceneError(f"cannot be held in an X3D document: {problem}", path=str(path)) from None
-    etree.indent(root, space="  ")
+    lay_out(root)  # one element a line; a Script's source keeps every character
     return etree.ElementTree(root)
 
 
