@@ -98,10 +98,15 @@ def test_the_added_viewpoint_is_first_and_in_the_documents_angle_unit(tmp_path):
     assert view.field_of_view == pytest.approx(math.pi / 4)
     rotation = rodrigues(view.orientation[:3], view.orientation[3])
     assert_in_view(CORNERS, view.position, rotation, view.field_of_view)
-    # Converted again: framed anew, never two.
+    # Its crate moved 40 along x and converted again: framed anew, never two.
+    moved = tmp_path / "moved.x3d"
+    moved.write_text(out.read_text().replace('translation="0 1 0"', 'translation="40 1 0"'))
     again = tmp_path / "again.x3d"
-    sg.save(converted(out), again)
+    sg.save(converted(moved), again)
     assert len(etree.parse(str(again)).getroot().findall(".//Viewpoint")) == 1
+    (view,) = sg.load(again).viewpoints
+    rotation = rodrigues(view.orientation[:3], view.orientation[3])
+    assert_in_view([*CORNERS, (41, 2, 1), (41, 0, -1)], view.position, rotation, view.field_of_view)
 
 
 def test_the_authors_viewpoint_is_kept_and_none_added(tmp_path):
