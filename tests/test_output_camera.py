@@ -191,3 +191,19 @@ def test_x3d_viewpoint_becomes_the_gltf_camera(tmp_path):
     position, rotation, yfov = gltf_camera(_as_gltf(again, tmp_path))
     np.testing.assert_allclose(position, [20, 1, 0], atol=1e-12)
     np.testing.assert_allclose(rotation @ [0, 0, -1], [-1, 0, 0], atol=1e-12)
+
+
+def test_usd_output_has_a_camera_framing_the_scene(tmp_path):
+    from pxr import Usd, UsdGeom
+    from validators import usd_errors
+
+    out = tmp_path / "scene.usda"
+    sg.save(converted(source(tmp_path)), out)
+    assert usd_errors(out, warnings=True) == []
+    stage = Usd.Stage.Open(str(out))
+    (camera,) = [UsdGeom.Camera(p) for p in stage.Traverse() if p.IsA(UsdGeom.Camera)]
+    world = np.array(camera.ComputeLocalToWorldTransform(Usd.TimeCode.Default())).T
+    focal = camera.GetFocalLengthAttr().Get()
+    vertical = 2 * math.atan(camera.GetVerticalApertureAttr().Get() / (2 * focal))
+    assert camera.GetHorizontalApertureAttr().Get() > camera.GetVerticalApertureAttr().Get()
+    assert_in_view(CORNERS, world[:3, 3], world[:3, :3], vertical)
