@@ -25,6 +25,12 @@ SCENE = """<X3D profile="Immersive" version="4.0"><head/><Scene>
   <Script DEF="logic" url='"logic.js" "ecmascript: function initialize() {}"'/>
   <Anchor url='"#vp"'><Shape><Sphere/></Shape></Anchor>
   <Background frontUrl='"sky/front.png" "urn:web3d:sky"'/>
+  <ProtoDeclare name="Decal"><ProtoInterface>
+    <field name="url" type="MFString" accessType="inputOutput" value='"tex/brick.png"'/>
+  </ProtoInterface><ProtoBody><ImageTexture><IS><connect nodeField="url" protoField="url"/></IS>
+  </ImageTexture></ProtoBody></ProtoDeclare>
+  <ProtoInstance name="Decal" DEF="decal"><fieldValue name="url" value='"sky/front.png"'/>
+  </ProtoInstance>
 </Scene></X3D>
 """
 HOUSE = '<X3D version="4.0"><Scene><Shape DEF="house"><Box size="4 3 4"/></Shape></Scene></X3D>'
@@ -66,9 +72,13 @@ def source(tmp_path):
 
 
 def urls(path) -> dict[str, list[str]]:
-    """Each node's (DEF or tag) url field values, as the X3D reader parses them."""
+    """Each node's (DEF or tag) url field values, as the X3D reader parses them;
+    a prototype's as ``field url`` and ``fieldValue url``."""
     found: dict[str, list[str]] = {}
     for element in x3d_parse.parse(path, []).getroot().iter():
+        if element.tag in ("field", "fieldValue") and element.get("name") == "url":
+            found.setdefault(f"{element.tag} url", []).append(element.get("value"))
+            continue
         for name, value in element.items():
             if name == "url" or name.endswith("Url"):
                 key = element.get("DEF") or element.get("name") or element.tag
@@ -95,6 +105,8 @@ def test_urls_name_the_same_files_from_another_folder(tmp_path, source, suffix):
     assert written["logic"] == ['"../../in/logic.js" "ecmascript: function initialize() {}"']
     assert written["Anchor"] == ['"#vp"']
     assert written["Background"] == ['"../../in/sky/front.png" "urn:web3d:sky"']
+    assert written["field url"] == ['"../../in/tex/brick.png"']
+    assert written["fieldValue url"] == ['"../../in/sky/front.png"']
     assert written["Inline"] == [
         '"../../in/house.x3d"',
         '"../../in/parts/shed.x3dv"',

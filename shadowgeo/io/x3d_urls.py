@@ -9,9 +9,10 @@ file is rewritten to the path from the output's folder to that same file
 (``os.path.relpath``, ``/``-separated, a ``#fragment`` kept); remote and
 absolute urls (``http:``, ``https:``, ``urn:``, ``data:``, ``ecmascript:``
 code, ``/...``), a lone ``#name`` and every url of a document written in its
-own folder are left as they are. A url naming no existing file is kept as it
-is, with a note naming the file, line and url. Only the urls change: the
-rest of each ``MFString`` value is kept byte for byte.
+own folder are left as they are (a file on another Windows drive, which no
+relative path reaches, gets a ``file:`` url). A url naming no existing file
+is kept as it is, with a note naming the file, line and url. Only the urls
+change: the rest of each ``MFString`` value is kept byte for byte.
 
 The files are not copied and nothing is read: a browser follows the
 rewritten urls; shadowgeo's own reader still opens nothing outside a scene's
@@ -127,7 +128,10 @@ def _relocated(url: str, *, source: Path, output: Path, missing: list[str]) -> s
     else:
         missing.append(url)
         return url
-    relative = os.path.relpath(target, output).replace(os.sep, "/")
+    try:
+        relative = os.path.relpath(target, output).replace(os.sep, "/")
+    except ValueError:  # another Windows drive: no relative path reaches it
+        return Path(target).as_uri() + hash_sign + fragment
     if text != location:
         relative = quote(relative, safe="/")
     return relative + hash_sign + fragment
