@@ -197,16 +197,19 @@ _VIEWPOINTS = (
     "//*[local-name()='Viewpoint' or local-name()='OrthoViewpoint' or local-name()='GeoViewpoint']"
 )
 OVERVIEW_CLASS = "shadowgeo-overview"
+_DEFAULT_FIELD_OF_VIEW = 0.7854  # X3D's, a little over pi/4
 
 
 def _add_overview(body: Element, scene: Scene, used: set[str], namespace: str) -> None:
     """Put a Viewpoint framing the scene and its shadows first in ``body`` (the
-    one a browser binds), its angles in the document's angle unit, with a note."""
-    view = overview(scene)
+    one a browser binds), its orientation in the document's angle unit, with a
+    note. Its field of view is X3D's default, pi/4, left unwritten: written in
+    degrees it would break the schema's bound (< 3.1416) that ignores units."""
+    view = overview(scene, field_of_view=_DEFAULT_FIELD_OF_VIEW)
     factor = _angle_factor(body.getparent(), namespace)
-    axis_angle = (*view.orientation[:3], view.orientation[3] / factor)
-    view = replace(view, orientation=axis_angle, field_of_view=view.field_of_view / factor)
+    view = replace(view, orientation=(*view.orientation[:3], view.orientation[3] / factor))
     element = _viewpoint_element(view, used, namespace)
+    del element.attrib["fieldOfView"]
     element.set("class", OVERVIEW_CLASS)
     lead = body.text if body.text and "\n" in body.text and not body.text.strip() else "\n"
     if len(body):
