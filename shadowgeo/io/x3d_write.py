@@ -18,7 +18,7 @@ Two cases:
   again) is dropped rather than stacked under a second set. A document with
   no viewpoint node gets one, first in ``<Scene>`` (the one browsers bind),
   framing the scene and its shadows (:func:`~shadowgeo.scene.model.overview`,
-  its angles in the document's angle unit), with a note; it has
+  its orientation in the document's angle unit), with a note; it has
   ``class="shadowgeo-overview"`` and is framed anew when converted again.
   Relative urls (Inline, textures, EXTERNPROTO, Script, ...) are rewritten
   for the output's folder (:mod:`.x3d_urls`).
