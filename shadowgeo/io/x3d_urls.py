@@ -34,6 +34,15 @@ from .x3d_inline import URL_SCHEME
 
 # The fields that hold urls: X3D's ``url`` and Background's ``frontUrl``, ...
 _URL_FIELD = re.compile(r"url|[a-z]+Url")
+# The elements that may hold one (found by XPath, in C: a Python loop over a
+# big document's every node is slow), each then checked with _URL_FIELD.
+_ENDS_IN_URL = "substring({0}, string-length({0}) - 2) = 'Url'"
+_HOLDERS = (
+    f"//*[@url or @*[{_ENDS_IN_URL.format('name()')}]]"
+    "[local-name() != 'field' and local-name() != 'fieldValue']"
+    f" | //*[local-name() = 'field' or local-name() = 'fieldValue']"
+    f"[@name = 'url' or {_ENDS_IN_URL.format('@name')}]"
+)
 # One string of an MFString attribute, its escapes (\" and \\) inside.
 _STRING = re.compile(r'"((?:[^"\\]|\\.)*)"', re.DOTALL)
 _ESCAPE = re.compile(r"\\(.)", re.DOTALL)
@@ -67,10 +76,8 @@ def rewrite_urls(tree: Tree, source: Path, output: Path) -> list[str]:
     if source_folder == output_folder:
         return []  # the urls already name the right files
     notes: list[str] = []
-    for element in tree.getroot().iter():
+    for element in tree.xpath(_HOLDERS):
         tag = local_name(element)
-        if not tag:
-            continue  # a comment
         if tag in ("field", "fieldValue"):
             names = ["value"] if _URL_FIELD.fullmatch(element.get("name") or "") else []
         else:
