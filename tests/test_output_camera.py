@@ -104,7 +104,8 @@ def test_the_added_viewpoint_is_first_and_in_the_documents_angle_unit(tmp_path):
     moved.write_text(out.read_text().replace('translation="0 1 0"', 'translation="40 1 0"'))
     again = tmp_path / "again.x3d"
     sg.save(converted(moved), again)
-    assert len(etree.parse(str(again)).getroot().findall(".//Viewpoint")) == 1
+    (added,) = etree.parse(str(again)).getroot().findall(".//Viewpoint")
+    assert added.get("DEF") == "shadowgeo_overview"
     (view,) = sg.load(again).viewpoints
     rotation = rodrigues(view.orientation[:3], view.orientation[3])
     assert_in_view([*CORNERS, (41, 2, 1), (41, 0, -1)], view.position, rotation, view.field_of_view)

@@ -169,13 +169,14 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
         raise SceneError("the X3D document has no <Scene> element", path=scene.path)
     added = [s for s in scene.shapes if s.role in ADDED_ROLES]
     _remove_marked(tree)  # the scene's added shapes replace them
+    authored = _bound_viewpoint(tree)  # (before the names are taken: ours gets its own back)
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
     groups = _add_groups(body, added, used, namespace, splicer)
     if groups:
         _indent(body, groups)
-    if _bound_viewpoint(tree) is None:
+    if authored is None:
         if root.get("profile") == "Core":
             _require_components(root, namespace, {"Navigation": 1})
         _add_overview(body, scene, used, namespace)
