@@ -18,6 +18,7 @@ EPILOG = """\
 examples:
   shadowgeo info examples/scenes/courtyard.x3d
   shadowgeo info model.glb
+  shadowgeo info out/scene.x3d --root .   # its urls name files beside out/
 """
 
 
@@ -31,6 +32,13 @@ def register(subparsers) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("input", metavar="IN", type=Path, help="the scene to read")
+    parser.add_argument(
+        "--root",
+        metavar="DIR",
+        type=Path,
+        help="X3D: the folder its Inlines and textures may not leave (default: IN's own); "
+        "a folder above IN for a trusted scene converted into another folder",
+    )
     parser.set_defaults(func=run)
 
 
@@ -67,7 +75,7 @@ def light_where(light) -> str:
 
 
 def run(args) -> int:
-    scene = shadowgeo.load(args.input)
+    scene = shadowgeo.load(args.input, **({"root": args.root} if args.root else {}))
     triangles = sum(s.n_faces for s in scene.shapes)
     print(
         f"{args.input}: {len(scene.shapes)} shapes, {triangles} triangles, "

@@ -91,6 +91,10 @@ def test_every_corpus_file_converts_with_no_flags(corpus_dir, x3d_schema, tmp_pa
         original = etree.parse(str(path), SAFE).getroot()
         written = etree.parse(str(out), SAFE).getroot()
         added = 5 * len(shadows) + len({s.group for s in shadows})
+        # and a Viewpoint framing the scene when it has none
+        viewpoints = "//*[local-name()='Viewpoint' or local-name()='OrthoViewpoint']"
+        added += 0 if original.xpath(viewpoints) else 1
+        assert written.xpath(viewpoints), name
         assert len(written.xpath("//*")) == len(original.xpath("//*")) + added, name
         casters = len(result.shapes_with_role("geometry"))
         outcomes[name] = (len(shadows), sunny, any("ground plane" in n for n in notes))

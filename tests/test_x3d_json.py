@@ -220,13 +220,15 @@ def scene_facts(scene: sg.Scene) -> list:
 
 
 def without_added(document: dict) -> dict:
-    """The JSON document less the groups of shadows shadowgeo added."""
+    """The JSON document less the groups of shadows shadowgeo added, and the
+    Viewpoint it adds to a document without one."""
     document = copy.deepcopy(document)
     children = document["X3D"]["Scene"]["-children"]
     document["X3D"]["Scene"]["-children"] = [
         item
         for item in children
         if not ("Group" in item and item["Group"].get("@class", "").startswith("shadowgeo-shadows"))
+        and not ("Viewpoint" in item and item["Viewpoint"].get("@class") == "shadowgeo-overview")
     ]
     return document
 

@@ -317,10 +317,11 @@ def test_core_profile_gets_the_components_the_shadows_need(tmp_path, x3d_schema)
     out = tmp_path / "out.x3d"
     x3d_write.write(document_scene(source, [shadow_shape()]), out)
     head = parse(out).getroot().find("head")
+    # Navigation for the Viewpoint added to a document that has none
     assert [(c.get("name"), c.get("level")) for c in head.findall("component")] == [
-        ("Grouping", "1"), ("Rendering", "3"), ("Shape", "1")
+        ("Grouping", "1"), ("Rendering", "3"), ("Shape", "1"), ("Navigation", "1")
     ]  # fmt: skip
-    assert [child.tag for child in head] == ["component"] * 3 + ["meta"]
+    assert [child.tag for child in head] == ["component"] * 4 + ["meta"]
     assert x3d_schema_errors(out, x3d_schema) == []
 
 

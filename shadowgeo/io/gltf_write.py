@@ -16,6 +16,13 @@ What is written
   (:func:`.gltf_layout.light_entry`).
 - glTF is Y-up in metres: a scene that is Z-up, or not in metres, goes under
   one root node that rotates and scales it there.
+- A perspective camera for each of the scene's viewpoints (an X3D
+  Viewpoint, a glTF camera read), else one that frames the scene and its
+  shadows (:func:`~shadowgeo.scene.model.overview`): each on a node of the
+  default scene, in glTF's Y-up metres, the first being the one viewers
+  open at. ``yfov`` is the viewpoint's field of view (X3D's smaller angle:
+  the vertical one in a landscape window); ``aspectRatio`` is left to the
+  viewer and ``zfar`` out (an infinite projection).
 - What glTF has no field for (roles, groups, X3D's ``shadows``,
   ``shadowIntensity``, ``on``, attenuation, ambient intensity) goes in the
   node's ``extras["shadowgeo"]`` (:mod:`.gltf_layout`), which
@@ -42,9 +49,17 @@ import numpy as np
 
 from ..errors import SceneError
 from ..scene import Scene, SceneLight, Shape
+from ..scene.model import overview, rotate
 from . import check_face_indices, up_and_units
 from .atomic import atomic_path
-from .gltf_layout import LIGHTS, glb_container, light_entry, shape_extras, unit_float
+from .gltf_layout import (
+    LIGHTS,
+    glb_container,
+    light_entry,
+    quaternion_xyzw,
+    shape_extras,
+    unit_float,
+)
 
 _ARRAY_BUFFER = 34962
 _ELEMENT_ARRAY_BUFFER = 34963
@@ -254,6 +269,7 @@ def build(scene: Scene) -> tuple[dict[str, Any], bytes]:
     for light in scene.lights:
         top.append(builder.node(builder.light(light)))
     root = _root_matrix(scene)
+    cameras = [builder.node(node) for node in _camera_nodes(builder, scene, root)]
     if root is not None and top:
         top = [
             builder.node(
@@ -265,13 +281,47 @@ def build(scene: Scene) -> tuple[dict[str, Any], bytes]:
                 }
             )
         ]
-    if top:
-        builder.gltf["scenes"][0]["nodes"] = top
-    else:
-        # glTF forbids empty arrays: an empty scene has no "nodes" at all.
-        del builder.gltf["scenes"][0]["nodes"], builder.gltf["nodes"]
+    builder.gltf["scenes"][0]["nodes"] = top + cameras
     builder.binary.extend(b"\0" * (-len(builder.binary) % 4))
     return builder.gltf, bytes(builder.binary)
+
+
+def _camera_nodes(builder: _Builder, scene: Scene, root: np.ndarray | None) -> list[dict[str, Any]]:
+    """A camera node for each of the scene's viewpoints, else for its
+    overview, in glTF's frame (``root`` takes the scene there; its scale is
+    taken out of the camera's rotation)."""
+    root = np.eye(4) if root is None else root
+    turn = root[:3, :3] / np.cbrt(np.linalg.det(root[:3, :3]))
+    size = float(np.linalg.norm(np.subtract(*scene.bounds))) * np.cbrt(np.linalg.det(root[:3, :3]))
+    cameras = builder.gltf.setdefault("cameras", [])
+    nodes = []
+    for view in scene.viewpoints or [overview(scene)]:
+        rotation = np.column_stack([rotate(view.orientation, axis) for axis in np.eye(3)])
+        position = root[:3, :3] @ np.asarray(view.position) + root[:3, 3]
+        if not (np.all(np.isfinite(position)) and 0 < view.field_of_view < math.pi):
+            raise SceneError(
+                f"cannot write viewpoint {view.name or view.description!r}: not finite"
+            )
+        perspective = {"yfov": float(view.field_of_view), "znear": _near(size)}
+        camera: dict[str, Any] = {"type": "perspective", "perspective": perspective}
+        if view.description:
+            camera["name"] = view.description
+        cameras.append(camera)
+        node: dict[str, Any] = {
+            "camera": len(cameras) - 1,
+            "translation": [float(v) for v in position],
+            "rotation": quaternion_xyzw(turn @ rotation),
+        }
+        if view.name:
+            node["name"] = view.name
+        nodes.append(node)
+    return nodes
+
+
+def _near(size: float) -> float:
+    """``znear`` for a scene ``size`` metres across: a thousandth of it, so
+    that depth keeps its precision (1 cm for no size)."""
+    return size / 1000 if math.isfinite(size) and size > 0 else 0.01
 
 
 def _glb(gltf: dict[str, Any], binary: bytes) -> bytes:

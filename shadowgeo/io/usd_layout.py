@@ -20,6 +20,10 @@ Stage metadata ``upAxis`` and ``metersPerUnit`` come from the scene.
   ``DistantLight``. Lights shine down their -Z, so the transform turns -Z onto
   the light's direction. ``ShadowAPI``'s ``inputs:shadow:enable`` carries X3D's
   ``shadows``; a light that is off is ``invisible``.
+- Cameras: a ``UsdGeom.Camera`` per viewpoint of the scene, else one
+  framing the scene and its shadows, with its ``xformOp:transform``; the
+  vertical aperture gives the field of view at the default focal length.
+  Written only: the reader does not read cameras.
 - Names: prims get valid, unique identifiers; the original name is the prim's
   ``displayName`` (USD strings end at a NUL character). A shape or light
   without a name gets a generated prim name and reads back as unnamed.

@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..scene import Material, Scene, Shape
+from ..scene.model import overview, rotate
 from . import check_face_indices, look_rotation, up_and_units
 from .atomic import atomic_path
 from .usd_layout import pxr, set_custom, usd_text
@@ -225,6 +226,38 @@ class _Writer:
             if not np.array_equal(transform, np.eye(4)):
                 usd_light.AddTransformOp(UsdGeom.XformOp.PrecisionDouble).Set(_matrix(transform))
 
+    def write_cameras(self) -> None:
+        """A ``UsdGeom.Camera`` for each viewpoint (else the overview), in
+        the stage's own frame; its vertical aperture gives the field of view
+        at the default focal length (X3D's smaller angle: the vertical one)."""
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+        size = float(np.linalg.norm(np.subtract(*self.scene.bounds))) or 1.0
+        for index, view in enumerate(self.scene.viewpoints or [overview(self.scene)]):
+            path = self.names.child("/World", view.name, f"Camera_{index}")
+            camera = UsdGeom.Camera.Define(self.stage, path)
+            camera.CreateProjectionAttr(UsdGeom.Tokens.perspective)
+            focal = camera.GetFocalLengthAttr().Get()
+            vertical = 2 * focal * math.tan(view.field_of_view / 2)
+            camera.CreateVerticalApertureAttr(vertical)
+            camera.CreateHorizontalApertureAttr(vertical * _ASPECT)
+            camera.CreateClippingRangeAttr(Gf.Vec2f(size / 1000, size * 1000))
+            transform = np.eye(4)
+            transform[:3, :3] = np.column_stack(
+                [rotate(view.orientation, axis) for axis in np.eye(3)]
+            )
+            transform[:3, 3] = view.position
+            if not np.all(np.isfinite(transform)):
+                raise SceneError(f"cannot write viewpoint {view.name!r}: not finite")
+            camera.AddTransformOp(UsdGeom.XformOp.PrecisionDouble).Set(_matrix(transform))
+            if view.name:
+                camera.GetPrim().SetDisplayName(usd_text(view.name))
+            if view.description:
+                camera.GetPrim().SetDocumentation(usd_text(view.description))
+
+
+# The picture's width over its height: usd-core's default apertures' (20.955 / 15.2908).
+_ASPECT = 20.955 / 15.2908
+
 
 def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
     """Write ``scene`` as USD; ``.usda`` is text, ``.usdc`` and ``.usd`` binary.
@@ -247,6 +280,7 @@ def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
         writer = _Writer(scene)
         writer.write_shapes()
         writer.write_lights()
+        writer.write_cameras()
     except SceneError as error:
         raise SceneError(error.message, path=str(path), node=error.node) from None
     with atomic_path(path) as temporary:

@@ -3,9 +3,10 @@
 Each ``url`` is tried in order, as X3D browsers do; the first that reads is
 used. Remote URLs (any ``scheme:``) are never fetched; a relative path is
 taken from the inlining file's folder and is never read when it leaves the
-top scene's folder. X3D is read with the same rules as the scene (its own DEF
-names); glTF and GLB with the glTF reader (:mod:`.gltf_read`), lights left out
-(with a warning); a glTF whose buffers or images lie outside the folder is
+top scene's folder (or the ``root`` folder :func:`.x3d_read.read` is given).
+X3D is read with the same rules as the scene (its own DEF names); glTF and
+GLB with the glTF reader (:mod:`.gltf_read`), lights left out (with a
+warning); a glTF whose buffers or images lie outside the folder is
 not read. When no url gives a file that reads (missing, remote, outside the
 folder, unreadable, not X3D or glTF), the Inline is skipped with a warning
 naming the file, line and every url with why it was not used. An Inline that

@@ -520,7 +520,11 @@ def _stack_for_nesting() -> Iterator[None]:
 
 
 def read(
-    path: str | os.PathLike[str], *, tolerance: Tolerance | None = None, chord: float | None = None
+    path: str | os.PathLike[str],
+    *,
+    tolerance: Tolerance | None = None,
+    chord: float | None = None,
+    root: str | os.PathLike[str] | None = None,
 ) -> Scene:
     """Read an X3D file: XML (``.x3d``), JSON (``.x3dj``, ``.json``), ClassicVRML
     (``.x3dv``) or VRML 97 (``.wrl``), the XML and Classic ones also gzip-compressed.
@@ -535,6 +539,11 @@ def read(
         Tessellation tolerance relative to the scene size (overrides
         ``tolerance.chord``): Box, Sphere, Cone and Cylinder deviate from
         their true surface by at most ``Tolerance.chord_length``.
+    root : str or Path, optional
+        The folder that Inlines and textures may not leave (default: the
+        file's own folder). Name a folder above it for a trusted scene whose
+        files lie beside its folder, as a converted scene written to another
+        folder names them (:mod:`.x3d_urls`).
 
     Returns
     -------
@@ -573,7 +582,12 @@ def read(
     notes: list[str] = []  # what the ClassicVRML parser skipped
     tree = x3d_parse.parse(path, notes)
     scene = Scene(path=str(path), document=tree, warnings=notes)
-    reader = _Reader(path.resolve().parent, scene.warnings)
+    folder = path.resolve().parent
+    if root is not None:
+        folder = Path(root).resolve()
+        if not path.resolve().is_relative_to(folder):
+            raise SceneError(f"the file is not inside root {folder}", path=str(path))
+    reader = _Reader(folder, scene.warnings)
     try:
         with _stack_for_nesting():
             reader.document(tree, path, np.eye(4), scene)

@@ -15,7 +15,13 @@ Two cases:
   version from 3.0, so the version stays valid. The added groups have
   ``class="shadowgeo-shadows"``: such a group whose shapes the scene no
   longer holds (``add_shadows`` replaced them: a converted file converted
-  again) is dropped rather than stacked under a second set.
+  again) is dropped rather than stacked under a second set. A document with
+  no viewpoint node gets one, first in ``<Scene>`` (the one browsers bind),
+  framing the scene and its shadows (:func:`~shadowgeo.scene.model.overview`,
+  its orientation in the document's angle unit), with a note; it has
+  ``class="shadowgeo-overview"`` and is framed anew when converted again.
+  Relative urls (Inline, textures, EXTERNPROTO, Script, ...) are rewritten
+  for the output's folder (:mod:`.x3d_urls`).
 * Otherwise (glTF, USD, mesh input, or a scene built in code): a fresh X3D 4.0
   document with the scene's viewpoints (else one that shows the scene and
   its shadows from above at an angle: :func:`~shadowgeo.scene.model.overview`),
@@ -58,6 +64,7 @@ import gzip
 import math
 import os
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -72,6 +79,7 @@ from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
 from .x3d_fields import Element, Tree, numbers_or_none
 from .x3d_numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
+from .x3d_urls import rewrite_urls
 
 ADDED_ROLES = ("shadow", "volume")
 # Written in the ClassicVRML encoding (the same tree, another syntax).
@@ -110,6 +118,8 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
         tree = _with_added(scene, splicer)
         source = Path(scene.path).name if scene.path else "input"
         doctype = _clean(tree, scene.warnings, source, splicer)
+        if scene.path:
+            scene.warnings.extend(rewrite_urls(tree, Path(scene.path), path))
     else:
         tree = _fresh(scene, splicer)
     name = path.name.lower()
@@ -159,13 +169,74 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
         raise SceneError("the X3D document has no <Scene> element", path=scene.path)
     added = [s for s in scene.shapes if s.role in ADDED_ROLES]
     _remove_marked(tree)  # the scene's added shapes replace them
+    authored = _bound_viewpoint(tree)  # (before the names are taken: ours gets its own back)
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
     groups = _add_groups(body, added, used, namespace, splicer)
     if groups:
         _indent(body, groups)
+    if authored is None:
+        if root.get("profile") == "Core":
+            _require_components(root, namespace, {"Navigation": 1})
+        _add_overview(body, scene, used, namespace)
     return tree
+
+
+def _bound_viewpoint(tree: Tree) -> Element | None:
+    """The document's first viewpoint node (any kind, a prototype's too), or
+    None; one shadowgeo added earlier is dropped, to be framed anew."""
+    for element in tree.xpath(_VIEWPOINTS):
+        if element.get("class") == OVERVIEW_CLASS:
+            _drop(element)
+        else:
+            return element
+    return None
+
+
+_VIEWPOINTS = (
+    "//*[local-name()='Viewpoint' or local-name()='OrthoViewpoint' or local-name()='GeoViewpoint']"
+)
+OVERVIEW_CLASS = "shadowgeo-overview"
+_DEFAULT_FIELD_OF_VIEW = 0.7854  # X3D's, a little over pi/4
+
+
+def _add_overview(body: Element, scene: Scene, used: set[str], namespace: str) -> None:
+    """Put a Viewpoint framing the scene and its shadows first in ``body`` (the
+    one a browser binds), its orientation in the document's angle unit, with a
+    note. Its field of view is X3D's default, pi/4, left unwritten: written in
+    degrees it would break the schema's bound (< 3.1416) that ignores units."""
+    view = overview(scene, field_of_view=_DEFAULT_FIELD_OF_VIEW)
+    factor = _angle_factor(body.getparent(), namespace)
+    view = replace(view, orientation=(*view.orientation[:3], view.orientation[3] / factor))
+    element = _viewpoint_element(view, used, namespace)
+    del element.attrib["fieldOfView"]
+    element.set("class", OVERVIEW_CLASS)
+    lead = body.text if body.text and "\n" in body.text and not body.text.strip() else "\n"
+    if len(body):
+        element.tail = lead
+    else:
+        element.tail = body.text or "\n"
+        body.text = lead + "  "
+    body.insert(0, element)
+    source = Path(scene.path).name if scene.path else "input"
+    scene.warnings.append(
+        f"{source}: no Viewpoint; added '{element.get('DEF')}', showing the scene and its "
+        "shadows from 35 degrees above"
+    )
+
+
+def _angle_factor(root: Element, namespace: str) -> float:
+    """Radians per angle unit of the document (``<unit category="angle">``), 1 if none."""
+    for unit in root.iterfind(f"{namespace}head/{namespace}unit"):
+        if unit.get("category") == "angle":
+            try:
+                factor = float(unit.get("conversionFactor", ""))
+            except ValueError:
+                continue
+            if math.isfinite(factor) and factor > 0:
+                return factor
+    return 1.0
 
 
 # The standard DOCTYPE of X3D 3.0 to 4.1; only this is written, and anew.
@@ -296,9 +367,12 @@ _SCANNED = 1 << 20
 _COMPONENTS = {"Grouping": 1, "Rendering": 3, "Shape": 1}
 
 
-def _require_components(root: Element, namespace: str) -> None:
-    """Declare the components the added nodes use in a ``profile="Core"``
-    document's ``<head>`` (components come first in it)."""
+def _require_components(
+    root: Element, namespace: str, components: dict[str, int] | None = None
+) -> None:
+    """Declare ``components`` (name: level; by default what the added shapes
+    use) in a ``profile="Core"`` document's ``<head>`` (components come first
+    in it)."""
     head = root.find(f"{namespace}head")
     if head is None:
         head = etree.Element(f"{namespace}head")
@@ -307,7 +381,7 @@ def _require_components(root: Element, namespace: str) -> None:
         c.get("name"): int(c.get("level", "1") or 1) for c in head.findall(f"{namespace}component")
     }
     position = len(head.findall(f"{namespace}component"))
-    for name, level in _COMPONENTS.items():
+    for name, level in (components or _COMPONENTS).items():
         if declared.get(name, 0) < level:
             component = etree.Element(f"{namespace}component", name=name, level=str(level))
             head.insert(position, component)
@@ -491,9 +565,9 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
     return etree.ElementTree(root)
 
 
-def _viewpoint_element(viewpoint: Viewpoint, used: set[str]) -> Element:
+def _viewpoint_element(viewpoint: Viewpoint, used: set[str], namespace: str = "") -> Element:
     element = etree.Element(
-        "Viewpoint",
+        f"{namespace}Viewpoint",
         position=_numbers(viewpoint.position),
         orientation=_numbers(viewpoint.orientation),
         fieldOfView=repr(float(viewpoint.field_of_view)),
