@@ -133,7 +133,7 @@ class _Reader:
             context.kept, context.kept_root = scene.numbers, root
         self._units(context, root, scene)
         context.defs = _definitions(context, root)
-        context.prototypes = Prototypes(root)
+        context.prototypes = Prototypes(root, display, self)
         scenes = [child for child in root if local_name(child) == "Scene"]
         if not scenes:
             raise SceneError("no <Scene> element", path=display, line=root.sourceline)
@@ -301,7 +301,7 @@ class _Reader:
                 matrix,
                 self.material_cache[appearance],
                 _public(element.get("DEF") or node.get("DEF")) or name,
-                f"{os.path.basename(context.path)} line {node.sourceline}, "
+                f"{os.path.basename(context.file_of(node))} line {node.sourceline}, "
                 f"{context.describe(node)}",
                 *self._added_role(element),
             )
@@ -322,7 +322,7 @@ class _Reader:
                 continue
             self.textures_seen.add(texture)
             urls = [u for u in context.field(texture, "url", "MFString") if u]
-            folder = Path(context.path).resolve().parent
+            folder = Path(context.file_of(texture)).resolve().parent
             local = [(folder / u).resolve() for u in urls if not URL_SCHEME.match(u)]
             # only files inside the scene's folder count (nothing outside is looked at)
             inside = [path for path in local if path.is_relative_to(self.root_folder)]
