@@ -30,12 +30,17 @@ Rules the reader follows, where X3D leaves a choice:
 - **Units.** ``<unit category="length">`` sets ``Scene.meters_per_unit``;
   ``category="angle"`` scales every angle field.
 - **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
-  the instance's field values (:mod:`.x3d_proto`); ExternProtoDeclare is not
-  followed.
+  the instance's field values, passed on through ``IS`` to nested instances
+  (:mod:`.x3d_proto`); an ExternProtoDeclare is followed to a PROTO in a local
+  file under Inline's rules (:mod:`.x3d_extern`), whose urls are then taken
+  from that file's folder.
+- **Scripts** are not run: one that builds geometry, or any Script of a scene
+  with no geometry, gets one note saying so (:mod:`.x3d_script`).
 - **Skipped, with a warning in** ``Scene.warnings`` naming file, line and
   node, where X3D browsers are lenient: nodes shadowgeo does not model or does
   not know (scripts, sensors, interpolators, routes, text, lines, points,
-  textures, external prototypes), missing textures, empty geometry, a USE
+  textures), external prototypes that cannot be followed (remote, missing,
+  outside the scene's folder, no such PROTO), missing textures, empty geometry, a USE
   naming no DEF or a node of another type, a field value that cannot be read
   (the field takes its default), geometry that cannot be built (indices out of
   range, counts that do not fit: that Shape), Inline files that are missing,
@@ -43,7 +48,7 @@ Rules the reader follows, where X3D leaves a choice:
   or not X3D/glTF. Metadata and WorldInfo are skipped silently.
 - **Refused with a SceneError** (what cannot be read as a scene at all):
   malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D, DEF/USE,
-  prototype and Inline cycles, expansion bombs (DEF/USE, Inline and prototypes
+  prototype, EXTERNPROTO and Inline cycles, expansion bombs (DEF/USE, Inline and prototypes
   beyond 2 million nodes, prototypes beyond 10,000 copies), transforms that
   overflow.
 """
@@ -75,6 +80,7 @@ from .x3d_inline import URL_SCHEME, load_inline
 from .x3d_lights import LIGHTS, material, scene_light
 from .x3d_numbers import Splicer
 from .x3d_proto import Prototypes
+from .x3d_script import script_note
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
 GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}
@@ -332,6 +338,15 @@ class _Reader:
                 self._skip(context, texture, local_name(texture), "textures not modelled")
 
     # -- result ------------------------------------------------------------------
+    def scripts(self, root: Element, path: str) -> None:
+        """One note for a Script that builds geometry (:mod:`.x3d_script`), in
+        place of the usual note on skipped Scripts."""
+        has_geometry = any(instance.role == "geometry" for instance in self.instances)
+        note = script_note(root, path, has_geometry)
+        if note is not None:
+            self.skipped = {key: entry for key, entry in self.skipped.items() if key[0] != "Script"}
+            self.warnings.append(note)
+
     def finish(self, scene: Scene, tolerance: Tolerance | None, chord: float | None) -> None:
         for (_, why), (where, count) in self.skipped.items():
             more = f" ({count} such nodes)" if count > 1 else ""
@@ -577,6 +592,7 @@ def read(
     try:
         with _stack_for_nesting():
             reader.document(tree, path, np.eye(4), scene)
+        reader.scripts(tree.getroot(), str(path))
         reader.finish(scene, tolerance, chord)
     except RecursionError:
         message = "nodes nested too deeply (through DEF/USE, prototypes or Inline)"
