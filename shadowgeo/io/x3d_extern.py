@@ -54,9 +54,9 @@ def find(
     for url in urls:
         location, _, fragment = url.partition("#")
         name = fragment or None
-        target = file if not location else resolve_url(reader, file.parent, location)
+        target = file if not location else resolve_url(reader, file.parent, location, url)
         if isinstance(target, str):
-            reasons.append(target if location == url else f"{target} (in '{url}')")
+            reasons.append(target)
             continue
         tree = x3d_tree(reader, target)
         if isinstance(tree, str):

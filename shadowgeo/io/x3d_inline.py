@@ -51,20 +51,23 @@ class InlineReader(Protocol):
     def document(self, tree: Tree, path: Path, matrix: np.ndarray, *, name: str | None) -> None: ...
 
 
-def resolve_url(reader: InlineReader, folder: Path, url: str) -> Path | str:
+def resolve_url(
+    reader: InlineReader, folder: Path, url: str, shown: str | None = None
+) -> Path | str:
     """The local file ``url`` names, taken from ``folder`` (that of the file
-    that names it), or a string saying why there is none (nothing outside the
-    scene's folder is looked at)."""
+    that names it), or a string saying why there is none, quoting ``shown``
+    (default ``url``); nothing outside the scene's folder is looked at."""
+    shown = url if shown is None else shown
     if URL_SCHEME.match(url):
-        return f"'{url}' is remote (never fetched)"
+        return f"'{shown}' is remote (never fetched)"
     candidate = (folder / url).resolve()
     reason = outside_reason(url, candidate, reader.root_folder)
     if reason == "it leaves the file's folder":
-        return f"'{url}' leaves the scene's folder {reader.root_folder} (never read)"
+        return f"'{shown}' leaves the scene's folder {reader.root_folder} (never read)"
     if reason is not None:
-        return f"'{url}' is {reason} (never read)"
+        return f"'{shown}' is {reason} (never read)"
     if not candidate.is_file():
-        return f"'{url}' not found"
+        return f"'{shown}' not found"
     return candidate
 
 

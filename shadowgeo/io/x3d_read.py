@@ -589,6 +589,7 @@ def read(
     tree = x3d_parse.parse(path, notes)
     scene = Scene(path=str(path), document=tree, warnings=notes)
     reader = _Reader(path.resolve().parent, scene.warnings)
+    reader.inline_files[path.resolve()] = tree  # (an EXTERNPROTO naming it reads this tree)
     try:
         with _stack_for_nesting():
             reader.document(tree, path, np.eye(4), scene)

@@ -18,10 +18,11 @@ from __future__ import annotations
 import os
 
 from .x3d_fields import Element, local_name
-from .x3d_geometry import COORDINATES, GEOMETRY, UNMODELLED_GEOMETRY
+from .x3d_geometry import COORDINATES, GEOMETRY
 
-# Nodes a Script changes the geometry of by writing any of their fields.
-SHAPED = GEOMETRY | UNMODELLED_GEOMETRY | COORDINATES | {"Shape"}
+# Nodes a Script changes the geometry of by writing any of their fields (text,
+# lines and points cast no shadow anyway).
+SHAPED = GEOMETRY | COORDINATES | {"Shape"}
 SHAPED |= {"Normal", "Color", "ColorRGBA", "TextureCoordinate", "HAnimHumanoid"}
 # Fields of a grouping node whose writing adds or removes geometry.
 CHILDREN = {"children", "addChildren", "removeChildren", "set_children", "children_changed"}
