@@ -542,7 +542,7 @@ def test_a_script_that_builds_geometry_is_named_in_one_note(tmp_path, suffix, te
     assert len(scene.shapes) == 1
     notes = [note for note in scene.warnings if "Script" in note]
     assert notes == [
-        f"scene{suffix}: geometry is built by Script 'builder' at line {line}, which "
+        f"{path} line {line}, Script DEF='builder': geometry is built by this Script, which "
         "shadowgeo does not run; it casts no shadow"
     ]
 
@@ -558,7 +558,7 @@ def test_a_script_with_direct_output_to_coordinates_builds_geometry(tmp_path):
         )
     )
     (note,) = [note for note in sg.load(path).warnings if "Script" in note]
-    assert note.startswith("scene.x3d: geometry is built by Script 'mover' at line 4")
+    assert note.startswith(f"{path} line 4, Script DEF='mover': geometry is built by")
 
 
 def test_scripts_that_build_no_geometry(tmp_path):
@@ -579,8 +579,8 @@ def test_scripts_that_build_no_geometry(tmp_path):
     )
     notes = [note for note in sg.load(path).warnings if "Script" in note]
     assert notes == [
-        "clock.x3dv: no geometry was read; Script 'tick' at line 4 may build it when run, "
-        "which shadowgeo does not do"
+        f"{path} line 4, Script DEF='tick': no geometry was read, and this Script may build "
+        "it when run, which shadowgeo does not do"
     ]
 
 

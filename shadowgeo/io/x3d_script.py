@@ -6,16 +6,14 @@ to a geometry node, a Shape, a node geometry is made of (Coordinate, Normal,
 Color, ...) or a grouping node's children, or a node field of a Script with
 ``directOutput`` holding such a node (which the script may change directly).
 Such a Script, or any Script of a scene in which no geometry was read, gets
-one note naming it, its file and line, in place of the usual "skipped"
-note for Scripts.
+one note naming its file, line and DEF, in place of the usual "skipped" note
+for Scripts.
 
 DEF names are looked up where X3D scopes them: the document, or the ProtoBody
 that holds the ROUTE and the Script.
 """
 
 from __future__ import annotations
-
-import os
 
 from .x3d_fields import Element, local_name
 from .x3d_geometry import COORDINATES, GEOMETRY
@@ -42,23 +40,23 @@ def script_note(root: Element, path: str, has_geometry: bool) -> str | None:
         return None
     names = _definitions(root)
     builder = next((script for script in scripts if _builds(script, names)), None)
-    name = os.path.basename(path)
     if builder is not None:
         return (
-            f"{name}: geometry is built by {_described(builder)}, which shadowgeo does not "
-            "run; it casts no shadow"
+            f"{_where(builder, path)}: geometry is built by this Script, which shadowgeo does "
+            "not run; it casts no shadow"
         )
     if not has_geometry:
         return (
-            f"{name}: no geometry was read; {_described(scripts[0])} may build it when "
-            "run, which shadowgeo does not do"
+            f"{_where(scripts[0], path)}: no geometry was read, and this Script may build it "
+            "when run, which shadowgeo does not do"
         )
     return None
 
 
-def _described(script: Element) -> str:
-    named = f" '{script.get('DEF')}'" if script.get("DEF") else ""
-    return f"Script{named} at line {script.sourceline}"
+def _where(script: Element, path: str) -> str:
+    """The Script as every note names a node: file, line, type and DEF."""
+    named = f" DEF='{script.get('DEF')}'" if script.get("DEF") else ""
+    return f"{path} line {script.sourceline}, Script{named}"
 
 
 def _scope(element: Element) -> Element | None:
