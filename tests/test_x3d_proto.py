@@ -510,6 +510,20 @@ def test_an_inner_default_stands_when_the_outer_field_has_no_value(tmp_path):
     assert scene.shapes[0].material.diffuse_color == (0, 1, 0)
 
 
+def test_a_prototype_passed_into_its_own_instance_is_no_cycle(tmp_path):
+    # the inner Frame is written in the scene, not in Frame's body: finite
+    path = tmp_path / "frames.x3dv"
+    path.write_text(
+        HEAD
+        + "PROTO Frame [ initializeOnly MFNode inside [ ] initializeOnly SFVec3f at 0 0 0 ] {\n"
+        "  Transform { translation IS at\n"
+        "    children [ Shape { geometry Box { } } Group { children IS inside } ] } }\n"
+        "Frame { at 10 0 0 inside [ Frame { at 0 10 0 } ] }\n"
+    )
+    scene = sg.load(path)
+    assert boxes(scene) == [corners((9, -1, -1), (11, 1, 1)), corners((9, 9, -1), (11, 11, 1))]
+
+
 # -- Scripts that build geometry ----------------------------------------------------------
 
 SCRIPTS_CLASSIC = (

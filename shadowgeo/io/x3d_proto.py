@@ -56,6 +56,17 @@ class _File:
     depth: int  # files between it and the document, through EXTERNPROTOs
 
 
+@dataclass(frozen=True)
+class _Place:
+    """Where nodes lie: the document, or a copy of a prototype's body made for
+    an instance lying at ``outer``. Nodes passed into a copy through a field
+    lie where they were written."""
+
+    file: _File  # whose names, urls and lines they have
+    copied: Element | None = None  # the ProtoDeclare copied, for a copy
+    outer: _Place | None = None
+
+
 def _declarations(root: Element, path: str, depth: int) -> _File:
     declarations: dict[str, Element] = {}
     externals: dict[str, Element] = {}
@@ -78,23 +89,23 @@ class Prototypes:
     """
 
     def __init__(self, root: Element, path: str, reader: InlineReader | None = None) -> None:
-        self.home = _declarations(root, path, 0)
-        self.files: dict[Element, _File] = {root: self.home}  # tree root (document, copy) -> file
+        self.home = _Place(_declarations(root, path, 0))
+        # the document, each copy and each node passed into one -> where it lies
+        self.places: dict[Element, _Place] = {root: self.home}
+        self.files = {root: self.home.file}  # each file's root -> its prototypes
         self.copies: dict[Element, Element | None] = {}
-        # copy -> (the declaration copied, the tree root holding the instance)
-        self.origins: dict[Element, tuple[Element, Element]] = {}
         self.followed: dict[Element, tuple[Element, _File] | str] = {}  # per ExternProtoDeclare
         self.reader = reader
         self.serial = itertools.count()
 
     def file_of(self, element: Element) -> str:
         """The file ``element`` was read from (see the module notes)."""
-        return self._file(element).path
+        return self._place(element).file.path
 
-    def _file(self, element: Element) -> _File:
+    def _place(self, element: Element) -> _Place:
         for holder in itertools.chain([element], element.iterancestors()):
-            if holder in self.files:
-                return self.files[holder]
+            if holder in self.places:
+                return self.places[holder]
         return self.home
 
     def expand(self, context: Context, instance: Element) -> Element | None:
@@ -114,8 +125,8 @@ class Prototypes:
             context.warn(instance, f"ProtoInstance name='{name}' skipped: its ProtoBody is empty")
             self.copies[instance] = None
             return None
-        holder = instance.getroottree().getroot()  # the document, or a copy
-        self._refuse_cycle(context, instance, declaration, holder)
+        place = self._place(instance)
+        self._refuse_cycle(context, instance, declaration, place)
         if len(self.copies) >= MAX_EXPANSIONS:
             raise context.error(
                 instance, f"prototypes expand more than {MAX_EXPANSIONS} times (one inside itself?)"
@@ -123,8 +134,7 @@ class Prototypes:
         self.copies[instance] = None  # (until the copy is made)
         values, node_values = _field_values(declaration, instance)
         copied: Element = copy.deepcopy(body)
-        self.files[copied] = file
-        self.origins[copied] = (declaration, holder)
+        self.places[copied] = _Place(file, declaration, place)
         # names first: the nodes IS brings in keep the names of the scope they come from
         self._private_names(context, copied)
         self._connect(context, copied, values, node_values)
@@ -140,7 +150,7 @@ class Prototypes:
     def _declaration(self, context: Context, instance: Element) -> tuple[Element, _File] | str:
         """The ProtoDeclare ``instance`` names and the file it is in, or why none."""
         name = instance.get("name", "")
-        file = self._file(instance)
+        file = self._place(instance).file
         if name in file.declarations:
             return file.declarations[name], file
         extern = file.externals.get(name)
@@ -166,17 +176,19 @@ class Prototypes:
         return found.declaration, self.files[found.root]
 
     def _refuse_cycle(
-        self, context: Context, instance: Element, declaration: Element, holder: Element
+        self, context: Context, instance: Element, declaration: Element, place: _Place
     ) -> None:
         """A SceneError if ``instance`` lies (through copies) inside a copy of
-        ``declaration``: the prototype would hold itself for ever."""
-        while holder in self.origins:
-            copied, holder = self.origins[holder]
-            if copied is declaration:
+        ``declaration``: the prototype would hold itself for ever. (One passed
+        into its own prototype through a field lies where it was written.)"""
+        at: _Place | None = place
+        while at is not None:
+            if at.copied is declaration:
                 name = instance.get("name", "")
                 raise context.error(
                     instance, f"prototype '{name}' is used inside its own body (prototype cycle)"
                 )
+            at = at.outer
 
     def _private_names(self, context: Context, body: Element) -> None:
         """Rename the copy's DEF/USE names apart and register its DEFs."""
@@ -212,7 +224,7 @@ class Prototypes:
                     target = context.resolve(value)
                     if target is not None:  # (a USE of no DEF or of another type: noted)
                         nodes.append(copy.deepcopy(target))
-                        self.files[nodes[-1]] = self._file(target)  # its urls are its file's
+                        self.places[nodes[-1]] = self._place(target)
                 if local_name(node) == "ProtoInstance":
                     _pass_on(node, node_field, values.get(proto_field), nodes, connect.sourceline)
                     continue
