@@ -492,10 +492,10 @@ def test_is_is_followed_through_nested_prototypes(tmp_path, encoding):
     assert colours[0] == (1, 0, 0) and colours[2] == (0, 0, 1)
 
 
-def test_an_inner_default_stands_when_the_outer_field_has_no_value(tmp_path):
-    # Outer's look has no value: Inner's own default look (green) stands; an
-    # instance's fieldValue of the inner prototype written in the body is
-    # replaced by the outer field passed through IS
+def test_a_null_node_passed_on_overrides_the_inner_default(tmp_path):
+    # Outer's look is NULL and reaches Inner's look through IS: the Shape has
+    # no appearance (unlit, as X3D draws a Shape without one), not Inner's green
+    # default; Outer's size (8) reaches the Box. Without IS, Inner's defaults.
     path = tmp_path / "defaults.x3dv"
     path.write_text(
         HEAD + "PROTO Inner [ initializeOnly SFNode look Appearance { material Material {"
@@ -503,11 +503,15 @@ def test_an_inner_default_stands_when_the_outer_field_has_no_value(tmp_path):
         " Shape { appearance IS look geometry Box { size IS size } } }\n"
         "PROTO Outer [ initializeOnly SFNode look NULL initializeOnly SFVec3f size 8 8 8 ] {"
         " Inner { look IS look size IS size } }\n"
-        "Outer { }\n"
+        "Outer { }\nTransform { translation 20 0 0 children Inner { } }\n"
     )
     scene = sg.load(path)
-    assert boxes(scene) == [corners((-4, -4, -4), (4, 4, 4))]
-    assert scene.shapes[0].material.diffuse_color == (0, 1, 0)
+    assert boxes(scene) == [
+        corners((-4, -4, -4), (4, 4, 4)),
+        corners((19.5, -0.5, -0.5), (20.5, 0.5, 0.5)),
+    ]
+    unlit, green = (shape.material for shape in scene.shapes)
+    assert unlit.emissive_color == (1, 1, 1) and green.diffuse_color == (0, 1, 0)
 
 
 def test_a_prototype_passed_into_its_own_instance_is_no_cycle(tmp_path):

@@ -219,10 +219,10 @@ class Prototypes:
                     raise context.error(
                         connect, f"connect nodeField={node_field!r} is not a field name"
                     )
-                nodes = []
+                nodes: list[Element] | None = None if proto_field not in node_values else []
                 for value in node_values.get(proto_field, []):
                     target = context.resolve(value)
-                    if target is not None:  # (a USE of no DEF or of another type: noted)
+                    if target is not None and nodes is not None:  # (a bad USE: noted)
                         nodes.append(copy.deepcopy(target))
                         self.places[nodes[-1]] = self._place(target)
                 if local_name(node) == "ProtoInstance":
@@ -230,7 +230,7 @@ class Prototypes:
                     continue
                 if proto_field in values:
                     node.set(node_field, values[proto_field])
-                for child in nodes:
+                for child in nodes or []:
                     child.set("containerField", node_field)
                     node.append(child)
             node.remove(holder)
@@ -244,21 +244,23 @@ def _field_values(
     declaration: Element, instance: Element
 ) -> tuple[dict[str, str], dict[str, list[Element]]]:
     """Attribute values and node values of the prototype's fields: the
-    interface's defaults overridden by the instance's fieldValue elements."""
+    interface's defaults overridden by the instance's fieldValue elements (a
+    node field given no node is NULL, which overrides a default too)."""
     values: dict[str, str] = {}
     node_values: dict[str, list[Element]] = {}
     interface = _child(declaration, "ProtoInterface")
-    for source in [interface, instance]:
-        if source is None:
-            continue
+    sources = [] if interface is None else [interface]
+    types = {item.get("name"): item.get("type") or "" for item in sources[0]} if sources else {}
+    for source in [*sources, instance]:
         for item in source:
-            if local_name(item) not in ("field", "fieldValue") or not item.get("name"):
+            name = item.get("name")
+            if local_name(item) not in ("field", "fieldValue") or not name:
                 continue
             nodes = [node for node in item if local_name(node)]
             if item.get("value") is not None:
-                values[item.get("name")] = item.get("value")
-            elif nodes:
-                node_values[item.get("name")] = nodes
+                values[name] = item.get("value")
+            elif nodes or types.get(name, "").endswith("Node"):
+                node_values[name] = nodes
     return values, node_values
 
 
@@ -269,12 +271,13 @@ def _declared_inside(holder: Element) -> bool:
 
 
 def _pass_on(
-    instance: Element, field: str, value: str | None, nodes: list[Element], line: int | None
+    instance: Element, field: str, value: str | None, nodes: list[Element] | None, line: int | None
 ) -> None:
     """Give a ProtoInstance inside a body the value of one of the body's
-    prototype's fields, as its fieldValue ``field`` (in place of any written)."""
-    if value is None and not nodes:
-        return  # the field has no value: the inner prototype's default stands
+    prototype's fields, as its fieldValue ``field`` (in place of any written);
+    ``nodes`` empty is NULL, None no node value."""
+    if value is None and nodes is None:
+        return  # the field has no value (an event): the inner prototype's default stands
     for written in [
         e for e in instance if local_name(e) == "fieldValue" and e.get("name") == field
     ]:
@@ -284,4 +287,4 @@ def _pass_on(
         passed.sourceline = line
     if value is not None:
         passed.set("value", value)
-    passed.extend(nodes)
+    passed.extend(nodes or [])
