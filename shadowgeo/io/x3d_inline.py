@@ -10,7 +10,10 @@ not read. When no url gives a file that reads (missing, remote, outside the
 folder, unreadable, not X3D or glTF), the Inline is skipped with a warning
 naming the file, line and every url with why it was not used. An Inline that
 includes itself, directly or not, is a SceneError (as are the reader's limits
-on nesting and expansion).
+on nesting and expansion). A url is taken from the folder of the file the
+Inline was written in (a prototype's file, for one in an EXTERNPROTO's body).
+:func:`resolve_url` and :func:`x3d_tree` find and read EXTERNPROTO files too
+(:mod:`.x3d_extern`), under the same rules.
 """
 
 from __future__ import annotations
