@@ -561,7 +561,7 @@ def test_a_script_that_builds_geometry_is_named_in_one_note(tmp_path, suffix, te
     notes = [note for note in scene.warnings if "Script" in note]
     assert notes == [
         f"{path} line {line}, Script DEF='builder': geometry is built by this Script, which "
-        "shadowgeo does not run; it casts no shadow"
+        "shadowgeo does not run; what it builds casts no shadow"
     ]
 
 

@@ -43,7 +43,7 @@ def script_note(root: Element, path: str, has_geometry: bool) -> str | None:
     if builder is not None:
         return (
             f"{_where(builder, path)}: geometry is built by this Script, which shadowgeo does "
-            "not run; it casts no shadow"
+            "not run; what it builds casts no shadow"
         )
     if not has_geometry:
         return (
