@@ -39,18 +39,18 @@ Rules the reader follows, where X3D leaves a choice:
 - **Skipped, with a warning in** ``Scene.warnings`` naming file, line and
   node, where X3D browsers are lenient: nodes shadowgeo does not model or does
   not know (scripts, sensors, interpolators, routes, text, lines, points,
-  textures), external prototypes that cannot be followed (remote, missing,
-  outside the scene's folder, no such PROTO), missing textures, empty geometry, a USE
-  naming no DEF or a node of another type, a field value that cannot be read
-  (the field takes its default), geometry that cannot be built (indices out of
-  range, counts that do not fit: that Shape), Inline files that are missing,
+  textures), missing textures, empty geometry, a USE naming no DEF or a node
+  of another type, a field value that cannot be read (the field takes its
+  default), geometry that cannot be built (indices out of range, counts that
+  do not fit: that Shape), Inline and EXTERNPROTO files that are missing,
   remote (never fetched), outside the scene's folder (never read), unreadable
-  or not X3D/glTF. Metadata and WorldInfo are skipped silently.
+  or not X3D/glTF, and EXTERNPROTO files with no such PROTO. Metadata and
+  WorldInfo are skipped silently.
 - **Refused with a SceneError** (what cannot be read as a scene at all):
-  malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D, DEF/USE,
-  prototype, EXTERNPROTO and Inline cycles, expansion bombs (DEF/USE, Inline and prototypes
-  beyond 2 million nodes, prototypes beyond 10,000 copies), transforms that
-  overflow.
+  malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D,
+  DEF/USE, prototype, EXTERNPROTO and Inline cycles, expansion bombs (DEF/USE,
+  Inline and prototypes beyond 2 million nodes, prototypes beyond 10,000
+  copies), transforms that overflow.
 """
 
 from __future__ import annotations
