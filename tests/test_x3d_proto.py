@@ -301,6 +301,26 @@ def test_prototypes_of_two_files_inside_each_other_are_refused(tmp_path):
         sg.load(tmp_path / "a.x3dv")
 
 
+def test_externproto_files_nested_beyond_the_limit_are_refused(tmp_path):
+    from shadowgeo import limits
+
+    # f0's PROTO holds f1's, which holds f2's, ... one file deeper each
+    count = limits.MAX_INLINE_DEPTH + 2
+    for k in range(count):
+        (tmp_path / f"f{k}.x3dv").write_text(
+            HEAD + f'EXTERNPROTO Next [ ] "f{k + 1}.x3dv#P"\n'
+            "PROTO P [ ] { Group { children [ Shape { geometry Box { } } Next { } ] } }\n"
+            + ("P { }\n" if k == 0 else "")
+        )
+    with pytest.raises(sg.SceneError, match=f"EXTERNPROTO files nested more than {count - 2}"):
+        sg.load(tmp_path / "f0.x3dv")
+    # the same chain, one file short of the limit, reads every box
+    (tmp_path / f"f{count - 3}.x3dv").write_text(
+        HEAD + "PROTO P [ ] { Shape { geometry Box { } } }\n"
+    )
+    assert len(sg.load(tmp_path / "f0.x3dv").shapes) == count - 2
+
+
 # -- IS through nested prototypes ---------------------------------------------------------
 
 NESTED_CLASSIC = (
