@@ -207,22 +207,31 @@ def test_externproto_across_encodings_and_from_a_subfolder(tmp_path):
 
 
 def test_urls_are_taken_from_the_file_each_node_was_written_in(tmp_path):
-    """The Inline in the prototype's body is parts/box.x3dv (beside the
-    prototype's file); the one the scene passes in through a field is
-    box.x3dv beside the scene. (Two files of one name, boxes of two sizes.)"""
+    """The Inlines in the prototype's body and in its field's default are
+    parts/box.x3dv (beside the prototype's file); the one the scene passes in
+    through a field is box.x3dv beside the scene. (Two files of one name,
+    boxes of two sizes.)"""
     (tmp_path / "parts").mkdir()
     (tmp_path / "parts" / "lib.x3dv").write_text(
-        HEAD + "PROTO Holder [ initializeOnly MFNode content [ ] ] {\n"
-        '  Group { children [ Inline { url "box.x3dv" } Group { children IS content } ] }\n}\n'
+        HEAD + "PROTO Holder [ initializeOnly MFNode content [ ]\n"
+        "  initializeOnly MFNode fallback [\n"
+        '    Transform { translation 0 20 0 children Inline { url "box.x3dv" } } ] ] {\n'
+        '  Group { children [ Inline { url "box.x3dv" } Group { children IS content }\n'
+        "                     Group { children IS fallback } ] }\n}\n"
     )
     (tmp_path / "parts" / "box.x3dv").write_text(HEAD + "Shape { geometry Box { size 2 2 2 } }\n")
     (tmp_path / "box.x3dv").write_text(HEAD + "Shape { geometry Box { size 6 6 6 } }\n")
     (tmp_path / "main.x3dv").write_text(
-        HEAD + 'EXTERNPROTO Holder [ initializeOnly MFNode content ] "parts/lib.x3dv#Holder"\n'
+        HEAD + "EXTERNPROTO Holder [ initializeOnly MFNode content initializeOnly MFNode fallback ]"
+        ' "parts/lib.x3dv#Holder"\n'
         'Holder { content Transform { translation 10 0 0 children Inline { url "box.x3dv" } } }\n'
     )
     scene = sg.load(tmp_path / "main.x3dv")
-    assert boxes(scene) == [corners((-1, -1, -1), (1, 1, 1)), corners((7, -3, -3), (13, 3, 3))]
+    assert boxes(scene) == [
+        corners((-1, -1, -1), (1, 1, 1)),
+        corners((7, -3, -3), (13, 3, 3)),
+        corners((-1, 19, -1), (1, 21, 1)),
+    ]
     assert not [note for note in scene.warnings if "Inline" in note]
 
 

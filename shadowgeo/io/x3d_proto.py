@@ -173,6 +173,8 @@ class Prototypes:
             return f"{where}: {found}"
         if found.root not in self.files:
             self.files[found.root] = _declarations(found.root, str(found.path), file.depth + 1)
+            # (its defaults passed through IS read their urls as its own)
+            self.places.setdefault(found.root, _Place(self.files[found.root]))
         return found.declaration, self.files[found.root]
 
     def _refuse_cycle(
