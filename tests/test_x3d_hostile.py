@@ -569,15 +569,21 @@ def test_deep_nesting_is_refused_before_python_runs_out_of_stack(tmp_path):
     its own body nested copies until Python's recursion limit, which numpy met
     first in a deeper stack and reported as a TypeError. The reader counts the
     grouping nodes it is inside and stops at MAX_NESTING, well inside the
-    stack a caller leaves it."""
+    stack a caller leaves it. (A prototype inside itself is now refused as a
+    cycle first: a chain of distinct prototypes, each inside the one before,
+    nests as deep.)"""
     import sys
 
     from shadowgeo import limits
 
+    count = limits.MAX_NESTING + 10
     body = (
-        '<ProtoDeclare name="Again"><ProtoBody><Transform><Shape><Box/></Shape>'
-        '<ProtoInstance name="Again"/></Transform></ProtoBody></ProtoDeclare>'
-        '<ProtoInstance name="Again"/>'
+        "".join(
+            f'<ProtoDeclare name="P{k}"><ProtoBody><Transform><Shape><Box/></Shape>'
+            f'<ProtoInstance name="P{k + 1}"/></Transform></ProtoBody></ProtoDeclare>'
+            for k in range(count)
+        )
+        + '<ProtoInstance name="P0"/>'
     )
     path = scene(tmp_path, body)
 

@@ -28,8 +28,8 @@ format: :mod:`.gltf_layout` (the GLB container, ``KHR_lights_punctual`` and
 attributes) and :mod:`.usd_assets` (every asset path checked before usd-core
 opens a stage); X3D's reader is split into ``x3d_parse``, ``x3d_fields``,
 ``x3d_geometry``, ``x3d_extrusion``, ``x3d_lights``, ``x3d_proto``,
-``x3d_inline`` and ``x3d_defaults``; its writer rewrites relative urls for
-the output's folder in ``x3d_urls``.
+``x3d_extern``, ``x3d_inline``, ``x3d_script`` and ``x3d_defaults``; its writer
+rewrites relative urls for the output's folder in ``x3d_urls``.
 
 Each reader provides ``read(path, **options) -> Scene`` and each writer
 ``write(scene, path, **options) -> None``; writers go through

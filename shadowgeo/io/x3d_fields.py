@@ -167,12 +167,20 @@ class Context:
                 return f"{name} {attribute}='{element.get(attribute)}'"
         return name
 
+    def file_of(self, element: Element) -> str:
+        """The file ``element`` was read from: the document's, or that of the
+        prototype (EXTERNPROTO) whose copy holds it."""
+        return self.path if self.prototypes is None else self.prototypes.file_of(element)
+
     def where(self, element: Element) -> str:
-        return f"{self.path} line {element.sourceline}, {self.describe(element)}"
+        return f"{self.file_of(element)} line {element.sourceline}, {self.describe(element)}"
 
     def error(self, element: Element, message: str) -> SceneError:
         return SceneError(
-            message, path=self.path, line=element.sourceline, node=self.describe(element)
+            message,
+            path=self.file_of(element),
+            line=element.sourceline,
+            node=self.describe(element),
         )
 
     def warn(self, element: Element, message: str) -> None:

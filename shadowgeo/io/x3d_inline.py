@@ -11,7 +11,10 @@ not read. When no url gives a file that reads (missing, remote, outside the
 folder, unreadable, not X3D or glTF), the Inline is skipped with a warning
 naming the file, line and every url with why it was not used. An Inline that
 includes itself, directly or not, is a SceneError (as are the reader's limits
-on nesting and expansion).
+on nesting and expansion). A url is taken from the folder of the file the
+Inline was written in (a prototype's file, for one in an EXTERNPROTO's body).
+:func:`resolve_url` and :func:`x3d_tree` find and read EXTERNPROTO files too
+(:mod:`.x3d_extern`), under the same rules.
 """
 
 from __future__ import annotations
@@ -52,20 +55,23 @@ class InlineReader(Protocol):
     def document(self, tree: Tree, path: Path, matrix: np.ndarray, *, name: str | None) -> None: ...
 
 
-def resolve_url(reader: InlineReader, context: Context, url: str) -> Path | str:
-    """The local file ``url`` names, or a string saying why there is none
-    (nothing outside the scene's folder is looked at)."""
+def resolve_url(
+    reader: InlineReader, folder: Path, url: str, shown: str | None = None
+) -> Path | str:
+    """The local file ``url`` names, taken from ``folder`` (that of the file
+    that names it), or a string saying why there is none, quoting ``shown``
+    (default ``url``); nothing outside the scene's folder is looked at."""
+    shown = url if shown is None else shown
     if URL_SCHEME.match(url):
-        return f"'{url}' is remote (never fetched)"
-    folder = Path(context.path).resolve().parent
+        return f"'{shown}' is remote (never fetched)"
     candidate = (folder / url).resolve()
     reason = outside_reason(url, candidate, reader.root_folder)
     if reason == "it leaves the file's folder":
-        return f"'{url}' leaves the scene's folder {reader.root_folder} (never read)"
+        return f"'{shown}' leaves the scene's folder {reader.root_folder} (never read)"
     if reason is not None:
-        return f"'{url}' is {reason} (never read)"
+        return f"'{shown}' is {reason} (never read)"
     if not candidate.is_file():
-        return f"'{url}' not found"
+        return f"'{shown}' not found"
     return candidate
 
 
@@ -76,15 +82,13 @@ def load_inline(
         return
     urls = [url.strip() for url in context.field(element, "url") if url.strip()]
     reasons = []
+    folder = Path(context.file_of(element)).resolve().parent
     for url in urls:
-        found = resolve_url(reader, context, url)
+        found = resolve_url(reader, folder, url)
         if isinstance(found, str):
             reasons.append(found)
             continue
-        suffix = "".join(found.suffixes[-2:] if found.suffix == ".gz" else [found.suffix]).lower()
-        if suffix in X3D_SUFFIXES and _is_vrml1(found):
-            reasons.append(f"'{url}' is VRML 1.0 (not supported)")
-            continue
+        suffix = _suffix(found)
         if suffix in X3D_SUFFIXES:
             problem = _x3d(reader, context, element, found, matrix, name)
         elif suffix in GLTF_SUFFIXES:
@@ -104,6 +108,33 @@ def _is_vrml1(path: Path) -> bool:
         return False  # _x3d says why it cannot be read
 
 
+def _suffix(path: Path) -> str:
+    return "".join(path.suffixes[-2:] if path.suffix == ".gz" else [path.suffix]).lower()
+
+
+def x3d_tree(reader: InlineReader, path: Path) -> Tree | str:
+    """The X3D document at ``path`` (any encoding), parsed once per scene
+    read, or why it cannot be read (an Inline's file, an EXTERNPROTO's)."""
+    if _suffix(path) not in X3D_SUFFIXES:
+        return "is not X3D or VRML 97"
+    if path not in reader.inline_files:
+        reader.inline_files[path] = _parsed(reader, path)
+    found: Tree | str = reader.inline_files[path]
+    return found
+
+
+def _parsed(reader: InlineReader, path: Path) -> Tree | str:
+    if _is_vrml1(path):
+        return "is VRML 1.0 (not supported)"
+    try:
+        tree = x3d_parse.parse(path, reader.warnings)
+    except SceneError as error:
+        return f"cannot be read: {error}"
+    if not any(local_name(child) == "Scene" for child in tree.getroot()):
+        return "cannot be read: it has no <Scene> element"
+    return tree
+
+
 def _x3d(
     reader: InlineReader,
     context: Context,
@@ -117,16 +148,7 @@ def _x3d(
         raise context.error(element, f"Inline cycle: {path.name} includes itself")
     if len(reader.inline_stack) > MAX_INLINE_DEPTH:
         raise context.error(element, f"Inlines nested more than {MAX_INLINE_DEPTH} deep")
-    if path not in reader.inline_files:
-        try:
-            tree = x3d_parse.parse(path, reader.warnings)
-        except SceneError as error:
-            tree = f"cannot be read: {error}"
-        else:
-            if not any(local_name(child) == "Scene" for child in tree.getroot()):
-                tree = "cannot be read: it has no <Scene> element"
-        reader.inline_files[path] = tree
-    tree = reader.inline_files[path]
+    tree = x3d_tree(reader, path)
     if isinstance(tree, str):
         return tree
     reader.document(tree, path, matrix, name=name)

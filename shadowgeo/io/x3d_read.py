@@ -30,22 +30,27 @@ Rules the reader follows, where X3D leaves a choice:
 - **Units.** ``<unit category="length">`` sets ``Scene.meters_per_unit``;
   ``category="angle"`` scales every angle field.
 - **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
-  the instance's field values (:mod:`.x3d_proto`); ExternProtoDeclare is not
-  followed.
+  the instance's field values, passed on through ``IS`` to nested instances
+  (:mod:`.x3d_proto`); an ExternProtoDeclare is followed to a PROTO in a local
+  file under Inline's rules (:mod:`.x3d_extern`), whose urls are then taken
+  from that file's folder.
+- **Scripts** are not run: one that builds geometry, or any Script of a scene
+  with no geometry, gets one note saying so (:mod:`.x3d_script`).
 - **Skipped, with a warning in** ``Scene.warnings`` naming file, line and
   node, where X3D browsers are lenient: nodes shadowgeo does not model or does
   not know (scripts, sensors, interpolators, routes, text, lines, points,
-  textures, external prototypes), missing textures, empty geometry, a USE
-  naming no DEF or a node of another type, a field value that cannot be read
-  (the field takes its default), geometry that cannot be built (indices out of
-  range, counts that do not fit: that Shape), Inline files that are missing,
+  textures), missing textures, empty geometry, a USE naming no DEF or a node
+  of another type, a field value that cannot be read (the field takes its
+  default), geometry that cannot be built (indices out of range, counts that
+  do not fit: that Shape), Inline and EXTERNPROTO files that are missing,
   remote (never fetched), outside the scene's folder (never read), unreadable
-  or not X3D/glTF. Metadata and WorldInfo are skipped silently.
+  or not X3D/glTF, and EXTERNPROTO files with no such PROTO. Metadata and
+  WorldInfo are skipped silently.
 - **Refused with a SceneError** (what cannot be read as a scene at all):
-  malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D, DEF/USE,
-  prototype and Inline cycles, expansion bombs (DEF/USE, Inline and prototypes
-  beyond 2 million nodes, prototypes beyond 10,000 copies), transforms that
-  overflow.
+  malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D,
+  DEF/USE, prototype, EXTERNPROTO and Inline cycles, expansion bombs (DEF/USE,
+  Inline and prototypes beyond 2 million nodes, prototypes beyond 10,000
+  copies), transforms that overflow.
 """
 
 from __future__ import annotations
@@ -75,6 +80,7 @@ from .x3d_inline import URL_SCHEME, load_inline
 from .x3d_lights import LIGHTS, material, scene_light
 from .x3d_numbers import Splicer
 from .x3d_proto import Prototypes
+from .x3d_script import script_note
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
 GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}
@@ -133,7 +139,7 @@ class _Reader:
             context.kept, context.kept_root = scene.numbers, root
         self._units(context, root, scene)
         context.defs = _definitions(context, root)
-        context.prototypes = Prototypes(root)
+        context.prototypes = Prototypes(root, display, self)
         scenes = [child for child in root if local_name(child) == "Scene"]
         if not scenes:
             raise SceneError("no <Scene> element", path=display, line=root.sourceline)
@@ -301,7 +307,7 @@ class _Reader:
                 matrix,
                 self.material_cache[appearance],
                 _public(element.get("DEF") or node.get("DEF")) or name,
-                f"{os.path.basename(context.path)} line {node.sourceline}, "
+                f"{os.path.basename(context.file_of(node))} line {node.sourceline}, "
                 f"{context.describe(node)}",
                 *self._added_role(element),
             )
@@ -322,7 +328,7 @@ class _Reader:
                 continue
             self.textures_seen.add(texture)
             urls = [u for u in context.field(texture, "url", "MFString") if u]
-            folder = Path(context.path).resolve().parent
+            folder = Path(context.file_of(texture)).resolve().parent
             local = [(folder / u).resolve() for u in urls if not URL_SCHEME.match(u)]
             # only files inside the scene's folder count (nothing outside is looked at)
             inside = [path for path in local if path.is_relative_to(self.root_folder)]
@@ -332,6 +338,15 @@ class _Reader:
                 self._skip(context, texture, local_name(texture), "textures not modelled")
 
     # -- result ------------------------------------------------------------------
+    def scripts(self, root: Element, path: str) -> None:
+        """One note for a Script that builds geometry (:mod:`.x3d_script`), in
+        place of the usual note on skipped Scripts."""
+        has_geometry = any(instance.role == "geometry" for instance in self.instances)
+        note = script_note(root, path, has_geometry)
+        if note is not None:
+            self.skipped = {key: entry for key, entry in self.skipped.items() if key[0] != "Script"}
+            self.warnings.append(note)
+
     def finish(self, scene: Scene, tolerance: Tolerance | None, chord: float | None) -> None:
         for (_, why), (where, count) in self.skipped.items():
             more = f" ({count} such nodes)" if count > 1 else ""
@@ -588,9 +603,11 @@ def read(
         if not path.resolve().is_relative_to(folder):
             raise SceneError(f"the file is not inside root {folder}", path=str(path))
     reader = _Reader(folder, scene.warnings)
+    reader.inline_files[path.resolve()] = tree  # (an EXTERNPROTO naming it reads this tree)
     try:
         with _stack_for_nesting():
             reader.document(tree, path, np.eye(4), scene)
+        reader.scripts(tree.getroot(), str(path))
         reader.finish(scene, tolerance, chord)
     except RecursionError:
         message = "nodes nested too deeply (through DEF/USE, prototypes or Inline)"
