@@ -1,0 +1,235 @@
+"""What casts, as the author said: X3D 4 ``castShadow``, Castle's
+``shadowCaster`` and transparency (see shadowgeo.scene.opacity).
+
+Scenes are written here (X3D XML, ClassicVRML, X3D JSON, glTF); the
+references are hand-derived: a box's shadow under a point light is the convex
+hull of its corners projected from the light, built with shapely in the test.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import shapely
+
+import shadowgeo as sg
+from shadowgeo.scene.opacity import casting_opacity
+
+LIGHT = np.array([0.0, 8.0, 0.0])  # a point light 8 above the ground y = 0
+
+
+def projected_hull(center, size, light=LIGHT):
+    """The shadow on y = 0 of a box (``center``, ``size``) lit from the point
+    ``light``: the hull of its corners projected from the light, in (x, z)."""
+    center, half = np.asarray(center, float), 0.5 * np.asarray(size, float)
+    corners = np.array(
+        [center + half * [sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    )
+    scale = light[1] / (light[1] - corners[:, 1])
+    images = light + (corners - light) * scale[:, None]
+    return shapely.MultiPoint(images[:, [0, 2]]).convex_hull
+
+
+def region(shape):
+    """A shadow shape's triangles as one shapely region in (x, z), and the sum
+    of the triangles' areas (equal to the region's iff they do not overlap)."""
+    triangles = shape.world_vertices[shape.faces][:, :, [0, 2]]
+    polygons = [shapely.Polygon(t) for t in triangles]
+    return shapely.union_all(polygons), sum(p.area for p in polygons)
+
+
+def on_ground(scene):
+    return {s.name: s for s in scene.shapes_with_role("shadow") if "_ground" in s.name}
+
+
+def x3d(body, light='<PointLight DEF="lamp" location="0 8 0" shadows="true"/>'):
+    return f"""<?xml version="1.0" encoding="UTF-8"?>
+<X3D profile="Interchange" version="4.0"><Scene>
+{light}
+<Shape DEF="ground"><Appearance><Material/></Appearance>
+  <IndexedFaceSet solid="false" coordIndex="0 3 2 1 -1">
+    <Coordinate point="-10 0 -10 10 0 -10 10 0 10 -10 0 10"/></IndexedFaceSet></Shape>
+{body}
+</Scene></X3D>
+"""
+
+
+def box(name, center, size=(2, 1, 2), shape="", appearance="", material=""):
+    x, y, z = center
+    return (
+        f'<Transform translation="{x} {y} {z}"><Shape DEF="{name}" {shape}>'
+        f"<Appearance {appearance}><Material {material}/></Appearance>"
+        f'<Box size="{" ".join(map(str, size))}"/></Shape></Transform>'
+    )
+
+
+def converted(tmp_path, text, name="scene.x3d", **options):
+    path = tmp_path / name
+    path.write_text(text)
+    return sg.add_shadows(sg.load(path), surfaces=False, **options)
+
+
+def test_cast_shadow_false_casts_nothing_while_its_twin_casts_its_hull(tmp_path):
+    text = x3d(box("quiet", (-4, 2.5, 0), shape='castShadow="false"') + box("loud", (4, 2.5, 0)))
+    scene = converted(tmp_path, text)
+    assert [s.casts_shadow for s in scene.shapes if s.role == "geometry"] == [True, False, True]
+    shadow, summed = region(on_ground(scene)["shadow_lamp_ground"])
+    expected = projected_hull((4, 2.5, 0), (2, 1, 2))
+    # hand check of the reference: the top face (y = 3) scales by 8/5, the
+    # bottom (y = 2) by 8/6: x from 3 * 8/6 to 5 * 8/5, z within 1 * 8/5
+    assert expected.bounds == pytest.approx((4.0, -1.6, 8.0, 1.6))
+    assert shadow.area == pytest.approx(expected.area, rel=1e-9)
+    assert summed == pytest.approx(expected.area, rel=1e-9)
+    assert shadow.symmetric_difference(expected).area < 1e-9
+    assert shadow.intersection(projected_hull((-4, 2.5, 0), (2, 1, 2))).area == 0
+
+
+def test_a_shape_that_does_not_cast_still_receives(tmp_path):
+    # the ground itself says castShadow="false", and a slab under the box too
+    text = x3d(box("loud", (0, 2.5, 0))).replace(
+        '<Shape DEF="ground">', '<Shape DEF="ground" castShadow="false">'
+    )
+    scene = converted(tmp_path, text)
+    shadow, _ = region(on_ground(scene)["shadow_lamp_ground"])
+    assert shadow.area == pytest.approx(projected_hull((0, 2.5, 0), (2, 1, 2)).area, rel=1e-9)
+    # every surface: a non-casting slab's top (y = 1) under the box takes its shadow
+    path = tmp_path / "slab.x3d"
+    path.write_text(
+        x3d(
+            box("loud", (0, 2.5, 0))
+            + box("slab", (0, 0.5, 0), (3, 1, 3), shape='castShadow="false"')
+        )
+    )
+    every = sg.add_shadows(sg.load(path), receivers=["ground"], surfaces=True)
+    surfaces = [s for s in every.shapes_with_role("shadow") if s.name.endswith("_surfaces")]
+    assert len(surfaces) == 1
+    triangles = surfaces[0].world_vertices[surfaces[0].faces]
+    on_top = np.all(np.abs(triangles[:, :, 1] - 1.0) < 0.05, axis=1)
+    top, _ = region(sg.Shape(triangles[on_top].reshape(-1, 3), np.arange(3 * on_top.sum())))
+    # the box's top (y = 3, half-width 1) seen from y = 8 onto y = 1: 7/5 wider
+    half = 7 / 5
+    assert top.area == pytest.approx((2 * half) ** 2, rel=1e-6)
+
+
+CLASSIC = """#X3D V4.0 utf8
+PROFILE Interchange
+DEF lamp PointLight {{ location 0 8 0 shadows TRUE }}
+DEF ground Shape {{
+  appearance Appearance {{ material Material {{ }} }}
+  geometry IndexedFaceSet {{ solid FALSE coordIndex [ 0 3 2 1 -1 ]
+    coord Coordinate {{ point [ -10 0 -10, 10 0 -10, 10 0 10, -10 0 10 ] }} }}
+}}
+Transform {{ translation -4 2.5 0 children DEF quiet Shape {{
+  appearance Appearance {{ {quiet} material Material {{ }} }}
+  geometry Box {{ size 2 1 2 }} }} }}
+Transform {{ translation 4 2.5 0 children DEF loud Shape {{
+  appearance Appearance {{ material Material {{ transparency {loud} }} }}
+  geometry Box {{ size 2 1 2 }} }} }}
+"""
+
+
+def test_castle_shadow_caster_false_in_classic_vrml(tmp_path):
+    scene = converted(tmp_path, CLASSIC.format(quiet="shadowCaster FALSE", loud=0), "s.x3dv")
+    shadow, _ = region(on_ground(scene)["shadow_lamp_ground"])
+    expected = projected_hull((4, 2.5, 0), (2, 1, 2))
+    assert shadow.symmetric_difference(expected).area < 1e-9
+    assert len(on_ground(scene)) == 1
+    # without the field, both cast (the default is TRUE)
+    both = converted(tmp_path, CLASSIC.format(quiet="", loud=0), "t.x3dv")
+    shadow, _ = region(on_ground(both)["shadow_lamp_ground"])
+    assert shadow.area == pytest.approx(2 * expected.area, rel=1e-9)
+
+
+def test_cast_shadow_false_in_x3d_json(tmp_path):
+    def shape(name, x, **fields):
+        body = {"@DEF": name, **fields, "-geometry": {"Box": {"@size": [2, 1, 2]}}}
+        return {"Transform": {"@translation": [x, 2.5, 0], "-children": [{"Shape": body}]}}
+
+    ground = {
+        "@DEF": "ground",
+        "-geometry": {
+            "IndexedFaceSet": {
+                "@solid": False,
+                "@coordIndex": [0, 3, 2, 1, -1],
+                "-coord": {
+                    "Coordinate": {"@point": [-10, 0, -10, 10, 0, -10, 10, 0, 10, -10, 0, 10]}
+                },
+            }
+        },
+    }
+    document = {
+        "X3D": {
+            "@profile": "Interchange",
+            "@version": "4.0",
+            "Scene": {
+                "-children": [
+                    {"PointLight": {"@DEF": "lamp", "@location": [0, 8, 0], "@shadows": True}},
+                    {"Shape": ground},
+                    shape("quiet", -4, **{"@castShadow": False}),
+                    shape("loud", 4),
+                ]
+            },
+        }
+    }
+    scene = converted(tmp_path, json.dumps(document), "s.x3dj")
+    shadow, _ = region(on_ground(scene)["shadow_lamp_ground"])
+    assert shadow.symmetric_difference(projected_hull((4, 2.5, 0), (2, 1, 2))).area < 1e-9
+
+
+def test_a_fully_transparent_shape_casts_nothing_and_costs_no_pass(tmp_path):
+    scene = converted(tmp_path, CLASSIC.format(quiet="shadowCaster FALSE", loud=1), "s.x3dv")
+    assert on_ground(scene) == {}
+    assert any("no shadow falls" in note for note in scene.warnings)
+    # nearly transparent (opacity below 1/32) is the same
+    assert casting_opacity(sg.Shape([], [], material=sg.Material(transparency=0.97))) == 0
+
+
+@pytest.mark.parametrize(("intensity", "transparency"), [(1.0, 0.5), (0.8, 0.6)])
+def test_half_transparent_casts_a_half_dark_shadow_of_the_same_area(
+    tmp_path, intensity, transparency
+):
+    lamp = f'<PointLight DEF="lamp" location="0 8 0" shadows="true" shadowIntensity="{intensity}"/>'
+    text = x3d(box("glass", (4, 2.5, 0), material='transparency="0.5"'), lamp)
+    scene = converted(tmp_path, text)
+    ((name, shadow),) = on_ground(scene).items()
+    assert name == "shadow_lamp_ground_opacity50"
+    # darkness = shadowIntensity x opacity: 1 - transparency
+    assert shadow.material.transparency == pytest.approx(transparency, abs=1e-12)
+    assert 1 - shadow.material.transparency == pytest.approx(intensity * 0.5)
+    area, _ = region(shadow)
+    assert area.symmetric_difference(projected_hull((4, 2.5, 0), (2, 1, 2))).area < 1e-9
+
+
+def test_overlapping_opaque_and_translucent_shadows_are_disjoint_layers(tmp_path):
+    # an opaque box and a glass box side by side: their shadows overlap
+    text = x3d(
+        box("stone", (1, 2.5, 0)) + box("glass", (2, 4.5, 0.5), material='transparency="0.5"')
+    )
+    scene = converted(tmp_path, text)
+    layers = on_ground(scene)
+    assert sorted(layers) == ["shadow_lamp_ground", "shadow_lamp_ground_opacity50"]
+    stone_hull = projected_hull((1, 2.5, 0), (2, 1, 2))
+    glass_hull = projected_hull((2, 4.5, 0.5), (2, 1, 2))
+    overlap = stone_hull.intersection(glass_hull).area
+    assert overlap > 0.5  # the scene tests what it means to
+    opaque, opaque_sum = region(layers["shadow_lamp_ground"])
+    glass, glass_sum = region(layers["shadow_lamp_ground_opacity50"])
+    assert opaque.area == pytest.approx(stone_hull.area, rel=1e-9)
+    assert glass.area == pytest.approx(glass_hull.area - overlap, rel=1e-9)
+    assert glass_sum == pytest.approx(glass.area, rel=1e-9)  # no triangle over another
+    assert opaque.intersection(glass).area < 1e-9  # never darkened twice
+    assert opaque.union(glass).symmetric_difference(stone_hull.union(glass_hull)).area < 1e-9
+    assert layers["shadow_lamp_ground"].material.transparency == 0
+    assert layers["shadow_lamp_ground_opacity50"].material.transparency == 0.5
+
+
+def test_opacity_levels_round_to_sixteenths():
+    def opacity(transparency):
+        return casting_opacity(sg.Shape([], [], material=sg.Material(transparency=transparency)))
+
+    assert [opacity(t) for t in (0, 0.02, 0.5, 0.8, 0.96, 0.97, 1)] == [
+        1, 1, 0.5, 3 / 16, 1 / 16, 0, 0,
+    ]  # fmt: skip
+    assert opacity(1 - 1 / 32) == 1 / 16  # halves round up: 1/32 still casts
