@@ -233,3 +233,128 @@ def test_opacity_levels_round_to_sixteenths():
         1, 1, 0.5, 3 / 16, 1 / 16, 0, 0,
     ]  # fmt: skip
     assert opacity(1 - 1 / 32) == 1 / 16  # halves round up: 1/32 still casts
+
+
+def on_slope(shape, tolerance=0.05):
+    """The triangles of a shadow shape lying on the ramp y = (x + 3) / 2, as a
+    shapely region in (x, z) (seen from above)."""
+    triangles = shape.world_vertices[shape.faces]
+    on = np.all(np.abs(triangles[:, :, 1] - (triangles[:, :, 0] + 3) / 2) < tolerance, axis=1)
+    return shapely.union_all([shapely.Polygon(t[:, [0, 2]]) for t in triangles[on]])
+
+
+def test_every_surface_a_translucent_caster_over_a_slope(tmp_path):
+    # a ramp y = (x + 3) / 2, a glass cube over it and a stone cube above
+    # that, sun straight down: seen from above, each shadow is its cube's
+    # square; on the ramp each is sqrt(1 + 1/4) times larger
+    sun = '<DirectionalLight DEF="sun" direction="0 -1 0" shadows="true"/>'
+    ramp = (
+        '<Shape DEF="ramp"><Appearance><Material/></Appearance>'
+        '<IndexedFaceSet solid="false" coordIndex="0 3 2 1 -1">'
+        '<Coordinate point="-3 0 -3 3 3 -3 3 3 3 -3 0 3"/></IndexedFaceSet></Shape>'
+    )
+    glass = box("glass", (0, 4, 0), (1, 1, 1), material='transparency="0.5"')
+    stone = box("stone", (0.5, 5.5, 0.5), (1, 1, 1))
+    path = tmp_path / "ramp.x3d"
+    path.write_text(x3d(ramp + glass + stone, sun))
+    # no lift: it moves a shadow on the ramp sideways along the ramp's normal
+    scene = sg.add_shadows(sg.load(path), receivers=["ground"], surfaces=True, offset=0)
+    layers = {s.name: s for s in scene.shapes_with_role("shadow") if "_surfaces" in s.name}
+    assert sorted(layers) == ["shadow_sun_surfaces", "shadow_sun_surfaces_opacity50"]
+    glass_square = shapely.box(-0.5, -0.5, 0.5, 0.5)
+    stone_square = shapely.box(0, 0, 1, 1)
+    opaque = on_slope(layers["shadow_sun_surfaces"])
+    translucent = on_slope(layers["shadow_sun_surfaces_opacity50"])
+    assert opaque.symmetric_difference(stone_square).area < 1e-6
+    expected = glass_square.difference(stone_square)  # 3/4 of the glass's square
+    assert translucent.symmetric_difference(expected).area < 1e-6
+    assert opaque.intersection(translucent).area < 1e-6
+    slope = np.sqrt(1.25)
+    flat = layers["shadow_sun_surfaces_opacity50"]
+    triangles = flat.world_vertices[flat.faces]
+    on = np.all(np.abs(triangles[:, :, 1] - (triangles[:, :, 0] + 3) / 2) < 0.05, axis=1)
+    sides = np.cross(triangles[on, 1] - triangles[on, 0], triangles[on, 2] - triangles[on, 0])
+    assert 0.5 * np.linalg.norm(sides, axis=1).sum() == pytest.approx(0.75 * slope, rel=1e-6)
+    assert layers["shadow_sun_surfaces_opacity50"].material.transparency == 0.5
+    # the stone's shadow on the glass's top (y = 4.5) is opaque: x, z in [0, 0.5]
+    stone_layer = layers["shadow_sun_surfaces"]
+    top = stone_layer.world_vertices[stone_layer.faces]
+    on_top = np.all(np.abs(top[:, :, 1] - 4.5) < 0.05, axis=1)
+    top_region = shapely.union_all([shapely.Polygon(t[:, [0, 2]]) for t in top[on_top]])
+    assert top_region.symmetric_difference(shapely.box(0, 0, 0.5, 0.5)).area < 1e-6
+
+
+def gltf_scene(alpha_mode):
+    """A glTF document: a ground quad and a 2 x 1 x 2 box at (4, 2.5, 0) of
+    alpha 0.5 under ``alpha_mode``, a point light at (0, 8, 0)."""
+    import base64
+
+    import trimesh
+
+    cube = trimesh.creation.box(extents=[2, 1, 2])
+    ground = np.array([[-10, 0, -10], [10, 0, -10], [10, 0, 10], [-10, 0, 10]], np.float32)
+    quad = np.array([[0, 3, 2], [0, 2, 1]], np.uint16)  # counter-clockwise from +y
+    parts = [
+        np.asarray(cube.vertices, np.float32),
+        np.asarray(cube.faces, np.uint16),
+        ground,
+        quad,
+    ]
+    blobs = [part.tobytes() + b"\0" * (-len(part.tobytes()) % 4) for part in parts]
+    offsets = np.cumsum([0] + [len(b) for b in blobs]).tolist()
+    views = [
+        {"buffer": 0, "byteOffset": offsets[k], "byteLength": len(parts[k].tobytes())}
+        for k in range(4)
+    ]
+
+    def accessor(k, kind):
+        part = parts[k]
+        if kind == "VEC3":
+            low, high = part.min(axis=0).tolist(), part.max(axis=0).tolist()
+            return {"bufferView": k, "componentType": 5126, "count": len(part), "type": "VEC3",
+                    "min": low, "max": high}  # fmt: skip
+        return {"bufferView": k, "componentType": 5123, "count": part.size, "type": "SCALAR"}
+
+    data = base64.b64encode(b"".join(blobs)).decode()
+    return {
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_lights_punctual"],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "point", "name": "lamp"}]}},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1, 2]}],
+        "nodes": [
+            {"mesh": 0, "name": "glass", "translation": [4, 2.5, 0]},
+            {"mesh": 1, "name": "ground"},
+            {
+                "name": "lamp",
+                "translation": [0, 8, 0],
+                "extensions": {"KHR_lights_punctual": {"light": 0}},
+            },
+        ],  # fmt: skip
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]},
+            {"primitives": [{"attributes": {"POSITION": 2}, "indices": 3}]},
+        ],
+        "materials": [
+            {
+                "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.4, 0.9, 0.5]},
+                "alphaMode": alpha_mode,
+            }
+        ],
+        "accessors": [accessor(0, "VEC3"), accessor(1, ""), accessor(2, "VEC3"), accessor(3, "")],
+        "bufferViews": views,
+        "buffers": [
+            {"byteLength": offsets[-1], "uri": "data:application/octet-stream;base64," + data}
+        ],
+    }
+
+
+@pytest.mark.parametrize(("mode", "transparency"), [("BLEND", 0.5), ("MASK", 0), ("OPAQUE", 0)])
+def test_gltf_alpha_under_blend_casts_half_dark(tmp_path, mode, transparency):
+    path = tmp_path / "scene.gltf"
+    path.write_text(json.dumps(gltf_scene(mode)))
+    scene = sg.add_shadows(sg.load(path), surfaces=False)
+    (shadow,) = on_ground(scene).values()
+    assert shadow.material.transparency == pytest.approx(transparency, abs=1e-6)
+    area, _ = region(shadow)
+    assert area.symmetric_difference(projected_hull((4, 2.5, 0), (2, 1, 2))).area < 1e-6

@@ -307,19 +307,19 @@ def _add_shadows(
                 # ray to a lit point runs inside them; each caster's
                 # topology made once for every light
                 reached = np.flatnonzero(stacked.lit(light.light) & (opacity > 0))
-                shape = surface_shadow(
+                for level, layer in surface_shadow(
                     surface,
                     [stacked.caster(int(k)) for k in reached],
+                    opacity[reached],
                     light,
                     tolerance,
                     height,
                     notes,
                     light_name,
-                )
-                if shape is not None:
-                    shape.name = names.unique(f"shadow_{light_name}_surfaces")
-                    shape.group = group
-                    added.append(shape)
+                ):
+                    layer.name = names.unique(f"shadow_{light_name}_surfaces{_layer_suffix(level)}")
+                    layer.group = group
+                    added.append(layer)
         if progress is not None:
             progress(total, total)
         if not added:
