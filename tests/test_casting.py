@@ -358,3 +358,33 @@ def test_gltf_alpha_under_blend_casts_half_dark(tmp_path, mode, transparency):
     assert shadow.material.transparency == pytest.approx(transparency, abs=1e-6)
     area, _ = region(shadow)
     assert area.symmetric_difference(projected_hull((4, 2.5, 0), (2, 1, 2))).area < 1e-6
+
+
+@pytest.mark.parametrize(
+    ("appearance", "transparency", "expected"),
+    [
+        ('alphaMode="OPAQUE"', 0.5, 0.0),  # drawn opaque: casts fully
+        ('alphaMode="MASK"', 0.4, 0.0),  # alpha 0.6 >= cutoff 0.5: opaque
+        ('alphaMode="MASK" alphaCutoff="0.7"', 0.4, 1.0),  # below the cutoff: not drawn
+        ('alphaMode="BLEND"', 0.5, 0.5),
+        ("", 0.5, 0.5),  # AUTO blends
+    ],
+)
+def test_x3d_alpha_mode_decides_the_transparency_that_casts(
+    tmp_path, appearance, transparency, expected
+):
+    text = x3d(box("pane", (4, 2.5, 0), appearance=appearance,
+                   material=f'transparency="{transparency}"'))  # fmt: skip
+    path = tmp_path / "pane.x3d"
+    path.write_text(text)
+    (pane,) = [shape for shape in sg.load(path).shapes if shape.name == "pane"]
+    assert pane.material.transparency == expected
+
+
+def test_a_shape_that_does_not_cast_keeps_saying_so_in_x3d_written_afresh(tmp_path):
+    quad = [[-1, 0, -1], [1, 0, -1], [1, 0, 1]]
+    scene = sg.Scene([sg.Shape(quad, [[0, 2, 1]], name="veil", casts_shadow=False)])
+    sg.save(scene, tmp_path / "out.x3d")
+    assert 'castShadow="false"' in (tmp_path / "out.x3d").read_text()
+    (back,) = sg.load(tmp_path / "out.x3d").shapes
+    assert not back.casts_shadow

@@ -18,22 +18,32 @@ Receivers
     found automatically or from the shapes named in ``receivers=``, or one
     unbounded ``plane=``; the rules are in :mod:`shadowgeo.scene.receivers`.
 Casters
-    Every shape; a receiver's own triangles (and an open shape's triangles
-    lying in its plane) do not shadow it; a closed shape resting on it keeps
-    its footprint. Only what can shadow a receiver is modelled: a caster
+    Every shape, as much as it is opaque (:mod:`.opacity`): one that says it
+    casts no shadow (X3D 4 ``castShadow="false"``, Castle's ``shadowCaster
+    FALSE``, ``Shape.casts_shadow``) or whose opacity ``1 - transparency``
+    rounds to 0 in 1/16 steps (below 1/32) casts nothing and costs no pass;
+    it still receives. A receiver's own triangles (and an open shape's
+    triangles lying in its plane) do not shadow it; a closed shape resting on
+    it keeps its footprint. Only what can shadow a receiver is modelled: a caster
     wholly behind the receiver's plane, wholly at or beyond a positional
     light's height, out of a light's radius, outside a spot light's cone, or
     whose shadow misses the receiver's bounding box is skipped. A caster the
     light touches or sits inside (a lamp's own bulb) is skipped with a note.
 
-The shadows of all casters of one light on one receiver are united into one
-region (so overlaps do not darken twice), cut to the receiver's outline (the
-union of its triangles), triangulated and lifted towards the light by
-``offset`` (default ``1e-3`` of the diagonal of the geometry and the lights;
-the i-th of n lights is lifted ``offset * (1 + i / n)`` so that shadows of
-different lights do not z-fight).
-Each becomes a shape with a black material whose transparency is
-``1 - shadow_intensity``.
+The shadows of the casters of one light and one opacity on one receiver are
+united into one region (so overlaps do not darken twice), cut to the
+receiver's outline (the union of its triangles), triangulated and lifted
+towards the light by ``offset`` (default ``1e-3`` of the diagonal of the
+geometry and the lights; the i-th of n lights is lifted ``offset * (1 + i /
+n)`` so that shadows of different lights do not z-fight).
+Each becomes a shape with a black material whose darkness (one less its
+transparency) is ``shadow_intensity`` times the casters' opacity. A point
+takes the darkness of the most opaque caster that hides it from the light:
+from each translucent opacity's region the regions of every more opaque one
+are cut out first (a polygon difference), so the layers never overlap; the
+opaque layer is named ``shadow_<light>_<receiver>``, one of opacity 1/2
+``shadow_<light>_<receiver>_opacity50``. Shadows on every other surface
+(:mod:`.surfaces`) are layered the same way.
 
 ``method="volume"`` instead adds one closed shadow volume
 (:func:`shadowgeo.shadow_volume`) per shape and light, role
