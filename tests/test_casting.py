@@ -388,3 +388,16 @@ def test_a_shape_that_does_not_cast_keeps_saying_so_in_x3d_written_afresh(tmp_pa
     assert 'castShadow="false"' in (tmp_path / "out.x3d").read_text()
     (back,) = sg.load(tmp_path / "out.x3d").shapes
     assert not back.casts_shadow
+
+
+def test_shadow_volumes_only_for_shapes_that_cast(tmp_path):
+    text = x3d(
+        box("quiet", (-4, 2.5, 0), shape='castShadow="false"')
+        + box("glass", (0, 2.5, 0), material='transparency="1"')
+        + box("loud", (4, 2.5, 0))
+    )
+    path = tmp_path / "scene.x3d"
+    path.write_text(text)
+    scene = sg.add_shadows(sg.load(path), method="volume")
+    names = [shape.name for shape in scene.shapes_with_role("volume")]
+    assert names == ["volume_lamp_ground", "volume_lamp_loud"]

@@ -243,7 +243,7 @@ def _add_shadows(
     opacity = opacities(geometry)  # (see .opacity: 0 casts nothing)
 
     if method == "volume":
-        added = _volumes(scene, stacked, chosen, tolerance, names, notes, progress)
+        added = _volumes(scene, stacked, opacity, chosen, tolerance, names, notes, progress)
     else:
         own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
         if surfaces is None:
@@ -610,14 +610,16 @@ def _shadow_on(
 def _volumes(
     scene: Scene,
     stacked: CasterSet,
+    opacity: np.ndarray,
     chosen: list[SceneLight],
     tolerance: Tolerance,
     names: _Names,
     notes: list[str],
     progress: Progress | None,
 ) -> list[Shape]:
-    """Shadow volumes of every shape for every light, ending one scene size past
-    the farthest corner of the scene (a sweep of twice its size for a sun)."""
+    """Shadow volumes of every shape that casts (``opacity`` above 0) for every
+    light, ending one scene size past the farthest corner of the scene (a
+    sweep of twice its size for a sun)."""
     bounds = stacked.bounds
     corners = np.array(
         [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
@@ -632,7 +634,8 @@ def _volumes(
             extent = 2 * tolerance.scale
         light_name = names.light(scene_light, index)
         group = names.unique(f"shadows_{light_name}")
-        for caster, lit in zip(stacked.casters, stacked.lit(light), strict=True):
+        casting = stacked.lit(light) & (opacity > 0)
+        for caster, lit in zip(stacked.casters, casting, strict=True):
             done += 1
             if progress is not None:
                 progress(done, total)
