@@ -401,3 +401,45 @@ def test_shadow_volumes_only_for_shapes_that_cast(tmp_path):
     scene = sg.add_shadows(sg.load(path), method="volume")
     names = [shape.name for shape in scene.shapes_with_role("volume")]
     assert names == ["volume_lamp_ground", "volume_lamp_loud"]
+
+
+USDA = """#usda 1.0
+(
+    upAxis = "Y"
+    metersPerUnit = 1
+)
+def Xform "World"
+{
+    def Mesh "ground"
+    {
+        uniform bool doubleSided = 1
+        int[] faceVertexCounts = [4]
+        int[] faceVertexIndices = [0, 3, 2, 1]
+        point3f[] points = [(-10, 0, -10), (10, 0, -10), (10, 0, 10), (-10, 0, 10)]
+    }
+    def Mesh "glass"
+    {
+        int[] faceVertexCounts = [4, 4, 4, 4, 4, 4]
+        int[] faceVertexIndices = [0, 1, 3, 2, 4, 6, 7, 5, 0, 4, 5, 1, 2, 3, 7, 6, 0, 2, 6, 4,
+                                   1, 5, 7, 3]
+        point3f[] points = [(3, 2, -1), (3, 2, 1), (3, 3, -1), (3, 3, 1),
+                            (5, 2, -1), (5, 2, 1), (5, 3, -1), (5, 3, 1)]
+        float[] primvars:displayOpacity = [0.5] (interpolation = "constant")
+    }
+    def SphereLight "lamp"
+    {
+        double3 xformOp:translate = (0, 8, 0)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+}
+"""
+
+
+def test_usd_display_opacity_half_casts_half_dark(tmp_path):
+    path = tmp_path / "scene.usda"
+    path.write_text(USDA)
+    scene = sg.add_shadows(sg.load(path), surfaces=False)
+    (shadow,) = on_ground(scene).values()
+    assert shadow.material.transparency == pytest.approx(0.5)
+    area, _ = region(shadow)
+    assert area.symmetric_difference(projected_hull((4, 2.5, 0), (2, 1, 2))).area < 1e-6
