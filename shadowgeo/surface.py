@@ -41,6 +41,12 @@ of a light are handled together (:class:`shadowgeo.outline.OutlineSet`): their
 outlines made, paired with faces and cut in a few numpy passes and one
 Clipper2 call, not one Python call each.
 
+:func:`shadow_layers_on_surface` takes groups of casters (of decreasing
+opacity, in the scene converter) and gives one shadow per group, none
+overlapping another: steps 1 to 3 run for each group in one frame, each
+group's regions less the earlier groups' are cut face by face
+(:func:`shadowgeo.seams.face_regions`), and then each is stitched.
+
 Per-mesh work on the surface (merged vertices, normals, face frames, whether
 it is a single sheet) is kept on the mesh (:func:`shadowgeo.sheets.surface_geometry`):
 a second light or a second call pays only for what the light changes.
@@ -258,9 +264,10 @@ def shadow_on_surface(
     >>> round(shadow.area, 12), np.round(shadow.fraction, 12).tolist()
     (0.5, [0.75, 0.25])
     """
-    return shadow_layers_on_surface([casters], light, surface, offset=offset, tolerance=tolerance)[
-        0
-    ]
+    (layer,) = shadow_layers_on_surface(
+        [casters], light, surface, offset=offset, tolerance=tolerance
+    )
+    return layer
 
 
 def shadow_layers_on_surface(
