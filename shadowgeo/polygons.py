@@ -697,6 +697,16 @@ def intersect(region: CrossSection, other: CrossSection) -> CrossSection:
     return region ^ other
 
 
+def subtract(region: CrossSection, other: CrossSection) -> CrossSection:
+    """The points of ``region`` not in ``other``."""
+    return region - other
+
+
+def unite(region: CrossSection, other: CrossSection) -> CrossSection:
+    """The points of ``region`` or ``other``."""
+    return region + other
+
+
 def components(region: CrossSection) -> list[list[np.ndarray]]:
     """Connected parts of ``region``, each ``[outer, hole, ...]``: outer loop
     counter-clockwise, holes clockwise, as (k, 2) float64 arrays.

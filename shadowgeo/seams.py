@@ -18,10 +18,12 @@ The regions are then triangulated with those shared points, face by face.
 
 from __future__ import annotations
 
+from typing import Literal, cast
+
 import numpy as np
 from manifold3d import triangulate
 
-from .polygons import MAX_COORDINATE
+from .polygons import MAX_COORDINATE, fill, local_scale, region_loops, subtract, unite
 from .topology import loops_taken, unique_integers
 
 # Loops of many regions at once: (P, 2) points, loop after loop; (L,) the
@@ -37,6 +39,57 @@ def loops_of(regions: list[list[np.ndarray]]) -> Loops:
         return np.zeros((0, 2)), sizes, region.astype(np.int64)
     points = np.concatenate([loop for loops in regions for loop in loops])
     return points, sizes, region.astype(np.int64)
+
+
+def face_regions(
+    one: tuple[Loops, np.ndarray],
+    other: tuple[Loops, np.ndarray],
+    operation: Literal["subtract", "unite"],
+) -> tuple[Loops, np.ndarray]:
+    """Two sets of per-face regions (each :data:`Loops` and the sorted faces
+    of its regions, in the same face frames) combined face by face: one's
+    region less the other's, or the two united, where a face has both;
+    where it has one only, that one's region for a union, ``one``'s or
+    nothing for a difference. Faces whose region comes out empty are
+    dropped."""
+    (points, sizes, region), faces = one
+    (other_points, other_sizes, other_region), other_faces = other
+    uniting = operation == "unite"
+    combine = unite if uniting else subtract
+    own = _split(points, sizes, region, len(faces))
+    theirs = _split(other_points, other_sizes, other_region, len(other_faces))
+    slot = {int(face): k for k, face in enumerate(faces.tolist())}
+    other_slot = {int(face): k for k, face in enumerate(other_faces.tolist())}
+    wanted = sorted(set(slot) | set(other_slot)) if uniting else sorted(slot)
+    regions: list[list[np.ndarray]] = []
+    kept: list[int] = []
+    for face in wanted:
+        mine, yours = slot.get(face), other_slot.get(face)
+        if yours is None or mine is None:
+            loops = own[mine] if mine is not None else theirs[cast(int, yours)]
+        else:
+            both = np.concatenate(own[mine] + theirs[yours])
+            scale = local_scale(2.0 * float(np.abs(both).max()))
+            result = combine(
+                fill([loop * scale for loop in own[mine]]),
+                fill([loop * scale for loop in theirs[yours]]),
+            )
+            loops = [loop / scale for loop in region_loops(result)]
+        if loops:
+            regions.append(loops)
+            kept.append(face)
+    return loops_of(regions), np.array(kept, dtype=np.int64)
+
+
+def _split(
+    points: np.ndarray, sizes: np.ndarray, region: np.ndarray, n_regions: int
+) -> list[list[np.ndarray]]:
+    """:data:`Loops` as a list of regions, each a list of (k, 2) loops."""
+    regions: list[list[np.ndarray]] = [[] for _ in range(n_regions)]
+    starts = np.cumsum(sizes) - sizes
+    for start, size, owner in zip(starts.tolist(), sizes.tolist(), region.tolist(), strict=True):
+        regions[owner].append(points[start : start + size])
+    return regions
 
 
 def without_collinear(regions: Loops, eps: float) -> Loops:

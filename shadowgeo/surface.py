@@ -41,6 +41,12 @@ of a light are handled together (:class:`shadowgeo.outline.OutlineSet`): their
 outlines made, paired with faces and cut in a few numpy passes and one
 Clipper2 call, not one Python call each.
 
+:func:`shadow_layers_on_surface` takes groups of casters (of decreasing
+opacity, in the scene converter) and gives one shadow per group, none
+overlapping another: steps 1 to 3 run for each group in one frame, each
+group's regions less the earlier groups' are cut face by face
+(:func:`shadowgeo.seams.face_regions`), and then each is stitched.
+
 Per-mesh work on the surface (merged vertices, normals, face frames, whether
 it is a single sheet) is kept on the mesh (:func:`shadowgeo.sheets.surface_geometry`):
 a second light or a second call pays only for what the light changes.
@@ -56,7 +62,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, cast
 
 import numpy as np
@@ -75,7 +81,7 @@ from .lightframe import (
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import MAX_CURVE_SEGMENTS
 from .outline import Outline, OutlineSet, make_outlines
-from .seams import Loops, loops_of, stitch, without_collinear
+from .seams import Loops, face_regions, loops_of, stitch, without_collinear
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
 from .tolerance import Tolerance
@@ -132,6 +138,18 @@ class SurfaceDiagnostics:
     n_outlined_casters: int = 0
     n_full_faces: int = 0
     limits: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class _Found:
+    """What the first steps found: each shadowed face's region (loops in
+    its frame), the faces (sorted), (m,) bool the faces turned to the light,
+    and the diagnostics so far."""
+
+    regions: Loops
+    faces: np.ndarray
+    facing: np.ndarray
+    diagnostics: SurfaceDiagnostics
 
 
 @dataclass(frozen=True)
@@ -246,25 +264,80 @@ def shadow_on_surface(
     >>> round(shadow.area, 12), np.round(shadow.fraction, 12).tolist()
     (0.5, [0.75, 0.25])
     """
+    (layer,) = shadow_layers_on_surface(
+        [casters], light, surface, offset=offset, tolerance=tolerance
+    )
+    return layer
+
+
+def shadow_layers_on_surface(
+    groups: Sequence[MeshLike | Sequence[MeshLike]],
+    light: Light,
+    surface: MeshLike,
+    *,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+) -> list[SurfaceShadow]:
+    """The shadows of groups of casters on ``surface`` as layers that do not
+    overlap: the i-th is what :func:`shadow_on_surface` gives for
+    ``groups[i]`` less, face by face, the shadows of every earlier group. A
+    point of the surface is in the layer of the first group that hides it
+    (casters of decreasing opacity: each point takes the darkness of the most
+    opaque caster in front of it). One group is :func:`shadow_on_surface`.
+
+    Parameters are those of :func:`shadow_on_surface`, ``groups`` a list of
+    its ``casters``; each layer's ``fraction`` is the share of each face in
+    that layer. Each layer is stitched on its own: a layer has no cracks, and
+    two layers meet along a common edge up to the tolerance length.
+
+    Examples
+    --------
+    Two walls on a unit square of ground; the second's shadow, over the
+    first's on the square's right half, keeps the part the first leaves:
+
+    >>> from shadowgeo import DirectionalLight
+    >>> ground = ([[0, 0, 0], [1, 0, 0], [1, 0, -1], [0, 0, -1]], [[0, 1, 2], [0, 2, 3]])
+    >>> def wall(x):
+    ...     return [[x, 0, 1], [x, 0, -2], [x, 9, -2], [x, 9, 1]], [[0, 1, 2], [0, 2, 3]]
+    >>> first, second = shadow_layers_on_surface(
+    ...     [wall(0.5), wall(0.25)], DirectionalLight([1, -1, 0]), ground
+    ... )
+    >>> round(first.area, 12), round(second.area, 12)
+    (0.5, 0.25)
+    """
     require_light(light)
     receiver = as_caster(surface)
-    caster_list = [as_caster(caster) for caster in _as_list(casters)]
-    _settle_casters(caster_list)
+    lists = [[as_caster(caster) for caster in _as_list(group)] for group in groups]
+    every = [caster for group in lists for caster in group]
+    _settle_casters(every)
     offset = float(offset)
     if not math.isfinite(offset):
         raise GeometryError(f"offset must be finite, got {offset!r}")
     positional = is_positional(light)
     if tolerance is None:
-        points = [c.bounds for c in caster_list if c.n_faces]
+        points = [c.bounds for c in every if c.n_faces]
         points += [receiver.bounds] if receiver.n_faces else []
         points += [cast("PointLight | SpotLight", light).position[None]] if positional else []
         tolerance = Tolerance.for_points(*points)
     if positional:
-        for caster in caster_list:
+        for caster in every:
             if caster.n_faces:
                 position = cast("PointLight | SpotLight", light).position
                 check_light_outside(caster, position, tolerance)
-    return _SurfaceProjector(caster_list, light, receiver, offset, tolerance).run()
+    # one frame for every layer: their regions are in the same face frames
+    center = _center(every, receiver)
+    layers = []
+    covered: tuple[Loops, np.ndarray] | None = None  # the earlier layers' regions
+    for group in lists:
+        projector = _SurfaceProjector(group, light, receiver, offset, tolerance, center)
+        found = projector.regions()
+        own = (found.regions, found.faces)
+        if covered is not None:
+            regions, faces = face_regions(own, covered, "subtract")
+            found = replace(found, regions=regions, faces=faces)
+        covered = own if covered is None else face_regions(covered, own, "unite")
+        layers.append(projector.shadow(found))
+    return layers
 
 
 def _settle_casters(casters: list[Caster]) -> None:
@@ -336,9 +409,16 @@ class _SurfaceProjector:
     geometry: SurfaceGeometry
 
     def __init__(
-        self, casters: list[Caster], light: Light, surface: Caster, offset: float, tol: Tolerance
+        self,
+        casters: list[Caster],
+        light: Light,
+        surface: Caster,
+        offset: float,
+        tol: Tolerance,
+        center: np.ndarray | None = None,
     ) -> None:
         self.casters = casters
+        self.given_center = center
         self.light = light
         self.surface = surface
         self.offset = offset
@@ -346,16 +426,34 @@ class _SurfaceProjector:
         self.limits: list[str] = []
 
     def run(self) -> SurfaceShadow:
+        return self.shadow(self.regions())
+
+    def regions(self) -> _Found:
+        """Each face's shadow region, in its face's frame (step 1 to 3)."""
         corners, facing, lit = self._faces()
         receivers, triangles, caster_triangles, full, extra, counts = self._pairs(corners, lit)
         regions, region_faces = self._regions(
             receivers, triangles, caster_triangles, corners, full, extra
         )
-        regions = without_collinear(regions, self.tol.length)
+        info = SurfaceDiagnostics(
+            n_surface_faces=self.surface.n_faces,
+            n_lit_faces=int(lit.sum()),
+            n_caster_triangles=len(caster_triangles),
+            n_candidate_pairs=counts[0],
+            n_clipped_pairs=len(receivers),
+            n_outlined_casters=counts[1],
+            n_full_faces=int(full.sum()),
+            limits=tuple(self.limits),
+        )
+        return _Found(regions, region_faces, facing, info)
+
+    def shadow(self, found: _Found) -> SurfaceShadow:
+        """The regions stitched, triangulated and lifted (step 4)."""
+        regions = without_collinear(found.regions, self.tol.length)
         points, shadow_faces, face_index = stitch(
             self.vertices,
             self.faces,
-            region_faces,
+            found.faces,
             (self.origin, self.u, self.v),
             regions,
             self.tol.length,
@@ -366,21 +464,11 @@ class _SurfaceProjector:
         areas = 0.5 * np.linalg.norm(
             np.cross(flat[:, 1] - flat[:, 0], flat[:, 2] - flat[:, 0]), axis=1
         )
-        n_faces = self.surface.n_faces
+        n_faces, facing = self.surface.n_faces, found.facing
         shadowed = np.bincount(face_index, weights=areas, minlength=n_faces)
         fraction = np.ones(n_faces)
         fraction[facing] = np.minimum(shadowed[facing] / self.face_area[facing], 1.0)
-        info = SurfaceDiagnostics(
-            n_surface_faces=n_faces,
-            n_lit_faces=int(lit.sum()),
-            n_caster_triangles=len(caster_triangles),
-            n_candidate_pairs=counts[0],
-            n_clipped_pairs=len(receivers),
-            n_shadowed_faces=len(unique_integers(face_index)),
-            n_outlined_casters=counts[1],
-            n_full_faces=int(full.sum()),
-            limits=tuple(self.limits),
-        )
+        info = replace(found.diagnostics, n_shadowed_faces=len(unique_integers(face_index)))
         area = float(areas.sum())
         return SurfaceShadow(self.light, vertices, triangles, face_index, fraction, area, info)
 
@@ -388,9 +476,10 @@ class _SurfaceProjector:
         """The surface in the centred frame, with vertices merged by position:
         (m, 3, 3) corners, the faces turned to the light, and those it reaches."""
         surface, tol, light = self.surface, self.tol, self.light
-        bounds = [c.bounds for c in self.casters if c.n_faces] + [surface.bounds]
-        stacked = np.concatenate(bounds)
-        self.center = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
+        if self.given_center is None:
+            self.center = _center(self.casters, surface)
+        else:
+            self.center = self.given_center
         # One index per position (faces that share a corner position share an
         # edge), normals and frames: once per mesh, in its own centred frame.
         geometry = surface.derived("surface_geometry", surface_geometry)
@@ -1133,6 +1222,14 @@ class _SurfaceProjector:
                 inverse.reshape(-1, 3), self.unit[face_index], len(used)
             )
         return vertices + self.center, inverse.reshape(-1, 3)
+
+
+def _center(casters: list[Caster], surface: Caster) -> np.ndarray:
+    """(3,) the centre of the box of the casters' boxes (those with faces)
+    and the surface's: the frame the work is done in."""
+    stacked = np.concatenate([c.bounds for c in casters if c.n_faces] + [surface.bounds])
+    center: np.ndarray = 0.5 * (stacked.min(axis=0) + stacked.max(axis=0))
+    return center
 
 
 def closed_silhouettes(

@@ -537,13 +537,13 @@ def test_every_surface_sees_only_the_casters_a_light_reaches(monkeypatch):
     far = box([25.0, 1.0, 0.0], [1.0, 2.0, 1.0])  # inside the scene's box: the same lift
     lamp = sg.SceneLight(sg.PointLight([0.5, 4.0, 0.0], radius=6.0), name="lamp")
     handed: list[int] = []
-    original = surfaces_module.shadow_on_surface
+    original = surfaces_module.shadow_layers_on_surface
 
-    def counting(casters, *args, **kwargs):
-        handed.append(len(casters))
-        return original(casters, *args, **kwargs)
+    def counting(groups, *args, **kwargs):
+        handed.append(sum(len(casters) for casters in groups))
+        return original(groups, *args, **kwargs)
 
-    monkeypatch.setattr(surfaces_module, "shadow_on_surface", counting)
+    monkeypatch.setattr(surfaces_module, "shadow_layers_on_surface", counting)
     with_far = sg.add_shadows(sg.Scene(shapes=[ground, step, near, edge, far], lights=[lamp]))
     assert handed == [4]  # ground, step, near box and the one on the edge
     without = sg.add_shadows(sg.Scene(shapes=[ground, step, near, edge], lights=[lamp]))

@@ -50,7 +50,9 @@ class Mesh:
 
 @dataclass
 class Instance:
-    """One rendered Shape: its geometry under a world transform (4x4)."""
+    """One rendered Shape: its geometry under a world transform (4x4);
+    ``casts_shadow`` False for X3D 4's ``castShadow="false"`` or Castle's
+    ``Appearance { shadowCaster FALSE }``."""
 
     geometry: Mesh | Primitive
     transform: np.ndarray
@@ -59,6 +61,7 @@ class Instance:
     source: str
     role: str = "geometry"
     group: str | None = None
+    casts_shadow: bool = True
 
 
 @dataclass

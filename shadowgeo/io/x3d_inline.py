@@ -202,6 +202,7 @@ def _gltf(
                 shape.material,
                 shape.name or name,
                 shape.source or path.name,
+                casts_shadow=shape.casts_shadow,
             )
         )
     return None

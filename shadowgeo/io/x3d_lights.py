@@ -8,6 +8,7 @@ the transform's mean scale ``|det M|^(1/3)`` (exact for uniform scaling).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -112,10 +113,26 @@ def material(context: Context, appearance: Element | None) -> Material:
         said = len(context.warnings)
         made = _material(context, node)
         if len(context.warnings) > said:
-            return made  # each bad Material is named in its own warning
+            return _alpha_mode(context, appearance, made)  # each bad one named in its warning
         context.by_content[key] = made
     known: Material = context.by_content[key]
-    return known
+    return _alpha_mode(context, appearance, known)
+
+
+def _alpha_mode(context: Context, appearance: Element, look: Material) -> Material:
+    """``look`` as X3D 4's Appearance ``alphaMode`` draws it: ``OPAQUE``
+    opaque whatever its transparency, ``MASK`` opaque or not at all as its
+    alpha (``1 - transparency``) reaches ``alphaCutoff`` or not; ``AUTO``
+    and ``BLEND`` as it is. (A texture's own alpha is not modelled.)"""
+    mode = str(context.field(appearance, "alphaMode")).upper()
+    if mode == "OPAQUE":
+        transparency = 0.0
+    elif mode == "MASK":
+        cutoff = float(context.field(appearance, "alphaCutoff"))
+        transparency = 0.0 if 1.0 - look.transparency >= cutoff else 1.0
+    else:
+        return look
+    return look if look.transparency == transparency else replace(look, transparency=transparency)
 
 
 def _material(context: Context, node: Element) -> Material:

@@ -74,7 +74,7 @@ from ..scene.model import MARK, Viewpoint, axis_angle
 from ..tolerance import Tolerance
 from . import float_triple, x3d_parse
 from .x3d_defaults import DEFAULTS
-from .x3d_fields import Context, Element, Tree, local_name, rotation_matrix
+from .x3d_fields import Context, Element, Tree, local_name, parse, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
 from .x3d_inline import URL_SCHEME, load_inline
 from .x3d_lights import LIGHTS, material, scene_light
@@ -310,6 +310,7 @@ class _Reader:
                 f"{os.path.basename(context.file_of(node))} line {node.sourceline}, "
                 f"{context.describe(node)}",
                 *self._added_role(element),
+                casts_shadow=_casts_shadow(context, element, appearance),
             )
         )
 
@@ -376,6 +377,7 @@ class _Reader:
                     source=instance.source,
                     role=instance.role,
                     group=instance.group,
+                    casts_shadow=instance.casts_shadow,
                 )
             )
         scene.lights.extend(self.lights)
@@ -403,6 +405,24 @@ class _Reader:
 
 
 _IDENTITY = np.eye(4)
+
+
+def _casts_shadow(context: Context, shape: Element, appearance: Element | None) -> bool:
+    """False when the author said the Shape casts no shadow: X3D 4's
+    ``Shape castShadow="false"`` or Castle Game Engine's ``Appearance
+    shadowCaster="false"`` (an extension: read only where written)."""
+    if not context.field(shape, "castShadow"):
+        return False
+    written = None if appearance is None else appearance.get("shadowCaster")
+    if written is None:
+        return True
+    try:
+        return bool(parse(written, "SFBool"))
+    except ValueError as problem:
+        context.warn_once(
+            appearance, f"field shadowCaster: '{written[:40]}' {problem}; TRUE is used"
+        )
+        return True
 
 
 def _public(name: str | None) -> str | None:

@@ -555,6 +555,8 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
         if shape.role in ADDED_ROLES:
             continue
         node = _shape_element(shape, used, world=False, splicer=splicer)
+        if not shape.casts_shadow:  # (X3D 4.0's field: this document's version)
+            node.set("castShadow", "false")
         if not np.array_equal(shape.transform, _IDENTITY):
             transform = etree.SubElement(body, "Transform", _transform_fields(shape.transform))
             transform.append(node)

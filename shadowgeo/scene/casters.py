@@ -24,6 +24,7 @@ from ..plane import Plane
 from ..tolerance import Tolerance
 from ..topology import BLOCK, Caster, block_normals, closed_by_sort
 from .model import Shape, transformed
+from .opacity import casting_opacity
 
 # Stacked caster meshes kept for later lights (each holds its topology: a few
 # times the size of its arrays).
@@ -41,8 +42,9 @@ _TOPOLOGIES_TESTED = 64
 
 def distinct(shapes: list[Shape]) -> list[Shape]:
     """``shapes`` without those that repeat an earlier one's geometry exactly
-    (vertices, faces, transform and sidedness): a node copied ten thousand
-    times over casts, and receives, one shadow.
+    (vertices, faces, transform and sidedness) and casting opacity
+    (:func:`~.opacity.casting_opacity`): a node copied ten thousand times over
+    casts, and receives, one shadow.
 
     Shapes are first told apart by a cheap probe (array shapes, transform,
     sidedness, first and last vertex); only shapes whose probes agree are
@@ -61,6 +63,7 @@ def distinct(shapes: list[Shape]) -> list[Shape]:
             shape.solid,
             vertices[:1].tobytes(),
             vertices[-1:].tobytes(),
+            casting_opacity(shape),
         )
         earlier = probes.get(probe)
         if earlier is None:

@@ -347,11 +347,18 @@ def overview(scene: Scene, field_of_view: float = math.pi / 4) -> Viewpoint:
 
 
 def shadow_shape(
-    vertices: ArrayLike, faces: ArrayLike, scene_light: SceneLight, source: str
+    vertices: ArrayLike,
+    faces: ArrayLike,
+    scene_light: SceneLight,
+    source: str,
+    opacity: float = 1.0,
 ) -> Shape:
     """A baked shadow as a shape: black, ``1 - shadow_intensity`` transparent,
-    two-sided, casting nothing (role ``"shadow"``)."""
+    two-sided, casting nothing (role ``"shadow"``). The shadow of casters of
+    ``opacity`` (0 to 1) is that much as dark: its darkness (one less its
+    transparency) times ``opacity``."""
     transparency = float(np.clip(1.0 - scene_light.shadow_intensity, 0.0, 1.0))
+    transparency = 1.0 - (1.0 - transparency) * opacity
     return Shape(
         np.asarray(vertices, dtype=np.float64),
         np.asarray(faces, dtype=np.int64),

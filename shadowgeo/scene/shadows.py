@@ -18,22 +18,32 @@ Receivers
     found automatically or from the shapes named in ``receivers=``, or one
     unbounded ``plane=``; the rules are in :mod:`shadowgeo.scene.receivers`.
 Casters
-    Every shape; a receiver's own triangles (and an open shape's triangles
-    lying in its plane) do not shadow it; a closed shape resting on it keeps
-    its footprint. Only what can shadow a receiver is modelled: a caster
+    Every shape, as much as it is opaque (:mod:`.opacity`): one that says it
+    casts no shadow (X3D 4 ``castShadow="false"``, Castle's ``shadowCaster
+    FALSE``, ``Shape.casts_shadow``) or whose opacity ``1 - transparency``
+    rounds to 0 in 1/16 steps (below 1/32) casts nothing and costs no pass;
+    it still receives. A receiver's own triangles (and an open shape's
+    triangles lying in its plane) do not shadow it; a closed shape resting on
+    it keeps its footprint. Only what can shadow a receiver is modelled: a caster
     wholly behind the receiver's plane, wholly at or beyond a positional
     light's height, out of a light's radius, outside a spot light's cone, or
     whose shadow misses the receiver's bounding box is skipped. A caster the
     light touches or sits inside (a lamp's own bulb) is skipped with a note.
 
-The shadows of all casters of one light on one receiver are united into one
-region (so overlaps do not darken twice), cut to the receiver's outline (the
-union of its triangles), triangulated and lifted towards the light by
-``offset`` (default ``1e-3`` of the diagonal of the geometry and the lights;
-the i-th of n lights is lifted ``offset * (1 + i / n)`` so that shadows of
-different lights do not z-fight).
-Each becomes a shape with a black material whose transparency is
-``1 - shadow_intensity``.
+The shadows of the casters of one light and one opacity on one receiver are
+united into one region (so overlaps do not darken twice), cut to the
+receiver's outline (the union of its triangles), triangulated and lifted
+towards the light by ``offset`` (default ``1e-3`` of the diagonal of the
+geometry and the lights; the i-th of n lights is lifted ``offset * (1 + i /
+n)`` so that shadows of different lights do not z-fight).
+Each becomes a shape with a black material whose darkness (one less its
+transparency) is ``shadow_intensity`` times the casters' opacity. A point
+takes the darkness of the most opaque caster that hides it from the light:
+from each translucent opacity's region the regions of every more opaque one
+are cut out first (a polygon difference), so the layers never overlap; the
+opaque layer is named ``shadow_<light>_<receiver>``, one of opacity 1/2
+``shadow_<light>_<receiver>_opacity50``. Shadows on every other surface
+(:mod:`.surfaces`) are layered the same way.
 
 ``method="volume"`` instead adds one closed shadow volume
 (:func:`shadowgeo.shadow_volume`) per shape and light, role
@@ -67,6 +77,7 @@ from ..topology import Caster
 from ..volume import shadow_volume
 from .casters import CasterSet, distinct
 from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
+from .opacity import opacities
 from .receivers import Receiver, ground
 from .receivers import select as select_receivers
 from .surfaces import receiving_faces, surface_shadow
@@ -229,9 +240,10 @@ def _add_shadows(
     if not math.isfinite(lift) or lift < 0:
         raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")
     names = _Names(kept, scene.lights)
+    opacity = opacities(geometry)  # (see .opacity: 0 casts nothing)
 
     if method == "volume":
-        added = _volumes(scene, stacked, chosen, tolerance, names, notes, progress)
+        added = _volumes(scene, stacked, opacity, chosen, tolerance, names, notes, progress)
     else:
         own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
         if surfaces is None:
@@ -282,10 +294,11 @@ def _add_shadows(
                     if progress is not None:
                         progress(start + count, total)
 
-                shape = _shadow_on(
+                layers = _shadow_on(
                     receiver,
                     light,
                     casters=stacked,
+                    opacity=opacity,
                     tolerance=tolerance,
                     lift=height,
                     notes=notes,
@@ -293,35 +306,42 @@ def _add_shadows(
                     step=step,
                 )
                 done += len(stacked)
-                if shape is None:
-                    continue
-                shape.name = names.unique(f"shadow_{light_name}_{receiver.name}")
-                shape.group = group
-                added.append(shape)
+                for level, layer in layers:
+                    layer.name = names.unique(
+                        f"shadow_{light_name}_{receiver.name}{_layer_suffix(level)}"
+                    )
+                    layer.group = group
+                    added.append(layer)
             if surface is not None:
                 # only casters the light reaches (its radius, its cone): a
                 # ray to a lit point runs inside them; each caster's
                 # topology made once for every light
-                reached = np.flatnonzero(stacked.lit(light.light))
-                shape = surface_shadow(
+                reached = np.flatnonzero(stacked.lit(light.light) & (opacity > 0))
+                for level, layer in surface_shadow(
                     surface,
                     [stacked.caster(int(k)) for k in reached],
+                    opacity[reached],
                     light,
                     tolerance,
                     height,
                     notes,
                     light_name,
-                )
-                if shape is not None:
-                    shape.name = names.unique(f"shadow_{light_name}_surfaces")
-                    shape.group = group
-                    added.append(shape)
+                ):
+                    layer.name = names.unique(f"shadow_{light_name}_surfaces{_layer_suffix(level)}")
+                    layer.group = group
+                    added.append(layer)
         if progress is not None:
             progress(total, total)
         if not added:
             listed = ", ".join(receiver.name for receiver in found)
             notes.append(f"shadows: no shadow falls on the receivers ({listed})")
     return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
+
+
+def _layer_suffix(opacity: float) -> str:
+    """The end of the name of a shadow layer of casters of ``opacity``:
+    nothing for opaque ones, ``_opacity50`` for half-transparent ones."""
+    return "" if opacity >= 1 else f"_opacity{round(100 * opacity)}"
 
 
 def _terrain(stacked: CasterSet, axis: int) -> str | None:
@@ -508,19 +528,25 @@ def _shadow_on(
     scene_light: SceneLight,
     *,
     casters: CasterSet,
+    opacity: np.ndarray,
     tolerance: Tolerance,
     lift: float,
     notes: list[str],
     light_name: str,
     step: Callable[[int], None],
-) -> Shape | None:
-    """The united shadow of the casters on one receiver as a shape, or None:
-    raised ``lift`` off the receiver's plane, ``step(count)`` called once the
-    casters are chosen, and a note in ``notes`` for a caster that cannot cast."""
+) -> list[tuple[float, Shape]]:
+    """The shadow of the casters on one receiver as shapes, one per casting
+    opacity (``opacity``: (k,) each caster's, :mod:`.opacity`), most opaque
+    first, each with that opacity: raised ``lift`` off the receiver's plane,
+    ``step(count)`` called once the casters are chosen, and a note in
+    ``notes`` for a caster that cannot cast. The layers do not overlap: each
+    is its casters' united shadow less the shadows of every more opaque
+    layer, so a point takes the darkness of the most opaque caster that hides
+    it."""
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
     if plane is None:
-        return None  # the light is behind a one-sided receiver, or in its plane
+        return []  # the light is behind a one-sided receiver, or in its plane
     region2d = box2d = rectangle = None
     if receiver.triangles is not None:
         flat = plane.to_2d(receiver.triangles.reshape(-1, 3)).reshape(-1, 3, 2)
@@ -528,53 +554,72 @@ def _shadow_on(
         low, high = box2d
         rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
         region2d = flat
-    chosen = casters.may_shadow(light, plane, box2d, tolerance)
-    faces = casters.faces_of(chosen) & casters.off_plane(plane, tolerance)
+    chosen = casters.may_shadow(light, plane, box2d, tolerance) & (opacity > 0)
+    off_plane = casters.off_plane(plane, tolerance) if chosen.any() else None
     step(len(casters))
-    loops = _caster_loops(casters, faces, light, plane, rectangle, tolerance, notes, light_name)
-    if not loops:
-        return None
-    points = np.concatenate(loops)
+    layers: list[tuple[float, list[np.ndarray]]] = []
+    for level in np.unique(opacity[chosen])[::-1].tolist():  # most opaque first
+        faces = casters.faces_of(chosen & (opacity == level)) & off_plane
+        loops = _caster_loops(casters, faces, light, plane, rectangle, tolerance, notes, light_name)
+        if loops:
+            layers.append((level, loops))
+    if not layers:
+        return []
+    points = np.concatenate([loop for _, loops in layers for loop in loops])
     center = 0.5 * (points.min(axis=0) + points.max(axis=0))
     extent = float(np.abs(points - center).max())
     if region2d is not None:
         extent = max(extent, float(np.abs(region2d.reshape(-1, 2) - center).max()))
     scale = poly.local_scale(max(extent, tolerance.length))
-    local = [(loop - center) * scale for loop in loops]
     receiving = None
     if region2d is not None:
         receiving = poly.triangles_region((region2d - center) * scale)
-    if poly.whole_loop(local, keep_triangles=True) and (
-        receiving is None or poly.holds_box(receiving, local[0].min(axis=0), local[0].max(axis=0))
-    ):  # one simple loop on the receiver: no union and no cut (a sweep over the loop each)
-        parts = [local]
-    else:
-        region = poly.fill(local)
-        if receiving is not None:
-            region = poly.intersect(region, receiving)
-        parts = poly.components(region)
-    if not parts:
-        return None
-    flat_points, faces = poly.triangulate_parts(parts)
-    if not len(faces):
-        return None  # slivers narrower than rounding: no shadow to draw
-    vertices = plane.to_3d(flat_points / scale + center) + lift * plane.normal
-    return shadow_shape(
-        vertices, faces, scene_light, f"shadow of light {light_name} on {receiver.name}"
-    )
+    shapes = []
+    covered = None  # the more opaque layers' region
+    for level, loops in layers:
+        local = [(loop - center) * scale for loop in loops]
+        if (
+            len(layers) == 1
+            and poly.whole_loop(local, keep_triangles=True)
+            and (
+                receiving is None
+                or poly.holds_box(receiving, local[0].min(axis=0), local[0].max(axis=0))
+            )
+        ):  # one simple loop on the receiver: no union and no cut (a sweep over the loop each)
+            parts = [local]
+        else:
+            region = poly.fill(local)
+            if receiving is not None:
+                region = poly.intersect(region, receiving)
+            layer = region if covered is None else poly.subtract(region, covered)
+            covered = region if covered is None else poly.unite(covered, region)
+            parts = poly.components(layer)
+        if not parts:
+            continue
+        flat_points, faces = poly.triangulate_parts(parts)
+        if not len(faces):
+            continue  # slivers narrower than rounding: no shadow to draw
+        vertices = plane.to_3d(flat_points / scale + center) + lift * plane.normal
+        where = f"shadow of light {light_name} on {receiver.name}"
+        if level < 1:
+            where += f", of casters of opacity {level:g}"
+        shapes.append((level, shadow_shape(vertices, faces, scene_light, where, level)))
+    return shapes
 
 
 def _volumes(
     scene: Scene,
     stacked: CasterSet,
+    opacity: np.ndarray,
     chosen: list[SceneLight],
     tolerance: Tolerance,
     names: _Names,
     notes: list[str],
     progress: Progress | None,
 ) -> list[Shape]:
-    """Shadow volumes of every shape for every light, ending one scene size past
-    the farthest corner of the scene (a sweep of twice its size for a sun)."""
+    """Shadow volumes of every shape that casts (``opacity`` above 0) for every
+    light, ending one scene size past the farthest corner of the scene (a
+    sweep of twice its size for a sun)."""
     bounds = stacked.bounds
     corners = np.array(
         [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
@@ -589,7 +634,8 @@ def _volumes(
             extent = 2 * tolerance.scale
         light_name = names.light(scene_light, index)
         group = names.unique(f"shadows_{light_name}")
-        for caster, lit in zip(stacked.casters, stacked.lit(light), strict=True):
+        casting = stacked.lit(light) & (opacity > 0)
+        for caster, lit in zip(stacked.casters, casting, strict=True):
             done += 1
             if progress is not None:
                 progress(done, total)

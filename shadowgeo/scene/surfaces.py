@@ -4,7 +4,9 @@ The planar receivers (:mod:`.receivers`: grounds, floors, walls, slab tops)
 keep the fast planar path. Every other face of the scene's geometry (terrain,
 steps, the sides of a box, a sphere, the casters themselves) receives through
 :func:`shadowgeo.shadow_on_surface`, all shapes of the scene at once: one
-surface made of those faces, every shape a caster. A face of a planar receiver
+surface made of those faces, every shape that casts a caster. Casters of
+less than full opacity (:mod:`.opacity`) cast lighter layers, each less the
+shadows of the more opaque ones, as on the planar receivers. A face of a planar receiver
 is left out of that surface, so no face is shadowed twice.
 
 A solid shape (X3D ``solid="true"``, the default) receives on the front of its
@@ -17,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import GeometryError
-from ..surface import shadow_on_surface
+from ..surface import shadow_layers_on_surface
 from ..tolerance import Tolerance
 from ..topology import Caster, row_groups, unique_integers
 from .casters import CasterSet
@@ -86,30 +88,44 @@ def receiving_faces(
 def surface_shadow(
     surface: tuple[np.ndarray, np.ndarray],
     casters: list[Caster],
+    opacity: np.ndarray,
     scene_light: SceneLight,
     tolerance: Tolerance,
     lift: float,
     notes: list[str],
     light_name: str,
-) -> Shape | None:
-    """The shadow of ``casters`` (in world coordinates) on ``surface`` as one
-    shape (role ``"shadow"``), or None when no shadow falls on it."""
+) -> list[tuple[float, Shape]]:
+    """The shadow of ``casters`` (in world coordinates; ``opacity`` (k,) the
+    casting opacity of each, above 0) on ``surface`` as shapes (role
+    ``"shadow"``), one per opacity, most opaque first, as the planar
+    receivers' (:func:`~shadowgeo.shadow_layers_on_surface`: the layers do
+    not overlap, each as dark as its opacity); none when no shadow falls on
+    it."""
     vertices, faces = surface
-    casters = [caster for caster in casters if caster.n_faces]
-    if not len(faces) or not casters:
-        return None
+    with_faces = [k for k, caster in enumerate(casters) if caster.n_faces]
+    if not len(faces) or not with_faces:
+        return []
+    levels = sorted({float(opacity[k]) for k in with_faces}, reverse=True)
+    groups = [[casters[k] for k in with_faces if opacity[k] == level] for level in levels]
     try:
-        result = shadow_on_surface(
-            casters, scene_light.light, (vertices, faces), offset=lift, tolerance=tolerance
+        layers = shadow_layers_on_surface(
+            groups, scene_light.light, (vertices, faces), offset=lift, tolerance=tolerance
         )
     except GeometryError as error:
         notes.append(f"shadows: no shadows on the surfaces for light {light_name}: {error}")
-        return None
-    if not len(result.faces):
-        return None
-    return shadow_shape(
-        result.vertices,
-        result.faces,
-        scene_light,
-        f"shadow of light {light_name} on the scene's surfaces",
-    )
+        return []
+    where = f"shadow of light {light_name} on the scene's surfaces"
+    return [
+        (
+            level,
+            shadow_shape(
+                layer.vertices,
+                layer.faces,
+                scene_light,
+                where if level >= 1 else f"{where}, of casters of opacity {level:g}",
+                level,
+            ),
+        )
+        for level, layer in zip(levels, layers, strict=True)
+        if len(layer.faces)
+    ]
