@@ -40,10 +40,11 @@ LOAD_TIMEOUT = 45.0  # seconds for X_ITE to load and draw, in software
 
 # The input scene: ground, a red box (an X3D Box, tessellated by the reader), a lamp.
 # shadows="false": X_ITE must show the shadow shadowgeo baked, not one of its own.
+# No headlight: the lamp alone lights the ground, so its shadow is black.
 SCENE = f"""<?xml version="1.0" encoding="UTF-8"?>
 <X3D profile="Interchange" version="4.0">
   <Scene>
-    <NavigationInfo headlight="true" type='"NONE"'/>
+    <NavigationInfo headlight="false" type='"NONE"'/>
     <OrthoViewpoint position="0 50 0" orientation="1 0 0 -1.5707963267948966"
                     fieldOfView="{-HALF_VIEW} {-HALF_VIEW} {HALF_VIEW} {HALF_VIEW}"/>
     <PointLight DEF="lamp" location="{LIGHT[0]} {LIGHT[1]} {LIGHT[2]}" shadows="false"/>
@@ -216,7 +217,8 @@ def test_x_ite_shows_the_baked_shadow(tmp_path, suffix):
 
     assert inside.sum() > 1000
     assert np.mean(brightness[inside] < 40) > 0.99, np.percentile(brightness[inside], 99)
-    assert np.mean(brightness[outside] > 80) > 0.99, np.percentile(brightness[outside], 1)
+    # lit by the lamp alone: the far corners of the ground, at a grazing angle, get 66
+    assert np.mean(brightness[outside] > 55) > 0.99, np.percentile(brightness[outside], 1)
     # The dark region has the reference's area (in pixels), to within its outline's width.
     dark = (brightness < 40).sum() * (2 * HALF_VIEW / PIXELS) ** 2
     expected = shadow.difference(box).area

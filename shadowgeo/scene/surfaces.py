@@ -21,6 +21,7 @@ from ..surface import shadow_on_surface
 from ..tolerance import Tolerance
 from ..topology import Caster, row_groups, unique_integers
 from .casters import CasterSet
+from .darkness import Lighting
 from .model import SceneLight, Shape, shadow_shape
 from .receivers import Receiver, repeated_faces
 
@@ -91,9 +92,12 @@ def surface_shadow(
     lift: float,
     notes: list[str],
     light_name: str,
+    lighting: Lighting | None = None,
 ) -> Shape | None:
     """The shadow of ``casters`` (in world coordinates) on ``surface`` as one
-    shape (role ``"shadow"``), or None when no shadow falls on it."""
+    shape (role ``"shadow"``), or None when no shadow falls on it; as dark as
+    ``lighting`` says for X3D's default material (the surface spans shapes of
+    many looks), else the light's ``shadow_intensity``."""
     vertices, faces = surface
     casters = [caster for caster in casters if caster.n_faces]
     if not len(faces) or not casters:
@@ -107,9 +111,13 @@ def surface_shadow(
         return None
     if not len(result.faces):
         return None
+    darkness = None
+    if lighting is not None:
+        darkness = lighting.darkness(scene_light, result.vertices, result.faces)
     return shadow_shape(
         result.vertices,
         result.faces,
         scene_light,
         f"shadow of light {light_name} on the scene's surfaces",
+        darkness,
     )
