@@ -19,7 +19,8 @@ Stage metadata ``upAxis`` and ``metersPerUnit`` come from the scene.
   angle in degrees, softness from the beam width); a directional light a
   ``DistantLight``. Lights shine down their -Z, so the transform turns -Z onto
   the light's direction. ``ShadowAPI``'s ``inputs:shadow:enable`` carries X3D's
-  ``shadows``; a light that is off is ``invisible``.
+  ``shadows`` as a browser draws them (false once shadowgeo baked them, with
+  ``shadowgeo:shadowsBaked``); a light that is off is ``invisible``.
 - Names: prims get valid, unique identifiers; the original name is the prim's
   ``displayName`` (USD strings end at a NUL character). A shape or light
   without a name gets a generated prim name and reads back as unnamed.
