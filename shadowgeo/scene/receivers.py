@@ -19,7 +19,8 @@ shapes:
   of the shape's area, else it is not planar;
 * a plane ``a x + b y + c z + d = 0``: unbounded, lit from either side;
 * when none is found: the ground plane under the scene's lowest point (along
-  its up axis), unbounded, lit from above, with a note. The ground plane also
+  its up axis), unbounded, lit from above, with a note (``add_shadows`` draws
+  a visible ground there: :mod:`.ground`). The ground plane also
   receives, besides those found, when none of them is a floor under the scene
   (:func:`is_floor`): a car's flat hood or a facade's wall is found, but the
   shadow a reader looks for is the one on the ground.

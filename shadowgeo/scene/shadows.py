@@ -32,8 +32,19 @@ union of its triangles), triangulated and lifted towards the light by
 ``offset`` (default ``1e-3`` of the diagonal of the geometry and the lights;
 the i-th of n lights is lifted ``offset * (1 + i / n)`` so that shadows of
 different lights do not z-fight).
-Each becomes a shape with a black material whose transparency is
-``1 - shadow_intensity``.
+Each becomes a shape with a black material as opaque as the browser's own
+shadow would darken the receiver: ``shadow_intensity`` times the light's share
+of the receiver's lighting (:mod:`.darkness`).
+When the ground plane receives (no receiver of the scene's own), a visible
+ground is added under the scene (role ``"ground"``, :mod:`.ground`).
+
+Runtime shadows
+    A light whose shadows are baked and that has ``shadows=True`` gets
+    ``baked=True``: the writers write X3D's ``shadows`` false for it (a
+    browser drawing its own shadow map over the baked shadow darkens it
+    twice), with a mark their readers give back, so a second run casts the
+    same lights. ``keep_runtime_shadows=True`` leaves them drawn. A note says
+    which lights still draw runtime shadows.
 
 ``method="volume"`` instead adds one closed shadow volume
 (:func:`shadowgeo.shadow_volume`) per shape and light, role
