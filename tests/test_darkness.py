@@ -253,3 +253,14 @@ def test_the_x3d_reader_keeps_the_headlight(tmp_path):
             f'<X3D version="4.0"><Scene>{navigation}<Shape><Box/></Shape></Scene></X3D>'
         )
         assert sg.load(tmp_path / "scene.x3d").headlight is headlight, navigation
+
+
+def test_info_says_which_lights_are_baked(tmp_path, capsys):
+    from cli.main import main
+
+    (tmp_path / "scene.x3d").write_text(SCENE)
+    assert main(["convert", str(tmp_path / "scene.x3d"), str(tmp_path / "out.x3d")]) == 0
+    capsys.readouterr()
+    assert main(["info", str(tmp_path / "out.x3d")]) == 0
+    rows = {line.split()[0]: line for line in capsys.readouterr().out.splitlines() if line}
+    assert "baked (1)" in rows["lamp"] and "PointLight  on  no " in rows["fill"]
