@@ -7,7 +7,7 @@ Two cases:
 
 * The scene came from X3D (``scene.document`` is the reader's lxml tree): the
   output is that document, unchanged, with one ``<Group DEF="shadows_<light>">``
-  per group of added shapes (role ``"shadow"`` or ``"volume"``) appended to
+  per group of added shapes (role ``"shadow"``, ``"volume"`` or ``"ground"``) appended to
   ``<Scene>``. Scripts, routes, viewpoints, metadata, comments and the
   ``version`` attribute stay as they were (but see *What is never copied*);
   the added nodes (Group, Shape,
@@ -16,12 +16,19 @@ Two cases:
   ``class="shadowgeo-shadows"``: such a group whose shapes the scene no
   longer holds (``add_shadows`` replaced them: a converted file converted
   again) is dropped rather than stacked under a second set.
+  A light whose shadows are baked (``SceneLight.baked``) gets
+  ``shadows="false"``, the class token ``shadowgeo-shadows-baked`` (read
+  back as ``baked``) and a comment before it saying why; a light that is no
+  longer baked loses both. Lights of Inlines and prototypes are not
+  rewritten.
 * Otherwise (glTF, USD, mesh input, or a scene built in code): a fresh X3D 4.0
   document with the scene's viewpoints (else one that shows the scene and
   its shadows from above at an angle: :func:`~shadowgeo.scene.model.overview`),
-  the lights, one ``Transform`` (translation, rotation, scale,
-  scaleOrientation: any affine transform exactly) around each shape that is
-  not in world coordinates, and the added shapes in their groups.
+  ``<NavigationInfo headlight="false"/>`` when the scene has no headlight
+  and a light that is on, the lights (marked as above when baked), one
+  ``Transform`` (translation, rotation, scale, scaleOrientation: any affine
+  transform exactly) around each shape that is not in world coordinates, and
+  the added shapes in their groups.
 
 Added shapes are ``IndexedTriangleSet`` in world coordinates with
 ``solid="false"``; coordinates are written with Python's shortest round-trip

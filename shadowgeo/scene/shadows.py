@@ -386,9 +386,10 @@ def _runtime_shadows(
     which lights still draw runtime shadows."""
     result = []
     turned_off, drawing = [], []
+    casting = {id(light) for light in baked}  # the scene's own objects, alive meanwhile
     for index, light in enumerate(lights):
         name = names.light(light, index)
-        chosen = any(light is one for one in baked)
+        chosen = id(light) in casting
         turn_off = chosen and light.shadows and not keep
         if turn_off:
             turned_off.append(name)
