@@ -50,9 +50,11 @@ from .model import Material, Scene, SceneLight
 
 # Rec. 709 luminance weights of linear R, G, B.
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
-# Light-and-point pairs evaluated per shadow, at most: a shadow's triangles
-# are sampled evenly down to this budget over the scene's lights.
-_PAIRS = 1 << 20
+# A shadow's triangles are sampled evenly down to at most _MAX_POINTS, and to
+# at most _PAIRS light-and-point pairs over the scene's lights (at least
+# _MIN_POINTS): every shadow of every light is weighed, so each stays cheap.
+_MAX_POINTS = 1024
+_PAIRS = 1 << 18
 _MIN_POINTS = 16
 
 
@@ -186,10 +188,11 @@ def _samples(
     """Centroids (k, 3), unit normals facing ``scene_light`` (k, 3) and areas
     (k,) of the shadow's triangles, evenly sampled so that ``k`` times the
     number of lights stays within the budget."""
-    corners = np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
-    count = max(_MIN_POINTS, _PAIRS // max(n_lights, 1))
-    if len(corners) > count:
-        corners = corners[np.linspace(0, len(corners) - 1, count).astype(np.int64)]
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    count = max(_MIN_POINTS, min(_MAX_POINTS, _PAIRS // max(n_lights, 1)))
+    if len(faces) > count:
+        faces = faces[np.linspace(0, len(faces) - 1, count).astype(np.int64)]
+    corners = np.asarray(vertices, dtype=np.float64)[faces]
     points = corners.mean(axis=1)
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     doubled = np.linalg.norm(normals, axis=1)
