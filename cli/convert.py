@@ -31,7 +31,11 @@ a scene with no light that is on gets a default sun travelling along
 note; --sun gives another directional light, and then only it and --light
 cast; neither is written into the scene. Receivers are the large planar
 shapes (ground, floor, walls) unless named; when there is none, the ground
-plane under the scene's lowest point receives, with a note.
+plane under the scene's lowest point receives, with a note, and a light-grey
+ground is drawn there. A shadow is as dark as the browser would draw it: its
+light's shadowIntensity times that light's share of the receiver's lighting.
+The lights whose shadows are baked get shadows="false" (a browser drawing its
+own over them would darken them twice), unless --keep-runtime-shadows.
 Batch: with a folder or more than one input, OUT is a folder; each scene
 file under a folder keeps its place below it, each listed file lands in OUT.
 The files run on a Dask LocalCluster started here (--workers N, one per core
@@ -110,6 +114,13 @@ def register(subparsers) -> None:
         metavar="N",
         help="refuse a scene of more than N triangles after tessellation and instancing "
         "(default 5,000,000: shadowgeo.limits.MAX_TRIANGLES); raise it for a trusted file",
+    )
+    parser.add_argument(
+        "--keep-runtime-shadows",
+        action="store_true",
+        help="let the lights whose shadows are baked draw them at run time too (X3D "
+        'shadows="true": a browser then darkens them twice); by default their runtime shadows '
+        "are turned off",
     )
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
@@ -253,6 +264,7 @@ def options_of(args: argparse.Namespace) -> ConvertOptions:
         tolerance=args.tolerance,
         sun=args.sun,
         max_triangles=args.max_triangles,
+        keep_runtime_shadows=args.keep_runtime_shadows,
     )
 
 
@@ -323,7 +335,7 @@ def run(args) -> int:
             f"cannot write: {error.strerror or error}", path=str(target)
         ) from None
     print_notes(result.warnings, known, args.input)
-    added = [s for s in result.shapes if s.role in ("shadow", "volume")]
+    added = [s for s in result.shapes if s.role in ("shadow", "volume")]  # not the ground
     groups = sorted({s.group for s in added if s.group})
     triangles = sum(s.n_faces for s in added)
     kind = "shadow volume" if args.method == "volume" else "shadow"

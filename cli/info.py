@@ -60,6 +60,15 @@ def vector(values) -> str:
     return " ".join(number(float(v)) for v in values)
 
 
+def shadows_column(light) -> str:
+    """Whether a light's shadows are drawn: by the browser at run time, baked
+    by shadowgeo (its runtime shadows off), or not at all."""
+    intensity = number(light.shadow_intensity)
+    if light.baked:
+        return f"baked ({intensity})"
+    return f"yes ({intensity})" if light.shadows else "no"
+
+
 def light_where(light) -> str:
     if isinstance(light, shadowgeo.DirectionalLight):
         return f"direction {vector(light.direction)}"
@@ -105,7 +114,7 @@ def run(args) -> int:
                 light.name or f"#{index}",
                 type(light.light).__name__,
                 "on" if light.on else "off",
-                f"yes ({number(light.shadow_intensity)})" if light.shadows else "no",
+                shadows_column(light),
                 number(light.intensity),
                 light_where(light.light),
             ]

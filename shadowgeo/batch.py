@@ -32,7 +32,8 @@ class ConvertOptions:
     """What :func:`add_shadows` is asked for every file (see its parameters);
     ``sun``: a directional light that casts instead of the scene's own
     (unless named in ``lights``), not written into the scene;
-    ``max_triangles``: the reader's budget (:func:`shadowgeo.load`)."""
+    ``max_triangles``: the reader's budget (:func:`shadowgeo.load`);
+    ``keep_runtime_shadows``: see :func:`add_shadows`."""
 
     method: Literal["planar", "volume"] = "planar"
     lights: tuple[str, ...] | None = None
@@ -41,6 +42,7 @@ class ConvertOptions:
     tolerance: float | None = None
     sun: DirectionalLight | None = None
     max_triangles: int | None = None
+    keep_runtime_shadows: bool = False
 
 
 @dataclass(frozen=True)
@@ -92,6 +94,7 @@ def shadowed(
         tolerance=options.tolerance,
         progress=progress,
         extra_lights=extra,
+        keep_runtime_shadows=options.keep_runtime_shadows,
     )
     return scene, result
 

@@ -47,6 +47,7 @@ def on_ground(scene):
 def x3d(body, light='<PointLight DEF="lamp" location="0 8 0" shadows="true"/>'):
     return f"""<?xml version="1.0" encoding="UTF-8"?>
 <X3D profile="Interchange" version="4.0"><Scene>
+<NavigationInfo headlight="false"/>
 {light}
 <Shape DEF="ground"><Appearance><Material/></Appearance>
   <IndexedFaceSet solid="false" coordIndex="0 3 2 1 -1">
@@ -195,7 +196,8 @@ def test_half_transparent_casts_a_half_dark_shadow_of_the_same_area(
     scene = converted(tmp_path, text)
     ((name, shadow),) = on_ground(scene).items()
     assert name == "shadow_lamp_ground_opacity50"
-    # darkness = shadowIntensity x opacity: 1 - transparency
+    # one light, no headlight, no ambient: the light's darkness is its
+    # shadowIntensity (see .darkness), so darkness = shadowIntensity x opacity
     assert shadow.material.transparency == pytest.approx(transparency, abs=1e-12)
     assert 1 - shadow.material.transparency == pytest.approx(intensity * 0.5)
     area, _ = region(shadow)

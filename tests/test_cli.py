@@ -151,7 +151,9 @@ def test_the_shadow_matches_a_union_of_projected_triangles(converted):
     assert sum(p.area for p in written) == pytest.approx(expected.area, rel=1e-9)  # no overlaps
     # Lifted off the ground by 1e-3 of the scene's size, towards the lamp.
     assert np.ptp(points[:, 1]) == 0 and 0 < points[0, 1] < 0.1
-    assert float(shape.find("Appearance/Material").get("transparency")) == pytest.approx(0.3)
+    # shadowIntensity 0.7, but the fill light and the headlight still light the
+    # ground in the lamp's shadow: drawn lighter (tests/test_darkness.py has the values)
+    assert 0.3 < float(shape.find("Appearance/Material").get("transparency")) < 1.0
 
 
 def test_info_prints_shapes_lights_and_what_was_skipped(capsys):

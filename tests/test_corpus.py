@@ -85,28 +85,32 @@ def test_every_corpus_file_converts_with_no_flags(corpus_dir, x3d_schema, tmp_pa
         before = x3d_schema_errors(path, x3d_schema)
         new = new_schema_errors(before, x3d_schema_errors(out, x3d_schema))
         assert new == [], f"{name}: {new[:3]}"
-        # Nothing removed: the input's elements plus, per shadow, Shape,
-        # Appearance, Material, IndexedTriangleSet and Coordinate, and a Group per light.
+        # Nothing removed: the input's elements plus, per shadow and for the
+        # ground, Shape, Appearance, Material, IndexedTriangleSet and Coordinate,
+        # and a Group per light and for the ground.
         shadows = result.shapes_with_role("shadow")
+        grounds = result.shapes_with_role("ground")
         original = etree.parse(str(path), SAFE).getroot()
         written = etree.parse(str(out), SAFE).getroot()
-        added = 5 * len(shadows) + len({s.group for s in shadows})
+        added = 5 * len(shadows + grounds) + len({s.group for s in shadows + grounds})
         # and a Viewpoint framing the scene when it has none
         viewpoints = "//*[local-name()='Viewpoint' or local-name()='OrthoViewpoint']"
         added += 0 if original.xpath(viewpoints) else 1
         assert written.xpath(viewpoints), name
         assert len(written.xpath("//*")) == len(original.xpath("//*")) + added, name
         casters = len(result.shapes_with_role("geometry"))
-        outcomes[name] = (len(shadows), sunny, any("ground plane" in n for n in notes))
+        outcomes[name] = (len(shadows), sunny, any("ground plane" in n for n in notes), grounds)
         # Everything with geometry casts (a few files hold only text or metadata).
         assert len(shadows) > 0 or casters == 0, name
     assert len(outcomes) == len(files)
     # Most files are lit by the default sun; the few that have no large flat
     # surface (a lone cube, spheres) receive on the ground under them.
-    assert sum(sunny for _, sunny, _ in outcomes.values()) >= 15
-    grounded = [name for name, (_, _, ground) in outcomes.items() if ground]
+    assert sum(sunny for _, sunny, _, _ in outcomes.values()) >= 15
+    grounded = [name for name, (_, _, ground, _) in outcomes.items() if ground]
     assert "blender/simple/test1.x3d" in grounded and "x3d/matrix_transform.x3d" in grounded
-    assert sum(count > 0 for count, _, _ in outcomes.values()) >= 15, outcomes
+    drawn = [name for name, (_, _, _, ground) in outcomes.items() if ground]
+    assert drawn == grounded  # the ground plane that receives is drawn
+    assert sum(count > 0 for count, _, _, _ in outcomes.values()) >= 15, outcomes
 
 
 # -- ClassicVRML, VRML 97 and JSON: the ">= 98 % write an output, 0 crash" ------------
@@ -145,7 +149,9 @@ def check_read_back(path: Path, out: Path, folder: Path, x3d_schema) -> None:
     shutil.copyfile(path, copy)
     source, back = sg.load(copy), sg.load(out)
     assert len(back.shapes_with_role("geometry")) == len(source.shapes), path
-    assert len(back.shapes_with_role("shadow")) == len(back.shapes) - len(source.shapes)
+    added = back.shapes_with_role("shadow") + back.shapes_with_role("ground")
+    assert len(added) == len(back.shapes) - len(source.shapes)
+    assert len(back.shapes_with_role("ground")) <= 1  # under the ground plane, when it receives
     sg.save(source, folder / "input.x3d")
     sg.save(back, folder / "back.x3d")
     before = x3d_schema_errors(folder / "input.x3d", x3d_schema)

@@ -387,7 +387,16 @@ def test_examples_draw_their_pictures(script, picture, tmp_path, monkeypatch, ca
         share = float(re.search(r"([\d.]+)% of the ground has at least 2 hours", printed)[1])
         assert 0 < share < 100
         return
-    assert (image.mean(axis=2) < 90).mean() > 0.005  # a shadow is in the picture
+    if script == "converted_scene.py":
+        # The courtyard's lamp shares the ground's light with a fill light and
+        # the headlight: its shadow is drawn part-dark, as X_ITE draws it. Ground
+        # (green over red over blue) darker than 140: 1.6 per mille of the
+        # picture without the shadows, about 2 % with them.
+        red, green, blue = (image[..., k].astype(float) for k in range(3))
+        shaded = (green > red) & (red > blue) & (image.mean(axis=2) < 140)
+        assert shaded.mean() > 0.01
+    else:
+        assert (image.mean(axis=2) < 90).mean() > 0.005  # a shadow is in the picture
     if script == "shadow_volume.py":
         # The volume sliced at the ground has the planar shadow's area
         # (manifold3d slices in float32: agreement to a few parts in 1e7).

@@ -219,6 +219,12 @@ def scene_facts(scene: sg.Scene) -> list:
     return [shapes, lights, scene.meters_per_unit]
 
 
+BAKED_COMMENT = (
+    " shadowgeo: the shadows of this light are baked into the scene as shapes; its runtime "
+    'shadows are off (shadows="false") so that a browser does not darken them twice '
+)
+
+
 def without_added(document: dict) -> dict:
     """The JSON document less the groups of shadows shadowgeo added, and the
     Viewpoint it adds to a document without one."""
@@ -387,7 +393,13 @@ def test_json_to_x3dj_keeps_the_document_and_adds_the_shadows(tmp_path, json_sch
     target = tmp_path / "out.x3dj"
     assert main(["convert", str(source), str(target), "--plane", "0,1,0,0"]) == 0
     written = json.loads(target.read_text())
-    assert without_added(written) == JSON  # DEF names, ROUTEs, PROTOs, comments, values
+    # the lamp's shadows are baked: its runtime shadows are off, marked and said so
+    expected = copy.deepcopy(JSON)
+    children = expected["X3D"]["Scene"]["-children"]
+    lamp = children[1]["PointLight"]
+    lamp.update({"@shadows": False, "@class": "shadowgeo-shadows-baked"})
+    children.insert(1, {"#comment": BAKED_COMMENT})
+    assert without_added(written) == expected  # DEF names, ROUTEs, PROTOs, comments, values
     (group,) = added_groups(written)
     assert group["@DEF"] == "shadows_lamp"
     assert schema_errors(json_schema, target) == []
@@ -406,7 +418,7 @@ def test_xml_output_of_json_input_is_valid_x3d(tmp_path, x3d_schema):
     assert main(["convert", str(source), str(target), "--plane", "0,1,0,0"]) == 0
     assert x3d_schema_errors(target, x3d_schema) == []
     comments = [c.text for c in etree.parse(str(target)).iter(etree.Comment)]
-    assert comments == [" a lamp and a crate "]
+    assert comments == [" a lamp and a crate ", BAKED_COMMENT]
 
 
 def test_fresh_document_as_json_is_valid_and_reads_back(tmp_path, json_schema):
@@ -668,7 +680,8 @@ def test_x_ite_shows_the_shadow_of_an_x3dj_output(tmp_path):
     brightness = image.astype(float).mean(axis=2).ravel()
     assert inside.sum() > 1000
     assert np.mean(brightness[inside] < 40) > 0.99, np.percentile(brightness[inside], 99)
-    assert np.mean(brightness[outside] > 80) > 0.99, np.percentile(brightness[outside], 1)
+    # lit by the lamp alone: the far corners of the ground, at a grazing angle, get 66
+    assert np.mean(brightness[outside] > 55) > 0.99, np.percentile(brightness[outside], 1)
 
 
 def test_container_fields_follow_x3d_rules_not_only_the_table(tmp_path, json_schema):

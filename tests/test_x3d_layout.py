@@ -196,8 +196,9 @@ def test_added_shadow_groups_follow_the_same_layout(tmp_path):
         # the author's own layout: tabs, a blank line, two nodes on one line (each
         # scene has its Viewpoint, so the writer adds none)
         '<?xml version="1.0" encoding="UTF-8"?>\n<X3D profile="Interchange" version="4.0">\n'
-        '\t<Scene><Viewpoint position="0 1 10"/>\n\n\t\t<Transform translation="0 1 0"><Shape DEF="crate"><Box/></Shape>'
-        "</Transform>\n   <!-- odd -->\n\t</Scene>\n</X3D>\n",
+        '\t<Scene><Viewpoint position="0 1 10"/>\n\n\t\t<Transform translation="0 1 0">'
+        '<Shape DEF="crate"><Box/></Shape></Transform>\n'
+        "   <!-- odd -->\n\t</Scene>\n</X3D>\n",
         # and none at all: XML is never laid out again
         '<?xml version="1.0" encoding="UTF-8"?>\n<X3D profile="Interchange" version="4.0">'
         '<Scene><Viewpoint position="0 1 10"/><Transform translation="0 1 0"><Shape DEF="crate">'

@@ -6,12 +6,15 @@ layout, each written and read back here, side by side.
 -----------------------
 What glTF has no field for goes in a node's ``extras["shadowgeo"]``:
 
-- shape nodes: ``role`` (``"geometry"``, ``"shadow"``, ``"volume"``), ``group``
+- shape nodes: ``role`` (``"geometry"``, ``"shadow"``, ``"volume"``,
+  ``"ground"``), ``group
   (the light group) and, when not the defaults, ``castsShadow`` and
   ``receivesShadow``;
-- light nodes: ``on``, ``intensity`` (unclamped), ``shadows``,
+- light nodes: ``on``, ``intensity`` (unclamped), ``shadows`` (whether the
+  browser draws its shadows: false once shadowgeo baked them),
   ``shadowIntensity``, ``ambientIntensity``, ``attenuation``, ``beamWidth``
-  and ``global``, X3D's light fields;
+  and ``global``, X3D's light fields; ``shadowsBaked`` when shadowgeo baked
+  its shadows and turned its runtime shadows off;
 - group and root nodes the writer adds: ``role`` ``"group"`` / ``"root"``.
 """
 
@@ -139,6 +142,7 @@ _SHADOWGEO = {
     "on": bool,
     "intensity": _NUMBER,
     "shadows": bool,
+    "shadowsBaked": bool,
     "shadowIntensity": _NUMBER,
     "ambientIntensity": _NUMBER,
     "attenuation": (3, _NUMBER),
@@ -358,7 +362,7 @@ def light_entry(light: SceneLight, index: int) -> tuple[dict[str, Any], dict[str
         "shadowgeo": {
             "on": bool(light.on),
             "intensity": float(light.intensity),
-            "shadows": bool(light.shadows),
+            "shadows": bool(light.runtime_shadows),
             "shadowIntensity": float(light.shadow_intensity),
             "ambientIntensity": float(light.ambient_intensity),
             "attenuation": [float(a) for a in light.attenuation],
@@ -366,6 +370,8 @@ def light_entry(light: SceneLight, index: int) -> tuple[dict[str, Any], dict[str
             "global": bool(light.global_),
         }
     }
+    if light.baked:
+        node["extras"]["shadowgeo"]["shadowsBaked"] = True
     return entry, node
 
 
@@ -403,6 +409,8 @@ def scene_light(
         beam_width=float(beam),
         on=bool(extras.get("on", True)),
         global_=bool(extras.get("global", True)),
-        shadows=bool(extras.get("shadows", False)),
+        # a light shadowgeo baked had shadows before they were turned off
+        shadows=bool(extras.get("shadows", False)) or bool(extras.get("shadowsBaked", False)),
         shadow_intensity=float(extras.get("shadowIntensity", 1.0)),
+        baked=bool(extras.get("shadowsBaked", False)),
     )

@@ -359,7 +359,7 @@ def _read_empty_shapes(
     (glTF forbids empty accessors); put them back in node order."""
     for index, node in enumerate(nodes):
         extras = shadowgeo_extras(node)
-        if "mesh" in node or extras.get("role") not in ("geometry", "shadow", "volume"):
+        if "mesh" in node or extras.get("role") not in ("geometry", "shadow", "volume", "ground"):
             continue
         transform = world(index)
         if transform is None:

@@ -19,7 +19,8 @@ Stage metadata ``upAxis`` and ``metersPerUnit`` come from the scene.
   angle in degrees, softness from the beam width); a directional light a
   ``DistantLight``. Lights shine down their -Z, so the transform turns -Z onto
   the light's direction. ``ShadowAPI``'s ``inputs:shadow:enable`` carries X3D's
-  ``shadows``; a light that is off is ``invisible``.
+  ``shadows`` as a browser draws them (false once shadowgeo baked them, with
+  ``shadowgeo:shadowsBaked``); a light that is off is ``invisible``.
 - Cameras: a ``UsdGeom.Camera`` per viewpoint of the scene, else one
   framing the scene and its shadows, with its ``xformOp:transform``; the
   vertical aperture gives the field of view at the default focal length.

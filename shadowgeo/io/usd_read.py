@@ -324,6 +324,7 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> b
     intensity = _get(usd_light.GetIntensityAttr(), "number", 0.0, time, path, where, True)
     ambient = _custom(prim, "ambientIntensity", "number", 0.0, path, where, True)
     attenuation = _custom(prim, "attenuation", "triple", (1.0, 0.0, 0.0), path, where, True)
+    baked = bool(_custom(prim, "shadowsBaked", "flag", False, path, where))
     limits.check_lights(len(scene.lights) + 1, str(path))
     scene.lights.append(
         SceneLight(
@@ -336,8 +337,9 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> b
             beam_width=float(beam if beam is not None else math.pi / 4),
             on=visibility != UsdGeom.Tokens.invisible,
             global_=bool(_custom(prim, "global", "flag", True, path, where)),
-            shadows=bool(shadow),
+            shadows=bool(shadow) or baked,  # baked: on before shadowgeo turned them off
             shadow_intensity=float(_custom(prim, "shadowIntensity", "number", 1.0, path, where)),
+            baked=baked,
         )
     )
     return True

@@ -211,7 +211,10 @@ class _Writer:
                 set_custom(prim, "range", Sdf.ValueTypeNames.Double, float(light.radius))
             usd_light.CreateIntensityAttr(float(scene_light.intensity))
             usd_light.CreateColorAttr(Gf.Vec3f(*scene_light.color))
-            UsdLux.ShadowAPI.Apply(prim).CreateShadowEnableAttr(bool(scene_light.shadows))
+            shadow = UsdLux.ShadowAPI.Apply(prim)
+            shadow.CreateShadowEnableAttr(bool(scene_light.runtime_shadows))
+            if scene_light.baked:  # shadowgeo baked them and turned them off
+                set_custom(prim, "shadowsBaked", Sdf.ValueTypeNames.Bool, True)
             set_custom(
                 prim, "shadowIntensity", Sdf.ValueTypeNames.Double, scene_light.shadow_intensity
             )

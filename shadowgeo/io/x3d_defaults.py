@@ -198,6 +198,15 @@ DEFAULTS = {
         "transparency": ("SFFloat", "0"),
     },
     "MatrixTransform": {"matrix": ("SFMatrix4f", "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")},
+    "NavigationInfo": {
+        "avatarSize": ("MFFloat", "0.25 1.6 0.75"),
+        "headlight": ("SFBool", "true"),
+        "speed": ("SFFloat", "1"),
+        "transitionTime": ("SFTime", "1.0"),
+        "transitionType": ("MFString", '"LINEAR"'),
+        "type": ("MFString", '"EXAMINE" "ANY"'),
+        "visibilityLimit": ("SFFloat", "0"),
+    },
     "PhysicalMaterial": {
         "baseColor": ("SFColor", "1 1 1"),
         "emissiveColor": ("SFColor", "0 0 0"),

@@ -17,10 +17,13 @@ from ..errors import GeometryError
 from ..lights import DirectionalLight, Light, PointLight, SpotLight
 from ..limits import check_coordinates, check_length
 from ..scene import Material, SceneLight
+from ..scene.model import MARK
 from . import float_triple
 from .x3d_fields import Context, Element, local_name
 
 LIGHTS = {"PointLight", "SpotLight", "DirectionalLight"}
+# The class token of a light whose shadows shadowgeo baked (see x3d_write).
+BAKED = f"{MARK}-baked"
 MATERIALS = {"Material", "PhysicalMaterial", "UnlitMaterial", "TwoSidedMaterial"}
 
 
@@ -65,6 +68,7 @@ def scene_light(context: Context, element: Element, matrix: np.ndarray) -> Scene
         context.warn(element, f"light skipped: {problem}")
         return None
     extra: dict[str, Any] = {}
+    baked = BAKED in (element.get("class") or "").split()
     if tag != "DirectionalLight":
         extra["attenuation"] = tuple(float(a) for a in field("attenuation"))
     if tag == "SpotLight":
@@ -77,8 +81,10 @@ def scene_light(context: Context, element: Element, matrix: np.ndarray) -> Scene
         ambient_intensity=float(field("ambientIntensity")),
         on=bool(field("on")),
         global_=bool(field("global")),
-        shadows=bool(field("shadows")),
+        # a light shadowgeo baked had shadows="true" before it was turned off
+        shadows=bool(field("shadows")) or baked,
         shadow_intensity=float(field("shadowIntensity")),
+        baked=baked,
         **extra,
     )
 
@@ -150,6 +156,7 @@ def _material(context: Context, node: Element) -> Material:
             shininess=float(field("shininess")),
             transparency=float(field("transparency")),
             name=name,
+            ambient_intensity=float(field("ambientIntensity")),
         )
     if tag == "PhysicalMaterial":
         return Material(

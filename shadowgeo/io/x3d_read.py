@@ -121,6 +121,8 @@ class _Reader:
         self.expanded = 0  # nodes the documents and prototype copies read so far expand to
         self.sizes: dict[Element, int] = {}  # element -> its expanded size (see _expanded_size)
         self.inline_files: dict[Path, Any] = {}  # each Inline file read once: tree or Scene
+        self.top_root: Element | None = None  # the root of the scene's own document
+        self.headlight: bool | None = None  # of the top document's first NavigationInfo
 
     # -- documents ---------------------------------------------------------------
     def document(
@@ -135,6 +137,7 @@ class _Reader:
         display = str(path)
         context = Context(display, _version(root, display, self.warnings), warnings=self.warnings)
         if scene is not None:  # the scene's own document: its long numbers held as bytes
+            self.top_root = root
             scene.numbers = Splicer()
             context.kept, context.kept_root = scene.numbers, root
         self._units(context, root, scene)
@@ -248,9 +251,15 @@ class _Reader:
                 raise context.error(element, limits.lights_message(len(self.lights) + 1))
             light = scene_light(context, element, matrix)
             if light is not None:
+                tree = element.getroottree()
+                if tree.getroot() is self.top_root:  # a writer of this document finds it
+                    light.node = tree.getpath(element)
                 self.lights.append(light)
         elif tag == "Inline":
             load_inline(self, context, element, matrix, name)
+        elif tag == "NavigationInfo" and len(self.inline_stack) == 1:
+            if self.headlight is None:  # the first is the one a browser binds
+                self.headlight = bool(context.field(element, "headlight"))
         elif tag == "Viewpoint" and len(self.inline_stack) == 1:
             self.viewpoints.append(_viewpoint(context, element, matrix))
         elif tag == "Viewpoint":
@@ -319,8 +328,9 @@ class _Reader:
         "shadow" (or "volume"), not as geometry that casts."""
         if not self.baked:
             return "geometry", None
-        volume = f"{MARK}-volume" in (element.get("class") or "").split()
-        return ("volume" if volume else "shadow"), self.baked[-1]
+        marks = (element.get("class") or "").split()
+        role = next((r for r in ("volume", "ground") if f"{MARK}-{r}" in marks), "shadow")
+        return role, self.baked[-1]
 
     def _textures(self, context: Context, appearance: Element) -> None:
         for texture in (e for e in appearance.iter() if local_name(e) in TEXTURES):
@@ -382,6 +392,7 @@ class _Reader:
             )
         scene.lights.extend(self.lights)
         scene.viewpoints.extend(self.viewpoints)
+        scene.headlight = True if self.headlight is None else self.headlight
 
     def _tolerance(self, tolerance: Tolerance | None, chord: float | None) -> Tolerance:
         settings = {} if chord is None else {"chord": float(chord)}

@@ -7,7 +7,7 @@ Two cases:
 
 * The scene came from X3D (``scene.document`` is the reader's lxml tree): the
   output is that document, unchanged, with one ``<Group DEF="shadows_<light>">``
-  per group of added shapes (role ``"shadow"`` or ``"volume"``) appended to
+  per group of added shapes (role ``"shadow"``, ``"volume"`` or ``"ground"``) appended to
   ``<Scene>``. Scripts, routes, viewpoints, metadata, comments and the
   ``version`` attribute stay as they were (but see *What is never copied*);
   the added nodes (Group, Shape,
@@ -22,12 +22,19 @@ Two cases:
   ``class="shadowgeo-overview"`` and is framed anew when converted again.
   Relative urls (Inline, textures, EXTERNPROTO, Script, ...) are rewritten
   for the output's folder (:mod:`.x3d_urls`).
+  A light whose shadows are baked (``SceneLight.baked``) gets
+  ``shadows="false"``, the class token ``shadowgeo-shadows-baked`` (read
+  back as ``baked``) and a comment before it saying why; a light that is no
+  longer baked loses both. Lights of Inlines and prototypes are not
+  rewritten.
 * Otherwise (glTF, USD, mesh input, or a scene built in code): a fresh X3D 4.0
   document with the scene's viewpoints (else one that shows the scene and
   its shadows from above at an angle: :func:`~shadowgeo.scene.model.overview`),
-  the lights, one ``Transform`` (translation, rotation, scale,
-  scaleOrientation: any affine transform exactly) around each shape that is
-  not in world coordinates, and the added shapes in their groups.
+  ``<NavigationInfo headlight="false"/>`` when the scene has no headlight
+  and a light that is on, the lights (marked as above when baked), one
+  ``Transform`` (translation, rotation, scale, scaleOrientation: any affine
+  transform exactly) around each shape that is not in world coordinates, and
+  the added shapes in their groups.
 
 Added shapes are ``IndexedTriangleSet`` in world coordinates with
 ``solid="false"``; coordinates are written with Python's shortest round-trip
@@ -66,6 +73,7 @@ import os
 import re
 from dataclasses import replace
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 from lxml import etree
@@ -78,10 +86,17 @@ from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
 from .x3d_fields import Element, Tree, numbers_or_none
+from .x3d_lights import BAKED
 from .x3d_numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
 from .x3d_urls import rewrite_urls
 
-ADDED_ROLES = ("shadow", "volume")
+ADDED_ROLES = ("shadow", "volume", "ground")
+LIGHT_TAGS = ("PointLight", "SpotLight", "DirectionalLight")
+# What the comment before a light whose shadows are baked says.
+_BAKED_COMMENT = (
+    " shadowgeo: the shadows of this light are baked into the scene as shapes; its runtime "
+    'shadows are off (shadows="false") so that a browser does not darken them twice '
+)
 # Written in the ClassicVRML encoding (the same tree, another syntax).
 CLASSIC_SUFFIXES = (".x3dv", ".x3dvz", ".x3dv.gz")
 VRML97_SUFFIXES = (".wrl", ".wrz", ".wrl.gz")
@@ -168,8 +183,11 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
     if body is None:
         raise SceneError("the X3D document has no <Scene> element", path=scene.path)
     added = [s for s in scene.shapes if s.role in ADDED_ROLES]
+    lights = _document_lights(tree, scene)  # found before the marked groups go
     _remove_marked(tree)  # the scene's added shapes replace them
     authored = _bound_viewpoint(tree)  # (before the names are taken: ours gets its own back)
+    for element, scene_light in lights:
+        _runtime_shadows(element, scene_light)
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
@@ -388,6 +406,54 @@ def _require_components(
             position += 1
 
 
+def _document_lights(tree: Tree, scene: Scene) -> list[tuple[Element, SceneLight]]:
+    """The elements of ``tree`` (a copy of ``scene.document``) the scene's
+    lights were read from, with those lights; a light of an Inline or a
+    prototype has none. Every light element loses the marks of an earlier
+    run (the ``class`` token, the comment before it): the scene's lights say
+    which are baked now."""
+    for element in tree.iter():
+        if not isinstance(element.tag, str) or element.tag.rsplit("}", 1)[-1] not in LIGHT_TAGS:
+            continue
+        marks = (element.get("class") or "").split()
+        if BAKED in marks:
+            marks.remove(BAKED)
+            if marks:
+                element.set("class", " ".join(marks))
+            else:
+                del element.attrib["class"]
+        previous = element.getprevious()
+        if isinstance(previous, etree._Comment) and (previous.text or "").startswith(
+            " shadowgeo: "
+        ):
+            _drop(previous)
+    found: dict[Element, SceneLight] = {}
+    for scene_light in scene.lights:
+        if scene_light.node is None:
+            continue
+        elements = tree.xpath(scene_light.node)
+        if isinstance(elements, list) and len(elements) == 1:  # a USEd light: its first
+            found.setdefault(cast(Element, elements[0]), scene_light)
+    return list(found.items())
+
+
+def _runtime_shadows(element: Element, scene_light: SceneLight) -> None:
+    """Write the light's ``shadows`` field where it changed, and mark a light
+    whose shadows are baked (its runtime shadows turned off): a ``class``
+    token the reader gives back as ``baked``, and a comment saying so."""
+    written = (element.get("shadows") or "false").strip().lower() == "true"
+    if written != scene_light.runtime_shadows:
+        element.set("shadows", _bool(scene_light.runtime_shadows))
+    if not scene_light.baked:
+        return
+    element.set("class", " ".join([*(element.get("class") or "").split(), BAKED]))
+    comment = etree.Comment(_BAKED_COMMENT)
+    comment.tail = element.getprevious().tail if element.getprevious() is not None else None
+    element.addprevious(comment)
+    if comment.tail is None:  # the first child: indent as the parent's text does
+        comment.tail = element.getparent().text
+
+
 def _remove_marked(tree: Tree) -> None:
     """Drop the groups an earlier run added, keeping the whitespace around
     them: the reader gave their shapes back as role "shadow"/"volume", so the
@@ -549,7 +615,12 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
     # ground and its shadows are edge-on).
     for viewpoint in scene.viewpoints or [overview(scene)]:
         body.append(_viewpoint_element(viewpoint, used))
+    if not scene.headlight and any(light.on for light in scene.lights):
+        # lit by its own lights, as in the viewers of the format it came from
+        etree.SubElement(body, "NavigationInfo", headlight="false")
     for light in scene.lights:
+        if light.baked:
+            body.append(etree.Comment(_BAKED_COMMENT))
         body.append(_light_element(light, used))
     for shape in scene.shapes:
         if shape.role in ADDED_ROLES:
@@ -602,8 +673,10 @@ def _light_element(scene_light: SceneLight, used: set[str]) -> Element:
     element.set("ambientIntensity", repr(float(scene_light.ambient_intensity)))
     element.set("on", _bool(scene_light.on))
     element.set("global", _bool(scene_light.global_))
-    element.set("shadows", _bool(scene_light.shadows))
+    element.set("shadows", _bool(scene_light.runtime_shadows))
     element.set("shadowIntensity", repr(float(scene_light.shadow_intensity)))
+    if scene_light.baked:
+        element.set("class", BAKED)
     return element
 
 

@@ -63,14 +63,23 @@ class Material:
     shininess: float = 0.2
     transparency: float = 0.0
     name: str | None = None
+    ambient_intensity: float = 0.2
 
 
 @dataclass
 class SceneLight:
     """A light of the scene: its geometry (world coordinates) and how it looks.
 
-    ``shadows`` and ``shadow_intensity`` are X3D 4's fields; ``name`` is the
-    DEF name (or the glTF/USD node name) where there is one.
+    ``shadows`` and ``shadow_intensity`` are X3D 4's fields (``shadows``: the
+    browser draws the light's shadows at run time); ``name`` is the DEF name
+    (or the glTF/USD node name) where there is one. ``baked``: shadowgeo
+    baked this light's shadows into the scene as shapes and turned its
+    runtime shadows off: every writer writes X3D's ``shadows`` as
+    ``shadows and not baked`` (:attr:`runtime_shadows`), with a mark its
+    reader gives back as ``baked``, so ``shadows`` stays the author's.
+    ``node``: the X3D reader's XPath of the light's element in
+    ``Scene.document`` (None for a light of an Inline or a prototype), so
+    the writer of that document marks the element a baked light came from.
     """
 
     light: PointLight | DirectionalLight | SpotLight
@@ -84,6 +93,14 @@ class SceneLight:
     global_: bool = True
     shadows: bool = False
     shadow_intensity: float = 1.0
+    baked: bool = False
+    node: str | None = None
+
+    @property
+    def runtime_shadows(self) -> bool:
+        """Whether a browser draws this light's shadows: X3D's ``shadows`` as
+        written, false once they are baked (see :attr:`baked`)."""
+        return self.shadows and not self.baked
 
 
 @dataclass
@@ -257,6 +274,14 @@ class Scene:
     ``viewpoints`` are in document order; the first is the one a browser
     shows first (X3D's bound Viewpoint).
 
+    ``headlight``: the viewer carries a light (a white directional light of
+    intensity 1 along the view). The X3D reader gives the ``headlight`` of
+    the scene's first NavigationInfo (X3D's default, true, when it has
+    none); a scene built in code or read from glTF, USD or a mesh has none,
+    as those formats' viewers light it by its own lights, and the X3D writer
+    then writes ``<NavigationInfo headlight="false"/>`` when it has a light
+    that is on.
+
     ``document`` keeps the reader's own representation (for X3D, the parsed XML
     tree) so a writer of the same format can keep everything shadowgeo does not
     model (scripts, routes, viewpoints, metadata, comments). The X3D reader
@@ -275,6 +300,7 @@ class Scene:
     document: Any = None
     viewpoints: list[Viewpoint] = field(default_factory=list)
     numbers: Any = None
+    headlight: bool = False
 
     def shapes_with_role(self, role: str) -> list[Shape]:
         return [shape for shape in self.shapes if shape.role == role]
@@ -352,13 +378,16 @@ def shadow_shape(
     scene_light: SceneLight,
     source: str,
     opacity: float = 1.0,
+    darkness: float | None = None,
 ) -> Shape:
-    """A baked shadow as a shape: black, ``1 - shadow_intensity`` transparent,
-    two-sided, casting nothing (role ``"shadow"``). The shadow of casters of
-    ``opacity`` (0 to 1) is that much as dark: its darkness (one less its
-    transparency) times ``opacity``."""
-    transparency = float(np.clip(1.0 - scene_light.shadow_intensity, 0.0, 1.0))
-    transparency = 1.0 - (1.0 - transparency) * opacity
+    """A baked shadow as a shape: black, two-sided, casting nothing (role
+    ``"shadow"``), its darkness (one less its transparency) ``darkness`` times
+    ``opacity``: ``darkness`` the light's shadow as the browser would draw it
+    (:func:`~shadowgeo.scene.darkness.shadow_darkness`; default the light's
+    ``shadow_intensity``), ``opacity`` (0 to 1) that of the casters (a shadow of
+    half-transparent casters is half as dark)."""
+    dark = scene_light.shadow_intensity if darkness is None else darkness
+    transparency = 1.0 - float(np.clip(dark, 0.0, 1.0)) * opacity
     return Shape(
         np.asarray(vertices, dtype=np.float64),
         np.asarray(faces, dtype=np.int64),

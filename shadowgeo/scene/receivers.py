@@ -19,7 +19,8 @@ shapes:
   of the shape's area, else it is not planar;
 * a plane ``a x + b y + c z + d = 0``: unbounded, lit from either side;
 * when none is found: the ground plane under the scene's lowest point (along
-  its up axis), unbounded, lit from above, with a note. The ground plane also
+  its up axis), unbounded, lit from above, with a note (``add_shadows`` draws
+  a visible ground there: :mod:`.ground`). The ground plane also
   receives, besides those found, when none of them is a floor under the scene
   (:func:`is_floor`): a car's flat hood or a facade's wall is found, but the
   shadow a reader looks for is the one on the ground.
@@ -44,7 +45,8 @@ from ..plane import Plane
 from ..tolerance import Tolerance
 from ..topology import point_ids, row_groups, unique_integers
 from .casters import CasterSet
-from .model import Scene, Shape, safe_name
+from .ground import MATERIAL as GROUND_MATERIAL
+from .model import Material, Scene, Shape, safe_name
 from .patchbound import may_hold_patch
 
 # A found receiver: at least these fractions of the largest patch's area and of
@@ -85,6 +87,9 @@ class Receiver:
         The patch in world coordinates; None for an unbounded plane.
     two_sided : bool
         Receives on either side (else only in front of ``plane``).
+    material : Material, optional
+        The look of the shape it is a patch of (how dark its shadows are
+        drawn depends on it); None for a plane.
     """
 
     plane: Plane
@@ -92,6 +97,7 @@ class Receiver:
     triangles: np.ndarray | None = None
     two_sided: bool = True
     area: float = float("inf")
+    material: Material | None = None
 
     def facing(self, light: Light, tolerance: Tolerance) -> Plane | None:
         """The plane turned towards ``light``; None when the light lies in it,
@@ -203,7 +209,7 @@ def ground(
             "shadows: no receiver found (no large flat surface with something in front of "
             f"it); {plane} (--receiver DEF or --plane a,b,c,d chooses another)"
         )
-    return Receiver(Plane(normal, -lowest), "ground", two_sided=False)
+    return Receiver(Plane(normal, -lowest), "ground", two_sided=False, material=GROUND_MATERIAL)
 
 
 def bounds_the_scene(receiver: Receiver, bounds: np.ndarray) -> bool:
@@ -332,6 +338,7 @@ def _patch_receiver(
         world_vertices[shape.faces[member]],
         two_sided=not shape.solid,
         area=area,
+        material=shape.material,
     )
 
 

@@ -44,6 +44,19 @@ are cut out first (a polygon difference), so the layers never overlap; the
 opaque layer is named ``shadow_<light>_<receiver>``, one of opacity 1/2
 ``shadow_<light>_<receiver>_opacity50``. Shadows on every other surface
 (:mod:`.surfaces`) are layered the same way.
+The opaque layer is as dark as the browser's own shadow would darken the
+receiver: ``shadow_intensity`` times the light's share of the receiver's
+lighting (:mod:`.darkness`); a translucent layer that times its opacity.
+When the ground plane receives (no receiver of the scene's own), a visible
+ground is added under the scene (role ``"ground"``, :mod:`.ground`).
+
+Runtime shadows
+    A light whose shadows are baked and that has ``shadows=True`` gets
+    ``baked=True``: the writers write X3D's ``shadows`` false for it (a
+    browser drawing its own shadow map over the baked shadow darkens it
+    twice), with a mark their readers give back, so a second run casts the
+    same lights. ``keep_runtime_shadows=True`` leaves them drawn. A note says
+    which lights still draw runtime shadows.
 
 ``method="volume"`` instead adds one closed shadow volume
 (:func:`shadowgeo.shadow_volume`) per shape and light, role
@@ -76,6 +89,8 @@ from ..tolerance import Tolerance
 from ..topology import Caster
 from ..volume import shadow_volume
 from .casters import CasterSet, distinct
+from .darkness import Lighting
+from .ground import visible_ground
 from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
 from .opacity import opacities
 from .receivers import Receiver, ground
@@ -117,6 +132,7 @@ def add_shadows(
     progress: Progress | None = None,
     extra_lights: Sequence[SceneLight] = (),
     surfaces: bool | None = None,
+    keep_runtime_shadows: bool = False,
 ) -> Scene:
     """The scene with the shadows of its lights added as shapes.
 
@@ -150,16 +166,22 @@ def add_shadows(
         for a scene with no light of its own. When given, they cast together
         with the lights named in ``lights`` (none by default): the scene's own
         lights then cast only when named.
+    keep_runtime_shadows : bool
+        Let the lights whose shadows are baked draw them at run time too (a
+        browser then darkens them twice). By default their runtime shadows
+        are turned off (see *Runtime shadows* in the module notes).
 
     Returns
     -------
     Scene
         A new scene: the input's shapes, then the added ones (group
-        ``"shadows_<light>"``, unique DEF-safe names), and ``warnings`` with
+        ``"shadows_<light>"``, unique DEF-safe names; a ground under the
+        scene when the ground plane receives), its lights with ``baked`` set
+        on those whose runtime shadows are turned off, and ``warnings`` with
         notes on what was chosen and skipped. ``document`` is shared.
-        Shadows an earlier run added (role ``"shadow"``/``"volume"``, or
-        baked into the X3D document) are replaced, so running it again on
-        its own output gives the same scene.
+        Shadows and grounds an earlier run added (role ``"shadow"``,
+        ``"volume"``, ``"ground"``, or baked into the X3D document) are
+        replaced, so running it again on its own output gives the same scene.
 
     Raises
     ------
@@ -193,6 +215,7 @@ def add_shadows(
             progress=progress,
             extra_lights=extra_lights,
             surfaces=surfaces,
+            keep_runtime_shadows=keep_runtime_shadows,
         )
 
 
@@ -208,6 +231,7 @@ def _add_shadows(
     progress: Progress | None,
     extra_lights: Sequence[SceneLight],
     surfaces: bool | None,
+    keep_runtime_shadows: bool,
 ) -> Scene:
     """:func:`add_shadows`, its arguments checked and passed on by name."""
     if method not in ("planar", "volume"):
@@ -241,6 +265,7 @@ def _add_shadows(
         raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")
     names = _Names(kept, scene.lights)
     opacity = opacities(geometry)  # (see .opacity: 0 casts nothing)
+    lighting = Lighting.of(scene)
 
     if method == "volume":
         added = _volumes(scene, stacked, opacity, chosen, tolerance, names, notes, progress)
@@ -283,6 +308,7 @@ def _add_shadows(
                 "every other surface (no ground plane is added under it; --plane a,b,c,d adds one)"
             )
         added = []
+        on_ground: list[np.ndarray] = []  # the shadows on the ground plane, if it receives
         total, done = len(chosen) * len(found) * len(stacked), 0
         for index, light in enumerate(chosen):
             light_name = names.light(light, index)
@@ -304,9 +330,12 @@ def _add_shadows(
                     notes=notes,
                     light_name=light_name,
                     step=step,
+                    lighting=lighting,
                 )
                 done += len(stacked)
                 for level, layer in layers:
+                    if _is_ground(receiver):
+                        on_ground.append(layer.vertices)
                     layer.name = names.unique(
                         f"shadow_{light_name}_{receiver.name}{_layer_suffix(level)}"
                     )
@@ -326,6 +355,7 @@ def _add_shadows(
                     height,
                     notes,
                     light_name,
+                    lighting,
                 ):
                     layer.name = names.unique(f"shadow_{light_name}_surfaces{_layer_suffix(level)}")
                     layer.group = group
@@ -335,7 +365,71 @@ def _add_shadows(
         if not added:
             listed = ", ".join(receiver.name for receiver in found)
             notes.append(f"shadows: no shadow falls on the receivers ({listed})")
-    return dataclasses.replace(scene, shapes=[*kept, *added], warnings=[*scene.warnings, *notes])
+        grounds = [receiver for receiver in found if _is_ground(receiver)]
+        if grounds:
+            height = -grounds[0].plane.offset / grounds[0].plane.normal[scene.up_index]
+            floor = visible_ground(np.vstack([bounds, *on_ground]), height, scene.up_index)
+            floor.name, floor.group = names.unique("ground"), names.unique("shadowgeo_ground")
+            added.insert(0, floor)
+            notes.append(
+                f"shadows: a light-grey ground ({floor.name}) is added under the scene to show "
+                "the shadows on the ground plane"
+            )
+    baked = chosen if method == "planar" else []
+    marked = _runtime_shadows(scene.lights, baked, keep_runtime_shadows, names, notes)
+    return dataclasses.replace(
+        scene, shapes=[*kept, *added], lights=marked, warnings=[*scene.warnings, *notes]
+    )
+
+
+def _is_ground(receiver: Receiver) -> bool:
+    """Whether ``receiver`` is the ground plane :func:`.receivers.ground` made."""
+    return receiver.triangles is None and receiver.name == "ground"
+
+
+def _runtime_shadows(
+    lights: list[SceneLight],
+    baked: list[SceneLight],
+    keep: bool,
+    names: _Names,
+    notes: list[str],
+) -> list[SceneLight]:
+    """The scene's lights with ``baked`` set on those whose shadows are now
+    ``baked`` and that would draw them at run time (``shadows`` true), unless
+    ``keep``: a browser drawing its own shadow over the baked one darkens it
+    twice. ``baked`` is cleared on the others (a light an earlier run baked
+    and this one does not draws its runtime shadows again). One note says
+    which lights still draw runtime shadows."""
+    result = []
+    turned_off, drawing = [], []
+    casting = {id(light) for light in baked}  # the scene's own objects, alive meanwhile
+    for index, light in enumerate(lights):
+        name = names.light(light, index)
+        chosen = id(light) in casting
+        turn_off = chosen and light.shadows and not keep
+        if turn_off:
+            turned_off.append(name)
+        if light.baked != turn_off:
+            light = dataclasses.replace(light, baked=turn_off)
+        if light.runtime_shadows and light.on:
+            drawing.append(name + (" (its shadows are baked too)" if chosen else ""))
+        result.append(light)
+    if turned_off:
+        notes.append(
+            f'shadows: runtime shadows turned off (shadows="false") for {_listed(turned_off)}: '
+            "their shadows are baked, and a browser drawing its own over them would darken "
+            "twice (--keep-runtime-shadows keeps them)"
+        )
+    if drawing:
+        notes.append(f"shadows: runtime shadows still drawn by {_listed(drawing)}")
+    elif baked:
+        notes.append("shadows: no light draws runtime shadows over the baked ones")
+    return result
+
+
+def _listed(names: list[str]) -> str:
+    more = f", and {len(names) - 10:,} more" if len(names) > 10 else ""
+    return f"light{'s' if len(names) > 1 else ''} {', '.join(names[:10])}{more}"
 
 
 def _layer_suffix(opacity: float) -> str:
@@ -374,7 +468,7 @@ def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
     """The scene's shapes less the shadows an earlier run added: shapes with
     role "shadow" or "volume" (every reader keeps roles; X3D through the
     ``MARK`` class of the groups). They are replaced, neither cast nor stay."""
-    kept = [s for s in scene.shapes if s.role not in ("shadow", "volume")]
+    kept = [s for s in scene.shapes if s.role not in ("shadow", "volume", "ground")]
     if len(kept) < len(scene.shapes):
         notes.append(
             f"shadows: {len(scene.shapes) - len(kept)} shadow shapes added by an earlier run "
@@ -534,6 +628,7 @@ def _shadow_on(
     notes: list[str],
     light_name: str,
     step: Callable[[int], None],
+    lighting: Lighting,
 ) -> list[tuple[float, Shape]]:
     """The shadow of the casters on one receiver as shapes, one per casting
     opacity (``opacity``: (k,) each caster's, :mod:`.opacity`), most opaque
@@ -542,7 +637,8 @@ def _shadow_on(
     ``notes`` for a caster that cannot cast. The layers do not overlap: each
     is its casters' united shadow less the shadows of every more opaque
     layer, so a point takes the darkness of the most opaque caster that hides
-    it."""
+    it. Each layer is as dark as ``lighting`` says (:mod:`.darkness`) times
+    its opacity."""
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
     if plane is None:
@@ -603,7 +699,8 @@ def _shadow_on(
         where = f"shadow of light {light_name} on {receiver.name}"
         if level < 1:
             where += f", of casters of opacity {level:g}"
-        shapes.append((level, shadow_shape(vertices, faces, scene_light, where, level)))
+        darkness = lighting.darkness(scene_light, vertices, faces, receiver.material)
+        shapes.append((level, shadow_shape(vertices, faces, scene_light, where, level, darkness)))
     return shapes
 
 

@@ -23,6 +23,7 @@ from ..surface import shadow_layers_on_surface
 from ..tolerance import Tolerance
 from ..topology import Caster, row_groups, unique_integers
 from .casters import CasterSet
+from .darkness import Lighting
 from .model import SceneLight, Shape, shadow_shape
 from .receivers import Receiver, repeated_faces
 
@@ -94,13 +95,15 @@ def surface_shadow(
     lift: float,
     notes: list[str],
     light_name: str,
+    lighting: Lighting | None = None,
 ) -> list[tuple[float, Shape]]:
     """The shadow of ``casters`` (in world coordinates; ``opacity`` (k,) the
     casting opacity of each, above 0) on ``surface`` as shapes (role
     ``"shadow"``), one per opacity, most opaque first, as the planar
     receivers' (:func:`~shadowgeo.shadow_layers_on_surface`: the layers do
     not overlap, each as dark as its opacity); none when no shadow falls on
-    it."""
+    it; as dark as ``lighting`` says for X3D's default material (the surface
+    spans shapes of many looks), else the light's ``shadow_intensity``."""
     vertices, faces = surface
     with_faces = [k for k, caster in enumerate(casters) if caster.n_faces]
     if not len(faces) or not with_faces:
@@ -115,17 +118,14 @@ def surface_shadow(
         notes.append(f"shadows: no shadows on the surfaces for light {light_name}: {error}")
         return []
     where = f"shadow of light {light_name} on the scene's surfaces"
-    return [
-        (
-            level,
-            shadow_shape(
-                layer.vertices,
-                layer.faces,
-                scene_light,
-                where if level >= 1 else f"{where}, of casters of opacity {level:g}",
-                level,
-            ),
-        )
-        for level, layer in zip(levels, layers, strict=True)
-        if len(layer.faces)
-    ]
+    shapes = []
+    for level, layer in zip(levels, layers, strict=True):
+        if not len(layer.faces):
+            continue
+        darkness = None
+        if lighting is not None:
+            darkness = lighting.darkness(scene_light, layer.vertices, layer.faces)
+        source = where if level >= 1 else f"{where}, of casters of opacity {level:g}"
+        shape = shadow_shape(layer.vertices, layer.faces, scene_light, source, level, darkness)
+        shapes.append((level, shape))
+    return shapes
