@@ -361,6 +361,7 @@ class _Reader:
                     source=instance.source,
                     role=instance.role,
                     group=instance.group,
+                    crease_angle=built.crease_angle,
                 )
             )
         scene.lights.extend(self.lights)

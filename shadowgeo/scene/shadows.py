@@ -255,7 +255,7 @@ def _add_shadows(
         surface = None
         if surfaces and besides <= limits.MAX_SURFACE_FACES:
             surface = receiving_faces(geometry, found, tolerance, stacked)
-            besides = len(surface[1])  # an open shape's faces count twice, one each way
+            besides = len(surface.faces)  # an open shape's faces count twice, one each way
         if surfaces and besides > limits.MAX_SURFACE_FACES:
             notes.append(
                 f"shadows: {besides:,} faces besides the planar receivers, more than "
@@ -306,6 +306,7 @@ def _add_shadows(
                 shape = surface_shadow(
                     surface,
                     [stacked.caster(int(k)) for k in reached],
+                    reached,
                     light,
                     tolerance,
                     height,
