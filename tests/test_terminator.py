@@ -1,0 +1,176 @@
+"""A cast shadow reaching a smooth shape's terminator ends where the viewer's
+shading ends (the smooth terminator), not in facet-wide stair steps.
+
+The scene: an X3D Sphere (radius 1, at the origin) under an oblique sun, and a
+wide slab above it that shades every point of the sphere with ``z`` above
+about 0.1 (its edge, cast along the sun, lies near ``z = 0.07``). So on
+the sphere, near its terminator, the truth is analytic: a point of the true
+sphere with unit normal ``n`` is shaded by the sun where ``n . l > 0`` (``l``
+towards the sun), and there the slab blocks it; where ``n . l <= 0`` the
+viewer adds no sunlight, shadowed or not, and no shadow is to be drawn.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import trimesh
+
+import shadowgeo as sg
+from shadowgeo.scene import primitives
+from shadowgeo.scene.terminator import clip_to_lit, corner_normals, lit_values
+
+SUN = np.array([1.0, -1.0, 0.35]) / np.linalg.norm([1.0, -1.0, 0.35])  # travel direction
+TOWARDS = -SUN
+# The slab: 12 x 0.2 x 8, its lower face at y = 2.9, reaching down to z = -0.95:
+# rays from the sphere towards the sun meet it where the sphere's z > about 0.07.
+SLAB_CENTRE = np.array([-3.0, 3.0, 4.0 + 0.1 - 3.0 * 0.35])
+
+
+def _text(vector: np.ndarray) -> str:
+    return " ".join(f"{value:.17g}" for value in vector)
+
+
+SCENE = f"""<?xml version="1.0" encoding="UTF-8"?>
+<X3D profile="Interchange" version="4.0">
+  <Scene>
+    <DirectionalLight DEF="sun" direction="{_text(SUN)}" shadows="true"/>
+    <Shape DEF="ball"><Sphere radius="1"/></Shape>
+    <Transform translation="{_text(SLAB_CENTRE)}">
+      <Shape DEF="slab"><Box size="12 0.2 8"/></Shape>
+    </Transform>
+  </Scene>
+</X3D>
+"""
+
+
+def blocked_by_slab(points: np.ndarray) -> np.ndarray:
+    """(n,) bool: the ray from each point towards the sun meets the slab (by
+    hand: where it crosses the slab's lower face)."""
+    low, high = SLAB_CENTRE - [6.0, 0.1, 4.0], SLAB_CENTRE + [6.0, 0.1, 4.0]
+    reach = (low[1] - points[:, 1]) / TOWARDS[1]
+    landed = points + reach[:, None] * TOWARDS
+    return (
+        (reach > 0)
+        & (landed[:, 0] >= low[0])
+        & (landed[:, 0] <= high[0])
+        & (landed[:, 2] >= low[2])
+        & (landed[:, 2] <= high[2])
+    )
+
+
+def sphere_samples(count: int, seed: int = 3) -> np.ndarray:
+    """(count, 3) unit vectors, uniform on the sphere."""
+    points = np.random.default_rng(seed).normal(size=(count, 3))
+    return points / np.linalg.norm(points, axis=1, keepdims=True)
+
+
+def drawn_on_sphere(result: sg.Scene, directions: np.ndarray) -> np.ndarray:
+    """(n,) bool: the ray from the sphere's centre along each direction meets a
+    baked shadow triangle lying on the sphere (what a viewer would show dark there)."""
+    triangles = []
+    for shape in result.shapes_with_role("shadow"):
+        corners = shape.world_vertices[shape.faces]
+        on_ball = np.abs(np.linalg.norm(corners, axis=2) - 1.0).max(axis=1) < 0.05
+        triangles.append(corners[on_ball])
+    corners = np.concatenate(triangles)
+    mesh = trimesh.Trimesh(corners.reshape(-1, 3), np.arange(len(corners) * 3).reshape(-1, 3))
+    hit = mesh.ray.intersects_any(np.zeros_like(directions), directions)
+    return np.asarray(hit)
+
+
+def test_shadow_ends_at_the_smooth_terminator(tmp_path):
+    path = tmp_path / "scene.x3d"
+    path.write_text(SCENE)
+    scene = sg.load(path, chord=3e-4)  # about 3 degrees a facet
+    result = sg.add_shadows(scene)
+    directions = sphere_samples(40_000)
+    facing = directions @ TOWARDS
+    truth = (facing > 0) & blocked_by_slab(directions)
+    drawn = drawn_on_sphere(result, directions)
+
+    # Well inside the slab's shadow and away from the terminator: all dark;
+    # on the far side: nothing drawn.
+    deep = (directions[:, 2] > 0.3) & (facing > 0.2) & truth
+    assert deep.sum() > 1000 and drawn[deep].mean() > 0.995
+    assert not drawn[facing < -0.2].any()
+    # Within a band of the terminator (|n . l| < 0.08, about a facet and a
+    # half either side) and inside the slab's shadow, what is drawn dark is
+    # what the shading lights. Ending at the faceted terminator gets 16 % of
+    # the band wrong (the stair steps); the smooth cut, under 2 % (its
+    # interpolated normals against the true sphere's).
+    band = (np.abs(facing) < 0.08) & (directions[:, 2] > 0.3)
+    assert band.sum() > 500
+    wrong = np.mean(drawn[band] != truth[band])
+    assert wrong < 0.05, wrong
+
+
+def test_smoothed_normals_of_a_sphere_are_its_radii():
+    """Crease angle above the facets' angle: each corner's normal is within a
+    degree or two of the true sphere's (its position, normalised)."""
+    vertices, faces = primitives.sphere(1.0, chord=0.01)
+    groups = np.zeros(len(faces), dtype=np.int64)
+    smooth = corner_normals(vertices, faces, groups, np.full(len(faces), 0.5))
+    radial = vertices[faces]
+    angle = np.degrees(np.arccos(np.clip(np.einsum("mkd,mkd->mk", smooth, radial), -1, 1)))
+    assert angle.max() < 3.0
+    # and 0 keeps each face's own normal at its three corners
+    flat = corner_normals(vertices, faces, groups, np.zeros(len(faces)))
+    corners = vertices[faces]
+    own = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    own /= np.linalg.norm(own, axis=1, keepdims=True)
+    assert np.allclose(flat, own[:, None, :])
+
+
+def test_smoothing_stays_within_a_shape_and_its_crease():
+    """Two unit squares folded 60 degrees along x = 0: one normal at the fold
+    with a crease above 60 degrees, each face's own below; a second shape
+    on the same corners is never averaged in."""
+    fold = math.radians(60)
+    vertices = np.array(
+        [[0, 0, 0], [0, 0, 1], [1, 0, 0], [1, 0, 1], [-math.cos(fold), math.sin(fold), 0],
+         [-math.cos(fold), math.sin(fold), 1]]
+    )  # fmt: skip
+    faces = np.array([[0, 1, 2], [2, 1, 3], [0, 4, 1], [1, 4, 5]])
+    normals = corner_normals(vertices, faces, np.zeros(4, np.int64), np.full(4, math.radians(61)))
+    # at the fold corner 0 of face 0: the mean of (0, 1, 0) weighted twice... by area:
+    # face 0 (area 1/2, normal +y) and face 2 (area 1/2, normal turned 60 degrees)
+    expected = np.array([0.0, 1.0, 0.0]) + np.array([math.sin(fold), math.cos(fold), 0.0])
+    assert np.allclose(normals[0, 0], expected / np.linalg.norm(expected))
+    assert np.allclose(normals[0, 2], [0, 1, 0])  # corner at x = 1: face 0 and 1 only
+    apart = corner_normals(vertices, faces, np.zeros(4, np.int64), np.full(4, math.radians(59)))
+    assert np.allclose(apart[0, 0], [0, 1, 0])
+    shapes = np.array([0, 0, 1, 1])
+    separate = corner_normals(vertices, faces, shapes, np.full(4, math.radians(61)))
+    assert np.allclose(separate[0, 0], [0, 1, 0])
+
+
+def test_clip_keeps_the_part_where_the_value_is_positive():
+    """The unit right triangle with corner values (-1, 3, 1): the value is 0
+    at (0.25, 0) and (0, 0.5); what is kept is the triangle less the corner
+    triangle of area 1/16, as two triangles meeting the cut points exactly."""
+    face = np.array([[[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]])
+    triangle, owner = np.array([[0, 1, 2]]), np.array([0])
+    points, triangles, owners = clip_to_lit(
+        face[0], triangle, owner, face, np.array([[-1.0, 3, 1]])
+    )
+    corners = points[triangles]
+    twice = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert math.isclose(0.5 * np.linalg.norm(twice, axis=1).sum(), 0.5 - 1 / 16)
+    assert (twice[:, 2] > 0).all()  # wound as the face
+    assert owners.tolist() == [0, 0]
+    assert {tuple(p) for p in points} == {(1, 0, 0), (0, 1, 0), (0.25, 0, 0), (0, 0.5, 0)}
+    # one corner kept: the small triangle at it
+    points, triangles, _ = clip_to_lit(face[0], triangle, owner, face, np.array([[1.0, -3, -1]]))
+    assert {tuple(p) for p in points} == {(0, 0, 0), (0.25, 0, 0), (0, 0.5, 0)}
+    # all corners negative: nothing; all positive: the triangle itself
+    assert len(clip_to_lit(face[0], triangle, owner, face, -np.ones((1, 3)))[1]) == 0
+    assert len(clip_to_lit(face[0], triangle, owner, face, np.ones((1, 3)))[1]) == 1
+
+
+def test_lit_values_of_a_point_light():
+    corners = np.array([[[0.0, 0, 0], [1, 0, 0], [0, 0, 1]]])
+    normals = np.tile([0.0, 1.0, 0.0], (1, 3, 1))
+    values = lit_values(corners, normals, sg.PointLight([0, 1, 0]))
+    assert np.allclose(values, [[1.0, 1 / math.sqrt(2), 1 / math.sqrt(2)]])
