@@ -61,6 +61,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike
 
 from . import polygons as poly
 from .errors import GeometryError
@@ -200,6 +201,7 @@ def shadow_on_surface(
     *,
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
+    not_shadowed_by: ArrayLike | None = None,
 ) -> SurfaceShadow:
     """The exact shadow that ``casters`` cast on every face of ``surface``.
 
@@ -218,6 +220,11 @@ def shadow_on_surface(
         light, so that it does not z-fight the surface.
     tolerance : Tolerance, optional
         Defaults to ``Tolerance.for_points`` of the casters, surface and light.
+    not_shadowed_by : (m,) int array_like, optional
+        For each face of ``surface``, the index in ``casters`` of one caster
+        that does not shadow it (-1: every caster does). The scene converter
+        uses it past a smooth shape's terminator, where the shape's own facets
+        would shadow their neighbours (:mod:`shadowgeo.scene.terminator`).
 
     Returns
     -------
@@ -264,7 +271,14 @@ def shadow_on_surface(
             if caster.n_faces:
                 position = cast("PointLight | SpotLight", light).position
                 check_light_outside(caster, position, tolerance)
-    return _SurfaceProjector(caster_list, light, receiver, offset, tolerance).run()
+    exclude = None
+    if not_shadowed_by is not None:
+        exclude = np.asarray(not_shadowed_by, dtype=np.int64).reshape(-1)
+        if len(exclude) != receiver.n_faces:
+            raise GeometryError(
+                f"not_shadowed_by has {len(exclude)} entries for {receiver.n_faces} surface faces"
+            )
+    return _SurfaceProjector(caster_list, light, receiver, offset, tolerance, exclude).run()
 
 
 def _settle_casters(casters: list[Caster]) -> None:
@@ -334,11 +348,22 @@ class _SurfaceProjector:
     u: np.ndarray
     v: np.ndarray
     geometry: SurfaceGeometry
+    # Set by _caster_triangles: the index in casters of each triangle handled
+    # one by one, and of each outlined caster.
+    triangle_caster: np.ndarray
+    outlined_caster: np.ndarray
 
     def __init__(
-        self, casters: list[Caster], light: Light, surface: Caster, offset: float, tol: Tolerance
+        self,
+        casters: list[Caster],
+        light: Light,
+        surface: Caster,
+        offset: float,
+        tol: Tolerance,
+        exclude: np.ndarray | None = None,
     ) -> None:
         self.casters = casters
+        self.exclude = exclude  # (m,) per face: the caster that does not shadow it, or -1
         self.light = light
         self.surface = surface
         self.offset = offset
@@ -441,7 +466,11 @@ class _SurfaceProjector:
             direction,
             pad,
         )
-        receiver_parts = [lit_faces[found_faces]]
+        found_faces = lit_faces[found_faces]
+        if self.exclude is not None:  # a face's own excluded caster: no pair
+            mine = self.triangle_caster[found_triangles] == self.exclude[found_faces]
+            found_faces, found_triangles = found_faces[~mine], found_triangles[~mine]
+        receiver_parts = [found_faces]
         triangle_parts = [found_triangles]
         # Closed casters wholly in front of a face: their outline, not their triangles.
         full = np.zeros(len(corners), dtype=bool)
@@ -456,6 +485,9 @@ class _SurfaceProjector:
         if outlined:
             fronts = [front for _, front, _ in outlined]
             pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
+            if self.exclude is not None:
+                mine = self.outlined_caster[owner[pair_triangles]] == self.exclude[pair_faces]
+                pair_faces, pair_triangles = pair_faces[~mine], pair_triangles[~mine]
             n_faces = np.int64(len(self.faces))
             keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
             near = np.unique(keys)
@@ -536,6 +568,9 @@ class _SurfaceProjector:
         half-sizes, box centre, bounding radius about it))."""
         chunks: list[np.ndarray] = []
         outlined: list[_Outlined] = []
+        # the index in self.casters of each chunk's caster and each outlined one
+        chunk_casters: list[int] = []
+        outlined_casters: list[int] = []
         # Without a light point the light is directional.
         direction = (
             None if self.light_point is not None else cast(DirectionalLight, self.light).direction
@@ -556,7 +591,7 @@ class _SurfaceProjector:
                 closed, found, centred, outlines, radii, strict=True
             )
         }
-        for caster in self.casters:
+        for index, caster in enumerate(self.casters):
             if caster.n_faces == 0:
                 continue
             faces = caster.faces
@@ -567,6 +602,7 @@ class _SurfaceProjector:
                     centre = 0.5 * (low + high)
                     half = 0.5 * (high - low)
                     outlined.append((outline, (vertices, faces[front]), (half, centre, radius)))
+                    outlined_casters.append(index)
                     continue
                 keep = front
             elif caster is self.surface and self.geometry.single_sheet:
@@ -579,6 +615,11 @@ class _SurfaceProjector:
             # one more candidate pair per face it covers.
             faces = faces[keep & caster.distinct]
             chunks.append(caster.vertices[faces] - self.center)
+            chunk_casters.append(index)
+        self.outlined_caster = np.array(outlined_casters, dtype=np.int64)
+        self.triangle_caster = np.repeat(
+            np.array(chunk_casters, dtype=np.int64), [len(chunk) for chunk in chunks]
+        )
         if not chunks:
             return np.zeros((0, 3, 3)), outlined
         return np.concatenate(chunks), outlined

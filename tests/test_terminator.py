@@ -100,6 +100,12 @@ def test_shadow_ends_at_the_smooth_terminator(tmp_path):
     # what the shading lights. Ending at the faceted terminator gets 16 % of
     # the band wrong (the stair steps); the smooth cut, under 2 % (its
     # interpolated normals against the true sphere's).
+    # Every shadow point on the ball is lifted off it, outwards: its facets lie
+    # within the chord tolerance (3e-4 of the scene's size) inside the unit
+    # sphere, and the lift (1e-3 of it) is larger, so none is under the surface.
+    for shape in result.shapes_with_role("shadow"):
+        radius = np.linalg.norm(shape.world_vertices, axis=1)
+        assert not ((radius > 0.9) & (radius < 1.0)).any()
     band = (np.abs(facing) < 0.08) & (directions[:, 2] > 0.3)
     assert band.sum() > 500
     wrong = np.mean(drawn[band] != truth[band])
@@ -174,3 +180,24 @@ def test_lit_values_of_a_point_light():
     normals = np.tile([0.0, 1.0, 0.0], (1, 3, 1))
     values = lit_values(corners, normals, sg.PointLight([0, 1, 0]))
     assert np.allclose(values, [[1.0, 1 / math.sqrt(2), 1 / math.sqrt(2)]])
+
+
+def test_a_face_is_not_shadowed_by_the_caster_named_for_it():
+    """A unit square on the ground under a sun straight down: a closed box
+    above its left half (outlined) and an open sheet above its right half
+    (clipped triangle by triangle) each shade a half; naming either for a
+    face takes that caster's shadow off that face only."""
+    ground = ([[0, 0, 0], [1, 0, 0], [1, 0, -1], [0, 0, -1]], [[0, 1, 2], [0, 2, 3]])
+    box = trimesh.creation.box(bounds=[[-0.5, 1, -2], [0.5, 2, 1]])  # x < 0.5
+    sheet = ([[0.5, 3, 1], [0.5, 3, -2], [2, 3, -2], [2, 3, 1]], [[0, 1, 2], [0, 2, 3]])
+    sun = sg.DirectionalLight([0, -1, 0])
+    casters = [box, sheet]
+    # face 0 is the lower-right triangle (0,0)-(1,0)-(1,-1); face 1 the upper-left
+    every = sg.shadow_on_surface(casters, sun, ground)
+    assert np.allclose(every.fraction, [1.0, 1.0])
+    no_box = sg.shadow_on_surface(casters, sun, ground, not_shadowed_by=[0, -1])
+    # face 0 without the box: the sheet's part, x > 0.5 of (0,0)-(1,0)-(1,-1): 3/8 of 1/2
+    assert np.allclose(no_box.fraction, [0.75, 1.0])
+    no_sheet = sg.shadow_on_surface(casters, sun, ground, not_shadowed_by=[-1, 1])
+    # face 1 without the sheet: the box's part, x < 0.5 of (0,0)-(1,-1)-(0,-1): 3/8 of 1/2
+    assert np.allclose(no_sheet.fraction, [1.0, 0.75])

@@ -148,32 +148,34 @@ def surface_shadow(
         notes.append(f"shadows: no shadows on the surfaces for light {light_name}: {error}")
         return None
     pieces = [clip_to_lit(result.vertices, result.faces, result.face_index, corners, values)]
-    for faces in _past_terminator(surface, values, result.face_index, light, tolerance):
-        others = caster_shapes != surface.owner[faces[0]]
-        if not others.any():
-            continue
-        # turned round, the face fronts the light; lifted back out along its own normal
-        turned = surface.faces[faces][:, ::-1]
+    past = _past_terminator(surface, values, result.face_index, light)
+    if len(past):
+        # turned round, each face fronts the light; lifted back out along its own normal
+        turned = surface.faces[past][:, ::-1]
         used, inverse = unique_integers(turned.reshape(-1), return_inverse=True)
+        position = {int(shape): k for k, shape in enumerate(caster_shapes)}
+        own = np.array([position.get(int(shape), -1) for shape in surface.owner[past]])
         try:
             part = shadow_on_surface(
-                [casters[k] for k in np.flatnonzero(others)],
+                casters,
                 light,
                 (surface.vertices[used], inverse.reshape(-1, 3)),
                 offset=-lift,
                 tolerance=tolerance,
+                not_shadowed_by=own,
             )
         except GeometryError:
-            continue  # the faces keep the shading's own terminator
-        pieces.append(
-            clip_to_lit(
-                part.vertices,
-                part.faces,
-                faces[part.face_index],
-                corners[:, ::-1],
-                values[:, ::-1],
+            pass  # these faces keep the shading's own terminator
+        else:
+            pieces.append(
+                clip_to_lit(
+                    part.vertices,
+                    part.faces,
+                    past[part.face_index],
+                    corners[:, ::-1],
+                    values[:, ::-1],
+                )
             )
-        )
     vertices, triangles = _joined([(points, triangles) for points, triangles, _ in pieces])
     if not len(triangles):
         return None
@@ -190,13 +192,13 @@ def _past_terminator(
     values: np.ndarray,
     shadowed: np.ndarray,
     light: Light,
-    tolerance: Tolerance,
-) -> list[np.ndarray]:
+) -> np.ndarray:
     """The faces turned away from the light that the shading still lights
     (some corner with ``values > 0``) and that touch a face with a cast
-    shadow (``shadowed``: face of each shadow triangle), one array per shape."""
+    shadow (``shadowed``: face of each shadow triangle)."""
+    none = np.zeros(0, dtype=np.int64)
     if not len(shadowed):
-        return []
+        return none
     corners = surface.vertices[surface.faces]
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     if is_positional(light):
@@ -205,12 +207,11 @@ def _past_terminator(
         turned = normals @ light.direction >= 0
     candidates = np.flatnonzero(turned & (values.max(axis=1) > 0))
     if not len(candidates):
-        return []
+        return none
     touched = np.zeros(len(surface.vertices), dtype=bool)
     touched[surface.faces[unique_integers(shadowed)].reshape(-1)] = True
-    near = candidates[touched[surface.faces[candidates]].any(axis=1)]
-    owners = surface.owner[near]
-    return [near[owners == owner] for owner in unique_integers(owners)]
+    near: np.ndarray = candidates[touched[surface.faces[candidates]].any(axis=1)]
+    return near
 
 
 def _joined(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
