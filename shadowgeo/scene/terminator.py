@@ -88,12 +88,11 @@ def corner_normals(
     if not smooth.any():
         return result
     # one key per (shape, position): corners of a shape at one point meet there
-    _, position = np.unique(vertices, axis=0, return_inverse=True)
+    # (only the smooth faces' corners: a flat city around one sphere costs nothing)
     corner_face = np.repeat(np.flatnonzero(smooth), 3)
-    key = (
-        groups[corner_face] * (int(position.max()) + 1)
-        + position.reshape(-1)[faces[smooth].reshape(-1)]
-    )
+    _, position = np.unique(vertices[faces[smooth].reshape(-1)], axis=0, return_inverse=True)
+    position = position.reshape(-1)
+    key = groups[corner_face] * (int(position.max()) + 1) + position
     order = np.argsort(key, kind="stable")
     key_sorted = key[order]
     starts = np.flatnonzero(np.r_[True, key_sorted[1:] != key_sorted[:-1]])
