@@ -241,3 +241,26 @@ def test_x_ite_shows_the_shadow_ending_at_the_smooth_terminator(tmp_path):
     assert band.sum() > 1000
     wrong = np.mean(black[band] != truth[band])
     assert wrong < 0.12, wrong
+
+
+def test_the_reader_gives_each_shape_the_crease_its_browser_shades_with(tmp_path):
+    """Curved primitives smooth (across their facets, not their rims), Box
+    flat, an IndexedFaceSet its own creaseAngle (default 0: flat)."""
+    path = tmp_path / "shapes.x3d"
+    path.write_text(
+        """<X3D profile="Interchange" version="4.0"><Scene>
+        <Shape DEF="ball"><Sphere/></Shape>
+        <Shape DEF="can"><Cylinder/></Shape>
+        <Shape DEF="hat"><Cone/></Shape>
+        <Shape DEF="box"><Box/></Shape>
+        <Shape DEF="flat"><IndexedFaceSet coordIndex="0 1 2 -1">
+          <Coordinate point="0 0 0, 1 0 0, 0 1 0"/></IndexedFaceSet></Shape>
+        <Shape DEF="creased"><IndexedFaceSet creaseAngle="1.2" coordIndex="0 1 2 -1">
+          <Coordinate point="0 0 0, 1 0 0, 0 1 0"/></IndexedFaceSet></Shape>
+        </Scene></X3D>"""
+    )
+    crease = {shape.name: shape.crease_angle for shape in sg.load(path).shapes}
+    assert crease["box"] == crease["flat"] == 0.0
+    assert crease["creased"] == 1.2
+    for name in ("ball", "can", "hat"):
+        assert math.radians(10) < crease[name] < math.radians(90)  # facets < rims
