@@ -264,3 +264,16 @@ def test_the_reader_gives_each_shape_the_crease_its_browser_shades_with(tmp_path
     assert crease["creased"] == 1.2
     for name in ("ball", "can", "hat"):
         assert math.radians(10) < crease[name] < math.radians(90)  # facets < rims
+
+
+def test_clip_at_any_scale():
+    """The same cut on a face 1e-80 and 1e80 across: the kept area scales
+    with the square of the size (3/8 of the face's: values (-1, 3, 1))."""
+    for size in (1e-80, 1e80):
+        face = np.array([[[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]]) * size
+        points, triangles, _ = clip_to_lit(
+            face[0], np.array([[0, 1, 2]]), np.array([0]), face, np.array([[-1.0, 3, 1]])
+        )
+        corners = points[triangles] / size
+        twice = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        assert math.isclose(0.5 * np.linalg.norm(twice, axis=1).sum(), 0.5 - 1 / 16)

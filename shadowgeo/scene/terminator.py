@@ -175,8 +175,13 @@ def clip_to_lit(
     own = surface_corners[face_index]  # (t, 3, 3)
     origin = own[:, 0]
     edges = np.stack([own[:, 1] - origin, own[:, 2] - origin], axis=1)  # (t, 2, 3)
+    # in units of each face's size, so that its Gram determinant neither
+    # underflows nor overflows, whatever the scene's scale
+    size = np.linalg.norm(edges, axis=2).max(axis=1)
+    size = np.where(size > 0, size, 1.0)[:, None, None]
+    edges = edges / size
     gram = np.einsum("tid,tjd->tij", edges, edges)
-    rhs = np.einsum("tid,tkd->tki", edges, triangles - origin[:, None])  # (t, 3, 2)
+    rhs = np.einsum("tid,tkd->tki", edges, (triangles - origin[:, None]) / size)  # (t, 3, 2)
     determinant = gram[:, 0, 0] * gram[:, 1, 1] - gram[:, 0, 1] ** 2
     safe = np.where(np.abs(determinant) > 0, determinant, 1.0)
     beta = (gram[:, None, 1, 1] * rhs[..., 0] - gram[:, None, 0, 1] * rhs[..., 1]) / safe[:, None]
