@@ -67,6 +67,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import shapely
+from numpy.typing import ArrayLike
 
 from . import polygons as poly
 from .errors import GeometryError
@@ -218,6 +219,7 @@ def shadow_on_surface(
     *,
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
+    not_shadowed_by: ArrayLike | None = None,
 ) -> SurfaceShadow:
     """The exact shadow that ``casters`` cast on every face of ``surface``.
 
@@ -236,6 +238,11 @@ def shadow_on_surface(
         light, so that it does not z-fight the surface.
     tolerance : Tolerance, optional
         Defaults to ``Tolerance.for_points`` of the casters, surface and light.
+    not_shadowed_by : (m,) int array_like, optional
+        For each face of ``surface``, the index in ``casters`` of one caster
+        that does not shadow it (-1: every caster does). The scene converter
+        uses it past a smooth shape's terminator, where the shape's own facets
+        would shadow their neighbours (:mod:`shadowgeo.scene.terminator`).
 
     Returns
     -------
@@ -265,7 +272,12 @@ def shadow_on_surface(
     (0.5, [0.75, 0.25])
     """
     (layer,) = shadow_layers_on_surface(
-        [casters], light, surface, offset=offset, tolerance=tolerance
+        [casters],
+        light,
+        surface,
+        offset=offset,
+        tolerance=tolerance,
+        not_shadowed_by=not_shadowed_by,
     )
     return layer
 
@@ -277,6 +289,7 @@ def shadow_layers_on_surface(
     *,
     offset: float = 0.0,
     tolerance: Tolerance | None = None,
+    not_shadowed_by: ArrayLike | None = None,
 ) -> list[SurfaceShadow]:
     """The shadows of groups of casters on ``surface`` as layers that do not
     overlap: the i-th is what :func:`shadow_on_surface` gives for
@@ -286,7 +299,8 @@ def shadow_layers_on_surface(
     opaque caster in front of it). One group is :func:`shadow_on_surface`.
 
     Parameters are those of :func:`shadow_on_surface`, ``groups`` a list of
-    its ``casters``; each layer's ``fraction`` is the share of each face in
+    its ``casters`` (``not_shadowed_by`` numbers the casters of all groups in
+    turn); each layer's ``fraction`` is the share of each face in
     that layer. Each layer is stitched on its own: a layer has no cracks, and
     two layers meet along a common edge up to the tolerance length.
 
@@ -324,12 +338,27 @@ def shadow_layers_on_surface(
             if caster.n_faces:
                 position = cast("PointLight | SpotLight", light).position
                 check_light_outside(caster, position, tolerance)
+    exclude = None
+    if not_shadowed_by is not None:
+        exclude = np.asarray(not_shadowed_by, dtype=np.int64).reshape(-1)
+        if len(exclude) != receiver.n_faces:
+            raise GeometryError(
+                f"not_shadowed_by has {len(exclude)} entries for {receiver.n_faces} surface faces"
+            )
     # one frame for every layer: their regions are in the same face frames
     center = _center(every, receiver)
     layers = []
     covered: tuple[Loops, np.ndarray] | None = None  # the earlier layers' regions
+    start = 0
     for group in lists:
-        projector = _SurfaceProjector(group, light, receiver, offset, tolerance, center)
+        own_exclude = None
+        if exclude is not None:  # the group's own numbering, -1 for another group's caster
+            inside = (exclude >= start) & (exclude < start + len(group))
+            own_exclude = np.where(inside, exclude - start, -1)
+        start += len(group)
+        projector = _SurfaceProjector(
+            group, light, receiver, offset, tolerance, center, own_exclude
+        )
         found = projector.regions()
         own = (found.regions, found.faces)
         if covered is not None:
@@ -407,6 +436,10 @@ class _SurfaceProjector:
     u: np.ndarray
     v: np.ndarray
     geometry: SurfaceGeometry
+    # Set by _caster_triangles: the index in casters of each triangle handled
+    # one by one, and of each outlined caster.
+    triangle_caster: np.ndarray
+    outlined_caster: np.ndarray
 
     def __init__(
         self,
@@ -416,9 +449,11 @@ class _SurfaceProjector:
         offset: float,
         tol: Tolerance,
         center: np.ndarray | None = None,
+        exclude: np.ndarray | None = None,
     ) -> None:
         self.casters = casters
         self.given_center = center
+        self.exclude = exclude  # (m,) per face: the caster that does not shadow it, or -1
         self.light = light
         self.surface = surface
         self.offset = offset
@@ -530,7 +565,11 @@ class _SurfaceProjector:
             direction,
             pad,
         )
-        receiver_parts = [lit_faces[found_faces]]
+        found_faces = lit_faces[found_faces]
+        if self.exclude is not None:  # a face's own excluded caster: no pair
+            mine = self.triangle_caster[found_triangles] == self.exclude[found_faces]
+            found_faces, found_triangles = found_faces[~mine], found_triangles[~mine]
+        receiver_parts = [found_faces]
         triangle_parts = [found_triangles]
         # Closed casters wholly in front of a face: their outline, not their triangles.
         full = np.zeros(len(corners), dtype=bool)
@@ -545,6 +584,9 @@ class _SurfaceProjector:
         if outlined:
             fronts = [front for _, front, _ in outlined]
             pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
+            if self.exclude is not None:
+                mine = self.outlined_caster[owner[pair_triangles]] == self.exclude[pair_faces]
+                pair_faces, pair_triangles = pair_faces[~mine], pair_triangles[~mine]
             n_faces = np.int64(len(self.faces))
             keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
             near = np.unique(keys)
@@ -625,6 +667,9 @@ class _SurfaceProjector:
         half-sizes, box centre, bounding radius about it))."""
         chunks: list[np.ndarray] = []
         outlined: list[_Outlined] = []
+        # the index in self.casters of each chunk's caster and each outlined one
+        chunk_casters: list[int] = []
+        outlined_casters: list[int] = []
         # Without a light point the light is directional.
         direction = (
             None if self.light_point is not None else cast(DirectionalLight, self.light).direction
@@ -645,7 +690,7 @@ class _SurfaceProjector:
                 closed, found, centred, outlines, radii, strict=True
             )
         }
-        for caster in self.casters:
+        for index, caster in enumerate(self.casters):
             if caster.n_faces == 0:
                 continue
             faces = caster.faces
@@ -656,6 +701,7 @@ class _SurfaceProjector:
                     centre = 0.5 * (low + high)
                     half = 0.5 * (high - low)
                     outlined.append((outline, (vertices, faces[front]), (half, centre, radius)))
+                    outlined_casters.append(index)
                     continue
                 keep = front
             elif caster is self.surface and self.geometry.single_sheet:
@@ -668,6 +714,11 @@ class _SurfaceProjector:
             # one more candidate pair per face it covers.
             faces = faces[keep & caster.distinct]
             chunks.append(caster.vertices[faces] - self.center)
+            chunk_casters.append(index)
+        self.outlined_caster = np.array(outlined_casters, dtype=np.int64)
+        self.triangle_caster = np.repeat(
+            np.array(chunk_casters, dtype=np.int64), [len(chunk) for chunk in chunks]
+        )
         if not chunks:
             return np.zeros((0, 3, 3)), outlined
         return np.concatenate(chunks), outlined

@@ -19,10 +19,14 @@ from .. import limits
 from ..errors import GeometryError
 from ..polygons import polygons_triangles
 from ..scene import Material, primitives
+from .x3d_defaults import DEFAULTS
 from .x3d_extrusion import extrusion
 from .x3d_fields import Context, Element, local_name
 
 PRIMITIVES = {"Box", "Sphere", "Cone", "Cylinder"}
+# Smooth across a curved primitive's facets (a few degrees apart), sharp at a
+# Cylinder's or Cone's rim (90 degrees or more).
+PRIMITIVE_CREASE = 0.5
 MESHES = {
     "IndexedFaceSet", "IndexedTriangleSet", "TriangleSet", "IndexedQuadSet", "QuadSet",
     "ElevationGrid", "IndexedTriangleFanSet", "IndexedTriangleStripSet", "TriangleFanSet",
@@ -46,6 +50,7 @@ class Mesh:
     faces: np.ndarray
     solid: bool = True
     notes: list[str] = field(default_factory=list)
+    crease_angle: float = 0.0  # X3D creaseAngle: how the browser smooths its normals
 
 
 @dataclass
@@ -95,7 +100,10 @@ class Primitive:
             reached = primitives.inscribed_deviation(vertices, faces, self.radius)
             if reached > chord:
                 notes.append(f"Sphere tessellation capped: within {reached:.3g}, not {chord:.3g}")
-        return Mesh(vertices, faces, self.solid, notes)
+        # Browsers shade Sphere, Cone and Cylinder with the true surface's
+        # normals: smooth across the tessellation, sharp at the rims.
+        crease = 0.0 if self.kind == "Box" else PRIMITIVE_CREASE
+        return Mesh(vertices, faces, self.solid, notes, crease)
 
 
 def geometry(context: Context, element: Element) -> Mesh | Primitive:
@@ -110,6 +118,8 @@ def geometry(context: Context, element: Element) -> Mesh | Primitive:
     if context.field(element, "ccw") is False:
         mesh.faces = mesh.faces[:, ::-1].copy()
     mesh.solid = solid
+    if "creaseAngle" in DEFAULTS.get(tag, {}):
+        mesh.crease_angle = float(context.field(element, "creaseAngle"))
     return mesh
 
 

@@ -388,6 +388,7 @@ class _Reader:
                     role=instance.role,
                     group=instance.group,
                     casts_shadow=instance.casts_shadow,
+                    crease_angle=built.crease_angle,
                 )
             )
         scene.lights.extend(self.lights)

@@ -122,6 +122,11 @@ class Shape:
         For added shadows: the name of the group (one per light) they go in.
     source : str, optional
         Where the shape came from, for messages: ``"scene.x3d line 42, Shape DEF='roof'"``.
+    crease_angle : float
+        How a viewer shades it (radians, X3D's ``creaseAngle``): normals are
+        smoothed across edges whose faces meet at less than this angle; 0
+        (the default) shades every face flat. Shadows on the shape end where
+        that shading does (:mod:`shadowgeo.scene.terminator`).
     """
 
     vertices: np.ndarray
@@ -135,6 +140,7 @@ class Shape:
     source: str | None = None
     casts_shadow: bool = True
     receives_shadow: bool = False
+    crease_angle: float = 0.0
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 3)

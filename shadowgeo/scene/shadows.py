@@ -292,7 +292,7 @@ def _add_shadows(
         surface = None
         if surfaces and besides <= limits.MAX_SURFACE_FACES:
             surface = receiving_faces(geometry, found, tolerance, stacked)
-            besides = len(surface[1])  # an open shape's faces count twice, one each way
+            besides = len(surface.faces)  # an open shape's faces count twice, one each way
         if surfaces and besides > limits.MAX_SURFACE_FACES:
             notes.append(
                 f"shadows: {besides:,} faces besides the planar receivers, more than "
@@ -350,6 +350,7 @@ def _add_shadows(
                     surface,
                     [stacked.caster(int(k)) for k in reached],
                     opacity[reached],
+                    reached,
                     light,
                     tolerance,
                     height,

@@ -12,13 +12,24 @@ is left out of that surface, so no face is shadowed twice.
 A solid shape (X3D ``solid="true"``, the default) receives on the front of its
 faces only; an open one (``solid="false"``) on both sides, as X3D browsers draw
 it: its faces go in once each way round.
+
+On a smoothly shaded shape (:attr:`Shape.crease_angle`: Sphere, Cone, Cylinder,
+a creased IndexedFaceSet) the shadow is drawn where the viewer's shading lights
+the surface, not where the facets face the light (:mod:`.terminator`): cut at
+the smooth terminator, and carried onto the faces just past the faceted one
+that the shading still lights, where every other shape casts on them but the
+shape itself does not (as its smooth surface would not). So a cast shadow that
+reaches the terminator ends in a smooth curve, not in facet-wide stair steps.
 """
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..errors import GeometryError
+from ..lights import Light, is_positional
 from ..surface import shadow_layers_on_surface
 from ..tolerance import Tolerance
 from ..topology import Caster, row_groups, unique_integers
@@ -26,6 +37,25 @@ from .casters import CasterSet
 from .darkness import Lighting
 from .model import SceneLight, Shape, shadow_shape
 from .receivers import Receiver, repeated_faces
+from .terminator import clip_to_lit, corner_normals, lit_values
+
+
+class ReceivingSurface(NamedTuple):
+    """The faces that receive besides the planar receivers, in world coordinates.
+
+    vertices : (n, 3) float64
+    faces : (m, 3) int64
+    owner : (m,) int64
+        The shape (index in the geometry list) of each face.
+    normals : (m, 3, 3) float64
+        The normals the viewer shades each face's corners with
+        (:func:`~.terminator.corner_normals`).
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    owner: np.ndarray
+    normals: np.ndarray
 
 
 def _receiver_centroids(found: list[Receiver]) -> np.ndarray:
@@ -50,16 +80,18 @@ def receiving_faces(
     found: list[Receiver],
     tolerance: Tolerance,
     stacked: CasterSet | None = None,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> ReceivingSurface:
     """The faces of ``geometry`` that no planar receiver covers, as one
-    (vertices, faces) surface in world coordinates (open shapes' faces twice,
-    once each way round; a face repeated within a shape once), in the shapes'
-    order. ``stacked``: the shapes' :class:`~.casters.CasterSet`, when the
-    caller has it; all shapes are handled in one numpy pass."""
+    surface in world coordinates (open shapes' faces twice, once each way
+    round; a face repeated within a shape once), in the shapes' order, with
+    each face's shape and shading normals. ``stacked``: the shapes'
+    :class:`~.casters.CasterSet`, when the caller has it; all shapes are
+    handled in one numpy pass."""
     if stacked is None:
         stacked = CasterSet(geometry)
     if not len(stacked.faces):
-        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+        none = np.zeros((0, 3), dtype=np.int64)
+        return ReceivingSurface(np.zeros((0, 3)), none, none[:, 0], np.zeros((0, 3, 3)))
     owner = stacked.face_owner
     # a face repeated (by coordinates) receives one shadow, not one per copy
     first = np.sort(repeated_faces(stacked.vertices, stacked.faces, owner)[0])
@@ -80,16 +112,21 @@ def receiving_faces(
         )
     )
     faces = faces[order]
+    owners = owner[np.concatenate([first, twice])[order]]
     used = unique_integers(faces.reshape(-1))
     renumber = np.zeros(len(stacked.vertices), dtype=np.int64)
     renumber[used] = np.arange(len(used))
-    return stacked.vertices[used], renumber[faces]
+    vertices, faces = stacked.vertices[used], renumber[faces]
+    crease = np.array([shape.crease_angle for shape in geometry], dtype=np.float64)[owners]
+    normals = corner_normals(vertices, faces, owners, crease)
+    return ReceivingSurface(vertices, faces, owners, normals)
 
 
 def surface_shadow(
-    surface: tuple[np.ndarray, np.ndarray],
+    surface: ReceivingSurface,
     casters: list[Caster],
     opacity: np.ndarray,
+    caster_shapes: np.ndarray,
     scene_light: SceneLight,
     tolerance: Tolerance,
     lift: float,
@@ -98,34 +135,112 @@ def surface_shadow(
     lighting: Lighting | None = None,
 ) -> list[tuple[float, Shape]]:
     """The shadow of ``casters`` (in world coordinates; ``opacity`` (k,) the
-    casting opacity of each, above 0) on ``surface`` as shapes (role
-    ``"shadow"``), one per opacity, most opaque first, as the planar
-    receivers' (:func:`~shadowgeo.shadow_layers_on_surface`: the layers do
-    not overlap, each as dark as its opacity); none when no shadow falls on
-    it; as dark as ``lighting`` says for X3D's default material (the surface
-    spans shapes of many looks), else the light's ``shadow_intensity``."""
-    vertices, faces = surface
-    with_faces = [k for k, caster in enumerate(casters) if caster.n_faces]
-    if not len(faces) or not with_faces:
+    casting opacity of each, above 0; ``caster_shapes`` (k,) the index of
+    each one's shape) on ``surface`` as shapes (role ``"shadow"``), one per
+    opacity, most opaque first, as the planar receivers'
+    (:func:`~shadowgeo.shadow_layers_on_surface`: the layers do not overlap,
+    each as dark as its opacity), drawn where the shading lights the surface
+    (module notes); none when no shadow falls on it. As dark as ``lighting``
+    says for X3D's default material (the surface spans shapes of many
+    looks), else the light's ``shadow_intensity``."""
+    light = scene_light.light
+    keep = [k for k, caster in enumerate(casters) if caster.n_faces]
+    if not len(surface.faces) or not keep:
         return []
-    levels = sorted({float(opacity[k]) for k in with_faces}, reverse=True)
-    groups = [[casters[k] for k in with_faces if opacity[k] == level] for level in levels]
+    levels = sorted({float(opacity[k]) for k in keep}, reverse=True)
+    order = [k for level in levels for k in keep if opacity[k] == level]  # group by group
+    groups = [[casters[k] for k in keep if opacity[k] == level] for level in levels]
+    shapes_of = np.asarray(caster_shapes)[order]  # each caster's shape, in that order
+    corners = surface.vertices[surface.faces]
+    values = lit_values(corners, surface.normals, light)
     try:
         layers = shadow_layers_on_surface(
-            groups, scene_light.light, (vertices, faces), offset=lift, tolerance=tolerance
+            groups, light, (surface.vertices, surface.faces), offset=lift, tolerance=tolerance
         )
     except GeometryError as error:
         notes.append(f"shadows: no shadows on the surfaces for light {light_name}: {error}")
         return []
+    pieces = [
+        [clip_to_lit(layer.vertices, layer.faces, layer.face_index, corners, values)]
+        for layer in layers
+    ]
+    shadowed = np.concatenate([layer.face_index for layer in layers])
+    past = _past_terminator(surface, values, shadowed, light)
+    if len(past):
+        # turned round, each face fronts the light; lifted back out along its own normal
+        turned = surface.faces[past][:, ::-1]
+        used, inverse = unique_integers(turned.reshape(-1), return_inverse=True)
+        position = {int(shape): k for k, shape in enumerate(shapes_of)}
+        own = np.array([position.get(int(shape), -1) for shape in surface.owner[past]])
+        try:
+            parts = shadow_layers_on_surface(
+                groups,
+                light,
+                (surface.vertices[used], inverse.reshape(-1, 3)),
+                offset=-lift,
+                tolerance=tolerance,
+                not_shadowed_by=own,
+            )
+        except GeometryError:
+            pass  # these faces keep the shading's own terminator
+        else:
+            for layer_pieces, part in zip(pieces, parts, strict=True):
+                layer_pieces.append(
+                    clip_to_lit(
+                        part.vertices,
+                        part.faces,
+                        past[part.face_index],
+                        corners[:, ::-1],
+                        values[:, ::-1],
+                    )
+                )
     where = f"shadow of light {light_name} on the scene's surfaces"
     shapes = []
-    for level, layer in zip(levels, layers, strict=True):
-        if not len(layer.faces):
+    for level, layer_pieces in zip(levels, pieces, strict=True):
+        vertices, triangles = _joined([(points, faces) for points, faces, _ in layer_pieces])
+        if not len(triangles):
             continue
         darkness = None
         if lighting is not None:
-            darkness = lighting.darkness(scene_light, layer.vertices, layer.faces)
+            darkness = lighting.darkness(scene_light, vertices, triangles)
         source = where if level >= 1 else f"{where}, of casters of opacity {level:g}"
-        shape = shadow_shape(layer.vertices, layer.faces, scene_light, source, level, darkness)
+        shape = shadow_shape(vertices, triangles, scene_light, source, level, darkness)
         shapes.append((level, shape))
     return shapes
+
+
+def _past_terminator(
+    surface: ReceivingSurface,
+    values: np.ndarray,
+    shadowed: np.ndarray,
+    light: Light,
+) -> np.ndarray:
+    """The faces turned away from the light that the shading still lights
+    (some corner with ``values > 0``) and that touch a face with a cast
+    shadow (``shadowed``: face of each shadow triangle)."""
+    none = np.zeros(0, dtype=np.int64)
+    if not len(shadowed):
+        return none
+    corners = surface.vertices[surface.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    if is_positional(light):
+        turned = np.einsum("ij,ij->i", normals, light.position - corners[:, 0]) <= 0
+    else:
+        turned = normals @ light.direction >= 0
+    candidates = np.flatnonzero(turned & (values.max(axis=1) > 0))
+    if not len(candidates):
+        return none
+    touched = np.zeros(len(surface.vertices), dtype=bool)
+    touched[surface.faces[unique_integers(shadowed)].reshape(-1)] = True
+    near: np.ndarray = candidates[touched[surface.faces[candidates]].any(axis=1)]
+    return near
+
+
+def _joined(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    """Meshes (vertices, faces) as one."""
+    starts = np.cumsum([0] + [len(points) for points, _ in parts[:-1]])
+    vertices = np.concatenate([points for points, _ in parts])
+    faces = np.concatenate(
+        [triangles + start for (_, triangles), start in zip(parts, starts, strict=True)]
+    )
+    return vertices, faces.astype(np.int64)
