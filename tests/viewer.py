@@ -13,7 +13,8 @@ set it:
 
 The Viewpoint is the author's first (world position and orientation, as
 shadowgeo reads it), else :func:`shadowgeo.scene.model.overview` of the input
-(the converter's own choice), bound explicitly in all three. The shadow mask
+(the converter's own choice), bound explicitly in all three, and every
+TimeSensor is stopped once the scene has loaded. The shadow mask
 of (a) and of (b) is the pixels darker than in (c) by more than
 :data:`DROP` of full scale *and* by more than :data:`RELATIVE` of their value
 in (c) (Rec. 709 luminance of the sRGB values, 0..1): the absolute floor keeps
@@ -178,9 +179,9 @@ def compare(
     url = copy.relative_to(site).as_posix()
     converted = output.relative_to(site).as_posix()
     canvases = [
-        Canvas(url, shadows="cast", view=view),
-        Canvas(converted, shadows="off", view=view),
-        Canvas(url, shadows="off", view=view),
+        Canvas(url, shadows="cast", view=view, still=True),
+        Canvas(converted, shadows="off", view=view, still=True),
+        Canvas(url, shadows="off", view=view, still=True),
     ]
     result.shots = render(site, canvases, size, browser, timeout)
     for label, shot in zip("abc", result.shots, strict=True):
