@@ -13,8 +13,10 @@ set it:
 
 The Viewpoint is the author's first (world position and orientation, as
 shadowgeo reads it), else :func:`shadowgeo.scene.model.overview` of the input
-(the converter's own choice), bound explicitly in all three, and every
-TimeSensor is stopped once the scene has loaded. The shadow mask
+(the converter's own choice), bound explicitly in all three. The scene is
+drawn from a copy in which every TimeSensor has ``enabled FALSE``: the three
+canvases, loaded a moment apart, all show the file's own state, the one
+shadowgeo bakes, not three moments of an animation. The shadow mask
 of (a) and of (b) is the pixels darker than in (c) by more than
 :data:`DROP` of full scale *and* by more than :data:`RELATIVE` of their value
 in (c) (Rec. 709 luminance of the sRGB values, 0..1): the absolute floor keeps
@@ -29,6 +31,7 @@ Used by ``tests/test_viewer.py`` (small scenes written there) and
 from __future__ import annotations
 
 import math
+import re
 import shutil
 import subprocess
 import sys
@@ -125,7 +128,20 @@ def staged(source: Path, root: Path, site: Path) -> Path:
     touching ``root``."""
     if not site.exists():
         shutil.copytree(root, site, symlinks=True)
-    return site / source.relative_to(root)
+    copy = site / source.relative_to(root)
+    copy.write_bytes(stopped_clocks(source.read_bytes(), source.suffix.lower()))
+    return copy
+
+
+def stopped_clocks(text: bytes, suffix: str) -> bytes:
+    """The scene ``text`` with ``enabled FALSE`` first in every TimeSensor
+    (X3D XML for ``.x3d``, else ClassicVRML / VRML 97 syntax); other
+    encodings (gzip) are returned as they are."""
+    if suffix == ".x3d":
+        return re.sub(rb"<TimeSensor\b", b'<TimeSensor enabled="false"', text)
+    if suffix in (".x3dv", ".wrl"):
+        return re.sub(rb"\bTimeSensor(\s*)\{", rb"TimeSensor\1{ enabled FALSE ", text)
+    return text
 
 
 def convert(source: Path, target: Path, timeout: float) -> tuple[str | None, list[str]]:
@@ -179,9 +195,9 @@ def compare(
     url = copy.relative_to(site).as_posix()
     converted = output.relative_to(site).as_posix()
     canvases = [
-        Canvas(url, shadows="cast", view=view, still=True),
-        Canvas(converted, shadows="off", view=view, still=True),
-        Canvas(url, shadows="off", view=view, still=True),
+        Canvas(url, shadows="cast", view=view),
+        Canvas(converted, shadows="off", view=view),
+        Canvas(url, shadows="off", view=view),
     ]
     result.shots = render(site, canvases, size, browser, timeout)
     for label, shot in zip("abc", result.shots, strict=True):

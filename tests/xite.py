@@ -77,16 +77,12 @@ class Canvas:
         Bound in place of the scene's own first Viewpoint.
     shadow_map_size : int
         X3D 4's ``shadowMapSize`` (X_ITE's default is 1024) for casting lights.
-    still : bool
-        Stop every TimeSensor (``enabled FALSE``) when the scene has loaded,
-        so that canvases loaded a moment apart show the same state.
     """
 
     scene: str
     shadows: Literal["as-is", "cast", "off"] = "as-is"
     view: View | None = None
     shadow_map_size: int = 2048
-    still: bool = False
 
 
 @dataclass
@@ -135,9 +131,6 @@ function setUp(canvas, config) {
   const browser = canvas.browser, scene = browser.currentScene;
   const all = nodes(scene.rootNodes);
   const lights = all.filter((node) => isType(node, LIGHT));
-  if (config.still)  // animation is not what is compared: every clock stops
-    for (const node of all.filter((node) => isType(node, X3D.X3DConstants.TimeSensor)))
-      node.enabled = false;
   if (config.shadows !== "as-is") {
     const authored = lights.some((light) => light.shadows);
     for (const light of lights) {
@@ -199,7 +192,6 @@ def page(canvases: list[Canvas], size: int) -> str:
         {
             "shadows": canvas.shadows,
             "shadowMapSize": canvas.shadow_map_size,
-            "still": canvas.still,
             "view": None if canvas.view is None else canvas.view.__dict__,
         }
         for canvas in canvases
