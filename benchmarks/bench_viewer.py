@@ -11,7 +11,7 @@ their IoU. The rules (Viewpoint, thresholds, which lights cast) are
 Run from the repository root (needs Chromium and ``npm ci --prefix
 tests/node``; about 10 minutes on 2 cores)::
 
-    python benchmarks/bench_viewer.py [--size 384] [--only NAME ...] [--no-write]
+    python benchmarks/bench_viewer.py [--size 512] [--only NAME ...] [--no-write]
 
 It prints the table, writes the section "What the viewer shows" of
 ``benchmarks/REPORT.md`` (``common.write_section``) and the gallery
@@ -56,6 +56,7 @@ class Entry:
     path: str
     reason: str
     seen: str = ""
+    xite_fault: bool = False  # the pictures show X_ITE's own shadow map wrong
 
     @property
     def folder(self) -> Path:
@@ -84,13 +85,13 @@ SCENES = [
           "8 street lamps over a road between walls",
           "X_ITE fault: on the walls beside the lamps its point-light shadow map darkens all "
           "but a square around each lamp's spot (the red rings), nothing casting there; "
-          "the curbs' thin shadows agree"),
+          "the curbs' thin shadows agree", xite_fault=True),
     Entry(XML, "lights_materials/shading_smooth_even_on_flat_normals.x3d",
           "a capsule over a box, one lamp", "clean; the capsule's shadow on itself agrees"),
     Entry(XML, "navigation/avatar_climb_stairs_geometry.x3d",
           "three flights of stairs on a floor, 2 lamps",
           "X_ITE acne: speckles on the dark tops of the right-hand flight; the flights' "
-          "shadows on the floor agree"),
+          "shadows on the floor agree", xite_fault=True),
     Entry(XML, "x3d/axis.x3d", "axis bars and 3-D text crossing, 2 lamps",
           "no X_ITE fault seen; baked shadows black and larger, also where the other lamp "
           "still lights the face"),
@@ -196,6 +197,7 @@ def row(entry: Entry, result: Comparison | None, seconds: float, failure: str = 
         "iou": result.iou if result else math.nan,
         "brighter": result.brighter if result else 0,
         "notes": "; ".join(filter(None, [*problems, entry.seen])),
+        "xite_fault": entry.xite_fault,
         "seconds": seconds,
         "image": None,
     }
@@ -254,12 +256,14 @@ def summary(rows: list[dict], size: int) -> str:
     failed = sum(r["runtime"] is None for r in rows)
     if not measured:
         return f"No scene has a shadow to compare ({failed} failed)."
-    low = sum(value < 0.7 for value in measured)
+    low = [r for r in rows if counted(r, size) and r["iou"] < 0.7]
+    excused = sum(r["xite_fault"] for r in low)
     return (
         f"{len(measured)} of {len(rows)} scenes have a shadow to compare (a mask of at least "
         f"{SHADOW_SHARE:.1%} of the picture; {failed} failed to render): median IoU "
         f"{statistics.median(measured):.2f} (target 0.9), lowest {min(measured):.2f}; "
-        f"{low} under 0.7 (target: none, except where X_ITE's own shadow map is wrong)."
+        f"{len(low)} under 0.7 (target: none), {excused} of them where X_ITE's own shadow "
+        "map is wrong."
     )
 
 
@@ -302,7 +306,7 @@ Corpus files with a light that are not in the table, and why:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", type=int, default=384, help="canvas pixels (default 384)")
+    parser.add_argument("--size", type=int, default=512, help="canvas pixels (default 512)")
     parser.add_argument("--timeout", type=float, default=90.0, help="seconds per scene step")
     parser.add_argument("--only", nargs="+", help="scenes whose name contains one of these")
     parser.add_argument("--no-write", action="store_true", help="print only")

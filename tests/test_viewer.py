@@ -2,7 +2,8 @@
 lights' own runtime shadows darken (the quick version of
 ``benchmarks/bench_viewer.py``; the comparison is :mod:`viewer`'s).
 
-Each scene is a box standing on a ground under one light, headlight off, seen
+Each scene is a box standing on a ground under one light (a PointLight, a
+DirectionalLight or a SpotLight: X_ITE 15 draws shadow maps for all three), headlight off, seen
 from a Viewpoint above and in front; (a) the input with X_ITE's shadow maps,
 (b) the converted output with runtime shadows off and (c) the input without
 shadows are drawn from it, and the two shadow masks, (a) and (b) darker than
@@ -46,6 +47,8 @@ LIGHTS = {
     "point": '<PointLight DEF="lamp" location="-1.5 4 -1" intensity="0.9" ambientIntensity="0.2"/>',
     "directional": '<DirectionalLight DEF="sun" direction="0.6 -1 0.4" intensity="0.9" '
     'ambientIntensity="0.2" global="true"/>',
+    "spot": '<SpotLight DEF="spot" location="-2 4 -1.5" direction="0.45 -1 0.35" '
+    'cutOffAngle="1.2" beamWidth="1.1" intensity="0.9" ambientIntensity="0.2"/>',
 }
 
 
