@@ -85,3 +85,35 @@ def test_masks_see_a_shadow_and_only_a_shadow() -> None:
     darker = np.array([[[10, 10, 10], [25, 25, 25]]], np.uint8)
     # 0.12 -> 0.04 is a shadow; 0.12 -> 0.10 is under the absolute floor
     assert shadow_mask(darker, dark).tolist() == [[True, False]]
+
+
+@pytest.mark.parametrize(
+    ("suffix", "scene", "stopped"),
+    [
+        (".x3d", '<X3D><Scene><TimeSensor DEF="t" loop="true"/></Scene></X3D>',
+         '<TimeSensor enabled="false" DEF="t" loop="true"/>'),
+        (".x3dv", "#X3D V3.0 utf8\nDEF t TimeSensor{ loop TRUE }\n",
+         "DEF t TimeSensor{ enabled FALSE  loop TRUE }"),
+        (".wrl", "#VRML V2.0 utf8\nTimeSensor {\n loop TRUE }\n",
+         "TimeSensor { enabled FALSE \n loop TRUE }"),
+    ],
+)  # fmt: skip
+def test_the_staged_copy_has_its_clocks_stopped_and_the_original_is_kept(
+    tmp_path: Path, suffix: str, scene: str, stopped: str
+) -> None:
+    from viewer import staged
+
+    root = tmp_path / "root"
+    (root / "textures").mkdir(parents=True)
+    (root / "textures" / "wall.png").write_bytes(b"png")
+    source = root / "scenes" / f"clock{suffix}"
+    source.parent.mkdir()
+    source.write_text(scene)
+
+    copy = staged(source, root, tmp_path / "site")
+
+    assert copy == tmp_path / "site" / "scenes" / f"clock{suffix}"
+    assert stopped in copy.read_text()
+    assert source.read_text() == scene  # the input is never modified
+    # ../textures/wall.png resolves beside the copy as beside the original
+    assert (copy.parent / ".." / "textures" / "wall.png").read_bytes() == b"png"
