@@ -83,15 +83,16 @@ SCENES = [
           "added ground is not drawn, so its baked shadows float over the Background"),
     Entry(XML, "lights_materials/light_street_lights_radius.x3d",
           "8 street lamps over a road between walls",
-          "X_ITE fault: on the walls beside the lamps its point-light shadow map darkens all "
-          "but a square around each lamp's spot (the red rings), nothing casting there; "
-          "the curbs' thin shadows agree", xite_fault=True),
+          "X_ITE fault: on the wall right beside each lamp, its point-light shadow map "
+          "darkens all around a small square of the lamp's spot, above the lamp too where "
+          "nothing can cast (the red rings); the curbs' thin shadows agree",
+          xite_fault=True),
     Entry(XML, "lights_materials/shading_smooth_even_on_flat_normals.x3d",
           "a capsule over a box, one lamp", "clean; the capsule's shadow on itself agrees"),
     Entry(XML, "navigation/avatar_climb_stairs_geometry.x3d",
           "three flights of stairs on a floor, 2 lamps",
-          "X_ITE acne: speckles on the dark tops of the right-hand flight; the flights' "
-          "shadows on the floor agree", xite_fault=True),
+          "X_ITE acne: speckles on the top riser of the right-hand flight; the flights' "
+          "shadows on the floor and on their sides agree"),
     Entry(XML, "x3d/axis.x3d", "axis bars and 3-D text crossing, 2 lamps",
           "no X_ITE fault seen; baked shadows black and larger, also where the other lamp "
           "still lights the face"),
