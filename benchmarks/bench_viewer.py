@@ -120,10 +120,13 @@ SCENES = [
           "spheres go dark; shadowgeo skips a caster the light is inside and bakes nothing"),
     Entry(CLASSIC, "lights_materials/light_transform_animated.x3dv",
           "3 spheres, a lamp under an animated Transform (stopped)",
-          "X_ITE draws the yellow sphere's shadow on the white one; nothing baked"),
+          "X_ITE draws the yellow sphere's shadow on the white one; nothing baked: the "
+          "lamp's own marker sphere (radius 0.1) encloses it, and the converter, besides "
+          "skipping it as a caster, bakes no surface shadow for the lamp at all"),
     Entry(CLASSIC, "x3d/material_parameters_x3dom_xite_tests/material_parameters.x3dv",
           "11 spheres, a lamp, animated materials (stopped)",
-          "X_ITE draws the spheres' shadows on each other; nothing baked"),
+          "X_ITE draws the spheres' shadows on each other; nothing baked, for the same "
+          "reason as light_transform_animated (the lamp's marker sphere)"),
     Entry(CLASSIC,
           "animation/simple_tests_interpolation_and_time/orientation_interpolator_aluminium.wrl",
           "VRML 97: a tube under 6 scoped suns, turned by an interpolator (stopped)",
