@@ -2,11 +2,8 @@
 as dark as X_ITE draws its own.
 
 X_ITE (the npm package ``x_ite``) runs in headless Debian Chromium with
-software WebGL (SwiftShader). Everything is served from a thread on
-127.0.0.1; Chromium is told not to touch the network otherwise. The page holds
-its ``load`` event (which Chromium's ``--screenshot`` waits for) on an image
-the server answers only once X_ITE has loaded the scene and drawn a few
-frames, so the screenshot is of the rendered scene, not of a blank canvas.
+software WebGL (SwiftShader), served from 127.0.0.1 and screenshotted once it
+has loaded the scene and drawn a few frames (``xite.py``).
 
 The check: looking straight down with an OrthoViewpoint whose field of view we
 set (in the input scene; the converter keeps it), the pixels inside the shadow
@@ -17,12 +14,8 @@ similar triangles.
 
 from __future__ import annotations
 
-import http.server
 import math
-import os
 import re
-import subprocess
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -30,9 +23,8 @@ import pytest
 import shapely
 from needs import need
 from reference import ray_plane
+from xite import Canvas, render
 
-ROOT = Path(__file__).resolve().parents[1]
-X_ITE = ROOT / "tests" / "node" / "node_modules" / "x_ite" / "dist"
 LIGHT = np.array([3.0, 6.0, 2.0])
 BOX = np.array([[-0.5, 1.5, -0.5], [0.5, 2.5, 0.5]])
 HALF_VIEW = 10.0  # the OrthoViewpoint shows x, z in [-10, 10]
@@ -75,27 +67,6 @@ PERSPECTIVE_SCENE = re.sub(
 )
 assert PERSPECTIVE_SCENE != SCENE
 
-PAGE = f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8">
-<style>html, body {{ margin: 0; overflow: hidden; background: #f0f; }}</style>
-<script src="x_ite/x_ite.min.js"></script></head>
-<body>
-<x3d-canvas src="converted.x3d" splashScreen="false" notifications="false" contextMenu="false"
-            style="display: block; width: {PIXELS}px; height: {PIXELS}px"></x3d-canvas>
-<script>
-  const canvas = document.querySelector("x3d-canvas");
-  const report = (path, text) => fetch(path, {{method: "POST", body: text}});
-  canvas.addEventListener("load", () => {{
-    let frames = 0;
-    const tick = () => (++frames < 10 ? requestAnimationFrame(tick) : report("/rendered", "ok"));
-    requestAnimationFrame(tick);
-  }});
-  canvas.addEventListener("error", () => report("/rendered", "X_ITE could not load the scene"));
-</script>
-<img src="/ready" width="1" height="1">
-</body></html>
-"""
-
 
 def reference_shadow():
     """shapely Polygon of the box's shadow on y = 0, in (x, z)."""
@@ -114,95 +85,19 @@ def convert(folder: Path, suffix: str = ".x3d") -> Path:
     return target
 
 
-class _Server(http.server.ThreadingHTTPServer):
-    daemon_threads = True
-
-    def __init__(self, folder: Path) -> None:
-        self.folder = folder
-        self.rendered = threading.Event()
-        self.status = "X_ITE did not report the scene loaded"
-        super().__init__(("127.0.0.1", 0), _Handler)
-
-
-class _Handler(http.server.SimpleHTTPRequestHandler):
-    def __init__(self, *args, **kwargs) -> None:
-        super().__init__(*args, directory=str(args[2].folder), **kwargs)
-
-    def do_GET(self) -> None:
-        if self.path == "/ready":  # held until the page reports; holds the load event
-            self.server.rendered.wait(LOAD_TIMEOUT)
-            self.send_response(204)
-            self.end_headers()
-            return
-        super().do_GET()
-
-    def do_POST(self) -> None:
-        length = int(self.headers.get("Content-Length") or 0)
-        text = self.rfile.read(length).decode("utf-8", "replace")
-        if self.path == "/rendered":
-            self.server.status = text
-            self.server.rendered.set()
-        self.send_response(204)
-        self.end_headers()
-
-    def log_message(self, *args) -> None:  # keep the test output quiet
-        pass
-
-
-def screenshot(folder: Path, browser: str) -> np.ndarray:
-    from PIL import Image
-
-    server = _Server(folder)
-    thread = threading.Thread(target=server.serve_forever, daemon=True)
-    thread.start()
-    shot = folder / "shot.png"
-    command = [
-        browser,
-        "--headless",
-        "--no-sandbox",
-        "--use-angle=swiftshader",
-        "--enable-unsafe-swiftshader",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--disable-extensions",
-        "--disable-default-apps",
-        "--no-first-run",
-        "--disable-quic",
-        "--disable-dev-shm-usage",  # containers often have a tiny /dev/shm
-        "--mute-audio",
-        "--hide-scrollbars",
-        f"--user-data-dir={folder / 'profile'}",
-        f"--screenshot={shot}",
-        f"--window-size={PIXELS},{PIXELS}",
-        f"--timeout={int(LOAD_TIMEOUT * 1000) + 5000}",
-        f"http://127.0.0.1:{server.server_address[1]}/index.html",
-    ]
-    try:
-        result = subprocess.run(
-            command,
-            capture_output=True,
-            timeout=LOAD_TIMEOUT + 60,
-            env={**os.environ, "HOME": str(folder)},
-            check=False,
-        )
-    finally:
-        server.rendered.set()  # release a held /ready
-        server.shutdown()
-        server.server_close()
-    assert server.status == "ok", server.status
-    assert shot.is_file(), result.stderr.decode("utf-8", "replace")[-2000:]
-    return np.asarray(Image.open(shot).convert("RGB"))
+def screenshot(folder: Path, browser: Path, scene: str = "converted.x3d") -> np.ndarray:
+    """X_ITE's picture of ``folder / scene``, the lights as the file says."""
+    (shot,) = render(folder, [Canvas(scene)], PIXELS, browser, LOAD_TIMEOUT)
+    assert shot.status == "ok", shot.status
+    return shot.image
 
 
 # every X3D encoding shadowgeo writes: XML, ClassicVRML, VRML 97
 @pytest.mark.parametrize("suffix", [".x3d", ".x3dv", ".wrl"])
 def test_x_ite_shows_the_baked_shadow(tmp_path, suffix):
     convert(tmp_path, suffix)
-    (tmp_path / "index.html").write_text(PAGE.replace("converted.x3d", f"converted{suffix}"))
     need("x_ite")
-    (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
-    image = screenshot(tmp_path, str(need("chromium")))
+    image = screenshot(tmp_path, need("chromium"), f"converted{suffix}")
     assert image.shape[:2] == (PIXELS, PIXELS)
 
     # Pixel centres -> world (x, z): looking down -y with screen-up = -z.
@@ -247,10 +142,8 @@ def test_x_ite_opens_a_converted_gltf_looking_at_its_shadow(tmp_path):
     sg.save(scene, tmp_path / "scene.glb")
     assert main(["convert", str(tmp_path / "scene.glb"), str(tmp_path / "converted.x3d")]) == 0
     (view,) = sg.load(tmp_path / "converted.x3d").viewpoints
-    (tmp_path / "index.html").write_text(PAGE)
     need("x_ite")
-    (tmp_path / "x_ite").symlink_to(X_ITE, target_is_directory=True)
-    image = screenshot(tmp_path, str(need("chromium")))
+    image = screenshot(tmp_path, need("chromium"))
 
     # The default sun travels along (0.3, -1, 0.2): the box's corners land on y = 0.
     corners = np.array([[x, y, z] for x in BOX[:, 0] for y in BOX[:, 1] for z in BOX[:, 2]])

@@ -1,0 +1,354 @@
+"""What the viewer shows: X_ITE's runtime shadows against the ones shadowgeo bakes.
+
+For the bundled examples and the corpus scenes listed in :data:`SCENES`, X_ITE
+in headless Chromium draws (a) the input with its lights' runtime shadows
+(shadow maps), (b) ``shadowgeo convert IN OUT.x3d`` (no flags) with runtime
+shadows off and (c) the input with no shadows, from the same Viewpoint; the
+shadow masks of (a) and (b), the pixels darker than in (c), are compared by
+their IoU. The rules (Viewpoint, thresholds, which lights cast) are
+``tests/viewer.py``'s; the rendering is ``tests/xite.py``'s.
+
+Run from the repository root (needs Chromium and ``npm ci --prefix
+tests/node``; about 10 minutes on 2 cores)::
+
+    python benchmarks/bench_viewer.py [--size 512] [--only NAME ...] [--no-write]
+
+It prints the table, writes the section "What the viewer shows" of
+``benchmarks/REPORT.md`` (``common.write_section``) and the gallery
+``docs/images/viewer/*.png`` ((a) | (b) | masks, 256 pixels each).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import shutil
+import statistics
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "benchmarks")]
+
+from common import write_section  # noqa: E402
+from needs import TOOLS  # noqa: E402
+from viewer import DROP, RELATIVE, Comparison, compare, gallery_image  # noqa: E402
+from xite import FRAMES  # noqa: E402
+
+CORPUS = ROOT.parent / "shared" / "corpus"
+GALLERY = ROOT / "docs" / "images" / "viewer"
+TITLE = "## What the viewer shows"
+PANEL = 256  # gallery pixels per picture
+# A scene counts towards the median when a mask covers this share of the picture.
+SHADOW_SHARE = 0.001
+
+
+@dataclass(frozen=True)
+class Entry:
+    """A scene measured: ``path`` under ``root`` ("examples" is
+    examples/scenes, else a corpus folder), why it was chosen, and what the
+    pictures show about X_ITE's own shadow map there (judged by eye)."""
+
+    root: str
+    path: str
+    reason: str
+    seen: str = ""
+    xite_fault: bool = False  # the pictures show X_ITE's own shadow map wrong
+
+    @property
+    def folder(self) -> Path:
+        return ROOT / "examples" / "scenes" if self.root == "examples" else CORPUS / self.root
+
+    @property
+    def name(self) -> str:
+        return self.path if self.root == "examples" else f"{self.root}/{self.path}"
+
+
+CLASSIC = "castle-demo-models-classic"
+XML = "castle-demo-models"
+
+SCENES = [
+    # the bundled examples
+    Entry("examples", "courtyard.x3d", "crate, column and tent on a ground, a lamp and a sun",
+          "clean shadow maps; the outlines agree"),
+    Entry("examples", "pyramid.x3d", "a pyramid over a ground under a lamp", "clean"),
+    Entry("examples", "terrain.x3d", "blocks and a pole on a terrain under a sun",
+          "clean; the pole's thin shadow on the slope agrees"),
+    # X3D XML
+    Entry(XML, "blender/simple/test1.x3d", "Blender export: cubes, one lamp",
+          "no surface under the cubes: X_ITE has nothing to cast onto; the converter's "
+          "added ground is not drawn, so its baked shadows float over the Background"),
+    Entry(XML, "lights_materials/light_street_lights_radius.x3d",
+          "8 street lamps over a road between walls",
+          "X_ITE fault: on the wall right beside each lamp, its point-light shadow map "
+          "darkens all around a small square of the lamp's spot, above the lamp too where "
+          "nothing can cast (the red rings); the curbs' thin shadows agree",
+          xite_fault=True),
+    Entry(XML, "lights_materials/shading_smooth_even_on_flat_normals.x3d",
+          "a capsule over a box, one lamp", "clean; the capsule's shadow on itself agrees"),
+    Entry(XML, "navigation/avatar_climb_stairs_geometry.x3d",
+          "three flights of stairs on a floor, 2 lamps",
+          "X_ITE acne: speckles on the top riser of the right-hand flight; the flights' "
+          "shadows on the floor and on their sides agree"),
+    Entry(XML, "x3d/axis.x3d", "axis bars and 3-D text crossing, 2 lamps",
+          "no X_ITE fault seen; baked shadows black and larger, also where the other lamp "
+          "still lights the face"),
+    Entry(XML, "x3d/matrix_transform.x3d", "MatrixTransform: spheres and a box, 1 lamp",
+          "baked only: a black patch on the red sphere's rim; X_ITE draws no shadow"),
+    # ClassicVRML and VRML 97
+    Entry(CLASSIC, "x3d/matrix_transform.x3dv", "the same scene in ClassicVRML",
+          "as its XML twin"),
+    Entry(CLASSIC, "lights_materials/directional_light_scope.wrl",
+          "VRML 97: six spheres, two suns each scoped to its group",
+          "baked black over each sphere's half that faces away from one sun yet is lit by "
+          "the other; X_ITE draws small crescents, no fault seen"),
+    Entry(CLASSIC, "lights_materials/light_radius.wrl",
+          "VRML 97: two grids of 512 cubes, a point and a spot light with a radius",
+          "many tiny cube shadows, agreeing in part; no X_ITE fault seen"),
+    Entry(CLASSIC, "lights_materials/lights.x3dv",
+          "spheres, cone and box under a lamp, a spot and a sun (three USEd groups)",
+          "X_ITE draws no visible shadow; baked: black patches on the fronts of box and cone"),
+    Entry(CLASSIC, "lights_materials/raytracer/alien_mirror.wrl",
+          "VRML 97: an alien head before a wall, 2 lamps",
+          "agree on the wall; baked: black shards on the head (its own faces)"),
+    Entry(CLASSIC, "lights_materials/light_location_animated.x3dv",
+          "3 spheres, a lamp moved by an interpolator (stopped: at 0 0 0)",
+          "the lamp is inside the yellow sphere: X_ITE lets no light past it, so the outer "
+          "spheres go dark; shadowgeo skips a caster the light is inside and bakes nothing"),
+    Entry(CLASSIC, "lights_materials/light_transform_animated.x3dv",
+          "3 spheres, a lamp under an animated Transform (stopped)",
+          "X_ITE draws the yellow sphere's shadow on the white one; nothing baked: the "
+          "lamp's own marker sphere (radius 0.1) encloses it, and the converter, besides "
+          "skipping it as a caster, bakes no surface shadow for the lamp at all"),
+    Entry(CLASSIC, "x3d/material_parameters_x3dom_xite_tests/material_parameters.x3dv",
+          "11 spheres, a lamp, animated materials (stopped)",
+          "X_ITE draws the spheres' shadows on each other; nothing baked, for the same "
+          "reason as light_transform_animated (the lamp's marker sphere)"),
+    Entry(CLASSIC,
+          "animation/simple_tests_interpolation_and_time/orientation_interpolator_aluminium.wrl",
+          "VRML 97: a tube under 6 scoped suns, turned by an interpolator (stopped)",
+          "no surface under the tube: the baked shadows float as a black band on the added "
+          "ground, which is not drawn; X_ITE has nothing to cast onto"),
+    Entry(CLASSIC,
+          "animation/simple_tests_interpolation_and_time/orientation_interpolator_alum_box.wrl",
+          "VRML 97: the same with a box", "as the tube: a floating black band"),
+    # corpus scenes with lights in which neither picture shows a shadow to speak of
+    Entry(CLASSIC, "lights_materials/directional_light_scope_simple.x3dv",
+          "a quad and a sphere, two scoped suns", "neither picture has a shadow"),
+    Entry(CLASSIC, "lights_materials/house_behind_the_glass.x3dv",
+          "a glass sphere mesh, 1 lamp", "neither picture has a shadow"),
+    Entry(CLASSIC, "lights_materials/light_attenuation.x3dv",
+          "two small spheres, a lamp and a spot", "neither picture has a shadow"),
+    Entry(CLASSIC, "lights_materials/non_global_lights_test.x3dv",
+          "a corner and a sphere, 2 non-global lamps", "neither picture has a shadow"),
+    Entry(CLASSIC, "x3d/shininess_phong_lighting_effect.x3dv",
+          "5 quads under 5 lamps", "neither picture has a shadow"),
+    Entry(CLASSIC, "prototypes/proto_events_test.x3dv",
+          "a sphere, a sun inside a PROTO", "neither picture has a shadow (one sphere)"),
+    Entry(CLASSIC, "lights_materials/sphere.x3dv", "a sphere and a half sphere, 1 sun",
+          "a few pixels only"),
+    Entry(CLASSIC, "lights_materials/light_color_animated.x3dv",
+          "3 spheres, a lamp of animated colour (stopped)", "a few pixels only"),
+    Entry(CLASSIC, "x3d/are_set_changed_optional.x3dv",
+          "a box whose only light is off (shadowgeo's default sun casts)",
+          "no light on, so X_ITE draws no shadow; baked: the default sun's shadow on the "
+          "added ground, seen edge-on as a line"),
+]  # fmt: skip
+
+# Corpus files with a light node that are not in the table, and why (none skipped silently).
+EXCLUDED = [
+    (f"{CLASSIC}/lights_materials/specular_demo.wrl",
+     "X_ITE draws this VRML 97 input all black, even untouched (the converted X3D draws)"),
+    (f"{CLASSIC}/lights_materials/raytracer/bowl_of_soup_final.x3dv",
+     "its geometry is Inlined from a VRML 1.0 file, which shadowgeo does not read"),
+    (f"{CLASSIC}/lights_materials/raytracer/office_final.x3dv",
+     "its geometry is Inlined from a VRML 1.0 file, which shadowgeo does not read"),
+    (f"{CLASSIC}/lights_materials/raytracer/graz_final.x3dv",
+     "its geometry, graz.wrl, is not in the corpus"),
+    (f"{CLASSIC}/x3d/dynamic_world.x3dv", "its geometry is made by a Script at run time"),
+    (f"{CLASSIC}/background/background_sunset.x3dv", "no geometry: a Background and a light"),
+    (f"{CLASSIC}/prototypes/proto_events_test_2.x3dv",
+     "the sphere and sun of proto_events_test.x3dv; only the events differ"),
+    (f"{CLASSIC}/prototypes/proto_events_test_3.x3dv",
+     "the sphere and sun of proto_events_test.x3dv; only the events differ"),
+    (f"{CLASSIC}/lights_materials/headlight_anim.x3dv",
+     "its only light is a NavigationInfo headlightNode (Castle extension)"),
+    (f"{CLASSIC}/lights_materials/headlight_custom.wrl",
+     "its only lights are NavigationInfo headlightNodes (Castle extension)"),
+    (f"{CLASSIC}/x3d/kings_head.x3dv", "its only light sits in a Switch choice not shown"),
+    (f"{CLASSIC}/prototypes/extern_proto_built_in_kings_head.wrl",
+     "its only light sits in a Switch choice not shown"),
+    (f"{CLASSIC}/lights_materials/raytracer/raytracer_simple_shadow.wrl", "VRML 1.0"),
+    (f"{CLASSIC}/lights_materials/raytracer/raytracer_spot_on_square.wrl", "VRML 1.0"),
+    (f"{CLASSIC}/lights_materials/raytracer/raytracer_very_specular.wrl", "VRML 1.0"),
+    (f"{CLASSIC}/lights_materials/vrml_1/forest-fog/forest-final.wrl", "VRML 1.0"),
+    (f"{CLASSIC}/lights_materials/vrml_1/lights.wrl", "VRML 1.0"),
+    (f"{CLASSIC}/lights_materials/vrml_1/materials.wrl", "VRML 1.0"),
+]  # fmt: skip
+
+
+def row(entry: Entry, result: Comparison | None, seconds: float, failure: str = "") -> dict:
+    runtime, baked = result.masks if result and result.masks is not None else (None, None)
+    problems = ([failure] if failure else []) + (result.problems if result else [])
+    return {
+        "scene": entry.name,
+        "lights": len(set(result.casting)) if result else 0,
+        "runtime": None if runtime is None else int(runtime.sum()),
+        "baked": None if baked is None else int(baked.sum()),
+        "iou": result.iou if result else math.nan,
+        "brighter": result.brighter if result else 0,
+        "notes": "; ".join(filter(None, [*problems, entry.seen])),
+        "xite_fault": entry.xite_fault,
+        "seconds": seconds,
+        "image": None,
+    }
+
+
+def measure(entry: Entry, work: Path, size: int, browser: str, timeout: float) -> dict:
+    """One table row (and the gallery image, kept in the row) for ``entry``."""
+    begin = time.perf_counter()
+    source = entry.folder / entry.path
+    if not source.is_file():
+        return row(entry, None, 0.0, f"missing: {source}")
+    try:
+        result = compare(source, entry.folder, work, size=size, browser=browser, timeout=timeout)
+    except Exception as error:  # noqa: BLE001 - the row says why, the others still run
+        return row(entry, None, time.perf_counter() - begin, f"{type(error).__name__}: {error}")
+    found = row(entry, result, time.perf_counter() - begin)
+    if len(result.shots) == 3:
+        found["image"] = gallery_image(result, PANEL)
+    return found
+
+
+def fmt_iou(value: float) -> str:
+    return "n/a" if math.isnan(value) else f"{value:.2f}"
+
+
+def table(rows: list[dict], gallery: bool) -> str:
+    lines = [
+        "| scene | lights | runtime mask (a) | baked mask (b) | IoU | (b) lighter than (c) "
+        "| notes |",
+        "|---|---:|---:|---:|---:|---:|---|",
+    ]
+    for r in rows:
+        name = r["scene"]
+        if gallery and r["image"] is not None:
+            name = f"[{name}](../docs/images/viewer/{slug(r['scene'])}.png)"
+        counts = [("—" if r[k] is None else f"{r[k]:,}") for k in ("runtime", "baked")]
+        lines.append(
+            f"| {name} | {r['lights']} | {counts[0]} | {counts[1]} | {fmt_iou(r['iou'])} "
+            f"| {r['brighter']:,} | {r['notes'].replace('|', '/')} |"
+        )
+    return "\n".join(lines)
+
+
+def slug(name: str) -> str:
+    return name.replace("/", "_").rsplit(".", 1)[0]
+
+
+def counted(r: dict, size: int) -> bool:
+    """Whether a row has a shadow to compare: a mask of at least
+    :data:`SHADOW_SHARE` of the picture."""
+    return max(r["runtime"] or 0, r["baked"] or 0) >= SHADOW_SHARE * size**2
+
+
+def summary(rows: list[dict], size: int) -> str:
+    measured = [r["iou"] for r in rows if counted(r, size)]
+    failed = sum(r["runtime"] is None for r in rows)
+    if not measured:
+        return f"No scene has a shadow to compare ({failed} failed)."
+    low = [r for r in rows if counted(r, size) and r["iou"] < 0.7]
+    excused = sum(r["xite_fault"] for r in low)
+    return (
+        f"{len(measured)} of {len(rows)} scenes have a shadow to compare (a mask of at least "
+        f"{SHADOW_SHARE:.1%} of the picture; {failed} failed to render): median IoU "
+        f"{statistics.median(measured):.2f} (target 0.9), lowest {min(measured):.2f}; "
+        f"{len(low)} under 0.7 (target: none), {excused} of them where X_ITE's own shadow "
+        "map is wrong."
+    )
+
+
+def section(rows: list[dict], size: int, elapsed: float) -> str:
+    excluded = "\n".join(f"- `{path}`: {why}" for path, why in EXCLUDED)
+    return f"""{TITLE}
+
+Generated by `python benchmarks/bench_viewer.py` ({elapsed / 60:.1f} minutes). For each scene,
+X_ITE (the npm package in `tests/node`) in headless Chromium (SwiftShader) draws, on
+{size} x {size} canvases from the same Viewpoint (the author's first, else the converter's
+overview, bound in all three) with the headlight as the author set it: (a) the input with
+runtime shadows on the lights shadowgeo bakes (`shadows TRUE` on those with it, else on every
+light that is on; `shadowMapSize` 2048), (b) the output of `shadowgeo convert IN OUT.x3d` (no
+flags) with `shadows FALSE` on every light, (c) the input with `shadows FALSE` on every
+light; {FRAMES} frames after the set-up. The scene is drawn from a copy of its folder in which
+every TimeSensor has `enabled FALSE`, so all three show the file's own state, the one
+shadowgeo bakes. A pixel is in a shadow mask when it is darker than in (c) by more than
+{DROP} of full scale and by more than {RELATIVE:.0%} of its value in (c) (Rec. 709
+luminance). IoU is |a and b| / |a or b| of the two masks (n/a: both empty); the median and
+the targets count the scenes with a mask of at least {SHADOW_SHARE:.1%} of the picture.
+"(b) lighter than (c)" counts pixels the conversion made lighter by the same threshold:
+baked shadows only darken, so anything there is another change (a material, a texture,
+geometry). "lights" are the lights shadowgeo bakes (each node once). Notes give what kept a
+scene from being measured, and what the pictures show (judged by eye), X_ITE's own
+shadow-map faults (acne, light leaking, peter-panning) named as such.
+
+{summary(rows, size)}
+
+{table(rows, gallery=True)}
+
+Each scene name links to its gallery picture: (a) runtime, (b) baked, and the masks over
+(c) in grey: green where both shadow, red where only X_ITE's runtime shadow does, blue where
+only the baked one does.
+
+Corpus files with a light that are not in the table, and why:
+
+{excluded}
+"""
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--size", type=int, default=512, help="canvas pixels (default 512)")
+    parser.add_argument("--timeout", type=float, default=90.0, help="seconds per scene step")
+    parser.add_argument("--only", nargs="+", help="scenes whose name contains one of these")
+    parser.add_argument("--no-write", action="store_true", help="print only")
+    args = parser.parse_args()
+    browser = TOOLS["chromium"][0]()
+    if browser is None or TOOLS["x_ite"][0]() is None:
+        sys.exit("needs Chromium and X_ITE (npm ci --prefix tests/node)")
+    entries = [e for e in SCENES if not args.only or any(word in e.name for word in args.only)]
+    begin = time.perf_counter()
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench-viewer-") as scratch:
+        for index, entry in enumerate(entries):
+            work = Path(scratch) / str(index)
+            found = measure(entry, work, args.size, str(browser), args.timeout)
+            shutil.rmtree(work, ignore_errors=True)
+            rows.append(found)
+            print(
+                f"{entry.name}: IoU {fmt_iou(found['iou'])} ({found['seconds']:.0f} s) "
+                f"{found['notes']}",
+                flush=True,
+            )
+    elapsed = time.perf_counter() - begin
+    print()
+    print(summary(rows, args.size))
+    print(table(rows, gallery=False))
+    if args.no_write:
+        return
+    GALLERY.mkdir(parents=True, exist_ok=True)
+    if args.only is None:  # a full run replaces the whole gallery
+        for old in GALLERY.glob("*.png"):
+            old.unlink()
+    for r in rows:
+        if r["image"] is not None:
+            r["image"].save(GALLERY / f"{slug(r['scene'])}.png", optimize=True)
+    if args.only is None:
+        write_section(TITLE, section(rows, args.size, elapsed))
+        print(f"wrote {GALLERY} and the section {TITLE[3:]!r} of benchmarks/REPORT.md")
+
+
+if __name__ == "__main__":
+    main()
