@@ -3,14 +3,15 @@
 That command is ``load`` (default budget), ``add_shadows`` (planar, the
 scene's lights, receivers found, default tolerance) and ``save``
 (:func:`shadowgeo.batch.shadowed` with default ``ConvertOptions``); the cases
-make the same public calls, so they run at any commit that has them.
+make the same public calls, so they run at any commit that has them. The
+example scenes also go through ``--method volume``.
 
 A writer rewrites each relative url of the scene for the folder it writes to
 (:mod:`shadowgeo.io.x3d_urls`), so the bytes depend on where the input and
 the output lie relative to each other. The inputs are therefore copied into a
 fixed layout under a scratch folder (``in/examples/scenes/``,
 ``in/corpus/<collection>/...``) and written to the mirror of that layout under
-``out/``: the same bytes whatever the repository's or the corpus's path.
+``out/<method>/``: the same bytes whatever the repository's or the corpus's path.
 """
 
 from __future__ import annotations
@@ -76,24 +77,28 @@ class Conversion:
     source: Path
     staged: str
     needs_corpus: bool
+    method: str = "planar"
 
     def run(self, scratch: Path) -> Digest:
-        return convert(scratch / "in" / self.staged, scratch / "out" / self.staged)
+        target = scratch / "out" / self.method / self.staged
+        return convert(scratch / "in" / self.staged, target, self.method)
 
 
 def cases(root: Path, corpus: Path | None) -> list[Conversion]:
-    """The example scenes of the repository at ``root``, then the corpus
-    scenes (none when ``corpus`` is None)."""
+    """The example scenes of the repository at ``root``, then the same with
+    ``--method volume``, then the corpus scenes (none when ``corpus`` is None)."""
+    examples = sorted(path for path in (root / "examples" / "scenes").iterdir() if path.is_file())
     found = [
         Conversion(
-            f"convert/examples/{path.name}",
-            "bundled example scene",
+            f"convert{'' if method == 'planar' else '-' + method}/examples/{path.name}",
+            f"bundled example scene{'' if method == 'planar' else ', --method ' + method}",
             path,
             f"examples/scenes/{path.name}",
             False,
+            method,
         )
-        for path in sorted((root / "examples" / "scenes").iterdir())
-        if path.is_file()
+        for method in ("planar", "volume")
+        for path in examples
     ]
     return found + [
         Conversion(f"convert/corpus/{name}", "corpus scene", corpus / name, f"corpus/{name}", True)
@@ -115,29 +120,34 @@ def stage(root: Path, corpus: Path | None, scratch: Path) -> None:
             shutil.copytree(corpus / collection, scratch / "in" / "corpus" / collection)
 
 
-def convert(source: Path, target: Path) -> Digest:
-    """``source`` with its shadows, written to ``target`` with each suffix of
-    :data:`FORMATS`: each file's sha256 and size (an error is the result)."""
+def convert(source: Path, target: Path, method: str = "planar") -> Digest:
+    """``source`` with its shadows (by ``method``, as ``convert --method``),
+    written to ``target`` with each suffix of :data:`FORMATS`: each file's
+    sha256 and size (an error is the result)."""
     import shadowgeo
 
     target.parent.mkdir(parents=True, exist_ok=True)
     try:
         scene = shadowgeo.load(source)
-        result = shadowgeo.add_shadows(scene)
+        result = shadowgeo.add_shadows(scene, method=method)  # type: ignore[arg-type]
         files = {}
         for suffix in FORMATS:
             out = target.with_name(target.name + suffix)
             shadowgeo.save(result, out)
             files[suffix] = out.read_bytes()
     except Exception as exception:  # the error is the golden result of this case
-        return error(exception)
+        failed = error(exception)
+        failed.record["input_sha256"] = sha256(source.read_bytes())
+        return failed
     record = {
         "kind": "conversion",
         "input_sha256": sha256(source.read_bytes()),
         "outputs": {suffix: sha256(data) for suffix, data in files.items()},
         "sizes": {suffix: len(data) for suffix, data in files.items()},
         "counts": {
-            "shadow_shapes": sum(1 for shape in result.shapes if shape.role == "shadow"),
+            "shadow_shapes": sum(
+                1 for shape in result.shapes if shape.role in ("shadow", "volume")
+            ),
             "lights": len(scene.lights),
         },
     }
