@@ -66,6 +66,7 @@ def run(
     run in its own scratch folder; a case whose two records differ is listed
     as unstable."""
     cases = list(cases)
+    checked_import()
     start = time.perf_counter()
     digests, unstable = {}, []
     with tempfile.TemporaryDirectory(prefix="golden-") as folder:
@@ -100,10 +101,44 @@ def write_kept(keep: Path, case_id: str, result: Digest) -> None:
     (folder / "record.json").write_text(json.dumps(result.record, indent=1, sort_keys=True))
 
 
+def environment() -> dict[str, str]:
+    """Python's and the numeric libraries' versions (the bytes may depend on them)."""
+    import importlib.metadata
+    import platform
+
+    found = {"python": platform.python_version(), "machine": platform.machine()}
+    for name in (
+        "numpy",
+        "shapely",
+        "trimesh",
+        "manifold3d",
+        "numba",
+        "lxml",
+        "usd-core",
+        "orjson",
+    ):
+        try:
+            found[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            found[name] = "absent"
+    return found
+
+
+def checked_import(root: Path = ROOT) -> None:
+    """Import shadowgeo and check it is the one in ``root`` (an editable
+    install of another checkout would be imported first otherwise)."""
+    import shadowgeo
+
+    where = Path(shadowgeo.__file__).resolve().parent
+    if where != root / "shadowgeo":
+        raise SystemExit(f"golden: shadowgeo imported from {where}, not from {root}")
+
+
 def manifest(cases: list[Any], done: Run, corpus: Path | None) -> dict[str, Any]:
     return {
         "tool": "tools/golden.py",
         "commit": commit(),
+        "environment": environment(),
         "corpus": corpus is not None,
         "cases": {
             case.id: {"what": case.what, **done.digests[case.id].record}
