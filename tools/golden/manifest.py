@@ -37,12 +37,18 @@ def all_cases(corpus: Path | None, root: Path = ROOT) -> list[Any]:
 
 
 def commit(root: Path = ROOT) -> dict[str, Any]:
+    """HEAD of the repository at ``root`` and whether its tree has changes
+    (untracked files included); "unknown" outside a git checkout."""
+
     def git(*args: str) -> str:
         return subprocess.run(
             ["git", *args], cwd=root, capture_output=True, text=True, check=True
         ).stdout.strip()
 
-    return {"head": git("rev-parse", "HEAD"), "dirty": bool(git("status", "--porcelain"))}
+    try:
+        return {"head": git("rev-parse", "HEAD"), "dirty": bool(git("status", "--porcelain"))}
+    except (OSError, subprocess.CalledProcessError):
+        return {"head": "unknown", "dirty": True}
 
 
 @dataclass
