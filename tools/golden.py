@@ -97,6 +97,8 @@ def compare(args: argparse.Namespace) -> int:
         f"old: {old['commit']['head'][:10]}  new: {new['commit']['head'][:10]}"
         f"{' (dirty tree)' if new['commit']['dirty'] else ''}"
     )
+    for change in manifest.environment_changes(old, new):
+        print(f"environment: {change}")
     print("\n".join(lines))
     print(", ".join(f"{count} {status}" for status, count in sorted(tally.items())))
     return 1 if tally.get("different", 0) else 0

@@ -112,7 +112,7 @@ def environment() -> dict[str, str]:
     import importlib.metadata
     import platform
 
-    found = {"python": platform.python_version(), "machine": platform.machine()}
+    found = {"python": platform.python_version(), "machine": platform.machine(), "cpu": cpu()}
     for name in (
         "numpy",
         "shapely",
@@ -128,6 +128,27 @@ def environment() -> dict[str, str]:
         except importlib.metadata.PackageNotFoundError:
             found[name] = "absent"
     return found
+
+
+def cpu() -> str:
+    """The processor's model name (Linux), which picks OpenBLAS's kernels."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "unknown"
+
+
+def environment_changes(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
+    """``name old -> new`` for each entry of the environment that changed."""
+    before, after = old.get("environment", {}), new.get("environment", {})
+    return [
+        f"{name} {before.get(name)} -> {after.get(name)}"
+        for name in sorted(before.keys() | after.keys())
+        if before.get(name) != after.get(name)
+    ]
 
 
 def checked_import(root: Path = ROOT) -> None:
