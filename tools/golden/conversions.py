@@ -81,7 +81,7 @@ class Conversion:
 
     def run(self, scratch: Path) -> Digest:
         target = scratch / "out" / self.method / self.staged
-        return convert(scratch / "in" / self.staged, target, self.method)
+        return convert(scratch / "in" / self.staged, target, self.method, scratch)
 
 
 def cases(root: Path, corpus: Path | None) -> list[Conversion]:
@@ -120,16 +120,17 @@ def stage(root: Path, corpus: Path | None, scratch: Path) -> None:
             shutil.copytree(corpus / collection, scratch / "in" / "corpus" / collection)
 
 
-def convert(source: Path, target: Path, method: str = "planar") -> Digest:
+def convert(source: Path, target: Path, method: str, scratch: Path) -> Digest:
     """``source`` with its shadows (by ``method``, as ``convert --method``),
     written to ``target`` with each suffix of :data:`FORMATS`: each file's
-    sha256 and size (an error is the result)."""
+    sha256 and size, and the notes' (an error is the result). A note naming
+    a file under ``scratch`` names it as ``<scratch>/...``."""
     import shadowgeo
 
     target.parent.mkdir(parents=True, exist_ok=True)
     try:
         scene = shadowgeo.load(source)
-        result = shadowgeo.add_shadows(scene, method=method)  # type: ignore[arg-type]
+        result = shadowgeo.add_shadows(scene, method=method)
         files = {}
         for suffix in FORMATS:
             out = target.with_name(target.name + suffix)
@@ -139,9 +140,12 @@ def convert(source: Path, target: Path, method: str = "planar") -> Digest:
         failed = error(exception)
         failed.record["input_sha256"] = sha256(source.read_bytes())
         return failed
+    # the notes (what the reader skipped, the shadows' notes) as the command prints them
+    notes = "\n".join(result.warnings).replace(str(scratch), "<scratch>")
     record = {
         "kind": "conversion",
         "input_sha256": sha256(source.read_bytes()),
+        "notes_sha256": sha256(notes.encode()),
         "outputs": {suffix: sha256(data) for suffix, data in files.items()},
         "sizes": {suffix: len(data) for suffix, data in files.items()},
         "counts": {
@@ -149,6 +153,8 @@ def convert(source: Path, target: Path, method: str = "planar") -> Digest:
                 1 for shape in result.shapes if shape.role in ("shadow", "volume")
             ),
             "lights": len(scene.lights),
+            "notes": len(result.warnings),
         },
     }
-    return Digest(record, files={target.name + suffix: data for suffix, data in files.items()})
+    kept = {target.name + suffix: data for suffix, data in files.items()}
+    return Digest(record, files={**kept, "notes.txt": notes.encode()})
