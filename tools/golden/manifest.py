@@ -1,10 +1,12 @@
 """Running the golden cases, writing the manifest, comparing with an old one.
 
 The manifest is JSON: ``commit`` (``git rev-parse HEAD``, and whether the
-tree had changes), ``corpus`` (whether the corpus cases ran) and ``cases``,
-one record per case id, each with ``what`` it is and what it produced (see
-:mod:`golden.digest` and :mod:`golden.conversions`). Two records are the same
-when every field but ``what`` is equal.
+tree had changes), ``environment`` (Python, the libraries, the CPU),
+``corpus`` (whether the corpus cases ran), ``nondeterministic`` (cases whose
+two runs differed) and ``cases``, one record per case id, each with ``what``
+it is and what it produced (see :mod:`golden.digest` and
+:mod:`golden.conversions`). Two records are the same when every field but
+``what`` is equal.
 """
 
 from __future__ import annotations
