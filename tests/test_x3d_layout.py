@@ -202,7 +202,7 @@ def test_added_shadow_groups_follow_the_same_layout(tmp_path):
         # and none at all: XML is never laid out again
         '<?xml version="1.0" encoding="UTF-8"?>\n<X3D profile="Interchange" version="4.0">'
         '<Scene><Viewpoint position="0 1 10"/><Transform translation="0 1 0"><Shape DEF="crate">'
-        '<Box/></Shape></Transform></Scene></X3D>\n',
+        "<Box/></Shape></Transform></Scene></X3D>\n",
     ],
 )
 def test_xml_input_keeps_its_authors_layout(tmp_path, text):
