@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import shadowgeo as sg
-from shadowgeo.scene.primitives import sphere
+from shadowgeo.scene.primitives import cylinder, sphere
 
 LAMP = np.array([0.0, 1.0, 0.0])
 CHORD = 1e-3  # of the spheres' tessellation: the areas below hold to about that
@@ -91,7 +91,9 @@ def test_a_lamp_in_its_bulb_shadows_every_surface_but_the_bulb_casts_nothing():
     assert triangle_set(shadow) == triangle_set(reference)
     # ... and exactly that of the scene with a bulb that says it casts none
     quiet = dataclasses.replace(MARKER, casts_shadow=False)
-    told = surface_shadow(sg.add_shadows(sg.Scene([quiet, SMALL, BIG], [lamp()]), **settings))
+    quiet_result = sg.add_shadows(sg.Scene([quiet, SMALL, BIG], [lamp()]), **settings)
+    assert not any("marker" in note for note in quiet_result.warnings)  # it casts nothing anyway
+    told = surface_shadow(quiet_result)
     assert np.array_equal(shadow.world_vertices, told.world_vertices)
     assert np.array_equal(shadow.faces, told.faces)
     # the small ball's shadow on the big one: the cap its cone cuts
@@ -141,6 +143,21 @@ def test_a_light_inside_two_nested_casters_has_one_note_naming_both():
     held = [note for note in result.warnings if "do not cast for light lamp" in note]
     assert len(held) == 1 and "dome" in held[0] and "marker" in held[0]
     assert surface_shadow(result).n_faces > 0
+
+
+def test_a_shade_around_the_lamp_that_does_not_enclose_it_still_casts():
+    """An open tube (a lamp shade, no caps) around the lamp: its box holds
+    the light, but the light neither touches it nor is inside a closed
+    shape, so it casts: it hides the whole big ball (the ball spans 19.5
+    degrees around the lamp's horizon, the tube 21.8)."""
+    vertices, faces = cylinder(0.5, 0.4, chord=CHORD, top=False, bottom=False)
+    shade = sg.Shape(vertices + LAMP, faces, name="shade", solid=False)
+    result = sg.add_shadows(sg.Scene([shade, BIG], [lamp()]), offset=1e-4)
+    assert not any("does not cast" in note for note in result.warnings)
+    area, centres = areas(surface_shadow(result))
+    on_big = np.linalg.norm(centres - (LAMP + [3.0, 0, 0]), axis=1) < 1.01
+    # the ball's side lit from the lamp: the cap inside its tangent cone
+    assert area[on_big].sum() == pytest.approx(cap_area(1.0, math.acos(1.0 / 3.0)), rel=1e-2)
 
 
 def test_a_direct_call_still_raises_for_a_light_inside_a_caster():
