@@ -403,11 +403,12 @@ def _held_note(casters: CasterSet, held: dict[int, str], light_name: str) -> str
         )
     by_reason: dict[str, list[str]] = {}  # (a light inside nested shells: one reason)
     for index, reason in held.items():
-        by_reason.setdefault(reason, []).append(casters.casters[index].name)
+        by_reason.setdefault(reason, []).append(repr(casters.casters[index].name))
     parts = []
     for reason, named in by_reason.items():
         more = f", and {len(named) - 10:,} more" if len(named) > 10 else ""
-        parts.append(f"{', '.join(named[:10])}{more}: {reason}")
+        each = "each: " if len(named) > 1 else ""
+        parts.append(f"{', '.join(named[:10])}{more} ({each}{reason})")
     return f"shadows: {len(held):,} casters do not cast for light {light_name}: {'; '.join(parts)}"
 
 
