@@ -22,9 +22,8 @@ CHORD = 1e-3  # of the spheres' tessellation: the areas below hold to about that
 
 def ball(center, radius, name, solid=True, chord=CHORD):
     vertices, faces = sphere(radius, chord=chord)
-    return sg.Shape(
-        vertices + center, faces, name=name, solid=solid, crease_angle=0.5
-    )  # an X3D Sphere's
+    # smoothed as an X3D Sphere is (creaseAngle 0.5)
+    return sg.Shape(vertices + center, faces, name=name, solid=solid, crease_angle=0.5)
 
 
 def surface_shadow(scene):
