@@ -5,11 +5,13 @@ the same triangles. :class:`CasterSet` therefore computes every shape's world
 vertices once and stacks them, with every shape's faces, into one vertex and
 one face array; the tests that drop a caster (wholly behind the receiver,
 beyond a positional light, out of its radius or cone, its shadow missing the
-receiver's box) and the removal of triangles lying in the receiver's plane are
-then a few numpy operations over all shapes at once, and the casters a
-receiver keeps go to :func:`shadowgeo.project_shadow` as one mesh. The
-topology of that mesh is cached by the faces it holds, so a second light
-whose casters are the same reuses it.
+receiver's box, the light touching it or inside it) and the removal of
+triangles lying in the receiver's plane are then a few numpy operations over
+all shapes at once (the light's touch exactly only for the few casters whose
+box holds it), and the casters a receiver keeps go to
+:func:`shadowgeo.project_shadow` as one mesh. The topology of that mesh is
+cached by the faces it holds, so a second light whose casters are the same
+reuses it.
 """
 
 from __future__ import annotations
@@ -19,8 +21,10 @@ import hashlib
 
 import numpy as np
 
+from ..errors import GeometryError
 from ..lights import Light, SpotLight, is_positional
 from ..plane import Plane
+from ..silhouette import check_light_outside
 from ..tolerance import Tolerance
 from ..topology import BLOCK, Caster, block_normals, closed_by_sort
 from .model import Shape, transformed
@@ -210,6 +214,32 @@ class CasterSet:
                 spread = np.arcsin(np.clip(radius / reach, 0.0, 1.0))
             keep &= ~(far & (np.arccos(cosine) - spread > light.cut_off_angle))
         return keep
+
+    def holding(
+        self, light: Light, tolerance: Tolerance, among: np.ndarray | None = None
+    ) -> dict[int, str]:
+        """The casters (of ``among``, (k,) bool, when given) that a positional
+        ``light`` touches (within ``tolerance.length``) or lies inside (a
+        closed one: a lamp's bulb, a room around it), each index with the
+        reason :func:`~shadowgeo.silhouette.check_light_outside` gives: such a
+        caster cannot cast for that light (every shadow function raises
+        :class:`~shadowgeo.errors.GeometryError` for it). One numpy test of
+        every caster's box first; the exact test only for the few whose box
+        holds the light."""
+        if not is_positional(light) or not len(self):
+            return {}
+        position = light.position
+        reach = tolerance.length
+        boxed = np.all((self.low - reach <= position) & (position <= self.high + reach), axis=1)
+        if among is not None:
+            boxed &= among
+        held = {}
+        for index in np.flatnonzero(boxed).tolist():
+            try:
+                check_light_outside(self.caster(index), position, tolerance)
+            except GeometryError as error:
+                held[index] = str(error)
+        return held
 
     def may_shadow(
         self,

@@ -28,7 +28,9 @@ Casters
     wholly behind the receiver's plane, wholly at or beyond a positional
     light's height, out of a light's radius, outside a spot light's cone, or
     whose shadow misses the receiver's bounding box is skipped. A caster the
-    light touches or sits inside (a lamp's own bulb) is skipped with a note.
+    light touches or sits inside (a lamp's own bulb, a closed room around
+    it) casts nothing for that light, on every receiver and every surface,
+    with one note naming it; the other casters cast as they would without it.
 
 The shadows of the casters of one light and one opacity on one receiver are
 united into one region (so overlaps do not darken twice), cut to the
@@ -314,6 +316,14 @@ def _add_shadows(
             light_name = names.light(light, index)
             group = names.unique(f"shadows_{light_name}")
             height = lift * (1 + index / len(chosen))
+            # a caster the light touches or sits inside (its bulb) casts
+            # nothing for it, on any receiver; the others cast as ever
+            held = stacked.holding(light.light, tolerance, opacity > 0)
+            casting = opacity
+            if held:
+                casting = opacity.copy()
+                casting[list(held)] = 0.0
+                notes.append(_held_note(stacked, held, light_name))
             for receiver in found:
 
                 def step(count: int, start: int = done) -> None:
@@ -324,7 +334,7 @@ def _add_shadows(
                     receiver,
                     light,
                     casters=stacked,
-                    opacity=opacity,
+                    opacity=casting,
                     tolerance=tolerance,
                     lift=height,
                     notes=notes,
@@ -345,11 +355,11 @@ def _add_shadows(
                 # only casters the light reaches (its radius, its cone): a
                 # ray to a lit point runs inside them; each caster's
                 # topology made once for every light
-                reached = np.flatnonzero(stacked.lit(light.light) & (opacity > 0))
+                reached = np.flatnonzero(stacked.lit(light.light) & (casting > 0))
                 for level, layer in surface_shadow(
                     surface,
                     [stacked.caster(int(k)) for k in reached],
-                    opacity[reached],
+                    casting[reached],
                     reached,
                     light,
                     tolerance,
@@ -381,6 +391,25 @@ def _add_shadows(
     return dataclasses.replace(
         scene, shapes=[*kept, *added], lights=marked, warnings=[*scene.warnings, *notes]
     )
+
+
+def _held_note(casters: CasterSet, held: dict[int, str], light_name: str) -> str:
+    """The note on the casters (``held``: index to reason) that the light
+    touches or sits inside, which cast nothing for it."""
+    if len(held) == 1:
+        ((index, reason),) = held.items()
+        return (
+            f"shadows: {casters.casters[index].name} does not cast for light {light_name}: {reason}"
+        )
+    by_reason: dict[str, list[str]] = {}  # (a light inside nested shells: one reason)
+    for index, reason in held.items():
+        by_reason.setdefault(reason, []).append(repr(casters.casters[index].name))
+    parts = []
+    for reason, named in by_reason.items():
+        more = f", and {len(named) - 10:,} more" if len(named) > 10 else ""
+        each = "each: " if len(named) > 1 else ""
+        parts.append(f"{', '.join(named[:10])}{more} ({each}{reason})")
+    return f"shadows: {len(held):,} casters do not cast for light {light_name}: {'; '.join(parts)}"
 
 
 def _is_ground(receiver: Receiver) -> bool:
