@@ -23,6 +23,7 @@ from test_browser import PIXELS, screenshot
 import shadowgeo as sg
 from cli.main import main
 from shadowgeo.scene import primitives
+from shadowgeo.scene.surfaces import receiving_faces
 from shadowgeo.scene.terminator import clip_to_lit, corner_normals, lit_values
 
 SUN = np.array([1.0, -1.0, 0.35]) / np.linalg.norm([1.0, -1.0, 0.35])  # travel direction
@@ -131,6 +132,27 @@ def test_smoothed_normals_of_a_sphere_are_its_radii():
     own = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     own /= np.linalg.norm(own, axis=1, keepdims=True)
     assert np.allclose(flat, own[:, None, :])
+
+
+def test_an_open_shape_turned_round_is_not_smoothed_with_itself():
+    """An open shape receives on both sides: its faces go in twice, once each
+    way round. X3D's creaseAngle 3.1416 (common in files: smooth everything)
+    must not average a face with the turned copies: each side is shaded with
+    the normals it has alone, the outside's those of crease 0.5, the
+    inside's their opposites."""
+    vertices, faces = primitives.sphere(1.0, chord=0.01)
+    upper = faces[vertices[faces].mean(axis=1)[:, 1] > 0]  # an open dome
+    groups = np.zeros(len(upper), dtype=np.int64)
+    alone = corner_normals(vertices, upper, groups, np.full(len(upper), 0.5))
+    tolerance = sg.Tolerance.for_points(vertices)
+    for crease in (0.5, 3.1416):
+        dome = sg.Shape(vertices, upper, solid=False, crease_angle=crease)
+        surface = receiving_faces([dome], [], tolerance)
+        assert len(surface.faces) == 2 * len(upper)
+        outside = surface.vertices[surface.faces[: len(upper)]]
+        assert np.array_equal(outside, vertices[upper])  # the faces as given first
+        assert np.allclose(surface.normals[: len(upper)], alone, atol=1e-9), crease
+        assert np.allclose(surface.normals[len(upper) :], -alone[:, ::-1], atol=1e-9), crease
 
 
 def test_smoothing_stays_within_a_shape_and_its_crease():

@@ -113,12 +113,15 @@ def receiving_faces(
     )
     faces = faces[order]
     owners = owner[np.concatenate([first, twice])[order]]
+    turned = np.repeat([0, 1], [len(first), len(twice)])[order]
     used = unique_integers(faces.reshape(-1))
     renumber = np.zeros(len(stacked.vertices), dtype=np.int64)
     renumber[used] = np.arange(len(used))
     vertices, faces = stacked.vertices[used], renumber[faces]
     crease = np.array([shape.crease_angle for shape in geometry], dtype=np.float64)[owners]
-    normals = corner_normals(vertices, faces, owners, crease)
+    # each side of an open shape smoothed on its own: a creaseAngle of 3.1416
+    # ("smooth everything") must not average a face with the turned copies
+    normals = corner_normals(vertices, faces, 2 * owners + turned, crease)
     return ReceivingSurface(vertices, faces, owners, normals)
 
 
