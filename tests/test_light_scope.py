@@ -26,6 +26,7 @@ import pytest
 from lxml import etree
 
 import shadowgeo as sg
+from shadowgeo.scene.darkness import shadow_darkness
 
 FLOOR_POINTS = "-5 0 -5 -5 0 5 5 0 5 5 0 -5"
 DOWN = "0 -1 0"
@@ -80,22 +81,36 @@ ROOF_XML = (
 ROOF_CLASSIC = (
     "Transform { translation -13 6 3 children DEF roof Shape { geometry Box { size 2 0.2 2 } } }"
 )
+# A 1 x 0.1 x 1 ring at the top of the scene, between the west box and slab
+# (y from 0.7 to 0.8), wholly in the box's shadow under a sun straight down.
+RING_XML = (
+    '<Transform translation="-10 0.75 0">'
+    '<Shape DEF="ring"><Box size="1 0.1 1"/></Shape></Transform>'
+)
+RING_CLASSIC = (
+    "Transform { translation -10 0.75 0 children DEF ring Shape { geometry Box { size 1 0.1 1 } } }"
+)
 
 
 def write_scene(
-    folder, encoding: str, west: tuple[str, dict], east: tuple[str, dict], roof: bool = False
+    folder,
+    encoding: str,
+    west: tuple[str, dict],
+    east: tuple[str, dict],
+    roof: bool = False,
+    ring: bool = False,
 ):
     """The two-group scene in ``encoding`` ("xml" or "classic"), each group's
     light given as (node type, fields), with the roof or not; no headlight."""
     if encoding == "xml":
         body = _xml_group("W", -10, _xml_light(*west)) + _xml_group("E", 10, _xml_light(*east))
-        body += ROOF_XML if roof else ""
+        body += (ROOF_XML if roof else "") + (RING_XML if ring else "")
         text = f'<X3D version="4.0"><Scene><NavigationInfo headlight="false"/>{body}</Scene></X3D>'
         path = folder / "scope.x3d"
     else:
         body = _classic_group("W", -10, _classic_light(*west))
         body += _classic_group("E", 10, _classic_light(*east))
-        body += ROOF_CLASSIC if roof else ""
+        body += (ROOF_CLASSIC if roof else "") + (RING_CLASSIC if ring else "")
         text = f"#X3D V4.0 utf8\nPROFILE Immersive\nNavigationInfo {{ headlight FALSE }}\n{body}"
         path = folder / "scope.x3dv"
     path.write_text(text)
@@ -147,6 +162,9 @@ def test_scoped_suns_shadow_only_their_own_group(tmp_path, encoding):
     # each floor lit by its own sun only: the shadow takes all of its light
     assert shadow(result, "shadow_sunW_floorW").material.transparency == pytest.approx(0, abs=1e-9)
     assert shadow(result, "shadow_sunE_floorE").material.transparency == pytest.approx(0, abs=1e-9)
+    assert shadow(result, "shadow_sunW_surfaces").material.transparency == pytest.approx(
+        0, abs=1e-9
+    )
 
 
 @pytest.mark.parametrize("encoding", ENCODINGS)
@@ -187,6 +205,57 @@ def test_a_shape_outside_the_scope_casts_nothing_for_the_light(tmp_path, encodin
     )
     areas = shadow_areas(sg.add_shadows(sg.load(path)))
     assert areas["sunW", "floorW"] == pytest.approx(16 + 4, rel=1e-6)  # the roof's 2 x 2 too
+
+
+@pytest.mark.parametrize("encoding", ENCODINGS)
+def test_a_shape_outside_the_scope_receives_nothing_from_the_light(tmp_path, encoding):
+    scoped = write_scene(tmp_path, encoding, sun("sunW", DOWN), sun("sunE", SLANT), ring=True)
+    both = sun("sunW", DOWN, **{"global": "true"})
+    (tmp_path / "global").mkdir()
+    unscoped = write_scene(tmp_path / "global", encoding, both, sun("sunE", SLANT), ring=True)
+    # the ring named as a planar receiver
+    areas = shadow_areas(sg.add_shadows(sg.load(scoped), receivers=["floorW", "ring"]))
+    assert ("sunW", "ring") not in areas and areas["sunW", "floorW"] == pytest.approx(16)
+    areas = shadow_areas(sg.add_shadows(sg.load(unscoped), receivers=["floorW", "ring"]))
+    assert areas["sunW", "ring"] == pytest.approx(1, rel=1e-6)
+    # the ring's top among every other surface: the slab's top only, or with the ring's
+    areas = shadow_areas(sg.add_shadows(sg.load(scoped)))
+    assert areas["sunW", "surfaces"] == pytest.approx(4, rel=1e-6)
+    areas = shadow_areas(sg.add_shadows(sg.load(unscoped)))
+    assert areas["sunW", "surfaces"] == pytest.approx(4 + 4 + 1, rel=1e-6)
+
+
+@pytest.mark.parametrize("global_", ["false", "true"])
+def test_the_added_ground_lies_outside_every_scope(tmp_path, global_):
+    path = tmp_path / "ground.x3d"
+    path.write_text(
+        '<X3D version="4.0"><Scene><Group>'
+        f'<DirectionalLight DEF="sun" direction="0 -1 0" global="{global_}"/>'
+        '<Transform translation="0 2 0"><Shape DEF="box"><Box/></Shape></Transform>'
+        "</Group></Scene></X3D>"
+    )
+    result = sg.add_shadows(sg.load(path))
+    assert result.shapes_with_role("ground")  # the ground plane receives
+    areas = shadow_areas(result)
+    if global_ == "true":
+        assert areas == {("sun", "ground"): pytest.approx(4, rel=1e-6)}
+    else:
+        assert areas == {}  # the scoped sun does not light the ground shadowgeo adds
+
+
+def test_darkness_counts_each_triangles_own_lights():
+    # two triangles of equal area straight under both lights; the bright one
+    # lights only the first: the dim one's shadow takes 0.25 / (0.25 + 0.75)
+    # of the first's light and all of the second's
+    vertices = [[0, 0, 0], [1, 0, 0], [0, 0, 1], [5, 0, 0], [6, 0, 0], [5, 0, 1]]
+    faces = [[0, 2, 1], [3, 5, 4]]
+    dim = sg.SceneLight(sg.DirectionalLight([0, -1, 0]), intensity=0.25)
+    bright = sg.SceneLight(sg.DirectionalLight([0, -1, 0]), intensity=0.75, global_=False, scope=7)
+    lights = [dim, bright]
+    both = shadow_darkness(dim, vertices, faces, lights, scopes=[frozenset({7}), frozenset()])
+    assert both == pytest.approx((0.25 + 1.0) / 2, rel=1e-12)
+    assert shadow_darkness(dim, vertices, faces, lights) == pytest.approx(0.25, rel=1e-12)
+    assert shadow_darkness(dim, vertices, faces, lights, scopes=frozenset()) == pytest.approx(1)
 
 
 def _brute_area(light, boxes, floor_low, floor_high, n=400):
@@ -243,6 +312,21 @@ def test_scopes_follow_use_and_the_top_of_the_file(tmp_path):
     ball, copy, alone = scene.shapes
     assert ball.scopes == {first.scope} and copy.scopes == {second.scope}
     assert alone.scopes == frozenset()
+
+
+def test_nested_scopes(tmp_path):
+    path = tmp_path / "nested.x3d"
+    path.write_text(
+        '<X3D version="4.0"><Scene><Group><DirectionalLight DEF="outer"/>'
+        '<Shape DEF="high"><Box/></Shape>'
+        '<Transform><Group><DirectionalLight DEF="inner"/><Shape DEF="deep"><Box/></Shape>'
+        "</Group></Transform></Group></Scene></X3D>"
+    )
+    scene = sg.load(path)
+    outer, inner = scene.lights
+    high, deep = scene.shapes
+    assert len({outer.scope, inner.scope, None}) == 3
+    assert high.scopes == {outer.scope} and deep.scopes == {outer.scope, inner.scope}
 
 
 def test_an_inlined_files_top_light_lights_the_inline(tmp_path):
