@@ -156,6 +156,7 @@ def test_scoped_suns_shadow_only_their_own_group(tmp_path, encoding):
     assert areas["sunE", "floorE"] == pytest.approx(21, rel=1e-6)
     assert areas["sunW", "surfaces"] == pytest.approx(4, rel=1e-6)  # the west slab's top
     assert areas["sunE", "surfaces"] == pytest.approx(5, rel=1e-6)  # the east slab's top
+    assert any(note.startswith("shadows: lights sunW, sunE: global") for note in result.warnings)
     west = shadow(result, "shadow_sunW_surfaces").world_vertices[:, 0]
     east = shadow(result, "shadow_sunE_surfaces").world_vertices[:, 0]
     assert west.max() < -5 and east.min() > 5

@@ -278,6 +278,12 @@ def _add_shadows(
     if not math.isfinite(lift) or lift < 0:
         raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")
     names = _Names(kept, scene.lights)
+    scoped = [names.light(light, i) for i, light in enumerate(chosen) if light.scope is not None]
+    if scoped:
+        notes.append(
+            f'shadows: {_listed(scoped)}: global="false", so only the shapes of the '
+            "light's parent group receive and cast its shadows"
+        )
     opacity = opacities(geometry)  # (see .opacity: 0 casts nothing)
     lighting = Lighting.of(scene)
 
