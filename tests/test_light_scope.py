@@ -364,3 +364,14 @@ def test_x3d_writer_keeps_global_and_gltf_lights_come_back_global(tmp_path):
     sg.save(back, tmp_path / "plain.x3d")
     (element,) = etree.parse(str(tmp_path / "plain.x3d")).iter("DirectionalLight")
     assert element.get("global") == "true"
+
+
+def test_shadow_volumes_of_a_scoped_light_are_its_groups_shapes_only(tmp_path):
+    path = write_scene(tmp_path, "xml", sun("sunW", DOWN), sun("sunE", SLANT, **{"global": "true"}))
+    result = sg.add_shadows(sg.load(path), method="volume")
+    names = sorted(shape.name for shape in result.shapes_with_role("volume"))
+    west = ["boxW", "floorW", "slabW"]
+    east = ["boxE", "floorE", "slabE"]
+    expected = sorted([f"volume_sunW_{name}" for name in west])
+    expected += sorted(f"volume_sunE_{name}" for name in east + west)
+    assert names == sorted(expected)
