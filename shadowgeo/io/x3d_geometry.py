@@ -57,7 +57,9 @@ class Mesh:
 class Instance:
     """One rendered Shape: its geometry under a world transform (4x4);
     ``casts_shadow`` False for X3D 4's ``castShadow="false"`` or Castle's
-    ``Appearance { shadowCaster FALSE }``."""
+    ``Appearance { shadowCaster FALSE }``. ``within``: the ids of the
+    grouping node instances (Inline's too) it lies in, outermost first (see
+    :attr:`~shadowgeo.SceneLight.scope`)."""
 
     geometry: Mesh | Primitive
     transform: np.ndarray
@@ -67,6 +69,7 @@ class Instance:
     role: str = "geometry"
     group: str | None = None
     casts_shadow: bool = True
+    within: tuple[int, ...] = ()
 
 
 @dataclass

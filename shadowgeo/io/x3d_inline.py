@@ -51,6 +51,7 @@ class InlineReader(Protocol):
     instances: list[Instance]
     inline_stack: list[Path]
     inline_files: dict[Path, Any]  # each Inline file read once: tree, Scene or why not
+    within: tuple[int, ...]  # the grouping node instances being read (see Instance)
 
     def document(self, tree: Tree, path: Path, matrix: np.ndarray, *, name: str | None) -> None: ...
 
@@ -203,6 +204,7 @@ def _gltf(
                 shape.name or name,
                 shape.source or path.name,
                 casts_shadow=shape.casts_shadow,
+                within=reader.within,
             )
         )
     return None

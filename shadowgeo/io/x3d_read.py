@@ -24,6 +24,13 @@ Rules the reader follows, where X3D leaves a choice:
   after it (with a warning).
 - **Defaults** are X3D 4.0's (from the schema), except that files declaring
   version 3.x get 3.x SpotLight defaults (beamWidth pi/2, cutOffAngle pi/4).
+- **Light scope.** A light with ``global`` false (DirectionalLight's
+  default) lights only its parent grouping node's descendants (an Inline's
+  for one at the top of an inlined file): its ``SceneLight.scope`` is that
+  node instance's id, in the ``Shape.scopes`` of the shapes under it. A
+  light reached twice through USE is two lights, each scoped where it is
+  reached; one at the top of the scene's own file lights everything. The
+  shapes of an inlined glTF lie in the Inline's scope like any other.
 - **Viewpoints** of the scene's own file (not of its Inlines, as X3D binds
   none of those first) go to ``Scene.viewpoints`` in world coordinates, in
   the order they are reached.
@@ -123,6 +130,11 @@ class _Reader:
         self.inline_files: dict[Path, Any] = {}  # each Inline file read once: tree or Scene
         self.top_root: Element | None = None  # the root of the scene's own document
         self.headlight: bool | None = None  # of the top document's first NavigationInfo
+        # ids of the grouping node (and Inline) instances being read, outermost
+        # first; those holding a non-global light are its scope (SceneLight.scope)
+        self.within: tuple[int, ...] = ()
+        self.opened = 0  # grouping node instances read so far: the next one's id
+        self.scopes: set[int] = set()  # the ids that are some light's scope
 
     # -- documents ---------------------------------------------------------------
     def document(
@@ -239,7 +251,8 @@ class _Reader:
             if baked:
                 self.baked.append(element.get("DEF") or "shadows")
             try:
-                self.children(context, element, world, name)
+                with self._scope():
+                    self.children(context, element, world, name)
             finally:
                 self.open_groups.discard(id(element))
                 if baked:
@@ -251,12 +264,16 @@ class _Reader:
                 raise context.error(element, limits.lights_message(len(self.lights) + 1))
             light = scene_light(context, element, matrix)
             if light is not None:
+                if not light.global_ and self.within:  # at the top of the scene: everything
+                    light.scope = self.within[-1]
+                    self.scopes.add(light.scope)
                 tree = element.getroottree()
                 if tree.getroot() is self.top_root:  # a writer of this document finds it
                     light.node = tree.getpath(element)
                 self.lights.append(light)
         elif tag == "Inline":
-            load_inline(self, context, element, matrix, name)
+            with self._scope():  # the inlined scene's own lights light it
+                load_inline(self, context, element, matrix, name)
         elif tag == "NavigationInfo" and len(self.inline_stack) == 1:
             if self.headlight is None:  # the first is the one a browser binds
                 self.headlight = bool(context.field(element, "headlight"))
@@ -268,6 +285,18 @@ class _Reader:
             pass
         else:
             self._skip(context, element, tag, _why(tag))
+
+    @contextlib.contextmanager
+    def _scope(self) -> Iterator[None]:
+        """Read a grouping node instance (or an Inline) inside: its id is the
+        scope of the non-global lights among its children."""
+        outer = self.within
+        self.within = (*outer, self.opened)
+        self.opened += 1
+        try:
+            yield
+        finally:
+            self.within = outer
 
     def _skip(
         self, context: Context, element: Element, tag: str, why: str = "not modelled"
@@ -320,6 +349,7 @@ class _Reader:
                 f"{context.describe(node)}",
                 *self._added_role(element),
                 casts_shadow=_casts_shadow(context, element, appearance),
+                within=self.within,
             )
         )
 
@@ -364,7 +394,10 @@ class _Reader:
             self.warnings.append(f"{where}: skipped, {why}{more}")
         tolerance = self._tolerance(tolerance, chord)
         tessellated: dict[tuple[Any, ...], Mesh] = {}
+        scopes: dict[tuple[int, ...], frozenset[int]] = {}  # shared by a group's shapes
         for instance in self.instances:
+            if instance.within not in scopes:
+                scopes[instance.within] = frozenset(self.scopes.intersection(instance.within))
             built = instance.geometry
             if isinstance(built, Primitive):
                 stretch = float(np.linalg.norm(instance.transform[:3, :3], 2)) or 1.0
@@ -389,6 +422,7 @@ class _Reader:
                     group=instance.group,
                     casts_shadow=instance.casts_shadow,
                     crease_angle=built.crease_angle,
+                    scopes=scopes[instance.within],
                 )
             )
         scene.lights.extend(self.lights)

@@ -46,9 +46,9 @@ _TOPOLOGIES_TESTED = 64
 
 def distinct(shapes: list[Shape]) -> list[Shape]:
     """``shapes`` without those that repeat an earlier one's geometry exactly
-    (vertices, faces, transform and sidedness) and casting opacity
-    (:func:`~.opacity.casting_opacity`): a node copied ten thousand times over
-    casts, and receives, one shadow.
+    (vertices, faces, transform and sidedness), casting opacity
+    (:func:`~.opacity.casting_opacity`) and scopes (:attr:`Shape.scopes`): a
+    node copied ten thousand times over casts, and receives, one shadow.
 
     Shapes are first told apart by a cheap probe (array shapes, transform,
     sidedness, first and last vertex); only shapes whose probes agree are
@@ -68,6 +68,7 @@ def distinct(shapes: list[Shape]) -> list[Shape]:
             vertices[:1].tobytes(),
             vertices[-1:].tobytes(),
             casting_opacity(shape),
+            shape.scopes,  # copies lit by different lights cast and receive for their own
         )
         earlier = probes.get(probe)
         if earlier is None:

@@ -31,8 +31,10 @@ of the receiver's lighting::
 so a scene with exactly one light, no headlight, no ambient and no emissive
 colour keeps ``alpha = s_k``. It is averaged over the shadow's triangles,
 weighted by area. Specular light is left out (X3D's default material has
-none). Every light that is on counts, wherever it is: the model does not keep
-a non-global light's scope. A light the scene does not hold (an extra light,
+none). Every light that is on counts where it lights the receiver: a
+non-global light (X3D's ``global="false"``) only within its scope
+(:attr:`~.model.SceneLight.scope`, :func:`~.model.lights`), the headlight
+everywhere. A light the scene does not hold (an extra light,
 the default sun) lights nothing the browser draws; its shadows keep
 ``alpha = s_k``.
 """
@@ -46,7 +48,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..lights import DirectionalLight, SpotLight
-from .model import Material, Scene, SceneLight
+from .model import Material, Scene, SceneLight, lights
+
+# Where a shadow lies, for which lights reach it: the scopes
+# (:attr:`~.model.Shape.scopes`) of its receiver, or of each triangle's
+# receiving shape; None: every light reaches it.
+Scopes = frozenset[int] | Sequence[frozenset[int]] | None
 
 # Rec. 709 luminance weights of linear R, G, B.
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
@@ -67,6 +74,7 @@ def shadow_darkness(
     headlight: bool = False,
     view: ArrayLike | None = None,
     material: Material | None = None,
+    scopes: Scopes = None,
 ) -> float:
     """The opacity, in [0, 1], a black shadow of ``scene_light`` is drawn with
     (the formula is in the module notes).
@@ -88,6 +96,10 @@ def shadow_darkness(
         The direction the viewer looks along; None: straight onto the receiver.
     material : Material, optional
         The receiver's; default: X3D's default Material.
+    scopes : frozenset of int, or (m,) sequence of them, optional
+        The receiver's :attr:`~.model.Shape.scopes`, or each triangle's: a
+        light with a scope counts only where it is among them. None: every
+        light counts everywhere.
 
     Returns
     -------
@@ -108,20 +120,27 @@ def shadow_darkness(
     0.25
     >>> round(shadow_darkness(bright, *floor, [dim, bright]), 12)
     0.75
+
+    Out of the bright light's scope, the dim one is the floor's only light:
+
+    >>> bright.scope = 7
+    >>> round(shadow_darkness(dim, *floor, [dim, bright], scopes=frozenset()), 12)
+    1.0
     """
     shadow = float(np.clip(scene_light.shadow_intensity, 0.0, 1.0))
     if not any(light is scene_light for light in lights) or not scene_light.on:
         return shadow
     shining = [light for light in lights if light.on]
-    points, normals, areas = _samples(vertices, faces, scene_light, len(shining))
+    points, normals, areas, picked = _samples(vertices, faces, scene_light, len(shining))
     if not areas.sum() > 0:
         return shadow
     material = material or Material()
     diffuse = np.asarray(material.diffuse_color, dtype=np.float64)
     lit = np.tile(np.asarray(material.emissive_color, dtype=np.float64), (len(points), 1))
     own = np.zeros_like(lit)
-    for light in shining:
+    for light, inside in zip(shining, _in_scope(shining, scopes, picked), strict=True):
         weight, facing = _reach(light, points, normals)
+        weight = weight * inside
         color = np.asarray(light.color, dtype=np.float64)
         ambient = light.ambient_intensity * material.ambient_intensity
         direct = weight * light.intensity * facing
@@ -164,6 +183,7 @@ class Lighting:
         vertices: ArrayLike,
         faces: ArrayLike,
         material: Material | None = None,
+        scopes: Scopes = None,
     ) -> float:
         """:func:`shadow_darkness` of a shadow under this lighting."""
         return shadow_darkness(
@@ -174,6 +194,7 @@ class Lighting:
             headlight=self.headlight,
             view=self.view,
             material=material,
+            scopes=scopes,
         )
 
 
@@ -182,16 +203,36 @@ def _unit(vector: np.ndarray) -> np.ndarray:
     return vector / length if length > 0 else vector
 
 
+def _in_scope(
+    shining: Sequence[SceneLight], scopes: Scopes, picked: np.ndarray
+) -> list[np.ndarray]:
+    """For each light, (k,) 1.0 where it lights the sampled triangles
+    ``picked`` (indices into the shadow's), 0.0 where they lie outside its
+    scope."""
+    if scopes is None or isinstance(scopes, frozenset):
+        return [np.full(len(picked), float(lights(light, scopes))) for light in shining]
+    distinct: dict[frozenset[int], int] = {}
+    which = np.array([distinct.setdefault(scopes[int(i)], len(distinct)) for i in picked])
+    return [
+        np.array([float(lights(light, known)) for known in distinct])[which]
+        if len(which)
+        else np.zeros(0)
+        for light in shining
+    ]
+
+
 def _samples(
     vertices: ArrayLike, faces: ArrayLike, scene_light: SceneLight, n_lights: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centroids (k, 3), unit normals facing ``scene_light`` (k, 3) and areas
-    (k,) of the shadow's triangles, evenly sampled so that ``k`` times the
-    number of lights stays within the budget."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Centroids (k, 3), unit normals facing ``scene_light`` (k, 3), areas
+    (k,) and indices (k,) of the shadow's triangles, evenly sampled so that
+    ``k`` times the number of lights stays within the budget."""
     faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     count = max(_MIN_POINTS, min(_MAX_POINTS, _PAIRS // max(n_lights, 1)))
+    picked = np.arange(len(faces))
     if len(faces) > count:
-        faces = faces[np.linspace(0, len(faces) - 1, count).astype(np.int64)]
+        picked = np.linspace(0, len(faces) - 1, count).astype(np.int64)
+        faces = faces[picked]
     corners = np.asarray(vertices, dtype=np.float64)[faces]
     points = corners.mean(axis=1)
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -203,7 +244,7 @@ def _samples(
     else:
         toward = light.position - points
     normals *= np.where(np.einsum("ij,ij->i", normals, toward) < 0, -1.0, 1.0)[:, None]
-    return points, normals, doubled / 2
+    return points, normals, doubled / 2, picked
 
 
 def _reach(

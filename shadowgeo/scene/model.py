@@ -80,6 +80,16 @@ class SceneLight:
     ``node``: the X3D reader's XPath of the light's element in
     ``Scene.document`` (None for a light of an Inline or a prototype), so
     the writer of that document marks the element a baked light came from.
+
+    ``scope``: for a light that lights only part of the scene (X3D's
+    ``global="false"``: the descendants of its parent grouping node), the
+    id of that grouping node's instance, found in :attr:`Shape.scopes` of
+    the shapes it lights (:func:`lights`); None: it lights every shape. The
+    X3D reader sets it (a light reached twice through USE is two lights, each
+    with its own scope; one at the top of the scene's own file lights
+    everything); glTF's KHR_lights_punctual and USD's UsdLux have no scope,
+    so their lights light every shape. ``global_`` stays the author's field,
+    written back as it was read.
     """
 
     light: PointLight | DirectionalLight | SpotLight
@@ -95,6 +105,7 @@ class SceneLight:
     shadow_intensity: float = 1.0
     baked: bool = False
     node: str | None = None
+    scope: int | None = None
 
     @property
     def runtime_shadows(self) -> bool:
@@ -127,6 +138,9 @@ class Shape:
         smoothed across edges whose faces meet at less than this angle; 0
         (the default) shades every face flat. Shadows on the shape end where
         that shading does (:mod:`shadowgeo.scene.terminator`).
+    scopes : frozenset of int
+        The scopes (:attr:`SceneLight.scope`) of the non-global lights that
+        light it: the grouping nodes holding such a light that it lies in.
     """
 
     vertices: np.ndarray
@@ -141,6 +155,7 @@ class Shape:
     casts_shadow: bool = True
     receives_shadow: bool = False
     crease_angle: float = 0.0
+    scopes: frozenset[int] = frozenset()
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 3)
@@ -162,6 +177,19 @@ class Shape:
     @property
     def n_faces(self) -> int:
         return len(self.faces)
+
+
+def lights(scene_light: SceneLight, scopes: frozenset[int] | None) -> bool:
+    """Whether ``scene_light`` lights a shape in ``scopes`` (its
+    :attr:`Shape.scopes`; None for what no scope excludes, e.g. a plane the
+    user gives): a light with no scope lights everything.
+
+    >>> from shadowgeo import DirectionalLight
+    >>> sun = SceneLight(DirectionalLight([0, -1, 0]), global_=False, scope=3)
+    >>> lights(sun, frozenset({3})), lights(sun, frozenset()), lights(sun, None)
+    (True, False, True)
+    """
+    return scene_light.scope is None or scopes is None or scene_light.scope in scopes
 
 
 def transformed(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:

@@ -90,6 +90,11 @@ class Receiver:
     material : Material, optional
         The look of the shape it is a patch of (how dark its shadows are
         drawn depends on it); None for a plane.
+    scopes : frozenset of int or None
+        The scopes of the shape it is a patch of (:attr:`Shape.scopes`): a
+        non-global light shadows it only within its scope. The ground plane
+        lies at the top of the scene (no scope); a given plane (None) takes
+        every light's shadows.
     """
 
     plane: Plane
@@ -98,6 +103,7 @@ class Receiver:
     two_sided: bool = True
     area: float = float("inf")
     material: Material | None = None
+    scopes: frozenset[int] | None = None
 
     def facing(self, light: Light, tolerance: Tolerance) -> Plane | None:
         """The plane turned towards ``light``; None when the light lies in it,
@@ -209,7 +215,13 @@ def ground(
             "shadows: no receiver found (no large flat surface with something in front of "
             f"it); {plane} (--receiver DEF or --plane a,b,c,d chooses another)"
         )
-    return Receiver(Plane(normal, -lowest), "ground", two_sided=False, material=GROUND_MATERIAL)
+    return Receiver(
+        Plane(normal, -lowest),
+        "ground",
+        two_sided=False,
+        material=GROUND_MATERIAL,
+        scopes=frozenset(),  # the ground is added at the top of the scene
+    )
 
 
 def bounds_the_scene(receiver: Receiver, bounds: np.ndarray) -> bool:
@@ -339,6 +351,7 @@ def _patch_receiver(
         two_sided=not shape.solid,
         area=area,
         material=shape.material,
+        scopes=shape.scopes,
     )
 
 

@@ -10,7 +10,12 @@ Lights
     The lights with ``shadows=True`` (X3D 4's ``shadows="true"``) cast. When no
     light has it, every light that is on casts, and a note in
     ``scene.warnings`` says so. ``lights=`` names the lights (DEF names) to use
-    instead. A scene with no light that is on gets :func:`default_sun` (high,
+    instead. A non-global light (``SceneLight.scope``, X3D's
+    ``global="false"``) shadows only the receivers it lights: the patches
+    and faces of shapes in its scope (the added ground lies outside every
+    scope; a ``plane=`` given takes every light's shadows), and only the
+    shapes in its scope cast for it, as X_ITE draws only the light's parent
+    group into its shadow map. A scene with no light that is on gets :func:`default_sun` (high,
     slightly oblique: travelling along ``(0.3, -1, 0.2)`` when Y is up), with
     a note; ``extra_lights`` replaces it.
 Receivers
@@ -93,7 +98,16 @@ from ..volume import shadow_volume
 from .casters import CasterSet, distinct
 from .darkness import Lighting
 from .ground import visible_ground
-from .model import Material, Scene, SceneLight, Shape, safe_name, shadow_shape, unique_name
+from .model import (
+    Material,
+    Scene,
+    SceneLight,
+    Shape,
+    lights,
+    safe_name,
+    shadow_shape,
+    unique_name,
+)
 from .opacity import opacities
 from .receivers import Receiver, ground
 from .receivers import select as select_receivers
@@ -266,6 +280,12 @@ def _add_shadows(
     if not math.isfinite(lift) or lift < 0:
         raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")
     names = _Names(kept, scene.lights)
+    scoped = [names.light(light, i) for i, light in enumerate(chosen) if light.scope is not None]
+    if scoped:
+        notes.append(
+            f'shadows: {_listed(scoped)}: global="false", so only the shapes of the '
+            "light's parent group receive and cast its shadows"
+        )
     opacity = opacities(geometry)  # (see .opacity: 0 casts nothing)
     lighting = Lighting.of(scene)
 
@@ -316,12 +336,12 @@ def _add_shadows(
             light_name = names.light(light, index)
             group = names.unique(f"shadows_{light_name}")
             height = lift * (1 + index / len(chosen))
-            # a caster the light touches or sits inside (its bulb) casts
-            # nothing for it, on any receiver; the others cast as ever
-            held = stacked.holding(light.light, tolerance, opacity > 0)
-            casting = opacity
+            # what it lights is what casts for it (X3D light scope); a caster
+            # the light touches or sits inside (its bulb) casts nothing for it,
+            # on any receiver; the others cast as ever
+            casting = opacity * in_scope(light, geometry)
+            held = stacked.holding(light.light, tolerance, casting > 0)
             if held:
-                casting = opacity.copy()
                 casting[list(held)] = 0.0
                 notes.append(_held_note(stacked, held, light_name))
             for receiver in found:
@@ -357,7 +377,7 @@ def _add_shadows(
                 # topology made once for every light
                 reached = np.flatnonzero(stacked.lit(light.light) & (casting > 0))
                 for level, layer in surface_shadow(
-                    surface,
+                    surface.lit_by(light),
                     [stacked.caster(int(k)) for k in reached],
                     casting[reached],
                     reached,
@@ -410,6 +430,14 @@ def _held_note(casters: CasterSet, held: dict[int, str], light_name: str) -> str
         each = "each: " if len(named) > 1 else ""
         parts.append(f"{', '.join(named[:10])}{more} ({each}{reason})")
     return f"shadows: {len(held):,} casters do not cast for light {light_name}: {'; '.join(parts)}"
+
+
+def in_scope(scene_light: SceneLight, shapes: Sequence[Shape]) -> np.ndarray:
+    """(n,) float64: 1 for each shape ``scene_light`` lights (all of them
+    for a light with no scope), else 0."""
+    if scene_light.scope is None:
+        return np.ones(len(shapes))
+    return np.array([float(lights(scene_light, shape.scopes)) for shape in shapes])
 
 
 def _is_ground(receiver: Receiver) -> bool:
@@ -671,8 +699,8 @@ def _shadow_on(
     its opacity."""
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
-    if plane is None:
-        return []  # the light is behind a one-sided receiver, or in its plane
+    if plane is None or not lights(scene_light, receiver.scopes):
+        return []  # behind a one-sided receiver, in its plane, or out of the light's scope
     region2d = box2d = rectangle = None
     if receiver.triangles is not None:
         flat = plane.to_2d(receiver.triangles.reshape(-1, 3)).reshape(-1, 3, 2)
@@ -729,7 +757,9 @@ def _shadow_on(
         where = f"shadow of light {light_name} on {receiver.name}"
         if level < 1:
             where += f", of casters of opacity {level:g}"
-        darkness = lighting.darkness(scene_light, vertices, faces, receiver.material)
+        darkness = lighting.darkness(
+            scene_light, vertices, faces, receiver.material, receiver.scopes
+        )
         shapes.append((level, shadow_shape(vertices, faces, scene_light, where, level, darkness)))
     return shapes
 
@@ -761,7 +791,9 @@ def _volumes(
             extent = 2 * tolerance.scale
         light_name = names.light(scene_light, index)
         group = names.unique(f"shadows_{light_name}")
-        casting = stacked.lit(light) & (opacity > 0)
+        casting = stacked.lit(light) & (
+            opacity * in_scope(scene_light, [caster.shape for caster in stacked.casters]) > 0
+        )
         for caster, lit in zip(stacked.casters, casting, strict=True):
             done += 1
             if progress is not None:

@@ -35,7 +35,7 @@ from ..tolerance import Tolerance
 from ..topology import Caster, row_groups, unique_integers
 from .casters import CasterSet
 from .darkness import Lighting
-from .model import SceneLight, Shape, shadow_shape
+from .model import SceneLight, Shape, lights, shadow_shape
 from .receivers import Receiver, repeated_faces
 from .terminator import clip_to_lit, corner_normals, lit_values
 
@@ -50,12 +50,26 @@ class ReceivingSurface(NamedTuple):
     normals : (m, 3, 3) float64
         The normals the viewer shades each face's corners with
         (:func:`~.terminator.corner_normals`).
+    scopes : tuple of frozenset of int
+        Each shape's :attr:`~.model.Shape.scopes` (indexed as ``owner``).
     """
 
     vertices: np.ndarray
     faces: np.ndarray
     owner: np.ndarray
     normals: np.ndarray
+    scopes: tuple[frozenset[int], ...] = ()
+
+    def lit_by(self, scene_light: SceneLight) -> ReceivingSurface:
+        """The faces ``scene_light`` lights: those of shapes in its scope (all
+        for a light with none; the vertices are kept as they are)."""
+        if scene_light.scope is None:
+            return self
+        inside = np.array([lights(scene_light, scopes) for scopes in self.scopes], dtype=bool)
+        keep = inside[self.owner] if len(self.owner) else np.zeros(0, dtype=bool)
+        return self._replace(
+            faces=self.faces[keep], owner=self.owner[keep], normals=self.normals[keep]
+        )
 
 
 def _receiver_centroids(found: list[Receiver]) -> np.ndarray:
@@ -91,7 +105,9 @@ def receiving_faces(
         stacked = CasterSet(geometry)
     if not len(stacked.faces):
         none = np.zeros((0, 3), dtype=np.int64)
-        return ReceivingSurface(np.zeros((0, 3)), none, none[:, 0], np.zeros((0, 3, 3)))
+        return ReceivingSurface(
+            np.zeros((0, 3)), none, none[:, 0], np.zeros((0, 3, 3)), _scopes(geometry)
+        )
     owner = stacked.face_owner
     # a face repeated (by coordinates) receives one shadow, not one per copy
     first = np.sort(repeated_faces(stacked.vertices, stacked.faces, owner)[0])
@@ -122,7 +138,11 @@ def receiving_faces(
     # each side of an open shape smoothed on its own: a creaseAngle of 3.1416
     # ("smooth everything") must not average a face with the turned copies
     normals = corner_normals(vertices, faces, 2 * owners + turned, crease)
-    return ReceivingSurface(vertices, faces, owners, normals)
+    return ReceivingSurface(vertices, faces, owners, normals, _scopes(geometry))
+
+
+def _scopes(geometry: list[Shape]) -> tuple[frozenset[int], ...]:
+    return tuple(shape.scopes for shape in geometry)
 
 
 def surface_shadow(
@@ -205,7 +225,12 @@ def surface_shadow(
             continue
         darkness = None
         if lighting is not None:
-            darkness = lighting.darkness(scene_light, vertices, triangles)
+            # each triangle lit by the lights whose scope holds its shape
+            owners = surface.owner[np.concatenate([index for *_, index in layer_pieces])]
+            table = np.empty(len(surface.scopes), dtype=object)  # frozensets, not sequences
+            table[:] = surface.scopes
+            scopes = list(table[owners]) if len(table) else None
+            darkness = lighting.darkness(scene_light, vertices, triangles, scopes=scopes)
         source = where if level >= 1 else f"{where}, of casters of opacity {level:g}"
         shape = shadow_shape(vertices, triangles, scene_light, source, level, darkness)
         shapes.append((level, shape))
