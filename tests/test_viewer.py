@@ -164,4 +164,7 @@ def test_the_unbaked_output_is_the_output_less_its_shadows_with_the_lights_casti
     # the light the converter turned off casts again; the other stays as written
     assert tree.find(".//PointLight").get("shadows") == "true"
     assert tree.find(".//DirectionalLight").get("shadows") == "false"
+    # the added ground receives and casts nothing, as in the converter's own shadows
+    assert tree.find(".//Shape[@DEF='ground']").get("castShadow") == "false"
+    assert tree.find(".//Shape[@DEF='box']").get("castShadow") is None
     assert output.read_text() == CONVERTED  # the output is not modified

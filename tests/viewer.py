@@ -184,7 +184,10 @@ def unbaked(output: Path, target: Path) -> None:
     the added ground (``-ground``), the added Viewpoint and every node of
     the input stay. A light marked ``shadowgeo-shadows-baked`` (its
     ``shadows TRUE`` turned off by the converter) gets ``shadows="true"``
-    back, so the lights cast as in the input."""
+    back, so the lights cast as in the input. The ground gets
+    ``castShadow="false"``: it is only a receiver, which the converter's
+    shadows do not count as a caster either (a light from below would
+    otherwise have X_ITE shade the scene with the ground's shadow)."""
     from lxml import etree
 
     from shadowgeo.scene.model import MARK
@@ -199,6 +202,8 @@ def unbaked(output: Path, target: Path) -> None:
             element.getparent().remove(element)
         elif f"{MARK}-baked" in marks(element):
             element.set("shadows", "true")
+        elif f"{MARK}-ground" in marks(element):
+            element.set("castShadow", "false")
     for group in list(tree.iter()):
         if MARK in marks(group) and not any(isinstance(child.tag, str) for child in group):
             group.getparent().remove(group)
