@@ -306,7 +306,8 @@ plus the light-grey ground the converter adds under a scene with no floor when t
 plane receives (and the Viewpoint it adds to a scene with none). Drawn from the input itself,
 (a) would have nothing to cast onto where the baked shadows lie on that ground, and (b) would
 differ from (c) by the ground as well as the shadows; this way the three pictures show the
-same scene and differ only by their shadows. The scene is drawn from a copy of its folder in
+same scene and differ only by their shadows (the ground has `castShadow FALSE` there: it
+only receives, as in the converter's own shadows). The scene is drawn from a copy of its folder in
 which every TimeSensor has `enabled FALSE`, so all three show the file's own state, the one
 shadowgeo bakes. A pixel is in a shadow mask when it is darker than in (c) by more than {DROP}
 of full scale and by more than {RELATIVE:.0%} of its value in (c) (Rec. 709 luminance). IoU is
