@@ -1,15 +1,18 @@
 """What the viewer shows: X_ITE's runtime shadows against the ones shadowgeo bakes.
 
 For the bundled examples and the corpus scenes listed in :data:`SCENES`, X_ITE
-in headless Chromium draws (a) the input with its lights' runtime shadows
-(shadow maps), (b) ``shadowgeo convert IN OUT.x3d`` (no flags) with runtime
-shadows off and (c) the input with no shadows, from the same Viewpoint; the
-shadow masks of (a) and (b), the pixels darker than in (c), are compared by
-their IoU. The rules (Viewpoint, thresholds, which lights cast) are
+in headless Chromium draws (a) the input as the converter frames it (the
+output of ``shadowgeo convert IN OUT.x3d``, no flags, less its baked shadow
+shapes: the input's nodes plus the ground and Viewpoint the converter adds)
+with its lights' runtime shadows (shadow maps), (b) the output with runtime
+shadows off and (c) the same as (a) with no shadows, from the same
+Viewpoint, so the three differ only by their shadows; the shadow masks of (a)
+and (b), the pixels darker than in (c), are compared by their IoU. The rules
+(what (a) is and why, Viewpoint, thresholds, which lights cast) are
 ``tests/viewer.py``'s; the rendering is ``tests/xite.py``'s.
 
 Run from the repository root (needs Chromium and ``npm ci --prefix
-tests/node``; about 10 minutes on 2 cores)::
+tests/node``; about 5 minutes on 2 cores)::
 
     python benchmarks/bench_viewer.py [--size 512] [--only NAME ...] [--no-write]
 
@@ -79,8 +82,7 @@ SCENES = [
           "clean; the pole's thin shadow on the slope agrees"),
     # X3D XML
     Entry(XML, "blender/simple/test1.x3d", "Blender export: cubes, one lamp",
-          "no surface under the cubes: X_ITE has nothing to cast onto; the converter's "
-          "added ground is not drawn, so its baked shadows float over the Background"),
+          "no floor: the converter adds a ground, and the cubes' shadows on it agree"),
     Entry(XML, "lights_materials/light_street_lights_radius.x3d",
           "8 street lamps over a road between walls",
           "X_ITE fault: on the wall right beside each lamp, its point-light shadow map "
@@ -91,55 +93,69 @@ SCENES = [
           "a capsule over a box, one lamp", "clean; the capsule's shadow on itself agrees"),
     Entry(XML, "navigation/avatar_climb_stairs_geometry.x3d",
           "three flights of stairs on a floor, 2 lamps",
-          "X_ITE acne: speckles on the top riser of the right-hand flight; the flights' "
-          "shadows on the floor and on their sides agree"),
+          "X_ITE acne and aliasing: speckles on the right-hand flight's top riser, 1-2 pixel "
+          "lines along the treads' lit edges and the flights' feet (red); the shadows on the "
+          "floor and on the right-hand flight's side agree",
+          xite_fault=True),
     Entry(XML, "x3d/axis.x3d", "axis bars and 3-D text crossing, 2 lamps",
-          "no X_ITE fault seen; baked shadows black and larger, also where the other lamp "
-          "still lights the face"),
+          "X_ITE peter-panning: the small shadows at a contact are missing at run time and "
+          "baked (blue): inside the 3-D letters (their counters, where the X's strokes "
+          "cross) and beside the bars' crossing; the bars' shadows on each other agree",
+          xite_fault=True),
     Entry(XML, "x3d/matrix_transform.x3d", "MatrixTransform: spheres and a box, 1 lamp",
-          "baked only: a black patch on the red sphere's rim; X_ITE draws no shadow"),
+          "X_ITE does not draw MatrixTransform (a Castle Game Engine node, not X3D): only the "
+          "red sphere shows, and its ground shadow agrees; shadowgeo reads the node and bakes "
+          "the unseen green and blue spheres' ground shadows too (blue)"),
     # ClassicVRML and VRML 97
     Entry(CLASSIC, "x3d/matrix_transform.x3dv", "the same scene in ClassicVRML",
           "as its XML twin"),
     Entry(CLASSIC, "lights_materials/directional_light_scope.wrl",
           "VRML 97: six spheres, two suns each scoped to its group",
-          "baked black over each sphere's half that faces away from one sun yet is lit by "
-          "the other; X_ITE draws small crescents, no fault seen"),
+          "a coloured light: X_ITE does draw the blue sun's shadow on the right-hand spheres "
+          "(blue 255 -> 156) but that is under the mask's luminance drop; the baked shadow is "
+          "a black layer (the blue sun's share) that darkens the red sun's light too (blue)"),
     Entry(CLASSIC, "lights_materials/light_radius.wrl",
           "VRML 97: two grids of 512 cubes, a point and a spot light with a radius",
-          "many tiny cube shadows, agreeing in part; no X_ITE fault seen"),
+          "many tiny cube shadows, mostly agreeing; the rest is 1-2 pixel offsets at their "
+          "edges (shadow-map aliasing) and a few cube tops X_ITE darkens whole and "
+          "shadowgeo leaves lit"),
     Entry(CLASSIC, "lights_materials/lights.x3dv",
           "spheres, cone and box under a lamp, a spot and a sun (three USEd groups)",
-          "X_ITE draws no visible shadow; baked: black patches on the fronts of box and cone"),
+          "X_ITE draws no shadow for any of the 3 lights, each USEd in 2 of the 3 groups; "
+          "baked: the cone's shadow on the box's front (the sun, 1 0 -1, carries the cone at "
+          "z 4 onto the box at x 4) and patches on cylinder and cone; the converter also takes "
+          "every light as global (the lamp and spot have global FALSE, the sun lights its "
+          "group only)"),
     Entry(CLASSIC, "lights_materials/raytracer/alien_mirror.wrl",
           "VRML 97: an alien head before a wall, 2 lamps",
-          "agree on the wall; baked: black shards on the head (its own faces)"),
+          "agree on the wall; baked: a few shards on the head (its own faces)"),
     Entry(CLASSIC, "lights_materials/light_location_animated.x3dv",
           "3 spheres, a lamp moved by an interpolator (stopped: at 0 0 0)",
-          "the lamp is inside the yellow sphere: X_ITE lets no light past it, so the outer "
-          "spheres go dark; shadowgeo skips a caster the light is inside and bakes nothing"),
+          "the lamp is inside the yellow sphere: X_ITE lets no light out of it, so all goes "
+          "dark (red); shadowgeo skips a caster the light is inside and bakes only the "
+          "outer spheres' ground shadows (green)"),
     Entry(CLASSIC, "lights_materials/light_transform_animated.x3dv",
           "3 spheres, a lamp under an animated Transform (stopped)",
-          "X_ITE draws the yellow sphere's shadow on the white one; nothing baked: the "
-          "lamp's own marker sphere (radius 0.1) encloses it, and the converter, besides "
-          "skipping it as a caster, bakes no surface shadow for the lamp at all"),
+          "the spheres' large ground shadows agree; X_ITE also draws their shadows on each "
+          "other (red), not baked: the lamp's marker sphere (radius 0.1) encloses it, and the "
+          "converter then bakes no surface shadow for the lamp"),
     Entry(CLASSIC, "x3d/material_parameters_x3dom_xite_tests/material_parameters.x3dv",
           "11 spheres, a lamp, animated materials (stopped)",
-          "X_ITE draws the spheres' shadows on each other; nothing baked, for the same "
-          "reason as light_transform_animated (the lamp's marker sphere)"),
+          "the spheres' ground shadows agree; X_ITE also draws their shadows on each other "
+          "(red), not baked, as in light_transform_animated (the lamp's marker sphere)"),
     Entry(CLASSIC,
           "animation/simple_tests_interpolation_and_time/orientation_interpolator_aluminium.wrl",
           "VRML 97: a tube under 6 scoped suns, turned by an interpolator (stopped)",
-          "no surface under the tube: the baked shadows float as a black band on the added "
-          "ground, which is not drawn; X_ITE has nothing to cast onto"),
+          "no floor: the converter adds a ground, and the tube's shadows on it agree"),
     Entry(CLASSIC,
           "animation/simple_tests_interpolation_and_time/orientation_interpolator_alum_box.wrl",
-          "VRML 97: the same with a box", "as the tube: a floating black band"),
+          "VRML 97: the same with a box", "as the tube: the shadows on the added ground agree"),
     # corpus scenes with lights in which neither picture shows a shadow to speak of
     Entry(CLASSIC, "lights_materials/directional_light_scope_simple.x3dv",
           "a quad and a sphere, two scoped suns", "neither picture has a shadow"),
     Entry(CLASSIC, "lights_materials/house_behind_the_glass.x3dv",
-          "a glass sphere mesh, 1 lamp", "neither picture has a shadow"),
+          "a glass sphere mesh, 1 lamp",
+          "the glass sphere's shadow on the floor agrees (X_ITE's darker)"),
     Entry(CLASSIC, "lights_materials/light_attenuation.x3dv",
           "two small spheres, a lamp and a spot", "neither picture has a shadow"),
     Entry(CLASSIC, "lights_materials/non_global_lights_test.x3dv",
@@ -149,13 +165,14 @@ SCENES = [
     Entry(CLASSIC, "prototypes/proto_events_test.x3dv",
           "a sphere, a sun inside a PROTO", "neither picture has a shadow (one sphere)"),
     Entry(CLASSIC, "lights_materials/sphere.x3dv", "a sphere and a half sphere, 1 sun",
-          "a few pixels only"),
+          "a few pixels only: X_ITE's acne speckles along the lit sphere's terminator"),
     Entry(CLASSIC, "lights_materials/light_color_animated.x3dv",
-          "3 spheres, a lamp of animated colour (stopped)", "a few pixels only"),
+          "3 spheres, a lamp of animated colour (stopped)",
+          "the spheres' ground shadows agree"),
     Entry(CLASSIC, "x3d/are_set_changed_optional.x3dv",
           "a box whose only light is off (shadowgeo's default sun casts)",
-          "no light on, so X_ITE draws no shadow; baked: the default sun's shadow on the "
-          "added ground, seen edge-on as a line"),
+          "no light on, so X_ITE draws no shadow; baked: the default sun's shadow of the box "
+          "on the added ground"),
 ]  # fmt: skip
 
 # Corpus files with a light node that are not in the table, and why (none skipped silently).
@@ -276,22 +293,30 @@ def section(rows: list[dict], size: int, elapsed: float) -> str:
     return f"""{TITLE}
 
 Generated by `python benchmarks/bench_viewer.py` ({elapsed / 60:.1f} minutes). For each scene,
-X_ITE (the npm package in `tests/node`) in headless Chromium (SwiftShader) draws, on
-{size} x {size} canvases from the same Viewpoint (the author's first, else the converter's
-overview, bound in all three) with the headlight as the author set it: (a) the input with
-runtime shadows on the lights shadowgeo bakes (`shadows TRUE` on those with it, else on every
-light that is on; `shadowMapSize` 2048), (b) the output of `shadowgeo convert IN OUT.x3d` (no
-flags) with `shadows FALSE` on every light, (c) the input with `shadows FALSE` on every
-light; {FRAMES} frames after the set-up. The scene is drawn from a copy of its folder in which
-every TimeSensor has `enabled FALSE`, so all three show the file's own state, the one
-shadowgeo bakes. A pixel is in a shadow mask when it is darker than in (c) by more than
-{DROP} of full scale and by more than {RELATIVE:.0%} of its value in (c) (Rec. 709
-luminance). IoU is |a and b| / |a or b| of the two masks (n/a: both empty); the median and
-the targets count the scenes with a mask of at least {SHADOW_SHARE:.1%} of the picture.
-"(b) lighter than (c)" counts pixels the conversion made lighter by the same threshold:
-baked shadows only darken, so anything there is another change (a material, a texture,
-geometry). "lights" are the lights shadowgeo bakes (each node once). Notes give what kept a
-scene from being measured, and what the pictures show (judged by eye), X_ITE's own
+X_ITE (the npm package in `tests/node`) in headless Chromium (SwiftShader) draws, on {size} x
+{size} canvases from the same Viewpoint (the author's first, else the converter's overview,
+bound in all three) with the headlight as the author set it: (a) the input as the converter
+frames it, with runtime shadows on the lights shadowgeo bakes (`shadows TRUE` on those with
+it, else on every light that is on; `shadowMapSize` 2048), (b) the output of `shadowgeo
+convert IN OUT.x3d` (no flags) with `shadows FALSE` on every light, (c) the same as (a) with
+`shadows FALSE` on every light; {FRAMES} frames after the set-up. "The input as the converter
+frames it" is the output less its baked shadow shapes (the shapes of class
+`shadowgeo-shadows-shadow`), the baked lights' `shadows TRUE` given back: the input's nodes,
+plus the light-grey ground the converter adds under a scene with no floor when the ground
+plane receives (and the Viewpoint it adds to a scene with none). Drawn from the input itself,
+(a) would have nothing to cast onto where the baked shadows lie on that ground, and (b) would
+differ from (c) by the ground as well as the shadows; this way the three pictures show the
+same scene and differ only by their shadows (the ground has `castShadow FALSE` there: it
+only receives, as in the converter's own shadows). The scene is drawn from a copy of its folder in
+which every TimeSensor has `enabled FALSE`, so all three show the file's own state, the one
+shadowgeo bakes. A pixel is in a shadow mask when it is darker than in (c) by more than {DROP}
+of full scale and by more than {RELATIVE:.0%} of its value in (c) (Rec. 709 luminance). IoU is
+|a and b| / |a or b| of the two masks (n/a: both empty); the median and the targets count the
+scenes with a mask of at least {SHADOW_SHARE:.1%} of the picture. "(b) lighter than (c)"
+counts pixels the conversion made lighter by the same threshold: baked shadows only darken, so
+anything there is a change besides the shadows (it should be none, now that (c) is the output
+less its shadows). "lights" are the lights shadowgeo bakes (each node once). Notes give what
+kept a scene from being measured, and what the pictures show (judged by eye), X_ITE's own
 shadow-map faults (acne, light leaking, peter-panning) named as such.
 
 {summary(rows, size)}

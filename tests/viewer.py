@@ -1,15 +1,27 @@
 """The viewer comparison: a scene's runtime shadows against the ones shadowgeo bakes.
 
-For one input scene, X_ITE in headless Chromium (:mod:`xite`) draws, side by
-side from the same Viewpoint and canvas size, with the headlight as the author
-set it:
+For one input scene, ``shadowgeo convert IN OUT.x3d`` (no flags) is run and
+X_ITE in headless Chromium (:mod:`xite`) draws, side by side from the same
+Viewpoint and canvas size, with the headlight as the author set it:
 
-(a) the input with its lights' runtime shadows on: ``shadows TRUE`` on the
-    lights shadowgeo bakes (those with ``shadows TRUE``, else every light that
-    is on), so X_ITE draws shadow maps (2048 pixels);
-(b) ``shadowgeo convert IN OUT.x3d`` (no flags) with ``shadows FALSE`` on every
-    light: only the baked shadows;
-(c) the input with ``shadows FALSE`` on every light: no shadow at all.
+(a) the input as the converter frames it, with its lights' runtime shadows
+    on: the output less its baked shadow shapes (:func:`unbaked`: the added
+    ground and Viewpoint stay) and with the baked lights' ``shadows`` given
+    back (``shadows TRUE`` on the lights shadowgeo bakes: those with
+    ``shadows TRUE``, else every light that is on), so X_ITE draws shadow
+    maps (2048 pixels);
+(b) the output with ``shadows FALSE`` on every light: only the baked shadows;
+(c) the same file as (a) with ``shadows FALSE`` on every light: no shadow at
+    all.
+
+So the three show the same scene and differ only by their shadows. The
+issue's (a) and (c) are "the input"; but the output adds a light-grey ground
+under a scene with no floor when the ground plane receives (and a Viewpoint
+to a scene with none), and drawing the input itself would leave the shadows
+on that ground with nothing to compare to in (a) and the ground itself as a
+difference between (b) and (c). The output less its baked shadows is the
+input's nodes, unchanged, plus that ground and Viewpoint: the input as the
+converter frames it.
 
 The Viewpoint is the author's first (world position and orientation, as
 shadowgeo reads it), else :func:`shadowgeo.scene.model.overview` of the input
@@ -164,6 +176,40 @@ def convert(source: Path, target: Path, timeout: float) -> tuple[str | None, lis
     return None, notes
 
 
+def unbaked(output: Path, target: Path) -> None:
+    """Write to ``target`` (beside ``output``, whose relative urls it keeps)
+    the converted X3D XML ``output`` less its baked shadows: the shapes of
+    role shadow or volume (class ``shadowgeo-shadows-shadow`` or
+    ``-volume``) and the ``shadowgeo-shadows`` groups they leave empty go;
+    the added ground (``-ground``), the added Viewpoint and every node of
+    the input stay. A light marked ``shadowgeo-shadows-baked`` (its
+    ``shadows TRUE`` turned off by the converter) gets ``shadows="true"``
+    back, so the lights cast as in the input. The ground gets
+    ``castShadow="false"``: it is only a receiver, which the converter's
+    shadows do not count as a caster either (a light from below would
+    otherwise have X_ITE shade the scene with the ground's shadow)."""
+    from lxml import etree
+
+    from shadowgeo.scene.model import MARK
+
+    tree = etree.parse(str(output))
+
+    def marks(element) -> list[str]:
+        return (element.get("class") or "").split() if isinstance(element.tag, str) else []
+
+    for element in list(tree.iter()):
+        if {f"{MARK}-shadow", f"{MARK}-volume"} & set(marks(element)):
+            element.getparent().remove(element)
+        elif f"{MARK}-baked" in marks(element):
+            element.set("shadows", "true")
+        elif f"{MARK}-ground" in marks(element):
+            element.set("castShadow", "false")
+    for group in list(tree.iter()):
+        if MARK in marks(group) and not any(isinstance(child.tag, str) for child in group):
+            group.getparent().remove(group)
+    tree.write(str(target), xml_declaration=True, encoding="UTF-8")
+
+
 def compare(
     source: Path,
     root: Path,
@@ -191,8 +237,14 @@ def compare(
     if failure:
         result.problems.append(failure)
         return result
+    bare = copy.with_name(copy.stem + ".unbaked.x3d")
+    try:
+        unbaked(output, bare)
+    except (OSError, SyntaxError) as error:  # lxml's XMLSyntaxError is a SyntaxError
+        result.problems.append(f"cannot strip the baked shadows from the output: {error}")
+        return result
     view = view_of(scene)
-    url = copy.relative_to(site).as_posix()
+    url = bare.relative_to(site).as_posix()
     converted = output.relative_to(site).as_posix()
     canvases = [
         Canvas(url, shadows="cast", view=view),
