@@ -6,6 +6,7 @@ process, and uses the same meshes, so figures from different scripts compare.
 
 from __future__ import annotations
 
+import platform
 import statistics
 import time
 from pathlib import Path
@@ -59,3 +60,15 @@ def meshes(quick: bool) -> dict[str, trimesh.Trimesh]:
     )
     torus.apply_transform(trimesh.transformations.rotation_matrix(0.5, [1, 0, 0]))
     return {"icosphere": sphere, "bumpy sphere (non-convex)": bumpy, "torus (non-convex)": torus}
+
+
+def cpu_model() -> str:
+    """The processor's model name (Linux's /proc/cpuinfo), which picks
+    OpenBLAS's kernels; else what ``platform`` knows."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()

@@ -36,7 +36,7 @@ sys.path.insert(0, str(HERE))
 import exact  # noqa: E402
 import report_surface  # noqa: E402
 import shadowmap  # noqa: E402
-from common import median_time  # noqa: E402
+from common import cpu_model, median_time  # noqa: E402
 
 import shadowgeo as sg  # noqa: E402
 from shadowgeo import polygons  # noqa: E402
@@ -638,16 +638,6 @@ def version(distribution):
         return importlib.metadata.version(distribution)
     except importlib.metadata.PackageNotFoundError:
         return "not installed"
-
-
-def cpu_model():
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
 
 
 def main() -> None:

@@ -426,9 +426,8 @@ def _held_note(casters: CasterSet, held: dict[int, str], light_name: str) -> str
         by_reason.setdefault(reason, []).append(repr(casters.casters[index].name))
     parts = []
     for reason, named in by_reason.items():
-        more = f", and {len(named) - 10:,} more" if len(named) > 10 else ""
         each = "each: " if len(named) > 1 else ""
-        parts.append(f"{', '.join(named[:10])}{more} ({each}{reason})")
+        parts.append(f"{_first_ten(named)} ({each}{reason})")
     return f"shadows: {len(held):,} casters do not cast for light {light_name}: {'; '.join(parts)}"
 
 
@@ -486,8 +485,13 @@ def _runtime_shadows(
 
 
 def _listed(names: list[str]) -> str:
+    return f"light{'s' if len(names) > 1 else ''} {_first_ten(names)}"
+
+
+def _first_ten(names: Sequence[str]) -> str:
+    """``names`` joined, at most the first ten, and how many more."""
     more = f", and {len(names) - 10:,} more" if len(names) > 10 else ""
-    return f"light{'s' if len(names) > 1 else ''} {', '.join(names[:10])}{more}"
+    return f"{', '.join(names[:10])}{more}"
 
 
 def _layer_suffix(opacity: float) -> str:
@@ -609,11 +613,10 @@ def _select_lights(
         return [sun]
     chosen = [light for light in lit if light.shadows]
     if not chosen:
-        listed = ", ".join(_Names.light(light, i) for i, light in enumerate(lit[:10]))
-        more = f", and {len(lit) - 10:,} more" if len(lit) > 10 else ""
+        listed = _first_ten([_Names.light(light, i) for i, light in enumerate(lit)])
         notes.append(
             f'shadows: no light has shadows="true"; all {len(lit)} lights that are on cast '
-            f"shadows ({listed}{more})"
+            f"shadows ({listed})"
         )
         chosen = lit
     if len(chosen) > limits.MAX_CASTING_LIGHTS:

@@ -57,7 +57,7 @@ class Scene:
     calls: tuple[str, ...] = ("project_shadow", "shadow_on_surface", "shadow_volume", "silhouette")
 
 
-def _benchmarks() -> None:
+def benchmarks_on_path() -> None:
     for folder in (ROOT / "benchmarks", ROOT):
         if str(folder) not in sys.path:
             sys.path.insert(0, str(folder))
@@ -93,7 +93,7 @@ def scenes() -> dict[str, Scene]:
     """Every scene by name (built once per process)."""
     import shadowgeo as sg
 
-    _benchmarks()
+    benchmarks_on_path()
     import bench_buildings
     import bench_surface
     import common
@@ -234,7 +234,7 @@ def _pyramid(scene: Scene, light: Any) -> Digest:
 def _sun_study(scene: Scene, light: Any) -> Digest:
     import shadowgeo as sg
 
-    _benchmarks()
+    benchmarks_on_path()
     import bench_sunstudy
 
     vertices, faces, half = bench_sunstudy.city(4)

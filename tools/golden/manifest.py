@@ -114,7 +114,7 @@ def environment() -> dict[str, str]:
     import importlib.metadata
     import platform
 
-    found = {"python": platform.python_version(), "machine": platform.machine(), "cpu": cpu()}
+    found = {"python": platform.python_version(), "machine": platform.machine(), "cpu": _cpu()}
     for name in (
         "numpy",
         "shapely",
@@ -130,17 +130,6 @@ def environment() -> dict[str, str]:
         except importlib.metadata.PackageNotFoundError:
             found[name] = "absent"
     return found
-
-
-def cpu() -> str:
-    """The processor's model name (Linux), which picks OpenBLAS's kernels."""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
 
 
 def environment_changes(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
@@ -255,3 +244,10 @@ def table(old: dict[str, Any], new: dict[str, Any]) -> tuple[list[str], dict[str
         tally[status] = tally.get(status, 0) + 1
         lines.append(f"{status:<10} {case_id}" + (f"  {detail}" if detail else ""))
     return lines, tally
+
+
+def _cpu() -> str:
+    geometry.benchmarks_on_path()  # the benchmarks' own record of the machine
+    from common import cpu_model
+
+    return str(cpu_model())
