@@ -227,21 +227,44 @@ def test_a_shape_outside_the_scope_receives_nothing_from_the_light(tmp_path, enc
 
 
 @pytest.mark.parametrize("global_", ["false", "true"])
-def test_the_added_ground_lies_outside_every_scope(tmp_path, global_):
+def test_the_added_ground_lies_in_the_scoped_lights_group(tmp_path, global_):
+    # the group is turned and scaled: the ground is written in its coordinates
     path = tmp_path / "ground.x3d"
     path.write_text(
-        '<X3D version="4.0"><Scene><Group>'
+        '<X3D version="3.0"><Scene><Transform DEF="lot" rotation="0 1 0 0.5" scale="2 2 2">'
         f'<DirectionalLight DEF="sun" direction="0 -1 0" global="{global_}"/>'
         '<Transform translation="0 2 0"><Shape DEF="box"><Box/></Shape></Transform>'
-        "</Group></Scene></X3D>"
+        "</Transform></Scene></X3D>"
     )
     result = sg.add_shadows(sg.load(path))
-    assert result.shapes_with_role("ground")  # the ground plane receives
-    areas = shadow_areas(result)
-    if global_ == "true":
-        assert areas == {("sun", "ground"): pytest.approx(4, rel=1e-6)}
-    else:
-        assert areas == {}  # the scoped sun does not light the ground shadowgeo adds
+    (ground,) = result.shapes_with_role("ground")
+    # either way the sun shadows the ground: the 4 x 4 box (scaled by 2)
+    assert shadow_areas(result) == {("sun", "ground"): pytest.approx(16, rel=1e-6)}
+    out = tmp_path / "out.x3d"
+    sg.save(result, out)
+    tree = etree.parse(str(out))
+    (written,) = tree.xpath("//Shape[@DEF='ground']")
+    parents = [e.get("DEF") for e in written.iterancestors() if e.get("DEF")]
+    if global_ == "false":  # in the sun's group, lit by it in every browser
+        assert parents[1] == "lot" and ground.placement is not None
+    else:  # a global sun lights it anywhere: at the top
+        assert "lot" not in parents and ground.placement is None
+    back = sg.load(out)
+    (again,) = back.shapes_with_role("ground")
+    np.testing.assert_allclose(again.world_vertices, ground.world_vertices, atol=1e-12)
+    assert shadow_areas(sg.add_shadows(back)) == shadow_areas(result)  # converted again
+
+
+def test_the_added_ground_stays_at_the_top_under_lights_of_two_groups(tmp_path):
+    path = write_scene(tmp_path, "xml", sun("sunW", DOWN), sun("sunE", DOWN))
+    tree = etree.parse(str(path))  # without the floors: the ground plane receives
+    for floor in tree.xpath("//Shape[starts-with(@DEF, 'floor')]"):
+        floor.getparent().remove(floor)
+    tree.write(str(path))
+    result = sg.add_shadows(sg.load(path))
+    (ground,) = result.shapes_with_role("ground")
+    assert ground.placement is None and ground.scopes == frozenset()
+    assert not [k for k in shadow_areas(result) if k[1] == "ground"]  # neither sun lights it
 
 
 def test_darkness_counts_each_triangles_own_lights():

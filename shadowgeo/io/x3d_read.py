@@ -77,7 +77,7 @@ from lxml import etree
 from .. import limits
 from ..errors import GeometryError, SceneError
 from ..scene import Material, Scene, SceneLight, Shape
-from ..scene.model import MARK, Viewpoint, axis_angle
+from ..scene.model import MARK, Placement, Viewpoint, axis_angle
 from ..tolerance import Tolerance
 from . import float_triple, x3d_parse
 from .x3d_defaults import DEFAULTS
@@ -270,6 +270,9 @@ class _Reader:
                 tree = element.getroottree()
                 if tree.getroot() is self.top_root:  # a writer of this document finds it
                     light.node = tree.getpath(element)
+                    group = element.getparent()
+                    if light.scope is not None and _holds_added(group):
+                        light.scope_group = Placement(tree.getpath(group), matrix.copy())
                 self.lights.append(light)
         elif tag == "Inline":
             with self._scope():  # the inlined scene's own lights light it
@@ -681,3 +684,22 @@ def read(
     except GeometryError as problem:  # e.g. transforms that overflow to infinity
         raise SceneError(str(problem), path=str(path)) from None
     return scene
+
+
+def _holds_added(group: Element | None) -> bool:
+    """Whether a writer may add a shape to ``group``, a light's parent: a
+    plain grouping node (not a Switch, LOD or Billboard, which would hide or
+    turn it) outside every prototype declaration (whose body is copied into
+    every instance, so a node added there would be too)."""
+    if group is None or local_name(group) not in _PLAIN_GROUPS:
+        return False
+    node: Element | None = group
+    while node is not None:
+        if isinstance(node.tag, str) and local_name(node) in _PROTO_TAGS:
+            return False
+        node = node.getparent()
+    return True
+
+
+_PLAIN_GROUPS = frozenset({"Group", "Transform", "Collision", "Anchor", "StaticGroup"})
+_PROTO_TAGS = frozenset({"ProtoDeclare", "ProtoBody", "ExternProtoDeclare"})

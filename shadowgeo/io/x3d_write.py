@@ -133,6 +133,7 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
         tree = _with_added(scene, splicer)
         source = Path(scene.path).name if scene.path else "input"
         doctype = _clean(tree, scene.warnings, source, splicer)
+        _standard_transforms(tree, scene.warnings, source)
         if scene.path:
             scene.warnings.extend(rewrite_urls(tree, Path(scene.path), path))
     else:
@@ -184,6 +185,7 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
         raise SceneError("the X3D document has no <Scene> element", path=scene.path)
     added = [s for s in scene.shapes if s.role in ADDED_ROLES]
     lights = _document_lights(tree, scene)  # found before the marked groups go
+    homes = _homes(tree, added)  # (likewise: the paths are of the document as read)
     _remove_marked(tree)  # the scene's added shapes replace them
     authored = _bound_viewpoint(tree)  # (before the names are taken: ours gets its own back)
     for element, scene_light in lights:
@@ -191,9 +193,13 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
-    groups = _add_groups(body, added, used, namespace, splicer)
+    at_top = [shape for shape in added if id(shape) not in homes]
+    groups = _add_groups(body, at_top, used, namespace, splicer)
     if groups:
         _indent(body, groups)
+    for shape in added:
+        if id(shape) in homes:
+            _add_home(shape, *homes[id(shape)], used, namespace, splicer)
     if authored is None:
         if root.get("profile") == "Core":
             _require_components(root, namespace, {"Navigation": 1})
@@ -330,6 +336,49 @@ def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str |
             elif len(value) >= LONG_VALUE and (data := long_number_bytes(value)) is not None:
                 splicer.set(element, name, data)
     return doctype
+
+
+def _standard_transforms(tree: Tree, notes: list[str], source: str) -> None:
+    """Write each MatrixTransform (a Castle Game Engine and VRML 97 browser
+    extension, not X3D: X_ITE and the X3D schema know no such node) as the
+    Transform of the same matrix (:func:`_transform_fields`: any affine matrix
+    exactly), noting it. One whose matrix is not affine or not finite, or
+    that a ROUTE or IS reaches (its ``matrix`` may change), stays as it is."""
+    found = tree.xpath("//*[local-name() = 'MatrixTransform']")
+    if not found:
+        return
+    routed = {
+        name
+        for route in tree.xpath("//*[local-name() = 'ROUTE']")
+        for name in (route.get("fromNode"), route.get("toNode"))
+        if name
+    }
+    written = []
+    for element in found:
+        if element.get("DEF") in routed or element.find("{*}IS") is not None:
+            continue
+        values = numbers_or_none(element.get("matrix") or "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
+        if values is None or len(values) != 16 or not np.all(np.isfinite(values)):
+            continue
+        matrix = values.reshape(4, 4).T  # X3D's SFMatrix4f: rows, translation in the last
+        if not np.array_equal(matrix[3], [0.0, 0.0, 0.0, 1.0]):
+            continue
+        try:
+            fields = _transform_fields(matrix)
+        except SceneError:
+            continue
+        element.tag = element.tag.replace("MatrixTransform", "Transform")
+        element.attrib.pop("matrix", None)
+        for name, value in fields.items():
+            element.set(name, value)
+        written.append(str(element.sourceline or "?"))
+    if written:
+        lines = ", ".join(written[:10]) + (f" and {len(written) - 10} more" * (len(written) > 10))
+        notes.append(
+            f"{source} line{'s' * (len(written) > 1)} {lines}: MatrixTransform (a Castle "
+            "Game Engine node, not X3D) written as the Transform of the same matrix, which "
+            "every X3D browser draws"
+        )
 
 
 # An exponent of three digits or more (searched with its letter first: a
@@ -489,6 +538,64 @@ def _add_groups(
         element.set("class", f"{MARK}-{shape.role}")  # read back as this role
         groups[key].append(element)
     return list(groups.values())
+
+
+def _homes(tree: Tree, added: list[Shape]) -> dict[int, tuple[Element, np.ndarray]]:
+    """The added shapes with a :attr:`~shadowgeo.scene.model.Shape.placement`
+    found in ``tree`` (by id): the element and the inverse of its matrix
+    (world to its local coordinates). One whose element is gone, or whose
+    matrix has no inverse, is written at the top."""
+    found = {}
+    for shape in added:
+        if shape.placement is None:
+            continue
+        elements = tree.xpath(shape.placement.node)
+        if not isinstance(elements, list) or len(elements) != 1:
+            continue
+        with np.errstate(all="ignore"):
+            try:
+                inverse = np.linalg.inv(shape.placement.matrix)
+            except np.linalg.LinAlgError:
+                continue
+        if np.all(np.isfinite(inverse)):
+            found[id(shape)] = (cast(Element, elements[0]), inverse)
+    return found
+
+
+def _add_home(
+    shape: Shape,
+    parent: Element,
+    inverse: np.ndarray,
+    used: set[str],
+    namespace: str,
+    splicer: Splicer | None,
+) -> None:
+    """Append ``shape`` in its own marked Group to ``parent`` (its placement),
+    its coordinates made local to it, indented as ``parent``'s children."""
+    local = replace(shape, transform=inverse @ shape.transform)
+    group = etree.Element(
+        f"{namespace}Group",
+        DEF=unique_name(shape.group or f"shadows_{shape.role}", used),
+        attrib={"class": MARK},
+    )
+    element = _shape_element(local, used, namespace, world=True, splicer=splicer)
+    element.set("class", f"{MARK}-{shape.role}")
+    group.append(element)
+    if len(parent):
+        lead, closing = (parent[-2].tail if len(parent) > 1 else parent.text), parent[-1].tail
+    else:
+        lead, closing = None, parent.text
+    closing = closing if closing and "\n" in closing and not closing.strip() else "\n"
+    outer = closing.rsplit("\n", 1)[1]  # the indentation of the closing tag
+    indent = lead.rsplit("\n", 1)[1] if lead and "\n" in lead and not lead.strip() else outer + "  "
+    step = indent[len(outer) :] if indent.startswith(outer) and len(indent) > len(outer) else "  "
+    etree.indent(group, space=step, level=max(len(indent) // len(step), 1))
+    if len(parent):
+        parent[-1].tail = "\n" + indent
+    else:
+        parent.text = "\n" + indent
+    group.tail = closing
+    parent.append(group)
 
 
 def _indent(body: Element, groups: list[Element]) -> None:

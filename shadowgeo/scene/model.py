@@ -89,7 +89,10 @@ class SceneLight:
     with its own scope; one at the top of the scene's own file lights
     everything); glTF's KHR_lights_punctual and USD's UsdLux have no scope,
     so their lights light every shape. ``global_`` stays the author's field,
-    written back as it was read.
+    written back as it was read. ``scope_group``: where that grouping node
+    lies in ``Scene.document`` (None for one of an Inline or a prototype), so
+    a shape shadowgeo adds for this light (the ground it draws) can be written
+    inside the scope, lit by the light in every browser.
     """
 
     light: PointLight | DirectionalLight | SpotLight
@@ -106,12 +109,23 @@ class SceneLight:
     baked: bool = False
     node: str | None = None
     scope: int | None = None
+    scope_group: Placement | None = None
 
     @property
     def runtime_shadows(self) -> bool:
         """Whether a browser draws this light's shadows: X3D's ``shadows`` as
         written, false once they are baked (see :attr:`baked`)."""
         return self.shadows and not self.baked
+
+
+@dataclass(frozen=True)
+class Placement:
+    """An element of an X3D ``Scene.document`` a shape can be written in:
+    ``node``, its XPath, and ``matrix`` (4, 4), the world transform of its
+    children's coordinates (column vectors)."""
+
+    node: str
+    matrix: np.ndarray
 
 
 @dataclass
@@ -141,6 +155,10 @@ class Shape:
     scopes : frozenset of int
         The scopes (:attr:`SceneLight.scope`) of the non-global lights that
         light it: the grouping nodes holding such a light that it lies in.
+    placement : Placement, optional
+        For an added shape: the element of the scene's X3D document the X3D
+        writer puts its group in (with its coordinates made local to it);
+        None: at the top of ``<Scene>``.
     """
 
     vertices: np.ndarray
@@ -156,6 +174,7 @@ class Shape:
     receives_shadow: bool = False
     crease_angle: float = 0.0
     scopes: frozenset[int] = frozenset()
+    placement: Placement | None = None
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 3)

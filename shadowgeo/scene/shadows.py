@@ -100,6 +100,7 @@ from .darkness import Lighting
 from .ground import visible_ground
 from .model import (
     Material,
+    Placement,
     Scene,
     SceneLight,
     Shape,
@@ -329,6 +330,12 @@ def _add_shadows(
                 f"shadows: no flat receiver found; {terrain} spans the scene and receives with "
                 "every other surface (no ground plane is added under it; --plane a,b,c,d adds one)"
             )
+        home = _ground_home(chosen)
+        if home is not None:  # the ground lies in the scoped lights' group, lit by them
+            found = [
+                dataclasses.replace(r, scopes=frozenset({home[0]})) if _is_ground(r) else r
+                for r in found
+            ]
         added = []
         on_ground: list[np.ndarray] = []  # the shadows on the ground plane, if it receives
         total, done = len(chosen) * len(found) * len(stacked), 0
@@ -402,9 +409,13 @@ def _add_shadows(
             floor = visible_ground(np.vstack([bounds, *on_ground]), height, scene.up_index)
             floor.name, floor.group = names.unique("ground"), names.unique("shadowgeo_ground")
             added.insert(0, floor)
+            where = ""
+            if home is not None:
+                floor.scopes, floor.placement = frozenset({home[0]}), home[1]
+                where = " (in the group of its non-global lights, so that they light it)"
             notes.append(
-                f"shadows: a light-grey ground ({floor.name}) is added under the scene to show "
-                "the shadows on the ground plane"
+                f"shadows: a light-grey ground ({floor.name}) is added under the scene{where} "
+                "to show the shadows on the ground plane"
             )
     baked = chosen if method == "planar" else []
     marked = _runtime_shadows(scene.lights, baked, keep_runtime_shadows, names, notes)
@@ -437,6 +448,21 @@ def in_scope(scene_light: SceneLight, shapes: Sequence[Shape]) -> np.ndarray:
     if scene_light.scope is None:
         return np.ones(len(shapes))
     return np.array([float(lights(scene_light, shape.scopes)) for shape in shapes])
+
+
+def _ground_home(chosen: Sequence[SceneLight]) -> tuple[int, Placement] | None:
+    """Where the added ground goes when the casting lights that have a scope
+    (X3D ``global="false"``) share one, a grouping node of the scene's own
+    document: there, those lights light it and shadow it, in a browser that
+    keeps to the scope and in one that does not (X_ITE takes a
+    DirectionalLight of X3D 3.0 and VRML 97 as global). Its scope and the
+    group; None when no casting light has a scope, or they have several (the
+    ground stays at the top, lit by the global lights only)."""
+    scoped = [light for light in chosen if light.scope is not None]
+    if not scoped or len({light.scope for light in scoped}) > 1:
+        return None
+    scope, group = scoped[0].scope, scoped[0].scope_group
+    return None if scope is None or group is None else (scope, group)
 
 
 def _is_ground(receiver: Receiver) -> bool:
