@@ -1,6 +1,9 @@
-"""add_shadows with a light inside a closed caster (a lamp's bulb, a dome
-around the scene): that caster casts nothing for the light, with one note,
-and every other caster casts, on the planar receivers and on every surface.
+"""add_shadows with a light inside a closed caster. A bulb (a tenth of the
+scene's size or less) casts nothing for the light, with one note, and every
+other caster casts, on the planar receivers and on every surface. A larger
+one shuts the light in: inside it the other casters cast as ever, and all
+outside it that the light faces is in its shadow (the ground, the lit side of
+every shape outside).
 
 References: the same scene without the enclosing shape, and the areas of the
 spherical caps a cone from the light cuts from a sphere (derived below)."""
@@ -28,7 +31,7 @@ def ball(center, radius, name, solid=True, chord=CHORD):
 
 def surface_shadow(scene):
     """The one shadow on the scene's surfaces (not the planar ground's)."""
-    (shape,) = [s for s in scene.shapes_with_role("shadow") if s.name.endswith("_surfaces")]
+    (shape,) = [s for s in scene.shapes_with_role("shadow") if "_surfaces" in s.name]
     return shape
 
 
@@ -116,8 +119,8 @@ def test_a_lamp_in_its_bulb_shadows_every_surface_but_the_bulb_casts_nothing():
 @pytest.mark.parametrize("solid", [True, False])
 def test_a_lamp_inside_a_dome_over_everything(solid):
     """The light at the centre of a closed sphere of radius 10 around the
-    scene (light_location_animated.x3dv's lamp inside its yellow ball): the
-    dome casts nothing and the balls inside shadow each other as without it.
+    scene (a sky dome): the dome casts nothing on what is inside it, and the
+    balls inside shadow each other as without it.
     A solid dome's faces are turned away from the lamp and receive nothing;
     an open one's inside receives the balls' shadows: the cap of the big
     ball's cone, which holds the small one's (both on one line)."""
@@ -125,7 +128,8 @@ def test_a_lamp_inside_a_dome_over_everything(solid):
     settings = {"tolerance": sg.Tolerance.for_points(LAMP - 10, LAMP + 10), "offset": 1e-4}
     result = sg.add_shadows(sg.Scene([dome, SMALL, BIG], [lamp()]), **settings)
     without = surface_shadow(sg.add_shadows(sg.Scene([SMALL, BIG], [lamp()]), **settings))
-    assert sum("dome does not cast for light lamp" in note for note in result.warnings) == 1
+    assert sum("lamp lies inside 'dome'" in note for note in result.warnings) == 1
+    assert not any("does not cast" in note for note in result.warnings)
     area, centres = areas(surface_shadow(result))
     on_dome = np.linalg.norm(centres - LAMP, axis=1) > 5.0
     assert area[~on_dome].sum() == pytest.approx(areas(without)[0].sum(), rel=1e-9)
@@ -136,13 +140,47 @@ def test_a_lamp_inside_a_dome_over_everything(solid):
         assert area[on_dome].sum() == pytest.approx(expected, rel=5e-3)
 
 
-def test_a_light_inside_two_nested_casters_has_one_note_naming_both():
+def test_a_bulb_inside_a_dome_each_with_its_note():
     result = sg.add_shadows(
         sg.Scene([ball(LAMP, 10.0, "dome", chord=0.02), MARKER, SMALL, BIG], [lamp()])
     )
-    held = [note for note in result.warnings if "do not cast for light lamp" in note]
-    assert len(held) == 1 and "'dome', 'marker' (each: the light at" in held[0]
+    held = [note for note in result.warnings if "not cast for light lamp" in note]
+    assert len(held) == 1 and "marker does not cast" in held[0] and "a bulb" in held[0]
+    assert sum("lamp lies inside 'dome'" in note for note in result.warnings) == 1
     assert surface_shadow(result).n_faces > 0
+
+
+def test_a_light_inside_two_nested_bulbs_has_one_note_naming_both():
+    tiny = ball(LAMP, 0.05, "filament")
+    scene = sg.Scene([tiny, MARKER, SMALL, BIG], [lamp()])
+    held = [n for n in sg.add_shadows(scene).warnings if "do not cast for light lamp" in n]
+    assert len(held) == 1 and "'filament', 'marker' (each: the light at" in held[0]
+
+
+def test_a_lamp_shut_in_a_ball_darkens_all_outside_it():
+    """light_location_animated.x3dv at load time: the lamp at the centre of
+    a unit ball, two more touching it at x = -2 and 2. Each outer ball's lit
+    side (the cap the lamp sees: 60 degrees round the near pole, area pi) is
+    wholly in shadow, and so is the ground under the scene, exactly the
+    ground shadowgeo adds; a half-transparent ball gives half the shadow."""
+    for opacity in (1.0, 0.5):
+        look = sg.Material(transparency=1 - opacity)
+        shut = dataclasses.replace(ball(LAMP, 1.0, "shut"), material=look)
+        west, east = ball(LAMP - [2, 0, 0], 1.0, "west"), ball(LAMP + [2, 0, 0], 1.0, "east")
+        result = sg.add_shadows(sg.Scene([shut, west, east], [lamp()]), offset=1e-4)
+        assert sum("lamp lies inside 'shut'" in n for n in result.warnings) == 1
+        shadows = result.shapes_with_role("shadow")
+        assert {round(1 - s.material.transparency, 9) for s in shadows} == {opacity}
+        area, centres = areas(surface_shadow(result))
+        for side in (-1, 1):
+            near = np.linalg.norm(centres - (LAMP + [2 * side, 0, 0]), axis=1) < 1.01
+            assert area[near].sum() == pytest.approx(cap_area(1.0, math.pi / 3), rel=1e-2)
+        assert len(area) == len(centres) and np.all(np.abs(centres[:, 0] - LAMP[0]) > 0.9)
+        (ground,) = result.shapes_with_role("ground")
+        (on_ground,) = [s for s in shadows if s.name.startswith("shadow_lamp_ground")]
+        lifted = on_ground.world_vertices - [0, 1e-4, 0]
+        np.testing.assert_allclose(lifted, ground.world_vertices, atol=1e-9)
+        assert np.array_equal(on_ground.faces, ground.faces)
 
 
 def test_a_shade_around_the_lamp_that_does_not_enclose_it_still_casts():

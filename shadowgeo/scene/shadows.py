@@ -33,9 +33,14 @@ Casters
     wholly behind the receiver's plane, wholly at or beyond a positional
     light's height, out of a light's radius, outside a spot light's cone, or
     whose shadow misses the receiver's bounding box is skipped. A caster the
-    light touches or sits inside (a lamp's own bulb, a closed room around
-    it) casts nothing for that light, on every receiver and every surface,
-    with one note naming it; the other casters cast as they would without it.
+    light touches, or a closed one it sits inside no larger than a bulb
+    (:data:`BULB_FRACTION` of the scene's size: a lamp's own bulb), casts
+    nothing for that light, on every receiver and every surface, with one
+    note naming it; the other casters cast as they would without it. A
+    larger closed caster round the light (a dome, a closed room) shuts it
+    in: inside it the others cast as ever, and every receiver and surface
+    outside it (a shape judged by a few of its corners) is in its shadow
+    where the light faces it, the ground plane wholly.
 
 The shadows of the casters of one light and one opacity on one receiver are
 united into one region (so overlaps do not darken twice), cut to the
@@ -112,8 +117,12 @@ from .model import (
 from .opacity import opacities
 from .receivers import Receiver, ground
 from .receivers import select as select_receivers
-from .surfaces import receiving_faces, surface_shadow
+from .surfaces import ReceivingSurface, receiving_faces, surface_covered, surface_shadow
 
+# A closed caster round a positional light is its bulb (or a marker drawn
+# where the light is), casting nothing for it, when its box diagonal is at most
+# this fraction of the scene's; a larger one shuts the light in (_enclosing).
+BULB_FRACTION = 0.1
 # Receivers found automatically: at least this fraction of the largest planar
 # shape's area and of the scene's bounding-box diagonal.
 _RECEIVER_AREA_FRACTION = 0.25
@@ -338,20 +347,45 @@ def _add_shadows(
             ]
         added = []
         on_ground: list[np.ndarray] = []  # the shadows on the ground plane, if it receives
+        # lights shut in a caster, whose shadow is all the ground: (light,
+        # name, group, lift, opacity of the shell)
+        covered: list[tuple[SceneLight, str, str, float, float]] = []
         total, done = len(chosen) * len(found) * len(stacked), 0
         for index, light in enumerate(chosen):
             light_name = names.light(light, index)
             group = names.unique(f"shadows_{light_name}")
             height = lift * (1 + index / len(chosen))
             # what it lights is what casts for it (X3D light scope); a caster
-            # the light touches or sits inside (its bulb) casts nothing for it,
-            # on any receiver; the others cast as ever
+            # the light touches or sits inside casts nothing for it, on any
+            # receiver; the others cast as ever
             casting = opacity * in_scope(light, geometry)
             held = stacked.holding(light.light, tolerance, casting > 0)
+            # a closed caster round the light that is no mere bulb: the light
+            # lights nothing outside it, all of which is in its shadow
+            shell = _enclosing(stacked, held, light, casting)
+            shut = float(casting[shell].max()) if shell else 0.0
             if held:
                 casting[list(held)] = 0.0
-                notes.append(_held_note(stacked, held, light_name))
+                for index in shell:
+                    del held[index]
+                if held:
+                    notes.append(_held_note(stacked, held, light_name))
+            if shell:
+                notes.append(_enclosed_note(stacked, shell, light_name))
+                if any(_is_ground(receiver) for receiver in found):
+                    covered.append((light, light_name, group, height, shut))
             for receiver in found:
+                if shell and (_is_ground(receiver) or _outside(stacked, shell, receiver)):
+                    done += len(stacked)
+                    for level, layer in _covered(
+                        receiver, light, shut, tolerance, height, lighting
+                    ):
+                        layer.name = names.unique(
+                            f"shadow_{light_name}_{receiver.name}{_layer_suffix(level)}"
+                        )
+                        layer.group = group
+                        added.append(layer)
+                    continue
 
                 def step(count: int, start: int = done) -> None:
                     if progress is not None:
@@ -379,12 +413,24 @@ def _add_shadows(
                     layer.group = group
                     added.append(layer)
             if surface is not None:
+                receiving = surface.lit_by(light)
+                if shell:  # the faces outside the shell are all in its shadow
+                    outside = _outside_faces(stacked, shell, receiving)
+                    for level, layer in surface_covered(
+                        receiving.only(outside), light, shut, height, light_name, lighting
+                    ):
+                        layer.name = names.unique(
+                            f"shadow_{light_name}_surfaces{_layer_suffix(level)}"
+                        )
+                        layer.group = group
+                        added.append(layer)
+                    receiving = receiving.only(~outside)
                 # only casters the light reaches (its radius, its cone): a
                 # ray to a lit point runs inside them; each caster's
                 # topology made once for every light
                 reached = np.flatnonzero(stacked.lit(light.light) & (casting > 0))
                 for level, layer in surface_shadow(
-                    surface.lit_by(light),
+                    receiving,
                     [stacked.caster(int(k)) for k in reached],
                     casting[reached],
                     reached,
@@ -400,7 +446,7 @@ def _add_shadows(
                     added.append(layer)
         if progress is not None:
             progress(total, total)
-        if not added:
+        if not added and not covered:
             listed = ", ".join(receiver.name for receiver in found)
             notes.append(f"shadows: no shadow falls on the receivers ({listed})")
         grounds = [receiver for receiver in found if _is_ground(receiver)]
@@ -409,6 +455,13 @@ def _add_shadows(
             floor = visible_ground(np.vstack([bounds, *on_ground]), height, scene.up_index)
             floor.name, floor.group = names.unique("ground"), names.unique("shadowgeo_ground")
             added.insert(0, floor)
+            for light, light_name, group, lift_by, shut in covered:
+                for level, layer in _covered_ground(
+                    floor, grounds[0], light, shut, lift_by, lighting
+                ):
+                    layer.name = names.unique(f"shadow_{light_name}_ground{_layer_suffix(level)}")
+                    layer.group = group
+                    added.append(layer)
             where = ""
             if home is not None:
                 floor.scopes, floor.placement = frozenset({home[0]}), home[1]
@@ -422,6 +475,164 @@ def _add_shadows(
     return dataclasses.replace(
         scene, shapes=[*kept, *added], lights=marked, warnings=[*scene.warnings, *notes]
     )
+
+
+def _enclosing(
+    casters: CasterSet, held: dict[int, str], scene_light: SceneLight, casting: np.ndarray
+) -> list[int]:
+    """Of the casters ``held`` (:meth:`.CasterSet.holding`), the closed ones the
+    light lies inside that are more than its bulb: whose box diagonal is over
+    :data:`BULB_FRACTION` of the scene's. A smaller one is the lamp's bulb or a
+    marker drawn where the light is: it casts nothing for that light (its
+    reason in ``held`` says so)."""
+    light = scene_light.light
+    if not held or not is_positional(light):
+        return []
+    scene = float(np.linalg.norm(casters.bounds[1] - casters.bounds[0]))
+    shells = []
+    for index in held:
+        caster = casters.caster(index)
+        if not (caster.is_closed and abs(caster.winding_number(light.position)) > 0.5):
+            continue  # it touches the light
+        size = float(np.linalg.norm(casters.high[index] - casters.low[index]))
+        if size > BULB_FRACTION * scene and casting[index] > 0:
+            shells.append(index)
+        else:
+            held[index] = (
+                f"the light at {light.position.tolist()} is inside the closed caster, no "
+                f"larger than a bulb (at most {BULB_FRACTION:g} of the scene's size): taken "
+                "for the lamp's own"
+            )
+    return shells
+
+
+def _outside(casters: CasterSet, shell: list[int], receiver: Receiver) -> bool:
+    """Whether a bounded planar ``receiver`` lies outside one of the casters
+    ``shell`` round the light (judged by its area's centre)."""
+    if receiver.triangles is None:
+        return True
+    corners = receiver.triangles
+    doubled = np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    weights = (
+        doubled / doubled.sum() if doubled.sum() > 0 else np.full(len(doubled), 1 / len(doubled))
+    )
+    centre = (corners.mean(axis=1) * weights[:, None]).sum(axis=0)
+    return bool(_outside_points(casters, shell, centre[None])[0])
+
+
+def _outside_faces(casters: CasterSet, shell: list[int], surface: ReceivingSurface) -> np.ndarray:
+    """(m,) bool: the faces of ``surface`` outside one of the casters ``shell``
+    round the light, judged per shape (a shape rarely straddles a shell round
+    a light) by :data:`_SAMPLES` of its corners, most of them outside; the
+    shells' own faces, which the light reaches from inside, are not."""
+    outside = np.zeros(len(surface.faces), dtype=bool)
+    for shape in np.unique(surface.owner).tolist():
+        if shape in shell:
+            continue
+        rows = surface.owner == shape
+        corners = np.unique(surface.faces[rows])
+        picked = corners[np.linspace(0, len(corners) - 1, min(_SAMPLES, len(corners))).astype(int)]
+        outside[rows] = _outside_points(casters, shell, surface.vertices[picked]).mean() > 0.5
+    return outside
+
+
+# Corners of a shape tested against a shell round the light (_outside_faces).
+_SAMPLES = 16
+
+
+def _outside_points(casters: CasterSet, shell: list[int], points: np.ndarray) -> np.ndarray:
+    """(p,) bool: ``points`` (p, 3) outside one of the closed casters
+    ``shell`` (generalised winding number under a half), in blocks of about a
+    million point-face pairs."""
+    outside = np.zeros(len(points), dtype=bool)
+    for index in shell:
+        caster = casters.caster(index)
+        low, high = casters.low[index], casters.high[index]
+        boxed = np.flatnonzero(np.all((low <= points) & (points <= high), axis=1))
+        out = np.ones(len(points), dtype=bool)
+        triangles = caster.triangles
+        block = max(1, 1_000_000 // max(len(triangles), 1))
+        for start in range(0, len(boxed), block):
+            rows = boxed[start : start + block]
+            out[rows] = np.abs(_winding_numbers(triangles, points[rows])) <= 0.5
+        outside |= out
+    return outside
+
+
+def _winding_numbers(triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(p,) generalised winding numbers of the closed (m, 3, 3) ``triangles``
+    around ``points`` (p, 3) (:meth:`~shadowgeo.topology.Caster.winding_number`,
+    for many points)."""
+    rel = triangles[None] - points[:, None, None]
+    a, b, c = rel[:, :, 0], rel[:, :, 1], rel[:, :, 2]
+    la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
+    numerator = np.einsum("pij,pij->pi", a, np.cross(b, c))
+    denominator = (
+        la * lb * lc
+        + np.einsum("pij,pij->pi", a, b) * lc
+        + np.einsum("pij,pij->pi", b, c) * la
+        + np.einsum("pij,pij->pi", c, a) * lb
+    )
+    result: np.ndarray = np.sum(2.0 * np.arctan2(numerator, denominator), axis=1) / (4.0 * np.pi)
+    return result
+
+
+def _enclosed_note(casters: CasterSet, shell: list[int], light_name: str) -> str:
+    named = _first_ten([repr(casters.casters[index].name) for index in shell])
+    return (
+        f"shadows: light {light_name} lies inside {named} (closed, larger than a bulb: "
+        f"over {BULB_FRACTION:g} of the scene's size), so it lights nothing outside it; "
+        "all it would light there is baked in shadow"
+    )
+
+
+def _covered(
+    receiver: Receiver,
+    scene_light: SceneLight,
+    opacity: float,
+    tolerance: Tolerance,
+    lift: float,
+    lighting: Lighting,
+) -> list[tuple[float, Shape]]:
+    """The shadow of a closed caster round the light on a bounded planar
+    receiver facing it: the whole patch (the ground plane's is made with the
+    visible ground, :func:`_covered_ground`)."""
+    plane = receiver.facing(scene_light.light, tolerance)
+    if plane is None or receiver.triangles is None or not lights(scene_light, receiver.scopes):
+        return []
+    vertices = receiver.triangles.reshape(-1, 3) + lift * plane.normal
+    faces = np.arange(len(vertices)).reshape(-1, 3)
+    darkness = lighting.darkness(scene_light, vertices, faces, receiver.material, receiver.scopes)
+    where = f"shadow on {receiver.name} of a caster round the light"
+    return [(opacity, shadow_shape(vertices, faces, scene_light, where, opacity, darkness))]
+
+
+def _covered_ground(
+    floor: Shape,
+    receiver: Receiver,
+    scene_light: SceneLight,
+    opacity: float,
+    lift: float,
+    lighting: Lighting,
+) -> list[tuple[float, Shape]]:
+    """The shadow of a closed caster round the light on the ground plane: the
+    whole visible ground ``floor``, when the light is above it."""
+    plane = receiver.plane
+    light = scene_light.light
+    if is_positional(light):
+        above = float(plane.signed_distance(light.position[None])[0]) > 0
+    else:
+        above = float(plane.normal @ light.direction) < 0
+    if not above or not lights(scene_light, receiver.scopes):
+        return []
+    vertices = floor.world_vertices + lift * plane.normal
+    darkness = lighting.darkness(
+        scene_light, vertices, floor.faces, receiver.material, receiver.scopes
+    )
+    where = "shadow on the ground of a caster round the light"
+    return [(opacity, shadow_shape(vertices, floor.faces, scene_light, where, opacity, darkness))]
 
 
 def _held_note(casters: CasterSet, held: dict[int, str], light_name: str) -> str:

@@ -67,6 +67,10 @@ class ReceivingSurface(NamedTuple):
             return self
         inside = np.array([lights(scene_light, scopes) for scopes in self.scopes], dtype=bool)
         keep = inside[self.owner] if len(self.owner) else np.zeros(0, dtype=bool)
+        return self.only(keep)
+
+    def only(self, keep: np.ndarray) -> ReceivingSurface:
+        """The faces where ``keep`` (m,) bool is set (the vertices kept as they are)."""
         return self._replace(
             faces=self.faces[keep], owner=self.owner[keep], normals=self.normals[keep]
         )
@@ -235,6 +239,45 @@ def surface_shadow(
         shape = shadow_shape(vertices, triangles, scene_light, source, level, darkness)
         shapes.append((level, shape))
     return shapes
+
+
+def surface_covered(
+    surface: ReceivingSurface,
+    scene_light: SceneLight,
+    opacity: float,
+    lift: float,
+    light_name: str,
+    lighting: Lighting | None = None,
+) -> list[tuple[float, Shape]]:
+    """The shadow of a closed caster round the light (of casting ``opacity``)
+    on ``surface``: every face, where the shading lights it, lifted ``lift``
+    along its normal; as dark as :func:`surface_shadow`'s. The light lights
+    nothing outside the caster, and the surface's lit faces outside it are
+    all there is to darken (the caster's own faces turn away from the light
+    inside it)."""
+    light = scene_light.light
+    if not len(surface.faces):
+        return []
+    corners = surface.vertices[surface.faces]
+    values = lit_values(corners, surface.normals, light)
+    lit = np.flatnonzero(values.max(axis=1) > 0)
+    if not len(lit):
+        return []
+    normals = np.cross(corners[lit, 1] - corners[lit, 0], corners[lit, 2] - corners[lit, 0])
+    lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+    lifted = corners[lit] + lift * (normals / np.where(lengths > 0, lengths, 1.0))[:, None]
+    triangles = np.arange(3 * len(lit)).reshape(-1, 3)
+    vertices, faces, index = clip_to_lit(lifted.reshape(-1, 3), triangles, lit, corners, values)
+    if not len(faces):
+        return []
+    darkness = None
+    if lighting is not None:
+        table = np.empty(len(surface.scopes), dtype=object)  # frozensets, not sequences
+        table[:] = surface.scopes
+        scopes = list(table[surface.owner[index]]) if len(table) else None
+        darkness = lighting.darkness(scene_light, vertices, faces, scopes=scopes)
+    where = f"shadow of light {light_name} on the scene's surfaces, from a caster round it"
+    return [(opacity, shadow_shape(vertices, faces, scene_light, where, opacity, darkness))]
 
 
 def _past_terminator(
