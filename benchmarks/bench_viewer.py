@@ -103,50 +103,57 @@ SCENES = [
           "cross) and beside the bars' crossing; the bars' shadows on each other agree",
           xite_fault=True),
     Entry(XML, "x3d/matrix_transform.x3d", "MatrixTransform: spheres and a box, 1 lamp",
-          "X_ITE does not draw MatrixTransform (a Castle Game Engine node, not X3D): only the "
-          "red sphere shows, and its ground shadow agrees; shadowgeo reads the node and bakes "
-          "the unseen green and blue spheres' ground shadows too (blue)"),
+          "the converter writes each MatrixTransform (a Castle Game Engine node, not X3D, "
+          "which X_ITE does not draw) as the Transform of the same matrix, so all three "
+          "spheres show; their ground shadows agree"),
     # ClassicVRML and VRML 97
     Entry(CLASSIC, "x3d/matrix_transform.x3dv", "the same scene in ClassicVRML",
           "as its XML twin"),
     Entry(CLASSIC, "lights_materials/directional_light_scope.wrl",
           "VRML 97: six spheres, two suns each scoped to its group",
-          "a coloured light: X_ITE does draw the blue sun's shadow on the right-hand spheres "
-          "(blue 255 -> 156) but that is under the mask's luminance drop; the baked shadow is "
-          "a black layer (the blue sun's share) that darkens the red sun's light too (blue)"),
+          "X_ITE fault: the blue sun is non-global in a moved Transform (translation 0 -3 0), "
+          "and X_ITE draws no shadow for such a light (control scene 1 below); baked: the "
+          "lower-left sphere's shadow on the lit side of the spheres behind it in the sun's "
+          "path (blue). The output says global FALSE on both suns: X_ITE takes a VRML 97 "
+          "DirectionalLight with none as global, the standard keeps it to its group",
+          xite_fault=True),
     Entry(CLASSIC, "lights_materials/light_radius.wrl",
           "VRML 97: two grids of 512 cubes, a point and a spot light with a radius",
-          "many tiny cube shadows, mostly agreeing; the rest is 1-2 pixel offsets at their "
-          "edges (shadow-map aliasing) and a few cube tops X_ITE darkens whole and "
-          "shadowgeo leaves lit"),
+          "X_ITE aliasing: many tiny cube shadows, a few pixels each, mostly agreeing; the "
+          "rest is 1-2 pixel offsets at their edges and the spot's lit ellipse, whose rim "
+          "is a staircase of shadow-map texels at run time and smooth baked (red and blue "
+          "specks). The cubes (transparency 0.3) cast black at run time and 11/16 dark "
+          "baked, as their opacity says",
+          xite_fault=True),
     Entry(CLASSIC, "lights_materials/lights.x3dv",
           "spheres, cone and box under a lamp, a spot and a sun (three USEd groups)",
-          "X_ITE draws no shadow for any of the 3 lights, each USEd in 2 of the 3 groups; "
-          "baked: the cone's shadow on the box's front (the sun, 1 0 -1, carries the cone at "
-          "z 4 onto the box at x 4) and patches on cylinder and cone; the converter also takes "
-          "every light as global (the lamp and spot have global FALSE, the sun lights its "
-          "group only)"),
+          "X_ITE fault: the sun, non-global, is USEd in the groups moved to x 20 and 40, and "
+          "X_ITE draws no shadow for such a light (control scene 1 below); baked: in the "
+          "group at x 20, the cone's shadow on the box's front (the sun, 1 0 -1, carries "
+          "the cone at z 4 onto the box at x 4) (blue)",
+          xite_fault=True),
     Entry(CLASSIC, "lights_materials/raytracer/alien_mirror.wrl",
           "VRML 97: an alien head before a wall, 2 lamps",
           "agree on the wall; baked: a few shards on the head (its own faces)"),
     Entry(CLASSIC, "lights_materials/light_location_animated.x3dv",
           "3 spheres, a lamp moved by an interpolator (stopped: at 0 0 0)",
-          "the lamp is inside the yellow sphere: X_ITE lets no light out of it, so all goes "
-          "dark (red); shadowgeo skips a caster the light is inside and bakes only the "
-          "outer spheres' ground shadows (green)"),
+          "the lamp is inside the yellow sphere (the file's animation moves it out): no light "
+          "gets out, so X_ITE draws all dark, and shadowgeo bakes all the lamp faces outside "
+          "the sphere (the ground, the outer spheres' lit sides) in its shadow"),
     Entry(CLASSIC, "lights_materials/light_transform_animated.x3dv",
           "3 spheres, a lamp under an animated Transform (stopped)",
-          "the spheres' large ground shadows agree; X_ITE also draws their shadows on each "
-          "other (red), not baked: the lamp's marker sphere (radius 0.1) encloses it, and the "
-          "converter then bakes no surface shadow for the lamp"),
+          "the spheres' large ground shadows agree; the lamp's marker sphere (radius 0.1) "
+          "round it is taken for its bulb and casts nothing, as in X_ITE (its shadow maps "
+          "start 0.125 from the light)"),
     Entry(CLASSIC, "x3d/material_parameters_x3dom_xite_tests/material_parameters.x3dv",
           "11 spheres, a lamp, animated materials (stopped)",
-          "the spheres' ground shadows agree; X_ITE also draws their shadows on each other "
-          "(red), not baked, as in light_transform_animated (the lamp's marker sphere)"),
+          "the spheres' ground shadows agree (the lamp's marker sphere is its bulb, as in "
+          "light_transform_animated)"),
     Entry(CLASSIC,
           "animation/simple_tests_interpolation_and_time/orientation_interpolator_aluminium.wrl",
           "VRML 97: a tube under 6 scoped suns, turned by an interpolator (stopped)",
-          "no floor: the converter adds a ground, and the tube's shadows on it agree"),
+          "no floor: the converter adds a ground inside the suns' group (their scope, so they "
+          "light it in every browser), and the tube's shadows on it agree"),
     Entry(CLASSIC,
           "animation/simple_tests_interpolation_and_time/orientation_interpolator_alum_box.wrl",
           "VRML 97: the same with a box", "as the tube: the shadows on the added ground agree"),
@@ -169,10 +176,6 @@ SCENES = [
     Entry(CLASSIC, "lights_materials/light_color_animated.x3dv",
           "3 spheres, a lamp of animated colour (stopped)",
           "the spheres' ground shadows agree"),
-    Entry(CLASSIC, "x3d/are_set_changed_optional.x3dv",
-          "a box whose only light is off (shadowgeo's default sun casts)",
-          "no light on, so X_ITE draws no shadow; baked: the default sun's shadow of the box "
-          "on the added ground"),
 ]  # fmt: skip
 
 # Corpus files with a light node that are not in the table, and why (none skipped silently).
@@ -187,6 +190,9 @@ EXCLUDED = [
      "its geometry, graz.wrl, is not in the corpus"),
     (f"{CLASSIC}/x3d/dynamic_world.x3dv", "its geometry is made by a Script at run time"),
     (f"{CLASSIC}/background/background_sunset.x3dv", "no geometry: a Background and a light"),
+    (f"{CLASSIC}/x3d/are_set_changed_optional.x3dv",
+     "its only light is off: X_ITE draws no shadow to compare with (shadowgeo bakes its "
+     "default sun's, as documented; --sun or --light choose another)"),
     (f"{CLASSIC}/prototypes/proto_events_test_2.x3dv",
      "the sphere and sun of proto_events_test.x3dv; only the events differ"),
     (f"{CLASSIC}/prototypes/proto_events_test_3.x3dv",
@@ -205,6 +211,48 @@ EXCLUDED = [
     (f"{CLASSIC}/lights_materials/vrml_1/lights.wrl", "VRML 1.0"),
     (f"{CLASSIC}/lights_materials/vrml_1/materials.wrl", "VRML 1.0"),
 ]  # fmt: skip
+
+
+# Control scenes for X_ITE faults named in the table: the same two unit
+# spheres on the x axis under a blue sun travelling +x (the left one shadows
+# the right one's lit side), the sun non-global (its shadow then reaches only
+# the spheres of its group), a red sun from above lighting all. The scenes
+# differ only in where that group lies.
+_CONTROL = """<X3D profile="Immersive" version="4.0"><Scene>
+<NavigationInfo headlight="false"/><Viewpoint position="0 {y} 12"/>
+<DirectionalLight color="1 0 0" direction="0 -1 -1"/>
+<{group}><DirectionalLight color="0 0 1" direction="1 0 0" global="false" shadows="true"/>
+<Transform translation="-3 0 0"><Shape><Appearance><Material/></Appearance><Sphere/></Shape>
+</Transform><Transform translation="3 0 0"><Shape><Appearance><Material/></Appearance>
+<Sphere/></Shape></Transform></{tag}></Scene></X3D>
+"""
+CONTROLS = [
+    ("1a: the sun's group is a Group", "Group", "Group", 0),
+    ("1b: the sun's group is a Transform, translation 0 0 0", 'Transform translation="0 0 0"',
+     "Transform", 0),
+    ("1c: the sun's group is a Transform, translation 0 -3 0 (directional_light_scope.wrl's)",
+     'Transform translation="0 -3 0"', "Transform", -3),
+]  # fmt: skip
+
+
+def controls(work: Path, size: int, browser: str, timeout: float) -> list[tuple[str, int]]:
+    """Each control scene with the shadow pixels X_ITE draws (its picture with
+    runtime shadows against the same with none, the table's mask rule)."""
+    from viewer import shadow_mask
+    from xite import Canvas, render
+
+    work.mkdir(parents=True, exist_ok=True)
+    canvases = []
+    for index, (_, group, tag, y) in enumerate(CONTROLS):
+        (work / f"control{index}.x3d").write_text(_CONTROL.format(group=group, tag=tag, y=y))
+        canvases += [Canvas(f"control{index}.x3d"), Canvas(f"control{index}.x3d", shadows="off")]
+    shots = render(work, canvases, size, browser, timeout)
+    found = []
+    for index, (title, *_) in enumerate(CONTROLS):
+        lit, plain = shots[2 * index], shots[2 * index + 1]
+        ok = lit.status == "ok" and plain.status == "ok"
+        found.append((title, int(shadow_mask(lit.image, plain.image).sum()) if ok else -1))
+    return found
 
 
 def row(entry: Entry, result: Comparison | None, seconds: float, failure: str = "") -> dict:
@@ -288,8 +336,12 @@ def summary(rows: list[dict], size: int) -> str:
     )
 
 
-def section(rows: list[dict], size: int, elapsed: float) -> str:
+def section(rows: list[dict], size: int, elapsed: float, checks: list[tuple[str, int]]) -> str:
     excluded = "\n".join(f"- `{path}`: {why}" for path, why in EXCLUDED)
+    checked = "\n".join(
+        f"| {title} | {'failed to render' if count < 0 else f'{count:,}'} |"
+        for title, count in checks
+    )
     return f"""{TITLE}
 
 Generated by `python benchmarks/bench_viewer.py` ({elapsed / 60:.1f} minutes). For each scene,
@@ -327,6 +379,17 @@ Each scene name links to its gallery picture: (a) runtime, (b) baked, and the ma
 (c) in grey: green where both shadow, red where only X_ITE's runtime shadow does, blue where
 only the baked one does.
 
+Control scenes for the X_ITE fault named "control scene 1" above (written by the benchmark,
+drawn the same way, shadow pixels by the same mask rule): two unit spheres on the x axis at
+x = -3 and 3 under a blue sun travelling +x with `global FALSE` and `shadows TRUE`, both
+spheres in its group, so the left one shadows the right one's lit side. X_ITE draws that
+shadow when the group is a Group or an unmoved Transform, and none when the same Transform is
+moved:
+
+| control scene | shadow pixels X_ITE draws |
+|---|---:|
+{checked}
+
 Corpus files with a light that are not in the table, and why:
 
 {excluded}
@@ -357,6 +420,9 @@ def main() -> None:
                 f"{found['notes']}",
                 flush=True,
             )
+        checks = controls(Path(scratch) / "controls", args.size, str(browser), args.timeout)
+    for title, count in checks:
+        print(f"control {title}: {count:,} shadow pixels")
     elapsed = time.perf_counter() - begin
     print()
     print(summary(rows, args.size))
@@ -371,7 +437,7 @@ def main() -> None:
         if r["image"] is not None:
             r["image"].save(GALLERY / f"{slug(r['scene'])}.png", optimize=True)
     if args.only is None:
-        write_section(TITLE, section(rows, args.size, elapsed))
+        write_section(TITLE, section(rows, args.size, elapsed, checks))
         print(f"wrote {GALLERY} and the section {TITLE[3:]!r} of benchmarks/REPORT.md")
 
 

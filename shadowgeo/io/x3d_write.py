@@ -188,8 +188,14 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
     homes = _homes(tree, added)  # (likewise: the paths are of the document as read)
     _remove_marked(tree)  # the scene's added shapes replace them
     authored = _bound_viewpoint(tree)  # (before the names are taken: ours gets its own back)
+    legacy = _legacy_version(root.get("version"))
     for element, scene_light in lights:
         _runtime_shadows(element, scene_light)
+        if legacy and not scene_light.global_ and element.get("global") is None:
+            # X_ITE takes a DirectionalLight of X3D 3.0 and VRML 97 with no
+            # ``global`` as global; the standard's default (false) said aloud
+            # keeps it to its group there too, as shadowgeo baked it
+            element.set("global", "false")
     used = set(tree.xpath("//@DEF"))
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
@@ -205,6 +211,15 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
             _require_components(root, namespace, {"Navigation": 1})
         _add_overview(body, scene, used, namespace)
     return tree
+
+
+def _legacy_version(version: str | None) -> bool:
+    """Whether an X3D document of ``version`` is one X_ITE reads with its
+    legacy defaults (3.0 and older: a DirectionalLight is global)."""
+    try:
+        return float(version or "3.0") <= 3.0
+    except ValueError:
+        return False
 
 
 def _bound_viewpoint(tree: Tree) -> Element | None:
