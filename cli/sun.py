@@ -20,7 +20,7 @@ import shadowgeo
 from shadowgeo.scene.sunlight import study_scene, sunlight_shapes
 from shadowgeo.sunstudy import days_table
 
-from .convert import (
+from .common import (
     ProgressBar,
     add_dask_arguments,
     dask_failure,
