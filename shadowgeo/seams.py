@@ -23,7 +23,8 @@ from typing import Literal, cast
 import numpy as np
 from manifold3d import triangulate
 
-from .polygons import MAX_COORDINATE, fill, local_scale, region_loops, subtract, unite
+from .orientation import MAX_COORDINATE
+from .polygons import fill, local_scale, region_loops, subtract, unite
 from .topology import loops_taken, unique_integers
 
 # Loops of many regions at once: (P, 2) points, loop after loop; (L,) the
