@@ -23,6 +23,8 @@ from .errors import GeometryError
 from .limits import MAX_UNION_CROSSINGS
 from .orientation import MAX_COORDINATE, turn_sign, turns
 from .plane import Plane
+from .simplify import without_collinear
+from .sweep import simple_triangles
 from .topology import loop_rings
 
 # A corner this close (local units) to the straight run between its
@@ -143,8 +145,6 @@ def whole_loop(loops: list[np.ndarray], keep_triangles: bool = False) -> bool:
         return True
     if not _many_reflex(loop):
         return False
-    from .sweep import simple_triangles
-
     simple, triangles = simple_triangles(loop, triangles=keep_triangles)
     if simple and triangles is not None:
         _SWEPT[_loop_key(loop)] = triangles
@@ -943,8 +943,6 @@ def _straightened(
     to rounding; a part whose outer loop was a sliver goes. A part of one
     many-reflex loop (``spiked``: :func:`_spiked_triangles`' certified
     sweep) is left as it is. Returns each part left with its ``spiked``."""
-    from .seams import without_collinear
-
     chosen = [k for k, flag in enumerate(spiked) if not flag]
     if not chosen:
         return list(zip(parts, spiked, strict=True))
@@ -997,8 +995,6 @@ def _spiked_triangles(loop: np.ndarray) -> np.ndarray | None:
     kept = _SWEPT.pop(_loop_key(loop), None) if _SWEPT else None
     if kept is not None:  # cut by the sweep that certified it (whole_loop)
         return kept
-    from .sweep import simple_triangles
-
     return simple_triangles(loop)[1]
 
 

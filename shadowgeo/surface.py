@@ -19,7 +19,7 @@ face by face, with the same clipping before the divide as
    :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
    own cell of one plane); spot cones and a light's range are applied as
    exact 2-D intersections.
-4. **Stitch** (:mod:`shadowgeo.seams`): corners that a straight run between
+4. **Stitch** (:mod:`shadowgeo.simplify`, :mod:`shadowgeo.seams`): corners that a straight run between
    two kept corners passes within the tolerance length of are dropped (where
    clipped pieces met along one shadow edge), region corners on a face edge are
    snapped to one parameter along that edge, shared by both faces, and every
@@ -83,9 +83,10 @@ from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positiona
 from .limits import MAX_CURVE_SEGMENTS
 from .orientation import MAX_COORDINATE
 from .outline import Outline, OutlineSet, make_outlines
-from .seams import Loops, face_regions, loops_of, stitch, without_collinear
+from .seams import face_regions, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
+from .simplify import Loops, loops_of, without_collinear
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, closed_each, loops_taken, unique_integers
 
