@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import TextIO
 
 import shadowgeo
 from shadowgeo.batch import ConvertOptions
@@ -38,7 +39,9 @@ def positive_int(text: str) -> int:
     return value
 
 
-def add_dask_arguments(group, item: str, default: str) -> None:
+def add_dask_arguments(
+    group: argparse.ArgumentParser | argparse._ArgumentGroup, item: str, default: str
+) -> None:
     """``--scheduler ADDRESS | --serial`` and ``--workers N`` on ``group``:
     where the items (``item``: a file, a day) run; ``default``: where they
     run without either."""
@@ -72,7 +75,7 @@ def dask_failure(command: str, error: ImportError | OSError) -> int:
 class ProgressBar:
     """A one-line bar on stderr, redrawn in place."""
 
-    def __init__(self, label: str, stream=None, width: int = 30) -> None:
+    def __init__(self, label: str, stream: TextIO | None = None, width: int = 30) -> None:
         self.label, self.width = label, width
         self.stream = sys.stderr if stream is None else stream
         self.shown = -1

@@ -51,7 +51,7 @@ in a batch, any file failed), 2 bad usage.
 """
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "convert",
         help="add shadows to a scene and write it as X3D, glTF or USD",
@@ -204,7 +204,7 @@ def is_batch(paths: list[Path]) -> bool:
     return len(paths) > 2 or paths[0].is_dir() or paths[-1].is_dir()
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     paths = args.paths
     if len(paths) < 2:
         args.parser.error("give IN and OUT (or inputs and an output folder)")
