@@ -19,12 +19,13 @@ face by face, with the same clipping before the divide as
    :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
    own cell of one plane); spot cones and a light's range are applied as
    exact 2-D intersections.
-4. **Stitch** (:mod:`shadowgeo.simplify`, :mod:`shadowgeo.seams`): corners that a straight run between
-   two kept corners passes within the tolerance length of are dropped (where
-   clipped pieces met along one shadow edge), region corners on a face edge are
-   snapped to one parameter along that edge, shared by both faces, and every
-   such point is inserted on both sides, so the triangulated shadow has no
-   cracks or T-junctions where the surface has none.
+4. **Stitch** (:mod:`shadowgeo.simplify`, :mod:`shadowgeo.seams`): corners
+   that a straight run between two kept corners passes within the tolerance
+   length of are dropped (where clipped pieces met along one shadow edge),
+   region corners on a face edge are snapped to one parameter along that
+   edge, shared by both faces, and every such point is inserted on both
+   sides, so the triangulated shadow has no cracks or T-junctions where the
+   surface has none.
 
 Closed casters (the light outside them) contribute their light-facing
 triangles only: every blocked ray leaves the caster through one of them last.
