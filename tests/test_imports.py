@@ -1,5 +1,5 @@
-"""No import cycles: the modules of ``shadowgeo`` and ``cli`` form a graph
-without loops, read from the source.
+"""No import cycles: the modules of ``shadowgeo`` and ``cli`` (and of the
+fuzzer, ``tools/fuzz/``) form a graph without loops, read from the source.
 
 A cycle means two modules each need the other to be read first: which one
 Python finishes depends on who is imported first, and a name used at import
@@ -27,9 +27,10 @@ from pathlib import Path
 import pytest
 from needs import ROOT
 
-# Source folder -> the import name its modules go by in the source (``cli``
-# is installed as ``shadowgeo_cli``, but imports inside it are relative).
-PACKAGES = {"shadowgeo": ROOT / "shadowgeo", "cli": ROOT / "cli"}
+# Import name -> source folder, for the names its modules go by in the source
+# (``cli`` is installed as ``shadowgeo_cli``, but imports inside it are
+# relative); and the fuzzer's package, which tools/fuzz.py imports as ``fuzz``.
+PACKAGES = {"shadowgeo": ROOT / "shadowgeo", "cli": ROOT / "cli", "fuzz": ROOT / "tools" / "fuzz"}
 
 
 def module_files(packages: Mapping[str, Path]) -> dict[str, Path]:
