@@ -47,6 +47,7 @@ from manifold3d import CrossSection, FillRule, triangulate
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from shadowgeo import polygons  # noqa: E402
+from shadowgeo.orientation import MAX_COORDINATE  # noqa: E402
 from shadowgeo.sweep import simple_triangles  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -110,7 +111,7 @@ def certificate(loop: np.ndarray) -> bool:
     """shadowgeo's certificate that the loop is simple (``whole_loop``
     takes it from ``polygons._SPIKED_CORNERS`` corners on): star-shaped
     round its corners' mean, else the sweep."""
-    local = loop * (polygons.MAX_COORDINATE / float(np.abs(loop).max()))
+    local = loop * (MAX_COORDINATE / float(np.abs(loop).max()))
     starts, lengths = np.zeros(1, dtype=np.int64), np.array([len(local)])
     certain = bool(polygons.star_shaped_flat(local, starts, lengths)[0])
     certain = certain or simple_triangles(local, triangles=False)[0]
@@ -119,7 +120,7 @@ def certificate(loop: np.ndarray) -> bool:
 
 
 def clipper(loop: np.ndarray) -> object:
-    local = loop * (polygons.MAX_COORDINATE / float(np.abs(loop).max()))
+    local = loop * (MAX_COORDINATE / float(np.abs(loop).max()))
     return CrossSection([local], FillRule.Positive)
 
 

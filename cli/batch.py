@@ -18,7 +18,7 @@ import shadowgeo
 from shadowgeo.batch import Outcome, convert_files, scene_suffix
 from shadowgeo.io import WRITERS
 
-from .convert import ProgressBar, dask_failure, options_of
+from .common import ProgressBar, dask_failure, options_of
 
 
 def jobs_for(

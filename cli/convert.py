@@ -13,7 +13,10 @@ import sys
 from pathlib import Path
 
 import shadowgeo
-from shadowgeo.batch import ConvertOptions, shadowed
+from shadowgeo.batch import shadowed
+
+from .batch import run_batch
+from .common import ProgressBar, add_dask_arguments, options_of, plane_argument
 
 EPILOG = """\
 examples:
@@ -48,7 +51,7 @@ in a batch, any file failed), 2 bad usage.
 """
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "convert",
         help="add shadows to a scene and write it as X3D, glTF or USD",
@@ -136,49 +139,6 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run, parser=parser)
 
 
-def add_dask_arguments(group, item: str, default: str) -> None:
-    """``--scheduler ADDRESS | --serial`` and ``--workers N`` on ``group``:
-    where the items (``item``: a file, a day) run; ``default``: where they
-    run without either."""
-    where = group.add_mutually_exclusive_group()
-    where.add_argument(
-        "--scheduler",
-        metavar="ADDRESS",
-        help=f"a running Dask scheduler (tcp://host:8786); default: {default}",
-    )
-    where.add_argument(
-        "--serial", action="store_true", help=f"no Dask: one {item} after another in this process"
-    )
-    group.add_argument(
-        "--workers",
-        type=positive_int,
-        metavar="N",
-        help="worker processes of the LocalCluster (default: one per core)",
-    )
-
-
-def dask_failure(command: str, error: ImportError | OSError) -> int:
-    """The one line and exit code for Dask missing (2: install it, or
-    --serial) or a scheduler out of reach (1)."""
-    if isinstance(error, ImportError):
-        print(f"shadowgeo {command}: {error} (or --serial)", file=sys.stderr)
-        return 2
-    print(f"shadowgeo {command}: cannot reach the Dask scheduler: {error}", file=sys.stderr)
-    return 1
-
-
-def plane_argument(text: str) -> shadowgeo.Plane:
-    try:
-        values = [float(part) for part in text.split(",")]
-        if len(values) != 4:
-            raise ValueError(f"{len(values)} numbers")
-        return shadowgeo.Plane.from_coefficients(values)
-    except (ValueError, shadowgeo.GeometryError) as error:
-        raise argparse.ArgumentTypeError(
-            f"expected four numbers a,b,c,d with (a, b, c) not zero, got {text!r} ({error})"
-        ) from None
-
-
 def direction_argument(text: str) -> shadowgeo.DirectionalLight:
     try:
         values = [float(part) for part in text.split(",")]
@@ -189,16 +149,6 @@ def direction_argument(text: str) -> shadowgeo.DirectionalLight:
         raise argparse.ArgumentTypeError(
             f"expected three numbers dx,dy,dz, not all zero, got {text!r} ({error})"
         ) from None
-
-
-def positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
-    return value
 
 
 def output_suffix(text: str) -> str:
@@ -230,44 +180,6 @@ def count_argument(text: str) -> int:
     return value
 
 
-class ProgressBar:
-    """A one-line bar on stderr, redrawn in place."""
-
-    def __init__(self, label: str, stream=None, width: int = 30) -> None:
-        self.label, self.width = label, width
-        self.stream = sys.stderr if stream is None else stream
-        self.shown = -1
-
-    def __call__(self, done: int, total: int) -> None:
-        percent = 100 * done // max(total, 1)
-        if percent == self.shown:
-            return
-        self.shown = percent
-        filled = self.width * percent // 100
-        bar = "#" * filled + "." * (self.width - filled)
-        self.stream.write(f"\r{self.label} [{bar}] {percent:3d}%")
-        self.stream.flush()
-
-    def close(self) -> None:
-        if self.shown >= 0:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def options_of(args: argparse.Namespace) -> ConvertOptions:
-    """What the command line asks of every file converted."""
-    return ConvertOptions(
-        method=args.method,
-        lights=tuple(args.light) if args.light else None,
-        receivers=tuple(args.receiver) if args.receiver else None,
-        plane=args.plane,
-        tolerance=args.tolerance,
-        sun=args.sun,
-        max_triangles=args.max_triangles,
-        keep_runtime_shadows=args.keep_runtime_shadows,
-    )
-
-
 # Notes of the reader printed at most (shadowgeo info lists them all).
 MAX_READER_NOTES = 20
 
@@ -292,7 +204,7 @@ def is_batch(paths: list[Path]) -> bool:
     return len(paths) > 2 or paths[0].is_dir() or paths[-1].is_dir()
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     paths = args.paths
     if len(paths) < 2:
         args.parser.error("give IN and OUT (or inputs and an output folder)")
@@ -307,8 +219,6 @@ def run(args) -> int:
         if value
     ]
     if is_batch(paths):
-        from .batch import run_batch
-
         return run_batch(args, paths[:-1], paths[-1])
     if batch_only:
         args.parser.error(f"{', '.join(batch_only)} only apply to several inputs or a folder")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ examples:
 """
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "info",
         help="list a scene's shapes, lights, bounds and what was skipped",
@@ -56,11 +57,11 @@ def number(value: float) -> str:
     return f"{value:.6g}" if math.isfinite(value) else str(value)
 
 
-def vector(values) -> str:
+def vector(values: Iterable[float]) -> str:
     return " ".join(number(float(v)) for v in values)
 
 
-def shadows_column(light) -> str:
+def shadows_column(light: shadowgeo.SceneLight) -> str:
     """Whether a light's shadows are drawn: by the browser at run time, baked
     by shadowgeo (its runtime shadows off), or not at all."""
     intensity = number(light.shadow_intensity)
@@ -69,7 +70,7 @@ def shadows_column(light) -> str:
     return f"yes ({intensity})" if light.shadows else "no"
 
 
-def light_where(light) -> str:
+def light_where(light: shadowgeo.Light) -> str:
     if isinstance(light, shadowgeo.DirectionalLight):
         return f"direction {vector(light.direction)}"
     where = f"at {vector(light.position)}"
@@ -83,7 +84,7 @@ def light_where(light) -> str:
     return where
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     scene = shadowgeo.load(args.input, **({"root": args.root} if args.root else {}))
     triangles = sum(s.n_faces for s in scene.shapes)
     print(

@@ -2,7 +2,10 @@
 
 Each command lives in its own module of this package and provides
 ``register(subparsers)``, which adds its parser and sets ``func`` to a function
-``run(args) -> int``.
+``run(args) -> int``. What several commands share (argument types, the Dask
+options, the progress bar) is in ``common.py``, which they import; no command
+imports another's module but ``convert``, which hands its batch form to
+``batch.py``.
 
 Exit codes: 0 done, 1 bad input, 2 bad usage.
 """

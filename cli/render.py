@@ -14,9 +14,11 @@ from pathlib import Path
 import shadowgeo as sg
 
 VIEWS = ("iso", "top", "front")
+# What --view gives: one of VIEWS, or a direction (x, y, z).
+View = str | tuple[float, ...]
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "render",
         help="render a scene and its shadows to PNG, off-screen",
@@ -31,7 +33,7 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def add_picture_options(parser) -> None:
+def add_picture_options(parser: argparse.ArgumentParser) -> None:
     """Options ``render`` and ``view`` share."""
     parser.add_argument(
         "--view",
@@ -60,7 +62,7 @@ def parse_size(text: str) -> tuple[int, int]:
     return width, height
 
 
-def parse_view(text: str):
+def parse_view(text: str) -> View:
     if text in VIEWS:
         return text
     try:
@@ -74,12 +76,13 @@ def parse_view(text: str):
     return direction
 
 
-def camera(args, scene: sg.Scene):
+def camera(args: argparse.Namespace, scene: sg.Scene) -> View | sg.Viewpoint | None:
     """What ``view=`` of :func:`shadowgeo.plot` gets: ``--view``, else the
     Viewpoint ``--viewpoint`` names, else None (the scene's first Viewpoint,
     else the automatic view)."""
-    if args.view is not None:
-        return args.view
+    view: View | None = args.view
+    if view is not None:
+        return view
     if args.viewpoint is None:
         return None
     for viewpoint in scene.viewpoints:
@@ -92,7 +95,7 @@ def camera(args, scene: sg.Scene):
     )
 
 
-def scene_to_draw(args) -> sg.Scene:
+def scene_to_draw(args: argparse.Namespace) -> sg.Scene:
     """Load the scene and add its shadows, as the options ask."""
     scene = sg.load(args.input)
     if args.no_shadows or scene.shapes_with_role("shadow"):
@@ -104,7 +107,7 @@ def scene_to_draw(args) -> sg.Scene:
         return scene
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     if args.output.suffix.lower() != ".png":
         print(
             f"shadowgeo render: the output must be a .png file, got {args.output}", file=sys.stderr

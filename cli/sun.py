@@ -15,12 +15,13 @@ import math
 import os
 import sys
 from pathlib import Path
+from typing import Any
 
 import shadowgeo
-from shadowgeo.scene.sunlight import study_scene, sunlight_shapes
+from shadowgeo.scene.sunlight import SceneStudy, study_scene, sunlight_shapes
 from shadowgeo.sunstudy import days_table
 
-from .convert import (
+from .common import (
     ProgressBar,
     add_dask_arguments,
     dask_failure,
@@ -59,7 +60,7 @@ same either way. Exit codes: 0 done, 1 bad input, 2 bad usage.
 SLIVER = 1e-9
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "sun",
         help="sun study: hours of sunlight on a scene's floor, as a table and a map",
@@ -179,7 +180,7 @@ def local_zone(longitude: float) -> dt.timezone:
     return dt.timezone(dt.timedelta(hours=round(longitude / 15.0)))
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     if args.output is not None and args.days > 1:
         args.parser.error("OUT takes one day's map: give --days 1, or no OUT for the table")
     if args.workers and (args.serial or args.scheduler):
@@ -268,7 +269,15 @@ def run(args) -> int:
     return 0
 
 
-def _study(args, scene, times, step, zone, scheduler, bar):
+def _study(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    times: list[dt.datetime],
+    step: dt.timedelta,
+    zone: dt.timezone,
+    scheduler: Any,
+    bar: ProgressBar | None,
+) -> tuple[SceneStudy, Any]:
     latitude, longitude = args.at
     return study_scene(
         scene,

@@ -6,6 +6,7 @@ Needs a display; where there is none it says so and exits 1 (use
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -15,7 +16,7 @@ from shadowgeo import viz
 from .render import add_picture_options, camera, scene_to_draw
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     parser = subparsers.add_parser(
         "view",
         help="open a scene and its shadows in an interactive window",
@@ -26,7 +27,7 @@ def register(subparsers) -> None:
     parser.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     reason = viz.no_display_reason()
     if reason is not None:
         print(

@@ -27,8 +27,8 @@ from . import polygons as poly
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight
 from .limits import LARGEST_COORDINATE, check_light
+from .orientation import MAX_COORDINATE, POINT_SLACK, PRODUCT_SLACK
 from .plane import Plane
-from .polygons import MAX_COORDINATE, POINT_SLACK, PRODUCT_SLACK
 from .shadow import Shadow, ShadowDiagnostics, triangulated
 from .silhouette import Outlines, check_light_outside, silhouette_outlines, vertex_components
 from .tolerance import Tolerance, resolution, scene_scales

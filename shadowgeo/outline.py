@@ -20,7 +20,8 @@ import shapely
 
 from .arrangement import strictly_convex_loops
 from .lightframe import corner_max, corner_min, misses_boxes, overlapping_boxes, twice_areas
-from .polygons import MAX_COORDINATE, components, fill
+from .orientation import MAX_COORDINATE
+from .polygons import components, fill
 from .topology import loop_rings
 
 if TYPE_CHECKING:

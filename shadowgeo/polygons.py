@@ -21,48 +21,16 @@ from manifold3d import CrossSection, FillRule, triangulate
 from .arrangement import convex_union_arrays, convex_union_flat
 from .errors import GeometryError
 from .limits import MAX_UNION_CROSSINGS
+from .orientation import MAX_COORDINATE, turn_sign, turns
 from .plane import Plane
+from .simplify import without_collinear
+from .sweep import simple_triangles
 from .topology import loop_rings
-
-# Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
-# its 1e8 fixed-point scaling overflows int64's safe range).
-MAX_COORDINATE = 1e8
-
 
 # A corner this close (local units) to the straight run between its
 # neighbours is dropped before triangulating: a few hundred units in the last
 # place of MAX_COORDINATE, far below any length a shadow resolves.
 STRAIGHT_SLACK = 64 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
-# Coordinates of the 2-D loops stay within +-MAX_COORDINATE (the window), so
-# a difference of two of them is off by at most this much (a few units in
-# the last place of MAX_COORDINATE) ...
-POINT_SLACK = 8 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
-# ... and a product of two differences by this much relative.
-PRODUCT_SLACK = 1e-13
-
-
-def turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(sign, cross): +1 where ``origin -> one -> two`` certainly turns left,
-    -1 certainly right, 0 when rounding could decide it; and the cross
-    product ``(one - origin) x (two - origin)`` itself (rows of (n, 2)
-    points within +-MAX_COORDINATE)."""
-    a, b = one - origin, two - origin
-    cross: np.ndarray = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    size_a = np.abs(a[:, 0]) + np.abs(a[:, 1])
-    size_b = np.abs(b[:, 0]) + np.abs(b[:, 1])
-    margin = 2 * POINT_SLACK * (size_a + size_b) + PRODUCT_SLACK * size_a * size_b
-    sign: np.ndarray = np.where(cross > margin, 1, np.where(cross < -margin, -1, 0))
-    return sign, cross
-
-
-def turn_sign(ax: float, ay: float, bx: float, by: float) -> int:
-    """:func:`turns` of one pair, from its two differences ``a = one -
-    origin`` and ``b = two - origin``: +1, -1, or 0 when rounding could
-    decide it."""
-    size_a, size_b = abs(ax) + abs(ay), abs(bx) + abs(by)
-    margin = 2 * POINT_SLACK * (size_a + size_b) + PRODUCT_SLACK * size_a * size_b
-    cross = ax * by - ay * bx
-    return 1 if cross > margin else -1 if cross < -margin else 0
 
 
 def star_shaped_flat(points: np.ndarray, starts: np.ndarray, lengths: np.ndarray) -> np.ndarray:
@@ -177,8 +145,6 @@ def whole_loop(loops: list[np.ndarray], keep_triangles: bool = False) -> bool:
         return True
     if not _many_reflex(loop):
         return False
-    from .sweep import simple_triangles
-
     simple, triangles = simple_triangles(loop, triangles=keep_triangles)
     if simple and triangles is not None:
         _SWEPT[_loop_key(loop)] = triangles
@@ -977,8 +943,6 @@ def _straightened(
     to rounding; a part whose outer loop was a sliver goes. A part of one
     many-reflex loop (``spiked``: :func:`_spiked_triangles`' certified
     sweep) is left as it is. Returns each part left with its ``spiked``."""
-    from .seams import without_collinear
-
     chosen = [k for k, flag in enumerate(spiked) if not flag]
     if not chosen:
         return list(zip(parts, spiked, strict=True))
@@ -1031,8 +995,6 @@ def _spiked_triangles(loop: np.ndarray) -> np.ndarray | None:
     kept = _SWEPT.pop(_loop_key(loop), None) if _SWEPT else None
     if kept is not None:  # cut by the sweep that certified it (whole_loop)
         return kept
-    from .sweep import simple_triangles
-
     return simple_triangles(loop)[1]
 
 

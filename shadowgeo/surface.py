@@ -19,12 +19,13 @@ face by face, with the same clipping before the divide as
    :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
    own cell of one plane); spot cones and a light's range are applied as
    exact 2-D intersections.
-4. **Stitch** (:mod:`shadowgeo.seams`): corners that a straight run between
-   two kept corners passes within the tolerance length of are dropped (where
-   clipped pieces met along one shadow edge), region corners on a face edge are
-   snapped to one parameter along that edge, shared by both faces, and every
-   such point is inserted on both sides, so the triangulated shadow has no
-   cracks or T-junctions where the surface has none.
+4. **Stitch** (:mod:`shadowgeo.simplify`, :mod:`shadowgeo.seams`): corners
+   that a straight run between two kept corners passes within the tolerance
+   length of are dropped (where clipped pieces met along one shadow edge),
+   region corners on a face edge are snapped to one parameter along that
+   edge, shared by both faces, and every such point is inserted on both
+   sides, so the triangulated shadow has no cracks or T-junctions where the
+   surface has none.
 
 Closed casters (the light outside them) contribute their light-facing
 triangles only: every blocked ray leaves the caster through one of them last.
@@ -81,10 +82,12 @@ from .lightframe import (
 )
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import MAX_CURVE_SEGMENTS
+from .orientation import MAX_COORDINATE
 from .outline import Outline, OutlineSet, make_outlines
-from .seams import Loops, face_regions, loops_of, stitch, without_collinear
+from .seams import face_regions, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
+from .simplify import Loops, loops_of, without_collinear
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, closed_each, loops_taken, unique_integers
 
@@ -1040,13 +1043,11 @@ class _SurfaceProjector:
             # One column of cells: Clipper2 sweeps along y, so its scanlines
             # meet one face at a time. x is stretched to the full width.
             n_cells = len(faces)
-            cell = 2.0 * poly.MAX_COORDINATE / n_cells
+            cell = 2.0 * MAX_COORDINATE / n_cells
             slot = np.arange(n_cells)
-            centers = np.column_stack(
-                [np.zeros(n_cells), -poly.MAX_COORDINATE + cell * (slot + 0.5)]
-            )
+            centers = np.column_stack([np.zeros(n_cells), -MAX_COORDINATE + cell * (slot + 0.5)])
             extents = np.abs(limits.reshape(n_cells, -1)).max(axis=1)
-            scales = np.column_stack([0.5 * poly.MAX_COORDINATE / extents, 0.25 * cell / extents])
+            scales = np.column_stack([0.5 * MAX_COORDINATE / extents, 0.25 * cell / extents])
             index = np.full(len(full), -1, dtype=np.int64)
             index[faces] = slot
             rows = np.flatnonzero(index[owner] >= 0)
@@ -1062,7 +1063,7 @@ class _SurfaceProjector:
                 sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
                 points = np.concatenate(loops)
                 first_y = points[np.cumsum(sizes) - sizes, 1]
-                k = np.floor((first_y + poly.MAX_COORDINATE) / cell).astype(np.int64)
+                k = np.floor((first_y + MAX_COORDINATE) / cell).astype(np.int64)
                 k = np.clip(k, 0, n_cells - 1)
                 point_cell = np.repeat(k, sizes)
                 points = (points - centers[point_cell]) / scales[point_cell]

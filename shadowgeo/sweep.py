@@ -16,7 +16,7 @@ every sweep line (a comb of 12,000 teeth: 48,000 corners, 85 s to convert).
    polygons.
 
 Every orientation is certified against float64's rounding
-(:func:`shadowgeo.polygons.turns`' margins, for coordinates within
+(:func:`shadowgeo.orientation.turns`' margins, for coordinates within
 ``MAX_COORDINATE``; the loop is first scaled there by a power of two): one
 that rounding could decide (touching edges, three corners on a line that a
 triangle would need) gives None, and the caller takes the general way. The
@@ -30,7 +30,7 @@ import math
 
 import numpy as np
 
-from .polygons import MAX_COORDINATE, turn_sign, turns
+from .orientation import MAX_COORDINATE, turn_sign, turns
 
 # Corner kinds along the sweep (top to bottom).
 _START, _SPLIT, _END, _MERGE, _LEFT, _RIGHT = range(6)

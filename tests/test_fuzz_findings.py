@@ -134,24 +134,23 @@ def test_faces_cut_by_a_small_receiver_give_the_textbook_shadow(seed):
     assert shadow.diagnostics.clipped["outside_receiver"] > 10
 
 
-def load_fuzz_tool():
-    import importlib.util
+def load_fuzz_checks():
+    """tools/fuzz/check_geometry.py, the fuzzer's checks of geometry mode."""
+    import importlib
     import sys
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "tools" / "fuzz.py"
-    spec = importlib.util.spec_from_file_location("shadowgeo_fuzz_tool", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up here
-    spec.loader.exec_module(module)
-    return module
+    folder = str(Path(__file__).resolve().parents[1] / "tools")  # tools/ is not a package
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    return importlib.import_module("fuzz.check_geometry")
 
 
 def test_fuzz_flat_check_accepts_a_thin_slab_under_a_grazing_sun_and_flags_a_flat_one():
     # A unit square lit by a sun 1e-10 off its plane: its volume is a real
     # slab, area x cosine x sweep, 1.4e-8 thick (past the 1.4e-9 length
     # tolerance), which the old absolute threshold called flat.
-    fuzz = load_fuzz_tool()
+    fuzz = load_fuzz_checks()
     vertices = np.array([[0, 1, 0], [1, 1, 0], [1, 1, 1], [0, 1, 1.0]])
     faces = np.array([[0, 1, 2], [0, 2, 3]])
     direction = np.array([-0.9564962158535296, -1e-10, 0.2917447326994578])

@@ -291,11 +291,11 @@ def _loop_area(points):
 
 
 def test_repeated_points_and_spike_tips_go_loop_by_loop_as_each_loop_alone():
-    """seams._without_spikes on many loops at once: each loop comes out as
+    """simplify._without_spikes on many loops at once: each loop comes out as
     it does alone (loops that settle early are set aside, the others go on),
     in its place; no point repeats the one before, no tip of a zero-width
     spike is left, and each loop keeps its area."""
-    from shadowgeo.seams import _without_spikes
+    from shadowgeo.simplify import _without_spikes
 
     rng = np.random.default_rng(3)
     eps = 1e-9
@@ -336,7 +336,7 @@ def test_points_on_a_straight_run_are_dropped_and_corners_kept():
     a duplicate, a zero-width spike), a hole with one extra point, and a
     sliver loop of three points on a line: the corners alone are left, in
     order, the same areas, and the sliver goes."""
-    from shadowgeo.seams import without_collinear
+    from shadowgeo.simplify import without_collinear
 
     square = np.array(
         [[0, 0], [1, 0], [2, 0], [3, 0], [4, 0], [4, 2], [4, 2], [4, 4], [2, 4],
@@ -370,7 +370,7 @@ def test_dropping_points_moves_a_region_by_at_most_eps():
     line (a second pass changes nothing), every point dropped lies within
     eps of what is left, and each loop's area moves by no more than eps
     times its perimeter."""
-    from shadowgeo.seams import without_collinear
+    from shadowgeo.simplify import without_collinear
 
     rng = np.random.default_rng(11)
     eps = 1e-6

@@ -120,7 +120,7 @@ def test_a_certified_outline_is_cut_by_the_sweep_that_certified_it(monkeypatch):
         calls.append(triangles)
         return original(loop, triangles)
 
-    monkeypatch.setattr(sweep, "simple_triangles", counted)
+    monkeypatch.setattr(polygons, "simple_triangles", counted)  # the name polygons calls
     assert polygons.whole_loop([comb], keep_triangles=True)
     _, faces = polygons.triangulate_parts([[comb]])
     assert calls == [True]  # one sweep for the certificate and the triangles

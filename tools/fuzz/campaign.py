@@ -1,0 +1,254 @@
+"""The campaign: mutants and geometry cases run on the pool, recorded in
+results.jsonl, each failing signature's first input shrunk into its folder
+under ``--out/failures/``, and the summary written; or the failures of an
+earlier results.jsonl replayed and shrunk."""
+
+from __future__ import annotations
+
+import json
+import math
+import random
+import re
+import signal
+import sys
+import time
+from collections import Counter, defaultdict
+
+from .geometry import geometry_case, geometry_reproducer
+from .inputs import ENCODINGS, KNOWN, REFERENCE_TEMPLATE, TEMPLATES
+from .mutate import mutate
+from .pool import Pool
+from .shrink import shrink_case, shrink_input
+
+
+def converter_tasks(seeds, encodings, count: int, seed: int, first: int = 0):
+    """``count`` mutants per encoding, interleaved, from index ``first`` (mutant
+    ``i`` is the same whatever chunk it is run in)."""
+    plans = [e for e in encodings if seeds.get(e)]
+    for index in range(first, first + count):
+        for encoding in plans:
+            yield converter_task(seeds, encoding, index, seed)
+
+
+def converter_task(seeds, encoding: str, index: int, seed: int) -> dict:
+    """Mutant ``index`` of ``encoding``: the same for the same seed files and ``seed``."""
+    rng = random.Random(f"{seed}:{encoding}:{index}")
+    pool = seeds[encoding]
+    name, data = pool[rng.randrange(len(pool))]
+    others = [d for _, d in rng.sample(pool, min(3, len(pool)))]
+    try:
+        mutant, ops = mutate(data, encoding, rng, others)
+    except Exception as error:  # noqa: BLE001 - a mutator's own limit must not end the campaign
+        mutant, ops = data[: len(data) // 2], [f"bytes:truncate (mutator: {type(error).__name__})"]
+    template = rng.randrange(len(TEMPLATES))
+    return {
+        "kind": "convert",
+        "encoding": encoding,
+        "index": index,
+        "seed_file": name,
+        "ops": ops,
+        "data": mutant,
+        "suffix": ENCODINGS[encoding],
+        "argv": list(TEMPLATES[template]),
+        "reference": template == REFERENCE_TEMPLATE,
+    }
+
+
+def known_signatures(pool: Pool) -> dict[str, list[str]]:
+    """Signatures of the findings already filed (README in ../shared/findings/robustness),
+    so the summary can say which failures are known."""
+    tasks = []
+    for path in sorted((KNOWN / "api").glob("*.py")):
+        tasks.append({"kind": "script", "source": path.read_text(), "known": f"api/{path.name}"})
+    for path in sorted((KNOWN / "cli").glob("*.x3d")):
+        for template in (TEMPLATES[0], TEMPLATES[REFERENCE_TEMPLATE], TEMPLATES[4]):
+            tasks.append(
+                {
+                    "kind": "convert",
+                    "encoding": "x3d",
+                    "data": path.read_bytes(),
+                    "suffix": ".x3d",
+                    "argv": list(template),
+                    "reference": False,
+                    "known": f"cli/{path.name}",
+                }
+            )
+    found: dict[str, list[str]] = defaultdict(list)
+    for task, result in pool.run(tasks):
+        if result["signature"] and task["known"] not in found[result["signature"]]:
+            found[result["signature"]].append(task["known"])
+    return found
+
+
+def slug(text: str) -> str:
+    return re.sub(r"[^\w.-]+", "_", text).strip("_")[:90]
+
+
+def replay(args, seeds, pool: Pool) -> int:
+    """Shrink the failures a results.jsonl recorded (e.g. of a campaign that was stopped)."""
+    first: dict[str, dict] = {}
+    by_signature: Counter = Counter()
+    counts: dict[str, Counter] = defaultdict(Counter)
+    for line in args.replay.read_text().splitlines():
+        entry = json.loads(line)
+        group = entry.get("encoding", "geometry")
+        counts[group]["runs"] += 1
+        counts[group][f"exit {entry.get('code')}" if entry["ok"] else "FAIL"] += 1
+        if entry["ok"]:
+            continue
+        signature = entry["signature"]
+        by_signature[signature] += 1
+        counts[group][signature] += 1
+        if signature in first:
+            continue
+        if "case" in entry:
+            task = {"kind": "geometry", "case": geometry_case(args.seed, entry["case"])}
+        else:
+            task = converter_task(seeds, entry["encoding"], entry["index"], args.seed)
+        result = pool.map([dict(task)])[0]
+        if result.get("signature") != signature:
+            print(f"not reproduced: {signature} (now {result.get('signature')})", file=sys.stderr)
+        task.pop("slot", None)
+        first[signature] = dict(task, result=dict(result, detail=entry.get("detail", "")))
+    known = {} if args.no_known else known_signatures(pool)
+    rows = write_failures(args, pool, first, by_signature, known)
+    summary = summary_table(counts, rows, 0.0, args)
+    (args.out / "summary.md").write_text(summary)
+    print(summary)
+    return 1 if by_signature else 0
+
+
+def campaign(args, encodings, seeds, pool: Pool) -> int:
+    if args.replay:
+        return replay(args, seeds, pool)
+    started = time.monotonic()
+    known = {} if args.no_known else known_signatures(pool)
+    counts: dict[str, Counter] = defaultdict(Counter)
+    first: dict[str, dict] = {}
+    by_signature: Counter = Counter()
+    log = (args.out / "results.jsonl").open("w")
+    total = args.inputs * len([e for e in encodings if seeds.get(e)]) + args.geometry
+    done = 0
+
+    def record(task, result):
+        nonlocal done
+        done += 1
+        group = task.get("encoding", "geometry")
+        counts[group]["runs"] += 1
+        counts[group][f"exit {result.get('code')}" if result["ok"] else "FAIL"] += 1
+        entry = {k: v for k, v in task.items() if k not in ("data", "case", "slot")}
+        if "case" in task:
+            entry.update(case=task["case"]["index"], kind=task["case"]["kind"])
+        entry.update({k: v for k, v in result.items() if k != "detail"})
+        if not result["ok"]:
+            by_signature[result["signature"]] += 1
+            counts[group][result["signature"]] += 1
+            first.setdefault(result["signature"], dict(task, result=result))
+            entry["detail"] = result["detail"][-600:]
+        log.write(json.dumps(entry, default=str) + "\n")
+        if not args.quiet and (done % 25 == 0 or not result["ok"]):
+            rate = done / max(time.monotonic() - started, 1e-9)
+            print(
+                f"\r[{done}/{total}] {rate:5.1f} runs/s, {sum(by_signature.values())} failures, "
+                f"{len(by_signature)} signatures",
+                end="",
+                file=sys.stderr,
+                flush=True,
+            )
+
+    deadline = [started + 60 * args.max_minutes if args.max_minutes else math.inf]
+
+    def stop_now(signum, frame):  # SIGUSR1: start no more runs, shrink and summarise
+        deadline[0] = 0.0
+
+    signal.signal(signal.SIGUSR1, stop_now)
+
+    def until_deadline(tasks):
+        for task in tasks:
+            if time.monotonic() > deadline[0]:
+                return
+            yield task
+
+    # Geometry first when both run: it is quick, and a deadline then cuts mutants.
+    cases = (
+        {"kind": "geometry", "case": geometry_case(args.seed, i)} for i in range(args.geometry)
+    )
+    for task, result in pool.run(until_deadline(cases)):
+        record(task, result)
+    mutants = converter_tasks(seeds, encodings, args.inputs, args.seed, args.first_index)
+    for task, result in pool.run(until_deadline(mutants)):
+        record(task, result)
+    log.close()
+    if not args.quiet:
+        print(file=sys.stderr)
+    rows = write_failures(args, pool, first, by_signature, known)
+    summary = summary_table(counts, rows, time.monotonic() - started, args)
+    (args.out / "summary.md").write_text(summary)
+    print(summary)
+    return 1 if by_signature else 0
+
+
+def write_failures(args, pool: Pool, first, by_signature, known) -> list[list[str]]:
+    rows = []
+    for number, (signature, count) in enumerate(by_signature.most_common(), start=1):
+        task = first[signature]
+        folder = args.out / "failures" / f"{number:02d}_{slug(signature)}"
+        folder.mkdir(parents=True, exist_ok=True)
+        result = task["result"]
+        tries = args.shrink_tries if not signature.startswith("timeout") else 8
+        if task["kind"] == "geometry":
+            (folder / "original.py").write_text(geometry_reproducer(task["case"]))
+            small = shrink_case(pool, task["case"], signature, tries)
+            (folder / "smallest.py").write_text(geometry_reproducer(small))
+            smallest = f"{len(small['faces'])} faces"
+            run = f"python {folder.name}/smallest.py"
+        else:
+            suffix = task["suffix"]
+            (folder / f"original{suffix}").write_bytes(task["data"])
+            small_data = shrink_input(pool, task, signature, tries)
+            (folder / f"smallest{suffix}").write_bytes(small_data)
+            smallest = f"{len(small_data)} bytes"
+            argv = [
+                f"smallest{suffix}" if a == "IN" else ("out" + a[3:] if a.startswith("OUT") else a)
+                for a in task["argv"]
+            ]
+            run = "shadowgeo " + " ".join(argv)
+        note = {k: v for k, v in task.items() if k not in ("data", "result", "slot", "case")}
+        if "case" in task:
+            note.update({k: task["case"][k] for k in ("seed", "index", "kind", "light_kind")})
+        (folder / "README.txt").write_text(
+            f"signature: {signature}\nruns failing this way: {count}\nreproduce: {run}\n"
+            f"task: {json.dumps(note, default=str)}\n\n{result['detail']}\n"
+        )
+        also = ", ".join(known.get(signature, [])) or "-"
+        rows.append([str(number), signature, str(count), smallest, run, also])
+    return rows
+
+
+def summary_table(counts, rows, seconds: float, args) -> str:
+    lines = [
+        f"# shadowgeo fuzz: seed {args.seed}, {args.inputs} mutants per encoding, "
+        f"{args.geometry} geometry cases, {seconds:.0f} s, jobs {args.jobs}, "
+        f"budget {args.time_budget:g} s / {args.memory_budget:g} GiB",
+        "",
+        "| encoding | runs | exit 0 | exit 1 | exit 2 | failures |",
+        "|---|---|---|---|---|---|",
+    ]
+    for group in sorted(counts):
+        c = counts[group]
+        lines.append(
+            f"| {group} | {c['runs']} | {c['exit 0']} | {c['exit 1']} | {c['exit 2']} "
+            f"| {c['FAIL']} |"
+        )
+    lines += ["", "| # | signature | runs | smallest | reproduce | known finding |"]
+    lines.append("|---|---|---|---|---|---|")
+    lines += ["| " + " | ".join(row) + " |" for row in rows] or ["| - | no failures | | | | |"]
+    per = [
+        f"| {group} | {sig} | {n} |"
+        for group in sorted(counts)
+        for sig, n in counts[group].most_common()
+        if sig not in ("runs", "FAIL") and not sig.startswith("exit ")
+    ]
+    if per:
+        lines += ["", "| encoding | signature | runs |", "|---|---|---|", *per]
+    return "\n".join(lines) + "\n"
