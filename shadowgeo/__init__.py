@@ -7,12 +7,13 @@ from __future__ import annotations
 
 from .errors import GeometryError, SceneError
 from .io import load, save
-from .lights import DirectionalLight, Light, PointLight, SpotLight
+from .lights import DirectionalLight, DiskLight, Light, PointLight, RectLight, SpotLight
 from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Shape, Viewpoint
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
+from .soft import SoftShadow, soft_shadow
 from .sun import sun_direction
 from .sunstudy import (
     DaySummary,
@@ -32,12 +33,14 @@ __all__ = [
     "Caster",
     "DaySummary",
     "DirectionalLight",
+    "DiskLight",
     "GeometryError",
     "Light",
     "Material",
     "MeshLike",
     "Plane",
     "PointLight",
+    "RectLight",
     "Scene",
     "SceneError",
     "SceneLight",
@@ -45,6 +48,7 @@ __all__ = [
     "ShadowDiagnostics",
     "Shape",
     "Silhouette",
+    "SoftShadow",
     "SpotLight",
     "SunStudies",
     "SunStudy",
@@ -61,6 +65,7 @@ __all__ = [
     "shadow_on_surface",
     "shadow_volume",
     "silhouette",
+    "soft_shadow",
     "sun_direction",
     "sun_study",
     "sun_study_by_day",

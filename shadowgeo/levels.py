@@ -167,6 +167,41 @@ def cover_levels(
     return dict(sorted(levels.items()))
 
 
+def cover_bands(
+    regions: list[list[NDArray[np.float64]]],
+    window: CrossSection,
+    thresholds: list[int],
+    *,
+    tile_vertices: int = TILE_VERTICES,
+) -> list[Parts]:
+    """The parts of ``window`` covered by at least ``thresholds[i]`` of
+    ``regions`` and fewer than ``thresholds[i + 1]`` (the last: no upper
+    limit), for increasing ``thresholds`` of at least 1: :func:`cover_levels`
+    with one union per threshold instead of one per level, for many regions
+    grouped into a few bands (a soft shadow's samples).
+
+    >>> import numpy as np
+    >>> square = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float)
+    >>> window = CrossSection([np.array([[0, 0], [3, 0], [3, 1], [0, 1]], dtype=float)])
+    >>> bands = cover_bands([[square], [square + [0.5, 0]], [square + [1, 0]]], window, [1, 2])
+    >>> [round(sum(CrossSection(p).area() for p in parts), 9) for parts in bands]
+    [1.0, 1.0]
+    """
+    if any(b <= a for a, b in zip(thresholds, thresholds[1:], strict=False)) or (
+        thresholds and thresholds[0] < 1
+    ):
+        raise ValueError(f"thresholds must increase from 1 up, got {thresholds}")
+    bands: list[Parts] = [[] for _ in thresholds]
+    for tile, whole, winding in _window_tiles(regions, window, tile_vertices):
+        regions_at = [winding.at_least(m, tile, whole) for m in thresholds]
+        for index, region in enumerate(regions_at):
+            if index + 1 < len(regions_at):
+                region = region - regions_at[index + 1]
+            if not region.is_empty():
+                bands[index].extend(_parts(region))
+    return bands
+
+
 def cover_level_areas(
     regions: list[list[NDArray[np.float64]]],
     window: CrossSection,

@@ -31,6 +31,14 @@ def _unit(vector: ArrayLike, name: str) -> NDArray[np.float64]:
     return unit
 
 
+def _size(value: float, name: str, upper: float = math.inf) -> float:
+    """A light's size (a source radius, an angle): finite, >= 0, below ``upper``."""
+    value = float(value)
+    if not 0 <= value < upper:
+        raise GeometryError(f"{name} must be in [0, {upper:g}), got {value!r}")
+    return value
+
+
 def _radius(radius: float) -> float:
     radius = float(radius)
     if math.isnan(radius) or radius <= 0:
@@ -41,14 +49,21 @@ def _radius(radius: float) -> float:
 @dataclass(frozen=True, eq=False)
 class PointLight:
     """A light at ``position`` shining in every direction, up to ``radius``
-    (X3D's range; ``inf`` for no limit)."""
+    (X3D's range; ``inf`` for no limit). ``source_radius``: the radius of the
+    glowing sphere (UsdLux ``SphereLight.radius``); 0, a point, is all the
+    hard-shadow functions see (they cast from ``position``), and
+    :func:`shadowgeo.soft_shadow` gives its umbra and penumbra."""
 
     position: NDArray[np.float64]
     radius: float = math.inf
+    source_radius: float = 0.0
 
-    def __init__(self, position: ArrayLike, radius: float = math.inf) -> None:
+    def __init__(
+        self, position: ArrayLike, radius: float = math.inf, source_radius: float = 0.0
+    ) -> None:
         object.__setattr__(self, "position", finite_vector(position, "light position"))
         object.__setattr__(self, "radius", _radius(radius))
+        object.__setattr__(self, "source_radius", _size(source_radius, "source_radius"))
 
     @property
     def homogeneous(self) -> NDArray[np.float64]:
@@ -56,18 +71,25 @@ class PointLight:
         return np.append(self.position, 1.0)
 
     def __repr__(self) -> str:
-        return f"PointLight(position={self.position.tolist()}, radius={self.radius!r})"
+        size = f", source_radius={self.source_radius!r}" if self.source_radius else ""
+        return f"PointLight(position={self.position.tolist()}, radius={self.radius!r}{size})"
 
 
 @dataclass(frozen=True, eq=False)
 class DirectionalLight:
     """A light infinitely far away whose rays travel along ``direction``
-    (X3D's convention: the way the light goes, not where it comes from)."""
+    (X3D's convention: the way the light goes, not where it comes from).
+    ``angle``: the angular diameter of its disc in radians (UsdLux
+    ``DistantLight.angle``, in degrees there: the sun's is 0.53 degrees); 0
+    is all the hard-shadow functions see, :func:`shadowgeo.soft_shadow`
+    gives its umbra and penumbra."""
 
     direction: NDArray[np.float64]
+    angle: float = 0.0
 
-    def __init__(self, direction: ArrayLike) -> None:
+    def __init__(self, direction: ArrayLike, angle: float = 0.0) -> None:
         object.__setattr__(self, "direction", _unit(direction, "light direction"))
+        object.__setattr__(self, "angle", _size(angle, "angle", math.pi))
 
     @property
     def homogeneous(self) -> NDArray[np.float64]:
@@ -75,18 +97,21 @@ class DirectionalLight:
         return np.append(-self.direction, 0.0)
 
     def __repr__(self) -> str:
-        return f"DirectionalLight(direction={self.direction.tolist()})"
+        size = f", angle={self.angle!r}" if self.angle else ""
+        return f"DirectionalLight(direction={self.direction.tolist()}{size})"
 
 
 @dataclass(frozen=True, eq=False)
 class SpotLight:
     """A light at ``position`` lighting the cone of half-angle ``cut_off_angle``
-    (radians, in (0, pi/2]) around ``direction``, up to ``radius``."""
+    (radians, in (0, pi/2]) around ``direction``, up to ``radius``;
+    ``source_radius`` as :class:`PointLight`'s."""
 
     position: NDArray[np.float64]
     direction: NDArray[np.float64]
     cut_off_angle: float = math.pi / 4
     radius: float = math.inf
+    source_radius: float = 0.0
 
     def __init__(
         self,
@@ -94,6 +119,7 @@ class SpotLight:
         direction: ArrayLike,
         cut_off_angle: float = math.pi / 4,
         radius: float = math.inf,
+        source_radius: float = 0.0,
     ) -> None:
         cut_off_angle = float(cut_off_angle)
         if not 0 < cut_off_angle <= math.pi / 2:
@@ -104,6 +130,7 @@ class SpotLight:
         object.__setattr__(self, "direction", _unit(direction, "light direction"))
         object.__setattr__(self, "cut_off_angle", cut_off_angle)
         object.__setattr__(self, "radius", _radius(radius))
+        object.__setattr__(self, "source_radius", _size(source_radius, "source_radius"))
 
     @property
     def homogeneous(self) -> NDArray[np.float64]:
@@ -113,7 +140,75 @@ class SpotLight:
     def __repr__(self) -> str:
         return (
             f"SpotLight(position={self.position.tolist()}, direction={self.direction.tolist()}, "
-            f"cut_off_angle={self.cut_off_angle!r}, radius={self.radius!r})"
+            f"cut_off_angle={self.cut_off_angle!r}, radius={self.radius!r}"
+            + (f", source_radius={self.source_radius!r})" if self.source_radius else ")")
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class RectLight:
+    """A one-sided rectangle of ``width`` x ``height`` centred on ``position``,
+    emitting towards ``direction`` (its normal; UsdLux ``RectLight``), its
+    ``width`` along ``up`` x ``direction`` and its ``height`` along the part of
+    ``up`` across ``direction``. For :func:`shadowgeo.soft_shadow`."""
+
+    position: NDArray[np.float64]
+    direction: NDArray[np.float64]
+    width: float
+    height: float
+    up: NDArray[np.float64]
+
+    def __init__(
+        self,
+        position: ArrayLike,
+        direction: ArrayLike,
+        width: float,
+        height: float,
+        up: ArrayLike = (0.0, 1.0, 0.0),
+    ) -> None:
+        normal = _unit(direction, "light direction")
+        toward = finite_vector(up, "light up")
+        across = toward - (toward @ normal) * normal
+        if not float(np.linalg.norm(across)) > 0:  # up along the normal: any across it
+            toward = np.eye(3)[int(np.argmin(np.abs(normal)))]
+            across = toward - (toward @ normal) * normal
+        object.__setattr__(self, "position", finite_vector(position, "light position"))
+        object.__setattr__(self, "direction", normal)
+        object.__setattr__(self, "width", _size(width, "width"))
+        object.__setattr__(self, "height", _size(height, "height"))
+        object.__setattr__(self, "up", _unit(across, "light up"))
+
+    @property
+    def axes(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Unit vectors along its width and its height."""
+        return np.cross(self.up, self.direction), self.up
+
+    def __repr__(self) -> str:
+        return (
+            f"RectLight(position={self.position.tolist()}, direction={self.direction.tolist()}, "
+            f"width={self.width!r}, height={self.height!r}, up={self.up.tolist()})"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class DiskLight:
+    """A one-sided disc of ``radius`` centred on ``position``, emitting
+    towards ``direction`` (its normal; UsdLux ``DiskLight``). For
+    :func:`shadowgeo.soft_shadow`."""
+
+    position: NDArray[np.float64]
+    direction: NDArray[np.float64]
+    radius: float
+
+    def __init__(self, position: ArrayLike, direction: ArrayLike, radius: float) -> None:
+        object.__setattr__(self, "position", finite_vector(position, "light position"))
+        object.__setattr__(self, "direction", _unit(direction, "light direction"))
+        object.__setattr__(self, "radius", _size(radius, "radius"))
+
+    def __repr__(self) -> str:
+        return (
+            f"DiskLight(position={self.position.tolist()}, direction={self.direction.tolist()}, "
+            f"radius={self.radius!r})"
         )
 
 

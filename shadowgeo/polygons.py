@@ -1109,3 +1109,19 @@ def polygons_triangles(
     triangles.append(fan(block))
     owners.append(np.repeat(rows, block.shape[1] - 2))
     return np.concatenate(triangles).astype(np.int64), np.concatenate(owners).astype(np.int64)
+
+
+def points_in_parts(points: np.ndarray, parts: list[list[np.ndarray]]) -> np.ndarray:
+    """(p,) bool: which of ``points`` (p, 2) lie in the polygons ``parts``
+    (``[outer, hole, ...]`` lists), by the even-odd rule over every loop,
+    all points at once per edge."""
+    inside = np.zeros(len(points), dtype=bool)
+    for part in parts:
+        for loop in part:
+            start, end = loop, np.roll(loop, -1, axis=0)
+            for (x0, y0), (x1, y1) in zip(start, end, strict=True):
+                crosses = (y0 > points[:, 1]) != (y1 > points[:, 1])
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    x_at = x0 + (points[:, 1] - y0) * (x1 - x0) / (y1 - y0)
+                inside ^= crosses & (points[:, 0] < x_at)
+    return inside

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import GeometryError
 from .levels import cover_level_areas, cover_levels
 from .plane import Plane
-from .polygons import components, local_scale, signed_areas
+from .polygons import components, local_scale, points_in_parts, signed_areas
 from .projection import project_shadow
 from .sun import days, sun_lights
 from .topology import as_caster
@@ -123,10 +123,10 @@ class SunStudy:
         """Sunlight duration, in hours, at (n, 2) plane points of the region
         (NaN outside it), from the shadows' polygons by even-odd ray crossing."""
         uv = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        inside_region = _inside(uv, self.region)
+        inside_region = points_in_parts(uv, self.region)
         shadowed = np.zeros(len(uv))
         for shadow in self.shadows:
-            shadowed += _inside(uv, shadow)
+            shadowed += points_in_parts(uv, shadow)
         lit = (len(self.times) - shadowed) * self.step.total_seconds() / 3600.0
         return np.where(inside_region, lit, np.nan)
 
@@ -174,20 +174,6 @@ def days_table(summaries: dict[_dt.date, DaySummary], hours: float) -> str:
     for day, summary in summaries.items():
         lines.append(f"| {day} | {summary.samples} | {summary.fraction_meeting(hours):.4f} |")
     return "\n".join(lines)
-
-
-def _inside(uv: NDArray[np.float64], polygons: Polygons) -> NDArray[np.bool_]:
-    """Even-odd point-in-polygons test, all points at once per edge loop."""
-    inside = np.zeros(len(uv), dtype=bool)
-    for part in polygons:
-        for loop in part:
-            start, end = loop, np.roll(loop, -1, axis=0)
-            for (x0, y0), (x1, y1) in zip(start, end, strict=True):
-                crosses = (y0 > uv[:, 1]) != (y1 > uv[:, 1])
-                with np.errstate(divide="ignore", invalid="ignore"):
-                    x_at = x0 + (uv[:, 1] - y0) * (x1 - x0) / (y1 - y0)
-                inside ^= crosses & (uv[:, 0] < x_at)
-    return inside
 
 
 def _region_polygon(plane: Plane, region: ArrayLike) -> NDArray[np.float64]:
