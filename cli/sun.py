@@ -218,6 +218,17 @@ def run(args: argparse.Namespace) -> int:
             inputs, studies = _study(args, scene, times, step, zone, scheduler, bar)
     except (ImportError, OSError) as error:
         return dask_failure("sun", error)
+    except Exception as error:
+        if type(error).__name__ != "KilledWorker":
+            raise
+        # Dask ran the day again on other workers (allowed-failures) and gave up
+        day = str(getattr(error, "task", "")).removeprefix("sun-summary-")
+        print(
+            f"shadowgeo sun: the Dask worker studying {day or 'a day'} died on each try "
+            "(KilledWorker: killed, or out of memory); nothing was written",
+            file=sys.stderr,
+        )
+        return 1
     finally:
         if bar is not None:
             bar.close()

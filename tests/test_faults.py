@@ -514,3 +514,58 @@ def test_a_worker_killed_mid_batch_is_retried_or_its_file_reported(tmp_path, tri
         if outcome.ok:
             assert_whole(outcome.target, expected[outcome.source.stem])
         assert_whole_or_absent(outcome.target, expected[outcome.source.stem])
+
+
+def test_a_worker_killed_in_a_sun_study_on_dask_is_one_line_naming_the_day(capsys):
+    """Several days of ``shadowgeo sun`` on a cluster whose worker is SIGKILLed
+    while it studies a day, Dask's allowed-failures at 0: one line naming the
+    day, exit 1, no traceback (sun writes no file over several days)."""
+    need("dask")
+    import threading
+
+    import dask
+    from dask.distributed import Client, LocalCluster
+
+    killed: list[int] = []
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with (
+            LocalCluster(
+                n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+            ) as cluster,
+            Client(cluster) as client,
+        ):
+
+            def kill_a_busy_worker() -> None:
+                end = time.monotonic() + 60
+                while not killed and time.monotonic() < end:
+                    busy = [address for address, keys in client.processing().items() if keys]
+                    if busy:
+                        pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
+                        os.kill(pid, signal.SIGKILL)
+                        killed.append(pid)
+                    time.sleep(0.02)
+
+            killer = threading.Thread(target=kill_a_busy_worker)
+            killer.start()
+            code = main(
+                [
+                    "sun",
+                    str(COURTYARD),
+                    "--at",
+                    "51.5,-0.12",
+                    "--date",
+                    "2026-03-21",
+                    "--days",
+                    "3",
+                    "--every",
+                    "20",
+                    "--scheduler",
+                    cluster.scheduler_address,
+                ]
+            )
+            killer.join()
+    stderr = capsys.readouterr().err
+    assert killed, "no worker was busy: nothing was killed"
+    assert code == 1, stderr
+    assert "Traceback" not in stderr
+    assert stderr.splitlines()[-1].startswith("shadowgeo sun: the Dask worker studying 2026-03-2")
