@@ -21,6 +21,7 @@ import io
 import os
 import random
 import resource
+import shutil
 import signal
 import subprocess
 import sys
@@ -569,3 +570,36 @@ def test_a_worker_killed_in_a_sun_study_on_dask_is_one_line_naming_the_day(capsy
     assert code == 1, stderr
     assert "Traceback" not in stderr
     assert stderr.splitlines()[-1].startswith("shadowgeo sun: the Dask worker studying 2026-03-2")
+
+
+def test_sigterm_mid_batch_on_a_local_cluster_leaves_whole_files_and_no_worker(tmp_path):
+    """SIGTERM to a batch on a LocalCluster of two worker processes once its
+    first file is written: exit 143, each output whole or absent, no
+    temporary file, and no worker left running (to write after the exit)."""
+    need("dask")
+    need_proc()
+    import psutil
+
+    scene = grid_scene(tmp_path / "grid.x3d", n=100)
+    assert main(["convert", str(scene), str(tmp_path / "clean.x3d")]) == 0
+    expected = (tmp_path / "clean.x3d").read_bytes()
+    inputs = tmp_path / "in"
+    inputs.mkdir()
+    for index in range(8):
+        shutil.copy(scene, inputs / f"scene{index}.x3d")
+    out = tmp_path / "out"
+    process = start("convert", inputs, out, "--workers", "2")
+    wait_until(lambda: list(out.glob("*.x3d")), process, "a first output", limit=120)
+    workers = psutil.Process(process.pid).children(recursive=True)
+    process.send_signal(signal.SIGTERM)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 143, stderr
+    assert stderr.splitlines()[-1] == "shadowgeo: stopped by SIGTERM"
+    assert "Traceback" not in stderr
+    _, alive = psutil.wait_procs(workers, timeout=10)
+    assert alive == [], f"workers still running after the exit: {alive}"
+    written = sorted(out.glob("*.x3d"))
+    assert 1 <= len(written) < 8
+    for path in written:
+        assert_whole(path, expected)
+    assert temporaries(out) == []
