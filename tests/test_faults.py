@@ -603,3 +603,36 @@ def test_sigterm_mid_batch_on_a_local_cluster_leaves_whole_files_and_no_worker(t
     for path in written:
         assert_whole(path, expected)
     assert temporaries(out) == []
+
+
+def test_a_png_the_kernel_refuses_is_one_line_and_no_truncated_file(tmp_path):
+    """``render`` under RLIMIT_FSIZE: VTK's PNG writer does not raise, it only
+    sets an error code; the truncated picture must not be renamed into place."""
+    done = subprocess.run(
+        command("render", COURTYARD, tmp_path / "can.png", "--size", "320x240"),
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    if done.returncode != 0:
+        absent(f"render does not work here: {done.stderr.strip().splitlines()[-1:]}")
+
+    def limited() -> None:
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (2048, 2048))
+
+    out = tmp_path / "out" / "courtyard.png"
+    out.parent.mkdir()
+    done = subprocess.run(
+        command("render", COURTYARD, out, "--size", "320x240"),
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=limited,
+    )
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.splitlines()[-1].startswith(f"shadowgeo render: {out}: cannot write: ")
+    assert "Traceback" not in done.stderr
+    assert list(out.parent.iterdir()) == []
