@@ -453,10 +453,11 @@ def test_remove_stale_removes_only_the_temporaries_of_dead_writers_here(tmp_path
         other_host = "0" * 8 if host != "0" * 8 else "1" * 8
         dead = tmp_path / f".scene.glb.{host}-{dead_pid}-0123abcd.glb"
         elsewhere = tmp_path / f".scene.glb.{other_host}-{dead_pid}-0123abcd.glb"
+        usd_core = tmp_path / f".scene.glb.{host}-{dead_pid}-0123abcd.HOpbJl"  # usd-core's own
         other_file = tmp_path / f".other.glb.{host}-{dead_pid}-0123abcd.glb"
-        for path in (dead, elsewhere, other_file):
+        for path in (dead, usd_core, elsewhere, other_file):
             path.write_bytes(b"half")
-        assert remove_stale([target]) == [dead]
+        assert sorted(remove_stale([target])) == sorted([dead, usd_core])
         assert ours.exists() and elsewhere.exists() and other_file.exists()
     assert not ours.exists() and target.exists()
 

@@ -25,7 +25,10 @@ import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-# What follows ".<name>." in a temporary file's name: host tag, pid, random.
+# What follows ".<name>" in a temporary file's name: host tag, pid, random,
+# then the suffix; or usd-core's own sibling temporary file, which Export
+# writes first and renames to ours, our name with 6 random characters for
+# the suffix (strace of usd-core 26.11): the same owner, so swept too.
 _OWNER = re.compile(r"\.(?P<host>[0-9a-f]{8})-(?P<pid>[0-9]+)-[0-9a-f]{8}(\.[^.]*)?$")
 
 
