@@ -107,6 +107,9 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
     if skipped:
         print(f"note: skipped {skipped} file(s) no reader takes", file=sys.stderr)
     jobs, renamed = distinct_targets(jobs)
+    first_in = {target.parent: target for _, target in reversed(jobs)}
+    for target in first_in.values():  # a folder that cannot be written, before the long work
+        shadowgeo.io.check_writable(target)
     for source, target in renamed:
         print(
             f"note: {source} is written as {target.name}: another input has the same name "

@@ -13,7 +13,8 @@ import sys
 from pathlib import Path
 
 import shadowgeo
-from shadowgeo.batch import shadowed
+from shadowgeo.batch import save_output, shadowed
+from shadowgeo.io.atomic import remove_stale
 
 from .batch import run_batch
 from .common import ProgressBar, add_dask_arguments, options_of, plane_argument
@@ -46,8 +47,10 @@ by default), on a running cluster (--scheduler ADDRESS; its workers must see
 the same paths), or one after another here (--serial); the outputs are the
 same bytes either way. Outputs keep the input's format unless --format names
 one (inputs with no writer, such as .obj, become .glb).
-Exit codes: 0 done, 1 bad input (one line naming the file and what is wrong;
-in a batch, any file failed), 2 bad usage.
+Exit codes: 0 done, 1 bad input or an output that cannot be written (one line
+naming the file and what is wrong; in a batch, any file failed), 2 bad usage,
+130 interrupted (Ctrl-C, SIGINT), 143 stopped by SIGTERM. Every output is
+written atomically: whole, or not there (a file it replaces is left as it was).
 """
 
 
@@ -238,12 +241,9 @@ def run(args: argparse.Namespace) -> int:
             bar.close()
     known = len(scene.warnings)
     try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shadowgeo.save(result, target)
-    except OSError as error:
-        raise shadowgeo.SceneError(
-            f"cannot write: {error.strerror or error}", path=str(target)
-        ) from None
+        save_output(result, target)
+    finally:
+        remove_stale([target])  # what a run killed outright left beside it
     print_notes(result.warnings, known, args.input)
     added = [s for s in result.shapes if s.role in ("shadow", "volume")]  # not the ground
     groups = sorted({s.group for s in added if s.group})

@@ -7,7 +7,9 @@ options, the progress bar) is in ``common.py``, which they import; no command
 imports another's module but ``convert``, which hands its batch form to
 ``batch.py``.
 
-Exit codes: 0 done, 1 bad input, 2 bad usage.
+Exit codes: 0 done, 1 bad input (or an output that cannot be written), 2 bad
+usage; 130 interrupted (SIGINT, Ctrl-C), 143 terminated (SIGTERM), after
+removing what was half written (:mod:`cli.interrupt`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ import re
 import sys
 
 import shadowgeo
+
+from .interrupt import Terminated, exit_code, signals_unwind
 
 # Command modules, in the order --help lists them.
 COMMANDS = ("convert", "sun", "info", "render", "view")
@@ -61,6 +65,16 @@ def negative_values_joined(argv: list[str]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    with signals_unwind():
+        try:
+            return run(argv)
+        except KeyboardInterrupt as interrupt:  # SIGINT, or SIGTERM as Terminated
+            why = f"stopped by {interrupt}" if isinstance(interrupt, Terminated) else "interrupted"
+            print(f"shadowgeo: {why}", file=sys.stderr)
+            return exit_code(interrupt)
+
+
+def run(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(negative_values_joined(sys.argv[1:] if argv is None else argv))
     if args.command is None:
@@ -71,6 +85,3 @@ def main(argv: list[str] | None = None) -> int:
     except (shadowgeo.SceneError, shadowgeo.GeometryError) as error:
         print(f"shadowgeo {args.command}: {error}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
-        print("shadowgeo: interrupted", file=sys.stderr)
-        return 130

@@ -18,6 +18,8 @@ from pathlib import Path
 from typing import Any
 
 import shadowgeo
+from shadowgeo.batch import save_output
+from shadowgeo.io.atomic import remove_stale
 from shadowgeo.scene.sunlight import SceneStudy, study_scene, sunlight_shapes
 from shadowgeo.sunstudy import days_table
 
@@ -51,7 +53,9 @@ day by day. OUT (one day) is the scene with the day's map of sunlight hours
 added as shapes, dark purple (none) to yellow (sun all day).
 Several days run on a Dask LocalCluster started here (--workers N), on a
 running cluster (--scheduler ADDRESS) or here (--serial); the results are the
-same either way. Exit codes: 0 done, 1 bad input, 2 bad usage.
+same either way. Exit codes: 0 done, 1 bad input or OUT cannot be written,
+2 bad usage, 130 interrupted (Ctrl-C, SIGINT), 143 stopped by SIGTERM; OUT is
+written atomically: whole, or not there.
 """
 
 
@@ -214,6 +218,17 @@ def run(args: argparse.Namespace) -> int:
             inputs, studies = _study(args, scene, times, step, zone, scheduler, bar)
     except (ImportError, OSError) as error:
         return dask_failure("sun", error)
+    except Exception as error:
+        if type(error).__name__ != "KilledWorker":
+            raise
+        # Dask ran the day again on other workers (allowed-failures) and gave up
+        day = str(getattr(error, "task", "")).removeprefix("sun-summary-")
+        print(
+            f"shadowgeo sun: the Dask worker studying {day or 'a day'} died on each try "
+            "(KilledWorker: killed, or out of memory); nothing was written",
+            file=sys.stderr,
+        )
+        return 1
     finally:
         if bar is not None:
             bar.close()
@@ -247,12 +262,9 @@ def run(args: argparse.Namespace) -> int:
             shapes = sunlight_shapes(study, inputs.scale)
             added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
             try:
-                args.output.parent.mkdir(parents=True, exist_ok=True)
-                shadowgeo.save(added, args.output)
-            except OSError as error:
-                raise shadowgeo.SceneError(
-                    f"cannot write: {error.strerror or error}", path=str(args.output)
-                ) from None
+                save_output(added, args.output)
+            finally:
+                remove_stale([args.output])  # what a run killed outright left beside it
             triangles = sum(shape.n_faces for shape in shapes)
             print(f"wrote {args.output}: {len(shapes)} sunlight shape(s), {triangles} triangles")
         return 0

@@ -5,7 +5,11 @@ save atomically). :func:`convert_files` runs the jobs one after another in
 this process, or hands them to Dask (``scheduler``), one task a file; either
 way a file's output is byte for byte the same, and a file that fails is
 reported with its name while the others go on. Dask only schedules: nothing
-here queues, retries or balances work itself.
+here queues, retries or balances work itself. A task whose worker dies is run
+again on another by Dask (``distributed.scheduler.allowed-failures`` times, 3
+by default), then reported as failed; as every output is written atomically,
+a file is whole or not there (the hidden temporary files of workers killed
+mid-write are removed when the batch ends: :func:`~shadowgeo.io.atomic.remove_stale`).
 
 On a cluster every worker must see the input and output paths under the same
 names (a shared file system) and have shadowgeo installed.
@@ -21,6 +25,7 @@ from typing import Any, Literal
 
 from .errors import GeometryError, SceneError
 from .io import READERS, load, save
+from .io.atomic import remove_stale
 from .lights import DirectionalLight
 from .plane import Plane
 from .scene import Scene, SceneLight
@@ -112,8 +117,7 @@ def convert_file(source: Path, target: Path, options: ConvertOptions) -> Outcome
             raise SceneError("OUT is the input file; it is never overwritten", path=str(target))
         scene, result = shadowed(source, options)
         known = len(scene.warnings)
-        target.parent.mkdir(parents=True, exist_ok=True)
-        save(result, target)
+        save_output(result, target)
     except (SceneError, GeometryError) as error:
         return Outcome(source, target, error=str(error))
     except OSError as error:
@@ -129,6 +133,18 @@ def convert_file(source: Path, target: Path, options: ConvertOptions) -> Outcome
         n_triangles=sum(shape.n_faces for shape in added),
         groups=tuple(sorted({shape.group for shape in added if shape.group})),
     )
+
+
+def save_output(scene: Scene, target: Path) -> None:
+    """:func:`shadowgeo.save` into ``target``'s folder, made if missing; an
+    error of the file system (a full disk, a folder that cannot be written)
+    is a :class:`SceneError` naming ``target``. Atomic: ``target`` is left
+    whole or as it was, with no temporary file beside it."""
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        save(scene, target)
+    except OSError as error:
+        raise SceneError(f"cannot write: {error.strerror or error}", path=str(target)) from None
 
 
 def convert_files(
@@ -156,7 +172,9 @@ def convert_files(
     Returns
     -------
     list of Outcome
-        In the order of ``jobs``, whatever order they finished in.
+        In the order of ``jobs``, whatever order they finished in; a file
+        whose task never came back (its Dask worker died on every try) has
+        an ``error`` saying so.
     """
     total = len(jobs)
     first: dict[Path, Path] = {}
@@ -166,13 +184,28 @@ def convert_files(
                 f"{first[target]} and {source} would be written to the same output file {target}"
             )
         first[target] = source
-    if scheduler is None:
-        outcomes = []
-        for done, (source, target) in enumerate(jobs, start=1):
-            outcomes.append(convert_file(source, target, options))
-            if progress:
-                progress(done, total)
-        return outcomes
+    try:
+        if scheduler is None:
+            outcomes = []
+            for done, (source, target) in enumerate(jobs, start=1):
+                outcomes.append(convert_file(source, target, options))
+                if progress:
+                    progress(done, total)
+            return outcomes
+        return _on_dask(jobs, options, scheduler, workers, progress)
+    finally:
+        # after the cluster is shut down: what its killed workers left
+        remove_stale(target for _, target in jobs)
+
+
+def _on_dask(
+    jobs: Sequence[tuple[Path, Path]],
+    options: ConvertOptions,
+    scheduler: Any,
+    workers: int | None,
+    progress: Callable[[int, int], None] | None,
+) -> list[Outcome]:
+    total = len(jobs)
     from .parallel import client_for
 
     with client_for(scheduler, workers=workers) as client:
@@ -186,8 +219,11 @@ def convert_files(
         index_of = {future.key: index for index, future in enumerate(futures)}
         finished: dict[int, Outcome] = {}
         for future in as_completed(futures):
-            outcome = future.result()
             index = index_of[future.key]
+            try:
+                outcome = future.result()
+            except Exception as lost:  # the task never returned
+                outcome = Outcome(*jobs[index], error=_lost(lost, jobs[index][1]))
             # report the paths as the caller gave them, as the serial run does
             source, target = jobs[index]
             given = {str(source.resolve()): str(source), str(target.resolve()): str(target)}
@@ -206,3 +242,14 @@ def convert_files(
             if progress:
                 progress(len(finished), total)
         return [finished[index] for index in range(total)]
+
+
+def _lost(error: Exception, target: Path) -> str:
+    """One line for a task Dask gave up on: usually every worker that ran it
+    died (``KilledWorker``: killed, out of memory, crashed)."""
+    if type(error).__name__ == "KilledWorker":
+        why = "the Dask worker converting it died on each try (KilledWorker)"
+    else:
+        first = str(error).splitlines()[0][:200] if str(error) else ""
+        why = f"its Dask task failed: {type(error).__name__}" + (f": {first}" if first else "")
+    return f"not converted to {target}: {why}"

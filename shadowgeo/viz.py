@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any, TypeAlias, TypeGuard, Union
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .errors import GeometryError
+from .errors import GeometryError, SceneError
 from .io.atomic import atomic_path
 from .lights import DirectionalLight, Light, PointLight, SpotLight
 from .projection import Shadow
@@ -557,6 +557,9 @@ def plot(
         Something that cannot be drawn, or a bad view.
     RuntimeError
         An interactive window was asked for where there is no display.
+    SceneError
+        ``screenshot`` cannot be written (a full disk, a folder that cannot
+        be written), naming it; no file, whole or partial, is left there.
 
     Examples
     --------
@@ -620,9 +623,17 @@ def _write_png(image: np.ndarray, path: str | os.PathLike[str]) -> None:
     # PNG rows run top to bottom, VTK image rows bottom to top.
     flat = np.ascontiguousarray(image[::-1].reshape(-1, channels))
     data.GetPointData().SetScalars(numpy_to_vtk(flat, deep=True))
-    with atomic_path(path, suffix=".png") as temporary:
-        writer = vtk.vtkPNGWriter()
-        writer.SetFileName(str(temporary))
-        writer.SetInputData(data)
-        writer.SetCompressionLevel(9)
-        writer.Write()
+    try:
+        with atomic_path(path, suffix=".png") as temporary:
+            writer = vtk.vtkPNGWriter()
+            writer.SetFileName(str(temporary))
+            writer.SetInputData(data)
+            writer.SetCompressionLevel(9)
+            writer.Write()
+            # VTK does not raise: a failed write (a full disk) only sets the code,
+            # and the rename would put the truncated file in place
+            if writer.GetErrorCode():
+                code = vtk.vtkErrorCode.GetStringFromErrorCode(writer.GetErrorCode())
+                raise SceneError(f"cannot write: VTK's PNG writer failed ({code})", path=str(path))
+    except OSError as error:
+        raise SceneError(f"cannot write: {error.strerror or error}", path=str(path)) from None

@@ -221,8 +221,18 @@ def load(
 
 def check_writable(path: str | os.PathLike[str]) -> None:
     """SceneError, naming the known extensions, unless :func:`save` can write
-    a file named ``path``: for callers that check before long work."""
+    a file named ``path``; SceneError naming the folder when the folder it
+    would go in (or the nearest one above that exists) is not a folder or is
+    not writable: for callers that check before long work. (Only a hint: the
+    write itself still fails cleanly if the folder changes meanwhile.)"""
     _module(WRITERS, path, "write")
+    folder = Path(path).parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if not folder.is_dir():
+        raise SceneError(f"cannot write: {folder} is not a folder", path=str(path))
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise SceneError(f"cannot write: the folder {folder} is not writable", path=str(path))
 
 
 def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:

@@ -19,7 +19,7 @@ from ..scene import Material, Scene, Shape
 from ..scene.model import overview, rotate
 from . import check_face_indices, look_rotation, up_and_units
 from .atomic import atomic_path
-from .usd_layout import pxr, set_custom, usd_text
+from .usd_layout import error_text, pxr, set_custom, usd_text
 
 
 class _Names:
@@ -286,6 +286,12 @@ def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
         writer.write_cameras()
     except SceneError as error:
         raise SceneError(error.message, path=str(path), node=error.node) from None
+    Tf = pxr()[2]
     with atomic_path(path) as temporary:
-        if not writer.stage.GetRootLayer().Export(str(temporary)):
+        try:
+            saved = writer.stage.GetRootLayer().Export(str(temporary))
+        except Tf.ErrorException as error:  # a full disk: hundreds of lines, one kept
+            message = error_text(error, first=True).rsplit(": '", 1)[-1].rstrip("'")
+            raise SceneError(f"cannot write: {message}", path=str(path)) from None
+        if not saved:
             raise SceneError("usd-core could not save the stage", path=str(path))
