@@ -1,0 +1,141 @@
+"""One city object's polygons as one :class:`~shadowgeo.scene.model.Shape`,
+for the city readers (:mod:`.cityjson`, :mod:`.footprints`).
+
+A city object (a building, a building part, a road) is a set of planar
+polygons, each an outer ring and perhaps holes (ring: vertex indices into the
+object's points), each of a semantic kind (``RoofSurface``, ``WallSurface``,
+``GroundSurface``, ...). It becomes one shape, so a building casts as one
+caster: the polygons triangulated by :mod:`shadowgeo.polygons` (fans for
+convex ones, ear clipping for the rest and for those with holes), no vertex
+added, so polygons that share corners in the file share them in the mesh and
+a closed solid stays closed; each triangle keeps its polygon's kind in
+:attr:`Shape.semantics`. The shape's vertices are relative to the corner of
+its box, placed by its transform: real-world coordinates (RD New's are
+400,000 m) would otherwise lose their last digits in float32 outputs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import GeometryError, SceneError
+from ..limits import check_coordinates
+from ..polygons import polygon_triangles, polygons_triangles
+from ..scene.model import Semantics, Shape
+from ..topology import closed_by_sort
+
+
+@dataclass
+class Surfaces:
+    """A city object's polygons, gathered as a reader walks its geometry.
+
+    ``rings``: per polygon, its rings (int64 arrays of indices into the
+    reader's points), the outer one first; ``kinds``: per polygon an index
+    into ``names`` or -1; ``names``: the semantic kinds met, each once.
+    """
+
+    rings: list[list[np.ndarray]] = field(default_factory=list)
+    kinds: list[int] = field(default_factory=list)
+    names: list[str] = field(default_factory=list)
+
+    def add(self, rings: list[np.ndarray], kind: str | None) -> None:
+        """Add one polygon of ``kind`` (None: the file gives it none)."""
+        if kind is not None and kind not in self.names:
+            self.names.append(kind)
+        self.rings.append(rings)
+        self.kinds.append(-1 if kind is None else self.names.index(kind))
+
+
+def _ring(indices: np.ndarray) -> np.ndarray:
+    """A ring's indices without repeats in a row or a closing copy of its first."""
+    if len(indices) > 1:
+        keep = np.append(indices[1:] != indices[:-1], indices[-1] != indices[0])
+        indices = indices[keep]
+    return indices
+
+
+def triangles(points: np.ndarray, surfaces: Surfaces) -> tuple[np.ndarray, np.ndarray]:
+    """(t, 3) int64 triangles of every polygon (indices into ``points``, wound
+    as their outer rings) and (t,) int64 the polygon each comes from. A ring
+    of fewer than three corners is dropped (it has no area)."""
+    plain: dict[int, list[tuple[int, np.ndarray]]] = {}  # corner count -> polygons
+    found, owners = [], []
+    for number, rings in enumerate(surfaces.rings):
+        outer = _ring(rings[0])
+        if len(outer) < 3:
+            continue  # no outer ring: nothing to fill
+        kept = [outer, *(ring for ring in map(_ring, rings[1:]) if len(ring) >= 3)]
+        if len(kept) == 1:
+            plain.setdefault(len(kept[0]), []).append((number, kept[0]))
+            continue
+        order = np.concatenate(kept)
+        pieces = order[polygon_triangles(points[kept[0]], [points[hole] for hole in kept[1:]])]
+        found.append(pieces)
+        owners.append(np.full(len(pieces), number, dtype=np.int64))
+    for group in plain.values():
+        numbers = np.array([number for number, _ in group], dtype=np.int64)
+        block = np.stack([ring for _, ring in group])
+        pieces, rows = polygons_triangles(points, block)
+        found.append(pieces)
+        owners.append(numbers[rows])
+    if not found:
+        return np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.concatenate(found), np.concatenate(owners)
+
+
+def city_shape(
+    points: np.ndarray,
+    surfaces: Surfaces,
+    *,
+    name: str,
+    path: Path,
+    kind: str,
+    solid: bool | None = None,
+) -> Shape | None:
+    """The shape of one city object (its ``kind`` is the file's word for it,
+    e.g. ``CityObject`` or ``feature``, for messages), or None when none of
+    its polygons has an area.
+
+    ``points`` (n, 3) float64: scene coordinates the rings index. ``solid``:
+    the file says the polygons bound a volume (a CityJSON Solid, an extruded
+    footprint); None: the shape is one-sided exactly when its triangles close
+    up (every edge met once each way), else it receives on both sides.
+
+    Raises
+    ------
+    SceneError
+        A point that is not finite or past ``limits.LARGEST_COORDINATE``,
+        naming the file and the object.
+    """
+    where = f"{kind} {name!r}"
+    faces, owners = triangles(points, surfaces)
+    if not len(faces):
+        return None
+    used, local_faces = np.unique(faces, return_inverse=True)
+    corners = points[used]
+    try:
+        check_coordinates(corners, "the object's")
+    except GeometryError as error:
+        raise SceneError(str(error), path=str(path), node=where) from None
+    # Corners the file wrote twice (same coordinates, two indices) are one
+    # vertex, so the mesh is closed where the surface is.
+    corners, merged = np.unique(corners, axis=0, return_inverse=True)
+    local_faces = merged.reshape(-1)[local_faces.reshape(-1, 3)]
+    if solid is None:
+        solid = bool(closed_by_sort(local_faces, len(corners)))
+    origin = corners.min(axis=0)
+    transform = np.eye(4)
+    transform[:3, 3] = origin
+    kinds = np.asarray(surfaces.kinds, dtype=np.int64)[owners]
+    return Shape(
+        corners - origin,
+        local_faces,
+        transform,
+        name=name,
+        solid=solid,
+        source=f"{path.name}, {where}",
+        semantics=Semantics(tuple(surfaces.names), kinds),
+    )
