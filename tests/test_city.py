@@ -411,6 +411,34 @@ def test_bad_cityjson_is_a_scene_error_naming_the_file_and_object(tmp_path, edit
         sg.load(path)
 
 
+def test_template_bomb_and_deep_nesting_are_refused(tmp_path, monkeypatch):
+    from shadowgeo.io import cityjson
+
+    monkeypatch.setattr(cityjson, "MAX_TEMPLATE_POINTS", 20)
+    instance = {
+        "type": "GeometryInstance",
+        "template": 0,
+        "boundaries": [0],
+        "transformationMatrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1],
+    }
+    templates = {
+        "templates": [{"type": "MultiSurface", "lod": "1", "boundaries": [[[0, 1, 2]]]}],
+        "vertices-templates": [[0, 0, 0], [1, 0, 0], [0, 1, 0]],
+    }
+    objects = {
+        f"tree{k}": {"type": "SolitaryVegetationObject", "geometry": [instance]} for k in range(7)
+    }
+    path = _cityjson(tmp_path / "bomb.city.json", objects, **{"geometry-templates": templates})
+    with pytest.raises(sg.SceneError, match=r"bomb\.city\.json, CityObject 'tree6': .*templates"):
+        sg.load(path)
+    monkeypatch.setattr(cityjson, "MAX_TEMPLATE_POINTS", 21)
+    assert len(sg.load(path).shapes) == 7  # 7 x 3 points: at the budget, read
+    deep = tmp_path / "deep.city.json"
+    deep.write_text('{"type": "CityJSON", "version": "2.0", "vertices": ' + "[" * 100_000)
+    with pytest.raises(sg.SceneError, match=r"deep\.city\.json.*malformed JSON"):
+        sg.load(deep)
+
+
 def test_malformed_json_and_nan_are_refused(tmp_path):
     path = tmp_path / "cut.city.json"
     path.write_text('{"type": "CityJSON", "version": "2.0",\n "vertices": [[0, 0, ')
