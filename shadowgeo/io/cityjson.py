@@ -22,8 +22,9 @@ both and the location; with no CRS the site is None. The scene is Z up.
 
 The file is untrusted: at most ``limits.MAX_DOCUMENT_BYTES``, JSON parsed by
 the standard library (NaN and Infinity refused), every index checked against
-the vertices it names and every nesting against its geometry type, before
-any array is built; a SceneError names the file and the city object.
+the vertices it names and every nesting against its geometry type before
+any array is built, and at most ``limits.MAX_TEMPLATE_POINTS`` points placed
+from templates; a SceneError names the file and the city object.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SceneError
+from ..limits import MAX_TEMPLATE_POINTS
 from ..scene.model import Scene, Shape
 from . import x3d_parse
 from .city_crs import Georeference, georeference
@@ -94,6 +96,22 @@ class _Model:
     objects: dict[str, Any]
     templates: list[Any]
     template_vertices: np.ndarray
+
+
+@dataclass
+class _Budget:
+    """Points placed from templates so far, against ``MAX_TEMPLATE_POINTS``."""
+
+    placed: int = 0
+
+    def spend(self, count: int, where: str, error: _Error) -> None:
+        self.placed += count
+        if self.placed > MAX_TEMPLATE_POINTS:
+            raise error(
+                f"geometry templates placed more than {MAX_TEMPLATE_POINTS:,} points "
+                "(shadowgeo.limits.MAX_TEMPLATE_POINTS); refused",
+                where,
+            )
 
 
 def _numbers(value: Any, size: int, what: str, error: _Error) -> np.ndarray:
@@ -217,7 +235,9 @@ def _wanted(lod: Any, chosen: str | None) -> bool:
     return text == chosen or ("." not in chosen and text.split(".")[0] == chosen)
 
 
-def _resolved(geometry: Any, model: _Model, where: str, error: _Error) -> tuple[Any, np.ndarray]:
+def _resolved(
+    geometry: Any, model: _Model, budget: _Budget, where: str, error: _Error
+) -> tuple[Any, np.ndarray]:
     """(geometry with boundaries, its points in file coordinates): the
     geometry and the model's vertices, or for a GeometryInstance its
     template and the template's points placed by the instance."""
@@ -237,6 +257,7 @@ def _resolved(geometry: Any, model: _Model, where: str, error: _Error) -> tuple[
         or not 0 <= reference[0] < len(model.vertices)
     ):
         raise error("GeometryInstance boundaries must be one vertex index", where)
+    budget.spend(len(model.template_vertices), where, error)
     rows = matrix.reshape(4, 4)  # row-major, for column vectors
     placed = model.template_vertices @ rows[:3, :3].T + rows[:3, 3] + model.vertices[reference[0]]
     found = model.templates[template]
@@ -331,7 +352,13 @@ def _gather(
 
 
 def _object_geometry(
-    name: str, body: Any, model: _Model, lod: str | None, notes: list[str], error: _Error
+    name: str,
+    body: Any,
+    model: _Model,
+    lod: str | None,
+    budget: _Budget,
+    notes: list[str],
+    error: _Error,
 ) -> list[tuple[Any, np.ndarray]]:
     """The geometries of object ``name`` to read (its chosen LoD), resolved."""
     where = f"CityObject {name!r}"
@@ -340,7 +367,7 @@ def _object_geometry(
     listed = body.get("geometry", [])
     if not isinstance(listed, list):
         raise error("geometry must be a list", where)
-    resolved = [_resolved(geometry, model, where, error) for geometry in listed]
+    resolved = [_resolved(geometry, model, budget, where, error) for geometry in listed]
     faces = []
     for geometry, points in resolved:
         kind = geometry.get("type")
@@ -399,12 +426,13 @@ def read(
         raise error(f"the CityJSON reader takes lod and types, got {sorted(options)}")
     header, models = _models(path, error)
     notes: list[str] = []
+    budget = _Budget()
     gathered: list[tuple[str, np.ndarray, Surfaces, bool]] = []
     for model in models:
         for name, body in model.objects.items():
             if types is not None and (not isinstance(body, dict) or body.get("type") not in types):
                 continue
-            chosen = _object_geometry(str(name), body, model, lod, notes, error)
+            chosen = _object_geometry(str(name), body, model, lod, budget, notes, error)
             if chosen:
                 gathered.append((str(name), *_gather(chosen, f"CityObject {name!r}", error)))
     located = _georeference(header, [points for _, points, _, _ in gathered], error)
