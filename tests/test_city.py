@@ -571,3 +571,40 @@ def test_rotterdam_takes_shadows_and_saves_to_the_millimetre(tmp_path):
         y_up = again[shape.name].world_vertices  # glTF is Y up: (x, z, -y)
         back = np.column_stack([y_up[:, 0], -y_up[:, 2], y_up[:, 1]])
         assert np.abs(back - shape.world_vertices).max() < 1e-3, shape.name
+
+
+def test_a_sun_study_takes_the_place_and_true_north_from_the_site(tmp_path):
+    """RD New far west of its central meridian (about 3.4 E): true north turns
+    from grid north by about 1.5 degrees, which moves a wall's shadow."""
+    import datetime as dt
+
+    from shadowgeo.scene.sunlight import study_scene
+    from shadowgeo.sunstudy import sun_study_by_day
+
+    wall = [[20000, 400000], [20002, 400000], [20002, 400040], [20000, 400040], [20000, 400000]]
+    scene = sg.load(_geojson(tmp_path / "wall.geojson", [_feature([wall], height=30)]))
+    site = scene.site
+    convergence = math.degrees(math.atan2(site.north[0], site.north[1]))
+    assert 1.0 < abs(convergence) < 2.0
+    times = [dt.datetime(2026, 6, 21, 12, tzinfo=dt.UTC)]
+    region = [[19900, 399900], [20100, 399900], [20100, 400140], [19900, 400140]]
+    inputs, studies = study_scene(scene, times, region=region)  # no latitude, longitude
+    (study,) = studies.days.values()
+
+    def shade(north):
+        (day,) = sun_study_by_day(
+            inputs.caster,
+            inputs.plane,
+            inputs.region,
+            times,
+            latitude=site.latitude,
+            longitude=site.longitude,
+            up="Z",
+            north=north,
+        ).days.values()
+        return day.level_areas()[0.0]
+
+    assert study.level_areas()[0.0] == pytest.approx(shade(site.north), rel=1e-12)
+    assert abs(study.level_areas()[0.0] - shade(None)) > 1e-3 * shade(None)  # grid north
+    with pytest.raises(sg.SceneError, match="give the latitude and longitude"):
+        study_scene(sg.load(_gis("rotterdam_subset.city.json")), times)
