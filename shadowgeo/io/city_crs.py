@@ -32,7 +32,11 @@ from ..errors import SceneError
 from ..scene.model import Site
 
 if TYPE_CHECKING:
+    from pathlib import Path
+
     import pyproj
+
+    from .city_surfaces import CityObject
 
 # The step (degrees of latitude, about 10 m) between the two points whose
 # projections give the direction of true north at the site.
@@ -216,3 +220,19 @@ def _north(
     if not (math.isfinite(length) and length > 0):  # at a pole every way is south
         return (0.0, 1.0, 0.0)
     return (dx / length, dy / length, 0.0)
+
+
+def place(objects: list[CityObject], located: Georeference, path: Path) -> None:
+    """Every object's points put in scene coordinates, in one call of pyproj
+    (per object only to name the one whose point cannot be projected)."""
+    if not objects:
+        return
+    sizes = np.cumsum([len(item.points) for item in objects])[:-1]
+    try:
+        moved = located.to_scene(np.concatenate([item.points for item in objects]), str(path))
+    except SceneError:
+        for item in objects:
+            located.to_scene(item.points, str(path), f"CityObject {item.name!r}")
+        raise
+    for item, points in zip(objects, np.split(moved, sizes), strict=True):
+        item.points = points

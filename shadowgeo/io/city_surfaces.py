@@ -43,10 +43,14 @@ class Surfaces:
 
     def add(self, rings: list[np.ndarray], kind: str | None) -> None:
         """Add one polygon of ``kind`` (None: the file gives it none)."""
+        self.add_each([rings], kind)
+
+    def add_each(self, polygons: list[list[np.ndarray]], kind: str | None) -> None:
+        """Add polygons all of ``kind``."""
         if kind is not None and kind not in self.names:
             self.names.append(kind)
-        self.rings.append(rings)
-        self.kinds.append(-1 if kind is None else self.names.index(kind))
+        self.rings.extend(polygons)
+        self.kinds.extend([-1 if kind is None else self.names.index(kind)] * len(polygons))
 
 
 def _ring(indices: np.ndarray) -> np.ndarray:
@@ -86,23 +90,25 @@ def triangles(points: np.ndarray, surfaces: Surfaces) -> tuple[np.ndarray, np.nd
     return np.concatenate(found), np.concatenate(owners)
 
 
-def city_shape(
-    points: np.ndarray,
-    surfaces: Surfaces,
-    *,
-    name: str,
-    path: Path,
-    kind: str,
-    solid: bool | None = None,
-) -> Shape | None:
-    """The shape of one city object (its ``kind`` is the file's word for it,
-    e.g. ``CityObject`` or ``feature``, for messages), or None when none of
-    its polygons has an area.
+@dataclass
+class CityObject:
+    """One city object as read: ``points`` (n, 3) float64 in scene
+    coordinates, its ``surfaces`` indexing them, and ``solid``: the file says
+    they bound a volume (a CityJSON Solid, an extruded footprint); None: the
+    shape is one-sided exactly when its triangles close up (every edge met
+    once each way), else it receives on both sides."""
 
-    ``points`` (n, 3) float64: scene coordinates the rings index. ``solid``:
-    the file says the polygons bound a volume (a CityJSON Solid, an extruded
-    footprint); None: the shape is one-sided exactly when its triangles close
-    up (every edge met once each way), else it receives on both sides.
+    name: str
+    points: np.ndarray
+    surfaces: Surfaces
+    solid: bool | None = None
+
+
+def city_shapes(objects: list[CityObject], *, path: Path, kind: str) -> list[Shape]:
+    """The shape of each object that has a polygon with an area, in order
+    (``kind`` is the file's word for an object, e.g. ``CityObject`` or
+    ``feature``, for messages). Every object's polygons are triangulated in
+    one pass: the work per object is a few array operations.
 
     Raises
     ------
@@ -110,10 +116,46 @@ def city_shape(
         A point that is not finite or past ``limits.LARGEST_COORDINATE``,
         naming the file and the object.
     """
-    where = f"{kind} {name!r}"
-    faces, owners = triangles(points, surfaces)
-    if not len(faces):
-        return None
+    if not objects:
+        return []
+    sizes = np.array([len(item.points) for item in objects], dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    counts = np.array([len(item.surfaces.rings) for item in objects], dtype=np.int64)
+    everything = Surfaces(
+        [
+            [ring + start for ring in rings]
+            for item, start in zip(objects, starts, strict=True)
+            for rings in item.surfaces.rings
+        ]
+    )
+    points = np.concatenate([item.points for item in objects])
+    faces, polygons = triangles(points, everything)
+    owner = np.repeat(np.arange(len(objects)), counts)[polygons]
+    order = np.argsort(owner, kind="stable")
+    bounds = np.searchsorted(owner[order], np.arange(len(objects) + 1))
+    kinds = np.concatenate(
+        [np.asarray(item.surfaces.kinds, dtype=np.int64).reshape(-1) for item in objects]
+    )[polygons]
+    shapes = []
+    for number, item in enumerate(objects):
+        chosen = order[bounds[number] : bounds[number + 1]]
+        if len(chosen):
+            shape = _shape(item, points, faces[chosen], kinds[chosen], path, kind)
+            shapes.append(shape)
+    return shapes
+
+
+def _shape(
+    item: CityObject,
+    points: np.ndarray,
+    faces: np.ndarray,
+    kinds: np.ndarray,
+    path: Path,
+    kind: str,
+) -> Shape:
+    """One object's shape from its triangles (indices into ``points``) and
+    their kinds (indices into its surfaces' names)."""
+    where = f"{kind} {item.name!r}"
     used, local_faces = np.unique(faces, return_inverse=True)
     corners = points[used]
     try:
@@ -124,18 +166,18 @@ def city_shape(
     # vertex, so the mesh is closed where the surface is.
     corners, merged = np.unique(corners, axis=0, return_inverse=True)
     local_faces = merged.reshape(-1)[local_faces.reshape(-1, 3)]
+    solid = item.solid
     if solid is None:
         solid = bool(closed_by_sort(local_faces, len(corners)))
     origin = corners.min(axis=0)
     transform = np.eye(4)
     transform[:3, 3] = origin
-    kinds = np.asarray(surfaces.kinds, dtype=np.int64)[owners]
     return Shape(
         corners - origin,
         local_faces,
         transform,
-        name=name,
+        name=item.name,
         solid=solid,
         source=f"{path.name}, {where}",
-        semantics=Semantics(tuple(surfaces.names), kinds),
+        semantics=Semantics(tuple(item.surfaces.names), kinds),
     )

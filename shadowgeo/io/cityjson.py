@@ -40,10 +40,10 @@ import numpy as np
 
 from ..errors import SceneError
 from ..limits import MAX_TEMPLATE_POINTS
-from ..scene.model import Scene, Shape
+from ..scene.model import Scene
 from . import x3d_parse
-from .city_crs import Georeference, georeference
-from .city_surfaces import Surfaces, city_shape
+from .city_crs import Georeference, georeference, place
+from .city_surfaces import CityObject, Surfaces, city_shapes
 
 VERSIONS = ("1.0", "1.1", "2.0")
 # Levels of list above one surface (a list of rings) in each geometry type's
@@ -436,15 +436,13 @@ def read(
             if chosen:
                 gathered.append((str(name), *_gather(chosen, f"CityObject {name!r}", error)))
     located = _georeference(header, [points for _, points, _, _ in gathered], error)
-    shapes: list[Shape] = []
-    for name, points, surfaces, solid in gathered:
-        where = f"CityObject {name!r}"
-        scene_points = points if located is None else located.to_scene(points, str(path), where)
-        shape = city_shape(
-            scene_points, surfaces, name=name, path=path, kind="CityObject", solid=solid or None
-        )
-        if shape is not None:
-            shapes.append(shape)
+    objects = [
+        CityObject(name, points, surfaces, solid or None)
+        for name, points, surfaces, solid in gathered
+    ]
+    if located is not None:
+        place(objects, located, path)
+    shapes = city_shapes(objects, path=path, kind="CityObject")
     if not shapes:
         raise error("no city object with faces in the file")
     return Scene(

@@ -31,9 +31,9 @@ import numpy as np
 
 from ..errors import SceneError
 from ..limits import MAX_DOCUMENT_BYTES
-from ..scene.model import Scene, Shape
+from ..scene.model import Scene
 from .city_crs import georeference
-from .city_surfaces import Surfaces, city_shape
+from .city_surfaces import CityObject, Surfaces, city_shapes
 
 ROOF, WALL, GROUND = "RoofSurface", "WallSurface", "GroundSurface"
 _POLYGONAL = ("Polygon", "MultiPolygon")
@@ -140,8 +140,8 @@ def prism(
     for low, high in zip(bottom, top_rings, strict=True):
         # along an exterior run counter-clockwise the solid is on the left:
         # (a, b, b', a') turns outward, as it does along a clockwise hole
-        for a, b, b_up, a_up in zip(low, np.roll(low, -1), np.roll(high, -1), high, strict=True):
-            surfaces.add([np.array([a, b, b_up, a_up])], WALL)
+        walls = np.column_stack([low, np.roll(low, -1), np.roll(high, -1), high])
+        surfaces.add_each([[wall] for wall in walls], WALL)
     surfaces.add(top_rings, ROOF)
     surfaces.add([ring[::-1] for ring in bottom], GROUND)
     return np.concatenate(
@@ -232,13 +232,14 @@ def read(
         footprints[invalid] = shapely.make_valid(footprints[invalid])
         notes.append(f"{path.name}: {int(invalid.sum())} footprints crossed themselves; mended")
     footprints = shapely.orient_polygons(footprints, exterior_cw=False)
-    shapes: list[Shape] = []
+    objects = []
     for index, footprint in zip(chosen.tolist(), footprints, strict=True):
         name = str(fids[index]) if len(fids) else str(index)
         floor = 0.0 if bases is None or not np.isfinite(bases[index]) else float(bases[index])
-        shape = _building(footprint, floor, floor + float(heights[index]), name, path, shapely)
-        if shape is not None:
-            shapes.append(shape)
+        building = _building(footprint, floor, floor + float(heights[index]), name, shapely)
+        if building is not None:
+            objects.append(building)
+    shapes = city_shapes(objects, path=path, kind="feature")
     return Scene(
         shapes=shapes,
         path=str(path),
@@ -250,26 +251,24 @@ def read(
 
 
 def _building(
-    footprint: Any, floor: float, roof: float, name: str, path: Path, shapely: Any
-) -> Shape | None:
-    """The closed prism of every polygon of one footprint, one shape."""
+    footprint: Any, floor: float, roof: float, name: str, shapely: Any
+) -> CityObject | None:
+    """The closed prism of every polygon of one footprint, one object."""
     surfaces, pieces, start = Surfaces(), [], 0
     parts = shapely.get_parts(shapely.get_parts(footprint))  # a mended one may nest
     polygons = [part for part in parts if shapely.get_type_id(part) == 3]
     for polygon in polygons:
+        if len(polygon.exterior.coords) < 4:
+            continue
         rings = [np.asarray(polygon.exterior.coords)[:-1, :2]]
         rings += [np.asarray(hole.coords)[:-1, :2] for hole in polygon.interiors]
         rings = [ring for ring in rings if len(ring) >= 3]
-        if not rings or len(polygon.exterior.coords) < 4:
-            continue
         points = prism(rings, floor, roof, surfaces, start)
         pieces.append(points)
         start += len(points)
     if not pieces:
         return None
-    return city_shape(
-        np.concatenate(pieces), surfaces, name=name, path=path, kind="feature", solid=True
-    )
+    return CityObject(name, np.concatenate(pieces), surfaces, solid=True)
 
 
 def _notes(path: Path, fids: np.ndarray, polygonal: np.ndarray, heights: np.ndarray) -> list[str]:
