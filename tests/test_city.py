@@ -281,6 +281,16 @@ def test_json_named_cityjson_is_read_as_cityjson_and_x3d_json_is_not(tmp_path):
     assert sg.load(x3d).shapes[0].n_faces == 12
 
 
+def test_batch_conversion_gives_a_cityjson_json_no_x3d_chord(tmp_path):
+    """--tolerance is X3D's chord for curved primitives: batch conversion
+    passes it to the reader the file goes to, found by content for .json."""
+    from shadowgeo.batch import ConvertOptions, shadowed
+
+    city = _cityjson(tmp_path / "cube.json", {"a": {"type": "Building", "geometry": [_cube()]}})
+    scene, result = shadowed(city, ConvertOptions(tolerance=1e-3))
+    assert scene.shapes[0].name == "a" and result.shapes_with_role("shadow")
+
+
 def test_cityjson_highest_lod_by_default_and_lod_option(tmp_path):
     low = _cube("1")
     low["boundaries"] = [[face for face in CUBE_FACES[:5]]]  # one wall less

@@ -167,6 +167,15 @@ def json_format(path: str | os.PathLike[str]) -> str:
     return _JSON_TYPES.get(kind, READERS[".json"]) if isinstance(kind, str) else READERS[".json"]
 
 
+def reader_name(path: str | os.PathLike[str]) -> str:
+    """The module of this package that :func:`load` reads ``path`` with
+    (``"x3d_read"``, ``"cityjson"``, ...): by extension, and for ``.json``
+    by :func:`json_format`; SceneError for an extension no reader takes."""
+    _module(READERS, path, "read")
+    suffix = _suffix(path)
+    return json_format(path) if suffix == ".json" else READERS[suffix]
+
+
 def up_and_units(scene: Scene) -> tuple[str, float]:
     """The scene's up axis (``"Y"`` or ``"Z"``) and metres per unit, checked
     for the writers; SceneError for any other axis or a scale not > 0."""
@@ -257,11 +266,10 @@ def load(
         the line and node.
     """
     path = Path(path)
-    module = _module(READERS, path, "read")
+    _module(READERS, path, "read")  # an unknown extension first, then a missing file
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
-    if _suffix(path) == ".json":
-        module = importlib.import_module(f"{__name__}.{json_format(path)}")
+    module = importlib.import_module(f"{__name__}.{reader_name(path)}")
     scene: Scene = module.read(path, **options)
     limits.check_triangles(sum(shape.n_faces for shape in scene.shapes), str(path), max_triangles)
     return scene
