@@ -172,6 +172,17 @@ def test_crs84_footprint_projects_to_its_geodesic_area(tmp_path):
     assert (high - low).tolist() == pytest.approx([68.6, 111.3], abs=0.1)  # metres, not degrees
 
 
+def test_metres_under_a_geographic_crs_are_refused_not_read_as_degrees(tmp_path):
+    """A GeoJSON without a crs member is CRS84 (RFC 7946): RD New metres
+    written into one are latitudes of 435,000 degrees, an error, never a
+    city 40,000 km across."""
+    path = _geojson(
+        tmp_path / "rd.geojson", [_feature([_square(90000, 435000, 1)], height=3)], None
+    )
+    with pytest.raises(sg.SceneError, match=r"rd\.geojson: longitudes 90000 .* are not those"):
+        sg.load(path)
+
+
 def test_suzhou_footprints_are_metres_at_31_3_n_120_6_e():
     path = _gis("suzhou_buildings.geojson")
     scene = sg.load(path)
