@@ -422,6 +422,10 @@ def test_cityjsonseq_reads_each_feature_with_its_own_vertices(tmp_path):
         ),
         (lambda d: d.update(metadata={"referenceSystem": "EPSG:999999"}), "unknown coordinate"),
         (lambda d: d["transform"].update(scale=[1, 1]), "transform scale must be 3"),
+        (  # 1e300 mm: past the range shadowgeo carries
+            lambda d: d["vertices"].__setitem__(5, [1e300, 0, 0]),
+            "CityObject 'house': the object's point 5 has coordinate 1e\\+297, outside",
+        ),
     ],
 )
 def test_bad_cityjson_is_a_scene_error_naming_the_file_and_object(tmp_path, edit, message):
@@ -471,6 +475,12 @@ def test_malformed_json_and_nan_are_refused(tmp_path):
     path.write_text('{"type": "CityJSON", "version": "2.0", "vertices": [[NaN, 0, 0]]}')
     with pytest.raises(sg.SceneError, match=r"cut\.city\.json: malformed JSON: NaN"):
         sg.load(path)
+    cube = _cityjson(
+        tmp_path / "inf.city.json", {"house": {"type": "Building", "geometry": [_cube()]}}
+    )
+    cube.write_text(cube.read_text().replace("[0, 0, 0]", "[1e400, 0, 0]", 1))  # json: inf
+    with pytest.raises(sg.SceneError, match=r"inf\.city\.json, CityObject 'house': .*not finite"):
+        sg.load(cube)
     bad = _geojson(tmp_path / "bad.geojson", [])
     bad.write_text("{not json")
     with pytest.raises(sg.SceneError, match=r"bad\.geojson"):

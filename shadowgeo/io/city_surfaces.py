@@ -129,6 +129,7 @@ def city_shapes(objects: list[CityObject], *, path: Path, kind: str) -> list[Sha
         ]
     )
     points = np.concatenate([item.points for item in objects])
+    _check(points, objects, path, kind)  # before triangles: a NaN corner would drop its face
     faces, polygons = triangles(points, everything)
     owner = np.repeat(np.arange(len(objects)), counts)[polygons]
     order = np.argsort(owner, kind="stable")
@@ -145,6 +146,21 @@ def city_shapes(objects: list[CityObject], *, path: Path, kind: str) -> list[Sha
     return shapes
 
 
+def _check(points: np.ndarray, objects: list[CityObject], path: Path, kind: str) -> None:
+    """SceneError naming the first object with a point that is not finite or
+    is past ``limits.LARGEST_COORDINATE`` (one check of all the points; the
+    objects one by one only to name the culprit)."""
+    try:
+        check_coordinates(points, "the file's")
+    except GeometryError:
+        for item in objects:
+            try:
+                check_coordinates(item.points, "the object's")
+            except GeometryError as error:
+                raise SceneError(str(error), path=str(path), node=f"{kind} {item.name!r}") from None
+        raise  # pragma: no cover - the points are the objects' points
+
+
 def _shape(
     item: CityObject,
     points: np.ndarray,
@@ -158,10 +174,6 @@ def _shape(
     where = f"{kind} {item.name!r}"
     used, local_faces = np.unique(faces, return_inverse=True)
     corners = points[used]
-    try:
-        check_coordinates(corners, "the object's")
-    except GeometryError as error:
-        raise SceneError(str(error), path=str(path), node=where) from None
     # Corners the file wrote twice (same coordinates, two indices) are one
     # vertex, so the mesh is closed where the surface is.
     corners, merged = np.unique(corners, axis=0, return_inverse=True)
