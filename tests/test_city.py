@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from needs import SHARED, absent
 
 import shadowgeo as sg
@@ -639,3 +641,37 @@ def test_a_sun_study_takes_the_place_and_true_north_from_the_site(tmp_path):
     assert abs(study.level_areas()[0.0] - shade(None)) > 1e-3 * shade(None)  # grid north
     with pytest.raises(sg.SceneError, match="give the latitude and longitude"):
         study_scene(sg.load(_gis("rotterdam_subset.city.json")), times)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    corners=st.lists(st.tuples(st.floats(0.0, 1.0), st.floats(0.3, 2.0)), min_size=3, max_size=14),
+    height=st.floats(0.1, 80.0),
+    far=st.sampled_from([0.0, 4.35e5]),
+)
+def test_any_star_shaped_footprint_extrudes_to_a_closed_prism(corners, height, far):
+    """Extrusion's promise on any simple footprint (star-shaped about its
+    centre: convex or not, thin spikes included), near the origin or 435 km
+    from it: closed, wound outward, volume = footprint area x height, roof
+    and ground each the footprint's area."""
+    import shapely
+
+    from shadowgeo.io.city_surfaces import CityObject, Surfaces, city_shapes
+    from shadowgeo.io.footprints import prism
+
+    chosen = dict(sorted((round(turn * 2 * math.pi, 9), radius) for turn, radius in corners))
+    if len(chosen) < 3:
+        return
+    corners_xy = [[far + r * math.cos(a), far + r * math.sin(a)] for a, r in chosen.items()]
+    footprint = shapely.Polygon(corners_xy)
+    if not footprint.is_valid or footprint.area < 1e-3:
+        return
+    # counter-clockwise, as the reader has shapely make it before extruding
+    ring = np.asarray(shapely.orient_polygons(footprint).exterior.coords)[:-1]
+    surfaces = Surfaces()
+    points = prism([ring], 0.0, height, surfaces, 0)
+    (shape,) = city_shapes([CityObject("b", points, surfaces, True)], path=Path("p"), kind="f")
+    assert _closed_outward(shape)
+    assert _mesh(shape).volume == pytest.approx(footprint.area * height, rel=1e-6)
+    assert _kind_area(shape, "RoofSurface") == pytest.approx(footprint.area, rel=1e-6)
+    assert _kind_area(shape, "GroundSurface") == pytest.approx(footprint.area, rel=1e-6)
