@@ -363,7 +363,7 @@ def test_cityjson_multisurface_with_hole_and_geometry_template(tmp_path, window_
     path.write_text(json.dumps(document))
     facade, tree_shape = sg.load(path).shapes
     assert float(_areas(facade).sum()) == pytest.approx(4 - 1, rel=1e-9)
-    assert not facade.solid  # an open surface receives on both sides
+    assert not facade.solid  # an open surface with no semantics receives on both sides
     assert facade.semantics.counts() == {}
     reference = np.array([10.0, 0.0, 0.0]) + TRANSLATE
     expected = reference + 2 * np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
@@ -371,6 +371,26 @@ def test_cityjson_multisurface_with_hole_and_geometry_template(tmp_path, window_
     assert tree_shape.semantics.counts() == {"+Crown": 1}
     only = sg.load(path, types={"Building"})
     assert [shape.name for shape in only.shapes] == ["facade"]
+
+
+@pytest.mark.parametrize(("ground", "one_sided"), [([0, 3, 2, 1], True), ([0, 1, 2, 3], False)])
+def test_an_open_surface_is_one_sided_when_its_semantics_say_outward(tmp_path, ground, one_sided):
+    """A roof and a floor, no walls: open. Its floor turned down (outward)
+    makes it one-sided; turned up (into the building), two-sided."""
+    geometry = {
+        "type": "MultiSurface",
+        "lod": "2",
+        "boundaries": [[ground], [[4, 5, 6, 7]]],
+        "semantics": {
+            "surfaces": [{"type": "GroundSurface"}, {"type": "RoofSurface"}],
+            "values": [0, 1],
+        },
+    }
+    path = _cityjson(
+        tmp_path / "open.city.json", {"o": {"type": "Building", "geometry": [geometry]}}
+    )
+    (shape,) = sg.load(path).shapes
+    assert shape.solid is one_sided
 
 
 def test_cityjsonseq_reads_each_feature_with_its_own_vertices(tmp_path):
@@ -551,6 +571,9 @@ def test_denhaag_solids_are_closed_and_rotterdam_counts():
     assert len(denhaag.shapes) == 9 and all(shape.solid for shape in denhaag.shapes)
     rotterdam = sg.load(_gis("rotterdam_subset.city.json"))
     assert len(rotterdam.shapes) == 16
+    # open (T-junctions where walls meet roofs) but wound outward: one-sided
+    assert all(shape.solid for shape in rotterdam.shapes)
+    assert not any(_closed_outward(shape) for shape in rotterdam.shapes)
     assert all(
         set(shape.semantics.kinds) == {"RoofSurface", "WallSurface", "GroundSurface"}
         for shape in rotterdam.shapes
@@ -597,7 +620,9 @@ def test_rotterdam_takes_shadows_and_saves_to_the_millimetre(tmp_path):
     positions) steps by 3 cm: each shape's vertices sit near its own corner."""
     scene = sg.load(_gis("rotterdam_subset.city.json"))
     shadowed = sg.add_shadows(scene)
-    assert sum(shape.n_faces for shape in shadowed.shapes_with_role("shadow")) > 0
+    # the street takes the shadows (a ground is added), not the buildings' floors
+    assert shadowed.shapes_with_role("ground")
+    assert any(shape.name == "shadow_sun_ground" for shape in shadowed.shapes)
     sg.save(shadowed, tmp_path / "rotterdam.glb")
     again = {shape.name: shape for shape in sg.load(tmp_path / "rotterdam.glb").shapes}
     for shape in scene.shapes:

@@ -27,6 +27,8 @@ from ..polygons import polygon_triangles, polygons_triangles
 from ..scene.model import Semantics, Shape
 from ..topology import closed_by_sort
 
+ROOF, WALL, GROUND = "RoofSurface", "WallSurface", "GroundSurface"
+
 
 @dataclass
 class Surfaces:
@@ -161,6 +163,21 @@ def _check(points: np.ndarray, objects: list[CityObject], path: Path, kind: str)
         raise  # pragma: no cover - the points are the objects' points
 
 
+def _wound_outward(triangles: np.ndarray, kinds: np.ndarray, names: list[str]) -> bool:
+    """Whether an open surface's semantics show it wound outward, as a
+    building's envelope is: some GroundSurface or RoofSurface faces, no
+    GroundSurface face turned up and no RoofSurface face turned down (z up).
+    Such a surface receives on its outside only, like a closed one: LoD2 data
+    often leaves T-junctions where walls meet roofs, and two-sided, a
+    building's floor would take the shadows meant for the street."""
+    normal_up = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])[:, 2]
+    ground = kinds == (names.index(GROUND) if GROUND in names else -2)
+    roof = kinds == (names.index(ROOF) if ROOF in names else -2)
+    if not (ground.any() or roof.any()):
+        return False
+    return bool(np.all(normal_up[ground] <= 0) and np.all(normal_up[roof] >= 0))
+
+
 def _shape(
     item: CityObject,
     points: np.ndarray,
@@ -180,7 +197,9 @@ def _shape(
     local_faces = merged.reshape(-1)[local_faces.reshape(-1, 3)]
     solid = item.solid
     if solid is None:
-        solid = bool(closed_by_sort(local_faces, len(corners)))
+        solid = bool(closed_by_sort(local_faces, len(corners))) or _wound_outward(
+            corners[local_faces], kinds, item.surfaces.names
+        )
     origin = corners.min(axis=0)
     transform = np.eye(4)
     transform[:3, 3] = origin

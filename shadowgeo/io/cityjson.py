@@ -9,7 +9,8 @@ those of its highest level of detail are read (``lod="1.2"`` picks that
 LoD, ``lod="2"`` the highest of 2.x; an object without it is left out, with a
 note). Read: MultiSurface, CompositeSurface, Solid, MultiSolid and
 CompositeSolid (a Solid's shells bound a volume: the shape is one-sided;
-surfaces are one-sided when they close up), and GeometryInstance of a
+surfaces are one-sided when they close up or their semantics show them wound
+outward, :mod:`.city_surfaces`), and GeometryInstance of a
 geometry template (the template's points through the instance's 4x4 matrix,
 then moved to its reference point). MultiPoint and MultiLineString have no
 faces: skipped, with a note.

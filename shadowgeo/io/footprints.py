@@ -33,9 +33,8 @@ from ..errors import SceneError
 from ..limits import MAX_DOCUMENT_BYTES
 from ..scene.model import Scene
 from .city_crs import georeference
-from .city_surfaces import CityObject, Surfaces, city_shapes
+from .city_surfaces import GROUND, ROOF, WALL, CityObject, Surfaces, city_shapes
 
-ROOF, WALL, GROUND = "RoofSurface", "WallSurface", "GroundSurface"
 _POLYGONAL = ("Polygon", "MultiPolygon")
 
 
