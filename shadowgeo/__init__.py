@@ -10,7 +10,7 @@ from .io import load, save
 from .lights import DirectionalLight, DiskLight, Light, PointLight, RectLight, SpotLight
 from .plane import Plane
 from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
-from .scene import Material, Scene, SceneLight, Shape, Viewpoint
+from .scene import Material, Scene, SceneLight, Semantics, Shape, Site, Viewpoint
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
 from .soft import SoftShadow, soft_shadow
@@ -44,10 +44,12 @@ __all__ = [
     "Scene",
     "SceneError",
     "SceneLight",
+    "Semantics",
     "Shadow",
     "ShadowDiagnostics",
     "Shape",
     "Silhouette",
+    "Site",
     "SoftShadow",
     "SpotLight",
     "SunStudies",

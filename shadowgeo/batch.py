@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from .errors import GeometryError, SceneError
-from .io import READERS, load, save
+from .io import READERS, load, reader_name, save
 from .io.atomic import remove_stale
 from .lights import DirectionalLight
 from .plane import Plane
@@ -81,9 +81,7 @@ def shadowed(
     """The scene read from ``source`` and the same with the shadows
     ``options`` ask for (see :func:`add_shadows`; ``progress`` is passed on)."""
     # the chord only matters for X3D's curved primitives; other readers take no options
-    curved = options.tolerance is not None and READERS.get(scene_suffix(source) or "") == (
-        "x3d_read"
-    )
+    curved = options.tolerance is not None and reader_name(source) == "x3d_read"
     scene = load(
         source,
         max_triangles=options.max_triangles,

@@ -74,6 +74,11 @@ outline crossings      2,000,000       edge crossings among the 2-D loops one sh
                                        triangles, or an Extrusion whose spine folds
                                        over itself, is refused in a fraction of a
                                        second rather than united in minutes
+template points        5,000,000       CityJSON: points made by placing geometry
+                                       templates (GeometryInstance), counted over
+                                       every instance as they are read (a small
+                                       file can instance a big template millions
+                                       of times)
 surface pairs          5,000,000       (receiving face, caster triangle) pairs that
                                        overlap as seen from a light in
                                        ``shadow_on_surface``; past it, an error
@@ -154,6 +159,10 @@ USD_TEXT_BYTES_PER_SECOND = 1_000_000
 # by fuzzing was 725 KB, and the campaign's mutants of small layers, parsed in
 # the fuzzer's own 20 CPU-s / 1.5 GB budget, never came near it.
 USD_TEXT_CHECK_BYTES = 64 * 1024
+# Points a CityJSON file's GeometryInstances make from their templates, all
+# instances counted as they are read: the triangle budget is checked only
+# after reading, too late for an expansion bomb.
+MAX_TEMPLATE_POINTS = 5_000_000
 # Triangles of a scene as read (after tessellation and instancing): what a
 # conversion's time and memory grow with. At this size a conversion takes
 # about 15 CPU seconds and 2 GB; load(..., max_triangles=N) or

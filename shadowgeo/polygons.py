@@ -12,7 +12,7 @@ import collections
 import hashlib
 import itertools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -1017,11 +1017,24 @@ def _tiles(part: list[np.ndarray]) -> list[list[np.ndarray]]:
     return pieces
 
 
-def polygon_triangles(points: np.ndarray) -> np.ndarray:
+def polygon_triangles(points: np.ndarray, holes: Sequence[np.ndarray] = ()) -> np.ndarray:
     """Triangulate one simple polygon (k, 3), convex or not, in its own plane.
 
-    Returns (m, 3) indices into ``points``, wound as the polygon is (its Newell
-    normal). A polygon with no area gives no triangles.
+    ``holes``: (h, 3) loops inside it, in its plane, either way round (a
+    city model's walls with windows, a footprint's courtyard).
+
+    Returns (m, 3) indices into ``points`` followed by each hole's corners,
+    wound as the polygon is (its Newell normal). A polygon with no area
+    gives no triangles.
+
+    Examples
+    --------
+    >>> square = np.array([[0, 0, 0], [4, 0, 0], [4, 4, 0], [0, 4, 0]], float)
+    >>> hole = np.array([[1, 1, 0], [3, 1, 0], [3, 3, 0], [1, 3, 0]], float)
+    >>> corners = np.concatenate([square, hole])[polygon_triangles(square, [hole])]
+    >>> float(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
+    ...                               corners[:, 2] - corners[:, 0]), axis=1).sum() / 2)
+    12.0
     """
     shifted = np.roll(points, -1, axis=0)
     normal = np.array(
@@ -1035,12 +1048,25 @@ def polygon_triangles(points: np.ndarray) -> np.ndarray:
     if length == 0.0 or not np.isfinite(length):
         return np.zeros((0, 3), dtype=np.int64)
     u, v = Plane(normal).basis  # u x v = normal: the polygon runs CCW in (u, v)
-    centred = points - points.mean(axis=0)
-    flat = np.column_stack([centred @ u, centred @ v])
-    spiked = _spiked_triangles(flat) if _many_reflex(flat) else None
-    if spiked is not None:
-        return spiked
-    return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)
+    origin = points.mean(axis=0)
+    flat = np.column_stack([(points - origin) @ u, (points - origin) @ v])
+    if not len(holes):
+        spiked = _spiked_triangles(flat) if _many_reflex(flat) else None
+        if spiked is not None:
+            return spiked
+        return np.asarray(triangulate([flat]), dtype=np.int64).reshape(-1, 3)
+    loops, order, start = [flat], [np.arange(len(points))], len(points)
+    for hole in holes:
+        ring = np.column_stack([(hole - origin) @ u, (hole - origin) @ v])
+        index = np.arange(start, start + len(hole))
+        if signed_areas([ring])[0] > 0:  # a hole runs clockwise against its outer loop
+            ring, index = ring[::-1], index[::-1]
+        loops.append(ring)
+        order.append(index)
+        start += len(hole)
+    triangles = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
+    mapped: np.ndarray = np.concatenate(order)[triangles]
+    return mapped
 
 
 # A corner that turns this far (radians) the wrong way still counts as straight.

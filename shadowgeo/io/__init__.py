@@ -14,7 +14,16 @@ glTF 2.0   ``.glb``, ``.gltf``                  :mod:`.gltf_read`         :mod:`
 USD        ``.usda``, ``.usdc``, ``.usd``       :mod:`.usd_read`          :mod:`.usd_write`
 OBJ, STL,  ``.obj``, ``.stl``, ``.ply``,        :mod:`.trimesh_formats`   --
 PLY, OFF   ``.off``
+CityJSON   ``.city.json``, ``.json``,           :mod:`.cityjson`          --
+           ``.city.jsonl`` (CityJSONSeq)
+footprints ``.geojson``, ``.json``, ``.gpkg``,  :mod:`.footprints`        --
+           ``.shp``
 =========  ===================================  ========================  =========================
+
+A ``.json`` file is X3D JSON unless its top-level ``type`` says CityJSON or
+GeoJSON (``FeatureCollection``, ``Feature``): :func:`json_format`. The city
+readers share :mod:`.city_crs` (coordinate reference systems, the scene's
+site) and :mod:`.city_surfaces` (a city object's polygons as one shape).
 
 Every X3D encoding becomes the same XML element tree: :mod:`.x3d_parse` parses
 XML, hands JSON to :mod:`.x3d_json` and ClassicVRML and VRML 97 text
@@ -43,6 +52,7 @@ references to other files.
 from __future__ import annotations
 
 import importlib
+import json
 import math
 import os
 from collections.abc import Iterable
@@ -73,7 +83,17 @@ READERS = {
     ".usda": "usd_read",
     ".usdc": "usd_read",
     ".usd": "usd_read",
+    ".city.json": "cityjson",
+    ".city.jsonl": "cityjson",
+    ".jsonl": "cityjson",
+    ".geojson": "footprints",
+    ".gpkg": "footprints",
+    ".shp": "footprints",
 }
+# Extensions of two parts that name a format (the last part alone names another).
+_COMPOUND = (".city.json", ".city.jsonl")
+# The top-level "type" of a .json document that is not X3D JSON -> its reader.
+_JSON_TYPES = {"CityJSON": "cityjson", "FeatureCollection": "footprints", "Feature": "footprints"}
 
 WRITERS = {
     ".x3d": "x3d_write",
@@ -106,6 +126,10 @@ def float_triple(values: Iterable[Any]) -> tuple[float, float, float]:
 def _suffix(path: str | os.PathLike[str]) -> str:
     """The extension, with the one before it for gzip (``.x3dv.gz``)."""
     path = Path(path)
+    name = path.name.lower()
+    for compound in _COMPOUND:
+        if name.endswith(compound):
+            return compound
     if path.suffix.lower() == ".gz":
         return "".join(path.suffixes[-2:]).lower()
     return path.suffix.lower()
@@ -119,6 +143,37 @@ def _module(table: dict[str, str], path: str | os.PathLike[str], verb: str) -> M
             f"cannot {verb} '{suffix or 'no extension'}' files (known: {known})", path=str(path)
         )
     return importlib.import_module(f"{__name__}.{table[suffix]}")
+
+
+def json_format(path: str | os.PathLike[str]) -> str:
+    """The reader module of a ``.json`` file: ``"cityjson"`` or
+    ``"footprints"`` when its top-level ``type`` is ``CityJSON`` or a GeoJSON
+    ``FeatureCollection`` / ``Feature``, else ``"x3d_read"`` (X3D JSON, whose
+    reader says what is wrong with a file that is neither). Only a file that
+    holds one of those words is parsed to tell."""
+    from .x3d_parse import read_bytes
+
+    try:
+        data = read_bytes(Path(path))
+    except SceneError:
+        return READERS[".json"]
+    if not any(f'"{kind}"'.encode() in data for kind in _JSON_TYPES):
+        return READERS[".json"]
+    try:
+        document = json.loads(data)
+    except (ValueError, RecursionError):
+        return READERS[".json"]
+    kind = document.get("type") if isinstance(document, dict) else None
+    return _JSON_TYPES.get(kind, READERS[".json"]) if isinstance(kind, str) else READERS[".json"]
+
+
+def reader_name(path: str | os.PathLike[str]) -> str:
+    """The module of this package that :func:`load` reads ``path`` with
+    (``"x3d_read"``, ``"cityjson"``, ...): by extension, and for ``.json``
+    by :func:`json_format`; SceneError for an extension no reader takes."""
+    _module(READERS, path, "read")
+    suffix = _suffix(path)
+    return json_format(path) if suffix == ".json" else READERS[suffix]
 
 
 def up_and_units(scene: Scene) -> tuple[str, float]:
@@ -211,9 +266,10 @@ def load(
         the line and node.
     """
     path = Path(path)
-    module = _module(READERS, path, "read")
+    _module(READERS, path, "read")  # an unknown extension first, then a missing file
     if not path.is_file():
         raise SceneError("no such file", path=str(path))
+    module = importlib.import_module(f"{__name__}.{reader_name(path)}")
     scene: Scene = module.read(path, **options)
     limits.check_triangles(sum(shape.n_faces for shape in scene.shapes), str(path), max_triangles)
     return scene

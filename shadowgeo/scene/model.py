@@ -128,6 +128,79 @@ class Placement:
     matrix: np.ndarray
 
 
+@dataclass(frozen=True)
+class Semantics:
+    """What each face of a shape is, in a city model's terms (CityGML's
+    semantic surfaces: ``RoofSurface``, ``WallSurface``, ``GroundSurface``, ...).
+
+    Parameters
+    ----------
+    kinds : tuple of str
+        The names the faces use, each once.
+    face_kind : (m,) int64
+        Per face of the shape, an index into ``kinds``, or -1 for a face the
+        file gives no kind.
+
+    Examples
+    --------
+    >>> labels = Semantics(("RoofSurface", "WallSurface"), [0, 1, 1, -1])
+    >>> labels.counts()
+    {'RoofSurface': 1, 'WallSurface': 2}
+    >>> labels.faces("WallSurface").tolist()
+    [1, 2]
+    """
+
+    kinds: tuple[str, ...]
+    face_kind: np.ndarray
+
+    def __post_init__(self) -> None:
+        index = np.asarray(self.face_kind, dtype=np.int64).reshape(-1)
+        if index.size and (index.min() < -1 or index.max() >= len(self.kinds)):
+            raise ValueError(f"face kinds must be -1 or below {len(self.kinds)}")
+        object.__setattr__(self, "face_kind", index)
+
+    def faces(self, kind: str) -> np.ndarray:
+        """(k,) int64 the faces of ``kind`` (none for a kind it does not have)."""
+        if kind not in self.kinds:
+            return np.zeros(0, dtype=np.int64)
+        return np.flatnonzero(self.face_kind == self.kinds.index(kind))
+
+    def counts(self) -> dict[str, int]:
+        """Faces of each kind, in the order of :attr:`kinds`."""
+        tally = np.bincount(self.face_kind[self.face_kind >= 0], minlength=len(self.kinds))
+        return {kind: int(count) for kind, count in zip(self.kinds, tally, strict=True)}
+
+
+@dataclass(frozen=True)
+class Site:
+    """Where on Earth a scene read from geographic data stands.
+
+    Parameters
+    ----------
+    crs : str
+        The scene's own coordinate reference system (WKT2): what its
+        coordinates are in, metres along x (east) and y (north), z up.
+    source_crs : str
+        The file's CRS as the file gave it (``"EPSG:7415"``, a URL, WKT): the
+        one an output goes back to. Equal to ``crs`` when the file's CRS was
+        projected and kept; for geographic input (longitude, latitude) the
+        scene is in a transverse Mercator centred on the data instead.
+    latitude, longitude : float
+        Degrees (north and east positive) of the centre of the data's
+        bounding box, what a sun study needs.
+    north : (3,) tuple of float
+        The horizontal unit vector pointing to true north there, in scene
+        coordinates (grid north and true north differ by the meridian
+        convergence of the projection).
+    """
+
+    crs: str
+    source_crs: str
+    latitude: float
+    longitude: float
+    north: tuple[float, float, float] = (0.0, 1.0, 0.0)
+
+
 @dataclass
 class Shape:
     """A triangle mesh with its world transform, material and role.
@@ -159,6 +232,9 @@ class Shape:
         For an added shape: the element of the scene's X3D document the X3D
         writer puts its group in (with its coordinates made local to it);
         None: at the top of ``<Scene>``.
+    semantics : Semantics, optional
+        What each face is in a city model (roof, wall, ground), from the city
+        readers; None where the file says nothing of it.
     """
 
     vertices: np.ndarray
@@ -175,11 +251,17 @@ class Shape:
     crease_angle: float = 0.0
     scopes: frozenset[int] = frozenset()
     placement: Placement | None = None
+    semantics: Semantics | None = None
 
     def __post_init__(self) -> None:
         self.vertices = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 3)
         self.faces = np.asarray(self.faces, dtype=np.int64).reshape(-1, 3)
         self.transform = np.asarray(self.transform, dtype=np.float64).reshape(4, 4)
+        if self.semantics is not None and len(self.semantics.face_kind) != len(self.faces):
+            raise ValueError(
+                f"semantics name {len(self.semantics.face_kind)} faces, the shape has "
+                f"{len(self.faces)}"
+            )
 
     @property
     def world_vertices(self) -> np.ndarray:
@@ -342,6 +424,11 @@ class Scene:
     mesh's points and indices) as bytes in ``numbers``, a placeholder in their
     place in ``document``; ``scene.numbers.filled_copy(scene.document)`` is
     the tree with them in place.
+
+    ``site``: where the scene stands on Earth and in which coordinate
+    reference system, for scenes read from geographic data (the city
+    readers) whose file names its CRS; None otherwise (a sun study then needs
+    the latitude and longitude from the caller).
     """
 
     shapes: list[Shape] = field(default_factory=list)
@@ -354,6 +441,7 @@ class Scene:
     viewpoints: list[Viewpoint] = field(default_factory=list)
     numbers: Any = None
     headlight: bool = False
+    site: Site | None = None
 
     def shapes_with_role(self, role: str) -> list[Shape]:
         return [shape for shape in self.shapes if shape.role == role]

@@ -259,8 +259,8 @@ def study_scene(
     scene: Scene,
     times: Sequence[_dt.datetime],
     *,
-    latitude: float,
-    longitude: float,
+    latitude: float | None = None,
+    longitude: float | None = None,
     step: _dt.timedelta | None = None,
     receivers: Sequence[str] | None = None,
     plane: Plane | None = None,
@@ -274,7 +274,21 @@ def study_scene(
     (:func:`scene_study`): one study a calendar day (in ``tz``) of ``times``,
     serially or on Dask (``scheduler``, as there), as :class:`SunStudies`;
     with ``summaries``, :func:`shadowgeo.sun_summaries_by_day`'s
-    ``{day: DaySummary}`` instead (no polygons kept: for many days)."""
+    ``{day: DaySummary}`` instead (no polygons kept: for many days).
+
+    ``latitude`` and ``longitude`` default to the scene's :attr:`Scene.site`
+    (city data whose file names its CRS), which also gives true north in the
+    scene's frame (a projected CRS's grid north turns from it); a scene with
+    no site needs them (SceneError)."""
+    site = scene.site
+    if latitude is None or longitude is None:
+        if site is None:
+            raise SceneError(
+                "the scene does not say where it is (no CRS in its file): give the "
+                "latitude and longitude"
+            )
+        latitude = site.latitude if latitude is None else latitude
+        longitude = site.longitude if longitude is None else longitude
     inputs = scene_study(scene, receivers=receivers, plane=plane, region=region)
     by_day = sun_summaries_by_day if summaries else sun_study_by_day
     studies = by_day(
@@ -286,6 +300,7 @@ def study_scene(
         longitude=longitude,
         step=step,
         up=inputs.up,
+        north=None if site is None else site.north,
         tz=tz,
         scheduler=scheduler,
         progress=progress,

@@ -1,0 +1,214 @@
+"""One city object's polygons as one :class:`~shadowgeo.scene.model.Shape`,
+for the city readers (:mod:`.cityjson`, :mod:`.footprints`).
+
+A city object (a building, a building part, a road) is a set of planar
+polygons, each an outer ring and perhaps holes (ring: vertex indices into the
+object's points), each of a semantic kind (``RoofSurface``, ``WallSurface``,
+``GroundSurface``, ...). It becomes one shape, so a building casts as one
+caster: the polygons triangulated by :mod:`shadowgeo.polygons` (fans for
+convex ones, ear clipping for the rest and for those with holes), no vertex
+added, so polygons that share corners in the file share them in the mesh and
+a closed solid stays closed; each triangle keeps its polygon's kind in
+:attr:`Shape.semantics`. The shape's vertices are relative to the corner of
+its box, placed by its transform: real-world coordinates (RD New's are
+400,000 m) would otherwise lose their last digits in float32 outputs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import GeometryError, SceneError
+from ..limits import check_coordinates
+from ..polygons import polygon_triangles, polygons_triangles
+from ..scene.model import Semantics, Shape
+from ..topology import closed_by_sort
+
+ROOF, WALL, GROUND = "RoofSurface", "WallSurface", "GroundSurface"
+
+
+@dataclass
+class Surfaces:
+    """A city object's polygons, gathered as a reader walks its geometry.
+
+    ``rings``: per polygon, its rings (int64 arrays of indices into the
+    reader's points), the outer one first; ``kinds``: per polygon an index
+    into ``names`` or -1; ``names``: the semantic kinds met, each once.
+    """
+
+    rings: list[list[np.ndarray]] = field(default_factory=list)
+    kinds: list[int] = field(default_factory=list)
+    names: list[str] = field(default_factory=list)
+
+    def add(self, rings: list[np.ndarray], kind: str | None) -> None:
+        """Add one polygon of ``kind`` (None: the file gives it none)."""
+        self.add_each([rings], kind)
+
+    def add_each(self, polygons: list[list[np.ndarray]], kind: str | None) -> None:
+        """Add polygons all of ``kind``."""
+        if kind is not None and kind not in self.names:
+            self.names.append(kind)
+        self.rings.extend(polygons)
+        self.kinds.extend([-1 if kind is None else self.names.index(kind)] * len(polygons))
+
+
+def _ring(indices: np.ndarray) -> np.ndarray:
+    """A ring's indices without repeats in a row or a closing copy of its first."""
+    if len(indices) > 1:
+        keep = np.append(indices[1:] != indices[:-1], indices[-1] != indices[0])
+        indices = indices[keep]
+    return indices
+
+
+def triangles(points: np.ndarray, surfaces: Surfaces) -> tuple[np.ndarray, np.ndarray]:
+    """(t, 3) int64 triangles of every polygon (indices into ``points``, wound
+    as their outer rings) and (t,) int64 the polygon each comes from. A ring
+    of fewer than three corners is dropped (it has no area)."""
+    plain: dict[int, list[tuple[int, np.ndarray]]] = {}  # corner count -> polygons
+    found, owners = [], []
+    for number, rings in enumerate(surfaces.rings):
+        outer = _ring(rings[0])
+        if len(outer) < 3:
+            continue  # no outer ring: nothing to fill
+        kept = [outer, *(ring for ring in map(_ring, rings[1:]) if len(ring) >= 3)]
+        if len(kept) == 1:
+            plain.setdefault(len(kept[0]), []).append((number, kept[0]))
+            continue
+        order = np.concatenate(kept)
+        pieces = order[polygon_triangles(points[kept[0]], [points[hole] for hole in kept[1:]])]
+        found.append(pieces)
+        owners.append(np.full(len(pieces), number, dtype=np.int64))
+    for group in plain.values():
+        numbers = np.array([number for number, _ in group], dtype=np.int64)
+        block = np.stack([ring for _, ring in group])
+        pieces, rows = polygons_triangles(points, block)
+        found.append(pieces)
+        owners.append(numbers[rows])
+    if not found:
+        return np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.concatenate(found), np.concatenate(owners)
+
+
+@dataclass
+class CityObject:
+    """One city object as read: ``points`` (n, 3) float64 in scene
+    coordinates, its ``surfaces`` indexing them, and ``solid``: the file says
+    they bound a volume (a CityJSON Solid, an extruded footprint); None: the
+    shape is one-sided exactly when its triangles close up (every edge met
+    once each way), else it receives on both sides."""
+
+    name: str
+    points: np.ndarray
+    surfaces: Surfaces
+    solid: bool | None = None
+
+
+def city_shapes(objects: list[CityObject], *, path: Path, kind: str) -> list[Shape]:
+    """The shape of each object that has a polygon with an area, in order
+    (``kind`` is the file's word for an object, e.g. ``CityObject`` or
+    ``feature``, for messages). Every object's polygons are triangulated in
+    one pass: the work per object is a few array operations.
+
+    Raises
+    ------
+    SceneError
+        A point that is not finite or past ``limits.LARGEST_COORDINATE``,
+        naming the file and the object.
+    """
+    if not objects:
+        return []
+    sizes = np.array([len(item.points) for item in objects], dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    counts = np.array([len(item.surfaces.rings) for item in objects], dtype=np.int64)
+    everything = Surfaces(
+        [
+            [ring + start for ring in rings]
+            for item, start in zip(objects, starts, strict=True)
+            for rings in item.surfaces.rings
+        ]
+    )
+    points = np.concatenate([item.points for item in objects])
+    _check(points, objects, path, kind)  # before triangles: a NaN corner would drop its face
+    faces, polygons = triangles(points, everything)
+    owner = np.repeat(np.arange(len(objects)), counts)[polygons]
+    order = np.argsort(owner, kind="stable")
+    bounds = np.searchsorted(owner[order], np.arange(len(objects) + 1))
+    kinds = np.concatenate(
+        [np.asarray(item.surfaces.kinds, dtype=np.int64).reshape(-1) for item in objects]
+    )[polygons]
+    shapes = []
+    for number, item in enumerate(objects):
+        chosen = order[bounds[number] : bounds[number + 1]]
+        if len(chosen):
+            shape = _shape(item, points, faces[chosen], kinds[chosen], path, kind)
+            shapes.append(shape)
+    return shapes
+
+
+def _check(points: np.ndarray, objects: list[CityObject], path: Path, kind: str) -> None:
+    """SceneError naming the first object with a point that is not finite or
+    is past ``limits.LARGEST_COORDINATE`` (one check of all the points; the
+    objects one by one only to name the culprit)."""
+    try:
+        check_coordinates(points, "the file's")
+    except GeometryError:
+        for item in objects:
+            try:
+                check_coordinates(item.points, "the object's")
+            except GeometryError as error:
+                raise SceneError(str(error), path=str(path), node=f"{kind} {item.name!r}") from None
+        raise  # pragma: no cover - the points are the objects' points
+
+
+def _wound_outward(triangles: np.ndarray, kinds: np.ndarray, names: list[str]) -> bool:
+    """Whether an open surface's semantics show it wound outward, as a
+    building's envelope is: some GroundSurface or RoofSurface faces, no
+    GroundSurface face turned up and no RoofSurface face turned down (z up).
+    Such a surface receives on its outside only, like a closed one: LoD2 data
+    often leaves T-junctions where walls meet roofs, and two-sided, a
+    building's floor would take the shadows meant for the street."""
+    normal_up = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])[:, 2]
+    ground = kinds == (names.index(GROUND) if GROUND in names else -2)
+    roof = kinds == (names.index(ROOF) if ROOF in names else -2)
+    if not (ground.any() or roof.any()):
+        return False
+    return bool(np.all(normal_up[ground] <= 0) and np.all(normal_up[roof] >= 0))
+
+
+def _shape(
+    item: CityObject,
+    points: np.ndarray,
+    faces: np.ndarray,
+    kinds: np.ndarray,
+    path: Path,
+    kind: str,
+) -> Shape:
+    """One object's shape from its triangles (indices into ``points``) and
+    their kinds (indices into its surfaces' names)."""
+    where = f"{kind} {item.name!r}"
+    used, local_faces = np.unique(faces, return_inverse=True)
+    corners = points[used]
+    # Corners the file wrote twice (same coordinates, two indices) are one
+    # vertex, so the mesh is closed where the surface is.
+    corners, merged = np.unique(corners, axis=0, return_inverse=True)
+    local_faces = merged.reshape(-1)[local_faces.reshape(-1, 3)]
+    solid = item.solid
+    if solid is None:
+        solid = bool(closed_by_sort(local_faces, len(corners))) or _wound_outward(
+            corners[local_faces], kinds, item.surfaces.names
+        )
+    origin = corners.min(axis=0)
+    transform = np.eye(4)
+    transform[:3, 3] = origin
+    return Shape(
+        corners - origin,
+        local_faces,
+        transform,
+        name=item.name,
+        solid=solid,
+        source=f"{path.name}, {where}",
+        semantics=Semantics(tuple(item.surfaces.names), kinds),
+    )
