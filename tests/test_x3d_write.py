@@ -595,3 +595,27 @@ def test_instructions_and_foreign_elements_are_noted_in_document_order_once(tmp_
         "<ext:outer> is not X3D (never followed); not written",
         "<ext:deep> is not X3D (never followed); not written",
     ]
+
+
+@pytest.mark.parametrize("version", ["3.3", "4.0"])
+def test_added_shapes_cast_no_runtime_shadow_in_x3d_4(tmp_path, version, x3d_schema):
+    # a browser drawing runtime shadows over the baked ones (--keep-runtime-
+    # shadows) must not cast the baked overlays themselves; castShadow is an
+    # X3D 4 field, left out of a 3.x document and of VRML 97
+    text = EXAMPLE.read_text().replace('version="4.0"', f'version="{version}"', 1)
+    source = tmp_path / "in.x3d"
+    source.write_text(text)
+    result = sg.add_shadows(sg.load(source))
+    out = tmp_path / "out.x3d"
+    sg.save(result, out)
+    added = parse(out).xpath("//Shape[starts-with(@class, 'shadowgeo-shadows-')]")
+    assert added
+    flags = {shape.get("castShadow") for shape in added}
+    assert flags == ({"false"} if version == "4.0" else {None})
+    assert (
+        new_schema_errors(x3d_schema_errors(source, x3d_schema), x3d_schema_errors(out, x3d_schema))
+        == []
+    )
+    wrl = tmp_path / "out.wrl"
+    sg.save(result, wrl)
+    assert "castShadow" not in wrl.read_text()

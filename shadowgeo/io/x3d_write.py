@@ -200,12 +200,13 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
     if added and root.get("profile") == "Core":
         _require_components(root, namespace)
     at_top = [shape for shape in added if id(shape) not in homes]
-    groups = _add_groups(body, at_top, used, namespace, splicer)
+    x3d4 = _version(root.get("version")) >= 4.0
+    groups = _add_groups(body, at_top, used, namespace, splicer, x3d4)
     if groups:
         _indent(body, groups)
     for shape in added:
         if id(shape) in homes:
-            _add_home(shape, *homes[id(shape)], used, namespace, splicer)
+            _add_home(shape, *homes[id(shape)], used, namespace, splicer, x3d4)
     if authored is None:
         if root.get("profile") == "Core":
             _require_components(root, namespace, {"Navigation": 1})
@@ -213,13 +214,18 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
     return tree
 
 
+def _version(version: str | None) -> float:
+    """An X3D document's ``version`` as a number (3.0 when absent or unreadable)."""
+    try:
+        return float(version or "3.0")
+    except ValueError:
+        return 3.0
+
+
 def _legacy_version(version: str | None) -> bool:
     """Whether an X3D document of ``version`` is one X_ITE reads with its
     legacy defaults (3.0 and older: a DirectionalLight is global)."""
-    try:
-        return float(version or "3.0") <= 3.0
-    except ValueError:
-        return False
+    return _version(version) <= 3.0
 
 
 def _bound_viewpoint(tree: Tree) -> Element | None:
@@ -540,8 +546,12 @@ def _add_groups(
     used: set[str],
     namespace: str = "",
     splicer: Splicer | None = None,
+    x3d4: bool = True,
 ) -> list[Element]:
-    """Append one Group per ``shape.group`` holding those shapes; returns them."""
+    """Append one Group per ``shape.group`` holding those shapes; returns them.
+    In an X3D 4 document (``x3d4``) each says ``castShadow="false"``: a
+    browser drawing runtime shadows (``--keep-runtime-shadows``) must not
+    cast the baked shadows' own overlays, nor the added ground."""
     groups: dict[str, etree._Element] = {}
     for shape in shapes:
         key = shape.group or f"shadows_{shape.role}"
@@ -551,6 +561,8 @@ def _add_groups(
             )
         element = _shape_element(shape, used, namespace, world=True, splicer=splicer)
         element.set("class", f"{MARK}-{shape.role}")  # read back as this role
+        if x3d4:
+            element.set("castShadow", "false")
         groups[key].append(element)
     return list(groups.values())
 
@@ -584,6 +596,7 @@ def _add_home(
     used: set[str],
     namespace: str,
     splicer: Splicer | None,
+    x3d4: bool,
 ) -> None:
     """Append ``shape`` in its own marked Group to ``parent`` (its placement),
     its coordinates made local to it, indented as ``parent``'s children."""
@@ -595,6 +608,8 @@ def _add_home(
     )
     element = _shape_element(local, used, namespace, world=True, splicer=splicer)
     element.set("class", f"{MARK}-{shape.role}")
+    if x3d4:
+        element.set("castShadow", "false")
     group.append(element)
     if len(parent):
         lead, closing = (parent[-2].tail if len(parent) > 1 else parent.text), parent[-1].tail
