@@ -662,3 +662,43 @@ def test_a_value_of_the_wrong_type_is_a_scene_error_naming_it(tmp_path, suffix, 
     name = line.split(" = ")[0].split()[-1].split(":")[-1]
     assert path.name in message and where in message and kind in message
     assert name in message
+
+
+def test_light_sizes_read_from_usdlux_and_written_back_exactly(tmp_path):
+    # UsdLux's own defaults: a DistantLight's angle 0.53 degrees (the sun), a
+    # SphereLight's radius 0.5; treatAsPoint makes it a point; a scaled
+    # transform scales the radius
+    def build(stage):
+        UsdLux.DistantLight.Define(stage, "/Sun")
+        UsdLux.DistantLight.Define(stage, "/Wide").CreateAngleAttr(5.0)
+        UsdLux.SphereLight.Define(stage, "/Bulb")
+        big = UsdLux.SphereLight.Define(stage, "/Big")
+        big.CreateRadiusAttr(0.25)
+        big.AddScaleOp().Set(Gf.Vec3f(2, 2, 2))
+        point = UsdLux.SphereLight.Define(stage, "/Point")
+        point.CreateTreatAsPointAttr(True)
+        _triangle(stage, "/Tri")
+
+    path = tmp_path / "lights.usda"
+    _author(path, build)
+    lights = {light.name: light.light for light in sg.load(path).lights}
+    assert lights["Sun"].angle == pytest.approx(math.radians(0.53), rel=1e-6)
+    assert lights["Wide"].angle == pytest.approx(math.radians(5.0), rel=1e-7)
+    assert lights["Bulb"].source_radius == pytest.approx(0.5)
+    assert lights["Big"].source_radius == pytest.approx(0.5, rel=1e-6)
+    assert lights["Point"].source_radius == 0.0
+    # written back and read again: the same sizes, to the last bit
+    scene = sg.Scene(
+        [sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="tri")],
+        [
+            sg.SceneLight(sg.DirectionalLight([0, 0, -1], angle=0.1234567891), name="sun"),
+            sg.SceneLight(sg.DirectionalLight([0, 0, -1]), name="hard"),
+            sg.SceneLight(sg.PointLight([0, 0, 5], source_radius=0.3333333333), name="bulb"),
+            sg.SceneLight(sg.PointLight([0, 0, 5]), name="point"),
+        ],
+    )
+    out = tmp_path / "out.usda"
+    sg.save(scene, out)
+    back = {light.name: light.light for light in sg.load(out).lights}
+    assert back["sun"].angle == 0.1234567891 and back["hard"].angle == 0.0
+    assert back["bulb"].source_radius == 0.3333333333 and back["point"].source_radius == 0.0

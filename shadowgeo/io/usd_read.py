@@ -282,6 +282,30 @@ def _read_mesh(scene: Scene, prim: Any, path: Path, time: Any, where: str) -> No
     )
 
 
+def _size(prim: Any, world: np.ndarray, path: Path, where: str) -> float:
+    """A SphereLight's radius in world units (UsdLux's default 0.5; 0 when
+    ``treatAsPoint``), scaled as its transform scales volumes."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+    sphere = UsdLux.SphereLight(prim)
+    if bool(sphere.GetTreatAsPointAttr().Get()):
+        return 0.0
+    radius = sphere.GetRadiusAttr().Get()
+    radius = 0.5 if radius is None else float(radius)
+    scale = abs(float(np.linalg.det(world[:3, :3]))) ** (1.0 / 3.0)
+    size = _exact(radius, prim, "sourceRadius", path, where) * scale
+    return size if math.isfinite(size) and size > 0 else 0.0
+
+
+def _exact(value: float, prim: Any, name: str, path: Path, where: str) -> float:
+    """``value`` read from a float32 attribute, or the float64 custom
+    attribute ``name`` shadowgeo's writer keeps beside it when the two agree
+    to float32's precision."""
+    exact = _custom(prim, name, "number", None, path, where)
+    if exact is not None and abs(float(exact) - value) <= 1e-6 * abs(value):
+        return float(exact)
+    return value
+
+
 def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> bool:
     """Append the light at ``prim``; False when it is no light shadowgeo models."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
@@ -297,7 +321,12 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> b
     beam = _custom(prim, "beamWidth", "number", None, path, where)
     light: Light
     if isinstance(usd_light, UsdLux.DistantLight):
-        light = DirectionalLight(direction)
+        # the disc's angular diameter, degrees (UsdLux's default 0.53: the sun's)
+        angle = _get(usd_light.GetAngleAttr(), "number", 0.53, time, path, where)
+        radians = _exact(
+            math.radians(min(max(float(angle), 0.0), 179.0)), prim, "angle", path, where
+        )
+        light = DirectionalLight(direction, radians)
     else:
         shaping = UsdLux.ShapingAPI(prim)
         cone = (
@@ -310,14 +339,20 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> b
             exact = _custom(prim, "cutOffAngle", "number", None, path, where)
             if exact is not None and abs(exact - cut_off) <= 1e-6 * cut_off:
                 cut_off = float(exact)
-            light = SpotLight(world[:3, 3], direction, min(cut_off, math.pi / 2), radius)
+            light = SpotLight(
+                world[:3, 3],
+                direction,
+                min(cut_off, math.pi / 2),
+                radius,
+                _size(prim, world, path, where),
+            )
             if beam is None:
                 softness = _get(
                     shaping.GetShapingConeSoftnessAttr(), "number", 0.0, time, path, where
                 )
                 beam = (1.0 - softness) * light.cut_off_angle
         else:
-            light = PointLight(world[:3, 3], radius)
+            light = PointLight(world[:3, 3], radius, _size(prim, world, path, where))
     shadow = _get(UsdLux.ShadowAPI(prim).GetShadowEnableAttr(), "flag", False, time, path, where)
     visibility = usd_light.ComputeVisibility(time)
     color = _get(usd_light.GetColorAttr(), "triple", (1, 1, 1), time, path, where, True)

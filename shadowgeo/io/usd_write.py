@@ -189,10 +189,20 @@ class _Writer:
             transform = np.eye(4)
             if isinstance(light, DirectionalLight):
                 usd_light = UsdLux.DistantLight.Define(self.stage, path)
+                usd_light.CreateAngleAttr(math.degrees(light.angle))  # (not the 0.53 default)
+                if light.angle:  # float32 degrees: the exact radians too
+                    set_custom(usd_light.GetPrim(), "angle", Sdf.ValueTypeNames.Double, light.angle)
             else:
                 usd_light = UsdLux.SphereLight.Define(self.stage, path)
-                usd_light.CreateTreatAsPointAttr(True)
-                usd_light.CreateRadiusAttr(0.0)
+                usd_light.CreateTreatAsPointAttr(light.source_radius == 0)
+                usd_light.CreateRadiusAttr(float(light.source_radius))
+                if light.source_radius:  # float32: the exact value too
+                    set_custom(
+                        usd_light.GetPrim(),
+                        "sourceRadius",
+                        Sdf.ValueTypeNames.Double,
+                        light.source_radius,
+                    )
                 transform[:3, 3] = light.position
             if not isinstance(light, PointLight):
                 transform[:3, :3] = look_rotation(light.direction)
