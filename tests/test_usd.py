@@ -702,3 +702,20 @@ def test_light_sizes_read_from_usdlux_and_written_back_exactly(tmp_path):
     back = {light.name: light.light for light in sg.load(out).lights}
     assert back["sun"].angle == 0.1234567891 and back["hard"].angle == 0.0
     assert back["bulb"].source_radius == 0.3333333333 and back["point"].source_radius == 0.0
+
+
+@pytest.mark.parametrize("suffix", [".x3d", ".glb"])
+def test_a_light_size_x3d_and_gltf_cannot_hold_is_noted(tmp_path, suffix):
+    def build(stage):
+        UsdLux.DistantLight.Define(stage, "/Sun")
+        UsdLux.SphereLight.Define(stage, "/Point").CreateTreatAsPointAttr(True)
+        _triangle(stage, "/Tri")
+
+    path = tmp_path / "lights.usda"
+    _author(path, build)
+    scene = sg.load(path)
+    sg.save(scene, tmp_path / f"out{suffix}")
+    notes = [note for note in scene.warnings if "no field for a light's size" in note]
+    assert len(notes) == 1 and "Sun, angle 0.53 degrees" in notes[0] and "Point" not in notes[0]
+    sg.save(scene, tmp_path / "out.usda")  # USD holds it: no second note
+    assert len([n for n in scene.warnings if "no field for a light's size" in n]) == 1

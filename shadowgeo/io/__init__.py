@@ -292,6 +292,33 @@ def check_writable(path: str | os.PathLike[str]) -> None:
 
 
 def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
-    """Write ``scene`` to ``path`` atomically; the format comes from the extension."""
+    """Write ``scene`` to ``path`` atomically; the format comes from the extension.
+
+    A light's size (a sun's ``angle``, a sphere light's ``source_radius``)
+    goes only into USD, which has fields for it; X3D and glTF have none, and
+    a note in ``scene.warnings`` names the lights whose size is left out."""
     module = _module(WRITERS, path, "write")
     module.write(scene, Path(path), **options)
+    if WRITERS[_suffix(path)] != "usd_write":
+        sized = [_size_text(i, light) for i, light in enumerate(scene.lights)]
+        left = [text for text in sized if text]
+        if left:
+            shown = "; ".join(left[:10]) + (
+                f"; and {len(left) - 10} more" if len(left) > 10 else ""
+            )
+            kind = "glTF" if WRITERS[_suffix(path)] == "gltf_write" else "X3D"
+            scene.warnings.append(
+                f"{Path(path).name}: {kind} has no field for a light's size, so these are not "
+                f"written (their hard shadows cast from the light's centre): {shown}"
+            )
+
+
+def _size_text(index: int, scene_light: Any) -> str:
+    """What size a light has, for :func:`save`'s note ("" for none)."""
+    light = scene_light.light
+    name = scene_light.name or f"light {index}"
+    if getattr(light, "angle", 0.0):
+        return f"{name}, angle {math.degrees(light.angle):.3g} degrees"
+    if getattr(light, "source_radius", 0.0):
+        return f"{name}, source radius {light.source_radius:.6g}"
+    return ""
