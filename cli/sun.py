@@ -1,4 +1,4 @@
-"""``shadowgeo sun SCENE [OUT] --at LAT,LON``: a sun study of a scene's floor.
+"""``shadowgeo sun SCENE [OUT] [--at LAT,LON]``: a sun study of a scene's floor.
 
 A thin layer over :func:`shadowgeo.scene.sunlight.study_scene` (the floor and
 casters found as ``convert`` finds receivers) and, for OUT, over
@@ -85,9 +85,9 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument(
         "--at",
         type=place_argument,
-        required=True,
         metavar="LAT,LON",
-        help="the site, in degrees (north and east positive)",
+        help="the site, in degrees (north and east positive); needed only when the file "
+        "does not say where it is (city data with a CRS does)",
     )
     parser.add_argument(
         "--date",
@@ -196,13 +196,21 @@ def run(args: argparse.Namespace) -> int:
                 "OUT is the input file; it is never overwritten", path=str(args.output)
             )
         shadowgeo.io.check_writable(args.output)  # before the long work
+    scene = shadowgeo.load(args.input)
+    if args.at is None:
+        if scene.site is None:
+            raise shadowgeo.SceneError(
+                "the file does not say where it is (no coordinate reference system): "
+                "give the site with --at LAT,LON",
+                path=str(args.input),
+            )
+        args.at = (scene.site.latitude, scene.site.longitude)
     latitude, longitude = args.at
     zone = local_zone(longitude)
     first = args.date or dt.date(dt.date.today().year, 3, 21)
     start = dt.datetime(first.year, first.month, first.day, tzinfo=zone)
     step = dt.timedelta(minutes=args.every)
     times = shadowgeo.sun.hourly(start, start + dt.timedelta(days=args.days), step)
-    scene = shadowgeo.load(args.input)
     scheduler = None
     if args.days > 1 and not args.serial:
         scheduler = args.scheduler or "local"

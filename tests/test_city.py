@@ -700,3 +700,59 @@ def test_any_star_shaped_footprint_extrudes_to_a_closed_prism(corners, height, f
     assert _mesh(shape).volume == pytest.approx(footprint.area * height, rel=1e-6)
     assert _kind_area(shape, "RoofSurface") == pytest.approx(footprint.area, rel=1e-6)
     assert _kind_area(shape, "GroundSurface") == pytest.approx(footprint.area, rel=1e-6)
+
+
+def _square_feature(lon: float, lat: float, side: float, height: float) -> dict:
+    ring = [[lon, lat], [lon + side, lat], [lon + side, lat + side], [lon, lat + side], [lon, lat]]
+    return {
+        "type": "Feature",
+        "properties": {"height": height},
+        "geometry": {"type": "Polygon", "coordinates": [ring]},
+    }
+
+
+def test_sun_cli_takes_the_site_from_the_files_crs(capsys, tmp_path):
+    # CRS84 footprints at 51.5 N, 0.1 W: no --at; a file with no CRS needs one
+    from cli.main import main
+
+    path = tmp_path / "block.geojson"
+    features = [
+        _square_feature(-0.1, 51.5, 2e-4, 20.0),
+        _square_feature(-0.1 + 4e-4, 51.5, 2e-4, 8.0),
+    ]
+    path.write_text(json.dumps({"type": "FeatureCollection", "features": features}))
+    assert main(["sun", str(path), "--date", "2026-03-21"]) == 0
+    out = capsys.readouterr().out
+    assert "at 51.5001, -0.0997" in out or "at 51.5" in out
+    local = tmp_path / "local.city.json"  # a CityJSON with no CRS: where is it?
+    cube = [[[[0, 1, 2, 3]], [[4, 7, 6, 5]], [[0, 4, 5, 1]], [[1, 5, 6, 2]], [[2, 6, 7, 3]],
+             [[3, 7, 4, 0]]]]  # fmt: skip
+    local.write_text(
+        json.dumps(
+            {
+                "type": "CityJSON",
+                "version": "2.0",
+                "transform": {"scale": [1, 1, 1], "translate": [0, 0, 0]},
+                "vertices": [
+                    [0, 0, 0],
+                    [0, 9, 0],
+                    [9, 9, 0],
+                    [9, 0, 0],
+                    [0, 0, 9],
+                    [0, 9, 9],
+                    [9, 9, 9],
+                    [9, 0, 9],
+                ],  # fmt: skip
+                "CityObjects": {
+                    "b": {
+                        "type": "Building",
+                        "geometry": [{"type": "Solid", "lod": "1", "boundaries": cube}],
+                    }
+                },
+            }
+        )
+    )
+    code = main(["sun", str(local), "--date", "2026-03-21"])
+    err = capsys.readouterr().err
+    assert code == 1 and "--at LAT,LON" in err and "local.city.json" in err
+    assert main(["sun", str(local), "--date", "2026-03-21", "--at", "52,4.3"]) == 0
