@@ -198,11 +198,10 @@ def run(args: argparse.Namespace) -> int:
         shadowgeo.io.check_writable(args.output)  # before the long work
     scene = shadowgeo.load(args.input)
     if args.at is None:
-        if scene.site is None:
-            raise shadowgeo.SceneError(
-                "the file does not say where it is (no coordinate reference system): "
-                "give the site with --at LAT,LON",
-                path=str(args.input),
+        if scene.site is None:  # a usage error (exit 2), as a missing option is
+            args.parser.error(
+                f"{args.input}: the file does not say where it is (no coordinate reference "
+                "system): give the site with --at LAT,LON"
             )
         args.at = (scene.site.latitude, scene.site.longitude)
     latitude, longitude = args.at

@@ -752,7 +752,8 @@ def test_sun_cli_takes_the_site_from_the_files_crs(capsys, tmp_path):
             }
         )
     )
-    code = main(["sun", str(local), "--date", "2026-03-21"])
+    with pytest.raises(SystemExit) as exit_:  # a usage error, as a missing option is
+        main(["sun", str(local), "--date", "2026-03-21"])
     err = capsys.readouterr().err
-    assert code == 1 and "--at LAT,LON" in err and "local.city.json" in err
+    assert exit_.value.code == 2 and "--at LAT,LON" in err and "local.city.json" in err
     assert main(["sun", str(local), "--date", "2026-03-21", "--at", "52,4.3"]) == 0
