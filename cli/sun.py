@@ -197,13 +197,14 @@ def run(args: argparse.Namespace) -> int:
             )
         shadowgeo.io.check_writable(args.output)  # before the long work
     scene = shadowgeo.load(args.input)
-    if args.at is None:
-        if scene.site is None:  # a usage error (exit 2), as a missing option is
-            args.parser.error(
-                f"{args.input}: the file does not say where it is (no coordinate reference "
-                "system): give the site with --at LAT,LON"
-            )
-        args.at = (scene.site.latitude, scene.site.longitude)
+    site = scene.site
+    if args.at is None and site is None:  # a usage error (exit 2), as a missing option is
+        args.parser.error(
+            f"{args.input}: the file does not say where it is (no coordinate reference "
+            "system): give the site with --at LAT,LON"
+        )
+    elif args.at is None and site is not None:
+        args.at = (site.latitude, site.longitude)
     latitude, longitude = args.at
     zone = local_zone(longitude)
     first = args.date or dt.date(dt.date.today().year, 3, 21)
