@@ -133,6 +133,28 @@ def neighbourhood(reference, vertices: np.ndarray):
     return hard, hard.boundary.buffer(1.05 * reach + 1e-9, quad_segs=32)
 
 
+def swept_regions(reference, vertices: np.ndarray):
+    """The umbra and penumbra by exact hard shadows (shapely): the common part
+    and the union of the shadows (hulls of the vertices' images) from a dense
+    set of the light's points: a 41 x 41 grid over the rectangle, edges
+    included, or 17 rings of 256 points over the disc, its rim included. The
+    umbra of a convex caster under a convex light is the common part of its
+    rim's shadows, so exact under the rectangle (and larger by about 1e-4 of
+    the disc's radius under the disc); the penumbra is a lower bound, short by
+    what the grid's gaps leave out."""
+    if isinstance(reference, softref.Rect):
+        steps = np.linspace(-0.5, 0.5, 41)
+        grid = np.stack(np.meshgrid(steps, steps), axis=-1).reshape(-1, 2)
+        offsets = grid * [reference.width, reference.height]
+    else:
+        turn = np.linspace(0, 2 * math.pi, 256, endpoint=False)
+        ring = np.column_stack([np.cos(turn), np.sin(turn)])
+        radii = math.tan(reference.angle / 2) * np.linspace(0, 1, 17)
+        offsets = np.concatenate([radius * ring for radius in radii])
+    shadows = shapely.convex_hull(shapely.multipoints(ground_images(reference, vertices, offsets)))
+    return shapely.intersection_all(shadows), shapely.union_all(shadows)
+
+
 def band_points(band, count: int, rng: np.random.Generator) -> np.ndarray:
     """(count, 3) points on the ground drawn uniformly in ``band``."""
     minx, minz, maxx, maxz = band.bounds
@@ -278,7 +300,10 @@ def measure(scene: Scene, n_points: int, side: int, resolutions, samples, taps: 
         return inner + band.area * share, band.area * math.sqrt(share * (1 - share) / n_points)
 
     soft = softs[max(samples)]
+    umbra, penumbra = swept_regions(scene.reference, vertices)
     stats = {
+        "swept umbra": umbra.area,
+        "swept penumbra": penumbra.area,
         "umbra": soft.umbra.area,
         "penumbra": soft.penumbra.area,
         "exact": soft.exact,
@@ -312,9 +337,9 @@ def table(results) -> str:
 
 def area_table(results) -> str:
     lines = [
-        "| scene | umbra: shadowgeo | umbra: reference | penumbra: shadowgeo | "
-        "penumbra: reference | exact | reference noise: max, mean | ray check |",
-        "|---|---:|---:|---:|---:|---|---|---|",
+        "| scene | umbra: shadowgeo | umbra: swept | umbra: sampled | penumbra: shadowgeo | "
+        "penumbra: swept | penumbra: sampled | exact | reference noise: max, mean | ray check |",
+        "|---|---:|---:|---:|---:|---:|---:|---|---|---|",
     ]
     for scene, _, stats in results:
         umbra, umbra_noise = stats["reference umbra"]
@@ -322,8 +347,9 @@ def area_table(results) -> str:
         wrong, total = stats["ray check"]
         lines.append(
             f"| {scene.caster_name}, {scene.light_name} | {stats['umbra']:.4f} | "
-            f"{umbra:.4f} ± {umbra_noise:.4f} | {stats['penumbra']:.4f} | "
-            f"{penumbra:.4f} ± {penumbra_noise:.4f} | {'yes' if stats['exact'] else 'no'} | "
+            f"{stats['swept umbra']:.4f} | {umbra:.3f} ± {umbra_noise:.3f} | "
+            f"{stats['penumbra']:.4f} | {stats['swept penumbra']:.4f} | "
+            f"{penumbra:.3f} ± {penumbra_noise:.3f} | {'yes' if stats['exact'] else 'no'} | "
             f"{stats['noise max']:.4f}, {stats['noise mean']:.5f} | {wrong} of {total:,} |"
         )
     return "\n".join(lines)
@@ -334,6 +360,7 @@ def plot(results, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import matplotlib.ticker
 
     columns = list(dict.fromkeys(scene.light_name for scene, _, _ in results))
     rows_of = list(dict.fromkeys(scene.caster_name for scene, _, _ in results))
@@ -366,6 +393,7 @@ def plot(results, path: Path) -> None:
         ax.axhline(stats["noise mean"], color="grey", linewidth=0.8, label="reference noise (mean)")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set_title(f"{scene.caster_name}, {scene.light_name}", fontsize=9)
         ax.set_xlabel("time (ms)")
         ax.set_ylabel("hidden-fraction error")
@@ -424,25 +452,38 @@ over the points the reference puts strictly inside the penumbra (0 < fraction < 
 
 {table(results)}
 
-Umbra and penumbra areas (shadowgeo's at {max(settings["samples"])} samples; they come from the
-light's corners for a convex caster, so do not depend on the samples) against the reference's:
-the area of the hard shadow outside the band plus the band's area times the share of its
+Umbra and penumbra areas. *shadowgeo*: its `umbra.area` and `penumbra.area` at
+{max(settings["samples"])} samples (from the light's corners for a convex caster, so the same at
+any number of samples). *swept*: exact hard shadows in shapely (each the hull of the vertices'
+images) from a dense set of the light's points, their common part and their union: a 41 x 41
+grid over the rectangle, its edges included, or 17 rings of 256 points over the disc, its rim
+included. The umbra is exact under the rectangle (a point hidden from a convex light's rim is
+hidden from all of it), larger by about 1e-4 of the disc's radius under the disc; the penumbra
+is a lower bound, short by what the grid's gaps leave out. *sampled*: from the reference's
+points, the hard shadow's area outside the band plus the band's area times the share of its
 points hidden from all of both draws' samples (umbra) or from any (penumbra), ± one standard
-deviation of that share's sampling. *exact*: shadowgeo's `SoftShadow.exact` (a convex caster
-under a rectangle); under a disc its umbra is conservative and its penumbra holds the true one,
-by at most 0.12 % of the disc's radius (the 64-gon round the disc).
+deviation of that share. The sampled penumbra is biased low where the hidden fraction rises
+slowly from 0 (a round caster's image reaching into a rectangle's corner covers a share that
+grows with the square of the depth), so points hidden from less than one sample in 8,192 count
+as lit: the icosphere under the rectangle shows it. *exact*: shadowgeo's `SoftShadow.exact` (a
+convex caster under a rectangle); under a disc its umbra is conservative and its penumbra holds
+the true one, by at most 0.12 % of the disc's radius (the 64-gon round the disc).
 
 {area_table(results)}
 
 ![hidden-fraction error against time](../docs/images/{PLOT.name})
 
 Reading the tables: shadowgeo's levels round the fraction to the nearest 1/8, so at worst they
-err by 1/16 on top of their samples' error; the fraction's error falls with the samples. A
-shadow map's error has two sources the rows separate: its texels (a texel's width across the light at
-the ground is in the parameters, to set against the penumbra's width: about 0.03 under the 0.53
-degree sun here) and the filter's blocker depth (PCF's one depth is right only where the
-silhouette lies at the caster's centre depth; PCSS finds a depth per point, the mean of the
-blocking texels it sees, which is not the depth of the edge that casts the penumbra).
+err by 1/16 on top of their samples' error, and their mean error stays near 0.03 however many
+samples; the fraction's error falls with the samples. A shadow map's error has two sources the
+rows separate: its texels (a texel's width across the light at the ground is in the
+parameters, to set against the penumbra's width, about 0.03 under the 0.53 degree sun here)
+and the filter's blocker depth. PCF's one depth is right only where the silhouette lies at the
+caster's centre depth, so past some resolution its error stops falling. PCSS finds a depth per
+point, the mean of the blocking texels it sees: right for the cube, whose penumbra is cast by
+the edges of its flat faces (under the rectangle it beats shadowgeo's 240 samples, whose grid
+rows run along the cube's edges), wrong for the sphere, whose silhouette lies deeper than the
+texels in front of it.
 """
 
 

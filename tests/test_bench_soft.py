@@ -86,6 +86,10 @@ def test_tiny_run_reference_noise_areas_and_shadow_map_resolution():
     penumbra, penumbra_noise = stats["reference penumbra"]
     assert stats["umbra"] <= umbra + 4 * umbra_noise
     assert stats["penumbra"] >= penumbra - 4 * penumbra_noise
+    # and against exact hard shadows from a dense set of the light's points
+    assert stats["umbra"] <= stats["swept umbra"] + 1e-9
+    assert stats["penumbra"] >= stats["swept penumbra"] - 1e-9
+    assert stats["swept umbra"] == pytest.approx(umbra, abs=4 * umbra_noise)
     # the finest map is closer to the reference than the coarsest
     coarse, fine = (row for row in rows if row[0] == "shadow map PCF")
     assert fine[4] < coarse[4]
