@@ -29,7 +29,7 @@ import numpy as np
 from .. import limits
 from ..errors import GeometryError, SceneError
 from ..scene import Scene
-from . import outside_reason, x3d_parse
+from . import file_problem, outside_reason, x3d_parse
 from .gltf_layout import external_uris, json_document
 from .x3d_fields import Context, Element, Tree, local_name
 from .x3d_geometry import Instance, Mesh
@@ -71,8 +71,9 @@ def resolve_url(
         return f"'{shown}' leaves the scene's folder {reader.root_folder} (never read)"
     if reason is not None:
         return f"'{shown}' is {reason} (never read)"
-    if not candidate.is_file():
-        return f"'{shown}' not found"
+    problem = file_problem(candidate)
+    if problem is not None:
+        return f"'{shown}' {problem}"
     return candidate
 
 

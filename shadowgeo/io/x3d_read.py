@@ -79,7 +79,7 @@ from ..errors import GeometryError, SceneError
 from ..scene import Material, Scene, SceneLight, Shape
 from ..scene.model import MARK, Placement, Viewpoint, axis_angle
 from ..tolerance import Tolerance
-from . import float_triple, x3d_parse
+from . import file_problem, float_triple, x3d_parse
 from .x3d_defaults import DEFAULTS
 from .x3d_fields import Context, Element, Tree, local_name, parse, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
@@ -376,8 +376,12 @@ class _Reader:
             local = [(folder / u).resolve() for u in urls if not URL_SCHEME.match(u)]
             # only files inside the scene's folder count (nothing outside is looked at)
             inside = [path for path in local if path.is_relative_to(self.root_folder)]
-            if urls and not any(path.is_file() for path in inside):
-                context.warn(texture, f"texture not found: {', '.join(urls[:3])}")
+            problems = [file_problem(path) for path in inside]
+            if urls and None not in problems:
+                # why a url cannot even be looked up (a name too long, ...) is said
+                why = sorted({p for p in problems if p not in (None, "not found", "not a file")})
+                reason = f" ({'; '.join(why)})" if why else ""
+                context.warn(texture, f"texture not found: {', '.join(urls[:3])}{reason}")
             else:
                 self._skip(context, texture, local_name(texture), "textures not modelled")
 
