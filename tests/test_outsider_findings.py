@@ -80,3 +80,58 @@ def test_a_gltf_image_uri_too_long_for_the_file_system_is_a_note(tmp_path, capsy
     done = run(capsys, "info", scene)
     assert done.returncode == 0, done.stderr
     assert "missing texture image" in done.stdout
+
+
+OVERFLOWING = "9" * 400  # past float64's range with no exponent: inf when read
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "literal"),
+    [
+        (
+            "spot.x3dv",
+            "#X3D V4.0 utf8\nShape { geometry Box { } }\n"
+            f"SpotLight {{ radius {OVERFLOWING} }}\n",
+            OVERFLOWING,
+        ),
+        (
+            "coord.wrl",
+            "#VRML V2.0 utf8\nShape { geometry IndexedFaceSet { coordIndex [ 0 1 2 -1 ] "
+            f"coord Coordinate {{ point [ 0 0 0 1 0 0 0 {OVERFLOWING} 0 ] }} }} }}\n",
+            OVERFLOWING,
+        ),
+        (
+            "translation.json",
+            json.dumps(
+                {
+                    "X3D": {
+                        "@version": "4.0",
+                        "Scene": {
+                            "-children": [
+                                {"Shape": {"-geometry": {"Box": {}}}},
+                                {"Transform": {"@translation": [1, 2, float(OVERFLOWING)]}},
+                            ]
+                        },
+                    }
+                }
+            ).replace("Infinity", OVERFLOWING),
+            OVERFLOWING,
+        ),
+        (
+            "interpolator.x3dv",
+            "#X3D V4.0 utf8\nDEF P PositionInterpolator { key [ 0 1 ] "
+            "keyValue [ 0 0 0 1 1_000 Infinity ] }\nShape { geometry Box { } }\n",
+            "Infinity",
+        ),
+    ],
+)
+def test_a_number_the_reader_cannot_use_is_not_copied_to_x3d(tmp_path, capsys, name, text, literal):
+    # outsider-2 x3d_output_overflowing_number_literal_copied and
+    # x3d_output_nan_inf_literal_copied: the writer copied the literal.
+    scene = tmp_path / name
+    scene.write_text(text)
+    out = tmp_path / "out.x3d"
+    done = run(capsys, "convert", scene, out)
+    assert done.returncode == 0, done.stderr
+    assert literal not in out.read_text()
+    assert "is not finite; not written (the field's default applies)" in done.stderr
