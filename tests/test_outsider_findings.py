@@ -135,3 +135,85 @@ def test_a_number_the_reader_cannot_use_is_not_copied_to_x3d(tmp_path, capsys, n
     assert done.returncode == 0, done.stderr
     assert literal not in out.read_text()
     assert "is not finite; not written (the field's default applies)" in done.stderr
+
+
+CONTROL = [chr(code) for code in [*range(0x20), *range(0x7F, 0xA0)]]
+
+
+def raw_controls(text: str) -> list[str]:
+    """The control characters of ``text`` other than the newlines that end lines."""
+    return sorted({char for char in text if char in CONTROL and char != "\n"})
+
+
+def test_an_error_quoting_a_bracketed_token_is_one_line(tmp_path, capsys):
+    # outsider-2 rc1_message_multiline_unbounded_numbers_token: a two-line error.
+    scene = tmp_path / "multi.wrl"
+    scene.write_text("#VRML V2.0\n    Shape [\n                   1 ]")
+    done = run(capsys, "convert", scene, tmp_path / "out.glb")
+    assert done.returncode == 1
+    assert done.stderr.count("\n") == 1 and "found [1]" in done.stderr
+
+
+def test_a_note_quoting_a_huge_token_is_bounded(tmp_path, capsys):
+    # The same finding's 12 MB note (2,000,000 lines), here 200,000 lines.
+    scene = tmp_path / "note.wrl"
+    scene.write_text(
+        "#VRML V2.0 utf8\nShape { geometry Box { } }\nCoordinate { [ "
+        + "1 2 3\n" * 200_000
+        + "] }\n"
+    )
+    done = run(capsys, "convert", scene, tmp_path / "out.glb")
+    assert done.returncode == 0, done.stderr[:1000]
+    note = next(line for line in done.stderr.splitlines() if "expected a field" in line)
+    assert len(note) < 1000 and "1 2 3 1 2 3" in note and "..." in note
+    assert len(done.stderr) < 5000
+
+
+@pytest.mark.parametrize(
+    ("name", "text", "code"),
+    [
+        (
+            "keys.json",
+            json.dumps(
+                {
+                    "X3D": {
+                        "@version": "4.0",
+                        "Scene": {
+                            "-children": [
+                                {"Transform": {"@tr\x1b]0;PWNED\x07\x1b[2J": [1, 2, 3]}},
+                                {"Shape": {"-geometry": {"Box": {}}}},
+                            ]
+                        },
+                    }
+                }
+            ),
+            1,
+        ),
+        (
+            "names.wrl",
+            "#VRML V2.0 utf8\nTransform { trans\x1b]0;PWNED\x07lation 1 2 3 children "
+            "[ DEF n\u202eame Shape { geometry Box { } } ] }\nUSE \x1b[31mNOPE\n",
+            0,
+        ),
+    ],
+)
+def test_control_characters_from_a_file_reach_the_terminal_escaped(
+    tmp_path, capsys, name, text, code
+):
+    # outsider-2 raw_terminal_escapes_echoed: ESC/OSC/BEL printed raw (the
+    # terminal's title set, the screen cleared).
+    scene = tmp_path / name
+    scene.write_text(text)
+    done = run(capsys, "info", scene)
+    assert done.returncode == code
+    assert raw_controls(done.stdout + done.stderr) == []
+    assert "\\x1b" in done.stdout + done.stderr
+    assert "\u202e" not in done.stdout
+
+
+def test_the_terminal_line_escapes_and_bounds_every_message():
+    from cli.common import MAX_MESSAGE, terminal
+
+    assert terminal("a\nb\x1b[2J\x07\u2028") == "a\\nb\\x1b[2J\\x07\\u2028"
+    long = terminal("x" * 10 * MAX_MESSAGE)
+    assert len(long) == MAX_MESSAGE and long.endswith("...")
