@@ -6,12 +6,16 @@ skipped when the findings folder is absent."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
 from cli.main import main
 
+ROOT = Path(__file__).resolve().parents[1]
 LONG_NAME = "a" * 300  # one path component past every file system's 255
 
 
@@ -217,3 +221,23 @@ def test_the_terminal_line_escapes_and_bounds_every_message():
     assert terminal("a\nb\x1b[2J\x07\u2028") == "a\\nb\\x1b[2J\\x07\\u2028"
     long = terminal("x" * 10 * MAX_MESSAGE)
     assert len(long) == MAX_MESSAGE and long.endswith("...")
+
+
+def test_a_sphere_past_float32_range_to_glb_is_one_line_naming_the_input(tmp_path):
+    # outsider-2 rc1_glb_float32_RuntimeWarning_leak: radius 1e75 (inside the
+    # readers' range) printed numpy's RuntimeWarning and its source line, and
+    # the error named only the output. Run as a user runs it: warnings and all.
+    scene = tmp_path / "sphere.x3dv"
+    scene.write_text("#X3D V4.0\nTransform children Shape { geometry Sphere { radius 1e75 } }")
+    done = subprocess.run(
+        [sys.executable, "-m", "cli", "convert", scene.name, "out.glb"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert done.returncode == 1
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert "sphere.x3dv line 2, Sphere" in done.stderr and "float32" in done.stderr
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["sphere.x3dv"]
