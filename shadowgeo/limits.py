@@ -62,8 +62,10 @@ casting lights         100             lights whose shadows ``add_shadows`` bake
                                        when none is named: the first ones cast,
                                        with a note (``--light NAME`` chooses)
 Inline depth           16              nested X3D Inlines
-Extrusion              20,000,000      vertices (spine points x cross-section
-                                       points) of one Extrusion
+Extrusion              2,500,000       vertices (spine points x cross-section
+                                       points) of one Extrusion, before it is
+                                       built: its side alone fills the default
+                                       triangle budget (about 580 MB to build)
 sphere segments        2,048           segments around one tessellated Sphere
                                        (a finer chord is not met; the reader notes
                                        it)
@@ -132,7 +134,11 @@ MAX_LIGHTS = 10_000
 # is a shadow pass over every caster and receiver.
 MAX_CASTING_LIGHTS = 100
 MAX_INLINE_DEPTH = 16
-MAX_EXTRUSION_POINTS = 20_000_000
+# Vertices one Extrusion may make, checked before it is built (about 230
+# bytes each while it is): its side alone, about two triangles a vertex, then
+# fills the default triangle budget, which refused 18M vertices only after
+# 3.8 GB had been spent making them.
+MAX_EXTRUSION_POINTS = 2_500_000
 MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
 # Edge crossings one 2-D union may have to resolve (about half a second of

@@ -6,6 +6,7 @@ skipped when the findings folder is absent."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import random
 import subprocess
@@ -16,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from cli.main import main
+from shadowgeo import limits
 from shadowgeo.errors import SceneError
 from shadowgeo.io.x3d_classic_tokens import Token, tokens
 
@@ -294,3 +296,31 @@ def test_strings_with_escapes_read_as_by_hand(seed):
             if char == '"' and (len(body[:index]) - len(body[:index].rstrip("\\"))) % 2 == 0
         )
         assert found[1] == Token("string", unescaped_by_hand(body[:close]), 1)
+
+
+def extrusion_scene(n_spine: int, n_section: int) -> str:
+    """ClassicVRML of one uncapped Extrusion: a straight spine, a circle."""
+    spine = " ".join(f"0 {index * 0.001:.3f} 0" for index in range(n_spine))
+    angles = [2 * math.pi * index / n_section for index in range(n_section)]
+    section = " ".join(f"{math.cos(a):.4f} {math.sin(a):.4f}" for a in angles)
+    return (
+        "#X3D V4.0 utf8\nShape { geometry Extrusion { beginCap FALSE endCap FALSE "
+        f"spine [ {spine} ] crossSection [ {section} ] }} }}\n"
+        "Shape { geometry Box { } }\n"
+    )
+
+
+def test_an_extrusion_past_the_vertex_budget_is_refused_before_it_is_built(tmp_path, capsys):
+    # outsider-2 traceback_ArrayMemoryError_x3d_extrusion_extrusion: 4000 x
+    # 4500 (18M vertices, under the old 20M cap) spent 3.8 GB before the
+    # triangle budget refused it. Here 1000 x 3000 (3M vertices, 6M
+    # triangles): past the new cap, so the Shape is skipped unbuilt.
+    scene = tmp_path / "extrusion.x3dv"
+    scene.write_text(extrusion_scene(1000, 3000))
+    done = run(capsys, "info", scene)
+    assert done.returncode == 0, done.stderr
+    assert "1,000 spine points x 3,000 section points" in done.stdout
+    assert "MAX_EXTRUSION_POINTS" in done.stdout
+    assert "Box" in done.stdout
+    # the cap is what the default triangle budget holds: the side's triangles
+    assert 2 * (limits.MAX_EXTRUSION_POINTS - 1) <= limits.MAX_TRIANGLES
