@@ -324,3 +324,31 @@ def test_an_extrusion_past_the_vertex_budget_is_refused_before_it_is_built(tmp_p
     assert "Box" in done.stdout
     # the cap is what the default triangle budget holds: the side's triangles
     assert 2 * (limits.MAX_EXTRUSION_POINTS - 1) <= limits.MAX_TRIANGLES
+
+
+def inline_fan_out(folder: Path, depth: int, fan_out: int = 10) -> Path:
+    """``depth`` files, each inlining the next ``fan_out`` times, the last a
+    Box: fan_out ** depth Boxes from a few hundred bytes; returns the top file."""
+    for level in range(depth):
+        inlines = f'Inline {{ url "f{level + 1}.wrl" }} ' * fan_out
+        (folder / f"f{level}.wrl").write_text(f"#VRML V2.0 utf8\n{inlines}\n")
+    (folder / f"f{depth}.wrl").write_text(
+        "#VRML V2.0 utf8\nTransform { translation 0 2 0 children Shape { geometry Box { } } }\n"
+    )
+    return folder / "f0.wrl"
+
+
+def test_an_inline_fan_out_past_the_budget_is_refused_before_it_is_read(tmp_path, capsys):
+    # outsider-2 budget_cpu_Inline_fanout: 16 files, each inlining the next
+    # ten times, ran past 20 CPU s with nothing refusing it early. Here 5
+    # levels: 11,110 Inline instances, past the 10,000 of the budget.
+    assert 10 + 100 + 1_000 + 10_000 > limits.MAX_INLINE_INSTANCES
+    done = run(capsys, "info", inline_fan_out(tmp_path, depth=5))
+    assert done.returncode == 1
+    assert "MAX_INLINE_INSTANCES" in done.stderr and done.stderr.count("\n") == 1
+
+
+def test_an_inline_fan_out_under_the_budget_is_read_whole(tmp_path, capsys):
+    done = run(capsys, "info", inline_fan_out(tmp_path, depth=3))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith(f"{tmp_path / 'f0.wrl'}: 1000 shapes, 12000 triangles")

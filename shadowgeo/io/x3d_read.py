@@ -128,6 +128,7 @@ class _Reader:
         self.expanded = 0  # nodes the documents and prototype copies read so far expand to
         self.sizes: dict[Element, int] = {}  # element -> its expanded size (see _expanded_size)
         self.inline_files: dict[Path, Any] = {}  # each Inline file read once: tree or Scene
+        self.inlines_read = 0  # X3D Inline instances read (limits.MAX_INLINE_INSTANCES)
         self.top_root: Element | None = None  # the root of the scene's own document
         self.headlight: bool | None = None  # of the top document's first NavigationInfo
         # ids of the grouping node (and Inline) instances being read, outermost
