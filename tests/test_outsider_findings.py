@@ -14,11 +14,14 @@ import sys
 import tracemalloc
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+import shadowgeo as sg
 from cli.main import main
 from shadowgeo import limits
 from shadowgeo.errors import SceneError
+from shadowgeo.io import x3d_read
 from shadowgeo.io.x3d_classic_tokens import Token, tokens
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -352,3 +355,38 @@ def test_an_inline_fan_out_under_the_budget_is_read_whole(tmp_path, capsys):
     done = run(capsys, "info", inline_fan_out(tmp_path, depth=3))
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith(f"{tmp_path / 'f0.wrl'}: 1000 shapes, 12000 triangles")
+
+
+def use_chain(levels: int, fan_out: int = 10) -> str:
+    """VRML of Transforms each USEing the one before ``fan_out`` times; a Box
+    at the bottom: fan_out ** levels Boxes."""
+    lines = [
+        "#VRML V2.0 utf8",
+        "DEF L0 Transform { translation 1 0 0 children Shape { geometry Box { } } }",
+    ]
+    for level in range(1, levels + 1):
+        uses = f" USE L{level - 1}" * fan_out
+        lines.append(f"DEF L{level} Transform {{ rotation 0 1 0 0.3 children [{uses} ] }}")
+    return "\n".join(lines) + "\n"
+
+
+def test_a_use_chain_reads_each_transform_once_however_often_it_is_used(tmp_path, monkeypatch):
+    # outsider-2 budget_cpu_USE_chain_under_node_limit: 1.1M Transform
+    # instances of 7 elements took 36 CPU s, most of it making each
+    # instance's local matrix from its fields again.
+    made = []
+
+    def counted(context, element, tag):
+        made.append(element)
+        return local_matrix(context, element, tag)
+
+    local_matrix = x3d_read._local_matrix
+    monkeypatch.setattr(x3d_read, "_local_matrix", counted)
+    scene = tmp_path / "chain.wrl"
+    scene.write_text(use_chain(3))
+    loaded = sg.load(scene)
+    assert len(loaded.shapes) == 1 + 10 + 100 + 1000
+    assert len(made) == len(set(made)) == 4  # L0 to L3, each once
+    # every copy of the Box sits 1 from the Y axis, however far it is turned
+    centres = np.array([shape.world_vertices.mean(axis=0) for shape in loaded.shapes])
+    assert np.allclose(np.hypot(centres[:, 0], centres[:, 2]), 1.0)

@@ -121,6 +121,11 @@ class _Reader:
         self.skipped: dict[tuple[str, str], list[Any]] = {}  # (tag, why) -> [first place, count]
         self.textures_seen: set[Element] = set()
         self.geometry_cache: dict[Element, Mesh | Primitive | None] = {}
+        # what each node's own fields say, read once: a DEF'd Transform USEd
+        # a million times through a chain is one element
+        self.local_matrices: dict[Element, np.ndarray] = {}
+        self.hidden: dict[Element, bool] = {}  # visible='false'
+        self.rendered: dict[Element, list[Element]] = {}  # the children drawn
         self.material_cache: dict[Element | None, Material] = {}
         self.inline_stack: list[Path] = []
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
@@ -203,10 +208,13 @@ class _Reader:
         self, context: Context, element: Element, matrix: np.ndarray, name: str | None
     ) -> None:
         tag = local_name(element)
-        nodes = [child for child in element if local_name(child)]
-        rendered = [
-            child for child in nodes if child.get("containerField", "children") in RENDERED_FIELDS
-        ]
+        if element not in self.rendered:
+            self.rendered[element] = [
+                child
+                for child in element
+                if local_name(child) and child.get("containerField", "children") in RENDERED_FIELDS
+            ]
+        rendered = self.rendered[element]
         if tag == "Switch":
             choice = context.field(element, "whichChoice")
             rendered = [rendered[choice]] if 0 <= choice < len(rendered) else []
@@ -231,15 +239,21 @@ class _Reader:
             )
         tag = local_name(element)
         name = _public(written.get("DEF") or element.get("DEF")) or name
-        if "visible" in DEFAULTS.get(tag, {}) and not context.field(element, "visible"):
+        if element not in self.hidden:
+            self.hidden[element] = "visible" in DEFAULTS.get(tag, {}) and not context.field(
+                element, "visible"
+            )
+        if self.hidden[element]:
             context.warn(element, "visible='false': skipped")
             return
         if tag in GROUPS:
             if tag == "Billboard":
                 context.warn(element, "Billboard: children kept unrotated (no viewer)")
+            if element not in self.local_matrices:
+                self.local_matrices[element] = _local_matrix(context, element, tag)
             with np.errstate(over="ignore", invalid="ignore"):
-                world = matrix @ _local_matrix(context, element, tag)
-            if not np.all(np.isfinite(world)):
+                world = matrix @ self.local_matrices[element]
+            if not np.isfinite(world).all():
                 raise context.error(element, "the transforms down to here overflow to infinity")
             if len(self.open_groups) >= limits.MAX_NESTING:  # e.g. a prototype inside itself
                 raise context.error(
@@ -481,7 +495,9 @@ def _casts_shadow(context: Context, shape: Element, appearance: Element | None) 
 
 def _public(name: str | None) -> str | None:
     """A DEF name as the file writes it (prototype copies prefix theirs with 'N#')."""
-    return name.split("#", 1)[1] if name and re.match(r"\d+#", name) else name
+    if not name or "#" not in name:
+        return name
+    return name.split("#", 1)[1] if re.match(r"\d+#", name) else name
 
 
 def _viewpoint(context: Context, element: Element, matrix: np.ndarray) -> Viewpoint:
