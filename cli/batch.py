@@ -18,7 +18,7 @@ import shadowgeo
 from shadowgeo.batch import Outcome, convert_files, scene_suffix
 from shadowgeo.io import WRITERS
 
-from .common import ProgressBar, dask_failure, options_of
+from .common import ProgressBar, dask_failure, options_of, terminal
 
 
 def jobs_for(
@@ -156,10 +156,10 @@ def report(outcomes: list[Outcome]) -> None:
             error = str(outcome.error)
             # name the file once: most errors start with it already
             named = error if error.startswith(str(outcome.source)) else f"{outcome.source}: {error}"
-            print(f"shadowgeo convert: {named}", file=sys.stderr)
+            print(f"shadowgeo convert: {terminal(named)}", file=sys.stderr)
             continue
         for note in outcome.notes:
-            print(f"note: {outcome.source}: {note}", file=sys.stderr)
+            print(f"note: {terminal(f'{outcome.source}: {note}')}", file=sys.stderr)
         groups = f": {', '.join(outcome.groups)}" if outcome.groups else ""
         print(
             f"wrote {outcome.target}: {outcome.n_shapes} shape(s), {outcome.n_triangles} "

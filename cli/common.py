@@ -10,11 +10,32 @@ needs another to be read first.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from typing import TextIO
 
 import shadowgeo
 from shadowgeo.batch import ConvertOptions
+
+# What a file's text must not bring to a terminal: C0 and C1 controls (ESC
+# starts the sequences that set a title or clear the screen, BEL, newlines
+# that fake a line), Unicode's line separators and the bidirectional
+# overrides that reorder what is shown.
+_UNSAFE = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+# Characters of one message printed at most.
+MAX_MESSAGE = 2000
+
+
+def terminal(text: object) -> str:
+    """``text`` (a note, an error, a name read from a file) as one line fit
+    for a terminal: each control character as its escape (``\\x1b``,
+    ``\\n``), at most :data:`MAX_MESSAGE` characters, ``...`` ending a cut."""
+    line = _UNSAFE.sub(_escape, str(text)[: MAX_MESSAGE + 1])
+    return line if len(line) <= MAX_MESSAGE else line[: MAX_MESSAGE - 3] + "..."
+
+
+def _escape(match: re.Match[str]) -> str:
+    return repr(match.group(0))[1:-1]
 
 
 def plane_argument(text: str) -> shadowgeo.Plane:

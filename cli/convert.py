@@ -17,7 +17,7 @@ from shadowgeo.batch import save_output, shadowed
 from shadowgeo.io.atomic import remove_stale
 
 from .batch import run_batch
-from .common import ProgressBar, add_dask_arguments, options_of, plane_argument
+from .common import ProgressBar, add_dask_arguments, options_of, plane_argument, terminal
 
 EPILOG = """\
 examples:
@@ -191,7 +191,7 @@ def print_notes(notes: list[str], n_reader: int, source: Path) -> None:
     """The reader's notes (what it skipped; at most :data:`MAX_READER_NOTES`),
     then every note on the shadows, one ``note:`` line each, on stderr."""
     for note in notes[: min(n_reader, MAX_READER_NOTES)]:
-        print(f"note: {note}", file=sys.stderr)
+        print(f"note: {terminal(note)}", file=sys.stderr)
     if n_reader > MAX_READER_NOTES:
         print(
             f"note: ... and {n_reader - MAX_READER_NOTES} more notes of the reader "
@@ -199,7 +199,7 @@ def print_notes(notes: list[str], n_reader: int, source: Path) -> None:
             file=sys.stderr,
         )
     for note in notes[n_reader:]:
-        print(f"note: {note}", file=sys.stderr)
+        print(f"note: {terminal(note)}", file=sys.stderr)
 
 
 def is_batch(paths: list[Path]) -> bool:

@@ -15,6 +15,8 @@ import numpy as np
 
 import shadowgeo
 
+from .common import terminal
+
 EPILOG = """\
 examples:
   shadowgeo info examples/scenes/courtyard.x3d
@@ -44,7 +46,9 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 
 def table(headers: list[str], rows: list[list[str]]) -> str:
-    """Columns padded to their widest cell, two spaces apart."""
+    """Columns padded to their widest cell, two spaces apart; a cell (a name
+    or description from the file) is one line fit for a terminal."""
+    rows = [[terminal(cell) for cell in row] for row in rows]
     widths = [max(len(str(c)) for c in column) for column in zip(headers, *rows, strict=True)]
     lines = [headers, ["-" * w for w in widths], *rows]
     return "\n".join(
@@ -141,5 +145,5 @@ def run(args: argparse.Namespace) -> int:
     if scene.warnings:
         print(f"\nskipped or noted ({len(scene.warnings)})")
         for warning in scene.warnings:
-            print(f"  - {warning}")
+            print(f"  - {terminal(warning)}")
     return 0

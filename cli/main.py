@@ -21,6 +21,7 @@ import sys
 
 import shadowgeo
 
+from .common import terminal
 from .interrupt import Terminated, exit_code, signals_unwind
 
 # Command modules, in the order --help lists them.
@@ -83,5 +84,5 @@ def run(argv: list[str] | None) -> int:
     try:
         return int(args.func(args) or 0)
     except (shadowgeo.SceneError, shadowgeo.GeometryError) as error:
-        print(f"shadowgeo {args.command}: {error}", file=sys.stderr)
+        print(f"shadowgeo {args.command}: {terminal(error)}", file=sys.stderr)
         return 1

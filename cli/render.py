@@ -13,6 +13,8 @@ from pathlib import Path
 
 import shadowgeo as sg
 
+from .common import terminal
+
 VIEWS = ("iso", "top", "front")
 # What --view gives: one of VIEWS, or a direction (x, y, z).
 View = str | tuple[float, ...]
@@ -103,7 +105,10 @@ def scene_to_draw(args: argparse.Namespace) -> sg.Scene:
     try:
         return sg.add_shadows(scene)
     except sg.SceneError as error:  # no light on or no receiver: still worth a picture
-        print(f"shadowgeo {args.command}: no shadows drawn: {error.message}", file=sys.stderr)
+        print(
+            f"shadowgeo {args.command}: no shadows drawn: {terminal(error.message)}",
+            file=sys.stderr,
+        )
         return scene
 
 

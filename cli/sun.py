@@ -29,6 +29,7 @@ from .common import (
     dask_failure,
     plane_argument,
     positive_int,
+    terminal,
 )
 
 EPILOG = """\
@@ -241,7 +242,7 @@ def run(args: argparse.Namespace) -> int:
         if bar is not None:
             bar.close()
     for note in [*scene.warnings, *inputs.notes]:
-        print(f"note: {note}", file=sys.stderr)
+        print(f"note: {terminal(note)}", file=sys.stderr)
     hours = args.hours
     place = f"{latitude:g}, {longitude:g}"
     if args.days == 1:  # a SunStudies of the one day (every sample lies in it)

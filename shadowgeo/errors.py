@@ -52,3 +52,26 @@ class SceneError(ValueError):
             where.append(self.node)
         prefix = ", ".join(where)
         return f"{prefix}: {self.message}" if prefix else self.message
+
+
+EXCERPT = 200  # characters of a file's own text that a message quotes, at most
+
+
+def excerpt(text: str, limit: int = EXCERPT) -> str:
+    """``text`` (a token or name from a file) as a message quotes it: on one
+    line (each run of white space, newlines included, as one space) and at
+    most ``limit`` characters, ``...`` ending a cut, however long the text.
+
+    Examples
+    --------
+    >>> excerpt("[ 1 2 3\\n 4 5 6 ]")
+    '[ 1 2 3 4 5 6 ]'
+    >>> excerpt("1 2 3\\n" * 1_000_000, limit=12)
+    '1 2 3 1 2...'
+    """
+    # Only the start is looked at: a 12 MB token must not be copied whole.
+    head = text[: 2 * limit + 2]
+    one_line = " ".join(head.split())
+    if len(head) < len(text) or len(one_line) > limit:
+        return one_line[: limit - 3].rstrip() + "..."
+    return one_line

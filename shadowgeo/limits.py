@@ -62,8 +62,13 @@ casting lights         100             lights whose shadows ``add_shadows`` bake
                                        when none is named: the first ones cast,
                                        with a note (``--light NAME`` chooses)
 Inline depth           16              nested X3D Inlines
-Extrusion              20,000,000      vertices (spine points x cross-section
-                                       points) of one Extrusion
+Inline instances       10,000          X3D Inlines read, every copy counted
+                                       (through DEF/USE and Inlines inside
+                                       Inlines), each checked before it is read
+Extrusion              2,500,000       vertices (spine points x cross-section
+                                       points) of one Extrusion, before it is
+                                       built: its side alone fills the default
+                                       triangle budget (about 580 MB to build)
 sphere segments        2,048           segments around one tessellated Sphere
                                        (a finer chord is not met; the reader notes
                                        it)
@@ -132,7 +137,15 @@ MAX_LIGHTS = 10_000
 # is a shadow pass over every caster and receiver.
 MAX_CASTING_LIGHTS = 100
 MAX_INLINE_DEPTH = 16
-MAX_EXTRUSION_POINTS = 20_000_000
+# X3D Inline instances read, every copy counted: each is a document walked
+# anew (~0.2 ms even for a small file), and 16 files of 250 bytes that each
+# inline the next ten times ask for 10^15; counted before each is read.
+MAX_INLINE_INSTANCES = 10_000
+# Vertices one Extrusion may make, checked before it is built (about 230
+# bytes each while it is): its side alone, about two triangles a vertex, then
+# fills the default triangle budget, which refused 18M vertices only after
+# 3.8 GB had been spent making them.
+MAX_EXTRUSION_POINTS = 2_500_000
 MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
 # Edge crossings one 2-D union may have to resolve (about half a second of

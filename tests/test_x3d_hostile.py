@@ -495,7 +495,7 @@ def test_extrusion_that_would_explode_is_refused(tmp_path):
     result = sg.load(scene(tmp_path, body))
     assert result.shapes == []
     (warning,) = result.warnings
-    assert "5000 spine points x 5000 section points" in warning and "Shape is skipped" in warning
+    assert "5,000 spine points x 5,000 section points" in warning and "Shape is skipped" in warning
 
 
 def test_a_def_name_given_again_rebinds_later_uses(tmp_path):

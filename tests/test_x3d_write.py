@@ -473,10 +473,27 @@ def test_every_encoding_writes_the_shapes_numbers_exactly(tmp_path, suffix):
         ("0 NaN 1", True),
         ("1 2 inf", True),
         ("1 e 3", False),  # not all numbers: text, left alone
+        ("9" * 400, True),  # no exponent at all (outsider-2: was copied)
+        ("1 2 " + "9" * 400, True),
     ],
 )
 def test_non_finite_attributes_are_found_without_parsing_every_number(value, non_finite):
     assert x3d_write._non_finite(value) == non_finite
+
+
+@pytest.mark.parametrize(
+    ("value", "kind", "non_finite"),
+    [
+        # outsider-2: beside a word that is no number, Infinity was copied
+        ("0 0 0 1 1_000 Infinity", "numbers", True),
+        ("0 0 0 1 oops 1e999", "numbers", True),
+        ("0 0 0 1 1_000 Infinity", "unknown", False),  # may be text: left alone
+        ("nan", "other", False),  # a string field that spells nan
+        ("0 0 oops 3", "numbers", False),
+    ],
+)
+def test_a_field_of_numbers_with_any_non_finite_word_is_found(value, kind, non_finite):
+    assert x3d_write._non_finite(value, kind) == non_finite
 
 
 def test_shapes_sharing_a_look_or_not_each_get_their_own_materials_text(tmp_path):

@@ -55,6 +55,7 @@ import importlib
 import json
 import math
 import os
+import stat
 from collections.abc import Iterable
 from pathlib import Path
 from types import ModuleType
@@ -214,6 +215,23 @@ def outside_reason(reference: str, target: Path, folder: Path) -> str | None:
     return None
 
 
+def file_problem(target: Path) -> str | None:
+    """None when ``target`` is a regular file, else why not: ``"not found"``,
+    ``"not a file"``, or the system's reason it cannot even be looked up (a
+    name too long, a NUL character), so that a url read from a file leads
+    to a note or a SceneError, never a traceback (``Path.is_file`` raises on
+    those before Python 3.14)."""
+    try:
+        mode = target.stat().st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return "not found"
+    except OSError as error:
+        return f"cannot be looked up: {error.strerror or error}"
+    except ValueError:  # an embedded NUL character
+        return "cannot be looked up: a NUL character"
+    return None if stat.S_ISREG(mode) else "not a file"
+
+
 def refuse_outside(
     reference: str, target: Path, folder: Path, *, path: str | os.PathLike[str], where: str
 ) -> None:
@@ -267,8 +285,9 @@ def load(
     """
     path = Path(path)
     _module(READERS, path, "read")  # an unknown extension first, then a missing file
-    if not path.is_file():
-        raise SceneError("no such file", path=str(path))
+    problem = file_problem(path)
+    if problem is not None:
+        raise SceneError("no such file" if problem == "not found" else problem, path=str(path))
     module = importlib.import_module(f"{__name__}.{reader_name(path)}")
     scene: Scene = module.read(path, **options)
     limits.check_triangles(sum(shape.n_faces for shape in scene.shapes), str(path), max_triangles)

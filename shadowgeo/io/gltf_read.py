@@ -37,7 +37,7 @@ from .. import limits
 from ..errors import SceneError
 from ..scene import Material, Scene, Shape
 from ..scene.model import Viewpoint, axis_angle
-from . import float_triple, refuse_outside
+from . import file_problem, float_triple, refuse_outside
 from .gltf_layout import (
     LIGHTS,
     check_types,
@@ -126,7 +126,7 @@ def _check_uris(document: dict[str, Any], path: Path) -> list[str]:
     for where, uri in external_uris(document):
         target = (folder / unquote(uri)).resolve()
         refuse_outside(uri, target, folder, path=path, where=where)
-        if target.is_file():
+        if file_problem(target) is None:
             continue
         if where.startswith("buffers"):
             raise SceneError("missing external file", path=str(path), node=where)

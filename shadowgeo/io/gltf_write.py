@@ -186,21 +186,31 @@ class _Builder:
         # (a mask, not np.unique: linear, and no copy when all are used).
         in_use = np.zeros(len(vertices), dtype=bool)
         in_use[shape.faces.ravel()] = True
-        if in_use.all():
-            positions = np.ascontiguousarray(vertices, dtype="<f4")
-            indices = np.ascontiguousarray(shape.faces, dtype="<u4")
-        else:
+        if not in_use.all():
             used = np.flatnonzero(in_use)
             remap = np.zeros(len(vertices), dtype=np.int64)
             remap[used] = np.arange(len(used))
-            positions = np.ascontiguousarray(vertices[used], dtype="<f4")
-            indices = np.ascontiguousarray(remap[shape.faces], dtype="<u4")
+            vertices, faces = vertices[used], remap[shape.faces]
+        else:
+            faces = shape.faces
+        # a float64 past float32's range becomes inf: said below, not warned
+        with np.errstate(over="ignore"):
+            positions = np.ascontiguousarray(vertices, dtype="<f4")
+        indices = np.ascontiguousarray(faces, dtype="<u4")
         # column by column (a strided axis-0 reduction is several times
         # slower); NaN or inf anywhere shows in the bounds
         low = [float(positions[:, k].min()) for k in range(3)]
         high = [float(positions[:, k].max()) for k in range(3)]
         if not all(math.isfinite(value) for value in low + high):
-            raise SceneError("non-finite vertex after float32 conversion", node=shape.name)
+            # name where the shape was read: the cause is there, not in the output
+            where = f"shape {shape.name!r}" if shape.name else "a shape"
+            where += f" ({shape.source})" if shape.source else ""
+            if not np.isfinite(vertices).all():
+                raise SceneError("non-finite vertex", node=where)
+            raise SceneError(
+                "a vertex past float32's range (about 3.4e38), which glTF positions hold",
+                node=where,
+            )
         position = self._accessor(
             bufferView=self._view(positions, _ARRAY_BUFFER),
             componentType=_FLOAT,

@@ -46,7 +46,7 @@ from typing import cast
 
 from lxml import etree
 
-from ..errors import SceneError
+from ..errors import SceneError, excerpt
 from .x3d_classic_tokens import Token, is_number, number_text, quote, tokens
 from .x3d_field_types import CONTAINER_FIELDS, field_type
 from .x3d_fields import Element
@@ -241,7 +241,9 @@ class _Parser:
         try:
             element.set(name, value)
         except ValueError as problem:
-            raise SceneError(f"field {name}: {problem}", path=self.path, line=line) from None
+            raise SceneError(
+                f"field {excerpt(name)}: {problem}", path=self.path, line=line
+            ) from None
 
     # -- document ----------------------------------------------------------------
     def document(self, version: str) -> etree._ElementTree:
@@ -470,13 +472,12 @@ class _Parser:
         """One ``accessType type name [value | IS name]`` declaration as a ``<field>``."""
         access = self.word("an access type")
         if access.text not in ACCESS:
-            found = access.text
             raise self.error(
-                f"expected an access type (inputOutput, ...), found {found!r}", [access]
+                f"expected an access type (inputOutput, ...), found {_shown(access)}", [access]
             )
         kind, name = self.word("a field type").text, self.word("a field name").text
         if not kind.startswith(("SF", "MF")):
-            raise self.error(f"{kind!r} is not a field type", [access])
+            raise self.error(f"{excerpt(kind)!r} is not a field type", [access])
         field = self.element(
             parent, "field", access.line, name=name, type=kind, accessType=ACCESS[access.text]
         )
@@ -526,7 +527,7 @@ class _Parser:
 
     def node(self, parent: Element, kind: Token, name: str | None) -> Element:
         if not _NAME.fullmatch(kind.text):
-            raise self.error(f"{kind.text!r} is not a node type", [kind])
+            raise self.error(f"{_shown(kind)} is not a node type", [kind])
         self.expect("{")
         self.depth += 1
         if self.depth > MAX_DEPTH:
@@ -557,7 +558,7 @@ class _Parser:
             except (_Refused, _Truncated):
                 raise
             except SceneError as error:
-                what = f"field {token.text} of {kind}"
+                what = f"field {excerpt(token.text)} of {kind}"
                 self.skip(element, start, state, error, what, fields=True)
 
     def field(self, element: Element, kind: str, instance: bool) -> None:
@@ -639,11 +640,11 @@ class _Parser:
                 if holder is not None and (following.text in STATEMENTS or self.starts_node()):
                     self.attempt(holder, container=container)  # ROUTE, PROTO may stand among nodes
                 elif self.starts_node():
-                    raise self.error(f"field {field} cannot hold nodes", [token])
+                    raise self.error(f"field {excerpt(field)} cannot hold nodes", [token])
                 elif following.text == "NULL":
                     self.take()
                 elif following.kind == "punct":
-                    raise self.error(f"unexpected {following.text!r} in field {field}")
+                    raise self.error(f"unexpected {_shown(following)} in field {excerpt(field)}")
                 else:
                     items.append(self.take())
             self.take()
@@ -653,7 +654,7 @@ class _Parser:
             return None if added or declared is None or declared.endswith("Node") else ""
         if self.starts_node():
             if holder is None:
-                raise self.error(f"field {field} cannot hold nodes", [token])
+                raise self.error(f"field {excerpt(field)} cannot hold nodes", [token])
             self.node_statement(holder, container)
             return None
         following = self.peek()
@@ -664,8 +665,8 @@ class _Parser:
         while (following := self.peek()) is not None and _is_scalar(following):
             items.append(self.take())
         if not items:
-            found = "the end of the file" if following is None else repr(following.text)
-            raise self.error(f"field {field} of {kind}: no value (found {found})", [token])
+            found = "the end of the file" if following is None else _shown(following)
+            raise self.error(f"field {excerpt(field)} of {kind}: no value (found {found})", [token])
         return _text(items, declared, False)
 
 
@@ -675,8 +676,8 @@ def _last_child(parent: Element) -> Element | None:
 
 
 def _shown(token: Token) -> str:
-    """``token`` as the file has it, for messages."""
-    return f"[{token.text}]" if token.kind == "numbers" else repr(token.text)
+    """``token`` as the file has it, for messages: one line, bounded."""
+    return f"[{excerpt(token.text)}]" if token.kind == "numbers" else repr(excerpt(token.text))
 
 
 def _is_scalar(token: Token) -> bool:

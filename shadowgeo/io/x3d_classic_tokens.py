@@ -19,8 +19,7 @@ from ..errors import SceneError
 _TOKEN = re.compile(
     r"""[ \t\r\n,]*
       (?: (?P<comment>\#[^\n\r]*)
-        | (?P<string>"(?:[^"\\]|\\.)*")
-        | (?P<open>")
+        | (?P<string>")
         | (?P<numbers>\[[0-9a-fA-FxX.+\- \t\r\n,]*\])
         | (?P<punct>[{}\[\]])
         | (?P<word>[^ \t\r\n,\#"{}\[\]]+) )""",
@@ -28,7 +27,6 @@ _TOKEN = re.compile(
 )
 _NUMBER = re.compile(r"[+-]?(?:0[xX][0-9A-Fa-f]+|(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)")
 _HEX = re.compile(r"[+-]?0[xX][0-9A-Fa-f]+")
-_ESCAPE = re.compile(r"\\(.)", re.DOTALL)
 _BREAK = re.compile("\n")
 
 
@@ -64,28 +62,61 @@ def tokens(text: str, path: str) -> list[Token]:
     # of line breaks before its start.
     breaks = [match.start() for match in _BREAK.finditer(text)]
     next_break, seen = (breaks[0] if breaks else len(text)), 0
-    for match in _TOKEN.finditer(text):
+    position = 0
+    # (each token matched in turn: a string's end is found by scanning, see
+    # _string_end, so the next match starts after it)
+    while (match := _TOKEN.match(text, position)) is not None:
         # every alternative of _TOKEN is a named group
         kind = cast(str, match.lastgroup)
         start = match.start(kind)
+        position = match.end()
         while next_break < start:  # the breaks before this token
             seen += 1
             next_break = breaks[seen] if seen < len(breaks) else len(text)
         line = seen + 1
-        value = match.group(kind)
-        if kind == "open":
-            raise SceneError(
-                "a string is not closed before the end of the file", path=path, line=line
-            )
         if kind == "string":
-            found.append(Token(kind, _ESCAPE.sub(r"\1", value[1:-1]), line))
-        elif kind == "numbers":
+            position = _string_end(text, start)
+            if position < 0:
+                raise SceneError(
+                    "a string is not closed before the end of the file", path=path, line=line
+                )
+            found.append(Token(kind, _unescaped(text[start + 1 : position - 1]), line))
+            continue
+        value = match.group(kind)
+        if kind == "numbers":
             found.append(Token(kind, value[1:-1], line))
         elif kind == "comment":
             found.append(Token(kind, value[1:], line))
         else:
             found.append(Token(kind, value, line))
     return found
+
+
+def _string_end(text: str, start: int) -> int:
+    """Where the string opening at ``text[start]`` ends (just past its closing
+    quote: the first ``"`` after an even run of backslashes), or -1 when it
+    is never closed. Found by ``str.find``, not a regular expression: one
+    that repeats a group per character (``(?:[^"\\\\]|\\\\.)*``) keeps
+    ~170 bytes of backtracking state per character of a long string."""
+    position = start + 1
+    while (close := text.find('"', position)) >= 0:
+        backslashes = 0
+        while close - backslashes - 1 > start and text[close - backslashes - 1] == "\\":
+            backslashes += 1
+        if backslashes % 2 == 0:
+            return close + 1
+        position = close + 1
+    return -1
+
+
+def _unescaped(body: str) -> str:
+    """A string's text with its escapes undone (a backslash and the
+    character it escapes become that character): split at the escaped
+    backslashes (paired from the left, as read), every other backslash
+    dropped from each piece."""
+    if "\\" not in body:
+        return body
+    return "\\".join(piece.replace("\\", "") for piece in body.split("\\\\"))
 
 
 def is_number(word: str) -> bool:

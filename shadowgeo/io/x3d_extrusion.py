@@ -124,8 +124,8 @@ def extrusion(context: Context, element: Element) -> tuple[np.ndarray, np.ndarra
     if len(spine) * len(section) > MAX_POINTS:
         raise context.error(
             element,
-            f"{len(spine)} spine points x {len(section)} section points is more than "
-            f"{MAX_POINTS} vertices; refused",
+            f"{len(spine):,} spine points x {len(section):,} section points is more than "
+            f"{MAX_POINTS:,} vertices (shadowgeo.limits.MAX_EXTRUSION_POINTS); refused",
         )
     scale = _per_point(context, element, "scale", [1.0, 1.0], len(spine))
     turns = _per_point(context, element, "orientation", [0.0, 0.0, 1.0, 0.0], len(spine))

@@ -29,7 +29,7 @@ import numpy as np
 from .. import limits
 from ..errors import GeometryError, SceneError
 from ..scene import Scene
-from . import outside_reason, x3d_parse
+from . import file_problem, outside_reason, x3d_parse
 from .gltf_layout import external_uris, json_document
 from .x3d_fields import Context, Element, Tree, local_name
 from .x3d_geometry import Instance, Mesh
@@ -41,6 +41,7 @@ X3D_SUFFIXES |= {".x3d.gz", ".x3dv.gz", ".wrl.gz"}
 X3D_SUFFIXES |= set(x3d_parse.ENCODINGS)
 GLTF_SUFFIXES = {".gltf", ".glb"}
 MAX_INLINE_DEPTH = limits.MAX_INLINE_DEPTH  # see shadowgeo.limits
+MAX_INLINE_INSTANCES = limits.MAX_INLINE_INSTANCES
 
 
 class InlineReader(Protocol):
@@ -51,6 +52,7 @@ class InlineReader(Protocol):
     instances: list[Instance]
     inline_stack: list[Path]
     inline_files: dict[Path, Any]  # each Inline file read once: tree, Scene or why not
+    inlines_read: int  # X3D Inline instances read so far (MAX_INLINE_INSTANCES)
     within: tuple[int, ...]  # the grouping node instances being read (see Instance)
 
     def document(self, tree: Tree, path: Path, matrix: np.ndarray, *, name: str | None) -> None: ...
@@ -71,8 +73,9 @@ def resolve_url(
         return f"'{shown}' leaves the scene's folder {reader.root_folder} (never read)"
     if reason is not None:
         return f"'{shown}' is {reason} (never read)"
-    if not candidate.is_file():
-        return f"'{shown}' not found"
+    problem = file_problem(candidate)
+    if problem is not None:
+        return f"'{shown}' {problem}"
     return candidate
 
 
@@ -152,6 +155,15 @@ def _x3d(
     tree = x3d_tree(reader, path)
     if isinstance(tree, str):
         return tree
+    # each copy is a document walked anew: counted before the walk, so a
+    # fan-out of small files stops here, not after minutes
+    reader.inlines_read += 1
+    if reader.inlines_read > MAX_INLINE_INSTANCES:
+        raise context.error(
+            element,
+            f"more than {MAX_INLINE_INSTANCES:,} Inline instances to read, every copy "
+            "counted (shadowgeo.limits.MAX_INLINE_INSTANCES)",
+        )
     reader.document(tree, path, matrix, name=name)
     return None
 

@@ -79,7 +79,7 @@ from ..errors import GeometryError, SceneError
 from ..scene import Material, Scene, SceneLight, Shape
 from ..scene.model import MARK, Placement, Viewpoint, axis_angle
 from ..tolerance import Tolerance
-from . import float_triple, x3d_parse
+from . import file_problem, float_triple, x3d_parse
 from .x3d_defaults import DEFAULTS
 from .x3d_fields import Context, Element, Tree, local_name, parse, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
@@ -121,6 +121,11 @@ class _Reader:
         self.skipped: dict[tuple[str, str], list[Any]] = {}  # (tag, why) -> [first place, count]
         self.textures_seen: set[Element] = set()
         self.geometry_cache: dict[Element, Mesh | Primitive | None] = {}
+        # what each node's own fields say, read once: a DEF'd Transform USEd
+        # a million times through a chain is one element
+        self.local_matrices: dict[Element, np.ndarray] = {}
+        self.hidden: dict[Element, bool] = {}  # visible='false'
+        self.rendered: dict[Element, list[Element]] = {}  # the children drawn
         self.material_cache: dict[Element | None, Material] = {}
         self.inline_stack: list[Path] = []
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
@@ -128,6 +133,7 @@ class _Reader:
         self.expanded = 0  # nodes the documents and prototype copies read so far expand to
         self.sizes: dict[Element, int] = {}  # element -> its expanded size (see _expanded_size)
         self.inline_files: dict[Path, Any] = {}  # each Inline file read once: tree or Scene
+        self.inlines_read = 0  # X3D Inline instances read (limits.MAX_INLINE_INSTANCES)
         self.top_root: Element | None = None  # the root of the scene's own document
         self.headlight: bool | None = None  # of the top document's first NavigationInfo
         # ids of the grouping node (and Inline) instances being read, outermost
@@ -202,10 +208,13 @@ class _Reader:
         self, context: Context, element: Element, matrix: np.ndarray, name: str | None
     ) -> None:
         tag = local_name(element)
-        nodes = [child for child in element if local_name(child)]
-        rendered = [
-            child for child in nodes if child.get("containerField", "children") in RENDERED_FIELDS
-        ]
+        if element not in self.rendered:
+            self.rendered[element] = [
+                child
+                for child in element
+                if local_name(child) and child.get("containerField", "children") in RENDERED_FIELDS
+            ]
+        rendered = self.rendered[element]
         if tag == "Switch":
             choice = context.field(element, "whichChoice")
             rendered = [rendered[choice]] if 0 <= choice < len(rendered) else []
@@ -230,15 +239,21 @@ class _Reader:
             )
         tag = local_name(element)
         name = _public(written.get("DEF") or element.get("DEF")) or name
-        if "visible" in DEFAULTS.get(tag, {}) and not context.field(element, "visible"):
+        if element not in self.hidden:
+            self.hidden[element] = "visible" in DEFAULTS.get(tag, {}) and not context.field(
+                element, "visible"
+            )
+        if self.hidden[element]:
             context.warn(element, "visible='false': skipped")
             return
         if tag in GROUPS:
             if tag == "Billboard":
                 context.warn(element, "Billboard: children kept unrotated (no viewer)")
+            if element not in self.local_matrices:
+                self.local_matrices[element] = _local_matrix(context, element, tag)
             with np.errstate(over="ignore", invalid="ignore"):
-                world = matrix @ _local_matrix(context, element, tag)
-            if not np.all(np.isfinite(world)):
+                world = matrix @ self.local_matrices[element]
+            if not np.isfinite(world).all():
                 raise context.error(element, "the transforms down to here overflow to infinity")
             if len(self.open_groups) >= limits.MAX_NESTING:  # e.g. a prototype inside itself
                 raise context.error(
@@ -376,8 +391,12 @@ class _Reader:
             local = [(folder / u).resolve() for u in urls if not URL_SCHEME.match(u)]
             # only files inside the scene's folder count (nothing outside is looked at)
             inside = [path for path in local if path.is_relative_to(self.root_folder)]
-            if urls and not any(path.is_file() for path in inside):
-                context.warn(texture, f"texture not found: {', '.join(urls[:3])}")
+            problems = [file_problem(path) for path in inside]
+            if urls and None not in problems:
+                # why a url cannot even be looked up (a name too long, ...) is said
+                why = sorted({p for p in problems if p not in (None, "not found", "not a file")})
+                reason = f" ({'; '.join(why)})" if why else ""
+                context.warn(texture, f"texture not found: {', '.join(urls[:3])}{reason}")
             else:
                 self._skip(context, texture, local_name(texture), "textures not modelled")
 
@@ -476,7 +495,9 @@ def _casts_shadow(context: Context, shape: Element, appearance: Element | None) 
 
 def _public(name: str | None) -> str | None:
     """A DEF name as the file writes it (prototype copies prefix theirs with 'N#')."""
-    return name.split("#", 1)[1] if name and re.match(r"\d+#", name) else name
+    if not name or "#" not in name:
+        return name
+    return name.split("#", 1)[1] if re.match(r"\d+#", name) else name
 
 
 def _viewpoint(context: Context, element: Element, matrix: np.ndarray) -> Viewpoint:

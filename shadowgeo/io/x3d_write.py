@@ -85,6 +85,7 @@ from ..scene import Scene, SceneLight, Shape
 from ..scene.model import MARK, Viewpoint, overview, unique_name
 from . import up_and_units, x3d_classic_write, x3d_json
 from .atomic import atomic_path
+from .x3d_field_types import field_type
 from .x3d_fields import Element, Tree, numbers_or_none
 from .x3d_lights import BAKED
 from .x3d_numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
@@ -346,11 +347,12 @@ def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str |
     # In document order. (Not an XPath ``contains()`` per letter: it copies
     # every attribute value once per call, 60 MB each for a big mesh.)
     for element in root.iter(etree.Element):
+        tag = etree.QName(element).localname
         for name, value in element.items():
-            if name not in _TEXT_ATTRIBUTES and _non_finite(value):
+            if name not in _TEXT_ATTRIBUTES and _non_finite(value, _kind(tag, name, element)):
                 shown = value if len(value) <= 40 else value[:37] + "..."
                 notes.append(
-                    f"{source} line {element.sourceline}, {etree.QName(element).localname}: "
+                    f"{source} line {element.sourceline}, {tag}: "
                     f"{name}='{shown}' is not finite; not written (the field's default applies)"
                 )
                 del element.attrib[name]
@@ -423,18 +425,45 @@ def _drop(node: Element) -> None:
     parent.remove(node)
 
 
-def _non_finite(value: str) -> bool:
-    """All the words of ``value`` are numbers and one is not finite."""
+def _kind(tag: str, name: str, element: Element) -> str:
+    """What attribute ``name`` of an element ``tag`` holds, as far as the
+    schema (or a ``<field>``'s ``type``) says: ``"numbers"``, ``"other"``
+    (strings, booleans, nodes), or ``"unknown"``."""
+    kind = element.get("type") if tag == "field" and name == "value" else field_type(tag, name)
+    if kind is None:
+        return "unknown"
+    return "other" if kind.endswith(("String", "Bool", "Node")) else "numbers"
+
+
+def _non_finite(value: str, kind: str = "unknown") -> bool:
+    """Whether ``value`` holds a number that is not finite: any word of it in
+    a field of numbers (``kind`` from :func:`_kind`; the reader refuses the
+    whole value for its default, even beside a word that is no number), only
+    when all its words are numbers in a field the schema does not know, and
+    never in one of strings."""
+    if kind == "other":
+        return False
     # A word reads as inf or nan only if it spells one (an n) or overflows
     # (an e with a big exponent, or a long run of digits). Anything else is
     # finite however long the text: 60 MB of coordinates are not parsed again.
     if "n" not in value and "N" not in value:
-        if "e" not in value and "E" not in value:
-            return False
         if not any(pattern.search(value) for pattern in _BIG_EXPONENTS) and not _long_run(value):
             return False
     numbers = numbers_or_none(value)
-    return numbers is not None and not bool(np.isfinite(numbers).all())
+    if numbers is not None:
+        return not bool(np.isfinite(numbers).all())
+    return kind == "numbers" and any(
+        _not_finite_word(word) for word in value.replace(",", " ").split()
+    )
+
+
+def _not_finite_word(word: str) -> bool:
+    """Whether ``word`` reads as a number that is not finite (inf, nan, or
+    one past float64's range)."""
+    try:
+        return not math.isfinite(float(word))
+    except ValueError:
+        return False
 
 
 def _long_run(value: str) -> bool:
