@@ -586,7 +586,9 @@ def test_sigterm_mid_batch_on_a_local_cluster_leaves_whole_files_and_no_worker(t
     expected = (tmp_path / "clean.x3d").read_bytes()
     inputs = tmp_path / "in"
     inputs.mkdir()
-    for index in range(8):
+    # 24 files: on a loaded machine the batch must still be running when the
+    # signal lands, and the workers get 30 s to be reaped (it failed once in a full run)
+    for index in range(24):
         shutil.copy(scene, inputs / f"scene{index}.x3d")
     out = tmp_path / "out"
     process = start("convert", inputs, out, "--workers", "2")
@@ -597,10 +599,10 @@ def test_sigterm_mid_batch_on_a_local_cluster_leaves_whole_files_and_no_worker(t
     assert process.returncode == 143, stderr
     assert stderr.splitlines()[-1] == "shadowgeo: stopped by SIGTERM"
     assert "Traceback" not in stderr
-    _, alive = psutil.wait_procs(workers, timeout=10)
+    _, alive = psutil.wait_procs(workers, timeout=30)  # (a loaded machine is slow to reap)
     assert alive == [], f"workers still running after the exit: {alive}"
     written = sorted(out.glob("*.x3d"))
-    assert 1 <= len(written) < 8
+    assert 1 <= len(written) < 24
     for path in written:
         assert_whole(path, expected)
     assert temporaries(out) == []

@@ -195,10 +195,11 @@ class Context:
             self.warnings.append(text)
 
     def _radians(self, kind: str, value: Any) -> Any:
-        if kind in ("SFRotation", "MFRotation"):
-            value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
-        else:
-            value = value * self.angle_factor
+        with np.errstate(over="ignore", invalid="ignore"):  # (refused just below)
+            if kind in ("SFRotation", "MFRotation"):
+                value = value * np.array([1.0, 1.0, 1.0, self.angle_factor])
+            else:
+                value = value * self.angle_factor
         if not np.all(np.isfinite(value)):
             raise ValueError("is not finite in radians")
         return value
