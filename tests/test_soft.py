@@ -146,10 +146,13 @@ def test_hidden_fraction_at_10000_points_against_ray_tests(kind):
         ]
     )
     error = np.abs(soft.fraction(targets) - reference)
-    # the module's bound: 1 / sqrt(samples) where an edge runs along a row of
-    # samples, plus the reference's own sampling noise (1,024 random points)
-    assert error.max() <= 1 / math.sqrt(len(soft.samples)) + 0.06
-    assert error.mean() <= 0.02
+    # the module's figures for 64 Hammersley samples (0.035 and 0.007 under
+    # the rectangle, 0.065 and 0.010 under the disc), plus the reference's own
+    # noise (1,024 random points: about 0.016, some 0.06 at the worst of
+    # 10,000); a grid of 64 errs by 0.10 and 0.03 on average
+    assert error.max() <= 0.13
+    penumbra = (reference > 0) & (reference < 1)
+    assert error[penumbra].mean() <= 0.02
     assert np.isfinite(soft.fraction(targets)).all()
 
 
