@@ -211,7 +211,8 @@ def _disc_points(
     phi = np.nan_to_num(phi)
     a, b = _frame(np.asarray(normal, dtype=np.float64))
     offsets = radius * (r * np.cos(phi))[:, None] * a + radius * (r * np.sin(phi))[:, None] * b
-    return np.asarray(centre, dtype=np.float64) + offsets
+    points: NDArray[np.float64] = np.asarray(centre, dtype=np.float64) + offsets
+    return points
 
 
 def _corners(light: SizedLight, towards: ArrayLike) -> list[Light] | None:
