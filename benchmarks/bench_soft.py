@@ -481,8 +481,8 @@ parameters, to set against the penumbra's width, about 0.03 under the 0.53 degre
 and the filter's blocker depth. PCF's one depth is right only where the silhouette lies at the
 caster's centre depth, so past some resolution its error stops falling. PCSS finds a depth per
 point, the mean of the blocking texels it sees: right for the cube, whose penumbra is cast by
-the edges of its flat faces (under the rectangle it beats shadowgeo's 240 samples, whose grid
-rows run along the cube's edges), wrong for the sphere, whose silhouette lies deeper than the
+the edges of its flat faces (under the rectangle about as close as shadowgeo's 64 samples, in
+ten to fifteen times their time), wrong for the sphere, whose silhouette lies deeper than the
 texels in front of it.
 """
 
