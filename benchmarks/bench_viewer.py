@@ -38,8 +38,8 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
 from common import write_section  # noqa: E402
 from needs import TOOLS  # noqa: E402
-from viewer import DROP, RELATIVE, Comparison, compare, gallery_image  # noqa: E402
-from xite import FRAMES  # noqa: E402
+from viewer import DROP, RELATIVE, Comparison, compare, gallery_image, shadow_mask  # noqa: E402
+from xite import FRAMES, Canvas, render  # noqa: E402
 
 CORPUS = ROOT.parent / "shared" / "corpus"
 GALLERY = ROOT / "docs" / "images" / "viewer"
@@ -238,9 +238,6 @@ CONTROLS = [
 def controls(work: Path, size: int, browser: str, timeout: float) -> list[tuple[str, int]]:
     """Each control scene with the shadow pixels X_ITE draws (its picture with
     runtime shadows against the same with none, the table's mask rule)."""
-    from viewer import shadow_mask
-    from xite import Canvas, render
-
     work.mkdir(parents=True, exist_ok=True)
     canvases = []
     for index, (_, group, tag, y) in enumerate(CONTROLS):

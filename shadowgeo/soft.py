@@ -297,14 +297,15 @@ def soft_shadow(
         )
     body = as_caster(caster)
     towards = 0.5 * (body.bounds[0] + body.bounds[1]) if body.n_faces else np.zeros(3)
-    lights = light_samples(light, count, towards) if sized else [_point_of(light)]
+    lights = light_samples(light, count, towards)  # (a light with no size: itself)
+    if tolerance is None:
+        positions = [s.position[None] for s in lights if not isinstance(s, DirectionalLight)]
+        known = [body.bounds] if body.n_faces else []
+        tolerance = Tolerance.for_points(*known, *positions) if known or positions else None
     if sized:  # the part of the light behind the plane (or in it) lights none of it
-        lights = [s for s in lights if _in_front(s, plane, body, tolerance)]
+        lights = [s for s in lights if _in_front(s, plane, tolerance)]
         if not lights:
             raise GeometryError(f"{light!r} lies wholly behind the plane or in it")
-    if tolerance is None and body.n_faces:
-        positions = [s.position for s in lights if not isinstance(s, DirectionalLight)]
-        tolerance = Tolerance.for_points(body.bounds, *positions)
     shadows = project_shadow(
         body, lights, plane, receiver=receiver, offset=offset, tolerance=tolerance
     )
@@ -312,32 +313,33 @@ def soft_shadow(
         (hard,) = shadows
         return SoftShadow(plane, light, hard, hard, [(1.0, hard)], True, tuple(lights), shadows)
     corners = _corners(light, towards) if _convex(body, tolerance) else None
-    if corners is not None and not all(_in_front(c, plane, body, tolerance) for c in corners):
+    if corners is not None and not all(_in_front(c, plane, tolerance) for c in corners):
         corners = None  # part of the light behind the plane: from the samples
     cut = _Cut(plane, light, shadows, offset)
+    bands = cut.levels(levels)
     if corners is not None:
         sides = project_shadow(
             body, corners, plane, receiver=receiver, offset=offset, tolerance=tolerance
         )
-        umbra = cut.shadow(cut.common([side.polygons for side in sides]))
-        penumbra = cut.shadow(cut.hull([side.polygons for side in sides]))
-    bands = cut.levels(levels)
-    if corners is None:
-        umbra = cut.shadow(bands.pop(-1)[1] if bands and bands[-1][0] == 1.0 else [])
-        penumbra = cut.shadow(cut.union([s.polygons for s in shadows]))
-    graded = [(fraction, cut.shadow(parts)) for fraction, parts in cut.levels(levels)]
+        umbra = cut.common([side.polygons for side in sides])
+        penumbra = cut.hull([side.polygons for side in sides])
+    else:  # hidden from every sample (the top band), from any
+        umbra = bands[-1][1] if bands and bands[-1][0] == 1.0 else CrossSection()
+        penumbra = cut.union([s.polygons for s in shadows])
+    graded = [(fraction, cut.shadow(region)) for fraction, region in bands]
     exact = corners is not None and isinstance(light, RectLight)
-    return SoftShadow(plane, light, umbra, penumbra, graded, exact, tuple(lights), shadows)
+    return SoftShadow(
+        plane, light, cut.shadow(umbra), cut.shadow(penumbra), graded, exact, tuple(lights), shadows
+    )
 
 
-def _in_front(sample: Light, plane: Plane, body: Caster, tolerance: Tolerance | None) -> bool:
-    """Whether a sample of the light lies in front of the plane, off it."""
+def _in_front(sample: Light, plane: Plane, tolerance: Tolerance | None) -> bool:
+    """Whether a sample of the light lies in front of the plane, off it (by
+    more than the tolerance's length; a positional sample always has one)."""
     if isinstance(sample, DirectionalLight):
         return float(plane.normal @ sample.direction) < 0
-    if tolerance is None:
-        tolerance = Tolerance.for_points(body.bounds if body.n_faces else sample.position[None])
-    height = float(plane.signed_distance(sample.position[None])[0])
-    return height > tolerance.length
+    reach = tolerance.length if tolerance is not None else 0.0
+    return float(plane.signed_distance(sample.position[None])[0]) > reach
 
 
 def _has_size(light: SizedLight) -> bool:
@@ -346,13 +348,6 @@ def _has_size(light: SizedLight) -> bool:
     if isinstance(light, DirectionalLight):
         return light.angle > 0
     return light.source_radius > 0
-
-
-def _point_of(light: SizedLight) -> Light:
-    """A light with no size as the hard-shadow functions take it."""
-    if isinstance(light, RectLight | DiskLight):
-        raise GeometryError(f"{light!r} has a size")  # (never: it always has one)
-    return light
 
 
 def _convex(body: object, tolerance: Tolerance | None) -> bool:
@@ -379,7 +374,7 @@ def _convex(body: object, tolerance: Tolerance | None) -> bool:
 
 class _Cut:
     """The sample shadows' polygons in one Clipper2 frame (centred, scaled),
-    and regions made from them back as :class:`Shadow` values."""
+    regions made from them there, and those back as :class:`Shadow` values."""
 
     def __init__(
         self, plane: Plane, light: SizedLight, shadows: list[Shadow], offset: float
@@ -391,36 +386,28 @@ class _Cut:
             low, high = stacked.min(axis=0), stacked.max(axis=0)
         else:
             low = high = np.zeros(2)
-        self.low, self.high = low, high
         self.center = 0.5 * (low + high)
         extent = float(np.abs(high - low).max()) if points else 0.0
         self.scale = poly.local_scale(extent if extent > 0 else 1.0)
+        self.low, self.high = (low - self.center) * self.scale, (high - self.center) * self.scale
 
     def local(self, parts: Parts) -> list[NDArray[np.float64]]:
         return [(loop - self.center) * self.scale for part in parts for loop in part]
 
-    def back(self, region: CrossSection) -> Parts:
-        return [
-            [loop / self.scale + self.center for loop in part] for part in poly.components(region)
-        ]
-
-    def common(self, each: list[Parts]) -> Parts:
-        region: CrossSection | None = None
-        for parts in each:
+    def common(self, each: list[Parts]) -> CrossSection:
+        region = CrossSection()
+        for index, parts in enumerate(each):
             filled = poly.fill(self.local(parts))
-            region = filled if region is None else poly.intersect(region, filled)
-        return self.back(region) if region is not None else []
+            region = filled if index == 0 else poly.intersect(region, filled)
+        return region
 
-    def union(self, each: list[Parts]) -> Parts:
-        return self.back(poly.fill([loop for parts in each for loop in self.local(parts)]))
+    def union(self, each: list[Parts]) -> CrossSection:
+        return poly.fill([loop for parts in each for loop in self.local(parts)])
 
-    def hull(self, each: list[Parts]) -> Parts:
-        loops = [loop for parts in each for part in parts for loop in part[:1]]
-        if not loops:
-            return []
-        return [[_convex_hull(np.concatenate(loops))]]
+    def hull(self, each: list[Parts]) -> CrossSection:
+        return self.union(each).hull()
 
-    def levels(self, count: int) -> list[tuple[float, Parts]]:
+    def levels(self, count: int) -> list[tuple[float, CrossSection]]:
         """The cover of the sample shadows in ``count`` bands of the hidden
         fraction rounded to the nearest ``k / count``, ``k >= 1``: band ``k``
         holds the points hidden from at least ``ceil((k - 1/2) / count * n)``
@@ -428,7 +415,7 @@ class _Cut:
         regions = [self.local(s.polygons) for s in self.shadows]
         if not any(regions):
             return []
-        low, high = (self.low - self.center) * self.scale, (self.high - self.center) * self.scale
+        low, high = self.low, self.high
         window = CrossSection(
             [np.array([low, [high[0], low[1]], high, [low[0], high[1]]], dtype=np.float64)]
         )
@@ -439,40 +426,20 @@ class _Cut:
         thresholds = sorted(t for t in starts if t <= total)
         bands = cover_bands(regions, window, thresholds)
         return [
-            (starts[t] / count, self.back(poly.fill([loop for part in parts for loop in part])))
+            (starts[t] / count, poly.fill([loop for part in parts for loop in part]))
             for t, parts in zip(thresholds, bands, strict=True)
             if parts
         ]
 
-    def shadow(self, parts: Parts) -> Shadow:
+    def shadow(self, region: CrossSection) -> Shadow:
         info = ShadowDiagnostics()
-        if not parts:
+        local = poly.components(region)
+        if not local:
             return Shadow(self.plane, self.light, empty_mesh, [], 0.0, info)  # type: ignore[arg-type]
-        local = [[(loop - self.center) * self.scale for loop in part] for part in parts]
+        parts = [[loop / self.scale + self.center for loop in part] for part in local]
         area = poly.parts_area(local) / self.scale / self.scale
         lift = self.plane.origin + self.offset * self.plane.normal
         u, v = self.plane.basis
         frame = lift + self.center[0] * u + self.center[1] * v
         build = partial(triangulated, local, self.scale, frame, self.plane.basis)
         return Shadow(self.plane, self.light, build, parts, area, info)  # type: ignore[arg-type]
-
-
-def _convex_hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Counter-clockwise convex hull of (n, 2) points (Andrew's monotone chain)."""
-    order = np.lexsort((points[:, 1], points[:, 0]))
-    ordered = points[order]
-
-    def half(sequence: NDArray[np.float64]) -> list[NDArray[np.float64]]:
-        chain: list[NDArray[np.float64]] = []
-        for point in sequence:
-            while len(chain) >= 2 and _cross(chain[-2], chain[-1], point) <= 0:
-                chain.pop()
-            chain.append(point)
-        return chain
-
-    lower, upper = half(ordered), half(ordered[::-1])
-    return np.array(lower[:-1] + upper[:-1])
-
-
-def _cross(o: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
-    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))

@@ -424,17 +424,33 @@ class Caster:
         """Generalised winding number of the mesh around ``point`` (1 inside a
         closed outward-wound mesh, 0 outside), by the solid angle of every face
         (Van Oosterom and Strackee)."""
-        rel = self.triangles - np.asarray(point, dtype=np.float64)
-        a, b, c = rel[:, 0], rel[:, 1], rel[:, 2]
-        la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
-        numerator = np.einsum("ij,ij->i", a, np.cross(b, c))
-        denominator = (
-            la * lb * lc
-            + np.einsum("ij,ij->i", a, b) * lc
-            + np.einsum("ij,ij->i", b, c) * la
-            + np.einsum("ij,ij->i", c, a) * lb
-        )
-        return float(np.sum(2.0 * np.arctan2(numerator, denominator)) / (4.0 * np.pi))
+        return float(self.winding_numbers(np.asarray(point, dtype=np.float64)[None])[0])
+
+    def winding_numbers(self, points: ArrayLike) -> np.ndarray:
+        """(p,) :meth:`winding_number` at each of ``points`` (p, 3), in blocks
+        of about a million point-face pairs."""
+        points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        triangles = self.triangles
+        result = np.empty(len(points))
+        block = max(1, _WINDING_PAIRS // max(len(triangles), 1))
+        for start in range(0, len(points), block):
+            rel = triangles[None] - points[start : start + block, None, None]
+            a, b, c = rel[:, :, 0], rel[:, :, 1], rel[:, :, 2]
+            la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
+            numerator = np.einsum("pij,pij->pi", a, np.cross(b, c))
+            denominator = (
+                la * lb * lc
+                + np.einsum("pij,pij->pi", a, b) * lc
+                + np.einsum("pij,pij->pi", b, c) * la
+                + np.einsum("pij,pij->pi", c, a) * lb
+            )
+            angles = 2.0 * np.arctan2(numerator, denominator)
+            result[start : start + block] = np.sum(angles, axis=1) / (4.0 * np.pi)
+        return result
+
+
+# Point-face pairs per pass of Caster.winding_numbers (about 72 MB of corners).
+_WINDING_PAIRS = 1_000_000
 
 
 def closed_by_sort(faces: np.ndarray, n_vertices: int) -> bool | None:

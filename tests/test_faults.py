@@ -26,6 +26,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -103,6 +104,32 @@ def grid_scene(path: Path, n: int = 200, lift: float = 3.0) -> Path:
 def command(*args: object, slow: bool = False) -> list[str]:
     code = ["-c", SLOW_DISK] if slow else ["-m", "cli"]
     return [sys.executable, *code, *map(str, args)]
+
+
+def run(
+    *args: object, preexec: Callable[[], None] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """The command line run to its end in a subprocess (``preexec`` in the
+    child before it starts)."""
+    return subprocess.run(
+        command(*args),
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        preexec_fn=preexec,
+    )
+
+
+def file_size_limit(size: int) -> Callable[[], None]:
+    """A ``preexec`` making the kernel fail any write past ``size`` bytes
+    (RLIMIT_FSIZE; EFBIG, as ENOSPC would fail it)."""
+
+    def limited() -> None:
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # else the signal ends the process
+        resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
+
+    return limited
 
 
 def start(
@@ -320,20 +347,8 @@ def test_a_full_disk_under_the_sun_study_and_a_batch(capsys, tmp_path, full_disk
 def test_a_write_the_kernel_refuses_leaves_nothing_in_every_encoding(tmp_path, suffix):
     """RLIMIT_FSIZE makes the kernel fail the write past 1 KiB (EFBIG, "File
     too large", as ENOSPC would fail it), in every writer, usd-core's too."""
-
-    def limited() -> None:
-        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # else the signal ends the process
-        resource.setrlimit(resource.RLIMIT_FSIZE, (1024, 1024))
-
     out = tmp_path / f"courtyard{suffix}"
-    done = subprocess.run(
-        command("convert", COURTYARD, out),
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        preexec_fn=limited,
-    )
+    done = run("convert", COURTYARD, out, preexec=file_size_limit(1024))
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines() == [
         f"shadowgeo convert: {out}: cannot write: File too large"
@@ -355,13 +370,11 @@ def test_a_read_only_output_folder_is_one_line_naming_the_file(tmp_path):
     folder.chmod(0o555)
     out = folder / "courtyard.glb"
     try:
-        done = subprocess.run(
-            command("convert", COURTYARD, out),
-            cwd=ROOT,
-            capture_output=True,
-            text=True,
-            timeout=120,
-            preexec_fn=without_root_override if os.geteuid() == 0 else None,
+        done = run(
+            "convert",
+            COURTYARD,
+            out,
+            preexec=without_root_override if os.geteuid() == 0 else None,
         )
     finally:
         folder.chmod(0o755)
@@ -611,30 +624,12 @@ def test_sigterm_mid_batch_on_a_local_cluster_leaves_whole_files_and_no_worker(t
 def test_a_png_the_kernel_refuses_is_one_line_and_no_truncated_file(tmp_path):
     """``render`` under RLIMIT_FSIZE: VTK's PNG writer does not raise, it only
     sets an error code; the truncated picture must not be renamed into place."""
-    done = subprocess.run(
-        command("render", COURTYARD, tmp_path / "can.png", "--size", "320x240"),
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    done = run("render", COURTYARD, tmp_path / "can.png", "--size", "320x240")
     if done.returncode != 0:
         absent(f"render does not work here: {done.stderr.strip().splitlines()[-1:]}")
-
-    def limited() -> None:
-        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-        resource.setrlimit(resource.RLIMIT_FSIZE, (2048, 2048))
-
     out = tmp_path / "out" / "courtyard.png"
     out.parent.mkdir()
-    done = subprocess.run(
-        command("render", COURTYARD, out, "--size", "320x240"),
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        preexec_fn=limited,
-    )
+    done = run("render", COURTYARD, out, "--size", "320x240", preexec=file_size_limit(2048))
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines()[-1].startswith(f"shadowgeo render: {out}: cannot write: ")
     assert "Traceback" not in done.stderr

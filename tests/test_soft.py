@@ -2,12 +2,15 @@
 
 References: hand-derived polygons (a box under a square light), dense
 sampling of the light with exact hard shadows, and an independent ray test
-(Moller-Trumbore, written here) of many random points of each light.
+(Moller-Trumbore: ``benchmarks/softref.py``, which does not import shadowgeo)
+of many random points of each light.
 """
 
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,6 +20,9 @@ import shadowgeo as sg
 from shadowgeo.lights import DiskLight, RectLight
 from shadowgeo.polygons import points_in_parts
 from shadowgeo.soft import light_samples, soft_shadow
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from softref import ray_blocked  # noqa: E402
 
 GROUND = sg.Plane([0, 1, 0], 0.0)
 
@@ -98,28 +104,6 @@ def test_two_boxes_under_a_long_light_corners_overstate_the_umbra():
         assert region.area == pytest.approx(share.mean() * box_area, rel=0.05)
 
 
-def _hits(origins, targets, triangles):
-    """(p, s) bool: whether the segment from each origin (p, s, 3) to its
-    target (p, 3) crosses a triangle (Moller-Trumbore, open segment)."""
-    direction = targets[:, None, :] - origins
-    hit = np.zeros(direction.shape[:2], dtype=bool)
-    for a, b, c in triangles:
-        e1, e2 = b - a, c - a
-        p = np.cross(direction, e2)
-        det = p @ e1
-        with np.errstate(divide="ignore", invalid="ignore"):
-            inv = 1.0 / det
-            t_vec = origins - a
-            u = np.einsum("psk,psk->ps", t_vec, p) * inv
-            q = np.cross(t_vec, e1)
-            v = np.einsum("psk,psk->ps", direction, q) * inv
-            t = (q @ e2) * inv
-        hit |= (
-            (np.abs(det) > 1e-12) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-9) & (t < 1 - 1e-9)
-        )
-    return hit
-
-
 @pytest.mark.parametrize("kind", ["rect", "disk"])
 def test_hidden_fraction_at_10000_points_against_ray_tests(kind):
     caster = box([2, 2, 2], [0, 2, 0])
@@ -139,9 +123,9 @@ def test_hidden_fraction_at_10000_points_against_ray_tests(kind):
     triangles = caster.vertices[caster.faces]
     reference = np.concatenate(
         [
-            _hits(np.broadcast_to(points, (len(chunk), *points.shape)), chunk, triangles).mean(
-                axis=1
-            )
+            ray_blocked(
+                chunk, np.broadcast_to(points, (len(chunk), *points.shape)), triangles
+            ).mean(axis=1)
             for chunk in np.array_split(targets, 20)
         ]
     )

@@ -140,11 +140,7 @@ def _flush_to_disk(path: Path) -> None:
 def _flush_folder(folder: Path) -> None:
     # the rename itself on disk; some file systems cannot sync a folder
     with contextlib.suppress(OSError):
-        descriptor = os.open(folder, os.O_RDONLY)
-        try:
-            os.fsync(descriptor)
-        finally:
-            os.close(descriptor)
+        _flush_to_disk(folder)
 
 
 def _mode_for(path: Path) -> int:

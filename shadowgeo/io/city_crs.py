@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..errors import SceneError
-from ..scene.model import Site
+from ..scene.model import Scene, Shape, Site
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -236,3 +236,18 @@ def place(objects: list[CityObject], located: Georeference, path: Path) -> None:
         raise
     for item, points in zip(objects, np.split(moved, sizes), strict=True):
         item.points = points
+
+
+def city_scene(
+    shapes: list[Shape], path: Path, located: Georeference | None, notes: list[str]
+) -> Scene:
+    """The Z-up scene of a city file's shapes, in the unit and at the site
+    its georeference gives (metres and no site for a file with none)."""
+    return Scene(
+        shapes=shapes,
+        path=str(path),
+        up_axis="Z",
+        meters_per_unit=1.0 if located is None else located.meters_per_unit,
+        warnings=notes,
+        site=None if located is None else located.site,
+    )

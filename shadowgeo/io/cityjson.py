@@ -43,7 +43,7 @@ from ..errors import SceneError
 from ..limits import MAX_TEMPLATE_POINTS
 from ..scene.model import Scene
 from . import x3d_parse
-from .city_crs import Georeference, georeference, place
+from .city_crs import Georeference, city_scene, georeference, place
 from .city_surfaces import CityObject, Surfaces, city_shapes
 
 VERSIONS = ("1.0", "1.1", "2.0")
@@ -446,14 +446,7 @@ def read(
     shapes = city_shapes(objects, path=path, kind="CityObject")
     if not shapes:
         raise error("no city object with faces in the file")
-    return Scene(
-        shapes=shapes,
-        path=str(path),
-        up_axis="Z",
-        meters_per_unit=1.0 if located is None else located.meters_per_unit,
-        warnings=notes,
-        site=None if located is None else located.site,
-    )
+    return city_scene(shapes, path, located, notes)
 
 
 def _georeference(

@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import SceneError
 from ..limits import MAX_DOCUMENT_BYTES
 from ..scene.model import Scene
-from .city_crs import georeference
+from .city_crs import city_scene, georeference
 from .city_surfaces import GROUND, ROOF, WALL, CityObject, Surfaces, city_shapes
 
 _POLYGONAL = ("Polygon", "MultiPolygon")
@@ -239,14 +239,7 @@ def read(
         if building is not None:
             objects.append(building)
     shapes = city_shapes(objects, path=path, kind="feature")
-    return Scene(
-        shapes=shapes,
-        path=str(path),
-        up_axis="Z",
-        meters_per_unit=1.0 if located is None else located.meters_per_unit,
-        warnings=notes,
-        site=None if located is None else located.site,
-    )
+    return city_scene(shapes, path, located, notes)
 
 
 def _building(

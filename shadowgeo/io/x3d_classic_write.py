@@ -37,8 +37,11 @@ CODE_NODES = {"Script", "ShaderPart", "ShaderProgram", "PackagedShader"}
 _SKIPPED = {"DEF", "USE", "containerField"}
 # X3D names VRML 97 spells otherwise: (node, X3D field) -> VRML 97 field; access types.
 VRML97_FIELDS = {("Collision", "enabled"): "collide", ("LOD", "children"): "level"}
-_LIGHTS = frozenset({"DirectionalLight", "PointLight", "SpotLight"})
-_NOT_VRML97 = frozenset({("Shape", "castShadow")})
+# X3D fields VRML 97 lacks (its DirectionalLight keeps to its group anyway).
+_NOT_VRML97 = frozenset(
+    {("Shape", "castShadow")}
+    | {(light, "global") for light in ("DirectionalLight", "PointLight", "SpotLight")}
+)
 VRML97_FIELDS[("Switch", "children")] = "choice"
 _SPOT = DEFAULTS["SpotLight"]
 X3D4_DEFAULTS = {("SpotLight", name): _SPOT[name][1] for name in ("beamWidth", "cutOffAngle")}
@@ -246,9 +249,8 @@ class _Writer:
                 continue
             if name.startswith("{"):
                 continue  # namespaced attributes (xsd:...) are XML-only
-            vrml97_lacks = (tag, name) in _NOT_VRML97 or (name == "global" and tag in _LIGHTS)
-            if self.vrml97 and vrml97_lacks:
-                continue  # X3D fields VRML 97 lacks (its DirectionalLight keeps to its group)
+            if self.vrml97 and (tag, name) in _NOT_VRML97:
+                continue
             kind_of = field_type(tag, name)
             if self.vrml97 and tag == "IndexedTriangleSet" and name == "index":
                 name, text = "coordIndex", _faces(text)

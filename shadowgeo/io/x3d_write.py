@@ -630,36 +630,13 @@ def _add_home(
     """Append ``shape`` in its own marked Group to ``parent`` (its placement),
     its coordinates made local to it, indented as ``parent``'s children."""
     local = replace(shape, transform=inverse @ shape.transform)
-    group = etree.Element(
-        f"{namespace}Group",
-        DEF=unique_name(shape.group or f"shadows_{shape.role}", used),
-        attrib={"class": MARK},
-    )
-    element = _shape_element(local, used, namespace, world=True, splicer=splicer)
-    element.set("class", f"{MARK}-{shape.role}")
-    if x3d4:
-        element.set("castShadow", "false")
-    group.append(element)
-    if len(parent):
-        lead, closing = (parent[-2].tail if len(parent) > 1 else parent.text), parent[-1].tail
-    else:
-        lead, closing = None, parent.text
-    closing = closing if closing and "\n" in closing and not closing.strip() else "\n"
-    outer = closing.rsplit("\n", 1)[1]  # the indentation of the closing tag
-    indent = lead.rsplit("\n", 1)[1] if lead and "\n" in lead and not lead.strip() else outer + "  "
-    step = indent[len(outer) :] if indent.startswith(outer) and len(indent) > len(outer) else "  "
-    etree.indent(group, space=step, level=max(len(indent) // len(step), 1))
-    if len(parent):
-        parent[-1].tail = "\n" + indent
-    else:
-        parent.text = "\n" + indent
-    group.tail = closing
-    parent.append(group)
+    _indent(parent, _add_groups(parent, [local], used, namespace, splicer, x3d4))
 
 
 def _indent(body: Element, groups: list[Element]) -> None:
-    """Indent the added groups like ``<Scene>``'s other children, and leave the
-    whitespace of everything else as it was."""
+    """Indent the added groups like the other children of ``body`` (``<Scene>``,
+    or the group a shape is placed in), and leave the whitespace of everything
+    else as it was."""
     children = list(body)
     first = children.index(groups[0])
     previous = children[first - 1] if first else None

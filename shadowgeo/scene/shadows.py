@@ -377,8 +377,12 @@ def _add_shadows(
             for receiver in found:
                 if shell and (_is_ground(receiver) or _outside(stacked, shell, receiver)):
                     done += len(stacked)
+                    if receiver.triangles is None:  # the ground's: with the visible ground
+                        continue
+                    patch = receiver.triangles.reshape(-1, 3)
+                    faces = np.arange(len(patch)).reshape(-1, 3)
                     for level, layer in _covered(
-                        receiver, light, shut, tolerance, height, lighting
+                        receiver, patch, faces, light, shut, tolerance, height, lighting
                     ):
                         layer.name = names.unique(
                             f"shadow_{light_name}_{receiver.name}{_layer_suffix(level)}"
@@ -456,8 +460,15 @@ def _add_shadows(
             floor.name, floor.group = names.unique("ground"), names.unique("shadowgeo_ground")
             added.insert(0, floor)
             for light, light_name, group, lift_by, shut in covered:
-                for level, layer in _covered_ground(
-                    floor, grounds[0], light, shut, lift_by, lighting
+                for level, layer in _covered(
+                    grounds[0],
+                    floor.world_vertices,
+                    floor.faces,
+                    light,
+                    shut,
+                    tolerance,
+                    lift_by,
+                    lighting,
                 ):
                     layer.name = names.unique(f"shadow_{light_name}_ground{_layer_suffix(level)}")
                     layer.group = group
@@ -544,39 +555,15 @@ _SAMPLES = 16
 
 def _outside_points(casters: CasterSet, shell: list[int], points: np.ndarray) -> np.ndarray:
     """(p,) bool: ``points`` (p, 3) outside one of the closed casters
-    ``shell`` (generalised winding number under a half), in blocks of about a
-    million point-face pairs."""
+    ``shell`` (generalised winding number under a half)."""
     outside = np.zeros(len(points), dtype=bool)
     for index in shell:
-        caster = casters.caster(index)
         low, high = casters.low[index], casters.high[index]
         boxed = np.flatnonzero(np.all((low <= points) & (points <= high), axis=1))
         out = np.ones(len(points), dtype=bool)
-        triangles = caster.triangles
-        block = max(1, 1_000_000 // max(len(triangles), 1))
-        for start in range(0, len(boxed), block):
-            rows = boxed[start : start + block]
-            out[rows] = np.abs(_winding_numbers(triangles, points[rows])) <= 0.5
+        out[boxed] = np.abs(casters.caster(index).winding_numbers(points[boxed])) <= 0.5
         outside |= out
     return outside
-
-
-def _winding_numbers(triangles: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(p,) generalised winding numbers of the closed (m, 3, 3) ``triangles``
-    around ``points`` (p, 3) (:meth:`~shadowgeo.topology.Caster.winding_number`,
-    for many points)."""
-    rel = triangles[None] - points[:, None, None]
-    a, b, c = rel[:, :, 0], rel[:, :, 1], rel[:, :, 2]
-    la, lb, lc = (np.linalg.norm(x, axis=2) for x in (a, b, c))
-    numerator = np.einsum("pij,pij->pi", a, np.cross(b, c))
-    denominator = (
-        la * lb * lc
-        + np.einsum("pij,pij->pi", a, b) * lc
-        + np.einsum("pij,pij->pi", b, c) * la
-        + np.einsum("pij,pij->pi", c, a) * lb
-    )
-    result: np.ndarray = np.sum(2.0 * np.arctan2(numerator, denominator), axis=1) / (4.0 * np.pi)
-    return result
 
 
 def _enclosed_note(casters: CasterSet, shell: list[int], light_name: str) -> str:
@@ -590,49 +577,25 @@ def _enclosed_note(casters: CasterSet, shell: list[int], light_name: str) -> str
 
 def _covered(
     receiver: Receiver,
+    points: np.ndarray,
+    faces: np.ndarray,
     scene_light: SceneLight,
     opacity: float,
     tolerance: Tolerance,
     lift: float,
     lighting: Lighting,
 ) -> list[tuple[float, Shape]]:
-    """The shadow of a closed caster round the light on a bounded planar
-    receiver facing it: the whole patch (the ground plane's is made with the
-    visible ground, :func:`_covered_ground`)."""
+    """The shadow of a closed caster round the light on a planar receiver
+    facing it: all of the triangles ``points`` (n, 3), ``faces`` (m, 3) (the
+    receiver's patch or, for the ground plane, the visible ground), lifted
+    towards the light."""
     plane = receiver.facing(scene_light.light, tolerance)
-    if plane is None or receiver.triangles is None or not lights(scene_light, receiver.scopes):
+    if plane is None or not lights(scene_light, receiver.scopes):
         return []
-    vertices = receiver.triangles.reshape(-1, 3) + lift * plane.normal
-    faces = np.arange(len(vertices)).reshape(-1, 3)
+    vertices = points + lift * plane.normal
     darkness = lighting.darkness(scene_light, vertices, faces, receiver.material, receiver.scopes)
     where = f"shadow on {receiver.name} of a caster round the light"
     return [(opacity, shadow_shape(vertices, faces, scene_light, where, opacity, darkness))]
-
-
-def _covered_ground(
-    floor: Shape,
-    receiver: Receiver,
-    scene_light: SceneLight,
-    opacity: float,
-    lift: float,
-    lighting: Lighting,
-) -> list[tuple[float, Shape]]:
-    """The shadow of a closed caster round the light on the ground plane: the
-    whole visible ground ``floor``, when the light is above it."""
-    plane = receiver.plane
-    light = scene_light.light
-    if is_positional(light):
-        above = float(plane.signed_distance(light.position[None])[0]) > 0
-    else:
-        above = float(plane.normal @ light.direction) < 0
-    if not above or not lights(scene_light, receiver.scopes):
-        return []
-    vertices = floor.world_vertices + lift * plane.normal
-    darkness = lighting.darkness(
-        scene_light, vertices, floor.faces, receiver.material, receiver.scopes
-    )
-    where = "shadow on the ground of a caster round the light"
-    return [(opacity, shadow_shape(vertices, floor.faces, scene_light, where, opacity, darkness))]
 
 
 def _held_note(casters: CasterSet, held: dict[int, str], light_name: str) -> str:
