@@ -14,6 +14,7 @@ from .scene import Material, Scene, SceneLight, Semantics, Shape, Site, Viewpoin
 from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
 from .soft import SoftShadow, soft_shadow
+from .soft_surface import SoftSurfaceShadow, soft_shadow_on_surface
 from .sun import sun_direction
 from .sunstudy import (
     DaySummary,
@@ -51,6 +52,7 @@ __all__ = [
     "Silhouette",
     "Site",
     "SoftShadow",
+    "SoftSurfaceShadow",
     "SpotLight",
     "SunStudies",
     "SunStudy",
@@ -68,6 +70,7 @@ __all__ = [
     "shadow_volume",
     "silhouette",
     "soft_shadow",
+    "soft_shadow_on_surface",
     "sun_direction",
     "sun_study",
     "sun_study_by_day",

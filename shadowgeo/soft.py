@@ -283,18 +283,8 @@ def soft_shadow(
     >>> round(soft.umbra.area, 9), round(soft.penumbra.area, 9), soft.exact
     (9.0, 25.0, True)
     """
-    if not isinstance(light, SizedLight):
-        raise GeometryError(f"light must be a light with or without a size, got {light!r}")
-    if int(levels) < 1:
-        raise GeometryError(f"levels must be >= 1, got {levels!r}")
-    levels = int(levels)
-    sized = _has_size(light)
-    count = 1 if not sized else int(samples) if samples is not None else DEFAULT_SAMPLES
-    if not 1 <= count <= MAX_SAMPLES:
-        raise GeometryError(
-            f"samples must be in [1, {MAX_SAMPLES}] (shadowgeo.soft.MAX_SAMPLES: the levels' "
-            f"cost grows with the square of the samples), got {count!r}"
-        )
+    levels, count = checked_counts(light, levels, samples)
+    sized = has_size(light)
     body = as_caster(caster)
     towards = 0.5 * (body.bounds[0] + body.bounds[1]) if body.n_faces else np.zeros(3)
     lights = light_samples(light, count, towards)  # (a light with no size: itself)
@@ -342,7 +332,37 @@ def _in_front(sample: Light, plane: Plane, tolerance: Tolerance | None) -> bool:
     return float(plane.signed_distance(sample.position[None])[0]) > reach
 
 
-def _has_size(light: SizedLight) -> bool:
+def checked_counts(light: SizedLight, levels: int, samples: int | None) -> tuple[int, int]:
+    """``levels`` and the number of samples for ``light`` (one for a light
+    with no size, else ``samples`` or :data:`DEFAULT_SAMPLES`), checked."""
+    if not isinstance(light, SizedLight):
+        raise GeometryError(f"light must be a light with or without a size, got {light!r}")
+    if int(levels) < 1:
+        raise GeometryError(f"levels must be >= 1, got {levels!r}")
+    count = 1 if not has_size(light) else int(samples) if samples is not None else DEFAULT_SAMPLES
+    if not 1 <= count <= MAX_SAMPLES:
+        raise GeometryError(
+            f"samples must be in [1, {MAX_SAMPLES}] (shadowgeo.soft.MAX_SAMPLES: the levels' "
+            f"cost grows with the square of the samples), got {count!r}"
+        )
+    return int(levels), count
+
+
+def band_thresholds(levels: int, total: int) -> tuple[list[int], dict[int, int]]:
+    """The thresholds :func:`~shadowgeo.levels.cover_bands` cuts ``total``
+    samples' shadows at for ``levels`` bands of the hidden fraction rounded
+    to the nearest ``k / levels``, ``k >= 1``, and the band ``k`` each
+    threshold starts: band ``k`` holds the points hidden from at least
+    ``ceil((k - 1/2) / levels * total)`` samples (a few samples: bands share
+    one threshold, the lowest ``k`` kept)."""
+    starts: dict[int, int] = {}
+    for k in range(1, levels + 1):
+        starts[max(1, ((2 * k - 1) * total + 2 * levels - 1) // (2 * levels))] = k
+    return sorted(t for t in starts if t <= total), starts
+
+
+def has_size(light: SizedLight) -> bool:
+    """Whether ``light`` has a size (its soft shadow is more than its hard one)."""
     if isinstance(light, RectLight | DiskLight):
         return True
     if isinstance(light, DirectionalLight):
@@ -419,11 +439,7 @@ class _Cut:
         window = CrossSection(
             [np.array([low, [high[0], low[1]], high, [low[0], high[1]]], dtype=np.float64)]
         )
-        total = len(self.shadows)
-        starts: dict[int, int] = {}  # threshold -> band (a few samples: bands share one)
-        for k in range(1, count + 1):
-            starts.setdefault(max(1, ((2 * k - 1) * total + 2 * count - 1) // (2 * count)), k)
-        thresholds = sorted(t for t in starts if t <= total)
+        thresholds, starts = band_thresholds(count, len(self.shadows))
         bands = cover_bands(regions, window, thresholds)
         return [
             (starts[t] / count, poly.fill([loop for part in parts for loop in part]))

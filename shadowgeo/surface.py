@@ -61,6 +61,7 @@ the size of the shadow's outline.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
@@ -145,7 +146,7 @@ class SurfaceDiagnostics:
 
 
 @dataclass(frozen=True)
-class _Found:
+class FaceRegions:
     """What the first steps found: each shadowed face's region (loops in
     its frame), the faces (sorted), (m,) bool the faces turned to the light,
     and the diagnostics so far."""
@@ -322,25 +323,9 @@ def shadow_layers_on_surface(
     >>> round(first.area, 12), round(second.area, 12)
     (0.5, 0.25)
     """
-    require_light(light)
-    receiver = as_caster(surface)
-    lists = [[as_caster(caster) for caster in _as_list(group)] for group in groups]
-    every = [caster for group in lists for caster in group]
-    _settle_casters(every)
-    offset = float(offset)
-    if not math.isfinite(offset):
-        raise GeometryError(f"offset must be finite, got {offset!r}")
-    positional = is_positional(light)
-    if tolerance is None:
-        points = [c.bounds for c in every if c.n_faces]
-        points += [receiver.bounds] if receiver.n_faces else []
-        points += [cast("PointLight | SpotLight", light).position[None]] if positional else []
-        tolerance = Tolerance.for_points(*points)
-    if positional:
-        for caster in every:
-            if caster.n_faces:
-                position = cast("PointLight | SpotLight", light).position
-                check_light_outside(caster, position, tolerance)
+    receiver, lists, every, offset, tolerance = _prepared(
+        groups, [light], surface, offset, tolerance
+    )
     exclude = None
     if not_shadowed_by is not None:
         exclude = np.asarray(not_shadowed_by, dtype=np.int64).reshape(-1)
@@ -372,6 +357,93 @@ def shadow_layers_on_surface(
     return layers
 
 
+def _prepared(
+    groups: Sequence[MeshLike | Sequence[MeshLike]],
+    lights: Sequence[Light],
+    surface: MeshLike,
+    offset: float,
+    tolerance: Tolerance | None,
+) -> tuple[Caster, list[list[Caster]], list[Caster], float, Tolerance]:
+    """The arguments checked: the surface and the casters (each group's and
+    all) as :class:`Caster`, the offset, and the tolerance (default: of the
+    casters, the surface and the positional lights)."""
+    for light in lights:
+        require_light(light)
+    receiver = as_caster(surface)
+    lists = [[as_caster(caster) for caster in caster_list(group)] for group in groups]
+    every = [caster for group in lists for caster in group]
+    _settle_casters(every)
+    offset = float(offset)
+    if not math.isfinite(offset):
+        raise GeometryError(f"offset must be finite, got {offset!r}")
+    positions = [light.position[None] for light in lights if is_positional(light)]
+    if tolerance is None:
+        boxes = [c.bounds for c in [*every, receiver] if c.n_faces]
+        tolerance = Tolerance.for_points(*boxes, *positions)
+    for position, caster in itertools.product(positions, every):
+        if caster.n_faces:
+            check_light_outside(caster, position[0], tolerance)
+    return receiver, lists, every, offset, tolerance
+
+
+@dataclass(frozen=True)
+class LightRegions:
+    """Each face's shadow region from each of several lights, in face frames
+    all of them share (:func:`regions_per_light`), ready to be combined face
+    by face and stitched back into a :class:`SurfaceShadow`.
+
+    Attributes
+    ----------
+    found : list of FaceRegions
+        For each light, its regions (:data:`~shadowgeo.simplify.Loops`, one
+        region per face in ``faces``) and the faces turned to it.
+    outlines : (m, 3, 2) float64
+        Each surface face's corners in its own frame.
+    """
+
+    found: list[FaceRegions]
+    outlines: np.ndarray
+    stitcher: _SurfaceProjector = field(repr=False)
+
+    def stitched(self, regions: Loops, faces: np.ndarray, facing: np.ndarray) -> SurfaceShadow:
+        """Regions (one per face of ``faces``, sorted, in the face frames)
+        stitched, triangulated and lifted as :func:`shadow_on_surface`'s;
+        ``facing`` (m,) the faces whose ``fraction`` is measured (1.0 on the
+        others)."""
+        info = SurfaceDiagnostics(n_surface_faces=len(self.outlines))
+        return self.stitcher.shadow(FaceRegions(regions, faces, facing, info))
+
+
+def regions_per_light(
+    casters: MeshLike | Sequence[MeshLike],
+    lights: Sequence[Light],
+    surface: MeshLike,
+    *,
+    offset: float = 0.0,
+    tolerance: Tolerance | None = None,
+) -> LightRegions:
+    """Steps 1 to 3 of :func:`shadow_on_surface` for each of ``lights`` (the
+    samples of a light with a size), every region in the same face frames;
+    :meth:`LightRegions.stitched` is step 4. Arguments as
+    :func:`shadow_on_surface`'s."""
+    receiver, (every,), _, offset, tolerance = _prepared(
+        [casters], lights, surface, offset, tolerance
+    )
+    center = _center(every, receiver)
+    found = []
+    projector = None
+    for light in lights:
+        projector = _SurfaceProjector(every, light, receiver, offset, tolerance, center)
+        found.append(projector.regions())
+    if projector is None:
+        raise GeometryError("regions_per_light needs at least one light")
+    corners = projector.vertices[projector.faces] - projector.origin[:, None]
+    outlines = np.stack(
+        [np.einsum("fij,fj->fi", corners, axis) for axis in (projector.u, projector.v)], axis=-1
+    )
+    return LightRegions(found, outlines, projector)
+
+
 def _settle_casters(casters: list[Caster]) -> None:
     """Work out for many separate casters at once what each would work out
     alone when first asked: :attr:`Caster.is_closed` of those that do not
@@ -401,7 +473,7 @@ def _settle_casters(casters: list[Caster]) -> None:
         caster.take_known(bounds=np.array([lows[k], highs[k]]))
 
 
-def _as_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
+def caster_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
     """A single mesh as a list of one; a list of meshes as it is."""
     if isinstance(casters, Caster) or hasattr(casters, "faces"):
         return [cast("MeshLike", casters)]
@@ -466,7 +538,7 @@ class _SurfaceProjector:
     def run(self) -> SurfaceShadow:
         return self.shadow(self.regions())
 
-    def regions(self) -> _Found:
+    def regions(self) -> FaceRegions:
         """Each face's shadow region, in its face's frame (step 1 to 3)."""
         corners, facing, lit = self._faces()
         receivers, triangles, caster_triangles, full, extra, counts = self._pairs(corners, lit)
@@ -483,9 +555,9 @@ class _SurfaceProjector:
             n_full_faces=int(full.sum()),
             limits=tuple(self.limits),
         )
-        return _Found(regions, region_faces, facing, info)
+        return FaceRegions(regions, region_faces, facing, info)
 
-    def shadow(self, found: _Found) -> SurfaceShadow:
+    def shadow(self, found: FaceRegions) -> SurfaceShadow:
         """The regions stitched, triangulated and lifted (step 4)."""
         regions = without_collinear(found.regions, self.tol.length)
         points, shadow_faces, face_index = stitch(
