@@ -213,6 +213,16 @@ class DiskLight:
 
 
 Light = PointLight | DirectionalLight | SpotLight
+AreaLight = RectLight | DiskLight
+
+
+def centre_light(light: AreaLight) -> SpotLight:
+    """The light with no size that stands for a rectangle or disc light
+    where only a point, spot or directional light fits (the hard-shadow
+    functions, X3D's and glTF's lights): a spot light at its centre, facing
+    the same way, lighting the whole half-space in front of it (cut-off
+    angle pi/2), as the one-sided rectangle or disc does."""
+    return SpotLight(light.position, light.direction, math.pi / 2)
 
 
 def is_positional(light: Light) -> TypeIs[PointLight | SpotLight]:

@@ -220,7 +220,7 @@ def test_reads_polygons_orientation_and_nesting_from_another_author(tmp_path):
         hidden.CreateFaceVertexIndicesAttr([0, 1, 2])
         hidden.MakeInvisible()
         UsdGeom.Cube.Define(stage, "/Root/Cube")
-        UsdLux.RectLight.Define(stage, "/Root/Panel")
+        UsdLux.CylinderLight.Define(stage, "/Root/Panel")
 
     path = tmp_path / "other.usda"
     _author(path, build)
@@ -238,7 +238,7 @@ def test_reads_polygons_orientation_and_nesting_from_another_author(tmp_path):
     triangle = left.world_vertices[left.faces[0]]
     assert np.cross(triangle[1] - triangle[0], triangle[2] - triangle[0])[2] < 0
     warnings = " ".join(scene.warnings)
-    assert "Cube </Root/Cube>" in warnings and "RectLight </Root/Panel>" in warnings
+    assert "Cube </Root/Cube>" in warnings and "CylinderLight </Root/Panel>" in warnings
     assert "skipped 1" in warnings
 
 
@@ -719,3 +719,83 @@ def test_a_light_size_x3d_and_gltf_cannot_hold_is_noted(tmp_path, suffix):
     assert len(notes) == 1 and "Sun, angle 0.53 degrees" in notes[0] and "Point" not in notes[0]
     sg.save(scene, tmp_path / "out.usda")  # USD holds it: no second note
     assert len([n for n in scene.warnings if "no field for a light's size" in n]) == 1
+
+
+def test_rect_and_disk_lights_read_from_usdlux_placed_by_their_transforms(tmp_path):
+    # Hand-derived: UsdLux lights emit along local -Z, a RectLight's width
+    # along local X and height along local Y. Turned 90 degrees about X
+    # (y -> z, z -> -y, so -z -> y) and moved to (1, 2, 3), a 2 x 0.5 panel
+    # emits along +y, its height along +z.
+    # Scaled by 3 along X, a disc of radius 0.25 grows to the mean of X's
+    # and Y's scales: 0.25 * 2 = 0.5.
+    def build(stage):
+        panel = UsdLux.RectLight.Define(stage, "/Panel")
+        panel.CreateWidthAttr(2.0)
+        panel.CreateHeightAttr(0.5)
+        panel.AddTranslateOp().Set(Gf.Vec3d(1, 2, 3))
+        panel.AddRotateXOp().Set(90.0)
+        UsdLux.RectLight.Define(stage, "/Plain")  # UsdLux's defaults: 1 x 1
+        disc = UsdLux.DiskLight.Define(stage, "/Disc")
+        disc.CreateRadiusAttr(0.25)
+        disc.AddScaleOp().Set(Gf.Vec3f(3, 1, 1))
+        _triangle(stage, "/Tri")
+
+    path = tmp_path / "areas.usda"
+    _author(path, build)
+    scene = sg.load(path)
+    lights = {light.name: light for light in scene.lights}
+    panel = lights["Panel"].area
+    assert isinstance(panel, sg.RectLight)
+    assert np.allclose(panel.position, [1, 2, 3]) and np.allclose(panel.direction, [0, 1, 0])
+    assert np.allclose(panel.up, [0, 0, 1])
+    assert panel.width == pytest.approx(2.0) and panel.height == pytest.approx(0.5)
+    plain = lights["Plain"].area
+    assert plain.width == 1.0 and plain.height == 1.0
+    assert np.allclose(plain.direction, [0, 0, -1])
+    disc = lights["Disc"].area
+    assert isinstance(disc, sg.DiskLight) and disc.radius == pytest.approx(0.5)
+    # where only a light with no size fits: a spot light at the centre,
+    # lighting the half-space in front
+    stand_in = lights["Panel"].light
+    assert isinstance(stand_in, sg.SpotLight) and stand_in.cut_off_angle == math.pi / 2
+    assert np.allclose(stand_in.position, [1, 2, 3]) and np.allclose(stand_in.direction, [0, 1, 0])
+    assert not any("Panel" in note or "Disc" in note for note in scene.warnings)
+
+
+def test_rect_and_disk_lights_written_back_exactly(tmp_path):
+    panel = sg.RectLight([0.1, 3.3, -0.7], [0.3, -1, 0.2], 1.2345678901, 0.3333333333, up=[0, 0, 1])
+    disc = sg.DiskLight([2, 4.1, 1], [-0.2, -1, 0.1], 0.7777777777)
+    scene = sg.Scene(
+        [sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="tri")],
+        [sg.SceneLight(panel, name="panel"), sg.SceneLight(disc, name="disc")],
+    )
+    out = tmp_path / "out.usda"
+    sg.save(scene, out)
+    assert usd_errors(out) == []
+    stage = Usd.Stage.Open(str(out))
+    assert stage.GetPrimAtPath("/World/panel").IsA(UsdLux.RectLight)
+    assert stage.GetPrimAtPath("/World/disc").IsA(UsdLux.DiskLight)
+    back = {light.name: light.area for light in sg.load(out).lights}
+    for want, got in ((panel, back["panel"]), (disc, back["disc"])):
+        assert type(got) is type(want)
+        assert np.array_equal(got.position, want.position)
+        assert np.abs(got.direction - want.direction).max() <= 1e-15
+    assert back["panel"].width == panel.width and back["panel"].height == panel.height
+    assert np.abs(back["panel"].up - panel.up).max() <= 1e-15
+    assert back["disc"].radius == disc.radius
+
+
+@pytest.mark.parametrize("suffix", [".x3d", ".glb"])
+def test_rect_and_disk_lights_x3d_and_gltf_cannot_hold_are_noted(tmp_path, suffix):
+    panel = sg.RectLight([0, 3, 0], [0, -1, 0], 1.5, 0.5, up=[0, 0, 1])
+    scene = sg.Scene(
+        [sg.Shape([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="tri")],
+        [sg.SceneLight(panel, name="panel")],
+    )
+    sg.save(scene, tmp_path / f"out{suffix}")
+    (note,) = [note for note in scene.warnings if "no field for a light's size" in note]
+    assert "panel, a 1.5 x 0.5 rectangle" in note and "spot light" in note
+    back = sg.load(tmp_path / f"out{suffix}").lights
+    assert len(back) == 1 and isinstance(back[0].light, sg.SpotLight)
+    assert np.allclose(back[0].light.position, [0, 3, 0])
+    assert back[0].light.cut_off_angle == pytest.approx(math.pi / 2)

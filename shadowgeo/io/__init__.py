@@ -313,9 +313,13 @@ def check_writable(path: str | os.PathLike[str]) -> None:
 def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
     """Write ``scene`` to ``path`` atomically; the format comes from the extension.
 
-    A light's size (a sun's ``angle``, a sphere light's ``source_radius``)
-    goes only into USD, which has fields for it; X3D and glTF have none, and
-    a note in ``scene.warnings`` names the lights whose size is left out."""
+    A light's size (a sun's ``angle``, a sphere light's ``source_radius``, a
+    rectangle or disc light's shape) goes only into USD, which has fields
+    for it; X3D and glTF have none, and a note in ``scene.warnings`` names
+    the lights whose size is left out. A rectangle or disc light goes into
+    them as the spot light at its centre that stands for it
+    (:attr:`SceneLight.light`: facing the same way, cut-off angle 90
+    degrees, lighting the half-space the panel lights)."""
     module = _module(WRITERS, path, "write")
     module.write(scene, Path(path), **options)
     if WRITERS[_suffix(path)] != "usd_write":
@@ -334,8 +338,15 @@ def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
 
 def _size_text(index: int, scene_light: Any) -> str:
     """What size a light has, for :func:`save`'s note ("" for none)."""
-    light = scene_light.light
+    light, area = scene_light.light, scene_light.area
     name = scene_light.name or f"light {index}"
+    if area is not None:
+        shape = (
+            f"a {area.width:.6g} x {area.height:.6g} rectangle"
+            if hasattr(area, "width")
+            else f"a disc of radius {area.radius:.6g}"
+        )
+        return f"{name}, {shape} (written as a spot light at its centre, cut-off 90 degrees)"
     if getattr(light, "angle", 0.0):
         return f"{name}, angle {math.degrees(light.angle):.3g} degrees"
     if getattr(light, "source_radius", 0.0):

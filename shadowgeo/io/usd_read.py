@@ -28,7 +28,16 @@ import numpy as np
 
 from .. import limits
 from ..errors import SceneError
-from ..lights import DirectionalLight, Light, PointLight, SpotLight
+from ..lights import (
+    AreaLight,
+    DirectionalLight,
+    DiskLight,
+    Light,
+    PointLight,
+    RectLight,
+    SpotLight,
+    centre_light,
+)
 from ..polygons import polygons_triangles
 from ..scene import Material, Scene, SceneLight, Shape
 from . import float_triple
@@ -309,10 +318,14 @@ def _exact(value: float, prim: Any, name: str, path: Path, where: str) -> float:
 def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> bool:
     """Append the light at ``prim``; False when it is no light shadowgeo models."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+    area: AreaLight | None = None
     if prim.IsA(UsdLux.DistantLight):
         usd_light = UsdLux.DistantLight(prim)
     elif prim.IsA(UsdLux.SphereLight):
         usd_light = UsdLux.SphereLight(prim)
+    elif prim.IsA(UsdLux.RectLight) or prim.IsA(UsdLux.DiskLight):
+        usd_light = UsdLux.RectLight(prim) if prim.IsA(UsdLux.RectLight) else UsdLux.DiskLight(prim)
+        area = _area_light(usd_light, _world(usd_light, time, path, where), time, path, where)
     else:
         return False
     world = _world(usd_light, time, path, where)
@@ -320,7 +333,9 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> b
     radius = float(_custom(prim, "range", "number", math.inf, path, where))
     beam = _custom(prim, "beamWidth", "number", None, path, where)
     light: Light
-    if isinstance(usd_light, UsdLux.DistantLight):
+    if area is not None:
+        light, beam = centre_light(area), math.pi / 4 if beam is None else beam
+    elif isinstance(usd_light, UsdLux.DistantLight):
         # the disc's angular diameter, degrees (UsdLux's default 0.53: the sun's)
         angle = _get(usd_light.GetAngleAttr(), "number", 0.53, time, path, where)
         radians = _exact(
@@ -375,9 +390,38 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> b
             shadows=bool(shadow) or baked,  # baked: on before shadowgeo turned them off
             shadow_intensity=float(_custom(prim, "shadowIntensity", "number", 1.0, path, where)),
             baked=baked,
+            area=area,
         )
     )
     return True
+
+
+def _area_light(usd_light: Any, world: np.ndarray, time: Any, path: Path, where: str) -> AreaLight:
+    """A UsdLux ``RectLight`` (``width`` along its local X, ``height`` along
+    Y; UsdLux's defaults 1) or ``DiskLight`` (``radius``, default 0.5), both
+    emitting along local -Z, in world units: each size scaled as the
+    transform scales its axis (a disc: the mean of X's and Y's), and the
+    exact float64 size shadowgeo's writer keeps beside it when they agree."""
+    UsdLux = pxr()[5]
+    prim = usd_light.GetPrim()
+    rotation = world[:3, :3]
+    axes = np.linalg.norm(rotation, axis=0)
+    direction = rotation @ [0.0, 0.0, -1.0]
+    if isinstance(usd_light, UsdLux.RectLight):
+        sizes = []
+        for name, attribute, axis in (
+            ("width", usd_light.GetWidthAttr(), 0),
+            ("height", usd_light.GetHeightAttr(), 1),
+        ):
+            value = float(_get(attribute, "number", 1.0, time, path, where))
+            sizes.append(_exact(value * float(axes[axis]), prim, name, path, where))
+        width, height = sizes
+        return RectLight(world[:3, 3], direction, width, height, up=rotation[:, 1] / axes[1])
+    value = float(_get(usd_light.GetRadiusAttr(), "number", 0.5, time, path, where))
+    scale = 0.5 * float(axes[0] + axes[1])
+    return DiskLight(
+        world[:3, 3], direction, _exact(value * scale, prim, "sourceRadius", path, where)
+    )
 
 
 def read(path: str | os.PathLike[str], **options: Any) -> Scene:
@@ -492,4 +536,6 @@ def _read_prim(
         scene.warnings.append(f"{path.name}: skipped {where}: only meshes are read")
     elif prim.HasAPI(UsdLux.LightAPI) or prim.IsA(UsdLux.BoundableLightBase):
         if not _read_light(scene, prim, time, path, where):
-            scene.warnings.append(f"{path.name}: skipped {where}: not a point, spot or sun")
+            scene.warnings.append(
+                f"{path.name}: skipped {where}: not a point, spot, rectangle or disc light or a sun"
+            )

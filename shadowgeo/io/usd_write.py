@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SceneError
-from ..lights import DirectionalLight, PointLight, SpotLight
+from ..lights import DirectionalLight, DiskLight, PointLight, RectLight, SpotLight
 from ..scene import Material, Scene, Shape
 from ..scene.model import overview, rotate
 from . import check_face_indices, look_rotation, up_and_units
@@ -187,7 +187,9 @@ class _Writer:
             light = scene_light.light
             path = self.names.child("/World", scene_light.name, f"Light_{index}")
             transform = np.eye(4)
-            if isinstance(light, DirectionalLight):
+            if scene_light.area is not None:
+                usd_light, transform = _area_light(self.stage, path, scene_light.area)
+            elif isinstance(light, DirectionalLight):
                 usd_light = UsdLux.DistantLight.Define(self.stage, path)
                 usd_light.CreateAngleAttr(math.degrees(light.angle))  # (not the 0.53 default)
                 if light.angle:  # float32 degrees: the exact radians too
@@ -204,12 +206,12 @@ class _Writer:
                         light.source_radius,
                     )
                 transform[:3, 3] = light.position
-            if not isinstance(light, PointLight):
+            if not isinstance(light, PointLight) and scene_light.area is None:
                 transform[:3, :3] = look_rotation(light.direction)
             prim = usd_light.GetPrim()
             if scene_light.name:
                 prim.SetDisplayName(usd_text(scene_light.name))
-            if isinstance(light, SpotLight):
+            if isinstance(light, SpotLight) and scene_light.area is None:
                 shaping = UsdLux.ShapingAPI.Apply(prim)
                 shaping.CreateShapingConeAngleAttr(math.degrees(light.cut_off_angle))
                 beam = min(max(scene_light.beam_width / light.cut_off_angle, 0.0), 1.0)
@@ -305,3 +307,28 @@ def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
             raise SceneError(f"cannot write: {message}", path=str(path)) from None
         if not saved:
             raise SceneError("usd-core could not save the stage", path=str(path))
+
+
+def _area_light(stage: Any, path: str, light: RectLight | DiskLight) -> tuple[Any, np.ndarray]:
+    """A UsdLux ``RectLight`` or ``DiskLight`` at ``path`` for ``light`` and its
+    (4, 4) transform: UsdLux's lights emit along their local -Z, a
+    rectangle's width along local X and its height along local Y, so local
+    +Y is the light's ``up`` and -Z its ``direction``. The sizes are float32
+    there: the exact values go beside them as custom attributes."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+    transform = np.eye(4)
+    transform[:3, 3] = light.position
+    if isinstance(light, RectLight):
+        usd_light = UsdLux.RectLight.Define(stage, path)
+        usd_light.CreateWidthAttr(float(light.width))
+        usd_light.CreateHeightAttr(float(light.height))
+        set_custom(usd_light.GetPrim(), "width", Sdf.ValueTypeNames.Double, light.width)
+        set_custom(usd_light.GetPrim(), "height", Sdf.ValueTypeNames.Double, light.height)
+        back = -light.direction
+        transform[:3, :3] = np.column_stack([np.cross(light.up, back), light.up, back])
+    else:
+        usd_light = UsdLux.DiskLight.Define(stage, path)
+        usd_light.CreateRadiusAttr(float(light.radius))
+        set_custom(usd_light.GetPrim(), "sourceRadius", Sdf.ValueTypeNames.Double, light.radius)
+        transform[:3, :3] = look_rotation(light.direction)
+    return usd_light, transform

@@ -16,7 +16,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..boxes import bounding_box
-from ..lights import DirectionalLight, PointLight, SpotLight
+from ..lights import (
+    AreaLight,
+    DirectionalLight,
+    DiskLight,
+    PointLight,
+    RectLight,
+    SpotLight,
+    centre_light,
+)
 
 Color = tuple[float, float, float]
 
@@ -93,6 +101,13 @@ class SceneLight:
     lies in ``Scene.document`` (None for one of an Inline or a prototype), so
     a shape shadowgeo adds for this light (the ground it draws) can be written
     inside the scope, lit by the light in every browser.
+
+    ``area``: a light with a shape (UsdLux ``RectLight``, ``DiskLight``).
+    ``light`` is then the spot light at its centre that stands for it
+    (:func:`~shadowgeo.lights.centre_light`): the hard-shadow paths and the
+    X3D and glTF writers, which hold no such light, use it; the soft-shadow
+    baking and the USD writer use ``area`` (:attr:`emitter`).
+    ``SceneLight(RectLight(...))`` sets both.
     """
 
     light: PointLight | DirectionalLight | SpotLight
@@ -110,6 +125,19 @@ class SceneLight:
     node: str | None = None
     scope: int | None = None
     scope_group: Placement | None = None
+    area: AreaLight | None = None
+
+    def __post_init__(self) -> None:
+        light: object = self.light
+        if isinstance(light, RectLight | DiskLight):  # given as the light itself
+            self.area = light
+            self.light = centre_light(light)
+
+    @property
+    def emitter(self) -> PointLight | DirectionalLight | SpotLight | AreaLight:
+        """The light with its size: :attr:`area` when there is one, else
+        :attr:`light` (whose ``source_radius`` or ``angle`` is its size)."""
+        return self.area if self.area is not None else self.light
 
     @property
     def runtime_shadows(self) -> bool:
