@@ -10,6 +10,7 @@ needs another to be read first.
 from __future__ import annotations
 
 import argparse
+import math
 import re
 import sys
 from typing import TextIO
@@ -128,4 +129,8 @@ def options_of(args: argparse.Namespace) -> ConvertOptions:
         sun=args.sun,
         max_triangles=args.max_triangles,
         keep_runtime_shadows=args.keep_runtime_shadows,
+        sun_angle=None if args.sun_angle is None else math.radians(args.sun_angle),
+        light_sizes=tuple(args.light_size or ()),
+        soft_levels=args.soft_levels,
+        soft_samples=args.soft_samples,
     )

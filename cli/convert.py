@@ -8,6 +8,7 @@ inputs, or a folder, are the batch form (:mod:`cli.batch`, on Dask).
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from pathlib import Path
@@ -15,6 +16,8 @@ from pathlib import Path
 import shadowgeo
 from shadowgeo.batch import save_output, shadowed
 from shadowgeo.io.atomic import remove_stale
+from shadowgeo.scene.softbake import UnknownLight
+from shadowgeo.soft import DEFAULT_SAMPLES, MAX_SAMPLES
 
 from .batch import run_batch
 from .common import ProgressBar, add_dask_arguments, options_of, plane_argument, terminal
@@ -26,6 +29,7 @@ examples:
   shadowgeo convert model.glb model.usda --plane 0,1,0,0
   shadowgeo convert scene.x3dz scene.x3d --method volume --progress
   shadowgeo convert unlit.x3d unlit.glb --sun 0.3,-1,0.2
+  shadowgeo convert scene.x3d soft.x3d --sun-angle 0.53 --light-size lamp=0.1
   shadowgeo convert scenes/ more/a.x3d out/ --format glb       (batch, on Dask)
   shadowgeo convert scenes/ out/ --scheduler tcp://10.0.0.5:8786
 
@@ -128,6 +132,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         'shadows="true": a browser then darkens them twice); by default their runtime shadows '
         "are turned off",
     )
+    add_soft_arguments(parser)
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
@@ -140,6 +145,73 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     add_dask_arguments(batch, "file", "a LocalCluster here")
     parser.set_defaults(func=run, parser=parser)
+
+
+def add_soft_arguments(parser: argparse.ArgumentParser) -> None:
+    """The options that give lights a size, and how finely their soft
+    shadows bake (graded layers: shadowgeo.scene.softbake)."""
+    soft = parser.add_argument_group(
+        "soft shadows (a light with a size bakes graded layers, darkest at the umbra)"
+    )
+    soft.add_argument(
+        "--sun-angle",
+        type=angle_argument,
+        metavar="DEG",
+        help="give the scene's directional lights (and --sun) this angular diameter in "
+        "degrees (the real sun: 0.53)",
+    )
+    soft.add_argument(
+        "--light-size",
+        action="append",
+        type=light_size_argument,
+        metavar="NAME=R",
+        help="give the point or spot light with DEF NAME a source radius R in scene units "
+        "(repeat for several)",
+    )
+    soft.add_argument(
+        "--soft-levels",
+        type=count_argument,
+        default=8,
+        metavar="N",
+        help="graded layers per soft shadow (default 8)",
+    )
+    soft.add_argument(
+        "--soft-samples",
+        type=samples_argument,
+        metavar="N",
+        help=f"point lights standing for a light with a size (default {DEFAULT_SAMPLES}, "
+        f"at most {MAX_SAMPLES})",
+    )
+
+
+def angle_argument(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 <= value < 180:
+        raise argparse.ArgumentTypeError(f"expected degrees in [0, 180), got {text!r}")
+    return value
+
+
+def light_size_argument(text: str) -> tuple[str, float]:
+    name, equals, size = text.rpartition("=")
+    try:
+        radius = float(size) if equals and name else float("nan")
+    except ValueError:
+        radius = float("nan")
+    if not (math.isfinite(radius) and radius >= 0):
+        raise argparse.ArgumentTypeError(
+            f"expected NAME=R, a light's DEF name and a radius >= 0, got {text!r}"
+        )
+    return name, radius
+
+
+def samples_argument(text: str) -> int:
+    value = count_argument(text)
+    if value > MAX_SAMPLES:
+        raise argparse.ArgumentTypeError(f"expected at most {MAX_SAMPLES}, got {text!r}")
+    return value
 
 
 def direction_argument(text: str) -> shadowgeo.DirectionalLight:
@@ -236,6 +308,8 @@ def run(args: argparse.Namespace) -> int:
     bar = ProgressBar(f"shadows ({args.method})") if show else None
     try:
         scene, result = shadowed(source, options_of(args), progress=bar)
+    except UnknownLight as error:  # --light-size names no light: a usage error
+        args.parser.error(f"--light-size: {error}")
     finally:
         if bar is not None:
             bar.close()

@@ -30,6 +30,7 @@ from .lights import DirectionalLight
 from .plane import Plane
 from .scene import Scene, SceneLight
 from .scene.shadows import Progress, add_shadows
+from .scene.softbake import with_light_sizes
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,10 @@ class ConvertOptions:
     ``sun``: a directional light that casts instead of the scene's own
     (unless named in ``lights``), not written into the scene;
     ``max_triangles``: the reader's budget (:func:`shadowgeo.load`);
-    ``keep_runtime_shadows``: see :func:`add_shadows`."""
+    ``keep_runtime_shadows``, ``soft_levels``, ``soft_samples``: see
+    :func:`add_shadows`; ``sun_angle`` (radians) and ``light_sizes`` ((name,
+    source radius) pairs): sizes given to the scene's lights and ``sun``
+    (:func:`~shadowgeo.scene.softbake.with_light_sizes`)."""
 
     method: Literal["planar", "volume"] = "planar"
     lights: tuple[str, ...] | None = None
@@ -48,6 +52,10 @@ class ConvertOptions:
     sun: DirectionalLight | None = None
     max_triangles: int | None = None
     keep_runtime_shadows: bool = False
+    sun_angle: float | None = None
+    light_sizes: tuple[tuple[str, float], ...] = ()
+    soft_levels: int = 8
+    soft_samples: int | None = None
 
 
 @dataclass(frozen=True)
@@ -87,7 +95,14 @@ def shadowed(
         max_triangles=options.max_triangles,
         **({"chord": options.tolerance} if curved else {}),
     )
-    extra = [] if options.sun is None else [SceneLight(options.sun, name="sun", shadows=True)]
+    if options.sun_angle is not None or options.light_sizes:
+        scene = with_light_sizes(
+            scene, sun_angle=options.sun_angle, light_sizes=options.light_sizes
+        )
+    sun = options.sun
+    if sun is not None and options.sun_angle is not None:
+        sun = DirectionalLight(sun.direction, options.sun_angle)
+    extra = [] if sun is None else [SceneLight(sun, name="sun", shadows=True)]
     result = add_shadows(
         scene,
         method=options.method,
@@ -98,6 +113,8 @@ def shadowed(
         progress=progress,
         extra_lights=extra,
         keep_runtime_shadows=options.keep_runtime_shadows,
+        soft_levels=options.soft_levels,
+        soft_samples=options.soft_samples,
     )
     return scene, result
 

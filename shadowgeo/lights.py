@@ -215,14 +215,18 @@ class DiskLight:
 Light = PointLight | DirectionalLight | SpotLight
 AreaLight = RectLight | DiskLight
 
+# The widest spot cone X3D holds: its schema's largest cutOffAngle (just
+# under pi / 2, by 3e-7).
+HALF_SPACE_CUT_OFF = 1.570796
+
 
 def centre_light(light: AreaLight) -> SpotLight:
     """The light with no size that stands for a rectangle or disc light
     where only a point, spot or directional light fits (the hard-shadow
     functions, X3D's and glTF's lights): a spot light at its centre, facing
-    the same way, lighting the whole half-space in front of it (cut-off
-    angle pi/2), as the one-sided rectangle or disc does."""
-    return SpotLight(light.position, light.direction, math.pi / 2)
+    the same way, lighting the half-space in front of it as the one-sided
+    rectangle or disc does (cut-off angle :data:`HALF_SPACE_CUT_OFF`)."""
+    return SpotLight(light.position, light.direction, HALF_SPACE_CUT_OFF)
 
 
 def is_positional(light: Light) -> TypeIs[PointLight | SpotLight]:

@@ -24,6 +24,7 @@ the level's rounding to ``k / levels`` on top (half a level at most).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import cast
 
@@ -76,7 +77,7 @@ class SoftSurfaceShadow:
 
 
 def soft_shadow_on_surface(
-    casters: MeshLike | list[MeshLike],
+    casters: MeshLike | Sequence[MeshLike],
     light: SizedLight,
     surface: MeshLike,
     *,

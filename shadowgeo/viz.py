@@ -36,16 +36,21 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError, SceneError
 from .io.atomic import atomic_path
-from .lights import DirectionalLight, Light, PointLight, SpotLight
+from .lights import AreaLight, DirectionalLight, DiskLight, Light, PointLight, RectLight, SpotLight
 from .projection import Shadow
 from .scene.model import Scene, SceneLight, Shape, Viewpoint
+from .soft import SoftShadow
+from .soft_surface import SoftSurfaceShadow
 
 if TYPE_CHECKING:
     import pyvista as pv
     import trimesh
 
-# What plot() draws: a scene, shape, shadow or mesh, or any nesting of lists of them.
-Plottable: TypeAlias = Union[Scene, Shape, Shadow, "trimesh.Trimesh", Iterable["Plottable"]]  # noqa: UP007
+# What plot() draws: a scene, shape, shadow (hard or soft) or mesh, or any
+# nesting of lists of them.
+Plottable: TypeAlias = Union[  # noqa: UP007
+    Scene, Shape, Shadow, SoftShadow, SoftSurfaceShadow, "trimesh.Trimesh", Iterable["Plottable"]
+]
 # A light as plot() takes it: bare, or with its scene colour and intensity.
 AnyLight: TypeAlias = Light | SceneLight
 
@@ -114,6 +119,12 @@ def _collect(
     elif isinstance(things, Shadow):
         items.append(_Item(things.mesh.vertices, things.mesh.faces, "shadow", SHADOW_COLOR))
         lights.append(things.light)
+    elif isinstance(things, SoftShadow | SoftSurfaceShadow):
+        # each level as dark as its share of the light hidden: the soft edge shows
+        for fraction, level in things.levels:
+            mesh = (level.mesh.vertices, level.mesh.faces)
+            items.append(_Item(*mesh, "shadow", SHADOW_COLOR, opacity=fraction))
+        lights.append(SceneLight(things.light))  # type: ignore[arg-type]  # (an area light too)
     elif _is_trimesh(things):
         color = {"shadow": SHADOW_COLOR, "volume": VOLUME_COLOR}.get(role, (0.8, 0.8, 0.8))
         opacity = VOLUME_OPACITY if role == "volume" else 1.0
@@ -131,6 +142,11 @@ def _collect(
 def _bare(light: AnyLight) -> Light:
     """The PointLight, SpotLight or DirectionalLight, unwrapped from a SceneLight."""
     return light.light if isinstance(light, SceneLight) else light
+
+
+def _emitter(light: AnyLight) -> Light | AreaLight:
+    """The light as its glyph shows it: a rectangle or disc light as itself."""
+    return light.emitter if isinstance(light, SceneLight) else light
 
 
 def _unique_lights(lights: list[AnyLight]) -> list[AnyLight]:
@@ -170,12 +186,21 @@ def _bounds(items: list[_Item], lights: list[AnyLight]) -> tuple[np.ndarray, flo
 
 
 def _light_glyph(
-    light: Light, center: np.ndarray, size: float, start: np.ndarray | None = None
+    light: Light | AreaLight, center: np.ndarray, size: float, start: np.ndarray | None = None
 ) -> pv.PolyData:
-    """A mesh marking ``light``: sphere (point), cone (spot) or arrow
-    (directional, from ``start`` when given)."""
+    """A mesh marking ``light``: sphere (point), cone (spot), arrow
+    (directional, from ``start`` when given), or the rectangle or disc itself."""
     import pyvista as pv
 
+    if isinstance(light, RectLight):
+        across, up = light.axes
+        corners = [
+            light.position + 0.5 * (i * light.width * across + j * light.height * up)
+            for i, j in ((-1, -1), (1, -1), (1, 1), (-1, 1))
+        ]
+        return pv.PolyData(np.array(corners), np.array([4, 0, 1, 2, 3]))
+    if isinstance(light, DiskLight):
+        return pv.Disc(center=light.position, inner=0.0, outer=light.radius, normal=light.direction)
     if isinstance(light, SpotLight):
         height = 2.5 * size
         # vtkConeSource's tip points along ``direction``: point it back at the light.
@@ -426,7 +451,7 @@ def _add_meshes(plotter: pv.Plotter, items: list[_Item], pbr: bool) -> None:
 
 
 def _framed_points(
-    drawn: list[np.ndarray], glyph_lights: list[Light], center: np.ndarray, scale: float
+    drawn: list[np.ndarray], glyph_lights: list[Light | AreaLight], center: np.ndarray, scale: float
 ) -> np.ndarray:
     """(n, 3) points the automatic camera frames: the ``drawn`` geometry and
     its shadows, and the positional lights near them (a far lamp would shrink
@@ -442,7 +467,7 @@ def _framed_points(
 
 def _add_light_glyphs(
     plotter: pv.Plotter,
-    glyph_lights: list[Light],
+    glyph_lights: list[Light | AreaLight],
     center: np.ndarray,
     scale: float,
     framed: np.ndarray,
@@ -487,7 +512,7 @@ def scene_plotter(
     center, scale = _bounds(items, scene_lights)
     _add_lights(plotter, scene_lights, center, scale)
     _add_meshes(plotter, items, pbr)
-    glyph_lights = [_bare(light) for light in scene_lights] if lights is not False else []
+    glyph_lights = [_emitter(light) for light in scene_lights] if lights is not False else []
     # No depth peeling: with EGL off-screen it renders a blank picture, and a few
     # convex translucent volumes sort well enough without it.
     if view is None and isinstance(scene_or_meshes, Scene) and scene_or_meshes.viewpoints:

@@ -757,7 +757,8 @@ def test_rect_and_disk_lights_read_from_usdlux_placed_by_their_transforms(tmp_pa
     # where only a light with no size fits: a spot light at the centre,
     # lighting the half-space in front
     stand_in = lights["Panel"].light
-    assert isinstance(stand_in, sg.SpotLight) and stand_in.cut_off_angle == math.pi / 2
+    assert isinstance(stand_in, sg.SpotLight)
+    assert stand_in.cut_off_angle == pytest.approx(math.pi / 2, abs=1e-6)
     assert np.allclose(stand_in.position, [1, 2, 3]) and np.allclose(stand_in.direction, [0, 1, 0])
     assert not any("Panel" in note or "Disc" in note for note in scene.warnings)
 

@@ -62,6 +62,12 @@ lighting (:mod:`.darkness`); a translucent layer that times its opacity.
 When the ground plane receives (no receiver of the scene's own), a visible
 ground is added under the scene (role ``"ground"``, :mod:`.ground`).
 
+Soft shadows
+    A light with a size (a sun's ``angle``, a ``source_radius``, a rectangle
+    or disc light: :attr:`SceneLight.emitter`) bakes graded layers instead:
+    one shape per level of the hidden fraction ``k / soft_levels``, as dark
+    as the hard shadow times that fraction, named ``..._soft25`` (a quarter
+    of the light hidden) up to ``..._soft100`` (the umbra); :mod:`.softbake`.
 Runtime shadows
     A light whose shadows are baked and that has ``shadows=True`` gets
     ``baked=True``: the writers write X3D's ``shadows`` false for it (a
@@ -117,6 +123,14 @@ from .model import (
 from .opacity import opacities
 from .receivers import Receiver, ground
 from .receivers import select as select_receivers
+from .softbake import (
+    SoftSettings,
+    is_soft,
+    soft_on_receiver,
+    soft_on_surface,
+    soft_suffix,
+    translucent_note,
+)
 from .surfaces import ReceivingSurface, receiving_faces, surface_covered, surface_shadow
 
 # A closed caster round a positional light is its bulb (or a marker drawn
@@ -159,6 +173,8 @@ def add_shadows(
     extra_lights: Sequence[SceneLight] = (),
     surfaces: bool | None = None,
     keep_runtime_shadows: bool = False,
+    soft_levels: int = 8,
+    soft_samples: int | None = None,
 ) -> Scene:
     """The scene with the shadows of its lights added as shapes.
 
@@ -196,6 +212,11 @@ def add_shadows(
         Let the lights whose shadows are baked draw them at run time too (a
         browser then darkens them twice). By default their runtime shadows
         are turned off (see *Runtime shadows* in the module notes).
+    soft_levels, soft_samples : int
+        A light with a size (:attr:`SceneLight.emitter`) bakes ``soft_levels``
+        graded layers, each as dark as its share of the light hidden, from
+        ``soft_samples`` point lights (default
+        :data:`shadowgeo.soft.DEFAULT_SAMPLES`; :mod:`.softbake`).
 
     Returns
     -------
@@ -242,6 +263,7 @@ def add_shadows(
             extra_lights=extra_lights,
             surfaces=surfaces,
             keep_runtime_shadows=keep_runtime_shadows,
+            soft=SoftSettings(soft_levels, soft_samples),
         )
 
 
@@ -258,6 +280,7 @@ def _add_shadows(
     extra_lights: Sequence[SceneLight],
     surfaces: bool | None,
     keep_runtime_shadows: bool,
+    soft: SoftSettings,
 ) -> Scene:
     """:func:`add_shadows`, its arguments checked and passed on by name."""
     if method not in ("planar", "volume"):
@@ -355,6 +378,8 @@ def _add_shadows(
             light_name = names.light(light, index)
             group = names.unique(f"shadows_{light_name}")
             height = lift * (1 + index / len(chosen))
+            graded = _soft_for(light, soft, opacity, light_name, notes)
+            suffix = _suffix_for(graded)
             # what it lights is what casts for it (X3D light scope); a caster
             # the light touches or sits inside casts nothing for it, on any
             # receiver; the others cast as ever
@@ -395,9 +420,10 @@ def _add_shadows(
                     if progress is not None:
                         progress(start + count, total)
 
-                layers = _shadow_on(
+                layers = _receiver_layers(
                     receiver,
                     light,
+                    graded,
                     casters=stacked,
                     opacity=casting,
                     tolerance=tolerance,
@@ -411,9 +437,7 @@ def _add_shadows(
                 for level, layer in layers:
                     if _is_ground(receiver):
                         on_ground.append(layer.vertices)
-                    layer.name = names.unique(
-                        f"shadow_{light_name}_{receiver.name}{_layer_suffix(level)}"
-                    )
+                    layer.name = names.unique(f"shadow_{light_name}_{receiver.name}{suffix(level)}")
                     layer.group = group
                     added.append(layer)
             if surface is not None:
@@ -433,7 +457,8 @@ def _add_shadows(
                 # ray to a lit point runs inside them; each caster's
                 # topology made once for every light
                 reached = np.flatnonzero(stacked.lit(light.light) & (casting > 0))
-                for level, layer in surface_shadow(
+                for level, layer in _surface_layers(
+                    graded,
                     receiving,
                     [stacked.caster(int(k)) for k in reached],
                     casting[reached],
@@ -445,7 +470,7 @@ def _add_shadows(
                     light_name,
                     lighting,
                 ):
-                    layer.name = names.unique(f"shadow_{light_name}_surfaces{_layer_suffix(level)}")
+                    layer.name = names.unique(f"shadow_{light_name}_surfaces{suffix(level)}")
                     layer.group = group
                     added.append(layer)
         if progress is not None:
@@ -965,6 +990,106 @@ def _shadow_on(
         )
         shapes.append((level, shadow_shape(vertices, faces, scene_light, where, level, darkness)))
     return shapes
+
+
+def _soft_for(
+    scene_light: SceneLight,
+    settings: SoftSettings,
+    opacity: np.ndarray,
+    light_name: str,
+    notes: list[str],
+) -> SoftSettings | None:
+    """``settings`` for a light with a size, whose shadows bake as graded
+    layers (:mod:`.softbake`), with a note when translucent casters cast
+    for it as opaque; None for one without."""
+    if not is_soft(scene_light):
+        return None
+    note = translucent_note(opacity, light_name)
+    if note is not None:
+        notes.append(note)
+    return settings
+
+
+def _suffix_for(graded: SoftSettings | None) -> Callable[[float], str]:
+    """How a layer's name ends: by its casters' opacity, or its level."""
+    return _layer_suffix if graded is None else soft_suffix
+
+
+def _receiver_layers(
+    receiver: Receiver,
+    scene_light: SceneLight,
+    graded: SoftSettings | None,
+    *,
+    casters: CasterSet,
+    opacity: np.ndarray,
+    tolerance: Tolerance,
+    lift: float,
+    notes: list[str],
+    light_name: str,
+    step: Callable[[int], None],
+    lighting: Lighting,
+) -> list[tuple[float, Shape]]:
+    """:func:`_shadow_on`, or for a light with a size (``graded``) its
+    graded layers (:func:`.softbake.soft_on_receiver`)."""
+    if graded is None:
+        return _shadow_on(
+            receiver,
+            scene_light,
+            casters=casters,
+            opacity=opacity,
+            tolerance=tolerance,
+            lift=lift,
+            notes=notes,
+            light_name=light_name,
+            step=step,
+            lighting=lighting,
+        )
+    step(len(casters))
+    return soft_on_receiver(
+        receiver,
+        scene_light,
+        casters=casters,
+        opacity=opacity,
+        tolerance=tolerance,
+        lift=lift,
+        notes=notes,
+        light_name=light_name,
+        lighting=lighting,
+        settings=graded,
+    )
+
+
+def _surface_layers(
+    graded: SoftSettings | None,
+    surface: ReceivingSurface,
+    casters: list[Caster],
+    opacity: np.ndarray,
+    caster_shapes: np.ndarray,
+    scene_light: SceneLight,
+    tolerance: Tolerance,
+    lift: float,
+    notes: list[str],
+    light_name: str,
+    lighting: Lighting,
+) -> list[tuple[float, Shape]]:
+    """:func:`.surfaces.surface_shadow`, or for a light with a size
+    (``graded``) its graded layers (:func:`.softbake.soft_on_surface`)."""
+    if graded is None:
+        return surface_shadow(
+            surface,
+            casters,
+            opacity,
+            caster_shapes,
+            scene_light,
+            tolerance,
+            lift,
+            notes,
+            light_name,
+            lighting,
+        )
+    return soft_on_surface(
+        surface, casters, scene_light, tolerance, lift, notes, light_name, lighting, graded
+    )
 
 
 def _volumes(

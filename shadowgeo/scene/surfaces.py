@@ -229,16 +229,30 @@ def surface_shadow(
             continue
         darkness = None
         if lighting is not None:
-            # each triangle lit by the lights whose scope holds its shape
-            owners = surface.owner[np.concatenate([index for *_, index in layer_pieces])]
-            table = np.empty(len(surface.scopes), dtype=object)  # frozensets, not sequences
-            table[:] = surface.scopes
-            scopes = list(table[owners]) if len(table) else None
-            darkness = lighting.darkness(scene_light, vertices, triangles, scopes=scopes)
+            index = np.concatenate([index for *_, index in layer_pieces])
+            darkness = surface_darkness(surface, lighting, scene_light, vertices, triangles, index)
         source = where if level >= 1 else f"{where}, of casters of opacity {level:g}"
         shape = shadow_shape(vertices, triangles, scene_light, source, level, darkness)
         shapes.append((level, shape))
     return shapes
+
+
+def surface_darkness(
+    surface: ReceivingSurface,
+    lighting: Lighting,
+    scene_light: SceneLight,
+    vertices: np.ndarray,
+    triangles: np.ndarray,
+    face_index: np.ndarray,
+) -> float:
+    """How dark ``lighting`` draws the shadow of ``scene_light`` made of
+    ``triangles`` on the faces ``face_index`` (t,) of ``surface``: each
+    triangle lit by the lights whose scope holds its shape."""
+    owners = surface.owner[face_index]
+    table = np.empty(len(surface.scopes), dtype=object)  # frozensets, not sequences
+    table[:] = surface.scopes
+    scopes = list(table[owners]) if len(table) else None
+    return lighting.darkness(scene_light, vertices, triangles, scopes=scopes)
 
 
 def surface_covered(
@@ -272,10 +286,7 @@ def surface_covered(
         return []
     darkness = None
     if lighting is not None:
-        table = np.empty(len(surface.scopes), dtype=object)  # frozensets, not sequences
-        table[:] = surface.scopes
-        scopes = list(table[surface.owner[index]]) if len(table) else None
-        darkness = lighting.darkness(scene_light, vertices, faces, scopes=scopes)
+        darkness = surface_darkness(surface, lighting, scene_light, vertices, faces, index)
     where = f"shadow of light {light_name} on the scene's surfaces, from a caster round it"
     return [(opacity, shadow_shape(vertices, faces, scene_light, where, opacity, darkness))]
 
