@@ -17,9 +17,17 @@ face turns its front to that casters hide from it: what the face's own
 plane hides is the shading's to draw, as for a hard shadow (a face turned
 away from every sample has no level, as :func:`shadow_on_surface` leaves
 it; its ``fraction`` is 1). It is the fraction of samples, with the errors
-:mod:`shadowgeo.soft` measures on a plane: at 64 samples (the default) about
-0.04 at most and 0.007 on average in the penumbra under a rectangle, and
-the level's rounding to ``k / levels`` on top (half a level at most).
+:mod:`shadowgeo.soft` measures on a plane: at 64 samples (the default), at
+2,500 points of a floor and a wall by a column under a 1.5 x 1 rectangle,
+0.035 at most and 0.0105 on average in the penumbra against ray tests of
+1,024 random points of the light (their own noise included;
+``tests/test_soft_surface.py``), and the level's rounding to ``k / levels``
+on top (half a level at most).
+
+Cost: the samples' steps 1 to 3 (each as one :func:`shadow_on_surface`
+call's), one :func:`~shadowgeo.levels.cover_bands` per shadowed face, and a
+stitch per level: in that test, 0.41 s at 16 samples, 1.25 s at 64 and 6.4 s
+at 256, against 0.02 s for the hard shadow of the light's centre.
 """
 
 from __future__ import annotations
