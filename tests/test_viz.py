@@ -568,3 +568,29 @@ def test_the_map_is_drawn_in_its_colours_and_shadows_stay_dark():
         assert shaded_rgb[0] < sunny_rgb[0] - 40 and shaded_rgb[2] > sunny_rgb[2] + 20  # bluer
     finally:
         plotter.close()
+
+
+def test_a_soft_shadow_is_drawn_graded_and_a_rect_light_as_itself():
+    # a 2 x 2 x 2 box spanning heights 1 to 3 under a 1 x 1 square light at
+    # height 6: umbra [-1.5, 1.5]^2, penumbra [-2.5, 2.5]^2 (hand-derived in
+    # test_soft.py); along z = 0 the hidden fraction falls linearly from 1 at
+    # x = 1.5 to 0 at x = 2.5, so the floor brightens step by step out there
+    box = trimesh.creation.box([2, 2, 2])
+    box.apply_translation([0, 2, 0])
+    lamp = sg.RectLight([0, 6, 0], [0, -1, 0], 1, 1, up=[0, 0, 1])
+    soft = sg.soft_shadow(box, lamp, sg.Plane([0, 1, 0], 0), offset=1e-3)
+    plotter, image = render([ground_shape(), box], shadows=soft, view="top")
+    try:
+        xs = [1.3, 1.75, 2.0, 2.25, 3.0]  # umbra, 3/4, 1/2, 1/4 hidden, lit
+        points = [[x, 0, 0] for x in xs]
+        values = [brightness(image, pixel) for pixel in to_pixels(plotter, points)]
+        assert all(a < b - 5 for a, b in zip(values, values[1:], strict=False)), values
+    finally:
+        plotter.close()
+    # the panel itself (1 x 1, above the box's middle) in the light colour
+    plotter, image = render([ground_shape(), box], shadows=soft, view=(0.3, 1.0, 0.2))
+    try:
+        ((row, column),) = to_pixels(plotter, [[0.0, 6.0, 0.0]])
+        assert tuple(image[row, column, :3]) == tuple(round(255 * c) for c in viz.LIGHT_COLOR)
+    finally:
+        plotter.close()
