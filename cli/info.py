@@ -74,10 +74,17 @@ def shadows_column(light: shadowgeo.SceneLight) -> str:
     return f"yes ({intensity})" if light.shadows else "no"
 
 
-def light_where(light: shadowgeo.Light) -> str:
+def light_where(light: shadowgeo.Light | shadowgeo.RectLight | shadowgeo.DiskLight) -> str:
+    """Where a light is and, for one with a size, how big."""
     if isinstance(light, shadowgeo.DirectionalLight):
-        return f"direction {vector(light.direction)}"
+        size = f", angle {number(math.degrees(light.angle))} deg" if light.angle else ""
+        return f"direction {vector(light.direction)}{size}"
     where = f"at {vector(light.position)}"
+    if isinstance(light, shadowgeo.RectLight | shadowgeo.DiskLight):
+        where += f", direction {vector(light.direction)}, "
+        if isinstance(light, shadowgeo.RectLight):
+            return where + f"{number(light.width)} x {number(light.height)}"
+        return where + f"radius {number(light.radius)}"
     if isinstance(light, shadowgeo.SpotLight):
         where += (
             f", direction {vector(light.direction)}, "
@@ -85,6 +92,8 @@ def light_where(light: shadowgeo.Light) -> str:
         )
     if math.isfinite(light.radius):
         where += f", radius {number(light.radius)}"
+    if light.source_radius:
+        where += f", source radius {number(light.source_radius)}"
     return where
 
 
@@ -117,11 +126,11 @@ def run(args: argparse.Namespace) -> int:
         rows = [
             [
                 light.name or f"#{index}",
-                type(light.light).__name__,
+                type(light.emitter).__name__,
                 "on" if light.on else "off",
                 shadows_column(light),
                 number(light.intensity),
-                light_where(light.light),
+                light_where(light.emitter),
             ]
             for index, light in enumerate(scene.lights)
         ]

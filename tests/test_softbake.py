@@ -146,3 +146,9 @@ def test_convert_sun_angle_and_light_size_options(tmp_path, capsys):
         with pytest.raises(SystemExit) as stopped:
             main(["convert", str(scene), str(tmp_path / "x.x3d"), "--light-size", bad])
         assert stopped.value.code == 2
+
+
+def test_info_lists_the_lights_with_their_sizes(capsys):
+    assert main(["info", str(EXAMPLE)]) == 0
+    out = capsys.readouterr().out
+    assert "RectLight" in out and "2 x 1" in out and "angle 0.53 deg" in out
