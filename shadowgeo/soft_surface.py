@@ -119,11 +119,9 @@ def soft_shadow_on_surface(
 
     Examples
     --------
-    A 1 x 1 square roof 1 above a 4 x 4 floor under a 1 x 1 square light 2
-    above the roof: the penumbra is the 2 x 2 square round the roof's foot
-    (area 4); the levels cover it but the rim hidden from fewer than one
-    eighth of the samples, and give the same regions as
-    :func:`~shadowgeo.soft_shadow` on the floor's plane.
+    A 1 x 1 roof 1 above a floor under a 1 x 1 light 2 above it: the levels
+    cover its 2 x 2 penumbra but the rim hidden from under one eighth of the
+    samples, the regions :func:`~shadowgeo.soft_shadow` gives on the plane.
 
     >>> from shadowgeo import Plane, soft_shadow
     >>> from shadowgeo.lights import RectLight
@@ -133,7 +131,7 @@ def soft_shadow_on_surface(
     >>> soft = soft_shadow_on_surface(roof, light, floor, levels=4)
     >>> [fraction for fraction, _ in soft.levels]
     [0.25, 0.5, 0.75, 1.0]
-    >>> round(sum(level.area for _, level in soft.levels), 4)
+    >>> round(sum(level.area for _, level in soft.levels), 4)  # (penumbra: 4)
     3.3954
     >>> flat = soft_shadow(roof, light, Plane([0, 1, 0], 0), levels=4)
     >>> [round(level.area, 9) for _, level in flat.levels] == [

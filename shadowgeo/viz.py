@@ -91,6 +91,23 @@ def _is_trimesh(thing: object) -> TypeGuard[trimesh.Trimesh]:
     return module is not None and isinstance(thing, module.Trimesh)
 
 
+def _shape_item(shape: Shape, role: str) -> _Item:
+    """A shape as drawn: its role's look (``role`` other than "geometry"
+    overrides its own), its material's colour and opacity."""
+    shape_role = shape.role if role == "geometry" else role
+    material = shape.material
+    # X3D's colour is the emissive plus the lit diffuse; with no diffuse
+    # (a Shape without Appearance: unlit white) it is drawn unlit
+    unlit = not any(material.diffuse_color) and any(material.emissive_color)
+    lit = np.clip(np.add(material.diffuse_color, material.emissive_color), 0.0, 1.0)
+    # a baked shadow is drawn in the shadow colour; one that glows (a sun
+    # study's map of sunlight hours, emissive) in its own colour
+    dark = shape_role == "shadow" and not any(material.emissive_color)
+    color = SHADOW_COLOR if dark else tuple(lit.tolist())
+    opacity = VOLUME_OPACITY if shape_role == "volume" else 1.0 - material.transparency
+    return _Item(shape.world_vertices, shape.faces, shape_role, color, opacity, unlit=unlit)
+
+
 def _collect(
     things: Plottable | None, role: str, items: list[_Item], lights: list[AnyLight]
 ) -> None:
@@ -102,20 +119,7 @@ def _collect(
             _collect(shape, role, items, lights)
         lights.extend(things.lights)
     elif isinstance(things, Shape):
-        shape_role = things.role if role == "geometry" else role
-        material = things.material
-        # X3D's colour is the emissive plus the lit diffuse; with no diffuse
-        # (a Shape without Appearance: unlit white) it is drawn unlit
-        unlit = not any(material.diffuse_color) and any(material.emissive_color)
-        lit = np.clip(np.add(material.diffuse_color, material.emissive_color), 0.0, 1.0)
-        # a baked shadow is drawn in the shadow colour; one that glows (a sun
-        # study's map of sunlight hours, emissive) in its own colour
-        dark = shape_role == "shadow" and not any(material.emissive_color)
-        color = SHADOW_COLOR if dark else tuple(lit.tolist())
-        opacity = VOLUME_OPACITY if shape_role == "volume" else 1.0 - material.transparency
-        items.append(
-            _Item(things.world_vertices, things.faces, shape_role, color, opacity, unlit=unlit)
-        )
+        items.append(_shape_item(things, role))
     elif isinstance(things, Shadow):
         items.append(_Item(things.mesh.vertices, things.mesh.faces, "shadow", SHADOW_COLOR))
         lights.append(things.light)

@@ -315,20 +315,32 @@ def _exact(value: float, prim: Any, name: str, path: Path, where: str) -> float:
     return value
 
 
+# The UsdLux lights shadowgeo reads, by schema name.
+_LIGHT_SCHEMAS = ("DistantLight", "SphereLight", "RectLight", "DiskLight")
+
+
+def _usd_light(prim: Any) -> Any:
+    """``prim`` as the UsdLux light schema it is, of those read; None for another."""
+    UsdLux = pxr()[5]
+    for name in _LIGHT_SCHEMAS:
+        schema = getattr(UsdLux, name)
+        if prim.IsA(schema):
+            return schema(prim)
+    return None
+
+
 def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> bool:
     """Append the light at ``prim``; False when it is no light shadowgeo models."""
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
-    area: AreaLight | None = None
-    if prim.IsA(UsdLux.DistantLight):
-        usd_light = UsdLux.DistantLight(prim)
-    elif prim.IsA(UsdLux.SphereLight):
-        usd_light = UsdLux.SphereLight(prim)
-    elif prim.IsA(UsdLux.RectLight) or prim.IsA(UsdLux.DiskLight):
-        usd_light = UsdLux.RectLight(prim) if prim.IsA(UsdLux.RectLight) else UsdLux.DiskLight(prim)
-        area = _area_light(usd_light, _world(usd_light, time, path, where), time, path, where)
-    else:
+    usd_light = _usd_light(prim)
+    if usd_light is None:
         return False
     world = _world(usd_light, time, path, where)
+    area = (
+        _area_light(usd_light, world, time, path, where)
+        if isinstance(usd_light, UsdLux.RectLight | UsdLux.DiskLight)
+        else None
+    )
     direction = world[:3, :3] @ [0.0, 0.0, -1.0]
     radius = float(_custom(prim, "range", "number", math.inf, path, where))
     beam = _custom(prim, "beamWidth", "number", None, path, where)

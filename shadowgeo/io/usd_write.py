@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import SceneError
 from ..lights import DirectionalLight, DiskLight, PointLight, RectLight, SpotLight
-from ..scene import Material, Scene, Shape
+from ..scene import Material, Scene, SceneLight, Shape
 from ..scene.model import overview, rotate
 from . import check_face_indices, look_rotation, up_and_units
 from .atomic import atomic_path
@@ -186,28 +186,7 @@ class _Writer:
         for index, scene_light in enumerate(self.scene.lights):
             light = scene_light.light
             path = self.names.child("/World", scene_light.name, f"Light_{index}")
-            transform = np.eye(4)
-            if scene_light.area is not None:
-                usd_light, transform = _area_light(self.stage, path, scene_light.area)
-            elif isinstance(light, DirectionalLight):
-                usd_light = UsdLux.DistantLight.Define(self.stage, path)
-                usd_light.CreateAngleAttr(math.degrees(light.angle))  # (not the 0.53 default)
-                if light.angle:  # float32 degrees: the exact radians too
-                    set_custom(usd_light.GetPrim(), "angle", Sdf.ValueTypeNames.Double, light.angle)
-            else:
-                usd_light = UsdLux.SphereLight.Define(self.stage, path)
-                usd_light.CreateTreatAsPointAttr(light.source_radius == 0)
-                usd_light.CreateRadiusAttr(float(light.source_radius))
-                if light.source_radius:  # float32: the exact value too
-                    set_custom(
-                        usd_light.GetPrim(),
-                        "sourceRadius",
-                        Sdf.ValueTypeNames.Double,
-                        light.source_radius,
-                    )
-                transform[:3, 3] = light.position
-            if not isinstance(light, PointLight) and scene_light.area is None:
-                transform[:3, :3] = look_rotation(light.direction)
+            usd_light, transform = _light_shape(self.stage, path, scene_light)
             prim = usd_light.GetPrim()
             if scene_light.name:
                 prim.SetDisplayName(usd_text(scene_light.name))
@@ -307,6 +286,34 @@ def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
             raise SceneError(f"cannot write: {message}", path=str(path)) from None
         if not saved:
             raise SceneError("usd-core could not save the stage", path=str(path))
+
+
+def _light_shape(stage: Any, path: str, scene_light: SceneLight) -> tuple[Any, np.ndarray]:
+    """The UsdLux light at ``path`` of the kind and size of ``scene_light``
+    (a DistantLight, a SphereLight, or a RectLight or DiskLight), and its
+    (4, 4) transform (UsdLux's lights shine along their local -Z)."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+    light = scene_light.light
+    if scene_light.area is not None:
+        return _area_light(stage, path, scene_light.area)
+    transform = np.eye(4)
+    if isinstance(light, DirectionalLight):
+        usd_light = UsdLux.DistantLight.Define(stage, path)
+        usd_light.CreateAngleAttr(math.degrees(light.angle))  # (not the 0.53 default)
+        if light.angle:  # float32 degrees: the exact radians too
+            set_custom(usd_light.GetPrim(), "angle", Sdf.ValueTypeNames.Double, light.angle)
+    else:
+        usd_light = UsdLux.SphereLight.Define(stage, path)
+        usd_light.CreateTreatAsPointAttr(light.source_radius == 0)
+        usd_light.CreateRadiusAttr(float(light.source_radius))
+        if light.source_radius:  # float32: the exact value too
+            set_custom(
+                usd_light.GetPrim(), "sourceRadius", Sdf.ValueTypeNames.Double, light.source_radius
+            )
+        transform[:3, 3] = light.position
+    if not isinstance(light, PointLight):
+        transform[:3, :3] = look_rotation(light.direction)
+    return usd_light, transform
 
 
 def _area_light(stage: Any, path: str, light: RectLight | DiskLight) -> tuple[Any, np.ndarray]:
