@@ -152,3 +152,9 @@ def test_info_lists_the_lights_with_their_sizes(capsys):
     assert main(["info", str(EXAMPLE)]) == 0
     out = capsys.readouterr().out
     assert "RectLight" in out and "2 x 1" in out and "angle 0.53 deg" in out
+
+
+@pytest.mark.parametrize("options", [{"soft_levels": 0}, {"soft_samples": 10_000}])
+def test_bad_soft_settings_are_refused_at_once(options):
+    with pytest.raises(sg.GeometryError, match="levels|samples"):
+        sg.add_shadows(sg.load(EXAMPLE), **options)

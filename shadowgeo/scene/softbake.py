@@ -31,7 +31,7 @@ import numpy as np
 from .. import polygons as poly
 from ..errors import GeometryError, SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
-from ..soft import has_size, soft_shadow
+from ..soft import checked_counts, has_size, soft_shadow
 from ..soft_surface import soft_shadow_on_surface
 from ..tolerance import Tolerance
 from ..topology import Caster
@@ -51,6 +51,10 @@ class SoftSettings:
 
     levels: int = 8
     samples: int | None = None
+
+    def __post_init__(self) -> None:
+        # checked now, not when a light with a size first asks (a note, then)
+        checked_counts(DirectionalLight([0, -1, 0], 0.01), self.levels, self.samples)
 
 
 class UnknownLight(SceneError):
