@@ -20,7 +20,14 @@ from typing import Any
 import shadowgeo
 from shadowgeo.batch import save_output
 from shadowgeo.io.atomic import remove_stale
-from shadowgeo.scene.sunlight import SceneStudy, study_scene, sunlight_shapes
+from shadowgeo.io.gis_write import Layer, is_gis_path, output_crs, write_layers
+from shadowgeo.scene.sunlight import (
+    SceneStudy,
+    level_regions,
+    shadows_at,
+    study_scene,
+    sunlight_shapes,
+)
 from shadowgeo.sunstudy import days_table
 
 from .common import (
@@ -133,6 +140,13 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="study only this polygon, corners in plan (x,z for a Y-up scene, x,y for Z up)",
     )
     parser.add_argument(
+        "--shadows-at",
+        type=clock_times_argument,
+        metavar="HH:MM[,HH:MM...]",
+        help="with a .gpkg or .geojson OUT: add the shadows at these local times of the "
+        "day, one feature a time with a 'time' attribute, in a layer 'shadows'",
+    )
+    parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
     add_dask_arguments(parser, "day", "a LocalCluster here for several days")
@@ -170,6 +184,15 @@ def date_argument(text: str) -> dt.date:
         raise argparse.ArgumentTypeError(f"expected a date YYYY-MM-DD, got {text!r}") from None
 
 
+def clock_times_argument(text: str) -> list[dt.time]:
+    try:
+        return [dt.time.fromisoformat(part.strip()) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected local times HH:MM[,HH:MM...], got {text!r}"
+        ) from None
+
+
 def hours_argument(text: str) -> float:
     try:
         value = float(text)
@@ -196,8 +219,13 @@ def run(args: argparse.Namespace) -> int:
             raise shadowgeo.SceneError(
                 "OUT is the input file; it is never overwritten", path=str(args.output)
             )
-        shadowgeo.io.check_writable(args.output)  # before the long work
+        if not is_gis_path(args.output):
+            shadowgeo.io.check_writable(args.output)  # before the long work
+    if args.shadows_at and (args.output is None or not is_gis_path(args.output)):
+        args.parser.error("--shadows-at adds layers to a GIS OUT: give OUT as .gpkg or .geojson")
     scene = shadowgeo.load(args.input)
+    if args.output is not None and is_gis_path(args.output):
+        output_crs(scene.site, args.output)  # GeoJSON of a file with no CRS: refused now
     site = scene.site
     if args.at is None and site is None:  # a usage error (exit 2), as a missing option is
         args.parser.error(
@@ -267,7 +295,9 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"\n{study.fraction_meeting(hours):.2%} of the region has at least {hours:g} h of sun"
         )
-        if args.output is not None:
+        if args.output is not None and is_gis_path(args.output):
+            _write_gis(args, scene, inputs, study, day, zone)
+        elif args.output is not None:
             shapes = sunlight_shapes(study, inputs.scale)
             added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
             try:
@@ -314,6 +344,54 @@ def _study(
         progress=bar,
         summaries=args.days > 1,  # a table only: no day's polygons kept
     )
+
+
+def _write_gis(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    inputs: SceneStudy,
+    study: shadowgeo.SunStudy,
+    day: dt.date,
+    zone: dt.timezone,
+) -> None:
+    """OUT as GeoPackage or GeoJSON: the day's levels of sunlight (layer
+    'sunlight': hours, date, threshold_h, meets) and, with --shadows-at, the
+    shadows at those times (layer 'shadows': time, date)."""
+    levels = level_regions(study, inputs.up)
+    layers = {
+        "sunlight": Layer(
+            [region for _, region in levels],
+            {
+                "hours": [hours for hours, _ in levels],
+                "date": [day.isoformat()] * len(levels),
+                "threshold_h": [args.hours] * len(levels),
+                "meets": [hours >= args.hours for hours, _ in levels],
+            },
+        )
+    }
+    if args.shadows_at:
+        latitude, longitude = args.at
+        times = [dt.datetime.combine(day, clock, tzinfo=zone) for clock in args.shadows_at]
+        site = scene.site
+        found = shadows_at(
+            inputs,
+            times,
+            latitude=latitude,
+            longitude=longitude,
+            north=None if site is None else site.north,
+        )
+        for time in sorted(set(times) - {time for time, _ in found}):
+            print(f"note: the sun is down at {time.isoformat()}: no shadow", file=sys.stderr)
+        layers["shadows"] = Layer(
+            [region for _, region in found],
+            {
+                "time": [time.isoformat() for time, _ in found],
+                "date": [day.isoformat()] * len(found),
+            },
+        )
+    crs = write_layers(args.output, layers, scene.site)
+    counts = ", ".join(f"{len(layer.polygons)} {name}" for name, layer in layers.items())
+    print(f"wrote {args.output}: {counts} feature(s), CRS {crs or 'none (the input has none)'}")
 
 
 def _offset(zone: dt.timezone) -> str:

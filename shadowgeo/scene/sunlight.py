@@ -31,7 +31,7 @@ from shapely.geometry.polygon import orient
 from .. import polygons as poly
 from ..errors import SceneError
 from ..plane import Plane
-from ..sunstudy import SunStudy, sun_study_by_day, sun_summaries_by_day
+from ..sunstudy import SunStudy, sun_study, sun_study_by_day, sun_summaries_by_day
 from ..tolerance import Tolerance
 from ..topology import Caster
 from .casters import CasterSet, distinct
@@ -350,3 +350,59 @@ def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> li
             )
         )
     return shapes
+
+
+def plan_region(plane: Plane, parts: Sequence[Sequence[np.ndarray]], up: str) -> Any:
+    """Polygons on ``plane`` (``[outer, hole, ...]`` loops of (k, 2) plane
+    coordinates, as a :class:`SunStudy` holds them) seen in plan: one shapely
+    MultiPolygon in the two horizontal axes (x, y for ``up="Z"``; x, z for
+    ``"Y"``), a part each. The parts are kept as the study cut them (a
+    level's along tile edges), not merged: they tile the level exactly,
+    where GEOS's union of thousands of them can refuse (a hole touching a
+    shell) or round the vertices. Empty ``parts`` give an empty MultiPolygon."""
+    axis = "XYZ".index(up)
+    across = [k for k in range(3) if k != axis]
+    pieces = [
+        shapely.Polygon(
+            plane.to_3d(part[0])[:, across], [plane.to_3d(hole)[:, across] for hole in part[1:]]
+        )
+        for part in parts
+    ]
+    return shapely.MultiPolygon(pieces)
+
+
+def level_regions(study: SunStudy, up: str) -> list[tuple[float, Any]]:
+    """A day's levels of sunlight in plan, rising: (hours, :func:`plan_region`)."""
+    return [
+        (study.hours(k), plan_region(study.plane, parts, up))
+        for k, parts in sorted(study.levels.items())
+        if parts
+    ]
+
+
+def shadows_at(
+    inputs: SceneStudy,
+    times: Sequence[_dt.datetime],
+    *,
+    latitude: float,
+    longitude: float,
+    north: ArrayLike | None = None,
+) -> list[tuple[_dt.datetime, Any]]:
+    """The exact shadow on ``inputs``' region at each of ``times`` with the
+    sun up, in plan (:func:`plan_region`): the same shadows a sun study of
+    those times casts (:func:`shadowgeo.sun_study`, one sample each)."""
+    found = []
+    for time in times:
+        study = sun_study(
+            inputs.caster,
+            inputs.plane,
+            inputs.region,
+            [time],
+            latitude=latitude,
+            longitude=longitude,
+            up=inputs.up,
+            north=north,
+        )
+        if study.times:
+            found.append((time, plan_region(inputs.plane, study.shadows[0], inputs.up)))
+    return found
