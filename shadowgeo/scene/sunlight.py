@@ -39,6 +39,15 @@ from .model import Material, Scene, Shape
 from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
 
+# FLOOR_COSINE as an angle from the vertical, for messages.
+FLOOR_SLOPE_DEGREES = float(np.degrees(np.arccos(FLOOR_COSINE)))
+# Metres: a city object rising less than this (a kerb, a bank, a low wall
+# along a road) is ground cover in a sun study of city data, not a caster:
+# LoD1 roads and land use carry such steps, and a caster at ground level
+# would shade the ground plane under it all day.
+GROUND_COVER_HEIGHT = 1.0
+_CITY_GROUND = "the ground of the city's flat objects"
+
 # Lift of the sunlight map off its floor, relative to the scene's size (as
 # shadows are lifted: shadowgeo.scene.shadows).
 _LIFT = 1e-3
@@ -131,6 +140,7 @@ def scene_study(
     stacked = CasterSet(geometry)
     bounds = stacked.bounds
     tolerance = Tolerance.for_points(bounds)
+    plane, cover = _city_ground(scene, geometry, notes, plane, (receivers, region))
     floor = _floor(scene, geometry, stacked, receivers, plane, tolerance, notes)
     facing = floor.plane
     if facing.normal[axis] < 0:
@@ -146,8 +156,9 @@ def scene_study(
     else:
         polygon = _plan(facing, bounds)
         what = "the plane given" if plane is not None else "the ground plane"
+        what = _CITY_GROUND if cover.any() else what
         notes.append(f"sun study: over {what}, within the scene's plan (its bounding box)")
-    casting = np.array([shape.casts_shadow for shape in geometry], dtype=bool)
+    casting = np.array([shape.casts_shadow for shape in geometry], dtype=bool) & ~cover
     faces = stacked.off_plane(facing, tolerance) & stacked.faces_of(casting)
     if not faces.any():
         raise SceneError(
@@ -156,6 +167,72 @@ def scene_study(
         )
     caster = stacked.mesh(faces)
     return SceneStudy(caster, facing, polygon, what, up_name, tolerance.scale, notes)
+
+
+def _city_ground(
+    scene: Scene,
+    geometry: list[Shape],
+    notes: list[str],
+    plane: Plane | None,
+    chosen: tuple[Any, ...],
+) -> tuple[Plane | None, np.ndarray]:
+    """City data's ground: the plane of its ground cover (:func:`_ground_cover`,
+    at :func:`_cover_plane`) and which shapes are cover, with a note. Only
+    for a scene with a site whose user chose no ``plane`` and nothing of
+    ``chosen`` (receivers, region); else ``plane`` as given and no cover, as
+    when the shapes are all cover or none is."""
+    none = np.zeros(len(geometry), dtype=bool)
+    if scene.site is None or plane is not None or any(item is not None for item in chosen):
+        return plane, none
+    axis = scene.up_index
+    cover = _ground_cover(geometry, axis, scene.meters_per_unit)
+    if not cover.any() or cover.all():
+        return None, none
+    plane = _cover_plane(geometry, cover, axis)
+    notes.append(
+        f"sun study: {int(cover.sum())} flat city object(s) (roads, land, water: no "
+        f"face steeper than {FLOOR_SLOPE_DEGREES:.0f} degrees, or lower than "
+        f"{GROUND_COVER_HEIGHT:g} m) are the ground, at "
+        f"{'xyz'[axis]} = {-plane.offset:.6g} (their area's median height); "
+        f"the {int((~cover).sum())} other(s) cast"
+    )
+    return plane, cover
+
+
+def _ground_cover(geometry: list[Shape], axis: int, meters_per_unit: float) -> np.ndarray:
+    """Per shape, whether it is ground cover, which receives sunlight and
+    does not block it (city data's roads, land use, water): every face
+    within ``FLOOR_COSINE`` of the up axis (no wall), or the whole shape
+    lower than ``GROUND_COVER_HEIGHT`` (a kerb, a bank)."""
+    flat = np.zeros(len(geometry), dtype=bool)
+    low = GROUND_COVER_HEIGHT / meters_per_unit
+    for index, shape in enumerate(geometry):
+        corners = shape.world_vertices[shape.faces]
+        if not len(corners):
+            continue
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        lengths = np.linalg.norm(normals, axis=1)
+        steep = np.abs(normals[:, axis]) < FLOOR_COSINE * lengths
+        height = float(np.ptp(corners[:, :, axis]))
+        flat[index] = height < low or not bool(steep[lengths > 0].any())
+    return flat
+
+
+def _cover_plane(geometry: list[Shape], cover: np.ndarray, axis: int) -> Plane:
+    """The plane, facing up, at the area-weighted median height of the
+    ground cover's faces: where most of the ground is."""
+    heights, areas = [], []
+    for shape in (shape for shape, flat in zip(geometry, cover, strict=True) if flat):
+        corners = shape.world_vertices[shape.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        heights.append(corners[:, :, axis].mean(axis=1))
+        areas.append(np.linalg.norm(normals, axis=1) / 2)
+    height, area = np.concatenate(heights), np.concatenate(areas)
+    order = np.argsort(height, kind="stable")
+    middle = np.searchsorted(np.cumsum(area[order]), 0.5 * area.sum())
+    normal = np.zeros(3)
+    normal[axis] = 1.0
+    return Plane(normal, -float(height[order][min(int(middle), len(order) - 1)]))
 
 
 def _floor(
@@ -406,3 +483,15 @@ def shadows_at(
         if study.times:
             found.append((time, plan_region(inputs.plane, study.shadows[0], inputs.up)))
     return found
+
+
+def roof_triangles(inputs: SceneStudy) -> list[Any]:
+    """The casters' faces that face up (roofs, the tops of blocks), in plan
+    (as :func:`plan_region`), one shapely triangle each: the buildings as a
+    map draws them."""
+    axis = "XYZ".index(inputs.up)
+    across = [k for k in range(3) if k != axis]
+    corners = inputs.caster.vertices[inputs.caster.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    up = normals[:, axis] > FLOOR_COSINE * np.linalg.norm(normals, axis=1)
+    return list(shapely.polygons(corners[up][:, :, across]))
