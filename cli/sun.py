@@ -20,10 +20,18 @@ from typing import Any
 import shadowgeo
 from shadowgeo.batch import save_output
 from shadowgeo.io.atomic import remove_stale
-from shadowgeo.io.gis_write import Layer, is_gis_path, output_crs, write_layers
+from shadowgeo.io.gis_write import (
+    Layer,
+    axis_names,
+    is_gis_path,
+    output_crs,
+    to_output,
+    write_layers,
+)
 from shadowgeo.scene.sunlight import (
     SceneStudy,
     level_regions,
+    roof_triangles,
     shadows_at,
     study_scene,
     sunlight_shapes,
@@ -47,6 +55,8 @@ examples:
   shadowgeo sun garden.glb --at -33.9,151.2 --date 2026-06-21          (Sydney, midwinter)
   shadowgeo sun city.glb --at 40.7,-74.0 --date 2026-01-01 --days 365 --hours 4
   shadowgeo sun city.glb --at 40.7,-74.0 --days 30 --scheduler tcp://10.0.0.5:8786
+  shadowgeo sun delft.city.json levels.gpkg --date 2026-03-21 --shadows-at 09:00,12:00,15:00
+  shadowgeo sun suzhou.geojson levels.geojson --date 2026-03-21 --plot map.png
 
 The floor is the largest flat surface found that faces up under the scene
 (--receiver DEF names one, --plane a,b,c,d gives a plane), else the ground
@@ -58,7 +68,15 @@ around it, over whole days of local mean time (the longitude's hour zone).
 It prints, for one day, the area sunlit for each duration and the share of
 the region with at least --hours of sun (2); for several days, that share
 day by day. OUT (one day) is the scene with the day's map of sunlight hours
-added as shapes, dark purple (none) to yellow (sun all day).
+added as shapes, dark purple (none) to yellow (sun all day); OUT as .gpkg or
+.geojson gets the day's levels as polygons (layer 'sunlight': hours, date,
+threshold_h, meets) in the input's CRS: a GeoPackage in the file's own CRS,
+GeoJSON in longitude and latitude (CRS84, as RFC 7946 asks); --shadows-at
+adds the shadows at those local times (layer 'shadows', attribute 'time').
+--plot draws the day's map with the buildings and a legend of hours, in the
+input's CRS. City data (a file naming its CRS) with flat objects (roads,
+land, water: no wall, or lower than 1 m) is studied on their ground: the
+plane at their median height over the file's plan, the rest casting.
 Several days run on a Dask LocalCluster started here (--workers N), on a
 running cluster (--scheduler ADDRESS) or here (--serial); the results are the
 same either way. Exit codes: 0 done, 1 bad input or OUT cannot be written,
@@ -147,6 +165,12 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "day, one feature a time with a 'time' attribute, in a layer 'shadows'",
     )
     parser.add_argument(
+        "--plot",
+        type=Path,
+        metavar="PNG",
+        help="draw the day's map of sunlight hours, buildings over it, in the input's CRS",
+    )
+    parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
     add_dask_arguments(parser, "day", "a LocalCluster here for several days")
@@ -209,10 +233,7 @@ def local_zone(longitude: float) -> dt.timezone:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.output is not None and args.days > 1:
-        args.parser.error("OUT takes one day's map: give --days 1, or no OUT for the table")
-    if args.workers and (args.serial or args.scheduler):
-        args.parser.error("--workers is for the LocalCluster, not --serial or --scheduler")
+    _check_usage(args)
     if args.output is not None:
         same = args.output.exists() and args.input.exists()
         if same and os.path.samefile(args.input, args.output):
@@ -221,8 +242,6 @@ def run(args: argparse.Namespace) -> int:
             )
         if not is_gis_path(args.output):
             shadowgeo.io.check_writable(args.output)  # before the long work
-    if args.shadows_at and (args.output is None or not is_gis_path(args.output)):
-        args.parser.error("--shadows-at adds layers to a GIS OUT: give OUT as .gpkg or .geojson")
     scene = shadowgeo.load(args.input)
     if args.output is not None and is_gis_path(args.output):
         output_crs(scene.site, args.output)  # GeoJSON of a file with no CRS: refused now
@@ -295,17 +314,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"\n{study.fraction_meeting(hours):.2%} of the region has at least {hours:g} h of sun"
         )
-        if args.output is not None and is_gis_path(args.output):
-            _write_gis(args, scene, inputs, study, day, zone)
-        elif args.output is not None:
-            shapes = sunlight_shapes(study, inputs.scale)
-            added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
-            try:
-                save_output(added, args.output)
-            finally:
-                remove_stale([args.output])  # what a run killed outright left beside it
-            triangles = sum(shape.n_faces for shape in shapes)
-            print(f"wrote {args.output}: {len(shapes)} sunlight shape(s), {triangles} triangles")
+        _write_outputs(args, scene, inputs, study, day, zone)
         return 0
     print(
         f"{args.input}: {len(studies)} days from {first} at {place} "
@@ -318,6 +327,16 @@ def run(args: argparse.Namespace) -> int:
         f"{max(shares):.2%} over the days"
     )
     return 0
+
+
+def _check_usage(args: argparse.Namespace) -> None:
+    """The options that do not go together (exit 2)."""
+    if (args.output is not None or args.plot is not None) and args.days > 1:
+        args.parser.error("OUT and --plot take one day's map: give --days 1, or neither")
+    if args.workers and (args.serial or args.scheduler):
+        args.parser.error("--workers is for the LocalCluster, not --serial or --scheduler")
+    if args.shadows_at and (args.output is None or not is_gis_path(args.output)):
+        args.parser.error("--shadows-at adds layers to a GIS OUT: give OUT as .gpkg or .geojson")
 
 
 def _study(
@@ -344,6 +363,32 @@ def _study(
         progress=bar,
         summaries=args.days > 1,  # a table only: no day's polygons kept
     )
+
+
+def _write_outputs(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    inputs: SceneStudy,
+    study: shadowgeo.SunStudy,
+    day: dt.date,
+    zone: dt.timezone,
+) -> None:
+    """The day's --plot and OUT: GIS polygons, or the scene with the map as shapes."""
+    if args.plot is not None:
+        _plot(args, scene, inputs, study, day)
+    if args.output is None:
+        return
+    if is_gis_path(args.output):
+        _write_gis(args, scene, inputs, study, day, zone)
+        return
+    shapes = sunlight_shapes(study, inputs.scale)
+    added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
+    try:
+        save_output(added, args.output)
+    finally:
+        remove_stale([args.output])  # what a run killed outright left beside it
+    triangles = sum(shape.n_faces for shape in shapes)
+    print(f"wrote {args.output}: {len(shapes)} sunlight shape(s), {triangles} triangles")
 
 
 def _write_gis(
@@ -392,6 +437,35 @@ def _write_gis(
     crs = write_layers(args.output, layers, scene.site)
     counts = ", ".join(f"{len(layer.polygons)} {name}" for name, layer in layers.items())
     print(f"wrote {args.output}: {counts} feature(s), CRS {crs or 'none (the input has none)'}")
+
+
+def _plot(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    inputs: SceneStudy,
+    study: shadowgeo.SunStudy,
+    day: dt.date,
+) -> None:
+    """--plot: the day's levels and the buildings' roofs, in the input's CRS."""
+    from shadowgeo.sunmap import plot_sunlight
+
+    site = scene.site
+    crs = None if site is None else site.source_crs
+    levels = level_regions(study, inputs.up)
+    roofs = roof_triangles(inputs)
+    moved_levels = to_output([region for _, region in levels], site, crs)
+    moved_roofs = to_output(roofs, site, crs)
+    names, degrees = axis_names(crs, scene.meters_per_unit)
+    plot_sunlight(
+        args.plot,
+        [(hours, region) for (hours, _), region in zip(levels, moved_levels, strict=True)],
+        moved_roofs,
+        most_hours=study.hours(len(study.times)),
+        title=f"{args.input.name}: hours of sunlight on {day}",
+        axis_names=names,
+        degrees=degrees,
+    )
+    print(f"wrote {args.plot}: the map of sunlight hours")
 
 
 def _offset(zone: dt.timezone) -> str:

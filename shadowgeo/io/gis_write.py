@@ -101,6 +101,22 @@ def to_output(polygons: list[Any], site: Site | None, crs: str | None) -> list[A
     return list(moved)
 
 
+def axis_names(crs: str | None, meters_per_unit: float) -> tuple[tuple[str, str], bool]:
+    """The labels of a map's two axes in ``crs`` (name and unit, east then
+    north) and whether it is in degrees; ``x``, ``y`` in the scene's unit
+    without a CRS."""
+    if crs is None:
+        unit = "m" if meters_per_unit == 1.0 else f"{meters_per_unit:g} m"
+        return (f"x ({unit})", f"y ({unit})"), False
+    import pyproj
+
+    found = pyproj.CRS.from_user_input(crs)
+    horizontal = found.sub_crs_list[0] if found.is_compound else found
+    axes = sorted(horizontal.axis_info[:2], key=lambda axis: axis.direction.lower() != "east")
+    labels = tuple(f"{axis.name} ({axis.unit_name})" for axis in axes)
+    return (labels[0], labels[1]), bool(horizontal.is_geographic)
+
+
 def write_layers(
     path: str | os.PathLike[str], layers: Mapping[str, Layer], site: Site | None
 ) -> str | None:
