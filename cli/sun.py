@@ -28,8 +28,10 @@ from shadowgeo.io.gis_write import (
     to_output,
     write_layers,
 )
+from shadowgeo.io.sunlight_glb import write_hours_glb
 from shadowgeo.scene.sunlight import (
     SceneStudy,
+    hours_faces,
     level_regions,
     roof_triangles,
     shadows_at,
@@ -169,6 +171,13 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         type=Path,
         metavar="PNG",
         help="draw the day's map of sunlight hours, buildings over it, in the input's CRS",
+    )
+    parser.add_argument(
+        "--mesh",
+        type=Path,
+        metavar="GLB",
+        help="write the day's ground levels and the buildings as a .glb with hours of "
+        "sunlight per face (attribute _SUNLIGHT_HOURS, -1 where not studied) and colours",
     )
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
@@ -331,8 +340,10 @@ def run(args: argparse.Namespace) -> int:
 
 def _check_usage(args: argparse.Namespace) -> None:
     """The options that do not go together (exit 2)."""
-    if (args.output is not None or args.plot is not None) and args.days > 1:
-        args.parser.error("OUT and --plot take one day's map: give --days 1, or neither")
+    if any(item is not None for item in (args.output, args.plot, args.mesh)) and args.days > 1:
+        args.parser.error("OUT, --plot and --mesh take one day's map: give --days 1")
+    if args.mesh is not None and args.mesh.suffix.lower() != ".glb":
+        args.parser.error(f"--mesh writes a .glb, not {args.mesh.name!r}")
     if args.workers and (args.serial or args.scheduler):
         args.parser.error("--workers is for the LocalCluster, not --serial or --scheduler")
     if args.shadows_at and (args.output is None or not is_gis_path(args.output)):
@@ -376,6 +387,19 @@ def _write_outputs(
     """The day's --plot and OUT: GIS polygons, or the scene with the map as shapes."""
     if args.plot is not None:
         _plot(args, scene, inputs, study, day)
+    if args.mesh is not None:
+        vertices, faces, hours, groups, names = hours_faces(scene, study, inputs.scale)
+        write_hours_glb(
+            args.mesh,
+            vertices,
+            faces,
+            hours,
+            most_hours=study.hours(len(study.times)),
+            groups=groups,
+            names=names,
+            up="Z" if scene.up_index == 2 else "Y",
+        )
+        print(f"wrote {args.mesh}: {len(faces)} faces with hours of sunlight")
     if args.output is None:
         return
     if is_gis_path(args.output):

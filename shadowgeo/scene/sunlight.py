@@ -35,7 +35,7 @@ from ..sunstudy import SunStudy, sun_study, sun_study_by_day, sun_summaries_by_d
 from ..tolerance import Tolerance
 from ..topology import Caster
 from .casters import CasterSet, distinct
-from .model import Material, Scene, Shape
+from .model import Material, Scene, Shape, unique_name
 from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
 
@@ -385,18 +385,18 @@ def study_scene(
     return inputs, studies
 
 
-def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> list[Shape]:
-    """A day's study as shapes: one per duration of sunlight with area, named
-    ``{name}_{hours}h``, coloured by :func:`ramp_colour` from dark purple (none)
-    to yellow (every sample),
-    lifted ``1e-3`` of ``scale`` off the plane, emissive (unlit in a viewer),
-    two-sided, casting nothing,
-    role ``"shadow"`` (``shadowgeo convert`` replaces them as baked shadows).
-    The triangles of each shape are the level's exact polygons."""
+def level_meshes(
+    study: SunStudy, scale: float
+) -> list[tuple[float, float, np.ndarray, np.ndarray]]:
+    """A day's levels as triangles, rising: ``(hours, share, vertices, faces)``
+    each, ``share`` the level's sunlit samples over all (0 to 1, the colour
+    ramp's position), the (n, 3) world vertices lifted ``1e-3`` of ``scale``
+    off the plane, the (m, 3) int64 faces the level's exact polygons
+    triangulated. Levels with no triangle are left out."""
     plane = study.plane
     lift = _LIFT * scale * plane.normal
     most = max(len(study.times), 1)  # every sample sunlit: the brightest
-    shapes = []
+    meshes = []
     for k, parts in sorted(study.levels.items()):
         if not parts:
             continue
@@ -409,13 +409,27 @@ def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> li
         if not len(faces):
             continue
         vertices = plane.to_3d(flat / local_scale + center) + lift
-        red, green, blue = ramp_colour(k / most)
-        hours = study.hours(k)
+        meshes.append((study.hours(k), k / most, vertices, faces.astype(np.int64)))
+    return meshes
+
+
+def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> list[Shape]:
+    """A day's study as shapes: one per duration of sunlight with area, named
+    ``{name}_{hours}h``, coloured by :func:`ramp_colour` from dark purple (none)
+    to yellow (every sample),
+    lifted ``1e-3`` of ``scale`` off the plane, emissive (unlit in a viewer),
+    two-sided, casting nothing,
+    role ``"shadow"`` (``shadowgeo convert`` replaces them as baked shadows).
+    The triangles of each shape are the level's exact polygons
+    (:func:`level_meshes`)."""
+    shapes = []
+    for hours, share, vertices, faces in level_meshes(study, scale):
+        red, green, blue = ramp_colour(share)
         label = f"{hours:g}".replace(".", "_")
         shapes.append(
             Shape(
                 vertices,
-                faces.astype(np.int64),
+                faces,
                 # emissive: the same colour in every viewer, whatever its lights
                 material=Material(diffuse_color=(0.0, 0.0, 0.0), emissive_color=(red, green, blue)),
                 name=f"{name}_{label}h",
@@ -495,3 +509,48 @@ def roof_triangles(inputs: SceneStudy) -> list[Any]:
     normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     up = normals[:, axis] > FLOOR_COSINE * np.linalg.norm(normals, axis=1)
     return list(shapely.polygons(corners[up][:, :, across]))
+
+
+def hours_faces(
+    scene: Scene, study: SunStudy, scale: float, ground: str = "ground"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """The day's ground levels (:func:`level_meshes`) and the scene's
+    geometry as plain arrays for a writer of hours per face
+    (:func:`shadowgeo.io.sunlight_glb.write_hours_glb`): (n, 3) world
+    vertices, (m, 3) faces, (m,) hours (NaN on the scene's own faces, not
+    studied), (m,) group of each face and the groups' names (``ground``
+    first, then each shape's name)."""
+    vertices, faces, hours, groups = [], [], [], []
+    names = [ground]
+    base = 0
+
+    def add(points: np.ndarray, triangles: np.ndarray, value: float, group: int) -> None:
+        nonlocal base
+        vertices.append(points)
+        faces.append(triangles + base)
+        hours.append(np.full(len(triangles), value))
+        groups.append(np.full(len(triangles), group, dtype=np.int64))
+        base += len(points)
+
+    for value, _, points, triangles in level_meshes(study, scale):
+        add(points, triangles, value, 0)
+    used: set[str] = {ground}
+    for shape in scene.shapes:
+        if shape.role == "geometry" and shape.n_faces:
+            names.append(unique_name(shape.name or "shape", used))
+            add(shape.world_vertices, shape.faces.astype(np.int64), float("nan"), len(names) - 1)
+    if not faces:
+        return (
+            np.zeros((0, 3)),
+            np.zeros((0, 3), np.int64),
+            np.zeros(0),
+            np.zeros(0, np.int64),
+            names,
+        )
+    return (
+        np.concatenate(vertices),
+        np.concatenate(faces),
+        np.concatenate(hours),
+        np.concatenate(groups),
+        names,
+    )
