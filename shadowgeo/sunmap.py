@@ -72,7 +72,7 @@ def plot_sunlight(
         from matplotlib.patches import Patch
     except ImportError:
         raise SceneError(
-            "a plot needs matplotlib (pip install matplotlib)", path=str(path)
+            'a plot needs matplotlib (pip install "shadowgeo[plot]")', path=str(path)
         ) from None
     figure, axes = plt.subplots(figsize=(9, 8), dpi=120)
     try:
