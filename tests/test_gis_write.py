@@ -284,3 +284,14 @@ def test_unknown_gis_suffix_and_shadows_at_without_gis_out_are_usage_errors(tmp_
     with pytest.raises(SystemExit) as raised:
         main(["sun", str(source), str(tmp_path / "o.gpkg"), "--shadows-at", "25:00"])
     assert raised.value.code == 2
+
+
+def test_a_target_under_a_file_is_one_line_naming_it_and_exit_1(tmp_path, capsys):
+    source = _rd_new(tmp_path)
+    blocker = tmp_path / "plain"
+    blocker.write_text("not a folder")
+    target = blocker / "out.gpkg"
+    assert main(["sun", str(source), str(target), "--date", DAY.isoformat()]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) >= 1 and "out.gpkg" in err[-1] and "cannot write" in err[-1]
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["plain", "rd.geojson"]

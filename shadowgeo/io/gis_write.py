@@ -131,6 +131,7 @@ def write_layers(
     """
     crs = output_crs(site, path)
     try:
+        import pyogrio.errors
         import pyogrio.raw
     except ImportError:  # pragma: no cover - the city extra installs it
         raise SceneError(f"GIS output needs pyogrio ({_INSTALL})", path=str(path)) from None
@@ -147,6 +148,9 @@ def write_layers(
                 _write_one(pyogrio.raw, temporary, layer_name, polygons, layer, crs, number > 0)
     except OSError as error:
         raise SceneError(f"cannot write: {error.strerror or error}", path=str(path)) from None
+    except (pyogrio.errors.DataSourceError, pyogrio.errors.DataLayerError) as error:
+        # GDAL's own refusals (a full disk, a driver error) come as these
+        raise SceneError(f"cannot write: {error}", path=str(path)) from None
     return crs
 
 
