@@ -90,17 +90,7 @@ def plot_sunlight(
             PolyCollection(triangles, facecolors=[_BUILDING], edgecolors="face", linewidths=0.3)
         )
         handles.append(Patch(facecolor=_BUILDING, edgecolor=_EDGE, label="buildings"))
-        axes.autoscale_view()
-        low, high = axes.get_ylim()
-        if degrees:
-            axes.set_aspect(1.0 / math.cos(math.radians((low + high) / 2)))
-        else:
-            axes.set_aspect("equal")
-        axes.set_xlabel(axis_names[0])
-        axes.set_ylabel(axis_names[1])
-        axes.set_title(title)
-        axes.ticklabel_format(useOffset=False, style="plain")
-        axes.legend(handles=handles, title="sunlight", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        _frame(axes, handles, title, axis_names, degrees)
         figure.tight_layout()
         target = Path(path)
         try:
@@ -111,6 +101,23 @@ def plot_sunlight(
             raise SceneError(f"cannot write: {error.strerror or error}", path=str(path)) from None
     finally:
         plt.close(figure)
+
+
+def _frame(
+    axes: Any, handles: list[Any], title: str, axis_names: tuple[str, str], degrees: bool
+) -> None:
+    """The map's extent, aspect, labels, title and legend (beside it)."""
+    axes.autoscale_view()
+    low, high = axes.get_ylim()
+    if degrees:  # a degree of longitude as long as on the ground at the map's latitude
+        axes.set_aspect(1.0 / math.cos(math.radians((low + high) / 2)))
+    else:
+        axes.set_aspect("equal")
+    axes.set_xlabel(axis_names[0])
+    axes.set_ylabel(axis_names[1])
+    axes.set_title(title)
+    axes.ticklabel_format(useOffset=False, style="plain")
+    axes.legend(handles=handles, title="sunlight", loc="upper left", bbox_to_anchor=(1.01, 1.0))
 
 
 def _polygons(geometries: Sequence[Any]) -> list[Any]:
