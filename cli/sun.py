@@ -20,7 +20,24 @@ from typing import Any
 import shadowgeo
 from shadowgeo.batch import save_output
 from shadowgeo.io.atomic import remove_stale
-from shadowgeo.scene.sunlight import SceneStudy, study_scene, sunlight_shapes
+from shadowgeo.io.gis_write import (
+    Layer,
+    axis_names,
+    is_gis_path,
+    output_crs,
+    to_output,
+    write_layers,
+)
+from shadowgeo.io.sunlight_glb import write_hours_glb
+from shadowgeo.scene.sunlight import (
+    SceneStudy,
+    hours_faces,
+    level_regions,
+    roof_triangles,
+    shadows_at,
+    study_scene,
+    sunlight_shapes,
+)
 from shadowgeo.sunstudy import days_table
 
 from .common import (
@@ -40,6 +57,8 @@ examples:
   shadowgeo sun garden.glb --at -33.9,151.2 --date 2026-06-21          (Sydney, midwinter)
   shadowgeo sun city.glb --at 40.7,-74.0 --date 2026-01-01 --days 365 --hours 4
   shadowgeo sun city.glb --at 40.7,-74.0 --days 30 --scheduler tcp://10.0.0.5:8786
+  shadowgeo sun delft.city.json levels.gpkg --date 2026-03-21 --shadows-at 09:00,12:00,15:00
+  shadowgeo sun suzhou.geojson levels.geojson --date 2026-03-21 --plot map.png
 
 The floor is the largest flat surface found that faces up under the scene
 (--receiver DEF names one, --plane a,b,c,d gives a plane), else the ground
@@ -51,7 +70,15 @@ around it, over whole days of local mean time (the longitude's hour zone).
 It prints, for one day, the area sunlit for each duration and the share of
 the region with at least --hours of sun (2); for several days, that share
 day by day. OUT (one day) is the scene with the day's map of sunlight hours
-added as shapes, dark purple (none) to yellow (sun all day).
+added as shapes, dark purple (none) to yellow (sun all day); OUT as .gpkg or
+.geojson gets the day's levels as polygons (layer 'sunlight': hours, date,
+threshold_h, meets) in the input's CRS: a GeoPackage in the file's own CRS,
+GeoJSON in longitude and latitude (CRS84, as RFC 7946 asks); --shadows-at
+adds the shadows at those local times (layer 'shadows', attribute 'time').
+--plot draws the day's map with the buildings and a legend of hours, in the
+input's CRS. City data (a file naming its CRS) with flat objects (roads,
+land, water: no wall, or lower than 1 m) is studied on their ground: the
+plane at their median height over the file's plan, the rest casting.
 Several days run on a Dask LocalCluster started here (--workers N), on a
 running cluster (--scheduler ADDRESS) or here (--serial); the results are the
 same either way. Exit codes: 0 done, 1 bad input or OUT cannot be written,
@@ -133,6 +160,26 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="study only this polygon, corners in plan (x,z for a Y-up scene, x,y for Z up)",
     )
     parser.add_argument(
+        "--shadows-at",
+        type=clock_times_argument,
+        metavar="HH:MM[,HH:MM...]",
+        help="with a .gpkg or .geojson OUT: add the shadows at these local times of the "
+        "day, one feature a time with a 'time' attribute, in a layer 'shadows'",
+    )
+    parser.add_argument(
+        "--plot",
+        type=Path,
+        metavar="PNG",
+        help="draw the day's map of sunlight hours, buildings over it, in the input's CRS",
+    )
+    parser.add_argument(
+        "--mesh",
+        type=Path,
+        metavar="GLB",
+        help="write the day's ground levels and the buildings as a .glb with hours of "
+        "sunlight per face (attribute _SUNLIGHT_HOURS, -1 where not studied) and colours",
+    )
+    parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
     add_dask_arguments(parser, "day", "a LocalCluster here for several days")
@@ -170,6 +217,15 @@ def date_argument(text: str) -> dt.date:
         raise argparse.ArgumentTypeError(f"expected a date YYYY-MM-DD, got {text!r}") from None
 
 
+def clock_times_argument(text: str) -> list[dt.time]:
+    try:
+        return [dt.time.fromisoformat(part.strip()) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected local times HH:MM[,HH:MM...], got {text!r}"
+        ) from None
+
+
 def hours_argument(text: str) -> float:
     try:
         value = float(text)
@@ -186,18 +242,18 @@ def local_zone(longitude: float) -> dt.timezone:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.output is not None and args.days > 1:
-        args.parser.error("OUT takes one day's map: give --days 1, or no OUT for the table")
-    if args.workers and (args.serial or args.scheduler):
-        args.parser.error("--workers is for the LocalCluster, not --serial or --scheduler")
+    _check_usage(args)
     if args.output is not None:
         same = args.output.exists() and args.input.exists()
         if same and os.path.samefile(args.input, args.output):
             raise shadowgeo.SceneError(
                 "OUT is the input file; it is never overwritten", path=str(args.output)
             )
-        shadowgeo.io.check_writable(args.output)  # before the long work
+        if not is_gis_path(args.output):
+            shadowgeo.io.check_writable(args.output)  # before the long work
     scene = shadowgeo.load(args.input)
+    if args.output is not None and is_gis_path(args.output):
+        output_crs(scene.site, args.output)  # GeoJSON of a file with no CRS: refused now
     site = scene.site
     if args.at is None and site is None:  # a usage error (exit 2), as a missing option is
         args.parser.error(
@@ -267,15 +323,7 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"\n{study.fraction_meeting(hours):.2%} of the region has at least {hours:g} h of sun"
         )
-        if args.output is not None:
-            shapes = sunlight_shapes(study, inputs.scale)
-            added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
-            try:
-                save_output(added, args.output)
-            finally:
-                remove_stale([args.output])  # what a run killed outright left beside it
-            triangles = sum(shape.n_faces for shape in shapes)
-            print(f"wrote {args.output}: {len(shapes)} sunlight shape(s), {triangles} triangles")
+        _write_outputs(args, scene, inputs, study, day, zone)
         return 0
     print(
         f"{args.input}: {len(studies)} days from {first} at {place} "
@@ -288,6 +336,18 @@ def run(args: argparse.Namespace) -> int:
         f"{max(shares):.2%} over the days"
     )
     return 0
+
+
+def _check_usage(args: argparse.Namespace) -> None:
+    """The options that do not go together (exit 2)."""
+    if any(item is not None for item in (args.output, args.plot, args.mesh)) and args.days > 1:
+        args.parser.error("OUT, --plot and --mesh take one day's map: give --days 1")
+    if args.mesh is not None and args.mesh.suffix.lower() != ".glb":
+        args.parser.error(f"--mesh writes a .glb, not {args.mesh.name!r}")
+    if args.workers and (args.serial or args.scheduler):
+        args.parser.error("--workers is for the LocalCluster, not --serial or --scheduler")
+    if args.shadows_at and (args.output is None or not is_gis_path(args.output)):
+        args.parser.error("--shadows-at adds layers to a GIS OUT: give OUT as .gpkg or .geojson")
 
 
 def _study(
@@ -314,6 +374,122 @@ def _study(
         progress=bar,
         summaries=args.days > 1,  # a table only: no day's polygons kept
     )
+
+
+def _write_outputs(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    inputs: SceneStudy,
+    study: shadowgeo.SunStudy,
+    day: dt.date,
+    zone: dt.timezone,
+) -> None:
+    """The day's --plot and OUT: GIS polygons, or the scene with the map as shapes."""
+    if args.plot is not None:
+        _plot(args, scene, inputs, study, day)
+    if args.mesh is not None:
+        vertices, faces, hours, groups, names = hours_faces(scene, study, inputs.scale)
+        write_hours_glb(
+            args.mesh,
+            vertices,
+            faces,
+            hours,
+            most_hours=study.hours(len(study.times)),
+            groups=groups,
+            names=names,
+            up="Z" if scene.up_index == 2 else "Y",
+        )
+        print(f"wrote {args.mesh}: {len(faces)} faces with hours of sunlight")
+    if args.output is None:
+        return
+    if is_gis_path(args.output):
+        _write_gis(args, scene, inputs, study, day, zone)
+        return
+    shapes = sunlight_shapes(study, inputs.scale)
+    added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
+    try:
+        save_output(added, args.output)
+    finally:
+        remove_stale([args.output])  # what a run killed outright left beside it
+    triangles = sum(shape.n_faces for shape in shapes)
+    print(f"wrote {args.output}: {len(shapes)} sunlight shape(s), {triangles} triangles")
+
+
+def _write_gis(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    inputs: SceneStudy,
+    study: shadowgeo.SunStudy,
+    day: dt.date,
+    zone: dt.timezone,
+) -> None:
+    """OUT as GeoPackage or GeoJSON: the day's levels of sunlight (layer
+    'sunlight': hours, date, threshold_h, meets) and, with --shadows-at, the
+    shadows at those times (layer 'shadows': time, date)."""
+    levels = level_regions(study, inputs.up)
+    layers = {
+        "sunlight": Layer(
+            [region for _, region in levels],
+            {
+                "hours": [hours for hours, _ in levels],
+                "date": [day.isoformat()] * len(levels),
+                "threshold_h": [args.hours] * len(levels),
+                "meets": [hours >= args.hours for hours, _ in levels],
+            },
+        )
+    }
+    if args.shadows_at:
+        latitude, longitude = args.at
+        times = [dt.datetime.combine(day, clock, tzinfo=zone) for clock in args.shadows_at]
+        site = scene.site
+        found = shadows_at(
+            inputs,
+            times,
+            latitude=latitude,
+            longitude=longitude,
+            north=None if site is None else site.north,
+        )
+        for time in sorted(set(times) - {time for time, _ in found}):
+            print(f"note: the sun is down at {time.isoformat()}: no shadow", file=sys.stderr)
+        layers["shadows"] = Layer(
+            [region for _, region in found],
+            {
+                "time": [time.isoformat() for time, _ in found],
+                "date": [day.isoformat()] * len(found),
+            },
+        )
+    crs = write_layers(args.output, layers, scene.site)
+    counts = ", ".join(f"{len(layer.polygons)} {name}" for name, layer in layers.items())
+    print(f"wrote {args.output}: {counts} feature(s), CRS {crs or 'none (the input has none)'}")
+
+
+def _plot(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    inputs: SceneStudy,
+    study: shadowgeo.SunStudy,
+    day: dt.date,
+) -> None:
+    """--plot: the day's levels and the buildings' roofs, in the input's CRS."""
+    from shadowgeo.sunmap import plot_sunlight
+
+    site = scene.site
+    crs = None if site is None else site.source_crs
+    levels = level_regions(study, inputs.up)
+    roofs = roof_triangles(inputs)
+    moved_levels = to_output([region for _, region in levels], site, crs)
+    moved_roofs = to_output(roofs, site, crs)
+    names, degrees = axis_names(crs, scene.meters_per_unit)
+    plot_sunlight(
+        args.plot,
+        [(hours, region) for (hours, _), region in zip(levels, moved_levels, strict=True)],
+        moved_roofs,
+        most_hours=study.hours(len(study.times)),
+        title=f"{args.input.name}: hours of sunlight on {day}",
+        axis_names=names,
+        degrees=degrees,
+    )
+    print(f"wrote {args.plot}: the map of sunlight hours")
 
 
 def _offset(zone: dt.timezone) -> str:

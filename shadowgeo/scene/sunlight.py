@@ -31,13 +31,22 @@ from shapely.geometry.polygon import orient
 from .. import polygons as poly
 from ..errors import SceneError
 from ..plane import Plane
-from ..sunstudy import SunStudy, sun_study_by_day, sun_summaries_by_day
+from ..sunstudy import SunStudy, sun_study, sun_study_by_day, sun_summaries_by_day
 from ..tolerance import Tolerance
 from ..topology import Caster
 from .casters import CasterSet, distinct
-from .model import Material, Scene, Shape
+from .model import Material, Scene, Shape, unique_name
 from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
+
+# FLOOR_COSINE as an angle from the vertical, for messages.
+FLOOR_SLOPE_DEGREES = float(np.degrees(np.arccos(FLOOR_COSINE)))
+# Metres: a city object rising less than this (a kerb, a bank, a low wall
+# along a road) is ground cover in a sun study of city data, not a caster:
+# LoD1 roads and land use carry such steps, and a caster at ground level
+# would shade the ground plane under it all day.
+GROUND_COVER_HEIGHT = 1.0
+_CITY_GROUND = "the ground of the city's flat objects"
 
 # Lift of the sunlight map off its floor, relative to the scene's size (as
 # shadows are lifted: shadowgeo.scene.shadows).
@@ -131,6 +140,7 @@ def scene_study(
     stacked = CasterSet(geometry)
     bounds = stacked.bounds
     tolerance = Tolerance.for_points(bounds)
+    plane, cover = _city_ground(scene, geometry, notes, plane, (receivers, region))
     floor = _floor(scene, geometry, stacked, receivers, plane, tolerance, notes)
     facing = floor.plane
     if facing.normal[axis] < 0:
@@ -146,8 +156,9 @@ def scene_study(
     else:
         polygon = _plan(facing, bounds)
         what = "the plane given" if plane is not None else "the ground plane"
+        what = _CITY_GROUND if cover.any() else what
         notes.append(f"sun study: over {what}, within the scene's plan (its bounding box)")
-    casting = np.array([shape.casts_shadow for shape in geometry], dtype=bool)
+    casting = np.array([shape.casts_shadow for shape in geometry], dtype=bool) & ~cover
     faces = stacked.off_plane(facing, tolerance) & stacked.faces_of(casting)
     if not faces.any():
         raise SceneError(
@@ -156,6 +167,72 @@ def scene_study(
         )
     caster = stacked.mesh(faces)
     return SceneStudy(caster, facing, polygon, what, up_name, tolerance.scale, notes)
+
+
+def _city_ground(
+    scene: Scene,
+    geometry: list[Shape],
+    notes: list[str],
+    plane: Plane | None,
+    chosen: tuple[Any, ...],
+) -> tuple[Plane | None, np.ndarray]:
+    """City data's ground: the plane of its ground cover (:func:`_ground_cover`,
+    at :func:`_cover_plane`) and which shapes are cover, with a note. Only
+    for a scene with a site whose user chose no ``plane`` and nothing of
+    ``chosen`` (receivers, region); else ``plane`` as given and no cover, as
+    when the shapes are all cover or none is."""
+    none = np.zeros(len(geometry), dtype=bool)
+    if scene.site is None or plane is not None or any(item is not None for item in chosen):
+        return plane, none
+    axis = scene.up_index
+    cover = _ground_cover(geometry, axis, scene.meters_per_unit)
+    if not cover.any() or cover.all():
+        return None, none
+    plane = _cover_plane(geometry, cover, axis)
+    notes.append(
+        f"sun study: {int(cover.sum())} flat city object(s) (roads, land, water: no "
+        f"face steeper than {FLOOR_SLOPE_DEGREES:.0f} degrees, or lower than "
+        f"{GROUND_COVER_HEIGHT:g} m) are the ground, at "
+        f"{'xyz'[axis]} = {-plane.offset:.6g} (their area's median height); "
+        f"the {int((~cover).sum())} other(s) cast"
+    )
+    return plane, cover
+
+
+def _ground_cover(geometry: list[Shape], axis: int, meters_per_unit: float) -> np.ndarray:
+    """Per shape, whether it is ground cover, which receives sunlight and
+    does not block it (city data's roads, land use, water): every face
+    within ``FLOOR_COSINE`` of the up axis (no wall), or the whole shape
+    lower than ``GROUND_COVER_HEIGHT`` (a kerb, a bank)."""
+    flat = np.zeros(len(geometry), dtype=bool)
+    low = GROUND_COVER_HEIGHT / meters_per_unit
+    for index, shape in enumerate(geometry):
+        corners = shape.world_vertices[shape.faces]
+        if not len(corners):
+            continue
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        lengths = np.linalg.norm(normals, axis=1)
+        steep = np.abs(normals[:, axis]) < FLOOR_COSINE * lengths
+        height = float(np.ptp(corners[:, :, axis]))
+        flat[index] = height < low or not bool(steep[lengths > 0].any())
+    return flat
+
+
+def _cover_plane(geometry: list[Shape], cover: np.ndarray, axis: int) -> Plane:
+    """The plane, facing up, at the area-weighted median height of the
+    ground cover's faces: where most of the ground is."""
+    heights, areas = [], []
+    for shape in (shape for shape, flat in zip(geometry, cover, strict=True) if flat):
+        corners = shape.world_vertices[shape.faces]
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        heights.append(corners[:, :, axis].mean(axis=1))
+        areas.append(np.linalg.norm(normals, axis=1) / 2)
+    height, area = np.concatenate(heights), np.concatenate(areas)
+    order = np.argsort(height, kind="stable")
+    middle = np.searchsorted(np.cumsum(area[order]), 0.5 * area.sum())
+    normal = np.zeros(3)
+    normal[axis] = 1.0
+    return Plane(normal, -float(height[order][min(int(middle), len(order) - 1)]))
 
 
 def _floor(
@@ -308,18 +385,18 @@ def study_scene(
     return inputs, studies
 
 
-def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> list[Shape]:
-    """A day's study as shapes: one per duration of sunlight with area, named
-    ``{name}_{hours}h``, coloured by :func:`ramp_colour` from dark purple (none)
-    to yellow (every sample),
-    lifted ``1e-3`` of ``scale`` off the plane, emissive (unlit in a viewer),
-    two-sided, casting nothing,
-    role ``"shadow"`` (``shadowgeo convert`` replaces them as baked shadows).
-    The triangles of each shape are the level's exact polygons."""
+def level_meshes(
+    study: SunStudy, scale: float
+) -> list[tuple[float, float, np.ndarray, np.ndarray]]:
+    """A day's levels as triangles, rising: ``(hours, share, vertices, faces)``
+    each, ``share`` the level's sunlit samples over all (0 to 1, the colour
+    ramp's position), the (n, 3) world vertices lifted ``1e-3`` of ``scale``
+    off the plane, the (m, 3) int64 faces the level's exact polygons
+    triangulated. Levels with no triangle are left out."""
     plane = study.plane
     lift = _LIFT * scale * plane.normal
     most = max(len(study.times), 1)  # every sample sunlit: the brightest
-    shapes = []
+    meshes = []
     for k, parts in sorted(study.levels.items()):
         if not parts:
             continue
@@ -332,13 +409,27 @@ def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> li
         if not len(faces):
             continue
         vertices = plane.to_3d(flat / local_scale + center) + lift
-        red, green, blue = ramp_colour(k / most)
-        hours = study.hours(k)
+        meshes.append((study.hours(k), k / most, vertices, faces.astype(np.int64)))
+    return meshes
+
+
+def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> list[Shape]:
+    """A day's study as shapes: one per duration of sunlight with area, named
+    ``{name}_{hours}h``, coloured by :func:`ramp_colour` from dark purple (none)
+    to yellow (every sample),
+    lifted ``1e-3`` of ``scale`` off the plane, emissive (unlit in a viewer),
+    two-sided, casting nothing,
+    role ``"shadow"`` (``shadowgeo convert`` replaces them as baked shadows).
+    The triangles of each shape are the level's exact polygons
+    (:func:`level_meshes`)."""
+    shapes = []
+    for hours, share, vertices, faces in level_meshes(study, scale):
+        red, green, blue = ramp_colour(share)
         label = f"{hours:g}".replace(".", "_")
         shapes.append(
             Shape(
                 vertices,
-                faces.astype(np.int64),
+                faces,
                 # emissive: the same colour in every viewer, whatever its lights
                 material=Material(diffuse_color=(0.0, 0.0, 0.0), emissive_color=(red, green, blue)),
                 name=f"{name}_{label}h",
@@ -350,3 +441,116 @@ def sunlight_shapes(study: SunStudy, scale: float, name: str = "sunlight") -> li
             )
         )
     return shapes
+
+
+def plan_region(plane: Plane, parts: Sequence[Sequence[np.ndarray]], up: str) -> Any:
+    """Polygons on ``plane`` (``[outer, hole, ...]`` loops of (k, 2) plane
+    coordinates, as a :class:`SunStudy` holds them) seen in plan: one shapely
+    MultiPolygon in the two horizontal axes (x, y for ``up="Z"``; x, z for
+    ``"Y"``), a part each. The parts are kept as the study cut them (a
+    level's along tile edges), not merged: they tile the level exactly,
+    where GEOS's union of thousands of them can refuse (a hole touching a
+    shell) or round the vertices. Empty ``parts`` give an empty MultiPolygon."""
+    axis = "XYZ".index(up)
+    across = [k for k in range(3) if k != axis]
+    pieces = [
+        shapely.Polygon(
+            plane.to_3d(part[0])[:, across], [plane.to_3d(hole)[:, across] for hole in part[1:]]
+        )
+        for part in parts
+    ]
+    return shapely.MultiPolygon(pieces)
+
+
+def level_regions(study: SunStudy, up: str) -> list[tuple[float, Any]]:
+    """A day's levels of sunlight in plan, rising: (hours, :func:`plan_region`)."""
+    return [
+        (study.hours(k), plan_region(study.plane, parts, up))
+        for k, parts in sorted(study.levels.items())
+        if parts
+    ]
+
+
+def shadows_at(
+    inputs: SceneStudy,
+    times: Sequence[_dt.datetime],
+    *,
+    latitude: float,
+    longitude: float,
+    north: ArrayLike | None = None,
+) -> list[tuple[_dt.datetime, Any]]:
+    """The exact shadow on ``inputs``' region at each of ``times`` with the
+    sun up, in plan (:func:`plan_region`): the same shadows a sun study of
+    those times casts (:func:`shadowgeo.sun_study`, one sample each)."""
+    found = []
+    for time in times:
+        study = sun_study(
+            inputs.caster,
+            inputs.plane,
+            inputs.region,
+            [time],
+            latitude=latitude,
+            longitude=longitude,
+            up=inputs.up,
+            north=north,
+        )
+        if study.times:
+            found.append((time, plan_region(inputs.plane, study.shadows[0], inputs.up)))
+    return found
+
+
+def roof_triangles(inputs: SceneStudy) -> list[Any]:
+    """The casters' faces that face up (roofs, the tops of blocks), in plan
+    (as :func:`plan_region`), one shapely triangle each: the buildings as a
+    map draws them."""
+    axis = "XYZ".index(inputs.up)
+    across = [k for k in range(3) if k != axis]
+    corners = inputs.caster.vertices[inputs.caster.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    up = normals[:, axis] > FLOOR_COSINE * np.linalg.norm(normals, axis=1)
+    return list(shapely.polygons(corners[up][:, :, across]))
+
+
+def hours_faces(
+    scene: Scene, study: SunStudy, scale: float, ground: str = "ground"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """The day's ground levels (:func:`level_meshes`) and the scene's
+    geometry as plain arrays for a writer of hours per face
+    (:func:`shadowgeo.io.sunlight_glb.write_hours_glb`): (n, 3) world
+    vertices, (m, 3) faces, (m,) hours (NaN on the scene's own faces, not
+    studied), (m,) group of each face and the groups' names (``ground``
+    first, then each shape's name)."""
+    vertices, faces, hours, groups = [], [], [], []
+    names = [ground]
+    base = 0
+
+    def add(points: np.ndarray, triangles: np.ndarray, value: float, group: int) -> None:
+        nonlocal base
+        vertices.append(points)
+        faces.append(triangles + base)
+        hours.append(np.full(len(triangles), value))
+        groups.append(np.full(len(triangles), group, dtype=np.int64))
+        base += len(points)
+
+    for value, _, points, triangles in level_meshes(study, scale):
+        add(points, triangles, value, 0)
+    used: set[str] = {ground}
+    for shape in scene.shapes:
+        if shape.role == "geometry" and shape.n_faces:
+            names.append(unique_name(shape.name or "shape", used))
+            add(shape.world_vertices, shape.faces.astype(np.int64), float("nan"), len(names) - 1)
+    if not faces:
+        return (
+            np.zeros((0, 3)),
+            np.zeros((0, 3), np.int64),
+            np.zeros(0),
+            np.zeros(0, np.int64),
+            names,
+        )
+    return (
+        np.concatenate(vertices),
+        np.concatenate(faces),
+        np.concatenate(hours),
+        np.concatenate(groups),
+        names,
+    )
