@@ -459,6 +459,39 @@ def sweep_table(results) -> str:
     return "\n".join(lines)
 
 
+MAP_STYLES = {"shadow map PCF": ("C3", "^", "--"), "shadow map PCSS": ("C1", "v", "-.")}
+
+
+def sweep_column(top, bottom, scene: Scene, rows, sweep_rows) -> None:
+    """One scene's sweep: error against levels on ``top`` (the finest maps'
+    mean error as lines), against time on ``bottom`` (every map as points)."""
+    levelled = [row for row in sweep_rows if row[0] > 0]
+    levels = [row[0] for row in levelled]
+    for ax, xs in ((top, levels), (bottom, [row[2] * 1e3 for row in levelled])):
+        ax.plot(xs, [r[4] for r in levelled], "s-", color="C0", label="levels: mean")
+        ax.plot(xs, [r[3] for r in levelled], "s:", color="C0", mfc="none", label="levels: max")
+    top.plot(levels, [0.5 / n for n in levels], color="grey", lw=0.8, label="1 / (2 levels)")
+    for method, _, seconds, worst, mean in map_rows(rows, finest=False):
+        color, marker, _ = MAP_STYLES[method]
+        bottom.plot(seconds * 1e3, mean, marker, color=color)
+        bottom.plot(seconds * 1e3, worst, marker, color=color, mfc="none")
+    for method, parameters, _, _, mean in map_rows(rows):
+        color, marker, line = MAP_STYLES[method]
+        px = parameters.split(" (")[0]
+        top.axhline(mean, color=color, ls=line, lw=1, label=f"{method[11:]} {px}: mean")
+        bottom.plot([], [], marker, color=color, label=f"{method[11:]}: mean (filled), max")
+    top.set_xscale("log", base=2)
+    top.set_xticks(levels, [str(n) for n in levels])
+    top.set_xlabel("levels (samples: max(64, 4 x levels))")
+    bottom.set_xscale("log")
+    bottom.set_xlabel("time (ms)")
+    for ax in (top, bottom):
+        ax.set_yscale("log")
+        ax.set_ylabel("hidden-fraction error")
+        ax.grid(True, which="both", alpha=0.3)
+    top.set_title(f"{scene.caster_name}, {scene.light_name}", fontsize=9)
+
+
 def sweep_plot(results, path: Path) -> None:
     """Error against levels (top) and against time (bottom), one column a
     scene, the shadow maps as lines (top) and points (bottom)."""
@@ -469,34 +502,8 @@ def sweep_plot(results, path: Path) -> None:
 
     swept = [(scene, rows, stats) for scene, rows, stats in results if stats["sweep"]]
     figure, axes = plt.subplots(2, len(swept), figsize=(3.6 * len(swept), 6.6), squeeze=False)
-    map_styles = {"shadow map PCF": ("C3", "^", "--"), "shadow map PCSS": ("C1", "v", "-.")}
     for column, (scene, rows, stats) in enumerate(swept):
-        levelled = [row for row in stats["sweep"] if row[0] > 0]
-        top, bottom = axes[0][column], axes[1][column]
-        levels = [row[0] for row in levelled]
-        for ax, xs in ((top, levels), (bottom, [row[2] * 1e3 for row in levelled])):
-            ax.plot(xs, [r[4] for r in levelled], "s-", color="C0", label="levels: mean")
-            ax.plot(xs, [r[3] for r in levelled], "s:", color="C0", mfc="none", label="levels: max")
-        top.plot(levels, [0.5 / n for n in levels], color="grey", lw=0.8, label="1 / (2 levels)")
-        for method, _, seconds, worst, mean in map_rows(rows, finest=False):
-            color, marker, line = map_styles[method]
-            bottom.plot(seconds * 1e3, mean, marker, color=color)
-            bottom.plot(seconds * 1e3, worst, marker, color=color, mfc="none")
-        for method, parameters, _, _, mean in map_rows(rows):
-            color, marker, line = map_styles[method]
-            px = parameters.split(" (")[0]
-            top.axhline(mean, color=color, ls=line, lw=1, label=f"{method[11:]} {px}: mean")
-            bottom.plot([], [], marker, color=color, label=f"{method[11:]}: mean (filled), max")
-        top.set_xscale("log", base=2)
-        top.set_xticks(levels, [str(n) for n in levels])
-        top.set_xlabel("levels (samples: max(64, 4 x levels))")
-        bottom.set_xscale("log")
-        bottom.set_xlabel("time (ms)")
-        for ax in (top, bottom):
-            ax.set_yscale("log")
-            ax.set_ylabel("hidden-fraction error")
-            ax.grid(True, which="both", alpha=0.3)
-        top.set_title(f"{scene.caster_name}, {scene.light_name}", fontsize=9)
+        sweep_column(axes[0][column], axes[1][column], scene, rows, stats["sweep"])
     # every column draws the same kinds: the first's top, and its bottom's map points
     top_handles, top_labels = axes[0][0].get_legend_handles_labels()
     bottom_handles, bottom_labels = axes[1][0].get_legend_handles_labels()
@@ -645,28 +652,65 @@ texels in front of it.
 {sweep_section(results, settings)}"""
 
 
-def sweep_figures(results) -> dict[str, str]:
-    """The sweep's figures the reading quotes: for each number of levels, the
-    range over the scenes of its mean error, max error and time, and the
-    same of the finest shadow map's (PCF or PCSS, the better) mean error."""
+def spread(values, form: str) -> str:
+    """The range of ``values`` formatted by ``form`` ("low to high", or one value)."""
+    low, high = format(min(values), form), format(max(values), form)
+    return low if low == high else f"{low} to {high}"
 
-    def spread(values, form: str) -> str:
-        low, high = min(values), max(values)
-        return (
-            format(low, form)
-            if format(low, form) == format(high, form)
-            else (f"{format(low, form)} to {format(high, form)}")
-        )
 
-    swept = [(rows, stats["sweep"]) for _, rows, stats in results if stats["sweep"]]
-    figures: dict[str, str] = defaultdict(lambda: "n/a")  # a level not swept (a short run)
-    for levels in sorted({row[0] for _, sweep_rows in swept for row in sweep_rows}):
-        chosen = [row for _, sweep_rows in swept for row in sweep_rows if row[0] == levels]
+def map_match(scene: Scene, rows, sweep_rows) -> str:
+    """The fewest levels whose mean error is at most the finest shadow map's
+    (the better of PCF and PCSS), with both errors and times."""
+    name = f"{scene.caster_name.split(' ')[0]} under the {scene.light_name.split(' 1')[0]}"
+    best = min(map_rows(rows), key=lambda row: row[4])
+    close = [row for row in sweep_rows if row[0] > 0 and row[4] <= best[4]]
+    if not close:
+        return f"{name}, none (the map's {best[4]:.4f})"
+    levels, _, seconds, _, mean = close[0]
+    return (
+        f"{name}, {levels} levels ({mean:.4f} against {best[4]:.4f}; "
+        f"{seconds * 1e3:,.0f} against {best[2] * 1e3:,.0f} ms)"
+    )
+
+
+def level_figures(sweep_rows) -> dict[str, str]:
+    """For each number of levels in ``sweep_rows`` (all scenes' rows), the
+    range over the scenes of its mean error, max error and time."""
+    figures = {}
+    for levels in sorted({row[0] for row in sweep_rows}):
+        chosen = [row for row in sweep_rows if row[0] == levels]
         figures[f"mean {levels}"] = spread([row[4] for row in chosen], ".4f")
         figures[f"max {levels}"] = spread([row[3] for row in chosen], ".3f")
         figures[f"ms {levels}"] = spread([row[2] * 1e3 for row in chosen], ",.0f")
-    best = [min(row[4] for row in map_rows(rows)) for rows, _ in swept if map_rows(rows)]
-    figures["map mean"] = spread(best, ".4f") if best else "n/a"
+    return figures
+
+
+def fraction_figures(swept) -> dict[str, str]:
+    """``.fraction``'s mean error at the most samples and its time as a share
+    of the most levels' time, as ranges over the scenes."""
+    pairs = []
+    for _, rows, sweep_rows in swept:
+        fractions = [row for row in rows if row[0] == "shadowgeo fraction"]
+        if fractions:
+            pairs.append((fractions[-1], sweep_rows[-1]))
+    if not pairs:
+        return {}
+    return {
+        "fraction mean": spread([fraction[4] for fraction, _ in pairs], ".4f"),
+        "fraction share": spread([fraction[2] / most[2] for fraction, most in pairs], ".2f"),
+    }
+
+
+def sweep_figures(results) -> dict[str, str]:
+    """The sweep's figures the reading quotes (:func:`level_figures`,
+    :func:`map_match`, :func:`fraction_figures`); "n/a" for any other key
+    (a level not swept in a short run)."""
+    swept = [(scene, rows, stats["sweep"]) for scene, rows, stats in results if stats["sweep"]]
+    figures: dict[str, str] = defaultdict(lambda: "n/a")
+    figures.update(level_figures([row for _, _, sweep_rows in swept for row in sweep_rows]))
+    matches = [map_match(*found) for found in swept if map_rows(found[1])]
+    figures["match"] = "; ".join(matches) or "n/a"
+    figures.update(fraction_figures(swept))
     return figures
 
 
@@ -701,13 +745,15 @@ runs evenly, by 1/(4n) on average, so the mean error halves with each doubling o
 {f[f"mean {last}"]} at {last}, a little over 1/(4n) where the samples add theirs. The largest
 error follows 1/(2n) down to 16 levels ({f["max 16"]}) and then the samples' error
 ({f[f"max {last}"]} at {last} levels with 256 samples). The umbra and penumbra alone err by
-{f["mean 0"]} on average. The finest shadow map's mean error ({f["map mean"]}, the better of
-PCF and PCSS) is matched by 4 to 8 levels and passed at 16, in {f["ms 16"]} ms. Beyond 16
-levels the time grows fast ({f[f"ms {last}"]} ms at {last}): each level is one more threshold
-cut from the samples' cover, whose arrangement grows with the square of the samples, and the
-icosphere's many silhouette edges make that cover large. Levels are for baking graded
-transparency, where 8 to 16 are what a viewer can show; for the fraction at points,
-`.fraction` reaches the same error at 256 samples in a fraction of the time (table above).
+{f["mean 0"]} on average. Against the finest shadow map (the better of PCF and PCSS by mean
+error), the fewest levels as close on average, and their time against the map's: {f["match"]}.
+Past 16 levels the time grows fast ({f[f"ms {last}"]} ms at {last}): each level is one more
+threshold cut from the samples' cover, whose arrangement grows with the square of the samples
+(doubled at 32 and again at 64), and the icosphere's many silhouette edges make that cover
+large. Levels are for baking graded transparency, where 8 to 16 are what a viewer shows; for
+the fraction at points, `.fraction` at {max(settings["samples"])} samples (table above) errs by
+{f["fraction mean"]} on average, under {last} levels' {f[f"mean {last}"]}, in
+{f["fraction share"]} of their time.
 """
 
 
