@@ -742,16 +742,17 @@ Reading the sweep: the levels' error is their rounding and their samples' error 
 Rounding to the nearest 1/n errs by at most 1/(2n) and, over a penumbra where the fraction
 runs evenly, by 1/(4n) on average, so the mean error halves with each doubling of the levels:
 {f[f"mean {first}"]} at {first} levels, {f["mean 8"]} at 8, {f["mean 16"]} at 16,
-{f[f"mean {last}"]} at {last}, a little over 1/(4n) where the samples add theirs. The largest
-error follows 1/(2n) down to 16 levels ({f["max 16"]}) and then the samples' error
-({f[f"max {last}"]} at {last} levels with 256 samples). The umbra and penumbra alone err by
+{f[f"mean {last}"]} at {last}, close to 1/(4n) and a little over it from 16 levels on, where
+the samples add theirs. The largest error is about 1/(2n) plus the samples' own (0.04 to 0.06
+at 64 samples, table above): {f[f"max {first}"]} at {first} levels, {f["max 16"]} at 16,
+{f[f"max {last}"]} at {last} with 256 samples. The umbra and penumbra alone err by
 {f["mean 0"]} on average. Against the finest shadow map (the better of PCF and PCSS by mean
 error), the fewest levels as close on average, and their time against the map's: {f["match"]}.
 Past 16 levels the time grows fast ({f[f"ms {last}"]} ms at {last}): each level is one more
 threshold cut from the samples' cover, whose arrangement grows with the square of the samples
 (doubled at 32 and again at 64), and the icosphere's many silhouette edges make that cover
-large. Levels are for baking graded transparency, where 8 to 16 are what a viewer shows; for
-the fraction at points, `.fraction` at {max(settings["samples"])} samples (table above) errs by
+large. Levels are for baking graded transparency, where a few bands do; for the fraction at
+points, `.fraction` at {max(settings["samples"])} samples (table above) errs by
 {f["fraction mean"]} on average, under {last} levels' {f[f"mean {last}"]}, in
 {f["fraction share"]} of their time.
 """
