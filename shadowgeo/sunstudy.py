@@ -315,6 +315,15 @@ def sun_study(
     >>> study = sun_study(cube, Plane([0, 1, 0]), plot, day, latitude=51.5, longitude=0.0)
     >>> len(study.times), round(sum(study.level_areas().values()), 9)
     (12, 100.0)
+
+    The sun as its 0.53 degree disc, four directions a sample: near the
+    shadow's edges a point sees part of the disc, a quarter hour at a time.
+
+    >>> import math
+    >>> disc = sun_study(cube, Plane([0, 1, 0]), plot, day, latitude=51.5, longitude=0.0,
+    ...                  sun_angle=math.radians(0.53), sun_samples=4)
+    >>> len(disc.shadows), sorted({disc.hours(k) % 1 for k in disc.levels})
+    (48, [0.0, 0.25, 0.5, 0.75])
     """
     step = step or _dt.timedelta(hours=1)
     disc = _Disc.of(sun_angle, sun_samples, up, north)
