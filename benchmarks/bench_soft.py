@@ -27,7 +27,9 @@ import platform
 import subprocess
 import sys
 import time
+from collections import defaultdict
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -47,6 +49,11 @@ from shadowgeo.lights import RectLight  # noqa: E402
 
 TITLE = "## Soft shadows"
 PLOT = HERE.parent / "docs" / "images" / "soft_shadows.png"
+SWEEP_PLOT = HERE.parent / "docs" / "images" / "soft_levels.png"
+# The levels swept, on the cube and icosphere under the rectangle and the 0.53 degree sun.
+SWEEP_LEVELS = (2, 4, 8, 16, 32, 64)
+# A sweep call taking this long (seconds) is timed once, not three times.
+SWEEP_ONCE = 1.0
 GROUND = sg.Plane([0, 1, 0], 0.0)
 SUN_DIRECTION = np.array([0.3, -1.0, 0.2]) / np.linalg.norm([0.3, -1.0, 0.2])
 
@@ -88,6 +95,12 @@ def lights() -> dict[str, tuple[object, softref.Rect | softref.Sun]]:
             softref.Sun(SUN_DIRECTION, angle),
         )
     return found
+
+
+def swept(scene: Scene) -> bool:
+    """Whether the levels are swept for ``scene``: the rectangle and the real
+    sun (the 5 degree sun only shows the penumbra at the scene's scale)."""
+    return not scene.light_name.startswith("sun disc 5")
 
 
 def scenes() -> list[Scene]:
@@ -213,6 +226,48 @@ def map_taps(scene: Scene, camera, offsets: np.ndarray) -> np.ndarray:
     return per_pixel * np.column_stack([world @ camera.right, world @ camera.up])
 
 
+def sweep_samples(levels: int) -> int:
+    """The samples for ``levels`` levels: the default 64, or four a level
+    when more (the levels' bands are 1 / levels wide, so the samples' own
+    error must stay under half of that for the bands to mean anything)."""
+    return max(sg.soft.DEFAULT_SAMPLES, 4 * levels)
+
+
+def umbra_penumbra_values(soft, points: np.ndarray) -> np.ndarray:
+    """(p,) 1 in the umbra, 1/2 in the rest of the penumbra, 0 outside: the
+    hidden fraction the umbra and penumbra alone can give."""
+    flat = GROUND.to_2d(points)
+    value = np.zeros(len(points))
+    for share, shadow in ((0.5, soft.penumbra), (1.0, soft.umbra)):
+        region = shadow.to_shapely()
+        value[shapely.contains_xy(region, flat[:, 0], flat[:, 1])] = share
+    return value
+
+
+def sweep(scene: Scene, points: np.ndarray, reference: np.ndarray, levels_swept, repeat: int):
+    """Rows (levels, samples, seconds, max error, mean error) of
+    ``soft_shadow`` at each of ``levels_swept`` (samples by
+    :func:`sweep_samples`), first the umbra/penumbra row (levels 0). Times:
+    the median of ``repeat`` calls, or one call when it takes
+    :data:`SWEEP_ONCE` or more."""
+    rows = []
+    for levels in levels_swept:
+        count = sweep_samples(levels)
+        call = partial(
+            sg.soft_shadow, scene.caster, scene.light, GROUND, levels=levels, samples=count
+        )
+        start = time.perf_counter()
+        soft = call()
+        seconds = time.perf_counter() - start
+        if seconds < SWEEP_ONCE and repeat > 1:  # the slow calls are timed once
+            seconds, soft = median_time(call, repeat)
+        if not rows:
+            estimate = umbra_penumbra_values(soft, points)
+            rows.append((0, count, seconds, *errors(estimate, reference)))
+        rows.append((levels, count, seconds, *errors(level_values(soft, points), reference)))
+    return rows
+
+
 def errors(estimate: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
     """The largest error over all points, and the mean over the true penumbra."""
     error = np.abs(estimate - reference)
@@ -220,9 +275,20 @@ def errors(estimate: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
     return float(error.max()), float(error[penumbra].mean())
 
 
-def measure(scene: Scene, n_points: int, side: int, resolutions, samples, taps: int, seed: int):
+def measure(
+    scene: Scene,
+    n_points: int,
+    side: int,
+    resolutions,
+    samples,
+    taps: int,
+    seed: int,
+    levels_swept=(),
+    sweep_repeat: int = 1,
+):
     """Rows (method, parameters, seconds, max error, mean error) and the
-    areas and reference statistics of one scene."""
+    areas and reference statistics of one scene; with ``levels_swept``, the
+    :func:`sweep` rows over the same points in ``stats["sweep"]``."""
     rng = np.random.default_rng(seed)
     vertices = np.asarray(scene.caster.vertices, dtype=float)
     hard, band = neighbourhood(scene.reference, vertices)
@@ -314,6 +380,7 @@ def measure(scene: Scene, n_points: int, side: int, resolutions, samples, taps: 
         "reference seconds": reference_seconds,
         "ray check": (disagree, len(check) * len(check_offsets)),
         "penumbra points": int(np.sum((reference > 0) & (reference < 1))),
+        "sweep": sweep(scene, points, reference, levels_swept, sweep_repeat),
     }
     return rows, stats
 
@@ -353,6 +420,104 @@ def area_table(results) -> str:
             f"{stats['noise max']:.4f}, {stats['noise mean']:.5f} | {wrong} of {total:,} |"
         )
     return "\n".join(lines)
+
+
+def sweep_label(levels: int) -> str:
+    return "umbra / penumbra (1, 1/2, 0)" if levels == 0 else f"{levels} levels"
+
+
+def map_rows(rows, finest: bool = True):
+    """The scene's shadow-map rows: PCF and PCSS at the finest resolution,
+    or all of them."""
+    maps = [row for row in rows if row[0].startswith("shadow map")]
+    if not finest or not maps:
+        return maps
+    last = maps[-1][1].split(" px")[0]
+    return [row for row in maps if row[1].split(" px")[0] == last]
+
+
+def sweep_table(results) -> str:
+    lines = [
+        "| scene | estimate | samples | time (ms) | max error | mean error |",
+        "|---|---|---:|---:|---:|---:|",
+    ]
+    for scene, rows, stats in results:
+        if not stats["sweep"]:
+            continue
+        name = f"{scene.caster_name}, {scene.light_name}"
+        for levels, count, seconds, worst, mean in stats["sweep"]:
+            lines.append(
+                f"| {name} | {sweep_label(levels)} | {count} | {seconds * 1e3:,.1f} | "
+                f"{worst:.3f} | {mean:.4f} |"
+            )
+        for method, parameters, seconds, worst, mean in map_rows(rows):
+            label = f"{method[len('shadow map ') :]} {parameters.split(' (')[0]}"
+            lines.append(
+                f"| {name} | shadow map {label} | | {seconds * 1e3:,.1f} | {worst:.3f} | "
+                f"{mean:.4f} |"
+            )
+    return "\n".join(lines)
+
+
+MAP_STYLES = {"shadow map PCF": ("C3", "^", "--"), "shadow map PCSS": ("C1", "v", "-.")}
+
+
+def sweep_column(top, bottom, scene: Scene, rows, sweep_rows) -> None:
+    """One scene's sweep: error against levels on ``top`` (the finest maps'
+    mean error as lines), against time on ``bottom`` (every map as points)."""
+    levelled = [row for row in sweep_rows if row[0] > 0]
+    levels = [row[0] for row in levelled]
+    for ax, xs in ((top, levels), (bottom, [row[2] * 1e3 for row in levelled])):
+        ax.plot(xs, [r[4] for r in levelled], "s-", color="C0", label="levels: mean")
+        ax.plot(xs, [r[3] for r in levelled], "s:", color="C0", mfc="none", label="levels: max")
+    top.plot(levels, [0.5 / n for n in levels], color="grey", lw=0.8, label="1 / (2 levels)")
+    for method, _, seconds, worst, mean in map_rows(rows, finest=False):
+        color, marker, _ = MAP_STYLES[method]
+        bottom.plot(seconds * 1e3, mean, marker, color=color)
+        bottom.plot(seconds * 1e3, worst, marker, color=color, mfc="none")
+    for method, parameters, _, _, mean in map_rows(rows):
+        color, marker, line = MAP_STYLES[method]
+        px = parameters.split(" (")[0]
+        top.axhline(mean, color=color, ls=line, lw=1, label=f"{method[11:]} {px}: mean")
+        bottom.plot([], [], marker, color=color, label=f"{method[11:]}: mean (filled), max")
+    top.set_xscale("log", base=2)
+    top.set_xticks(levels, [str(n) for n in levels])
+    top.set_xlabel("levels (samples: max(64, 4 x levels))")
+    bottom.set_xscale("log")
+    bottom.set_xlabel("time (ms)")
+    for ax in (top, bottom):
+        ax.set_yscale("log")
+        ax.set_ylabel("hidden-fraction error")
+        ax.grid(True, which="both", alpha=0.3)
+    top.set_title(f"{scene.caster_name}, {scene.light_name}", fontsize=9)
+
+
+def sweep_plot(results, path: Path) -> None:
+    """Error against levels (top) and against time (bottom), one column a
+    scene, the shadow maps as lines (top) and points (bottom)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    swept = [(scene, rows, stats) for scene, rows, stats in results if stats["sweep"]]
+    figure, axes = plt.subplots(2, len(swept), figsize=(3.6 * len(swept), 6.6), squeeze=False)
+    for column, (scene, rows, stats) in enumerate(swept):
+        sweep_column(axes[0][column], axes[1][column], scene, rows, stats["sweep"])
+    # every column draws the same kinds: the first's top, and its bottom's map points
+    top_handles, top_labels = axes[0][0].get_legend_handles_labels()
+    bottom_handles, bottom_labels = axes[1][0].get_legend_handles_labels()
+    figure.legend(
+        top_handles + bottom_handles[2:],
+        top_labels + bottom_labels[2:],
+        loc="lower center",
+        ncol=4,
+        fontsize=8,
+    )
+    figure.tight_layout(rect=(0, 0.1, 1, 1))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=100)
+    plt.close(figure)
 
 
 def plot(results, path: Path) -> None:
@@ -484,6 +649,7 @@ point, the mean of the blocking texels it sees: right for the cube, whose penumb
 the edges of its flat faces (under the rectangle about as close as shadowgeo's 64 samples, in
 ten to fifteen times their time), wrong for the sphere, whose silhouette lies deeper than the
 texels in front of it.
+{sweep_section(results, settings)}
 
 ### Soft shadows in the converter
 
@@ -507,13 +673,127 @@ the spot light at its centre (cut-off 90 degrees), with a note; USD keeps both.
 """
 
 
+def spread(values, form: str) -> str:
+    """The range of ``values`` formatted by ``form`` ("low to high", or one value)."""
+    low, high = format(min(values), form), format(max(values), form)
+    return low if low == high else f"{low} to {high}"
+
+
+def map_match(scene: Scene, rows, sweep_rows) -> str:
+    """The fewest levels whose mean error is at most the finest shadow map's
+    (the better of PCF and PCSS), with both errors and times."""
+    name = f"{scene.caster_name.split(' ')[0]} under the {scene.light_name.split(' 1')[0]}"
+    best = min(map_rows(rows), key=lambda row: row[4])
+    close = [row for row in sweep_rows if row[0] > 0 and row[4] <= best[4]]
+    if not close:
+        return f"{name}, none (the map's {best[4]:.4f})"
+    levels, _, seconds, _, mean = close[0]
+    return (
+        f"{name}, {levels} levels ({mean:.4f} against {best[4]:.4f}; "
+        f"{seconds * 1e3:,.0f} against {best[2] * 1e3:,.0f} ms)"
+    )
+
+
+def level_figures(sweep_rows) -> dict[str, str]:
+    """For each number of levels in ``sweep_rows`` (all scenes' rows), the
+    range over the scenes of its mean error, max error and time."""
+    figures = {}
+    for levels in sorted({row[0] for row in sweep_rows}):
+        chosen = [row for row in sweep_rows if row[0] == levels]
+        figures[f"mean {levels}"] = spread([row[4] for row in chosen], ".4f")
+        figures[f"max {levels}"] = spread([row[3] for row in chosen], ".3f")
+        figures[f"ms {levels}"] = spread([row[2] * 1e3 for row in chosen], ",.0f")
+    return figures
+
+
+def fraction_figures(swept) -> dict[str, str]:
+    """``.fraction``'s mean error at the most samples and its time as a share
+    of the most levels' time, as ranges over the scenes."""
+    pairs = []
+    for _, rows, sweep_rows in swept:
+        fractions = [row for row in rows if row[0] == "shadowgeo fraction"]
+        if fractions:
+            pairs.append((fractions[-1], sweep_rows[-1]))
+    if not pairs:
+        return {}
+    return {
+        "fraction mean": spread([fraction[4] for fraction, _ in pairs], ".4f"),
+        "fraction share": spread([fraction[2] / most[2] for fraction, most in pairs], ".2f"),
+    }
+
+
+def sweep_figures(results) -> dict[str, str]:
+    """The sweep's figures the reading quotes (:func:`level_figures`,
+    :func:`map_match`, :func:`fraction_figures`); "n/a" for any other key
+    (a level not swept in a short run)."""
+    swept = [(scene, rows, stats["sweep"]) for scene, rows, stats in results if stats["sweep"]]
+    figures: dict[str, str] = defaultdict(lambda: "n/a")
+    figures.update(level_figures([row for _, _, sweep_rows in swept for row in sweep_rows]))
+    matches = [map_match(*found) for found in swept if map_rows(found[1])]
+    figures["match"] = "; ".join(matches) or "n/a"
+    figures.update(fraction_figures(swept))
+    return figures
+
+
+def sweep_section(results, settings: dict) -> str:
+    if not any(stats["sweep"] for _, _, stats in results):
+        return ""
+    levels = settings["levels"]
+    f = sweep_figures(results)
+    first, last = min(levels), max(levels)
+    return f"""
+### Levels {first} to {last}
+
+The same points and reference, `soft_shadow(caster, light, ground, levels=n, samples=s)` for
+n = {", ".join(str(n) for n in levels)} on the two casters under the rectangle and the
+0.53 degree sun, with s = max(64, 4 n) samples: the default 64 up to 16 levels, then four a
+level (128 at 32, 256 at 64), so that the samples' own error (about 0.02 at most with 256,
+above) stays near the half-band 1 / (2 n) the levels round to. The estimate is the fraction of
+the level each point lies in, as above. The first row of each scene is what the umbra and
+penumbra alone say: 1 in the umbra, 1/2 in the rest of the penumbra, 0 outside (its time: the
+call at {first} levels, which makes them). Last in each scene, the shadow maps at the finest
+resolution of the table above. Times: the median of {settings["sweep repeat"]} calls, or one call
+when it takes {SWEEP_ONCE:g} s or more.
+
+{sweep_table(results)}
+
+![hidden-fraction error against levels and time](../docs/images/{SWEEP_PLOT.name})
+
+Reading the sweep: the levels' error is their rounding and their samples' error together.
+Rounding to the nearest 1/n errs by at most 1/(2n) and, over a penumbra where the fraction
+runs evenly, by 1/(4n) on average, so the mean error halves with each doubling of the levels:
+{f[f"mean {first}"]} at {first} levels, {f["mean 8"]} at 8, {f["mean 16"]} at 16,
+{f[f"mean {last}"]} at {last}, close to 1/(4n) and a little over it from 16 levels on, where
+the samples add theirs. The largest error is about 1/(2n) plus the samples' own (0.04 to 0.06
+at 64 samples, table above): {f[f"max {first}"]} at {first} levels, {f["max 16"]} at 16,
+{f[f"max {last}"]} at {last} with 256 samples. The umbra and penumbra alone err by
+{f["mean 0"]} on average. Against the finest shadow map (the better of PCF and PCSS by mean
+error), the fewest levels as close on average, and their time against the map's: {f["match"]}.
+Past 16 levels the time grows fast ({f[f"ms {last}"]} ms at {last}): each level is one more
+threshold cut from the samples' cover, whose arrangement grows with the square of the samples
+(doubled at 32 and again at 64), and the icosphere's many silhouette edges make that cover
+large. Levels are for baking graded transparency, where a few bands do; for the fraction at
+points, `.fraction` at {max(settings["samples"])} samples (table above) errs by
+{f["fraction mean"]} on average, under {last} levels' {f[f"mean {last}"]}, in
+{f["fraction share"]} of their time.
+"""
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="few points, small maps; print only")
     parser.add_argument("--no-write", action="store_true", help="print only")
     args = parser.parse_args()
     settings = (
-        {"points": 1000, "side": 24, "resolutions": (128, 512), "samples": (16, 64), "taps": 8}
+        {
+            "points": 1000,
+            "side": 24,
+            "resolutions": (128, 512),
+            "samples": (16, 64),
+            "taps": 8,
+            "levels": (2, 8),
+            "sweep repeat": 1,
+        }
         if args.quick
         else {
             "points": 20000,
@@ -521,6 +801,8 @@ def main() -> None:
             "resolutions": (256, 1024, 2048),
             "samples": (16, 64, 256),
             "taps": 16,
+            "levels": SWEEP_LEVELS,
+            "sweep repeat": 3,
         }
     )
     begin = time.perf_counter()
@@ -534,6 +816,8 @@ def main() -> None:
             settings["samples"],
             settings["taps"],
             seed=index,
+            levels_swept=settings["levels"] if swept(scene) else (),
+            sweep_repeat=settings["sweep repeat"],
         )
         results.append((scene, rows, stats))
         print(f"{scene.caster_name}, {scene.light_name}: {stats}", flush=True)
@@ -544,8 +828,9 @@ def main() -> None:
     if args.quick or args.no_write:
         return
     plot(results, PLOT)
+    sweep_plot(results, SWEEP_PLOT)
     write_section(TITLE, text)
-    print(f"wrote {PLOT} and the section {TITLE[3:]!r} of benchmarks/REPORT.md")
+    print(f"wrote {PLOT}, {SWEEP_PLOT} and the section {TITLE[3:]!r} of benchmarks/REPORT.md")
 
 
 if __name__ == "__main__":

@@ -38,7 +38,7 @@ from shadowgeo.scene.sunlight import (
     study_scene,
     sunlight_shapes,
 )
-from shadowgeo.sunstudy import days_table
+from shadowgeo.sunstudy import SUN_DISC_SAMPLES, days_table
 
 from .common import (
     ProgressBar,
@@ -54,6 +54,7 @@ examples:
   shadowgeo sun courtyard.x3d --at 51.5,-0.12                  (21 March: BRE's 2-hour test)
   shadowgeo sun courtyard.x3d map.x3d --at 51.5,-0.12 --date 2026-06-21
   shadowgeo sun courtyard.x3d --at 51.5,-0.12 --region -3,-3,3,-3,3,3,-3,3
+  shadowgeo sun courtyard.x3d --at 51.5,-0.12 --sun-angle 0.53         (the sun's disc)
   shadowgeo sun garden.glb --at -33.9,151.2 --date 2026-06-21          (Sydney, midwinter)
   shadowgeo sun city.glb --at 40.7,-74.0 --date 2026-01-01 --days 365 --hours 4
   shadowgeo sun city.glb --at 40.7,-74.0 --days 30 --scheduler tcp://10.0.0.5:8786
@@ -67,6 +68,9 @@ outline, or the scene's plan for a plane, or the --region given (corners
 in plan, dropped onto the floor's plane). Every other face casts. The sun is
 sampled every --every minutes (60), each sample standing for the minutes
 around it, over whole days of local mean time (the longitude's hour zone).
+--sun-angle 0.53 takes the sun as the disc it is: a point near a shadow
+edge that sees part of it counts that part of the sample (durations become
+fractional there, in steps of the sample's time over --sun-samples).
 It prints, for one day, the area sunlit for each duration and the share of
 the region with at least --hours of sun (2); for several days, that share
 day by day. OUT (one day) is the scene with the day's map of sunlight hours
@@ -132,6 +136,23 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         default=60,
         metavar="MINUTES",
         help="minutes between sun samples (default 60)",
+    )
+    parser.add_argument(
+        "--sun-angle",
+        type=sun_angle_argument,
+        default=0.0,
+        metavar="DEG",
+        help="the sun's angular diameter in degrees: 0.53 is the real sun's, whose disc "
+        "half hidden near a shadow edge counts half (fractional hours there); 0, the "
+        "default, is a point sun",
+    )
+    parser.add_argument(
+        "--sun-samples",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help=f"directions each sample's sun disc is spread over (default {SUN_DISC_SAMPLES}; "
+        "the time grows with about the cube of N times the samples)",
     )
     parser.add_argument(
         "--hours",
@@ -226,6 +247,19 @@ def clock_times_argument(text: str) -> list[dt.time]:
         ) from None
 
 
+def sun_angle_argument(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 <= value < 90:
+        raise argparse.ArgumentTypeError(
+            f"expected the sun's angular diameter in degrees, 0 to under 90 (the sun's is "
+            f"0.53), got {text!r}"
+        )
+    return value
+
+
 def hours_argument(text: str) -> float:
     try:
         value = float(text)
@@ -305,7 +339,8 @@ def run(args: argparse.Namespace) -> int:
         ((day, study),) = studies.days.items()
         print(
             f"{args.input}: {len(study.times)} of {len(times)} samples with the sun up on "
-            f"{day} at {place} (UTC{_offset(zone)}); region {study.area:.6g} square units\n"
+            f"{day} at {place} (UTC{_offset(zone)}){_disc(args, study.disc_samples)}; "
+            f"region {study.area:.6g} square units\n"
         )
         print("| sunlight (h) | area | share of the region |")
         print("|---:|---:|---:|")
@@ -327,7 +362,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     print(
         f"{args.input}: {len(studies)} days from {first} at {place} "
-        f"(UTC{_offset(zone)}), every {args.every} min\n"
+        f"(UTC{_offset(zone)}), every {args.every} min"
+        f"{_disc(args, args.sun_samples)}\n"
     )
     print(days_table(studies, hours))
     shares = [summary.fraction_meeting(hours) for summary in studies.values()]
@@ -373,6 +409,8 @@ def _study(
         scheduler=scheduler,
         progress=bar,
         summaries=args.days > 1,  # a table only: no day's polygons kept
+        sun_angle=math.radians(args.sun_angle),
+        sun_samples=args.sun_samples,
     )
 
 
@@ -394,7 +432,7 @@ def _write_outputs(
             vertices,
             faces,
             hours,
-            most_hours=study.hours(len(study.times)),
+            most_hours=study.hours(len(study.times) * study.disc_samples),
             groups=groups,
             names=names,
             up="Z" if scene.up_index == 2 else "Y",
@@ -484,12 +522,20 @@ def _plot(
         args.plot,
         [(hours, region) for (hours, _), region in zip(levels, moved_levels, strict=True)],
         moved_roofs,
-        most_hours=study.hours(len(study.times)),
+        most_hours=study.hours(len(study.times) * study.disc_samples),
         title=f"{args.input.name}: hours of sunlight on {day}",
         axis_names=names,
         degrees=degrees,
     )
     print(f"wrote {args.plot}: the map of sunlight hours")
+
+
+def _disc(args: argparse.Namespace, samples: int | None) -> str:
+    """How the sun was taken, for the header: nothing for a point sun."""
+    if not args.sun_angle:
+        return ""
+    count = SUN_DISC_SAMPLES if samples is None else samples
+    return f", the sun a {args.sun_angle:g} degree disc of {count} directions"
 
 
 def _offset(zone: dt.timezone) -> str:

@@ -105,3 +105,31 @@ def test_section_writes_the_table_and_links_the_plot():
     assert text.startswith(bench_soft.TITLE + "\n")
     assert "| icosphere (320 faces), rect 1.5 x 1 at height 6 | shadow map PCSS |" in text
     assert f"../docs/images/{bench_soft.PLOT.name}" in text
+
+
+def test_levels_sweep_rows_table_and_section():
+    found = scene("cube", "rect")
+    rows, stats = bench_soft.measure(
+        found, 300, 8, (32,), (16,), 4, seed=5, levels_swept=(2, 16), sweep_repeat=1
+    )
+    levels = [row[0] for row in stats["sweep"]]
+    samples = [row[1] for row in stats["sweep"]]
+    assert levels == [0, 2, 16] and samples == [64, 64, 64]
+    assert bench_soft.sweep_samples(32) == 128 and bench_soft.sweep_samples(64) == 256
+    # finer levels round the fraction less: 16 levels err by far less on average than 2
+    (_, _, _, _, mean_two), (_, _, _, worst, mean_sixteen) = stats["sweep"][1:]
+    assert mean_sixteen < mean_two / 3 and worst < 0.25
+    settings = {
+        "points": 300,
+        "side": 8,
+        "resolutions": (32,),
+        "samples": (16,),
+        "taps": 4,
+        "levels": (2, 16),
+        "sweep repeat": 1,
+    }
+    text = bench_soft.section([(found, rows, stats)], "tiny", settings, 1.0)
+    assert "### Levels 2 to 16" in text
+    assert "| cube, rect 1.5 x 1 at height 6 | 16 levels | 64 |" in text
+    assert "| cube, rect 1.5 x 1 at height 6 | shadow map PCSS 32 px | |" in text
+    assert f"../docs/images/{bench_soft.SWEEP_PLOT.name}" in text

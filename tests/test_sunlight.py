@@ -183,6 +183,31 @@ def test_shadowgeo_sun_prints_the_table_and_writes_the_map(capsys, tmp_path, x3d
     assert x3d_schema_errors(out, x3d_schema) == []
 
 
+def test_shadowgeo_sun_with_the_suns_disc_counts_fractions_of_hours(capsys, tmp_path):
+    args = ["--at", "51.5,-0.12", "--date", "2026-03-21"]
+    out = tmp_path / "map.x3d"
+    done = in_process(
+        capsys, "sun", COURTYARD, out, *args, "--sun-angle", "0.53", "--sun-samples", "4"
+    )
+    assert done.returncode == 0, done.stderr
+    assert "the sun a 0.53 degree disc of 4 directions" in done.stdout
+    rows = [line.split("|") for line in done.stdout.splitlines() if line.startswith("| ")]
+    durations = [float(row[1]) for row in rows if "%" in row[3]]
+    assert any(hours % 1 == 0.25 for hours in durations)  # a quarter of the disc seen
+    assert all((hours * 4) % 1 == 0 for hours in durations)
+    assert sum(float(row[2]) for row in rows if "%" in row[3]) == pytest.approx(144.0, rel=1e-5)
+    point = in_process(capsys, "sun", COURTYARD, *args)
+    assert "disc" not in point.stdout
+    # the disc moves the share meeting 2 hours only by its thin penumbrae
+    shares = [
+        float(line.split("%")[0]) for run in (done, point) for line in run.stdout.splitlines()
+        if "of the region has at least" in line
+    ]  # fmt: skip
+    assert shares[0] == pytest.approx(shares[1], abs=1.0)
+    maps = [s for s in sg.load(out).shapes if s.role == "shadow"]
+    assert any(s.name.endswith("_25h") or "_75h" in s.name for s in maps)
+
+
 def test_shadowgeo_sun_over_days_is_the_same_on_dask(capsys):
     args = ["sun", COURTYARD, "--at", "51.5,-0.12", "--date", "2026-06-20", "--days", "2"]
     serial = in_process(capsys, *args, "--serial")
@@ -203,6 +228,9 @@ def test_shadowgeo_sun_usage(capsys, tmp_path):
         ["sun", str(COURTYARD), "--at", "51,0", "--hours", "25"],
         ["sun", str(COURTYARD), str(tmp_path / "m.x3d"), "--at", "51,0", "--days", "2"],
         ["sun", str(COURTYARD), "--at", "51,0", "--serial", "--workers", "2"],
+        ["sun", str(COURTYARD), "--at", "51,0", "--sun-angle", "-0.5"],
+        ["sun", str(COURTYARD), "--at", "51,0", "--sun-angle", "90"],
+        ["sun", str(COURTYARD), "--at", "51,0", "--sun-angle", "0.53", "--sun-samples", "0"],
     ):
         with pytest.raises(SystemExit) as exit_:
             main(args)

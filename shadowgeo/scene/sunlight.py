@@ -346,12 +346,16 @@ def study_scene(
     scheduler: Any = None,
     progress: Callable[[int, int], None] | None = None,
     summaries: bool = False,
+    sun_angle: float = 0.0,
+    sun_samples: int | None = None,
 ) -> tuple[SceneStudy, Any]:
     """:func:`shadowgeo.sun_study_by_day` of a scene's casters over its floor
     (:func:`scene_study`): one study a calendar day (in ``tz``) of ``times``,
     serially or on Dask (``scheduler``, as there), as :class:`SunStudies`;
     with ``summaries``, :func:`shadowgeo.sun_summaries_by_day`'s
     ``{day: DaySummary}`` instead (no polygons kept: for many days).
+    ``sun_angle`` and ``sun_samples``: the sun's disc, as
+    :func:`shadowgeo.sun_study` takes it (0: a point sun).
 
     ``latitude`` and ``longitude`` default to the scene's :attr:`Scene.site`
     (city data whose file names its CRS), which also gives true north in the
@@ -381,6 +385,8 @@ def study_scene(
         tz=tz,
         scheduler=scheduler,
         progress=progress,
+        sun_angle=sun_angle,
+        sun_samples=sun_samples,
     )
     return inputs, studies
 
@@ -395,7 +401,8 @@ def level_meshes(
     triangulated. Levels with no triangle are left out."""
     plane = study.plane
     lift = _LIFT * scale * plane.normal
-    most = max(len(study.times), 1)  # every sample sunlit: the brightest
+    # every sample sunlit (every direction of each one's sun disc): the brightest
+    most = max(len(study.times) * study.disc_samples, 1)
     meshes = []
     for k, parts in sorted(study.levels.items()):
         if not parts:
