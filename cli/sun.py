@@ -345,11 +345,11 @@ def run(args: argparse.Namespace) -> int:
         print("| sunlight (h) | area | share of the region |")
         print("|---:|---:|---:|")
         slivers = 0
-        for duration, area in study.level_areas().items():
+        for duration, area in _duration_rows(study):
             if area <= SLIVER * study.area:
                 slivers += 1
                 continue
-            print(f"| {duration:g} | {area:.6g} | {area / study.area:.2%} |")
+            print(f"| {duration} | {area:.6g} | {area / study.area:.2%} |")
         if slivers:
             print(
                 f"\n({slivers} duration(s) covering under {SLIVER:g} of the region, slivers "
@@ -528,6 +528,32 @@ def _plot(
         degrees=degrees,
     )
     print(f"wrote {args.plot}: the map of sunlight hours")
+
+
+def _duration_rows(study: shadowgeo.SunStudy) -> list[tuple[str, float]]:
+    """The day's table rows, (duration, area): one per duration for a point
+    sun; for a sun disc, whose partly covered samples make a duration of
+    every fraction of a step, one per step ("2 to 3": at least 2 h, under 3),
+    so a day is a dozen rows, not hundreds."""
+    areas = study.level_areas()
+    if study.disc_samples == 1:
+        return [(f"{duration:g}", area) for duration, area in areas.items()]
+    per = study.disc_samples
+    step = study.hours(per)  # one whole sample's hours
+    rows: dict[int, float] = {}
+    for duration, area in areas.items():
+        whole = round(duration / step * per) // per  # the whole samples it holds
+        rows[whole] = rows.get(whole, 0.0) + area
+    last = len(study.times)
+    return [
+        (
+            f"{study.hours(whole * per):g}"
+            if whole == last
+            else f"{study.hours(whole * per):g} to {study.hours((whole + 1) * per):g}",
+            area,
+        )
+        for whole, area in sorted(rows.items())
+    ]
 
 
 def _disc(args: argparse.Namespace, samples: int | None) -> str:
