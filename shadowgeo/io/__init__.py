@@ -315,9 +315,16 @@ def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
 
     A light's size (a sun's ``angle``, a sphere light's ``source_radius``)
     goes only into USD, which has fields for it; X3D and glTF have none, and
-    a note in ``scene.warnings`` names the lights whose size is left out."""
+    a note in ``scene.warnings`` names the lights whose size is left out.
+
+    An error of the file system (a full disk, a missing or read-only folder)
+    is a :class:`SceneError` naming ``path``, its ``OSError`` as the cause;
+    ``path`` is then left as it was."""
     module = _module(WRITERS, path, "write")
-    module.write(scene, Path(path), **options)
+    try:
+        module.write(scene, Path(path), **options)
+    except OSError as error:
+        raise SceneError(f"cannot write: {error.strerror or error}", path=str(path)) from error
     if WRITERS[_suffix(path)] != "usd_write":
         sized = [_size_text(i, light) for i, light in enumerate(scene.lights)]
         left = [text for text in sized if text]
