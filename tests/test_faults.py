@@ -346,9 +346,7 @@ def test_a_full_disk_under_the_sun_study_and_a_batch(capsys, tmp_path, full_disk
     assert not out.exists() and not jobs[0][1].exists() and temporaries(tmp_path) == []
 
 
-def test_the_library_save_turns_a_full_disk_into_an_error_naming_the_output(
-    tmp_path, full_disk
-):
+def test_the_library_save_turns_a_full_disk_into_an_error_naming_the_output(tmp_path, full_disk):
     scene = sg.load(COURTYARD)
     out = tmp_path / "courtyard.glb"
     with pytest.raises(sg.SceneError) as raised:
