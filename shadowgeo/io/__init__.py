@@ -52,6 +52,7 @@ references to other files.
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import math
 import os
@@ -289,6 +290,8 @@ def load(
     if problem is not None:
         raise SceneError("no such file" if problem == "not found" else problem, path=str(path))
     module = importlib.import_module(f"{__name__}.{reader_name(path)}")
+    if "max_triangles" in inspect.signature(module.read).parameters:
+        options["max_triangles"] = max_triangles  # it estimates them before building them
     scene: Scene = module.read(path, **options)
     limits.check_triangles(sum(shape.n_faces for shape in scene.shapes), str(path), max_triangles)
     return scene
