@@ -206,7 +206,13 @@ MEMORY_BUDGET = MAX_TRIANGLES * BYTES_PER_TRIANGLE
 
 
 def check_expansion(
-    triangles: int, path: str, node: str | None, line: int | None, limit: int | None = None
+    triangles: int,
+    path: str,
+    node: str | None,
+    line: int | None,
+    limit: int | None = None,
+    *,
+    through: str = "DEF/USE, prototypes or Inline",
 ) -> None:
     """Raise :class:`SceneError` for ``node`` of ``path`` when what it expands
     to, an estimated ``triangles``, would pass the memory budget (``limit``
@@ -224,7 +230,7 @@ def check_expansion(
     limit = MAX_TRIANGLES if limit is None else int(limit)
     if triangles > limit:
         raise SceneError(
-            f"with this the scene expands (through DEF/USE, prototypes or Inline) to about "
+            f"with this the scene expands (through {through}) to about "
             f"{triangles:.2g} "
             f"triangles (~{triangles * BYTES_PER_TRIANGLE / 1e9:.3g} GB at "
             f"{BYTES_PER_TRIANGLE} bytes each), more than the budget of {limit:,} "

@@ -8,6 +8,9 @@ an n x n grid)."""
 
 from __future__ import annotations
 
+import base64
+import json
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -18,7 +21,7 @@ from needs import SHARED, absent
 import shadowgeo as sg
 from cli.main import main
 from shadowgeo import limits
-from shadowgeo.io import x3d_budget, x3d_read
+from shadowgeo.io import gltf_read, x3d_budget, x3d_read
 
 USE_CHAIN = SHARED / "findings" / "outsider-2" / "budget_cpu_USE_chain_under_node_limit"
 
@@ -210,3 +213,62 @@ def test_a_walk_at_the_visit_budget_is_read(tmp_path, monkeypatch, work):
     with pytest.raises(sg.SceneError, match="Scene: .* 2,345 grouping nodes and Shapes"):
         sg.load(scene)
     assert work == {"walked": 0, "built": 0}
+
+
+# -- glTF: meshes counted once for each node that uses them -----------------------------------
+
+
+def square_gltf(path: Path, n_nodes: int) -> Path:
+    """A glTF of one two-triangle square (4 float32 points, 6 uint16
+    indices, in a data: buffer) that ``n_nodes`` nodes use."""
+    points = struct.pack("<12f", 0, 0, 0, 1, 0, 0, 1, 0, 1, 0, 0, 1)
+    indices = struct.pack("<6H", 0, 1, 2, 0, 2, 3)
+    data = points + indices
+    document = {
+        "asset": {"version": "2.0"},
+        "buffers": [
+            {
+                "byteLength": len(data),
+                "uri": "data:application/octet-stream;base64," + base64.b64encode(data).decode(),
+            }
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 12},
+        ],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": 5126,
+                "count": 4,
+                "type": "VEC3",
+                "min": [0, 0, 0],
+                "max": [1, 0, 1],
+            },
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"},
+        ],  # fmt: skip
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "nodes": [
+            {"mesh": 0, "name": f"tile{i}", "translation": [2 * i, 0, 0]} for i in range(n_nodes)
+        ],
+        "scenes": [{"nodes": list(range(n_nodes))}],
+        "scene": 0,
+    }
+    path.write_text(json.dumps(document))
+    return path
+
+
+def test_a_gltf_mesh_used_by_many_nodes_is_refused_before_it_is_decoded(tmp_path, monkeypatch):
+    scene = square_gltf(tmp_path / "tiles.gltf", 50)
+    loaded = sg.load(scene, max_triangles=100)  # 50 nodes x 2 triangles, at the budget
+    assert len(loaded.shapes) == 50 and sum(s.n_faces for s in loaded.shapes) == 100
+
+    def decoded(*args, **kwargs):
+        raise AssertionError("decoded past the budget")
+
+    monkeypatch.setattr(gltf_read, "plain_meshes", decoded)
+    monkeypatch.setattr(gltf_read, "load_scene", decoded)
+    with pytest.raises(sg.SceneError) as raised:
+        sg.load(scene, max_triangles=99)
+    assert raised.value.node == "nodes[49] 'tile49'"  # the node whose mesh passes it
+    assert "about 1e+02 triangles" in str(raised.value) and "through nodes" in str(raised.value)
