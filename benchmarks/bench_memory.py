@@ -246,9 +246,10 @@ def section(
         *["| " + " | ".join(row) + " |" for row in rows],
         "",
         f"What a triangle costs at the peak: {per_triangle}. "
-        "`BYTES_PER_TRIANGLE` (400) is set above it, so the budget's 2 GB holds the "
-        "5,000,000 triangles of the triangle budget with room for the arrays a conversion "
-        "holds briefly.",
+        "`BYTES_PER_TRIANGLE` (400) is that figure, so the budget's 2 GB is what the "
+        "5,000,000 triangles of the triangle budget take as separate meshes. Copies of one "
+        "mesh (DEF/USE, glTF nodes) share its arrays and take less (the nest just under the "
+        "budget), but the estimate counts them all: the work on shadows grows with each.",
         "",
     ]
     return "\n".join(lines)
