@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING
 
 import shadowgeo
 
-from .inputs import ENCODINGS, EXAMPLES, MESH_SUFFIXES, SHARED, WRITTEN
+from .inputs import CITY_SEED_OBJECTS, ENCODINGS, EXAMPLES, MESH_SUFFIXES, SHARED, WRITTEN
+from .mutate_city import subset
 
 if TYPE_CHECKING:
     from .pool import Pool
@@ -19,6 +20,8 @@ if TYPE_CHECKING:
 
 def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, list]:
     """Seed files per encoding: (name, content). Missing folders are skipped.
+    City files (``.city.json``, ``.geojson``) seed their own encodings, a big
+    one cut to its first objects.
     glb, glTF, USD and mesh (OBJ, STL, PLY, OFF) seeds are the X3D ones written by
     shadowgeo (meshes by trimesh), in a worker
     (the parent never starts USD's threads, so forking stays safe)."""
@@ -29,6 +32,13 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
             suffix = path.suffix.lower().lstrip(".")
             if path.is_file() and suffix in ENCODINGS and path.stat().st_size <= max_bytes:
                 seeds[suffix].append((str(path), path.read_bytes()))
+            city = _city_encoding(path)
+            if city in encodings and path.is_file():
+                data = path.read_bytes()
+                if len(data) > max_bytes:  # a big file: its first objects
+                    data = subset(data, city, CITY_SEED_OBJECTS) or b""
+                if 0 < len(data) <= max_bytes:
+                    seeds[city].append((str(path), data))
     for name, data in seeds["x3d"]:
         seeds["x3dz"].append((name + ".gz", gzip.compress(data, mtime=0)))
     for name, data in seeds["json"]:
@@ -45,6 +55,13 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
     for encoding in WRITTEN:  # made in completion order: sort, to replay
         seeds[encoding] = sorted(seeds[encoding])
     return dict(seeds)
+
+
+def _city_encoding(path: Path) -> str | None:
+    name = path.name.lower()
+    if name.endswith(".city.json"):
+        return "cityjson"
+    return "geojson" if name.endswith(".geojson") else None
 
 
 def run_seed(task: dict, scratch: Path) -> dict:
