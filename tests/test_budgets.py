@@ -272,3 +272,51 @@ def test_a_gltf_mesh_used_by_many_nodes_is_refused_before_it_is_decoded(tmp_path
         sg.load(scene, max_triangles=99)
     assert raised.value.node == "nodes[49] 'tile49'"  # the node whose mesh passes it
     assert "about 1e+02 triangles" in str(raised.value) and "through nodes" in str(raised.value)
+
+
+# -- USD: every instance of a mesh counted before its arrays are read ------------------------
+
+
+def instanced_usda(path: Path, n_instances: int) -> Path:
+    """A quad (one face of 4 corners: 2 triangles) under /Proto, and
+    ``n_instances`` instanceable references to it: n + 1 quads drawn."""
+    lines = [
+        "#usda 1.0",
+        'def Xform "Proto" {',
+        '    def Mesh "quad" {',
+        "        int[] faceVertexCounts = [4]",
+        "        int[] faceVertexIndices = [0, 1, 2, 3]",
+        "        point3f[] points = [(0, 0, 0), (1, 0, 0), (1, 0, 1), (0, 0, 1)]",
+        "    }",
+        "}",
+    ]
+    for index in range(n_instances):
+        lines.append(
+            f'def Xform "copy{index}" (\n    instanceable = true\n    references = </Proto>\n) {{'
+        )
+        lines.append(f"    double3 xformOp:translate = ({2 * index + 2}, 0, 0)")
+        lines.append('    uniform token[] xformOpOrder = ["xformOp:translate"]')
+        lines.append("}")
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_usd_instances_past_the_budget_are_refused_before_their_arrays_are_read(
+    tmp_path, monkeypatch
+):
+    usd_read = pytest.importorskip("shadowgeo.io.usd_read")
+    scene = instanced_usda(tmp_path / "copies.usda", 30)
+    loaded = sg.load(scene, max_triangles=62)  # 31 quads of 2 triangles: at the budget
+    assert len(loaded.shapes) == 31 and sum(s.n_faces for s in loaded.shapes) == 62
+    read = []
+    original = usd_read._read_mesh
+
+    def counted(scene, prim, *args):
+        read.append(str(prim.GetPath()))
+        return original(scene, prim, *args)
+
+    monkeypatch.setattr(usd_read, "_read_mesh", counted)
+    with pytest.raises(sg.SceneError) as raised:
+        sg.load(scene, max_triangles=61)
+    assert "copy29" in raised.value.node and "through instancing" in str(raised.value)
+    assert len(read) == 30 and not any("copy29" in prim for prim in read)
