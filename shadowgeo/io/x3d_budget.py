@@ -147,31 +147,41 @@ _GEOMETRY_IN = etree.XPath(
 )
 
 
+# Triangles a geometry node makes: a fixed count, or index (or point) tokens per triangle.
+_FIXED = {"Box": 12, "Sphere": CURVED_TRIANGLES, "Cone": CURVED_TRIANGLES}
+_FIXED["Cylinder"] = CURVED_TRIANGLES
+_INDEX_TOKENS = {"IndexedTriangleSet": 3, "IndexedQuadSet": 2}
+_INDEX_TOKENS |= {"IndexedTriangleFanSet": 1, "IndexedTriangleStripSet": 1}
+_POINTS = {"TriangleSet": 3, "QuadSet": 2, "TriangleFanSet": 1, "TriangleStripSet": 1}
+
+
 def _triangles(context: Context, element: Element) -> int:
     """Triangles one geometry node makes at most (0 for any other node)."""
     tag = local_name(element)
-    if tag == "Box":
-        return 12
-    if tag in ("Sphere", "Cone", "Cylinder"):
-        return CURVED_TRIANGLES
+    if tag in _FIXED:
+        return _FIXED[tag]
     if tag == "IndexedFaceSet":
         return _polygon_triangles(element.get("coordIndex") or "")
-    if tag in ("IndexedTriangleSet", "IndexedQuadSet"):
-        return tokens(element.get("index") or "") // (3 if tag == "IndexedTriangleSet" else 2)
-    if tag in ("IndexedTriangleFanSet", "IndexedTriangleStripSet"):
-        return tokens(element.get("index") or "")
-    if tag in ("TriangleSet", "QuadSet", "TriangleFanSet", "TriangleStripSet"):
-        return _points(context, element) // (3 if tag == "TriangleSet" else 1)
+    if tag in _INDEX_TOKENS:
+        return tokens(element.get("index") or "") // _INDEX_TOKENS[tag]
+    if tag in _POINTS:
+        return _points(context, element) // _POINTS[tag]
     if tag == "ElevationGrid":
         columns, rows = _integer(element, "xDimension"), _integer(element, "zDimension")
         return 2 * max(columns - 1, 0) * max(rows - 1, 0)
     if tag == "Extrusion":
-        spine = tokens(element.get("spine") or "0 0 0 0 1 0") // 3
-        section = tokens(element.get("crossSection") or "1 1 1 -1 -1 -1 -1 1 1 1") // 2
-        if spine * section > MAX_EXTRUSION_POINTS:
-            return 0  # refused by its own budget: the Shape is skipped unbuilt, with a note
-        return 2 * spine * section + 2 * section  # the side, and two caps
+        return _extrusion_triangles(element)
     return 0
+
+
+def _extrusion_triangles(element: Element) -> int:
+    """An Extrusion's side and two caps; 0 past its own vertex budget (it is
+    then skipped unbuilt, with a note)."""
+    spine = tokens(element.get("spine") or "0 0 0 0 1 0") // 3
+    section = tokens(element.get("crossSection") or "1 1 1 -1 -1 -1 -1 1 1 1") // 2
+    if spine * section > MAX_EXTRUSION_POINTS:
+        return 0
+    return 2 * spine * section + 2 * section
 
 
 def _polygon_triangles(text: str) -> int:

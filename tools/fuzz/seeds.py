@@ -32,13 +32,7 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
             suffix = path.suffix.lower().lstrip(".")
             if path.is_file() and suffix in ENCODINGS and path.stat().st_size <= max_bytes:
                 seeds[suffix].append((str(path), path.read_bytes()))
-            city = _city_encoding(path)
-            if city in encodings and path.is_file():
-                data = path.read_bytes()
-                if len(data) > max_bytes:  # a big file: its first objects
-                    data = subset(data, city, CITY_SEED_OBJECTS) or b""
-                if 0 < len(data) <= max_bytes:
-                    seeds[city].append((str(path), data))
+    seeds.update(_city_seeds(roots, max_bytes, encodings))
     for name, data in seeds["x3d"]:
         seeds["x3dz"].append((name + ".gz", gzip.compress(data, mtime=0)))
     for name, data in seeds["json"]:
@@ -57,11 +51,28 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
     return dict(seeds)
 
 
-def _city_encoding(path: Path) -> str | None:
+def _city_seeds(roots: list[Path], max_bytes: int, encodings) -> dict[str, list]:
+    """Seeds of the city encodings asked for: (name, content) per encoding."""
+    seeds: dict[str, list[tuple[str, bytes]]] = defaultdict(list)
+    for root in roots:
+        for path in sorted(root.rglob("*")):
+            city = _city_seed(path, max_bytes)
+            if city is not None and city[0] in encodings:
+                seeds[city[0]].append((str(path), city[1]))
+    return seeds
+
+
+def _city_seed(path: Path, max_bytes: int) -> tuple[str, bytes] | None:
+    """(encoding, seed) of a city file: the file, or a big one's first objects."""
     name = path.name.lower()
-    if name.endswith(".city.json"):
-        return "cityjson"
-    return "geojson" if name.endswith(".geojson") else None
+    encoding = "cityjson" if name.endswith(".city.json") else None
+    encoding = "geojson" if name.endswith(".geojson") else encoding
+    if encoding is None or not path.is_file():
+        return None
+    data = path.read_bytes()
+    if len(data) > max_bytes:
+        data = subset(data, encoding, CITY_SEED_OBJECTS) or b""
+    return (encoding, data) if 0 < len(data) <= max_bytes else None
 
 
 def run_seed(task: dict, scratch: Path) -> dict:
