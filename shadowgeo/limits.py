@@ -62,7 +62,8 @@ scene memory           2 GB            the triangles of a scene x 400 bytes
                        (5M triangles)  (BYTES_PER_TRIANGLE), estimated before they
                                        are built: X3D through DEF/USE, PROTO and
                                        Inline (shadowgeo.io.x3d_budget), glTF
-                                       meshes through their nodes
+                                       meshes through their nodes, USD meshes
+                                       through their instances
 PROTO expansions       10,000          ProtoInstance copies per document
 lights                 10,000          lights of a scene as read, every copy
                                        counted (X3D, glTF, USD)
@@ -200,7 +201,8 @@ MAX_TRIANGLES = 5_000_000
 # written; measured by benchmarks/bench_memory.py). The triangle budget is the
 # memory budget in triangles; the readers estimate a scene's triangles before
 # they build them (X3D: through DEF/USE, prototypes and Inline; glTF: meshes
-# through their nodes) and refuse, naming the node, what would pass it.
+# through their nodes; USD: meshes through their instances) and refuse,
+# naming the node, what would pass it.
 BYTES_PER_TRIANGLE = 400
 MEMORY_BUDGET = MAX_TRIANGLES * BYTES_PER_TRIANGLE
 

@@ -56,8 +56,10 @@ Rules the reader follows, where X3D leaves a choice:
 - **Refused with a SceneError** (what cannot be read as a scene at all):
   malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D,
   DEF/USE, prototype, EXTERNPROTO and Inline cycles, expansion bombs (DEF/USE,
-  Inline and prototypes beyond 2 million nodes, prototypes beyond 10,000
-  copies), transforms that overflow.
+  Inline and prototypes beyond 2 million nodes, 500,000 grouping nodes and
+  Shapes to walk or the triangle budget, all estimated before the walk by
+  :mod:`.x3d_budget`; prototypes beyond 10,000 copies), transforms that
+  overflow.
 """
 
 from __future__ import annotations
