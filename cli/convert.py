@@ -53,7 +53,7 @@ same bytes either way. Outputs keep the input's format unless --format names
 one (inputs with no writer, such as .obj, become .glb).
 Exit codes: 0 done, 1 bad input or an output that cannot be written (one line
 naming the file and what is wrong; in a batch, any file failed), 2 bad usage,
-130 interrupted (Ctrl-C, SIGINT), 143 stopped by SIGTERM. Every output is
+130 interrupted (Ctrl-C, SIGINT), 143 stopped by SIGTERM, 129 by SIGHUP. Every output is
 written atomically: whole, or not there (a file it replaces is left as it was).
 """
 

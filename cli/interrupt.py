@@ -1,14 +1,15 @@
-"""SIGINT and SIGTERM unwind the command as Ctrl-C does, so what is half
-written is removed on the way out.
+"""SIGINT, SIGTERM and SIGHUP unwind the command as Ctrl-C does, so what
+is half written is removed on the way out.
 
 Python turns SIGINT into ``KeyboardInterrupt``, but SIGTERM (``kill``, a batch
-system's time limit, ``docker stop``) ends the process where it stands: a
-temporary file being written stays behind. :func:`signals_unwind` raises
-:class:`Terminated`, a ``KeyboardInterrupt``, for SIGTERM, so every
+system's time limit, ``docker stop``) and SIGHUP (the terminal or the ssh
+session closed) end the process where it stands: a temporary file being
+written stays behind. :func:`signals_unwind` raises :class:`Terminated`, a
+``KeyboardInterrupt``, for SIGTERM and SIGHUP, so every
 ``finally`` and ``except BaseException`` runs for both (the atomic writers
 delete their temporary file, a LocalCluster is shut down) and ``main`` exits
-130 for SIGINT, 143 for SIGTERM (128 + the signal's number, as a shell
-reports a process the signal ended).
+130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP (128 + the signal's
+number, as a shell reports a process the signal ended).
 
 A second signal while the first unwinds ends the process at once, with the
 signal's default action: for someone who does not want to wait for the clean
@@ -24,7 +25,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from types import FrameType
 
-SIGNALS = (signal.SIGINT, signal.SIGTERM)
+SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
 class Terminated(KeyboardInterrupt):
@@ -36,15 +37,16 @@ class Terminated(KeyboardInterrupt):
 
 
 def exit_code(interrupt: KeyboardInterrupt) -> int:
-    """128 + the signal's number: 130 for SIGINT (or Ctrl-C), 143 for SIGTERM."""
+    """128 + the signal's number: 130 for SIGINT (or Ctrl-C), 143 for SIGTERM,
+    129 for SIGHUP."""
     signum = interrupt.signum if isinstance(interrupt, Terminated) else signal.SIGINT
     return 128 + int(signum)
 
 
 @contextmanager
 def signals_unwind() -> Iterator[None]:
-    """Inside the block, SIGINT raises ``KeyboardInterrupt`` and SIGTERM
-    :class:`Terminated`; a second one of either ends the process at once.
+    """Inside the block, SIGINT raises ``KeyboardInterrupt`` and SIGTERM or
+    SIGHUP :class:`Terminated`; a second one of any ends the process at once.
     The handlers in place before are restored on the way out. Only the main
     thread may install handlers: elsewhere the block changes nothing."""
     received: list[int] = []

@@ -8,7 +8,8 @@ imports another's module but ``convert``, which hands its batch form to
 ``batch.py``.
 
 Exit codes: 0 done, 1 bad input (or an output that cannot be written), 2 bad
-usage; 130 interrupted (SIGINT, Ctrl-C), 143 terminated (SIGTERM), after
+usage; 130 interrupted (SIGINT, Ctrl-C), 143 terminated (SIGTERM), 129 hung up
+(SIGHUP), after
 removing what was half written (:mod:`cli.interrupt`).
 """
 

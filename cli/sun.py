@@ -86,7 +86,7 @@ plane at their median height over the file's plan, the rest casting.
 Several days run on a Dask LocalCluster started here (--workers N), on a
 running cluster (--scheduler ADDRESS) or here (--serial); the results are the
 same either way. Exit codes: 0 done, 1 bad input or OUT cannot be written,
-2 bad usage, 130 interrupted (Ctrl-C, SIGINT), 143 stopped by SIGTERM; OUT is
+2 bad usage, 130 interrupted (Ctrl-C, SIGINT), 143 stopped by SIGTERM, 129 by SIGHUP; OUT is
 written atomically: whole, or not there.
 """
 

@@ -157,9 +157,9 @@ def save_output(scene: Scene, target: Path) -> None:
     whole or as it was, with no temporary file beside it."""
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        save(scene, target)
     except OSError as error:
         raise SceneError(f"cannot write: {error.strerror or error}", path=str(target)) from None
+    save(scene, target)
 
 
 def convert_files(

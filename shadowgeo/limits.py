@@ -55,6 +55,15 @@ entity declarations    none            X3D: ``<!ENTITY`` in the bytes is refused
                                        before libxml2 parses anything
 nodes                  2,000,000       X3D nodes after DEF/USE, Inline and PROTO
                                        expansion, counted over every copy
+node visits            500,000         X3D grouping nodes and Shapes the reader
+                                       walks, every copy counted, estimated
+                                       before the walk (about 10 us each)
+scene memory           2 GB            the triangles of a scene x 400 bytes
+                       (5M triangles)  (BYTES_PER_TRIANGLE), estimated before they
+                                       are built: X3D through DEF/USE, PROTO and
+                                       Inline (shadowgeo.io.x3d_budget), glTF
+                                       meshes through their nodes, USD meshes
+                                       through their instances
 PROTO expansions       10,000          ProtoInstance copies per document
 lights                 10,000          lights of a scene as read, every copy
                                        counted (X3D, glTF, USD)
@@ -129,6 +138,12 @@ MAX_XML_DEPTH = 256
 # limit to hold this many levels above its caller's stack).
 MAX_NESTING = MAX_XML_DEPTH
 MAX_NODES = 2_000_000
+# Grouping nodes and Shapes the X3D reader walks one by one, every copy
+# counted, estimated before the walk (shadowgeo.io.x3d_budget): about 10 us
+# each even when they hold nothing, so 5 CPU-s at most. A 1.1 KB chain of
+# empty Transforms, each USEing the one before ten times, asked for 1.1M
+# (under MAX_NODES) and took 19-36 CPU-s.
+MAX_VISITS = 500_000
 MAX_PROTO_EXPANSIONS = 10_000
 # Lights of a scene as read: each is a node of the output, and a fuzzed file
 # that copies one 30,000 times took 11 CPU-s to read and write.
@@ -181,6 +196,52 @@ MAX_TEMPLATE_POINTS = 5_000_000
 # about 15 CPU seconds and 2 GB; load(..., max_triangles=N) or
 # ``convert --max-triangles N`` raises it for a trusted file.
 MAX_TRIANGLES = 5_000_000
+# The peak memory of one scene's conversion, and what it is made of: a scene's
+# triangles each take about this many bytes at the peak (read, shadows added,
+# written; measured by benchmarks/bench_memory.py). The triangle budget is the
+# memory budget in triangles; the readers estimate a scene's triangles before
+# they build them (X3D: through DEF/USE, prototypes and Inline; glTF: meshes
+# through their nodes; USD: meshes through their instances) and refuse,
+# naming the node, what would pass it.
+BYTES_PER_TRIANGLE = 400
+MEMORY_BUDGET = MAX_TRIANGLES * BYTES_PER_TRIANGLE
+
+
+def check_expansion(
+    triangles: int,
+    path: str,
+    node: str | None,
+    line: int | None,
+    limit: int | None = None,
+    *,
+    through: str = "DEF/USE, prototypes or Inline",
+) -> None:
+    """Raise :class:`SceneError` for ``node`` of ``path`` when what it expands
+    to, an estimated ``triangles``, would pass the memory budget (``limit``
+    triangles, default :data:`MAX_TRIANGLES`), before it is built.
+
+    Examples
+    --------
+    >>> check_expansion(12, "nest.x3d", "Transform DEF='L0'", 2)
+    >>> check_expansion(12 * 10**10, "nest.x3d", "Transform DEF='L10'", 12)
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    shadowgeo.errors.SceneError: nest.x3d line 12, Transform DEF='L10': ... 1.2e+11 triangles ...
+    """
+    limit = MAX_TRIANGLES if limit is None else int(limit)
+    if triangles > limit:
+        raise SceneError(
+            f"with this the scene expands (through {through}) to about "
+            f"{triangles:.2g} "
+            f"triangles (~{triangles * BYTES_PER_TRIANGLE / 1e9:.3g} GB at "
+            f"{BYTES_PER_TRIANGLE} bytes each), more than the budget of {limit:,} "
+            f"(~{limit * BYTES_PER_TRIANGLE / 1e9:.3g} GB; shadowgeo.limits.MAX_TRIANGLES; "
+            "--max-triangles N raises it for a trusted file); refused before it is built",
+            path=path,
+            line=line,
+            node=node,
+        )
 
 
 def check_triangles(count: int, path: str, limit: int | None = None) -> None:

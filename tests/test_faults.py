@@ -206,10 +206,13 @@ def need_proc() -> None:
         absent("the signal tests read /proc/PID/status (Linux) to know when main() is running")
 
 
-# -- SIGINT and SIGTERM ---------------------------------------------------------------------
+# -- SIGINT, SIGTERM and SIGHUP -------------------------------------------------------------
+
+# SIGHUP (a closed terminal or ssh session) is handled as SIGTERM is: exit 129.
+SIGNALS = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP]
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("signum", SIGNALS, ids=[s.name for s in SIGNALS])
 def test_a_signal_at_random_points_leaves_the_output_whole_or_absent(tmp_path, big, signum):
     need_proc()
     rng = random.Random(3400 + signum)  # fixed: the same points on every run
@@ -225,13 +228,13 @@ def test_a_signal_at_random_points_leaves_the_output_whole_or_absent(tmp_path, b
         if process.returncode == 0:  # finished before the signal
             assert_whole(out, big[".x3d"])
         else:
-            last = "interrupted" if signum == signal.SIGINT else "stopped by SIGTERM"
+            last = "interrupted" if signum == signal.SIGINT else f"stopped by {signum.name}"
             assert stderr.splitlines()[-1] == f"shadowgeo: {last}", stderr
         assert_whole_or_absent(out, big[".x3d"])
 
 
 @pytest.mark.parametrize("suffix", [".x3d", ".glb"])
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("signum", SIGNALS, ids=[s.name for s in SIGNALS])
 def test_a_signal_while_the_output_is_written_removes_the_temporary_file(
     tmp_path, big, signum, suffix
 ):
@@ -341,6 +344,24 @@ def test_a_full_disk_under_the_sun_study_and_a_batch(capsys, tmp_path, full_disk
     (outcome,) = convert_files(jobs, ConvertOptions())
     assert outcome.error == f"{jobs[0][1]}: cannot write: No space left on device"
     assert not out.exists() and not jobs[0][1].exists() and temporaries(tmp_path) == []
+
+
+def test_the_library_save_turns_a_full_disk_into_an_error_naming_the_output(tmp_path, full_disk):
+    scene = sg.load(COURTYARD)
+    out = tmp_path / "courtyard.glb"
+    with pytest.raises(sg.SceneError) as raised:
+        sg.save(scene, out)
+    assert str(raised.value) == f"{out}: cannot write: No space left on device"
+    assert isinstance(raised.value.__cause__, OSError)  # the cause is kept for a debugger
+    assert not out.exists() and temporaries(tmp_path) == []
+
+
+def test_the_library_save_into_a_missing_folder_names_the_output(tmp_path):
+    # the temporary file beside it is what the system refuses: the error names the output
+    out = tmp_path / "no such folder" / "courtyard.x3d"
+    with pytest.raises(sg.SceneError, match="cannot write: No such file or directory") as raised:
+        sg.save(sg.load(COURTYARD), out)
+    assert raised.value.path == str(out) and str(raised.value).startswith(f"{out}: ")
 
 
 @pytest.mark.parametrize("suffix", ENCODINGS)

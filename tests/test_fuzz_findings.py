@@ -501,3 +501,25 @@ def test_at_most_the_casting_budget_of_lights_cast_with_a_note(monkeypatch):
     assert any("3 lights would cast; the first 2" in note for note in result.warnings)
     named = sg.add_shadows(_lit_scene(3), lights=["lamp0", "lamp1", "lamp2"], surfaces=False)
     assert len({shape.group for shape in named.shapes_with_role("shadow")}) == 3
+
+
+def test_a_geojson_field_name_that_is_not_utf8_is_one_line_naming_the_file(tmp_path):
+    # The campaign's geojson mutant 38 at seed 34 (one byte set in a property
+    # name): pyogrio raised a UnicodeDecodeError traceback from its field names.
+    square = "[[[0, 0], [0, 10], [10, 10], [10, 0], [0, 0]]]"
+    feature = (
+        '{"type": "Feature", "properties": {"h\x80eight": 6.0, "height": 6.0}, '
+        f'"geometry": {{"type": "Polygon", "coordinates": {square}}}}}'
+    )
+    path = tmp_path / "footprints.geojson"
+    path.write_bytes(
+        ('{"type": "FeatureCollection", "features": [' + feature + "]}").encode("latin-1")
+    )
+    assert b"\x80" in path.read_bytes()
+    out = io.StringIO()
+    with contextlib.redirect_stderr(out):
+        code = cli_main(["info", str(path)])
+    assert code == 1
+    assert out.getvalue() == (
+        f"shadowgeo info: {path}: a field name or text value is not UTF-8 (byte 0x80); refused\n"
+    )

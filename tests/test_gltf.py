@@ -256,12 +256,12 @@ def test_failed_write_leaves_the_existing_file_untouched(tmp_path, monkeypatch):
         raise OSError("disk full")
 
     monkeypatch.setattr(Path, "write_bytes", write_half_then_fail)
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(sg.SceneError, match="scene.glb: cannot write: disk full"):
         sg.save(_scene(), path)
     monkeypatch.undo()
     assert path.read_bytes() == b"previous contents"
     assert [p.name for p in tmp_path.iterdir()] == ["scene.glb"]
-    with pytest.raises(OSError, match="disk full"):
+    with pytest.raises(sg.SceneError, match="new.glb: cannot write: disk full"):
         monkeypatch.setattr(Path, "write_bytes", write_half_then_fail)
         sg.save(_scene(), tmp_path / "new.glb")
     monkeypatch.undo()

@@ -39,6 +39,13 @@ Usage::
 
 Exit status 1 when any run failed. ``kill -USR1`` the campaign to stop starting
 runs early and go on to shrinking and the summary.
+
+The whole campaign on one commit, every encoding (X3D XML, x3dz, ClassicVRML,
+VRML 97, X3D JSON, glTF, glb, USD text and crate, OBJ, STL, PLY, OFF,
+CityJSON, GeoJSON footprints) and the geometry cases, its table written into
+``benchmarks/REPORT.md``'s "Fuzz campaign" section::
+
+    python tools/fuzz.py campaign --per-encoding 10000 --geometry 20000 --seed 7 --jobs 2
 """
 
 from __future__ import annotations
@@ -47,6 +54,7 @@ import argparse
 import os
 import signal
 import sys
+import time
 from pathlib import Path
 
 # One BLAS thread a worker: the campaign runs --jobs workers side by side.
@@ -60,10 +68,56 @@ sys.path[:0] = [str(Path(__file__).resolve().parent), str(Path(__file__).resolve
 from fuzz.campaign import campaign  # noqa: E402
 from fuzz.inputs import ENCODINGS  # noqa: E402
 from fuzz.pool import Pool  # noqa: E402
+from fuzz.report import TITLE, commit, section, write_section  # noqa: E402
 from fuzz.seeds import collect_seeds  # noqa: E402
+
+REPORT = Path(__file__).resolve().parents[1] / "benchmarks" / "REPORT.md"
+
+
+def whole_campaign(argv: list[str]) -> int:
+    """``campaign``: every encoding and the geometry cases on this commit, then
+    the table in REPORT.md (``fuzz.report``)."""
+    parser = argparse.ArgumentParser(
+        prog="fuzz.py campaign", description="the whole campaign on one commit, reported"
+    )
+    parser.add_argument("--per-encoding", type=int, default=10_000)
+    parser.add_argument("--geometry", type=int, default=20_000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--out", type=Path, help="default /tmp/shadowgeo-campaign-SEED")
+    parser.add_argument("--report", type=Path, default=REPORT, help="default %(default)s")
+    parser.add_argument("--no-report", action="store_true", help="write no REPORT.md section")
+    parser.add_argument("--encodings", default=",".join(ENCODINGS), help="default: all")
+    args = parser.parse_args(argv)
+    out = args.out or Path(f"/tmp/shadowgeo-campaign-{args.seed}")
+    at = commit()  # the code the runs use (before anything changes meanwhile)
+    started = time.monotonic()
+    code = main(
+        [
+            f"--inputs={args.per_encoding}",
+            f"--geometry={args.geometry}",
+            f"--seed={args.seed}",
+            f"--jobs={args.jobs}",
+            f"--out={out}",
+            f"--encodings={args.encodings}",
+        ]
+    )
+    wall = time.monotonic() - started
+    command = f"python tools/fuzz.py campaign {' '.join(argv)}"
+    text = section(
+        out / "results.jsonl", seed=args.seed, jobs=args.jobs, command=command, wall=wall, at=at
+    )
+    print(text)
+    if not args.no_report:
+        write_section(args.report, text)
+        print(f"wrote the section {TITLE[3:]!r} of {args.report}", file=sys.stderr)
+    return code
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["campaign"]:
+        return whole_campaign(argv[1:])
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--inputs", type=int, default=200, help="mutants per encoding")
     parser.add_argument("--geometry", type=int, default=0, help="random geometry cases")

@@ -52,6 +52,7 @@ references to other files.
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import math
 import os
@@ -289,6 +290,8 @@ def load(
     if problem is not None:
         raise SceneError("no such file" if problem == "not found" else problem, path=str(path))
     module = importlib.import_module(f"{__name__}.{reader_name(path)}")
+    if "max_triangles" in inspect.signature(module.read).parameters:
+        options["max_triangles"] = max_triangles  # it estimates them before building them
     scene: Scene = module.read(path, **options)
     limits.check_triangles(sum(shape.n_faces for shape in scene.shapes), str(path), max_triangles)
     return scene
@@ -319,9 +322,16 @@ def save(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
     the lights whose size is left out. A rectangle or disc light goes into
     them as the spot light at its centre that stands for it
     (:attr:`SceneLight.light`: facing the same way, cut-off angle 90
-    degrees, lighting the half-space the panel lights)."""
+    degrees, lighting the half-space the panel lights).
+
+    An error of the file system (a full disk, a missing or read-only folder)
+    is a :class:`SceneError` naming ``path``, its ``OSError`` as the cause;
+    ``path`` is then left as it was."""
     module = _module(WRITERS, path, "write")
-    module.write(scene, Path(path), **options)
+    try:
+        module.write(scene, Path(path), **options)
+    except OSError as error:
+        raise SceneError(f"cannot write: {error.strerror or error}", path=str(path)) from error
     if WRITERS[_suffix(path)] != "usd_write":
         sized = [_size_text(i, light) for i, light in enumerate(scene.lights)]
         left = [text for text in sized if text]

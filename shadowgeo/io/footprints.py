@@ -66,6 +66,11 @@ def _features(
         raise SceneError(f"cannot read as a GIS layer: {problem}", path=str(path)) from None
     except (pyogrio.errors.FieldError, pyogrio.errors.FeatureError) as problem:
         raise SceneError(f"malformed feature: {problem}", path=str(path)) from None
+    except UnicodeDecodeError as problem:  # a field name or value GDAL hands over undecoded
+        byte = problem.object[problem.start : problem.start + 1].hex()
+        raise SceneError(
+            f"a field name or text value is not UTF-8 (byte 0x{byte}); refused", path=str(path)
+        ) from None
     geometries = shapely.from_wkb(wkb, on_invalid="ignore") if wkb is not None else None
     if geometries is None:
         raise SceneError("the layer has no geometry", path=str(path))

@@ -117,6 +117,42 @@ def _check_references(document: dict[str, Any], path: Path) -> None:
                 raise SceneError(message, path=str(path), node=where)
 
 
+def _check_triangles(document: dict[str, Any], path: Path, limit: int | None) -> None:
+    """Refuse, naming the node, a file whose triangles (each mesh's index or
+    position count over 3, counted for each node that uses it: at most what
+    decoding makes) pass the memory budget, before a buffer is decoded."""
+    accessors = document.get("accessors") or []
+    meshes = document.get("meshes") or []
+
+    def count(index: Any) -> int:
+        accessor = (
+            accessors[index] if isinstance(index, int) and 0 <= index < len(accessors) else {}
+        )
+        value = accessor.get("count", 0) if isinstance(accessor, dict) else 0
+        return value if isinstance(value, int) and value > 0 else 0
+
+    def mesh_triangles(mesh: Any) -> int:
+        primitives = mesh.get("primitives") if isinstance(mesh, dict) else None
+        total = 0
+        for primitive in primitives if isinstance(primitives, list) else []:
+            if not isinstance(primitive, dict) or primitive.get("mode", 4) not in (4, 5, 6):
+                continue  # points and lines make none
+            attributes = primitive.get("attributes")
+            position = attributes.get("POSITION") if isinstance(attributes, dict) else None
+            per_triangle = 3 if primitive.get("mode", 4) == 4 else 1  # strips and fans: 1
+            total += count(primitive.get("indices", position)) // per_triangle
+        return total
+
+    per_mesh = [mesh_triangles(mesh) for mesh in meshes]
+    triangles = 0
+    for index, node in enumerate(document.get("nodes") or []):
+        mesh = node.get("mesh") if isinstance(node, dict) else None
+        if isinstance(mesh, int) and 0 <= mesh < len(per_mesh):
+            triangles += per_mesh[mesh]
+            name = f"nodes[{index}]" + (f" {node.get('name')!r}" if node.get("name") else "")
+            limits.check_expansion(triangles, str(path), name, None, limit, through="nodes")
+
+
 def _check_uris(document: dict[str, Any], path: Path) -> list[str]:
     """Refuse resources that are remote or outside the file's folder, and
     missing buffers; return warnings for missing images (textures, which
@@ -213,13 +249,20 @@ def _material_from_gltf(entry: dict[str, Any]) -> tuple[Material, bool]:
     return material, not entry.get("doubleSided", False)
 
 
-def read(path: str | os.PathLike[str], **options: Any) -> Scene:
+def read(
+    path: str | os.PathLike[str], *, max_triangles: int | None = None, **options: Any
+) -> Scene:
     """Read a glTF 2.0 file into a :class:`Scene`.
 
     Parameters
     ----------
     path : str or Path
         ``.glb`` or ``.gltf``.
+    max_triangles : int, optional
+        The triangle (memory) budget, default
+        :data:`~shadowgeo.limits.MAX_TRIANGLES`: a file whose meshes, counted
+        once for each node that uses them, pass it is refused before a
+        buffer is decoded.
 
     Returns
     -------
@@ -242,6 +285,7 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
         raise SceneError("no such file", path=str(path))
     document, binary = _gltf_document(path)
     warnings = _check_uris(document, path)
+    _check_triangles(document, path, max_triangles)
     scene = Scene(path=str(path), warnings=warnings)
     nodes = document.get("nodes") or []
     plain = plain_meshes(document, binary, path)

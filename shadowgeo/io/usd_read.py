@@ -436,13 +436,21 @@ def _area_light(usd_light: Any, world: np.ndarray, time: Any, path: Path, where:
     )
 
 
-def read(path: str | os.PathLike[str], **options: Any) -> Scene:
+def read(
+    path: str | os.PathLike[str], *, max_triangles: int | None = None, **options: Any
+) -> Scene:
     """Read a USD file into a :class:`Scene`.
 
     Parameters
     ----------
     path : str or Path
         ``.usda``, ``.usdc`` or ``.usd``.
+    max_triangles : int, optional
+        The triangle (memory) budget, default
+        :data:`~shadowgeo.limits.MAX_TRIANGLES`: each mesh (every instance
+        counted) adds its faces' triangles, from its ``faceVertexCounts``
+        alone, before its points and indices are read; past the budget the
+        file is refused naming the mesh.
 
     Returns
     -------
@@ -469,7 +477,7 @@ def read(path: str | os.PathLike[str], **options: Any) -> Scene:
     with _corrupt_data(path):
         check_assets(path, notes)
         stage = opened(Usd.Stage.Open, path, "cannot open")
-        return _stage_scene(stage, path, notes)
+        return _stage_scene(stage, path, notes, max_triangles)
 
 
 @contextlib.contextmanager
@@ -507,7 +515,9 @@ def _message(error: Exception) -> str:
     return found.group(1) if found else text
 
 
-def _stage_scene(stage: Any, path: Path, notes: list[str]) -> Scene:
+def _stage_scene(
+    stage: Any, path: Path, notes: list[str], max_triangles: int | None = None
+) -> Scene:
     Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
     up = UsdGeom.GetStageUpAxis(stage)
     scene = Scene(
@@ -519,15 +529,31 @@ def _stage_scene(stage: Any, path: Path, notes: list[str]) -> Scene:
     # An animated stage reads at its first time sample; a static one at its defaults.
     time = Usd.TimeCode.EarliestTime()
     indices: list[int | None] = []
+    triangles = 0  # of the meshes so far, every instance counted
     for prim in stage.Traverse(Usd.TraverseInstanceProxies()):
         where = _where(prim)
         with _corrupt_data(path, where):
+            if prim.IsA(UsdGeom.Mesh):
+                triangles += _mesh_triangles(prim, time)
+                through = "instancing and references"
+                limits.check_expansion(
+                    triangles, str(path), where, None, max_triangles, through=through
+                )
             _read_prim(scene, prim, path, time, where, indices)
     # Shapes shadowgeo wrote carry their place in the scene; others follow in file order.
     keys = [(0, index) if index is not None else (1, 0) for index in indices]
     order = sorted(range(len(keys)), key=keys.__getitem__)
     scene.shapes = [scene.shapes[i] for i in order]
     return scene
+
+
+def _mesh_triangles(prim: Any, time: Any) -> int:
+    """Triangles the mesh at ``prim`` makes at most (a face of ``k`` corners
+    ``k - 2``), from its ``faceVertexCounts`` alone."""
+    counts = pxr()[4].Mesh(prim).GetFaceVertexCountsAttr().Get(time)
+    if counts is None:
+        return 0
+    return int(np.maximum(np.asarray(counts, dtype=np.int64) - 2, 0).sum())
 
 
 def _read_prim(

@@ -56,8 +56,10 @@ Rules the reader follows, where X3D leaves a choice:
 - **Refused with a SceneError** (what cannot be read as a scene at all):
   malformed XML or JSON, DOCTYPE entity declarations, a root that is not X3D,
   DEF/USE, prototype, EXTERNPROTO and Inline cycles, expansion bombs (DEF/USE,
-  Inline and prototypes beyond 2 million nodes, prototypes beyond 10,000
-  copies), transforms that overflow.
+  Inline and prototypes beyond 2 million nodes, 500,000 grouping nodes and
+  Shapes to walk or the triangle budget, all estimated before the walk by
+  :mod:`.x3d_budget`; prototypes beyond 10,000 copies), transforms that
+  overflow.
 """
 
 from __future__ import annotations
@@ -80,6 +82,7 @@ from ..scene import Material, Scene, SceneLight, Shape
 from ..scene.model import MARK, Placement, Viewpoint, axis_angle
 from ..tolerance import Tolerance
 from . import file_problem, float_triple, x3d_parse
+from .x3d_budget import Estimates, Expansion, expansion, flat_expansion
 from .x3d_defaults import DEFAULTS
 from .x3d_fields import Context, Element, Tree, local_name, parse, rotation_matrix
 from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
@@ -112,7 +115,9 @@ REASONS = [
 
 
 class _Reader:
-    def __init__(self, root_folder: Path, warnings: list[str]) -> None:
+    def __init__(
+        self, root_folder: Path, warnings: list[str], max_triangles: int | None = None
+    ) -> None:
         self.root_folder = root_folder
         self.warnings = warnings
         self.instances: list[Instance] = []
@@ -130,8 +135,12 @@ class _Reader:
         self.inline_stack: list[Path] = []
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
         self.baked: list[str] = []  # DEFs of the enclosing groups of shadows shadowgeo added
-        self.expanded = 0  # nodes the documents and prototype copies read so far expand to
-        self.sizes: dict[Element, int] = {}  # element -> its expanded size (see _expanded_size)
+        # what the documents and prototype copies read so far expand to, and
+        # what each element does (x3d_budget)
+        self.expanded = Expansion()
+        self.estimates = Estimates(
+            Expansion(MAX_NODES, limits.MAX_VISITS, max_triangles or limits.MAX_TRIANGLES)
+        )
         self.inline_files: dict[Path, Any] = {}  # each Inline file read once: tree or Scene
         self.inlines_read = 0  # X3D Inline instances read (limits.MAX_INLINE_INSTANCES)
         self.top_root: Element | None = None  # the root of the scene's own document
@@ -172,17 +181,44 @@ class _Reader:
             self.inline_stack.pop()
 
     def _count(self, context: Context, element: Element, at: Element | None = None) -> None:
-        """Add the nodes ``element`` expands to to the budget, counted over every
-        document and prototype copy read (Inlines and prototypes used again
-        multiply too); refuse the scene beyond :data:`MAX_NODES`, naming ``at``."""
+        """Add what ``element`` expands to (x3d_budget) to what the scene does so
+        far, counted over every document and prototype copy read (Inlines and
+        prototypes used again multiply too); refuse the scene, before it is
+        walked, beyond its budgets of nodes, visits or triangles, naming the
+        innermost node too big (else ``at``, else ``element``)."""
         if element.get("USE") is None and not _USES_INSIDE(element):
-            # nothing to expand: the elements counted by libxml2, not a Python call each
-            self.expanded += min(int(_ELEMENTS_IN(element)), MAX_NODES + 1)
+            # nothing to expand: counted by libxml2, not a Python call each node
+            found = flat_expansion(context, element)
         else:
-            self.expanded += _expanded_size(context, element, self.sizes)
-        if self.expanded > MAX_NODES:
+            found = expansion(context, element, self.estimates)
+        self.expanded = self.expanded + found
+        budget, first_over = self.estimates.budget, self.estimates.first_over
+
+        def named(measure: str) -> Element:
+            if at is not None:  # a prototype's copy: the instance (its DEFs are renamed)
+                return at
+            return first_over.get(measure, element)
+
+        # memory first: the measure a bomb with geometry in it would fill
+        if self.expanded.triangles > budget.triangles:
+            node = named("triangles")
+            limits.check_expansion(
+                self.expanded.triangles,
+                context.file_of(node),
+                context.describe(node),
+                node.sourceline,
+                budget.triangles,
+            )
+        if self.expanded.visits > budget.visits:
             raise context.error(
-                element if at is None else at,
+                named("visits"),
+                f"the scene expands (through DEF/USE, Inline or prototypes) to "
+                f"{self.expanded.visits:,} grouping nodes and Shapes to walk, more than "
+                f"{budget.visits:,} (shadowgeo.limits.MAX_VISITS); refused before the walk",
+            )
+        if self.expanded.nodes > budget.nodes:
+            raise context.error(
+                named("nodes"),
                 f"the scene expands (through DEF/USE, Inline or prototypes) to more than "
                 f"{MAX_NODES} nodes",
             )
@@ -528,22 +564,6 @@ def _why(tag: str) -> str:
 # (XPath, evaluated by libxml2 once per document or prototype copy counted:
 # 50,000 nodes in a few ms, not a Python call per node)
 _USES_INSIDE = etree.XPath("boolean(descendant::*[@USE])")
-_ELEMENTS_IN = etree.XPath("count(descendant-or-self::*)")
-
-
-def _expanded_size(context: Context, element: Element, sizes: dict[Element, int]) -> int:
-    """Number of nodes the subtree stands for once every USE is expanded,
-    counted in linear time (each DEF'd node once); a cycle counts 0 here and
-    is reported by the traversal."""
-    target = context.definition(element) if element.get("USE") else element
-    if target is None:
-        return 1
-    if target in sizes:
-        return sizes[target]
-    sizes[target] = 0
-    size = 1 + sum(_expanded_size(context, child, sizes) for child in target if local_name(child))
-    sizes[target] = min(size, MAX_NODES + 1)
-    return sizes[target]
 
 
 def _version(root: Element, display: str, warnings: list[str]) -> tuple[int, int]:
@@ -630,6 +650,7 @@ def read(
     tolerance: Tolerance | None = None,
     chord: float | None = None,
     root: str | os.PathLike[str] | None = None,
+    max_triangles: int | None = None,
 ) -> Scene:
     """Read an X3D file: XML (``.x3d``), JSON (``.x3dj``, ``.json``), ClassicVRML
     (``.x3dv``) or VRML 97 (``.wrl``), the XML and Classic ones also gzip-compressed.
@@ -649,6 +670,11 @@ def read(
         file's own folder). Name a folder above it for a trusted scene whose
         files lie beside its folder, as a converted scene written to another
         folder names them (:mod:`.x3d_urls`).
+    max_triangles : int, optional
+        The triangle (memory) budget, default
+        :data:`~shadowgeo.limits.MAX_TRIANGLES`: a scene estimated to pass
+        it through DEF/USE, prototypes or Inline is refused before it is
+        built (:mod:`.x3d_budget`).
 
     Returns
     -------
@@ -692,7 +718,7 @@ def read(
         folder = Path(root).resolve()
         if not path.resolve().is_relative_to(folder):
             raise SceneError(f"the file is not inside root {folder}", path=str(path))
-    reader = _Reader(folder, scene.warnings)
+    reader = _Reader(folder, scene.warnings, max_triangles)
     reader.inline_files[path.resolve()] = tree  # (an EXTERNPROTO naming it reads this tree)
     try:
         with _stack_for_nesting():

@@ -15,7 +15,15 @@ import time
 from collections import Counter, defaultdict
 
 from .geometry import geometry_case, geometry_reproducer
-from .inputs import ENCODINGS, KNOWN, REFERENCE_TEMPLATE, TEMPLATES
+from .inputs import (
+    CITY_ENCODINGS,
+    CITY_REFERENCE_TEMPLATE,
+    CITY_TEMPLATES,
+    ENCODINGS,
+    KNOWN,
+    REFERENCE_TEMPLATE,
+    TEMPLATES,
+)
 from .mutate import mutate
 from .pool import Pool
 from .shrink import shrink_case, shrink_input
@@ -40,7 +48,10 @@ def converter_task(seeds, encoding: str, index: int, seed: int) -> dict:
         mutant, ops = mutate(data, encoding, rng, others)
     except Exception as error:  # noqa: BLE001 - a mutator's own limit must not end the campaign
         mutant, ops = data[: len(data) // 2], [f"bytes:truncate (mutator: {type(error).__name__})"]
-    template = rng.randrange(len(TEMPLATES))
+    city = encoding in CITY_ENCODINGS
+    templates = CITY_TEMPLATES if city else TEMPLATES
+    template = rng.randrange(len(templates))
+    reference = template == (CITY_REFERENCE_TEMPLATE if city else REFERENCE_TEMPLATE)
     return {
         "kind": "convert",
         "encoding": encoding,
@@ -49,8 +60,8 @@ def converter_task(seeds, encoding: str, index: int, seed: int) -> dict:
         "ops": ops,
         "data": mutant,
         "suffix": ENCODINGS[encoding],
-        "argv": list(TEMPLATES[template]),
-        "reference": template == REFERENCE_TEMPLATE,
+        "argv": list(templates[template]),
+        "reference": reference,
     }
 
 

@@ -30,14 +30,20 @@ ENCODINGS = {
     "stl": ".stl",
     "ply": ".ply",
     "off": ".off",
+    "cityjson": ".city.json",
+    "geojson": ".geojson",
 }
 # Seeds written from the X3D seeds: by shadowgeo, or (meshes that shadowgeo
 # reads but does not write) by trimesh.
 WRITTEN = ("glb", "gltf", "usda", "usdc", "obj", "stl", "ply", "off")
 MESH_SUFFIXES = (".obj", ".stl", ".ply", ".off")
-TEXT_ENCODINGS = {"x3d", "x3dv", "wrl", "json", "x3dj", "gltf", "usda"}
+TEXT_ENCODINGS = {"x3d", "x3dv", "wrl", "json", "x3dj", "gltf", "usda", "cityjson", "geojson"}
 XML_ENCODINGS = {"x3d"}
-JSON_ENCODINGS = {"json", "x3dj", "gltf"}
+JSON_ENCODINGS = {"json", "x3dj", "gltf", "cityjson", "geojson"}
+# City data (Z up, a site on Earth): its own command lines, and seeds cut
+# from the corpus's big files (their first objects) as well as the small ones.
+CITY_ENCODINGS = {"cityjson", "geojson"}
+CITY_SEED_OBJECTS = 12
 
 SUN = "0.3,-1,0.2"
 GROUND = "0,1,0,0"
@@ -53,6 +59,14 @@ TEMPLATES = [
     ("convert", "IN", "OUT.x3dz", "--sun=-0.5,-1,0.3", "--method", "planar"),
 ]
 REFERENCE_TEMPLATE = 1
+CITY_TEMPLATES = [
+    ("convert", "IN", "OUT.x3d"),
+    ("convert", "IN", "OUT.glb", "--sun", "0.3,0.2,-1", "--plane", "0,0,1,0"),
+    ("info", "IN"),
+    ("convert", "IN", "OUT.usda", "--method", "volume"),
+    ("sun", "IN", "OUT.x3d", "--at", "52.0,4.36", "--serial", "--every", "240"),
+]
+CITY_REFERENCE_TEMPLATE = 1
 
 SPECIAL_FLOATS = ["0", "-0", "1e308", "-1e308", "1e-320", "nan", "inf", "-inf", "1e155", "3e38"]
 SPECIAL_INTS = ["2147483647", "-1", "-2", "-2147483648", "999999999", "4294967296", "-1000"]

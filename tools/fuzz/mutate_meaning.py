@@ -1,7 +1,8 @@
 """The meaning level of the text encodings: numbers turned into 0, -0,
 1e308, 1e-320, nan, inf, huge counts or negative indices, fields emptied,
 deep nesting, DEF/USE cycles (each in the encoding's own syntax), and X3D
-XML's modelled fields set to hostile values (:mod:`fuzz.mutate_xml`)."""
+XML's modelled fields set to hostile values (:mod:`fuzz.mutate_xml`); for
+city data, mostly its own (:mod:`fuzz.mutate_city`)."""
 
 from __future__ import annotations
 
@@ -9,14 +10,26 @@ import json
 import random
 import re
 
-from .inputs import JSON_ENCODINGS, MAX_MUTANT, SPECIAL_FLOATS, SPECIAL_INTS, XML_ENCODINGS
+from .inputs import (
+    CITY_ENCODINGS,
+    JSON_ENCODINGS,
+    MAX_MUTANT,
+    SPECIAL_FLOATS,
+    SPECIAL_INTS,
+    XML_ENCODINGS,
+)
 from .mutate_bytes import mutate_bytes
+from .mutate_city import mutate_city
 from .mutate_xml import mutate_x3d_fields
 
 NUMBER = re.compile(rb"(?<![\w.#])[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?(?![\w.])")
 
 
 def mutate_meaning(data: bytes, encoding: str, rng: random.Random):
+    if encoding in CITY_ENCODINGS and rng.random() < 0.7:
+        mutated = mutate_city(data, encoding, rng)
+        if mutated is not None:
+            return mutated
     kinds = ["number", "number", "field", "count", "empty", "nest", "cycle"]
     if encoding in XML_ENCODINGS:
         kinds += ["set-field", "set-field", "add-node", "add-node"]

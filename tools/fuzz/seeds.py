@@ -11,7 +11,8 @@ from typing import TYPE_CHECKING
 
 import shadowgeo
 
-from .inputs import ENCODINGS, EXAMPLES, MESH_SUFFIXES, SHARED, WRITTEN
+from .inputs import CITY_SEED_OBJECTS, ENCODINGS, EXAMPLES, MESH_SUFFIXES, SHARED, WRITTEN
+from .mutate_city import subset
 
 if TYPE_CHECKING:
     from .pool import Pool
@@ -19,6 +20,8 @@ if TYPE_CHECKING:
 
 def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, list]:
     """Seed files per encoding: (name, content). Missing folders are skipped.
+    City files (``.city.json``, ``.geojson``) seed their own encodings, a big
+    one cut to its first objects.
     glb, glTF, USD and mesh (OBJ, STL, PLY, OFF) seeds are the X3D ones written by
     shadowgeo (meshes by trimesh), in a worker
     (the parent never starts USD's threads, so forking stays safe)."""
@@ -29,6 +32,7 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
             suffix = path.suffix.lower().lstrip(".")
             if path.is_file() and suffix in ENCODINGS and path.stat().st_size <= max_bytes:
                 seeds[suffix].append((str(path), path.read_bytes()))
+    seeds.update(_city_seeds(roots, max_bytes, encodings))
     for name, data in seeds["x3d"]:
         seeds["x3dz"].append((name + ".gz", gzip.compress(data, mtime=0)))
     for name, data in seeds["json"]:
@@ -45,6 +49,30 @@ def collect_seeds(pool: Pool, max_bytes: int, encodings=ENCODINGS) -> dict[str, 
     for encoding in WRITTEN:  # made in completion order: sort, to replay
         seeds[encoding] = sorted(seeds[encoding])
     return dict(seeds)
+
+
+def _city_seeds(roots: list[Path], max_bytes: int, encodings) -> dict[str, list]:
+    """Seeds of the city encodings asked for: (name, content) per encoding."""
+    seeds: dict[str, list[tuple[str, bytes]]] = defaultdict(list)
+    for root in roots:
+        for path in sorted(root.rglob("*")):
+            city = _city_seed(path, max_bytes)
+            if city is not None and city[0] in encodings:
+                seeds[city[0]].append((str(path), city[1]))
+    return seeds
+
+
+def _city_seed(path: Path, max_bytes: int) -> tuple[str, bytes] | None:
+    """(encoding, seed) of a city file: the file, or a big one's first objects."""
+    name = path.name.lower()
+    encoding = "cityjson" if name.endswith(".city.json") else None
+    encoding = "geojson" if name.endswith(".geojson") else encoding
+    if encoding is None or not path.is_file():
+        return None
+    data = path.read_bytes()
+    if len(data) > max_bytes:
+        data = subset(data, encoding, CITY_SEED_OBJECTS) or b""
+    return (encoding, data) if 0 < len(data) <= max_bytes else None
 
 
 def run_seed(task: dict, scratch: Path) -> dict:

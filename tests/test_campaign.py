@@ -1,0 +1,120 @@
+"""The fuzz campaign over every encoding (issue 34 item 1): the city encodings'
+seeds and mutants, and ``tools/fuzz.py campaign`` writing its table into a
+report."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import random
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from needs import SHARED, absent
+
+import shadowgeo as sg
+
+ROOT = Path(__file__).resolve().parents[1]
+GIS = SHARED / "corpus" / "gis"
+
+
+def fuzz_module(name: str):
+    folder = str(ROOT / "tools")
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    return importlib.import_module(f"fuzz.{name}")
+
+
+def corpus_file(name: str) -> Path:
+    path = GIS / name
+    if not path.is_file():
+        absent(f"{path} is missing")
+    return path
+
+
+def test_every_reader_encoding_is_fuzzed():
+    inputs = fuzz_module("inputs")
+    wanted = {"x3d", "x3dz", "x3dv", "wrl", "x3dj", "gltf", "glb", "usda", "usdc"}
+    wanted |= {"cityjson", "geojson"}
+    assert wanted <= set(inputs.ENCODINGS)
+    assert inputs.ENCODINGS["cityjson"] == ".city.json"
+    for encoding in inputs.ENCODINGS:  # each suffix has a reader: a mutant reaches it
+        assert sg.io.reader_name(f"scene{inputs.ENCODINGS[encoding]}")
+
+
+def test_a_big_cityjson_file_is_cut_to_its_first_objects_with_their_own_points(tmp_path):
+    source = corpus_file("delft_lod1.city.json")
+    whole = json.loads(source.read_bytes())
+    cut = fuzz_module("mutate_city").subset(source.read_bytes(), "cityjson", 5)
+    small = json.loads(cut)
+    assert len(cut) < len(source.read_bytes()) / 20
+    assert list(small["CityObjects"]) == list(whole["CityObjects"])[:5]
+
+    def points(document, name):
+        """The object's boundary points, in order: the reference, read by hand."""
+        found = []
+
+        def walk(value):
+            if isinstance(value, list):
+                for item in value:
+                    walk(item)
+            elif isinstance(value, int):
+                found.append(tuple(document["vertices"][value]))
+
+        for geometry in document["CityObjects"][name].get("geometry", []):
+            walk(geometry["boundaries"])
+        return found
+
+    for name in small["CityObjects"]:
+        assert points(small, name) == points(whole, name)
+    assert len(small["vertices"]) == len(
+        {i for n in small["CityObjects"] for i in points(small, n)}
+    )
+    path = tmp_path / "cut.city.json"
+    path.write_bytes(cut)
+    sg.load(path)  # a file the reader takes
+
+
+@pytest.mark.parametrize("encoding", ["cityjson", "geojson"])
+def test_city_mutants_are_reproducible_json_that_changes(encoding):
+    name = "rotterdam_subset.city.json" if encoding == "cityjson" else "suzhou_buildings.geojson"
+    data = corpus_file(name).read_bytes()
+    mutate_city = fuzz_module("mutate_city")
+    seed = mutate_city.subset(data, encoding, 12) if len(data) > 64 << 10 else data
+    made = [mutate_city.mutate_city(seed, encoding, random.Random(i)) for i in range(40)]
+    again = [mutate_city.mutate_city(seed, encoding, random.Random(i)) for i in range(40)]
+    assert made == again
+    done = [m for m in made if m is not None]
+    assert len(done) >= 30
+    assert all(data != seed for data, _ in done)
+    kinds = {op.split("-")[1] for _, op in done}
+    assert len(kinds) >= 5  # the operations are all reached
+    for data, _ in done:
+        json.loads(data)  # whole JSON: the reader's own checks are what is tried
+
+
+def test_the_campaign_command_writes_its_table_into_the_report(tmp_path):
+    report = tmp_path / "REPORT.md"
+    report.write_text("# report\n\n## Fuzz campaign\n\nold table\n\n## Next section\n\nkept\n")
+    out = tmp_path / "campaign"
+    command = [sys.executable, str(ROOT / "tools" / "fuzz.py"), "campaign", "--per-encoding", "2"]
+    command += ["--geometry", "3", "--seed", "4", "--jobs", "1", "--out", str(out)]
+    command += ["--encodings", "x3d,cityjson,geojson", "--report", str(report)]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert done.returncode in (0, 1), done.stderr[-2000:]
+    text = report.read_text()
+    assert "old table" not in text and text.endswith("## Next section\n\nkept\n")
+    runs = [json.loads(line) for line in (out / "results.jsonl").read_text().splitlines()]
+    for group in ("x3d", "cityjson", "geojson", "geometry"):
+        count = sum(1 for r in runs if r.get("encoding", "geometry") == group)
+        failures = sum(1 for r in runs if r.get("encoding", "geometry") == group and not r["ok"])
+        assert f"| {group} | {count:,} | {failures:,} |" in text
+        assert count == (3 if group == "geometry" else 2)
+    head = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, cwd=ROOT
+    ).stdout.strip()
+    assert f"at commit {head}" in text and "seed 4, 1 workers: 9 runs" in text
+    assert "`python tools/fuzz.py campaign --per-encoding 2 --geometry 3 --seed 4" in text
+    assert "would take about" in text
