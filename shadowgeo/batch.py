@@ -81,7 +81,7 @@ def shadowed(
     """The scene read from ``source`` and the same with the shadows
     ``options`` ask for (see :func:`add_shadows`; ``progress`` is passed on)."""
     # the chord only matters for X3D's curved primitives; other readers take no options
-    curved = options.tolerance is not None and reader_name(source) == "x3d_read"
+    curved = options.tolerance is not None and reader_name(source) == "x3d.read"
     scene = load(
         source,
         max_triangles=options.max_triangles,

@@ -18,8 +18,9 @@ from hypothesis import strategies as st
 from lxml import etree
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_extrusion, x3d_read
-from shadowgeo.io.x3d_defaults import DEFAULTS
+from shadowgeo.io.x3d import extrusion as x3d_extrusion
+from shadowgeo.io.x3d import read as x3d_read
+from shadowgeo.io.x3d.defaults import DEFAULTS
 
 DATA = Path(__file__).parent / "data"
 

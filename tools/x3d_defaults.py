@@ -1,4 +1,4 @@
-"""Regenerate ``shadowgeo/io/x3d_defaults.py``: field types and defaults of the
+"""Regenerate ``shadowgeo/io/x3d/defaults.py``: field types and defaults of the
 X3D nodes the reader models, taken from the X3D 4.0 XML Schema.
 
 The schema (committed gzipped as ``tests/data/x3d-schema/x3d-4.0.xsd.gz``)
@@ -25,7 +25,7 @@ from lxml import etree
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA = ROOT / "tests" / "data" / "x3d-schema" / "x3d-4.0.xsd.gz"
-OUTPUT = ROOT / "shadowgeo" / "io" / "x3d_defaults.py"
+OUTPUT = ROOT / "shadowgeo" / "io" / "x3d" / "defaults.py"
 XS = "{http://www.w3.org/2001/XMLSchema}"
 
 NODES = [

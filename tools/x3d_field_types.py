@@ -1,4 +1,4 @@
-"""Regenerate ``shadowgeo/io/x3d_field_types.py``: the X3D type of every
+"""Regenerate ``shadowgeo/io/x3d/field_types.py``: the X3D type of every
 non-node field of every node, and each node's default ``containerField``,
 from the X3D 4.0 XML Schema.
 
@@ -23,7 +23,7 @@ from lxml import etree
 from x3d_defaults import SCHEMA, XS, _fields
 
 ROOT = Path(__file__).resolve().parents[1]
-OUTPUT = ROOT / "shadowgeo" / "io" / "x3d_field_types.py"
+OUTPUT = ROOT / "shadowgeo" / "io" / "x3d" / "field_types.py"
 # Fields of nodes outside X3D 4.0 that real files use (VRML 97, Castle Game Engine).
 EXTRA = {"MatrixTransform": {"matrix": "SFMatrix4f"}}
 

@@ -1,10 +1,10 @@
-"""Regenerate ``shadowgeo/io/x3d_json_fields.py``: for every X3D 4.0 node, its
+"""Regenerate ``shadowgeo/io/x3d/json_fields.py``: for every X3D 4.0 node, its
 default containerField and the type of each field, for the X3D JSON encoding.
 
 The JSON encoding types every attribute (numbers, arrays, booleans, strings)
 and writes a node field as one object (SFNode) or an array (MFNode), so the
 writer needs the type of every field of every node, not only of those the
-reader models (:mod:`shadowgeo.io.x3d_defaults`). The types come from the X3D
+reader models (:mod:`shadowgeo.io.x3d.defaults`). The types come from the X3D
 JSON schema (each ``@field`` has a ``$comment`` "SFVec3f inputOutput", each
 ``-field`` refers to a ``...SFNode`` or ``...MFNode`` definition); the
 default containerField, which the JSON encoding leaves out, from the X3D 4.0
@@ -27,7 +27,7 @@ from lxml import etree
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMAS = ROOT.parent / "shared" / "schemas" / "x3d"
-OUTPUT = ROOT / "shadowgeo" / "io" / "x3d_json_fields.py"
+OUTPUT = ROOT / "shadowgeo" / "io" / "x3d" / "json_fields.py"
 XS = "{http://www.w3.org/2001/XMLSchema}"
 # Schema definitions that are statements, not nodes.
 STATEMENTS = {"X3D", "head", "Scene", "component", "unit", "meta", "field", "fieldValue",

@@ -79,17 +79,19 @@ import numpy as np
 from lxml import etree
 from numpy.typing import ArrayLike
 
-from ..errors import SceneError
-from ..lights import DirectionalLight, SpotLight
-from ..scene import Scene, SceneLight, Shape
-from ..scene.model import MARK, Viewpoint, overview, unique_name
-from . import up_and_units, x3d_classic_write, x3d_json
-from .atomic import atomic_path
-from .x3d_field_types import field_type
-from .x3d_fields import Element, Tree, numbers_or_none
-from .x3d_lights import BAKED
-from .x3d_numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
-from .x3d_urls import rewrite_urls
+from ...errors import SceneError
+from ...lights import DirectionalLight, SpotLight
+from ...scene import Scene, SceneLight, Shape
+from ...scene.model import MARK, Viewpoint, overview, unique_name
+from .. import up_and_units
+from ..atomic import atomic_path
+from . import classic_write as x3d_classic_write
+from . import json as x3d_json
+from .field_types import field_type
+from .fields import Element, Tree, numbers_or_none
+from .lights import BAKED
+from .numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
+from .urls import rewrite_urls
 
 ADDED_ROLES = ("shadow", "volume", "ground")
 LIGHT_TAGS = ("PointLight", "SpotLight", "DirectionalLight")
@@ -737,7 +739,7 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
         f"{{{xsd}}}noNamespaceSchemaLocation", "https://www.web3d.org/specifications/x3d-4.0.xsd"
     )
     head = etree.SubElement(root, "head")
-    from .. import __version__
+    from ... import __version__
 
     # The schema's order in <head>: component, unit, meta.
     if meters != 1.0:

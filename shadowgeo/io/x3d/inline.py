@@ -26,13 +26,14 @@ from urllib.parse import unquote
 
 import numpy as np
 
-from .. import limits
-from ..errors import GeometryError, SceneError
-from ..scene import Scene
-from . import file_problem, outside_reason, x3d_parse
-from .gltf_layout import external_uris, json_document
-from .x3d_fields import Context, Element, Tree, local_name
-from .x3d_geometry import Instance, Mesh
+from ... import limits
+from ...errors import GeometryError, SceneError
+from ...scene import Scene
+from .. import file_problem, outside_reason
+from ..gltf_layout import external_uris, json_document
+from . import parse as x3d_parse
+from .fields import Context, Element, Tree, local_name
+from .geometry import Instance, Mesh
 
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
@@ -180,7 +181,7 @@ def _read_gltf(reader: InlineReader, context: Context, element: Element, path: P
             return f"refers to '{uri}', outside the scene's folder (never read)"
     # the glTF reader's own checks (compression, quantized positions, ...) and materials
     try:
-        from . import gltf_read  # (trimesh: imported for a glTF Inline only)
+        from .. import gltf_read  # (trimesh: imported for a glTF Inline only)
 
         loaded = gltf_read.read(path)
     except (SceneError, GeometryError) as error:

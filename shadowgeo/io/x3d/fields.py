@@ -26,12 +26,12 @@ from typing import TYPE_CHECKING, Any, TypeAlias
 import numpy as np
 from lxml import etree
 
-from ..errors import SceneError
-from ..limits import LARGEST_COORDINATE
-from .x3d_defaults import DEFAULTS
+from ...errors import SceneError
+from ...limits import LARGEST_COORDINATE
+from .defaults import DEFAULTS
 
 if TYPE_CHECKING:
-    from .x3d_proto import Prototypes
+    from .proto import Prototypes
 
 # lxml ships no type information: to mypy both are Any, named for the reader.
 Element: TypeAlias = etree._Element

@@ -23,13 +23,13 @@ from __future__ import annotations
 
 from lxml import etree
 
-from ..errors import SceneError
-from .x3d_classic_read import classic_comment
-from .x3d_classic_tokens import is_number, quote
-from .x3d_defaults import DEFAULTS
-from .x3d_field_types import CONTAINER_FIELDS, field_type
-from .x3d_fields import Element, Tree, local_name
-from .x3d_fields import parse as parse_field
+from ...errors import SceneError
+from .classic_read import classic_comment
+from .classic_tokens import is_number, quote
+from .defaults import DEFAULTS
+from .field_types import CONTAINER_FIELDS, field_type
+from .fields import Element, Tree, local_name
+from .fields import parse as parse_field
 
 INDENT = "  "
 # Nodes whose XML text content is code (a CDATA section), written as a url.

@@ -13,13 +13,13 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import GeometryError
-from ..lights import DirectionalLight, Light, PointLight, SpotLight
-from ..limits import check_coordinates, check_length
-from ..scene import Material, SceneLight
-from ..scene.model import MARK
-from . import float_triple
-from .x3d_fields import Context, Element, local_name
+from ...errors import GeometryError
+from ...lights import DirectionalLight, Light, PointLight, SpotLight
+from ...limits import check_coordinates, check_length
+from ...scene import Material, SceneLight
+from ...scene.model import MARK
+from .. import float_triple
+from .fields import Context, Element, local_name
 
 LIGHTS = {"PointLight", "SpotLight", "DirectionalLight"}
 # The class token of a light whose shadows shadowgeo baked (see x3d_write).

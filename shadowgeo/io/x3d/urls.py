@@ -28,9 +28,9 @@ from collections.abc import Callable
 from pathlib import Path
 from urllib.parse import quote, unquote
 
-from .x3d_classic_tokens import quote as quoted
-from .x3d_fields import Tree, local_name
-from .x3d_inline import URL_SCHEME
+from .classic_tokens import quote as quoted
+from .fields import Tree, local_name
+from .inline import URL_SCHEME
 
 # The fields that hold urls: X3D's ``url`` and Background's ``frontUrl``, ...
 _URL_FIELD = re.compile(r"url|[a-z]+Url")

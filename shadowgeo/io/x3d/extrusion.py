@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..limits import MAX_EXTRUSION_POINTS as MAX_POINTS
-from ..polygons import polygon_triangles
-from .x3d_fields import Context, Element, rotation_matrix
+from ...limits import MAX_EXTRUSION_POINTS as MAX_POINTS
+from ...polygons import polygon_triangles
+from .fields import Context, Element, rotation_matrix
 
 # MAX_POINTS: vertices one Extrusion may make (spine x section): a few
 # kilobytes of text could otherwise ask for billions.

@@ -13,7 +13,7 @@ out again.
 
 from __future__ import annotations
 
-from .x3d_fields import Element
+from .fields import Element
 
 _SPACE = "  "
 

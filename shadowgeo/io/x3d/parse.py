@@ -28,12 +28,12 @@ from pathlib import Path
 
 from lxml import etree
 
-from .. import limits
-from ..errors import SceneError
-from . import x3d_classic_read
+from ... import limits
+from ...errors import SceneError
+from . import classic_read as x3d_classic_read
 
 # X3D encodings other than XML: extension -> module whose parse(path) gives the tree.
-ENCODINGS = {".x3dj": "x3d_json", ".json": "x3d_json"}
+ENCODINGS = {".x3dj": "json", ".json": "json"}
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).
 MAX_BYTES = limits.MAX_DOCUMENT_BYTES  # see shadowgeo.limits
 MAX_DEPTH = limits.MAX_XML_DEPTH

@@ -31,13 +31,13 @@ from typing import TYPE_CHECKING
 
 from lxml import etree
 
-from .. import limits
-from .x3d_extern import Found, find
-from .x3d_fields import Element, local_name
+from ... import limits
+from .extern import Found, find
+from .fields import Element, local_name
 
 if TYPE_CHECKING:
-    from .x3d_fields import Context
-    from .x3d_inline import InlineReader
+    from .fields import Context
+    from .inline import InlineReader
 
 # Copies made per document at most: a prototype whose body holds an instance
 # of itself would otherwise expand for ever.

@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from typing import NamedTuple, cast
 
-from ..errors import SceneError
+from ...errors import SceneError
 
 # One match a token, with the white space (and commas) before it.
 _TOKEN = re.compile(

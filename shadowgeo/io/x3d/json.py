@@ -40,11 +40,11 @@ from typing import Any
 import numpy as np
 from lxml import etree
 
-from ..errors import SceneError
-from . import x3d_parse
-from .x3d_fields import Element, Tree
-from .x3d_json_fields import NODES
-from .x3d_layout import lay_out
+from ...errors import SceneError
+from . import parse as x3d_parse
+from .fields import Element, Tree
+from .json_fields import NODES
+from .layout import lay_out
 
 JSON_SUFFIXES = {".x3dj", ".json"}
 # Nodes nested at most this deep. libxml2 refuses XML deeper than 256; JSON

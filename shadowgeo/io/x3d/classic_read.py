@@ -46,11 +46,11 @@ from typing import cast
 
 from lxml import etree
 
-from ..errors import SceneError, excerpt
-from .x3d_classic_tokens import Token, is_number, number_text, quote, tokens
-from .x3d_field_types import CONTAINER_FIELDS, field_type
-from .x3d_fields import Element
-from .x3d_layout import lay_out
+from ...errors import SceneError, excerpt
+from .classic_tokens import Token, is_number, number_text, quote, tokens
+from .field_types import CONTAINER_FIELDS, field_type
+from .fields import Element
+from .layout import lay_out
 
 MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000

@@ -23,9 +23,9 @@ from typing import BinaryIO
 import numpy as np
 from lxml import etree
 
-from ..errors import SceneError
-from . import optional_module
-from .x3d_fields import Element, Tree
+from ...errors import SceneError
+from .. import optional_module
+from .fields import Element, Tree
 
 # The shortest float64 text (as repr), ten times faster: the `speed` extra.
 orjson = optional_module("orjson")

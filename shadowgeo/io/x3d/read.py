@@ -74,20 +74,21 @@ from typing import Any
 import numpy as np
 from lxml import etree
 
-from .. import limits
-from ..errors import GeometryError, SceneError
-from ..scene import Material, Scene, SceneLight, Shape
-from ..scene.model import MARK, Placement, Viewpoint, axis_angle
-from ..tolerance import Tolerance
-from . import file_problem, float_triple, x3d_parse
-from .x3d_defaults import DEFAULTS
-from .x3d_fields import Context, Element, Tree, local_name, parse, rotation_matrix
-from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
-from .x3d_inline import URL_SCHEME, load_inline
-from .x3d_lights import LIGHTS, material, scene_light
-from .x3d_numbers import Splicer
-from .x3d_proto import Prototypes
-from .x3d_script import script_note
+from ... import limits
+from ...errors import GeometryError, SceneError
+from ...scene import Material, Scene, SceneLight, Shape
+from ...scene.model import MARK, Placement, Viewpoint, axis_angle
+from ...tolerance import Tolerance
+from .. import file_problem, float_triple
+from . import parse as x3d_parse
+from .defaults import DEFAULTS
+from .fields import Context, Element, Tree, local_name, parse, rotation_matrix
+from .geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
+from .inline import URL_SCHEME, load_inline
+from .lights import LIGHTS, material, scene_light
+from .numbers import Splicer
+from .proto import Prototypes
+from .script import script_note
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
 GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}

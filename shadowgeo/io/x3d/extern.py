@@ -17,10 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import limits
-from ..errors import SceneError
-from .x3d_fields import Element, local_name, parse
-from .x3d_inline import InlineReader, resolve_url, x3d_tree
+from ... import limits
+from ...errors import SceneError
+from .fields import Element, local_name, parse
+from .inline import InlineReader, resolve_url, x3d_tree
 
 
 @dataclass(frozen=True)
