@@ -1,10 +1,10 @@
 """Write an X3D XML tree in the ClassicVRML encoding (``.x3dv``).
 
-The tree is what :mod:`.x3d_write` would write as XML (the input document
+The tree is what :mod:`.write` would write as XML (the input document
 with the shadow groups added, or a fresh one); this module only changes its
 syntax, so every node, DEF/USE name, field value, PROTO, ROUTE, Script,
 IMPORT/EXPORT, head entry and comment is kept. Field types come from the
-schema table (:mod:`.x3d_field_types`), a prototype's declaration, or a
+schema table (:mod:`.field_types`), a prototype's declaration, or a
 ``<field type>``: SFString values are quoted, MF values bracketed, booleans
 written ``TRUE`` / ``FALSE``. A child node goes to its ``containerField``
 (or its type's default one). Script code held as XML text is written as the

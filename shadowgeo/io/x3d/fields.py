@@ -1,6 +1,6 @@
 """X3D XML field values: parsing attribute text by field type, with defaults.
 
-Field types and defaults come from :mod:`.x3d_defaults` (generated from the X3D
+Field types and defaults come from :mod:`.defaults` (generated from the X3D
 4.0 XML Schema by ``tools/x3d_defaults.py``). X3D 3.x files differ in a few
 defaults; :data:`X3D3_DEFAULTS` holds those, chosen by the ``<X3D version>``.
 
@@ -87,7 +87,7 @@ class Context:
     # Values built from a node's attributes alone, by (kind, tag, attributes):
     # ten thousand identical Materials are read once.
     by_content: dict[tuple[Any, ...], Any] = field(default_factory=dict)
-    # The scene's long number attributes, held as bytes (an x3d_numbers
+    # The scene's long number attributes, held as bytes (a numbers
     # Splicer), and the root of the document they are held for.
     kept: Any = None
     kept_root: Element | None = None

@@ -3,7 +3,7 @@
 Each ``url`` is tried in order, as X3D browsers do; the first that reads is
 used. Remote URLs (any ``scheme:``) are never fetched; a relative path is
 taken from the inlining file's folder and is never read when it leaves the
-top scene's folder (or the ``root`` folder :func:`.x3d_read.read` is given).
+top scene's folder (or the ``root`` folder :func:`.read.read` is given).
 X3D is read with the same rules as the scene (its own DEF names); glTF and
 GLB with the glTF reader (:mod:`.gltf_read`), lights left out (with a
 warning); a glTF whose buffers or images lie outside the folder is
@@ -14,7 +14,7 @@ includes itself, directly or not, is a SceneError (as are the reader's limits
 on nesting and expansion). A url is taken from the folder of the file the
 Inline was written in (a prototype's file, for one in an EXTERNPROTO's body).
 :func:`resolve_url` and :func:`x3d_tree` find and read EXTERNPROTO files too
-(:mod:`.x3d_extern`), under the same rules.
+(:mod:`.extern`), under the same rules.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ MAX_INLINE_INSTANCES = limits.MAX_INLINE_INSTANCES
 
 
 class InlineReader(Protocol):
-    """What reading an Inline needs of the X3D reader (:mod:`.x3d_read`'s)."""
+    """What reading an Inline needs of the X3D reader (:mod:`.read`'s)."""
 
     root_folder: Path
     warnings: list[str]

@@ -16,12 +16,12 @@ from any encoding, shadows added) as X3D JSON. The mapping, both ways:
 - ``head``, ``meta``, ``component``, ``unit``, ``field``, ``fieldValue``,
   ``IS``, ``connect``, ``ProtoDeclare`` ...: statements, keyed by their name.
 
-Field types come from :mod:`.x3d_json_fields` (generated from the X3D JSON
+Field types come from :mod:`.json_fields` (generated from the X3D JSON
 schema); a ``field``'s value is typed by its ``type``, a ``fieldValue``'s by
 the declaration of its prototype.
 
 Parsing is as safe as the XML parser's: the size limit and gzip-bomb guard of
-:func:`.x3d_parse.read_bytes`, nodes nested at most :data:`MAX_DEPTH` deep
+:func:`.parse.read_bytes`, nodes nested at most :data:`MAX_DEPTH` deep
 (about libxml2's limit for XML), errors naming the JSON line (up to line
 65534: lxml keeps 16 bits) and the path of keys to the node.
 """

@@ -22,7 +22,7 @@ from .. import float_triple
 from .fields import Context, Element, local_name
 
 LIGHTS = {"PointLight", "SpotLight", "DirectionalLight"}
-# The class token of a light whose shadows shadowgeo baked (see x3d_write).
+# The class token of a light whose shadows shadowgeo baked (see write.py).
 BAKED = f"{MARK}-baked"
 MATERIALS = {"Material", "PhysicalMaterial", "UnlitMaterial", "TwoSidedMaterial"}
 

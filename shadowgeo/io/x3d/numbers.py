@@ -86,7 +86,7 @@ def integers_text(values: np.ndarray) -> bytes:
 
 # Attribute values at least this long made only of number characters (which
 # XML escapes nowhere) are held as bytes beside the lxml tree: the reader's
-# (see Splicer.hold) and the writer's (see x3d_write._spliced_out).
+# (see Splicer.hold) and the writer's (see write._spliced_out).
 LONG_VALUE = 1 << 16
 NUMBER_CHARACTERS = b"0123456789+-.eE ,"
 

@@ -78,7 +78,7 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
     the same tree.
 
     ClassicVRML and VRML 97 files (known by their ``#X3D`` / ``#VRML`` header,
-    whatever the extension) give the same tree, from :mod:`.x3d_classic_read`;
+    whatever the extension) give the same tree, from :mod:`.classic_read`;
     what it skips is noted in ``notes``.
 
     Raises

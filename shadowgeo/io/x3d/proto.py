@@ -12,7 +12,7 @@ private to the copy.
 A prototype's name is looked up in the file that holds the instance: the
 document, or for an instance inside a copy, the file the copied prototype was
 declared in. An ExternProtoDeclare is followed to a PROTO in a local file
-(:mod:`.x3d_extern`, under Inline's rules), whose copies then read their urls,
+(:mod:`.extern`, under Inline's rules), whose copies then read their urls,
 names and messages as that file's. Instances of an EXTERNPROTO that cannot be
 followed (remote, missing, outside the scene's folder, no such PROTO) and of
 undeclared prototypes are skipped with a warning naming the file, line and

@@ -3,7 +3,7 @@ VRML 97 ``.wrl``; gzip ``.x3dz``, ``.x3dvz``, ``.wrz``, ``*.gz``) into a
 :class:`~shadowgeo.Scene`.
 
 Every encoding is parsed into the XML encoding's element tree
-(:mod:`.x3d_parse`, :mod:`.x3d_json`, :mod:`.x3d_classic_read`), which this one
+(:mod:`.parse`, :mod:`.json`, :mod:`.classic_read`), which this one
 reader reads.
 
 Rules the reader follows, where X3D leaves a choice:
@@ -38,11 +38,11 @@ Rules the reader follows, where X3D leaves a choice:
   ``category="angle"`` scales every angle field.
 - **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
   the instance's field values, passed on through ``IS`` to nested instances
-  (:mod:`.x3d_proto`); an ExternProtoDeclare is followed to a PROTO in a local
-  file under Inline's rules (:mod:`.x3d_extern`), whose urls are then taken
+  (:mod:`.proto`); an ExternProtoDeclare is followed to a PROTO in a local
+  file under Inline's rules (:mod:`.extern`), whose urls are then taken
   from that file's folder.
 - **Scripts** are not run: one that builds geometry, or any Script of a scene
-  with no geometry, gets one note saying so (:mod:`.x3d_script`).
+  with no geometry, gets one note saying so (:mod:`.script`).
 - **Skipped, with a warning in** ``Scene.warnings`` naming file, line and
   node, where X3D browsers are lenient: nodes shadowgeo does not model or does
   not know (scripts, sensors, interpolators, routes, text, lines, points,
@@ -403,7 +403,7 @@ class _Reader:
 
     # -- result ------------------------------------------------------------------
     def scripts(self, root: Element, path: str) -> None:
-        """One note for a Script that builds geometry (:mod:`.x3d_script`), in
+        """One note for a Script that builds geometry (:mod:`.script`), in
         place of the usual note on skipped Scripts."""
         has_geometry = any(instance.role == "geometry" for instance in self.instances)
         note = script_note(root, path, has_geometry)
@@ -649,7 +649,7 @@ def read(
         The folder that Inlines and textures may not leave (default: the
         file's own folder). Name a folder above it for a trusted scene whose
         files lie beside its folder, as a converted scene written to another
-        folder names them (:mod:`.x3d_urls`).
+        folder names them (:mod:`.urls`).
 
     Returns
     -------

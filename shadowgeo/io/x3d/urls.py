@@ -16,7 +16,7 @@ change: the rest of each ``MFString`` value is kept byte for byte.
 
 The files are not copied and nothing is read: a browser follows the
 rewritten urls; shadowgeo's own reader still opens nothing outside a scene's
-folder (see :mod:`.x3d_inline`).
+folder (see :mod:`.inline`).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """X3D writer, every encoding of the same tree: XML (``.x3d``; ``.x3dz``, the
-same gzip-compressed), JSON (``.x3dj``, ``.json``, by :mod:`.x3d_json`),
+same gzip-compressed), JSON (``.x3dj``, ``.json``, by :mod:`.json`),
 ClassicVRML (``.x3dv``; ``.x3dvz``, ``.x3dv.gz``: gzip) or a translation to
-VRML 97 (``.wrl``; ``.wrz``, ``.wrl.gz``), both by :mod:`.x3d_classic_write`.
+VRML 97 (``.wrl``; ``.wrz``, ``.wrl.gz``), both by :mod:`.classic_write`.
 
 Two cases:
 
@@ -21,7 +21,7 @@ Two cases:
   its orientation in the document's angle unit), with a note; it has
   ``class="shadowgeo-overview"`` and is framed anew when converted again.
   Relative urls (Inline, textures, EXTERNPROTO, Script, ...) are rewritten
-  for the output's folder (:mod:`.x3d_urls`).
+  for the output's folder (:mod:`.urls`).
   A light whose shadows are baked (``SceneLight.baked``) gets
   ``shadows="false"``, the class token ``shadowgeo-shadows-baked`` (read
   back as ``baked``) and a comment before it saying why; a light that is no
@@ -130,7 +130,7 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
     path = Path(path)
     doctype = None
     # the shapes' numbers, and the long ones the reader held, kept out of the
-    # tree (see .x3d_numbers)
+    # tree (see .numbers)
     splicer = Splicer(scene.numbers if scene.document is not None else None)
     if scene.document is not None:
         tree = _with_added(scene, splicer)
