@@ -20,6 +20,7 @@ from manifold3d import CrossSection, FillRule, triangulate
 
 from .arrangement import convex_union_arrays, convex_union_flat
 from .errors import GeometryError
+from .limits import CONVEX_TURN as _CONVEX_TURN
 from .limits import MAX_UNION_CROSSINGS
 from .orientation import MAX_COORDINATE, turn_sign, turns
 from .plane import Plane
@@ -1067,10 +1068,6 @@ def polygon_triangles(points: np.ndarray, holes: Sequence[np.ndarray] = ()) -> n
     triangles = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
     mapped: np.ndarray = np.concatenate(order)[triangles]
     return mapped
-
-
-# A corner that turns this far (radians) the wrong way still counts as straight.
-_CONVEX_TURN = 1e-12
 
 
 def is_convex(corners: np.ndarray) -> np.ndarray:

@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
 from .levels import cover_level_areas, cover_levels
+from .limits import RELATIVE_ROUNDING
 from .plane import Plane
 from .polygons import components, local_scale, points_in_parts, signed_areas
 from .projection import project_shadow
@@ -138,7 +139,9 @@ def _hours(k: int, step: _dt.timedelta) -> float:
 
 def _at_least(level_areas: dict[float, float], hours: float) -> float:
     """The areas of the durations of at least ``hours``, summed in rising order."""
-    return float(sum(area for duration, area in level_areas.items() if duration >= hours - 1e-9))
+    return float(
+        sum(area for duration, area in level_areas.items() if duration >= hours - RELATIVE_ROUNDING)
+    )
 
 
 @dataclass(frozen=True)

@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import GeometryError, SceneError
 from .io.atomic import atomic_path
 from .lights import DirectionalLight, Light, PointLight, SpotLight
+from .limits import SMALLEST_DRAWN_SIZE
 from .projection import Shadow
 from .scene.model import Scene, SceneLight, Shape, Viewpoint
 
@@ -166,7 +167,7 @@ def _bounds(items: list[_Item], lights: list[AnyLight]) -> tuple[np.ndarray, flo
         return np.zeros(3), 1.0
     stacked = np.concatenate(points)
     low, high = stacked.min(axis=0), stacked.max(axis=0)
-    return (low + high) / 2, max(float(np.linalg.norm(high - low)), 1e-12)
+    return (low + high) / 2, max(float(np.linalg.norm(high - low)), SMALLEST_DRAWN_SIZE)
 
 
 def _light_glyph(

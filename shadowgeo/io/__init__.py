@@ -256,7 +256,7 @@ def look_rotation(direction: ArrayLike) -> np.ndarray:
     source = np.array([0.0, 0.0, -1.0])
     cosine = float(source @ target)
     axis = np.cross(source, target)
-    if cosine < -1.0 + 1e-12:
+    if cosine < -1.0 + limits.PRODUCT_ROUNDING:
         # Pointing along +Z: half a turn about X.
         return np.diag([1.0, -1.0, -1.0])
     # Rodrigues' formula for the rotation by the angle between source and target.

@@ -81,6 +81,7 @@ from numpy.typing import ArrayLike
 
 from ...errors import SceneError
 from ...lights import DirectionalLight, SpotLight
+from ...limits import MATRIX_ROUNDING, PRODUCT_ROUNDING
 from ...scene import Scene, SceneLight, Shape
 from ...scene.model import MARK, Viewpoint, overview, unique_name
 from .. import up_and_units
@@ -829,7 +830,7 @@ def _transform_fields(matrix: np.ndarray) -> dict[str, str]:
     """X3D Transform fields that give exactly ``matrix`` (4, 4): the linear part
     ``A = R (SR S SR^-1)`` from the singular value decomposition
     ``A = U diag(s) V^T`` with ``R = U V^T``, ``SR = V``, scale ``s``."""
-    if not np.allclose(matrix[3], [0, 0, 0, 1], rtol=0, atol=1e-12):
+    if not np.allclose(matrix[3], [0, 0, 0, 1], rtol=0, atol=PRODUCT_ROUNDING):
         raise SceneError(f"cannot write a projective transform in X3D: {matrix.tolist()}")
     linear = matrix[:3, :3]
     u, s, vt = np.linalg.svd(linear)
@@ -841,11 +842,11 @@ def _transform_fields(matrix: np.ndarray) -> dict[str, str]:
         s[2] *= -1
     fields = {"translation": _numbers(matrix[:3, 3])}
     rotation = u @ vt
-    if not np.allclose(rotation, np.eye(3), rtol=0, atol=1e-15):
+    if not np.allclose(rotation, np.eye(3), rtol=0, atol=MATRIX_ROUNDING):
         fields["rotation"] = _numbers(_axis_angle(rotation))
-    if not np.allclose(s, 1.0, rtol=0, atol=1e-15):
+    if not np.allclose(s, 1.0, rtol=0, atol=MATRIX_ROUNDING):
         fields["scale"] = _numbers(s)
-        if not np.allclose(vt, np.eye(3), rtol=0, atol=1e-15):
+        if not np.allclose(vt, np.eye(3), rtol=0, atol=MATRIX_ROUNDING):
             fields["scaleOrientation"] = _numbers(_axis_angle(vt.T))
     return fields
 
