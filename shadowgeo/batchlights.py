@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from . import polygons as poly
+from .compiled import use_compiled
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight
 from .limits import LARGEST_COORDINATE, check_light
@@ -694,7 +695,8 @@ def whole_outlines(
     - **Two to** :data:`HELD_LOOPS` **loops**, :data:`HELD_CORNERS` or more
       corners in all, one loop's box holding the others' (compiled:
       :func:`shadowgeo.kernels.whole_loops`, which imports numba the first
-      time): the light's loop of largest area, the holder, is star-shaped
+      time; not under ``SHADOWGEO_COMPILED=never``, :mod:`shadowgeo.compiled`):
+      the light's loop of largest area, the holder, is star-shaped
       round the mean of its corners; every other loop is simple and
       counter-clockwise, being monotone along an axis (its principal axis,
       which suits a crescent, else one of 16 directions), so it winds at
@@ -716,7 +718,9 @@ def whole_outlines(
     tried &= np.bincount(loop_light, weights=loop_lengths, minlength=count) >= HELD_CORNERS
     if tried.any():
         tried &= _one_box_holds_all(points, loop_lengths, loop_light, count)
-    if not tried.any():  # (numba is then not loaded: a scene of separate shapes)
+    # (none tried: a scene of separate shapes, and numba is not loaded; the
+    # rule and its override: shadowgeo.compiled)
+    if not use_compiled("certificate", int(tried.sum())):
         return result
     from .kernels import whole_loops  # numba: imported on first use
 
