@@ -20,7 +20,7 @@ PACKAGE = ROOT / "shadowgeo"
 # Where epsilons are named, and tables generated from the X3D schemas (their
 # numbers are the schema's, not thresholds).
 NAMED = {PACKAGE / "tolerance.py", PACKAGE / "limits.py"}
-GENERATED = {PACKAGE / "io" / "x3d" / name for name in ("defaults.py", "field_types.py")}
+GENERATED = {PACKAGE / "io" / "x3d" / "tables.py"}
 SMALLEST_PLAIN = 1e-6
 
 

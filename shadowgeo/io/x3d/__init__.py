@@ -11,8 +11,9 @@ that tree whatever the encoding, with :mod:`.fields` (field values),
 writes the tree back in the encoding the output's extension names
 (:mod:`.classic_write`, :mod:`.json`), with :mod:`.numbers` (number text),
 :mod:`.layout` (indentation) and :mod:`.urls` (relative urls for the output's
-folder). :mod:`.defaults`, :mod:`.field_types` and :mod:`.json_fields` are
-tables generated from the X3D 4.0 schemas by ``tools/``.
+folder). :mod:`.tables` is what they know of X3D 4.0 (field types and
+defaults, default containerFields), generated from its schemas by
+``tools/x3d_tables.py``.
 
 This package imports nothing itself, so importing one module loads only what
 that module needs.

@@ -48,9 +48,9 @@ from lxml import etree
 
 from ...errors import SceneError, excerpt
 from .classic_tokens import Token, is_number, number_text, quote, tokens
-from .field_types import CONTAINER_FIELDS, field_type
 from .fields import Element
 from .layout import lay_out
+from .tables import CONTAINER_FIELDS, field_type
 
 MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000

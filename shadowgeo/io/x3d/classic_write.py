@@ -4,7 +4,7 @@ The tree is what :mod:`.write` would write as XML (the input document
 with the shadow groups added, or a fresh one); this module only changes its
 syntax, so every node, DEF/USE name, field value, PROTO, ROUTE, Script,
 IMPORT/EXPORT, head entry and comment is kept. Field types come from the
-schema table (:mod:`.field_types`), a prototype's declaration, or a
+schema table (:mod:`.tables`), a prototype's declaration, or a
 ``<field type>``: SFString values are quoted, MF values bracketed, booleans
 written ``TRUE`` / ``FALSE``. A child node goes to its ``containerField``
 (or its type's default one). Script code held as XML text is written as the
@@ -26,10 +26,9 @@ from lxml import etree
 from ...errors import SceneError
 from .classic_read import classic_comment
 from .classic_tokens import is_number, quote
-from .defaults import DEFAULTS
-from .field_types import CONTAINER_FIELDS, field_type
 from .fields import Element, Tree, local_name
 from .fields import parse as parse_field
+from .tables import CONTAINER_FIELDS, DEFAULTS, field_type
 
 INDENT = "  "
 # Nodes whose XML text content is code (a CDATA section), written as a url.

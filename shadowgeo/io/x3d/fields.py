@@ -1,7 +1,7 @@
 """X3D XML field values: parsing attribute text by field type, with defaults.
 
-Field types and defaults come from :mod:`.defaults` (generated from the X3D
-4.0 XML Schema by ``tools/x3d_defaults.py``). X3D 3.x files differ in a few
+Field types and defaults come from :mod:`.tables` (generated from the X3D
+4.0 schemas by ``tools/x3d_tables.py``). X3D 3.x files differ in a few
 defaults; :data:`X3D3_DEFAULTS` holds those, chosen by the ``<X3D version>``.
 
 As X3D browsers do, a field whose value cannot be read takes its default, with
@@ -28,7 +28,7 @@ from lxml import etree
 
 from ...errors import SceneError
 from ...limits import LARGEST_COORDINATE
-from .defaults import DEFAULTS
+from .tables import DEFAULTS
 
 if TYPE_CHECKING:
     from .proto import Prototypes

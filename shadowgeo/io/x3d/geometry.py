@@ -19,9 +19,9 @@ from ... import limits
 from ...errors import GeometryError
 from ...polygons import polygons_triangles
 from ...scene import Material, primitives
-from .defaults import DEFAULTS
 from .extrusion import extrusion
 from .fields import Context, Element, local_name
+from .tables import DEFAULTS
 
 PRIMITIVES = {"Box", "Sphere", "Cone", "Cylinder"}
 # Smooth across a curved primitive's facets (a few degrees apart), sharp at a

@@ -16,8 +16,8 @@ from any encoding, shadows added) as X3D JSON. The mapping, both ways:
 - ``head``, ``meta``, ``component``, ``unit``, ``field``, ``fieldValue``,
   ``IS``, ``connect``, ``ProtoDeclare`` ...: statements, keyed by their name.
 
-Field types come from :mod:`.json_fields` (generated from the X3D JSON
-schema); a ``field``'s value is typed by its ``type``, a ``fieldValue``'s by
+Field types come from :mod:`.tables` (generated from the X3D JSON schema
+and XML Schema); a ``field``'s value is typed by its ``type``, a ``fieldValue``'s by
 the declaration of its prototype.
 
 Parsing is as safe as the XML parser's: the size limit and gzip-bomb guard of
@@ -42,8 +42,8 @@ from lxml import etree
 
 from ...errors import SceneError
 from . import parse as x3d_parse
+from . import tables
 from .fields import Element, Tree
-from .json_fields import NODES
 from .layout import lay_out
 
 JSON_SUFFIXES = {".x3dj", ".json"}
@@ -67,14 +67,7 @@ STATEMENT_FIELDS = {
     "ExternProtoDeclare": {"url": "MFString"},
 }
 # node -> (default containerField, {field: type}); a field not listed is an SFString.
-FIELDS = {
-    node: (container, dict(item.split(":") for item in fields.split()))
-    for node, (container, fields) in NODES.items()
-}
-FIELDS["MatrixTransform"] = (  # Castle Game Engine / VRML 97, outside X3D 4.0
-    "children",
-    {"matrix": "SFMatrix4f", "-children": "MFNode", "-metadata": "SFNode"},
-)
+FIELDS = {node: entry for node, entry in tables.FIELDS.items() if node not in tables.STATEMENTS}
 _INTEGER = re.compile(r"[+-]?\d+")
 _HEX = re.compile(r"[+-]?0[xX][0-9a-fA-F]+")
 _OPEN, _CLOSE, _QUOTE, _BACKSLASH = (ord(mark) for mark in '{}"\\')

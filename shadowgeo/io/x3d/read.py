@@ -81,7 +81,6 @@ from ...scene.model import MARK, Placement, Viewpoint, axis_angle
 from ...tolerance import Tolerance
 from .. import file_problem, float_triple
 from . import parse as x3d_parse
-from .defaults import DEFAULTS
 from .fields import Context, Element, Tree, local_name, parse, rotation_matrix
 from .geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
 from .inline import URL_SCHEME, load_inline
@@ -89,6 +88,7 @@ from .lights import LIGHTS, material, scene_light
 from .numbers import Splicer
 from .proto import Prototypes
 from .script import script_note
+from .tables import DEFAULTS
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
 GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}

@@ -88,10 +88,10 @@ from .. import up_and_units
 from ..atomic import atomic_path
 from . import classic_write as x3d_classic_write
 from . import json as x3d_json
-from .field_types import field_type
 from .fields import Element, Tree, numbers_or_none
 from .lights import BAKED
 from .numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
+from .tables import field_type
 from .urls import rewrite_urls
 
 ADDED_ROLES = ("shadow", "volume", "ground")
