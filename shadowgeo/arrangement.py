@@ -38,6 +38,8 @@ from .limits import ORIENTATION_ERROR as _ORIENTATION_ERROR
 from .limits import TINY
 from .topology import cycle_walk, loop_rings, loops_taken
 
+__all__ = ["convex_union", "convex_union_arrays", "convex_union_flat", "strictly_convex_loops"]
+
 # Candidate box pairs per loop above which the grid is not worth it (one loop
 # spanning many others' cells): the caller unites the loops another way.
 _PAIRS_PER_LOOP = 64

@@ -31,6 +31,16 @@ from .plane import Plane
 from .scene import Scene, SceneLight
 from .scene.shadows import Progress, add_shadows
 
+__all__ = [
+    "ConvertOptions",
+    "Outcome",
+    "convert_file",
+    "convert_files",
+    "save_output",
+    "scene_suffix",
+    "shadowed",
+]
+
 
 @dataclass(frozen=True)
 class ConvertOptions:

@@ -27,8 +27,8 @@ from . import polygons as poly
 from .compiled import use_compiled
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight
-from .limits import LARGEST_COORDINATE, check_light
-from .orientation import MAX_COORDINATE, POINT_SLACK, PRODUCT_SLACK
+from .limits import LARGEST_COORDINATE, PRODUCT_SLACK, check_light
+from .orientation import MAX_COORDINATE, POINT_SLACK
 from .plane import Plane
 from .shadow import Shadow, ShadowDiagnostics, triangulated
 from .silhouette import Outlines, check_light_outside, silhouette_outlines, vertex_components
@@ -37,6 +37,27 @@ from .topology import BLOCK, Caster, empty_mesh
 
 if TYPE_CHECKING:
     import trimesh
+
+__all__ = [
+    "BACK",
+    "BEHIND",
+    "CASTS",
+    "HELD_CORNERS",
+    "HELD_LOOPS",
+    "LightFrames",
+    "ON_PLANE",
+    "PARALLEL",
+    "ProjectedOutlines",
+    "array_shadows",
+    "front_rows",
+    "light_frames",
+    "pieces",
+    "project_outlines",
+    "projected_many",
+    "settle",
+    "takes_arrays",
+    "whole_outlines",
+]
 
 # What the frame alone decides about a light.
 CASTS = 0  # the light reaches the plane's front: a shadow to compute

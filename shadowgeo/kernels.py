@@ -23,6 +23,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+__all__ = ["cycle_walk", "successors", "whole_loops"]
+
 # A sign is certain when the cross product is beyond its light's margin
 # (see whole_loops), an order along an axis when the difference is beyond
 # the axis slack.

@@ -28,6 +28,18 @@ import shapely
 from .errors import GeometryError
 from .limits import MAX_SURFACE_PAIRS, TINY
 
+__all__ = [
+    "Triangles",
+    "candidate_pairs",
+    "clip_batch",
+    "corner_max",
+    "corner_min",
+    "indexed_triangles",
+    "misses_boxes",
+    "overlapping_boxes",
+    "twice_areas",
+]
+
 # The cube map around a point light: (axis, sign) of each side's central ray.
 _CUBE_SIDES = [(axis, sign) for axis in range(3) for sign in (1.0, -1.0)]
 

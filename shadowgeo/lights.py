@@ -20,6 +20,17 @@ from .plane import finite_vector
 if TYPE_CHECKING:  # annotations only: no runtime dependency on typing_extensions
     from typing_extensions import TypeIs
 
+__all__ = [
+    "DirectionalLight",
+    "DiskLight",
+    "Light",
+    "PointLight",
+    "RectLight",
+    "SpotLight",
+    "is_positional",
+    "require_light",
+]
+
 
 def _unit(vector: ArrayLike, name: str) -> NDArray[np.float64]:
     vector = finite_vector(vector, name)

@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .limits import PRODUCT_SLACK as PRODUCT_SLACK
+from .limits import PRODUCT_SLACK
+
+__all__ = ["MAX_COORDINATE", "POINT_SLACK", "turn_sign", "turns"]
 
 # Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
 # its 1e8 fixed-point scaling overflows int64's safe range).

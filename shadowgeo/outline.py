@@ -28,6 +28,8 @@ from .topology import loop_rings
 if TYPE_CHECKING:
     from manifold3d import CrossSection
 
+__all__ = ["Outline", "OutlineSet", "make_outlines", "padded_loops"]
+
 
 def padded_loops(points: np.ndarray, sizes: np.ndarray) -> np.ndarray:
     """(n, k, 2) loops of ``sizes`` points each, taken in turn from ``points``,

@@ -28,6 +28,40 @@ from .simplify import without_collinear
 from .sweep import simple_triangles
 from .topology import loop_rings
 
+__all__ = [
+    "ARRANGED_LOOPS",
+    "FlatParts",
+    "STRAIGHT_SLACK",
+    "arranged_parts",
+    "clipper_parts",
+    "components",
+    "crossings_estimate",
+    "fan",
+    "fill",
+    "holds_box",
+    "intersect",
+    "is_convex",
+    "local_scale",
+    "nest",
+    "nest_flat",
+    "parts_area",
+    "points_in_parts",
+    "polygon_triangles",
+    "polygons_triangles",
+    "region_loops",
+    "signed_areas",
+    "star_shaped_flat",
+    "star_triangles",
+    "subtract",
+    "triangles_region",
+    "triangulate_parts",
+    "union_parts",
+    "union_region",
+    "unite",
+    "whole_loop",
+    "without_copies",
+]
+
 # A corner this close (local units) to the straight run between its
 # neighbours is dropped before triangulating: a few hundred units in the last
 # place of MAX_COORDINATE, far below any length a shadow resolves.

@@ -66,6 +66,8 @@ from .topology import Caster, MeshLike, as_caster, empty_mesh, unique_integers
 if TYPE_CHECKING:
     from .lights import PointLight
 
+__all__ = ["project_shadow", "shadow_matrix"]
+
 
 def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
     """The planar shadow matrix ``M = (P . L) I - L P^T``.

@@ -29,6 +29,8 @@ from .polygons import fill, local_scale, region_loops, subtract, unite
 from .simplify import Loops, loops_of
 from .topology import unique_integers
 
+__all__ = ["face_regions", "stitch"]
+
 
 def face_regions(
     one: tuple[Loops, np.ndarray],

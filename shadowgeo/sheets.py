@@ -22,6 +22,15 @@ from .limits import ANGLE_SLACK, PRODUCT_ROUNDING, RELATIVE_ROUNDING, SINGULAR_S
 from .silhouette import chain
 from .topology import Caster
 
+__all__ = [
+    "SurfaceGeometry",
+    "face_frames",
+    "lift_directions",
+    "merge_positions",
+    "single_sheet",
+    "surface_geometry",
+]
+
 
 def lift_directions(triangles: np.ndarray, normals: np.ndarray, n_points: int) -> np.ndarray:
     """(p, 3) the direction ``m`` to move each point by ``offset * m``: the

@@ -39,6 +39,17 @@ from .projection import project_shadow
 from .sun import days, sun_lights
 from .topology import as_caster
 
+__all__ = [
+    "DaySummary",
+    "Polygons",
+    "SunStudies",
+    "SunStudy",
+    "days_table",
+    "sun_study",
+    "sun_study_by_day",
+    "sun_summaries_by_day",
+]
+
 Polygons = list[list[NDArray[np.float64]]]
 
 

@@ -94,6 +94,14 @@ from .topology import Caster, MeshLike, as_caster, closed_each, loops_taken, uni
 if TYPE_CHECKING:
     import trimesh
 
+__all__ = [
+    "SurfaceDiagnostics",
+    "SurfaceShadow",
+    "closed_silhouettes",
+    "shadow_layers_on_surface",
+    "shadow_on_surface",
+]
+
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000
 

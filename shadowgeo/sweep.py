@@ -33,6 +33,8 @@ import numpy as np
 from .limits import RELATIVE_ROUNDING
 from .orientation import MAX_COORDINATE, turn_sign, turns
 
+__all__ = ["simple_triangles"]
+
 # Corner kinds along the sweep (top to bottom).
 _START, _SPLIT, _END, _MERGE, _LEFT, _RIGHT = range(6)
 

@@ -22,6 +22,24 @@ from .errors import GeometryError
 if TYPE_CHECKING:
     import trimesh
 
+__all__ = [
+    "BLOCK",
+    "Caster",
+    "MeshLike",
+    "as_caster",
+    "block_normals",
+    "closed_by_sort",
+    "closed_each",
+    "compiled_walk",
+    "cycle_walk",
+    "empty_mesh",
+    "loop_rings",
+    "loops_taken",
+    "point_ids",
+    "row_groups",
+    "unique_integers",
+]
+
 _CACHE_KEY = "shadowgeo_caster"
 # Faces (or vertices) per block where per-face (per-vertex) arrays are
 # worked out a block at a time: small temporaries, reused, instead of fresh

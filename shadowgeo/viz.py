@@ -38,12 +38,27 @@ from .errors import GeometryError, SceneError
 from .io.atomic import atomic_path
 from .lights import DirectionalLight, Light, PointLight, SpotLight
 from .limits import SMALLEST_DRAWN_SIZE
-from .projection import Shadow
 from .scene.model import Scene, SceneLight, Shape, Viewpoint
+from .shadow import Shadow
 
 if TYPE_CHECKING:
     import pyvista as pv
     import trimesh
+
+__all__ = [
+    "AnyLight",
+    "BACKGROUND",
+    "LIGHT_COLOR",
+    "Plottable",
+    "SHADOW_COLOR",
+    "VIEWS",
+    "VOLUME_COLOR",
+    "VOLUME_OPACITY",
+    "no_display_reason",
+    "plot",
+    "scene_plotter",
+    "view_angle",
+]
 
 # What plot() draws: a scene, shape, shadow or mesh, or any nesting of lists of them.
 Plottable: TypeAlias = Union[Scene, Shape, Shadow, "trimesh.Trimesh", Iterable["Plottable"]]  # noqa: UP007

@@ -241,6 +241,17 @@ the readers and writers: :data:`FIELDS`, :data:`CONTAINER_FIELDS`,
 
 from __future__ import annotations
 
+__all__ = [
+    "CONTAINER_FIELDS",
+    "DEFAULTS",
+    "DEFAULT_VALUES",
+    "FIELDS",
+    "FIELD_TYPES",
+    "NODES",
+    "STATEMENTS",
+    "field_type",
+]
+
 '''
 
 FOOTER = '''

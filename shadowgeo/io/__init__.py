@@ -66,6 +66,24 @@ from .. import limits
 from ..errors import SceneError
 from ..scene import Scene, Shape
 
+__all__ = [
+    "READERS",
+    "WRITERS",
+    "check_face_indices",
+    "check_writable",
+    "file_problem",
+    "float_triple",
+    "json_format",
+    "load",
+    "look_rotation",
+    "optional_module",
+    "outside_reason",
+    "reader_name",
+    "refuse_outside",
+    "save",
+    "up_and_units",
+]
+
 READERS = {
     ".x3d": "x3d.read",
     ".x3dz": "x3d.read",

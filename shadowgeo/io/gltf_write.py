@@ -62,6 +62,8 @@ from .gltf_layout import (
     unit_float,
 )
 
+__all__ = ["build", "is_trs", "write"]
+
 _ARRAY_BUFFER = 34962
 _ELEMENT_ARRAY_BUFFER = 34963
 _FLOAT = 5126

@@ -35,6 +35,8 @@ from . import float_triple
 from .usd_assets import check_assets
 from .usd_layout import custom, error_text, opened, pxr, stored_name
 
+__all__ = ["read"]
+
 
 def _world(xformable: Any, time: Any, path: Path, where: str) -> np.ndarray:
     """(4, 4) column-vector local-to-world transform of a prim (named

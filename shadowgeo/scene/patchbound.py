@@ -21,6 +21,8 @@ from ..limits import RELATIVE_ROUNDING
 from ..tolerance import Tolerance
 from .casters import CasterSet
 
+__all__ = ["may_hold_patch"]
+
 # Side of the cells of the normal histogram (unit-normal components), and the
 # faces binned per pass (bounds its memory).
 _NORMAL_CELL = 1.0 / 16.0

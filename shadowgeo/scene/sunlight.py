@@ -39,6 +39,8 @@ from .model import Material, Scene, Shape
 from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
 
+__all__ = ["SceneStudy", "ramp_colour", "scene_study", "study_scene", "sunlight_shapes"]
+
 # Lift of the sunlight map off its floor, relative to the scene's size (as
 # shadows are lifted: shadowgeo.scene.shadows).
 _LIFT = 1e-3

@@ -36,6 +36,8 @@ import numpy as np
 from ..lights import Light, is_positional
 from ..limits import PRODUCT_ROUNDING, TINY
 
+__all__ = ["clip_to_lit", "corner_normals", "lit_values"]
+
 # Past this many (corner, face around its vertex) pairs, faces keep their own
 # normals: a vertex shared by thousands of faces is a fan no one smooths.
 _MAX_PAIRS = 4_000_000

@@ -18,3 +18,5 @@ defaults, default containerFields), generated from its schemas by
 This package imports nothing itself, so importing one module loads only what
 that module needs.
 """
+
+__all__: list[str] = []

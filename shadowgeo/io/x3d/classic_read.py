@@ -52,6 +52,21 @@ from .fields import Element
 from .layout import lay_out
 from .tables import CONTAINER_FIELDS, field_type
 
+__all__ = [
+    "ACCESS",
+    "MAX_DEPTH",
+    "MAX_ELEMENTS",
+    "MAX_SKIPPED",
+    "STATEMENTS",
+    "VRML97_FIELDS",
+    "XSD",
+    "ZERO_WIDTH",
+    "classic_comment",
+    "is_classic",
+    "parse_bytes",
+    "xml_comment",
+]
+
 MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000
 # Statements and fields skipped at most before the file is refused as unreadable.

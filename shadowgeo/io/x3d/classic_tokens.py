@@ -15,6 +15,8 @@ from typing import NamedTuple, cast
 
 from ...errors import SceneError
 
+__all__ = ["Token", "is_number", "number_text", "quote", "tokens"]
+
 # One match a token, with the white space (and commas) before it.
 _TOKEN = re.compile(
     r"""[ \t\r\n,]*

@@ -30,6 +30,15 @@ from .fields import Element, Tree, local_name
 from .fields import parse as parse_field
 from .tables import CONTAINER_FIELDS, DEFAULTS, field_type
 
+__all__ = [
+    "CODE_NODES",
+    "INDENT",
+    "VRML97_ACCESS",
+    "VRML97_FIELDS",
+    "X3D4_DEFAULTS",
+    "classic_text",
+]
+
 INDENT = "  "
 # Nodes whose XML text content is code (a CDATA section), written as a url.
 CODE_NODES = {"Script", "ShaderPart", "ShaderProgram", "PackagedShader"}

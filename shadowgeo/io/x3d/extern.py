@@ -22,6 +22,8 @@ from ...errors import SceneError
 from .fields import Element, local_name, parse
 from .inline import InlineReader, resolve_url, x3d_tree
 
+__all__ = ["Found", "find"]
+
 
 @dataclass(frozen=True)
 class Found:

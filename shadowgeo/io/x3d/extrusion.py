@@ -20,6 +20,8 @@ from ...limits import PRODUCT_ROUNDING, SHORTEST_DIRECTION
 from ...polygons import polygon_triangles
 from .fields import Context, Element, rotation_matrix
 
+__all__ = ["extrusion", "frames"]
+
 # MAX_POINTS: vertices one Extrusion may make (spine x section): a few
 # kilobytes of text could otherwise ask for billions.
 

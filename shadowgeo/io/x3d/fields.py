@@ -33,6 +33,19 @@ from .tables import DEFAULTS
 if TYPE_CHECKING:
     from .proto import Prototypes
 
+__all__ = [
+    "ANGLE_FIELDS",
+    "Context",
+    "Element",
+    "Tree",
+    "WIDTH",
+    "X3D3_DEFAULTS",
+    "local_name",
+    "numbers_or_none",
+    "parse",
+    "rotation_matrix",
+]
+
 # lxml ships no type information: to mypy both are Any, named for the reader.
 Element: TypeAlias = etree._Element
 Tree: TypeAlias = etree._ElementTree

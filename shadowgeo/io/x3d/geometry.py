@@ -23,6 +23,20 @@ from .extrusion import extrusion
 from .fields import Context, Element, local_name
 from .tables import DEFAULTS
 
+__all__ = [
+    "COORDINATES",
+    "GEOMETRY",
+    "Instance",
+    "MESHES",
+    "Mesh",
+    "PRIMITIVES",
+    "PRIMITIVE_CREASE",
+    "Primitive",
+    "UNMODELLED_GEOMETRY",
+    "coordinates",
+    "geometry",
+]
+
 PRIMITIVES = {"Box", "Sphere", "Cone", "Cylinder"}
 # Smooth across a curved primitive's facets (a few degrees apart), sharp at a
 # Cylinder's or Cone's rim (90 degrees or more).

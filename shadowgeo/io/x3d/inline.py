@@ -35,6 +35,18 @@ from . import parse as x3d_parse
 from .fields import Context, Element, Tree, local_name
 from .geometry import Instance, Mesh
 
+__all__ = [
+    "GLTF_SUFFIXES",
+    "InlineReader",
+    "MAX_INLINE_DEPTH",
+    "MAX_INLINE_INSTANCES",
+    "URL_SCHEME",
+    "X3D_SUFFIXES",
+    "load_inline",
+    "resolve_url",
+    "x3d_tree",
+]
+
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
 X3D_SUFFIXES = {".x3d", ".x3dz", ".x3dv", ".x3dvz", ".wrl", ".wrz"}

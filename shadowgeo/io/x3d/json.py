@@ -46,6 +46,25 @@ from . import tables
 from .fields import Element, Tree
 from .layout import lay_out
 
+__all__ = [
+    "FIELDS",
+    "HOLDERS",
+    "IN_CHILDREN",
+    "JSON_SCHEMA",
+    "JSON_SUFFIXES",
+    "LISTED",
+    "MAX_DEPTH",
+    "SCHEMA_LOCATION",
+    "SINGLE",
+    "SOURCE_CODE_NODES",
+    "STATEMENT_FIELDS",
+    "XSD",
+    "dumps",
+    "is_x3d_json",
+    "parse",
+    "typed",
+]
+
 JSON_SUFFIXES = {".x3dj", ".json"}
 # Nodes nested at most this deep. libxml2 refuses XML deeper than 256; JSON
 # takes up to four levels a node ({"Group": {"-children": [{...}]}}) and

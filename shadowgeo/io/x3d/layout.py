@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from .fields import Element
 
+__all__ = ["lay_out"]
+
 _SPACE = "  "
 
 

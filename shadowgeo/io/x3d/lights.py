@@ -21,6 +21,8 @@ from ...scene.model import MARK
 from .. import float_triple
 from .fields import Context, Element, local_name
 
+__all__ = ["BAKED", "LIGHTS", "MATERIALS", "material", "scene_light"]
+
 LIGHTS = {"PointLight", "SpotLight", "DirectionalLight"}
 # The class token of a light whose shadows shadowgeo baked (see write.py).
 BAKED = f"{MARK}-baked"

@@ -27,6 +27,16 @@ from ...errors import SceneError
 from .. import optional_module
 from .fields import Element, Tree
 
+__all__ = [
+    "LONG_VALUE",
+    "NUMBER_CHARACTERS",
+    "Splicer",
+    "integers_text",
+    "long_number_bytes",
+    "orjson",
+    "points_text",
+]
+
 # The shortest float64 text (as repr), ten times faster: the `speed` extra.
 orjson = optional_module("orjson")
 

@@ -32,6 +32,8 @@ from ... import limits
 from ...errors import SceneError
 from . import classic_read as x3d_classic_read
 
+__all__ = ["ENCODINGS", "MAX_BYTES", "MAX_DEPTH", "parse", "read_bytes"]
+
 # X3D encodings other than XML: extension -> module whose parse(path) gives the tree.
 ENCODINGS = {".x3dj": "json", ".json": "json"}
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).

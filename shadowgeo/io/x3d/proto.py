@@ -39,6 +39,8 @@ if TYPE_CHECKING:
     from .fields import Context
     from .inline import InlineReader
 
+__all__ = ["MAX_EXPANSIONS", "MAX_FILES_DEEP", "Prototypes"]
+
 # Copies made per document at most: a prototype whose body holds an instance
 # of itself would otherwise expand for ever.
 MAX_EXPANSIONS = limits.MAX_PROTO_EXPANSIONS  # see shadowgeo.limits

@@ -90,6 +90,8 @@ from .proto import Prototypes
 from .script import script_note
 from .tables import DEFAULTS
 
+__all__ = ["GROUPS", "MAX_NODES", "REASONS", "RENDERED_FIELDS", "SILENT", "TEXTURES", "read"]
+
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
 GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}
 GROUPS |= {"Switch", "LOD"}

@@ -18,6 +18,8 @@ from __future__ import annotations
 from .fields import Element, local_name
 from .geometry import COORDINATES, GEOMETRY
 
+__all__ = ["CHILDREN", "SHAPED", "script_note"]
+
 # Nodes a Script changes the geometry of by writing any of their fields (text,
 # lines and points cast no shadow anyway).
 SHAPED = GEOMETRY | COORDINATES | {"Shape"}

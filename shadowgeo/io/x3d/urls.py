@@ -32,6 +32,8 @@ from .classic_tokens import quote as quoted
 from .fields import Tree, local_name
 from .inline import URL_SCHEME
 
+__all__ = ["rewrite_urls"]
+
 # The fields that hold urls: X3D's ``url`` and Background's ``frontUrl``, ...
 _URL_FIELD = re.compile(r"url|[a-z]+Url")
 # The elements that may hold one (found by XPath, in C: a Python loop over a

@@ -94,6 +94,15 @@ from .numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, poin
 from .tables import field_type
 from .urls import rewrite_urls
 
+__all__ = [
+    "ADDED_ROLES",
+    "CLASSIC_SUFFIXES",
+    "LIGHT_TAGS",
+    "OVERVIEW_CLASS",
+    "VRML97_SUFFIXES",
+    "write",
+]
+
 ADDED_ROLES = ("shadow", "volume", "ground")
 LIGHT_TAGS = ("PointLight", "SpotLight", "DirectionalLight")
 # What the comment before a light whose shadows are baked says.
