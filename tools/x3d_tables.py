@@ -179,11 +179,9 @@ def json_nodes(json_path: Path) -> dict[str, dict[str, str]]:
     return out
 
 
-def tables(xsd_path: Path, json_path: Path):
-    """(nodes, default values, common field types): ``nodes[node] =
-    (containerField, {field: type})`` over both schemas, sorted."""
-    elements = xml_elements(xsd_path)
-    from_json = json_nodes(json_path)
+def _merged(elements: dict, from_json: dict) -> dict[str, tuple[str, dict[str, str]]]:
+    """node -> (containerField, {field: type}) over both schemas, sorted;
+    SystemExit where they type a field differently."""
     nodes: dict[str, tuple[str, dict[str, str]]] = {}
     for node in sorted(set(elements) | set(from_json)):
         container, xml = elements.get(node, ("children", {}))
@@ -194,23 +192,34 @@ def tables(xsd_path: Path, json_path: Path):
             if fields.setdefault(name, kind) != kind:
                 raise SystemExit(f"{node}.{name}: {fields[name]} in the XML Schema, {kind} in JSON")
         nodes[node] = (container, dict(sorted(fields.items())))
-    for node, (container, fields) in EXTRA.items():
-        nodes[node] = (container, {name: kind for name, (kind, _) in fields.items()})
+    for node, (container, extra) in EXTRA.items():
+        nodes[node] = (container, {name: kind for name, (kind, _) in extra.items()})
+    return dict(sorted(nodes.items()))
+
+
+def _common_types(elements: dict) -> dict[str, str]:
+    """The type a field name has in most elements (for a node the table
+    lacks): counted over the XML Schema's elements in its order, as ties fall."""
+    votes: dict[str, collections.Counter[str]] = collections.defaultdict(collections.Counter)
+    for _, fields in [*elements.values(), *EXTRA.values()]:
+        for name, (kind, _) in fields.items():
+            if name[0] != "-":
+                votes[name][kind] += 1
+    return {name: counter.most_common(1)[0][0] for name, counter in sorted(votes.items())}
+
+
+def tables(xsd_path: Path, json_path: Path):
+    """(nodes, default values, common field types): ``nodes[node] =
+    (containerField, {field: type})`` over both schemas, sorted."""
+    elements = xml_elements(xsd_path)
+    nodes = _merged(elements, json_nodes(json_path))
     values = {
         node: {name: default for name, (_, default) in sorted(elements[node][1].items())}
         for node in MODELLED
     }
     for node, (_, fields) in EXTRA.items():
         values[node] = {name: value for name, (_, value) in fields.items() if name[0] != "-"}
-    # The type a field name has in most elements (for a node the table lacks):
-    # counted over the XML Schema's elements in its order, as ties fall.
-    votes: dict[str, collections.Counter[str]] = collections.defaultdict(collections.Counter)
-    for _, fields in [*elements.values(), *EXTRA.values()]:
-        for name, (kind, _) in fields.items():
-            if name[0] != "-":
-                votes[name][kind] += 1
-    common = {name: counter.most_common(1)[0][0] for name, counter in sorted(votes.items())}
-    return dict(sorted(nodes.items())), dict(sorted(values.items())), common
+    return nodes, dict(sorted(values.items())), _common_types(elements)
 
 
 def _node_lines(nodes: dict[str, tuple[str, dict[str, str]]]) -> str:
