@@ -12,9 +12,10 @@ kinds of job can:
     the compiled way give the same arrays, bit for bit; the compiled way
     saves about 0.4 s per million items walked (numpy's pointer doubling
     takes about 2 log2(k) passes over k items), so a walk takes it from
-    :data:`WALK_ITEMS` items (measured: a walk and its successor matching of
-    2**20 items took 1.0-1.2 s with numpy and 0.3-0.4 s compiled, against
-    0.5 s for the import, on a shared two-core machine).
+    :data:`WALK_ITEMS` items (``python benchmarks/bench_compiled.py`` on a
+    shared two-core machine: the import 0.5 s; a walk and its successor
+    matching of 2**20 items 1.1-1.3 s with numpy, 0.35 s compiled; of 2**18
+    items they save 0.15 s, less than the import).
 ``"certificate"``
     The test that one outline loop is a light's whole shadow
     (:func:`shadowgeo.batchlights.whole_outlines`): a light whose outline has
