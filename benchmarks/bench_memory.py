@@ -238,7 +238,7 @@ def section(
         "through fork and exec), CPU its user + system time (`getrusage`). The budget is "
         f"`limits.MEMORY_BUDGET` = {limits.MAX_TRIANGLES:,} triangles x "
         f"{limits.BYTES_PER_TRIANGLE} bytes = {limits.MEMORY_BUDGET / 1e9:.1f} GB, estimated "
-        "before the work (`shadowgeo/io/x3d_budget.py`, glTF accessor counts); the bombs are "
+        "before the work (`shadowgeo/io/x3d/budget.py`, glTF accessor counts); the bombs are "
         f"refused at about the {baseline / 1e6:.0f} MB an empty scene takes.",
         "",
         "| input | file size | stands for | outcome | peak RSS | CPU s |",

@@ -124,8 +124,8 @@ def run_shadowgeo(source: str, target: str) -> dict:
     import shadowgeo
     import shadowgeo.io.gltf_read  # noqa: F401  (the readers and writers imported up front,
     import shadowgeo.io.gltf_write  # noqa: F401  so that "base MB" holds all the code)
-    import shadowgeo.io.x3d_read  # noqa: F401
-    import shadowgeo.io.x3d_write  # noqa: F401
+    import shadowgeo.io.x3d.read  # noqa: F401
+    import shadowgeo.io.x3d.write  # noqa: F401
 
     times = {"base MB": peak_mb()}
     start = clock()

@@ -62,7 +62,7 @@ from x3d_schema import new_schema_errors, x3d_schema_errors  # noqa: E402
 
 import shadowgeo as sg  # noqa: E402
 from cli.main import main as shadowgeo_main  # noqa: E402
-from shadowgeo.io.x3d_parse import read_bytes  # noqa: E402
+from shadowgeo.io.x3d.parse import read_bytes  # noqa: E402
 
 SHARED = ROOT.parent / "shared"
 XSD = ROOT / "tests" / "data" / "x3d-schema" / "x3d-4.0.xsd.gz"

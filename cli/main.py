@@ -21,6 +21,7 @@ import re
 import sys
 
 import shadowgeo
+import shadowgeo.compiled
 
 from .common import terminal
 from .interrupt import Terminated, exit_code, signals_unwind
@@ -81,6 +82,11 @@ def run(argv: list[str] | None) -> int:
     args = parser.parse_args(negative_values_joined(sys.argv[1:] if argv is None else argv))
     if args.command is None:
         parser.print_help(sys.stderr)
+        return 2
+    try:
+        shadowgeo.compiled.current_mode()  # SHADOWGEO_COMPILED, checked before any work
+    except ValueError as error:
+        print(f"shadowgeo: {error}", file=sys.stderr)
         return 2
     try:
         return int(args.func(args) or 0)

@@ -9,9 +9,10 @@ from .errors import GeometryError, SceneError
 from .io import load, save
 from .lights import DirectionalLight, DiskLight, Light, PointLight, RectLight, SpotLight
 from .plane import Plane
-from .projection import Shadow, ShadowDiagnostics, project_shadow, shadow_matrix
+from .projection import project_shadow, shadow_matrix
 from .scene import Material, Scene, SceneLight, Semantics, Shape, Site, Viewpoint
 from .scene.shadows import add_shadows
+from .shadow import Shadow, ShadowDiagnostics
 from .silhouette import Silhouette, silhouette
 from .soft import SoftShadow, soft_shadow
 from .soft_surface import SoftSurfaceShadow, soft_shadow_on_surface

@@ -32,13 +32,14 @@ import math
 
 import numpy as np
 
+from .limits import CROSSING_RESOLUTION as _T_RESOLUTION
+from .limits import FRAME_ROUNDING as _FRAME_ROUNDING
+from .limits import ORIENTATION_ERROR as _ORIENTATION_ERROR
+from .limits import TINY
 from .topology import cycle_walk, loop_rings, loops_taken
 
-# Rounding error bound of a 2-D orientation (a 2x2 determinant of coordinate
-# differences) as a multiple of the squared extent of the points involved:
-# Shewchuk's (3 + 16 eps) eps times the sum of the two products' magnitudes
-# (each at most the extent squared) is 6.7e-16; ten times that for margin.
-_ORIENTATION_ERROR = 1e-14
+__all__ = ["convex_union", "convex_union_arrays", "convex_union_flat", "strictly_convex_loops"]
+
 # Candidate box pairs per loop above which the grid is not worth it (one loop
 # spanning many others' cells): the caller unites the loops another way.
 _PAIRS_PER_LOOP = 64
@@ -47,13 +48,6 @@ _CANDIDATE_PAIRS = 1_000_000
 # The grid's cells are listed in a table while there are at most this many
 # per loop (else found by bisection).
 _DENSE_CELLS = 8
-# Rounding of a point turned into another frame, as a share of the largest
-# coordinate (a few ulps; a thousand for margin).
-_FRAME_ROUNDING = 1e-13
-# Crossing parameters along one edge closer than this are not ordered (the
-# sort key edge + t resolves about 1e-11 at 60,000 edges; 64 ulps of the
-# edge count where that is coarser).
-_T_RESOLUTION = 1e-9
 # Edge pairs of the paired loops (every edge of one against every edge of
 # the other) above which the candidate arrays would fill too much memory:
 # many-sided loops over one another.
@@ -239,7 +233,7 @@ def _box_pairs(
     and of the next cells. None when that would test more than
     ``_PAIRS_PER_LOOP`` candidates per loop and ``_CANDIDATE_PAIRS`` in all."""
     count = len(low)
-    cell = np.maximum((high - low).max(axis=0), 1e-300)
+    cell = np.maximum((high - low).max(axis=0), TINY)
     origin = low.min(axis=0)
     column_row = np.floor((low - origin) / cell).astype(np.int64)
     rows = int(column_row[:, 1].max()) + 3

@@ -32,6 +32,16 @@ from .scene import Scene, SceneLight
 from .scene.shadows import Progress, add_shadows
 from .scene.softbake import with_light_sizes
 
+__all__ = [
+    "ConvertOptions",
+    "Outcome",
+    "convert_file",
+    "convert_files",
+    "save_output",
+    "scene_suffix",
+    "shadowed",
+]
+
 
 @dataclass(frozen=True)
 class ConvertOptions:
@@ -89,7 +99,7 @@ def shadowed(
     """The scene read from ``source`` and the same with the shadows
     ``options`` ask for (see :func:`add_shadows`; ``progress`` is passed on)."""
     # the chord only matters for X3D's curved primitives; other readers take no options
-    curved = options.tolerance is not None and reader_name(source) == "x3d_read"
+    curved = options.tolerance is not None and reader_name(source) == "x3d.read"
     scene = load(
         source,
         max_triangles=options.max_triangles,

@@ -24,10 +24,11 @@ from typing import TYPE_CHECKING, cast
 import numpy as np
 
 from . import polygons as poly
+from .compiled import use_compiled
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight
-from .limits import LARGEST_COORDINATE, check_light
-from .orientation import MAX_COORDINATE, POINT_SLACK, PRODUCT_SLACK
+from .limits import LARGEST_COORDINATE, PRODUCT_SLACK, check_light
+from .orientation import MAX_COORDINATE, POINT_SLACK
 from .plane import Plane
 from .shadow import Shadow, ShadowDiagnostics, triangulated
 from .silhouette import Outlines, check_light_outside, silhouette_outlines, vertex_components
@@ -36,6 +37,27 @@ from .topology import BLOCK, Caster, empty_mesh
 
 if TYPE_CHECKING:
     import trimesh
+
+__all__ = [
+    "BACK",
+    "BEHIND",
+    "CASTS",
+    "HELD_CORNERS",
+    "HELD_LOOPS",
+    "LightFrames",
+    "ON_PLANE",
+    "PARALLEL",
+    "ProjectedOutlines",
+    "array_shadows",
+    "front_rows",
+    "light_frames",
+    "pieces",
+    "project_outlines",
+    "projected_many",
+    "settle",
+    "takes_arrays",
+    "whole_outlines",
+]
 
 # What the frame alone decides about a light.
 CASTS = 0  # the light reaches the plane's front: a shadow to compute
@@ -694,7 +716,8 @@ def whole_outlines(
     - **Two to** :data:`HELD_LOOPS` **loops**, :data:`HELD_CORNERS` or more
       corners in all, one loop's box holding the others' (compiled:
       :func:`shadowgeo.kernels.whole_loops`, which imports numba the first
-      time): the light's loop of largest area, the holder, is star-shaped
+      time; not under ``SHADOWGEO_COMPILED=never``, :mod:`shadowgeo.compiled`):
+      the light's loop of largest area, the holder, is star-shaped
       round the mean of its corners; every other loop is simple and
       counter-clockwise, being monotone along an axis (its principal axis,
       which suits a crescent, else one of 16 directions), so it winds at
@@ -716,7 +739,9 @@ def whole_outlines(
     tried &= np.bincount(loop_light, weights=loop_lengths, minlength=count) >= HELD_CORNERS
     if tried.any():
         tried &= _one_box_holds_all(points, loop_lengths, loop_light, count)
-    if not tried.any():  # (numba is then not loaded: a scene of separate shapes)
+    # (none tried: a scene of separate shapes, and numba is not loaded; the
+    # rule and its override: shadowgeo.compiled)
+    if not use_compiled("certificate", int(tried.sum())):
         return result
     from .kernels import whole_loops  # numba: imported on first use
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
+__all__ = ["bounding_box"]
+
 
 def bounding_box(points: ArrayLike) -> np.ndarray:
     """(2, k) the lowest and highest value of each of the ``k`` coordinates of

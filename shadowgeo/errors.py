@@ -6,6 +6,8 @@ element it comes from, so a user can find the problem without a traceback.
 
 from __future__ import annotations
 
+__all__ = ["EXCERPT", "GeometryError", "SceneError", "excerpt"]
+
 
 class GeometryError(ValueError):
     """Input geometry that has no meaningful shadow (NaN, a zero normal, a light

@@ -2,14 +2,16 @@
 dozens of passes over a chunk's arrays for a few hundred corners a light.
 
 Imported on first use only (numba's import and the cached machine code take
-about 0.8 s and 100 MB): :func:`shadowgeo.batchlights.whole_outlines` loads it
-for a light of two to 64 outline loops, 128 corners or more, one loop's box
-holding the others' (a dented caster's folds; not a few shapes side by side,
-nor a small scene's sphere and box); once it is loaded,
-:func:`shadowgeo.topology.cycle_walk` and ``shadowgeo.silhouette._successors``
-take its walks for long outlines (the same results as their numpy ways). Each
-function is compiled once and cached beside this file (or in numba's user
-cache when this folder is read-only).
+about 0.8 s and 100 MB), when :mod:`shadowgeo.compiled`'s rule says a job
+repays it: :func:`shadowgeo.batchlights.whole_outlines` for a light of two to
+64 outline loops, 128 corners or more, one loop's box holding the others' (a
+dented caster's folds; not a few shapes side by side, nor a small scene's
+sphere and box); :func:`shadowgeo.topology.cycle_walk` and
+``shadowgeo.silhouette._successors`` for walks of a million items or more (the
+same results as their numpy ways, bit for bit). ``SHADOWGEO_COMPILED=never``
+keeps numba out, ``always`` takes these loops for every job. Each function is
+compiled once and cached beside this file (or in numba's user cache when this
+folder is read-only).
 
 Every sign here is a certificate: it is taken only when it holds beyond the
 rounding of the numbers that give it, and a loop or light that is not
@@ -20,6 +22,8 @@ from __future__ import annotations
 
 import numba as nb
 import numpy as np
+
+__all__ = ["cycle_walk", "successors", "whole_loops"]
 
 # A sign is certain when the cross product is beyond its light's margin
 # (see whole_loops), an order along an axis when the difference is beyond

@@ -35,6 +35,15 @@ from numpy.typing import NDArray
 from .polygons import nest, signed_areas
 from .topology import loop_rings
 
+__all__ = [
+    "MAX_DEPTH",
+    "Parts",
+    "TILE_VERTICES",
+    "cover_bands",
+    "cover_level_areas",
+    "cover_levels",
+]
+
 Parts = list[list[NDArray[np.float64]]]
 
 # A tile holding more loop vertices than this is split in two.

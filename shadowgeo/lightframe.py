@@ -26,7 +26,19 @@ import numpy as np
 import shapely
 
 from .errors import GeometryError
-from .limits import MAX_SURFACE_PAIRS
+from .limits import MAX_SURFACE_PAIRS, TINY
+
+__all__ = [
+    "Triangles",
+    "candidate_pairs",
+    "clip_batch",
+    "corner_max",
+    "corner_min",
+    "indexed_triangles",
+    "misses_boxes",
+    "overlapping_boxes",
+    "twice_areas",
+]
 
 # The cube map around a point light: (axis, sign) of each side's central ray.
 _CUBE_SIDES = [(axis, sign) for axis in range(3) for sign in (1.0, -1.0)]
@@ -380,7 +392,7 @@ def _grid_pairs(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.n
     height = np.concatenate([first[:, 3] - first[:, 1], second[:, 3] - second[:, 1]])
     typical = np.array([np.median(width), np.median(height)])
     cell = np.maximum(typical * 2.0, (high - low) / 4096)
-    cell = np.maximum(cell, 1e-300)
+    cell = np.maximum(cell, TINY)
     columns = int(np.ceil((high[0] - low[0]) / cell[0])) + 1
 
     def cells(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -20,6 +20,19 @@ from .plane import finite_vector
 if TYPE_CHECKING:  # annotations only: no runtime dependency on typing_extensions
     from typing_extensions import TypeIs
 
+__all__ = [
+    "AreaLight",
+    "DirectionalLight",
+    "DiskLight",
+    "Light",
+    "PointLight",
+    "RectLight",
+    "SpotLight",
+    "centre_light",
+    "is_positional",
+    "require_light",
+]
+
 
 def _unit(vector: ArrayLike, name: str) -> NDArray[np.float64]:
     vector = finite_vector(vector, name)

@@ -61,7 +61,7 @@ node visits            500,000         X3D grouping nodes and Shapes the reader
 scene memory           2 GB            the triangles of a scene x 400 bytes
                        (5M triangles)  (BYTES_PER_TRIANGLE), estimated before they
                                        are built: X3D through DEF/USE, PROTO and
-                                       Inline (shadowgeo.io.x3d_budget), glTF
+                                       Inline (shadowgeo.io.x3d.budget), glTF
                                        meshes through their nodes, USD meshes
                                        through their instances
 PROTO expansions       10,000          ProtoInstance copies per document
@@ -128,6 +128,55 @@ if TYPE_CHECKING:
     from .plane import Plane
     from .topology import Caster
 
+__all__ = [
+    "ANGLE_SLACK",
+    "CONVEX_TURN",
+    "CROSSING_RESOLUTION",
+    "FLOAT32_AGREEMENT",
+    "FRAME_ROUNDING",
+    "LARGEST_COORDINATE",
+    "MATRIX_ROUNDING",
+    "MAX_CASTING_LIGHTS",
+    "MAX_CURVE_SEGMENTS",
+    "MAX_DOCUMENT_BYTES",
+    "MAX_EXTRUSION_POINTS",
+    "MAX_INLINE_DEPTH",
+    "MAX_INLINE_INSTANCES",
+    "MAX_LIGHTS",
+    "MAX_NESTING",
+    "MAX_NODES",
+    "MAX_PROTO_EXPANSIONS",
+    "MAX_SPHERE_SEGMENTS",
+    "MAX_SURFACE_FACES",
+    "MAX_SURFACE_PAIRS",
+    "MAX_TEMPLATE_POINTS",
+    "MAX_TRIANGLES",
+    "MAX_UNION_CROSSINGS",
+    "MAX_XML_DEPTH",
+    "ORIENTATION_ERROR",
+    "PRODUCT_ROUNDING",
+    "PRODUCT_SLACK",
+    "RELATIVE_ROUNDING",
+    "SHORTEST_DIRECTION",
+    "SINGULAR_SHARE",
+    "SMALLEST_DRAWN_SIZE",
+    "SMALLEST_LENGTH",
+    "TINY",
+    "TRS_RELATIVE",
+    "USD_TEXT_BYTES_PER_SECOND",
+    "USD_TEXT_CHECK_BYTES",
+    "USD_TEXT_MEMORY",
+    "USD_TEXT_MEMORY_PER_BYTE",
+    "USD_TEXT_SECONDS",
+    "check_coordinates",
+    "check_geometry",
+    "check_length",
+    "check_light",
+    "check_lights",
+    "check_triangles",
+    "lights_message",
+]
+
 LARGEST_COORDINATE = 1e75
 SMALLEST_LENGTH = 1e-75
 
@@ -139,7 +188,7 @@ MAX_XML_DEPTH = 256
 MAX_NESTING = MAX_XML_DEPTH
 MAX_NODES = 2_000_000
 # Grouping nodes and Shapes the X3D reader walks one by one, every copy
-# counted, estimated before the walk (shadowgeo.io.x3d_budget): about 10 us
+# counted, estimated before the walk (shadowgeo.io.x3d.budget): about 10 us
 # each even when they hold nothing, so 5 CPU-s at most. A 1.1 KB chain of
 # empty Transforms, each USEing the one before ten times, asked for 1.1M
 # (under MAX_NODES) and took 19-36 CPU-s.
@@ -372,3 +421,66 @@ def check_geometry(caster: Caster, light: Light, plane: Plane | None = None) -> 
     check_light(light)
     if plane is not None:
         check_coordinates([plane.offset], "plane offset")
+
+
+# -- Numeric guards ------------------------------------------------------------------
+# Fixed numbers that keep float64 arithmetic from dividing by zero or from
+# telling apart values that differ by rounding alone. Unlike the tolerances of
+# shadowgeo.tolerance they do not scale with the scene: each is a share of the
+# values it compares, a cosine, an angle, or says what else it guards. Every
+# number below 1e-6 in shadowgeo lives here or in tolerance.py
+# (tests/test_epsilons.py).
+
+# Floor of a divisor (a box's extent, a squared length, a norm): a degenerate
+# one divides to a large finite number, not inf or NaN. Far below any real
+# divisor (SMALLEST_LENGTH squared is 1e-150), so it never changes one.
+TINY = 1e-300
+# Share of the values compared by which two results from the same inputs,
+# reached along different float64 paths (a sum of many terms, a box grown or
+# shrunk by rounding, a duration summed from steps), may differ and still
+# agree: a few hundred roundings of 1.1e-16 each, with room.
+RELATIVE_ROUNDING = 1e-9
+# Share by which one product or difference of products (a cross product, a
+# cosine or sine of unit vectors, a turn against its lengths) may be off.
+PRODUCT_ROUNDING = 1e-12
+# Entries of a transform, from a product of matrices or a singular value
+# decomposition, compared with 0 or 1: within this the transform is plain
+# (no projection, no rotation, unit scale); a few ulps of 1.
+MATRIX_ROUNDING = 1e-15
+# Coordinates of 2-D loops within +-polygons' MAX_COORDINATE: a product of two
+# of their differences is off by this much relative (orientation.POINT_SLACK
+# bounds the differences themselves).
+PRODUCT_SLACK = 1e-13
+# Rounding error bound of a 2-D orientation (a 2x2 determinant of coordinate
+# differences) as a multiple of the squared extent of the points involved:
+# Shewchuk's (3 + 16 eps) eps times the sum of the two products' magnitudes
+# (each at most the extent squared) is 6.7e-16; ten times that for margin.
+ORIENTATION_ERROR = 1e-14
+# Rounding of a point turned into another frame, as a share of the largest
+# coordinate (a few ulps; a thousand for margin).
+FRAME_ROUNDING = 1e-13
+# Crossing parameters along one edge closer than this are not ordered (the
+# sort key edge + t resolves about 1e-11 at 60,000 edges; 64 ulps of the
+# edge count where that is coarser).
+CROSSING_RESOLUTION = 1e-9
+# A corner that turns this far (radians) the wrong way still counts as straight.
+CONVEX_TURN = 1e-12
+# Singular values below this share of the largest count as zero when a
+# least-squares direction is solved from a point's face normals (sheets).
+SINGULAR_SHARE = 1e-10
+# glTF node matrices whose TRS decomposition misses them by more than this
+# (relative) are not TRS: glTF's validator rejects them, so they are baked
+# into vertices.
+TRS_RELATIVE = 1e-9
+# A vector shorter than this (in the file's units) has no direction: an X3D
+# Extrusion's spine step or cross-section axis.
+SHORTEST_DIRECTION = 1e-12
+# Radians by which a spot light's cut-off may fall short of a right angle
+# and still light a whole half-space; and by which the turns of a loop may
+# miss one full turn and still wind once.
+ANGLE_SLACK = 1e-6
+# Share by which a USD float attribute may differ from shadowgeo's exact
+# double beside it and still be the same number (float32 keeps ~7 digits).
+FLOAT32_AGREEMENT = 1e-6
+# Floor of the drawn scene's diagonal in viz, for a scene of one point.
+SMALLEST_DRAWN_SIZE = 1e-12

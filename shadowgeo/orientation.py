@@ -13,6 +13,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .limits import PRODUCT_SLACK
+
+__all__ = ["MAX_COORDINATE", "POINT_SLACK", "turn_sign", "turns"]
+
 # Coordinates handed to Clipper2 stay below this (it accepts about 4e10 before
 # its 1e8 fixed-point scaling overflows int64's safe range).
 MAX_COORDINATE = 1e8
@@ -21,8 +25,7 @@ MAX_COORDINATE = 1e8
 # a difference of two of them is off by at most this much (a few units in
 # the last place of MAX_COORDINATE) ...
 POINT_SLACK = 8 * MAX_COORDINATE * float(np.finfo(np.float64).eps)
-# ... and a product of two differences by this much relative.
-PRODUCT_SLACK = 1e-13
+# ... and a product of two differences by limits.PRODUCT_SLACK relative.
 
 
 def turns(origin: np.ndarray, one: np.ndarray, two: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

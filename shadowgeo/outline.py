@@ -20,12 +20,15 @@ import shapely
 
 from .arrangement import strictly_convex_loops
 from .lightframe import corner_max, corner_min, misses_boxes, overlapping_boxes, twice_areas
+from .limits import PRODUCT_ROUNDING, TINY
 from .orientation import MAX_COORDINATE
 from .polygons import components, fill
 from .topology import loop_rings
 
 if TYPE_CHECKING:
     from manifold3d import CrossSection
+
+__all__ = ["Outline", "OutlineSet", "make_outlines", "padded_loops"]
 
 
 def padded_loops(points: np.ndarray, sizes: np.ndarray) -> np.ndarray:
@@ -47,8 +50,8 @@ def _perimeter(points: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndar
     the lower left corner: 0 to 1 along the bottom, 1 to 2 up the right side,
     2 to 3 along the top, 3 to 4 down the left side (the nearest side)."""
     x, y = points[:, 0], points[:, 1]
-    width = np.maximum(high[:, 0] - low[:, 0], 1e-300)
-    height = np.maximum(high[:, 1] - low[:, 1], 1e-300)
+    width = np.maximum(high[:, 0] - low[:, 0], TINY)
+    height = np.maximum(high[:, 1] - low[:, 1], TINY)
     distance = np.stack(
         [
             np.abs(y - low[:, 1]),
@@ -220,7 +223,7 @@ class _Cutter:
         reference = images.mean(axis=1)
         a, b, r = rings.segments[seg, 0], rings.segments[seg, 1], reference[tri]
         ab, ar = b - a, r - a
-        length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
+        length2 = np.maximum(np.einsum("ij,ij->i", ab, ab), TINY)
         along = np.clip(np.einsum("ij,ij->i", ar, ab) / length2, 0.0, 1.0)
         gap = np.hypot(*(ar - along[:, None] * ab).T)  # from r to the segment
         unsure = np.zeros(count, dtype=bool)
@@ -348,7 +351,7 @@ class _Cutter:
             ]
         )
         middle = 0.5 * (box_low + box_high)
-        size = np.maximum((box_high - box_low).max(axis=1), 1e-300)
+        size = np.maximum((box_high - box_low).max(axis=1), TINY)
         scale = 0.45 * cell / size
         mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
         subject = [mapped[o : o + n] for o, n in zip(offsets.tolist(), sizes.tolist(), strict=True)]
@@ -660,7 +663,7 @@ class OutlineSet(_Cutter):
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         width = np.nan_to_num(bounds[:, 2] - bounds[:, 0])
         height = np.nan_to_num(bounds[:, 3] - bounds[:, 1])
-        step = 2.0 * float(max(width.max(), height.max(), 1e-300))
+        step = 2.0 * float(max(width.max(), height.max(), TINY))
         # Moved by cell: rounding of the moved corners is within a few ulps
         # of the largest coordinate; boxes grown by more keep every overlap.
         shift = np.column_stack([np.arange(len(bounds)) * step, np.zeros(len(bounds))])
@@ -730,7 +733,7 @@ def _box_within(triangles: np.ndarray, boxes: np.ndarray) -> np.ndarray:
     # each difference is rounded once (relative), then two products and
     # their difference: a few eps of the products' size, far below 1e-12
     with np.errstate(invalid="ignore"):  # (NaN boxes: an outline with no loops)
-        left = first - second > 1e-12 * (np.abs(first) + np.abs(second))
+        left = first - second > PRODUCT_ROUNDING * (np.abs(first) + np.abs(second))
     within: np.ndarray = np.all(left, axis=(1, 2))
     return within
 
@@ -738,7 +741,7 @@ def _box_within(triangles: np.ndarray, boxes: np.ndarray) -> np.ndarray:
 def _scale_for(extent: np.ndarray) -> np.ndarray:
     """Clipper2's scale for regions whose largest coordinates (frame
     coordinates) are ``extent``: those at a quarter of MAX_COORDINATE."""
-    scale: np.ndarray = MAX_COORDINATE / np.maximum(extent, 1e-300) / 4.0
+    scale: np.ndarray = MAX_COORDINATE / np.maximum(extent, TINY) / 4.0
     return scale
 
 

@@ -11,6 +11,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
+__all__ = ["client_for"]
+
 
 def _distributed() -> Any:
     try:

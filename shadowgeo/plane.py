@@ -9,6 +9,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
 
+__all__ = ["Plane", "finite_vector"]
+
 
 def finite_vector(value: ArrayLike, name: str, size: int = 3) -> NDArray[np.float64]:
     """``value`` as a read-only float64 vector of ``size`` finite components;

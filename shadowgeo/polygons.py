@@ -20,12 +20,47 @@ from manifold3d import CrossSection, FillRule, triangulate
 
 from .arrangement import convex_union_arrays, convex_union_flat
 from .errors import GeometryError
+from .limits import CONVEX_TURN as _CONVEX_TURN
 from .limits import MAX_UNION_CROSSINGS
 from .orientation import MAX_COORDINATE, turn_sign, turns
 from .plane import Plane
 from .simplify import without_collinear
 from .sweep import simple_triangles
 from .topology import loop_rings
+
+__all__ = [
+    "ARRANGED_LOOPS",
+    "FlatParts",
+    "STRAIGHT_SLACK",
+    "arranged_parts",
+    "clipper_parts",
+    "components",
+    "crossings_estimate",
+    "fan",
+    "fill",
+    "holds_box",
+    "intersect",
+    "is_convex",
+    "local_scale",
+    "nest",
+    "nest_flat",
+    "parts_area",
+    "points_in_parts",
+    "polygon_triangles",
+    "polygons_triangles",
+    "region_loops",
+    "signed_areas",
+    "star_shaped_flat",
+    "star_triangles",
+    "subtract",
+    "triangles_region",
+    "triangulate_parts",
+    "union_parts",
+    "union_region",
+    "unite",
+    "whole_loop",
+    "without_copies",
+]
 
 # A corner this close (local units) to the straight run between its
 # neighbours is dropped before triangulating: a few hundred units in the last
@@ -1067,10 +1102,6 @@ def polygon_triangles(points: np.ndarray, holes: Sequence[np.ndarray] = ()) -> n
     triangles = np.asarray(triangulate(loops), dtype=np.int64).reshape(-1, 3)
     mapped: np.ndarray = np.concatenate(order)[triangles]
     return mapped
-
-
-# A corner that turns this far (radians) the wrong way still counts as straight.
-_CONVEX_TURN = 1e-12
 
 
 def is_convex(corners: np.ndarray) -> np.ndarray:

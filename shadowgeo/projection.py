@@ -45,7 +45,7 @@ from .batchlights import (
 )
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
-from .limits import check_coordinates, check_light
+from .limits import ANGLE_SLACK, check_coordinates, check_light
 from .plane import Plane
 
 # Shadow and ShadowDiagnostics live in .shadow; they are re-exported here,
@@ -65,6 +65,8 @@ from .topology import Caster, MeshLike, as_caster, empty_mesh, unique_integers
 
 if TYPE_CHECKING:
     from .lights import PointLight
+
+__all__ = ["project_shadow", "shadow_matrix"]
 
 
 def shadow_matrix(plane: Plane, light: Light) -> np.ndarray:
@@ -665,7 +667,7 @@ class _Projector:
         axis = light.direction
         side, up = Plane(axis, 0.0).basis  # across the axis; the rim's winding is fixed below
         rectangle_planes = _rectangle_planes(low, high)
-        if light.cut_off_angle >= math.pi / 2 - 1e-6:
+        if light.cut_off_angle >= math.pi / 2 - ANGLE_SLACK:
             # A hemisphere: the half-plane of points in front of the light.
             u, v = self.call.basis
             # Points p = origin + (x u + y v) / scale with axis . (p - light) >= 0.

@@ -23,10 +23,13 @@ from typing import Literal, cast
 import numpy as np
 from manifold3d import triangulate
 
+from .limits import TINY
 from .orientation import MAX_COORDINATE
 from .polygons import fill, local_scale, region_loops, subtract, unite
 from .simplify import Loops, loops_of
 from .topology import unique_integers
+
+__all__ = ["face_regions", "stitch"]
 
 
 def face_regions(
@@ -263,7 +266,7 @@ def stitch(
         low[present, column] = np.minimum.reduceat(values, starts)
         high[present, column] = np.maximum.reduceat(values, starts)
     middle = 0.5 * (low + high)
-    reach = np.maximum(0.5 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1]), 1e-300)
+    reach = np.maximum(0.5 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1]), TINY)
     stretch = np.column_stack([0.5 * MAX_COORDINATE / reach, 0.25 * cell / reach])
     centre = np.column_stack(
         [np.zeros(n_regions), -MAX_COORDINATE + cell * (np.arange(n_regions) + 0.5)]

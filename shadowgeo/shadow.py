@@ -20,6 +20,8 @@ if TYPE_CHECKING:
     import shapely
     import trimesh
 
+__all__ = ["Shadow", "ShadowDiagnostics", "triangulated"]
+
 
 @dataclass(frozen=True)
 class ShadowDiagnostics:

@@ -18,8 +18,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import GeometryError
+from .limits import ANGLE_SLACK, PRODUCT_ROUNDING, RELATIVE_ROUNDING, SINGULAR_SHARE, TINY
 from .silhouette import chain
 from .topology import Caster
+
+__all__ = [
+    "SurfaceGeometry",
+    "face_frames",
+    "lift_directions",
+    "merge_positions",
+    "single_sheet",
+    "surface_geometry",
+]
 
 
 def lift_directions(triangles: np.ndarray, normals: np.ndarray, n_points: int) -> np.ndarray:
@@ -35,10 +45,10 @@ def lift_directions(triangles: np.ndarray, normals: np.ndarray, n_points: int) -
     np.add.at(moments, corners, each[:, :, None] * each[:, None, :])
     sums = np.zeros((n_points, 3))
     np.add.at(sums, corners, each)
-    direction = np.einsum("pij,pj->pi", np.linalg.pinv(moments, rcond=1e-10), sums)
+    direction = np.einsum("pij,pj->pi", np.linalg.pinv(moments, rcond=SINGULAR_SHARE), sums)
     # A sharp concave crease would push its miter far out: keep it bounded.
     length = np.linalg.norm(direction, axis=1, keepdims=True)
-    lifted: np.ndarray = direction * np.minimum(1.0, 4.0 / np.maximum(length, 1e-300))
+    lifted: np.ndarray = direction * np.minimum(1.0, 4.0 / np.maximum(length, TINY))
     return lifted
 
 
@@ -78,7 +88,7 @@ def _sheet_along(up: np.ndarray, normals: np.ndarray, border: np.ndarray) -> boo
     left or goes straight on at every corner and winds once."""
     length = np.linalg.norm(normals, axis=1)
     proper = length > 0
-    if np.any(normals[proper] @ up <= 1e-9 * length[proper]):
+    if np.any(normals[proper] @ up <= RELATIVE_ROUNDING * length[proper]):
         return False
     first, second = face_frames(up[None])
     flat = np.column_stack([border @ first[0], border @ second[0]])
@@ -89,9 +99,11 @@ def _sheet_along(up: np.ndarray, normals: np.ndarray, border: np.ndarray) -> boo
     scale = np.linalg.norm(steps, axis=1) * np.linalg.norm(following, axis=1)
     if np.any(scale == 0):
         return False
-    if np.any(turn < -1e-12 * scale) or np.any((np.abs(turn) <= 1e-12 * scale) & (ahead <= 0)):
+    if np.any(turn < -PRODUCT_ROUNDING * scale) or np.any(
+        (np.abs(turn) <= PRODUCT_ROUNDING * scale) & (ahead <= 0)
+    ):
         return False
-    return bool(abs(np.arctan2(turn, ahead).sum() - 2 * np.pi) < 1e-6)
+    return bool(abs(np.arctan2(turn, ahead).sum() - 2 * np.pi) < ANGLE_SLACK)
 
 
 def merge_positions(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -110,7 +122,7 @@ def face_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     axis = np.zeros_like(normals)
     axis[np.arange(len(normals)), np.argmin(np.abs(normals), axis=1)] = 1.0
     u = axis - np.einsum("ij,ij->i", axis, normals)[:, None] * normals
-    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), 1e-300)
+    u /= np.maximum(np.linalg.norm(u, axis=1, keepdims=True), TINY)
     return u, np.cross(normals, u)
 
 

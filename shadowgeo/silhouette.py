@@ -25,6 +25,23 @@ from .limits import check_geometry
 from .tolerance import Tolerance
 from .topology import BLOCK, Caster, MeshLike, as_caster, compiled_walk, cycle_walk
 
+__all__ = [
+    "Outlines",
+    "Silhouette",
+    "boundary_loops",
+    "chain",
+    "chain_flat",
+    "check_light_outside",
+    "front_boundary",
+    "light_homogeneous",
+    "point_triangle_distance",
+    "silhouette",
+    "silhouette_loops",
+    "silhouette_loops_many",
+    "silhouette_outlines",
+    "vertex_components",
+]
+
 
 @dataclass(frozen=True, eq=False)
 class Silhouette:

@@ -14,6 +14,8 @@ import numpy as np
 
 from .topology import loops_taken
 
+__all__ = ["Loops", "loops_of", "without_collinear"]
+
 # Loops of many regions at once: (P, 2) points, loop after loop; (L,) the
 # number of points of each loop; (L,) the region of each loop.
 Loops = tuple[np.ndarray, np.ndarray, np.ndarray]

@@ -76,6 +76,21 @@ from .shadow import Shadow, ShadowDiagnostics, triangulated
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, empty_mesh
 
+__all__ = [
+    "DEFAULT_SAMPLES",
+    "DISC_CORNERS",
+    "MAX_CONVEX_CHECK",
+    "MAX_SAMPLES",
+    "Parts",
+    "SizedLight",
+    "SoftShadow",
+    "band_thresholds",
+    "checked_counts",
+    "has_size",
+    "light_samples",
+    "soft_shadow",
+]
+
 SizedLight = PointLight | SpotLight | DirectionalLight | RectLight | DiskLight
 Parts = list[list[NDArray[np.float64]]]
 

@@ -55,6 +55,8 @@ from .surface import (
 from .tolerance import Tolerance
 from .topology import MeshLike, as_caster
 
+__all__ = ["SoftSurfaceShadow", "soft_shadow_on_surface"]
+
 # Per face: for each sample turned to it, its shadow region's loops (none: unshadowed).
 _FaceCover = list[list[NDArray[np.float64]]]
 

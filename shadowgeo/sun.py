@@ -25,6 +25,8 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import GeometryError
 from .lights import DirectionalLight
 
+__all__ = ["days", "frame", "hourly", "sun_direction", "sun_lights", "sun_position"]
+
 _UP = {"Y": np.array([0.0, 1.0, 0.0]), "Z": np.array([0.0, 0.0, 1.0])}
 _NORTH = {"Y": np.array([0.0, 0.0, -1.0]), "Z": np.array([0.0, 1.0, 0.0])}
 

@@ -26,6 +26,8 @@ from .errors import SceneError
 from .io.atomic import atomic_path
 from .scene.sunlight import ramp_colour
 
+__all__ = ["plot_sunlight"]
+
 _BUILDING = (0.55, 0.55, 0.55)
 _EDGE = (0.25, 0.25, 0.25)
 

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import GeometryError
 from .levels import cover_level_areas, cover_levels
 from .lights import DirectionalLight
+from .limits import RELATIVE_ROUNDING
 from .plane import Plane
 from .polygons import components, local_scale, points_in_parts, signed_areas
 from .projection import project_shadow
@@ -54,6 +55,18 @@ from .soft import light_samples
 from .sun import days, sun_lights
 from .sun import frame as sun_frame
 from .topology import as_caster
+
+__all__ = [
+    "DaySummary",
+    "Polygons",
+    "SUN_DISC_SAMPLES",
+    "SunStudies",
+    "SunStudy",
+    "days_table",
+    "sun_study",
+    "sun_study_by_day",
+    "sun_summaries_by_day",
+]
 
 Polygons = list[list[NDArray[np.float64]]]
 
@@ -178,7 +191,9 @@ def _hours(k: int, step: _dt.timedelta, per_sample: int = 1) -> float:
 
 def _at_least(level_areas: dict[float, float], hours: float) -> float:
     """The areas of the durations of at least ``hours``, summed in rising order."""
-    return float(sum(area for duration, area in level_areas.items() if duration >= hours - 1e-9))
+    return float(
+        sum(area for duration, area in level_areas.items() if duration >= hours - RELATIVE_ROUNDING)
+    )
 
 
 @dataclass(frozen=True)

@@ -82,7 +82,7 @@ from .lightframe import (
     twice_areas,
 )
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
-from .limits import MAX_CURVE_SEGMENTS
+from .limits import ANGLE_SLACK, MAX_CURVE_SEGMENTS, RELATIVE_ROUNDING
 from .orientation import MAX_COORDINATE
 from .outline import Outline, OutlineSet, make_outlines
 from .seams import face_regions, stitch
@@ -94,6 +94,17 @@ from .topology import Caster, MeshLike, as_caster, closed_each, loops_taken, uni
 
 if TYPE_CHECKING:
     import trimesh
+
+__all__ = [
+    "LightRegions",
+    "SurfaceDiagnostics",
+    "SurfaceShadow",
+    "caster_list",
+    "closed_silhouettes",
+    "regions_per_light",
+    "shadow_layers_on_surface",
+    "shadow_on_surface",
+]
 
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
 _BATCH = 200_000
@@ -632,7 +643,7 @@ class _SurfaceProjector:
         lit_faces = np.flatnonzero(lit)
         caster_triangles, outlined = self._caster_triangles()
         direction = None if is_positional(light) else light.direction
-        pad = 1e-9 if is_positional(light) else tol.length
+        pad = RELATIVE_ROUNDING if is_positional(light) else tol.length
         found_faces, found_triangles = candidate_pairs(
             (self.vertices, self.faces[lit_faces]),
             caster_triangles,
@@ -900,7 +911,7 @@ class _SurfaceProjector:
         # the triangle's image does (it runs counter-clockwise in the face's frame).
         flips = twice_areas(images) < 0
         extent = np.abs(images - images.mean(axis=1, keepdims=True)).max(axis=(1, 2))
-        covered, pieces, owners = outlines.cut(images, 1e-9 * extent, owner)
+        covered, pieces, owners = outlines.cut(images, RELATIVE_ROUNDING * extent, owner)
         if len(pieces) == 0:
             return covered, (np.zeros((0, 3, 2)), np.zeros(0, np.int64))
         mapped = self._onto_faces(
@@ -1075,7 +1086,7 @@ class _SurfaceProjector:
         capped), with a margin for rounding."""
         (centre_x, centre_y), radius = self._range_circles(faces)
         capped = radius * (1.0 - math.cos(math.pi / MAX_CURVE_SEGMENTS))
-        inner = radius - np.maximum(self.tol.chord_length, capped) - 1e-9 * radius
+        inner = radius - np.maximum(self.tol.chord_length, capped) - RELATIVE_ROUNDING * radius
         low, high = outlines.min(axis=1), outlines.max(axis=1)
         reach_x = np.maximum(np.abs(low[:, 0] - centre_x), np.abs(high[:, 0] - centre_x))
         reach_y = np.maximum(np.abs(low[:, 1] - centre_y), np.abs(high[:, 1] - centre_y))
@@ -1314,7 +1325,7 @@ class _SurfaceProjector:
         if isinstance(light, SpotLight):
             axis = light.direction
             apex = cast(np.ndarray, self.light_point)  # a spot light is positional
-            if light.cut_off_angle >= math.pi / 2 - 1e-6:
+            if light.cut_off_angle >= math.pi / 2 - ANGLE_SLACK:
                 planes = np.append(axis, -axis @ apex)[None]
             else:
                 count = tol.segments(tol.scale)

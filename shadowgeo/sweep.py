@@ -30,7 +30,10 @@ import math
 
 import numpy as np
 
+from .limits import RELATIVE_ROUNDING
 from .orientation import MAX_COORDINATE, turn_sign, turns
+
+__all__ = ["simple_triangles"]
 
 # Corner kinds along the sweep (top to bottom).
 _START, _SPLIT, _END, _MERGE, _LEFT, _RIGHT = range(6)
@@ -389,7 +392,7 @@ def _tiles(points: np.ndarray, triangles: np.ndarray) -> bool:
     if not np.all(sign == 1):
         return False
     doubled = _doubled_area(points)
-    return abs(float(cross.sum()) - doubled) <= 1e-9 * abs(doubled)
+    return abs(float(cross.sum()) - doubled) <= RELATIVE_ROUNDING * abs(doubled)
 
 
 def _doubled_area(points: np.ndarray) -> float:

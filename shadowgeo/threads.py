@@ -18,6 +18,8 @@ from contextlib import contextmanager
 
 from threadpoolctl import threadpool_limits
 
+__all__ = ["one_blas_thread"]
+
 
 @contextmanager
 def one_blas_thread() -> Iterator[None]:

@@ -47,6 +47,8 @@ from .boxes import bounding_box
 from .errors import GeometryError
 from .limits import MAX_CURVE_SEGMENTS, SMALLEST_LENGTH, check_coordinates
 
+__all__ = ["Tolerance", "below_resolution", "resolution", "scene_scales"]
+
 # Units in the last place of float64 that a coordinate may carry after a few
 # arithmetic operations; the length tolerance never drops below this.
 _ULPS = 64.0

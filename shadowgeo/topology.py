@@ -8,7 +8,6 @@ costs only the per-light work.
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from functools import cached_property
 from typing import TYPE_CHECKING, Literal, TypeAlias, TypeVar, Union, cast, overload
@@ -17,10 +16,29 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .boxes import bounding_box
+from .compiled import use_compiled
 from .errors import GeometryError
 
 if TYPE_CHECKING:
     import trimesh
+
+__all__ = [
+    "BLOCK",
+    "Caster",
+    "MeshLike",
+    "as_caster",
+    "block_normals",
+    "closed_by_sort",
+    "closed_each",
+    "compiled_walk",
+    "cycle_walk",
+    "empty_mesh",
+    "loop_rings",
+    "loops_taken",
+    "point_ids",
+    "row_groups",
+    "unique_integers",
+]
 
 _CACHE_KEY = "shadowgeo_caster"
 # Faces (or vertices) per block where per-face (per-vertex) arrays are
@@ -696,19 +714,12 @@ def unique_integers(
 MeshLike: TypeAlias = Union["trimesh.Trimesh", tuple[ArrayLike, ArrayLike], Caster]  # noqa: UP007
 
 
-# Permutations (and outlines: silhouette._successors) of at least this many
-# items are walked by compiled loops (shadowgeo.kernels, numba) once those are
-# loaded (by a light whose outline has loops inside its outline): the pointer
-# doubling below takes about 2 log2(k) passes over k items. numba's import (about
-# 0.8 s and 100 MB the first time) is not worth paying for a walk alone.
-COMPILED_ITEMS = 4096
-
-
 def compiled_walk(count: int) -> bool:
-    """Whether a walk of ``count`` items takes the compiled loops: at least
-    :data:`COMPILED_ITEMS` of them, and :mod:`shadowgeo.kernels` (numba)
-    loaded already (the walks give the same result either way)."""
-    return count >= COMPILED_ITEMS and "shadowgeo.kernels" in sys.modules
+    """Whether a walk of ``count`` items (here, and the outline matching of
+    ``silhouette._successors``) takes the compiled loops of
+    :mod:`shadowgeo.kernels` (numba): the rule and its override are
+    :mod:`shadowgeo.compiled`'s (the walks give the same arrays either way)."""
+    return use_compiled("walk", count)
 
 
 def cycle_walk(successor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -37,14 +37,30 @@ from numpy.typing import ArrayLike, NDArray
 from .errors import GeometryError, SceneError
 from .io.atomic import atomic_path
 from .lights import AreaLight, DirectionalLight, DiskLight, Light, PointLight, RectLight, SpotLight
-from .projection import Shadow
+from .limits import SMALLEST_DRAWN_SIZE
 from .scene.model import Scene, SceneLight, Shape, Viewpoint
+from .shadow import Shadow
 from .soft import SoftShadow
 from .soft_surface import SoftSurfaceShadow
 
 if TYPE_CHECKING:
     import pyvista as pv
     import trimesh
+
+__all__ = [
+    "AnyLight",
+    "BACKGROUND",
+    "LIGHT_COLOR",
+    "Plottable",
+    "SHADOW_COLOR",
+    "VIEWS",
+    "VOLUME_COLOR",
+    "VOLUME_OPACITY",
+    "no_display_reason",
+    "plot",
+    "scene_plotter",
+    "view_angle",
+]
 
 # What plot() draws: a scene, shape, shadow (hard or soft) or mesh, or any
 # nesting of lists of them.
@@ -186,7 +202,7 @@ def _bounds(items: list[_Item], lights: list[AnyLight]) -> tuple[np.ndarray, flo
         return np.zeros(3), 1.0
     stacked = np.concatenate(points)
     low, high = stacked.min(axis=0), stacked.max(axis=0)
-    return (low + high) / 2, max(float(np.linalg.norm(high - low)), 1e-12)
+    return (low + high) / 2, max(float(np.linalg.norm(high - low)), SMALLEST_DRAWN_SIZE)
 
 
 def _light_glyph(

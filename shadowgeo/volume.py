@@ -34,6 +34,8 @@ from .topology import Caster, MeshLike, as_caster, empty_mesh
 if TYPE_CHECKING:
     import trimesh
 
+__all__ = ["shadow_volume"]
+
 
 @renamed_keyword("mesh", "caster")
 def shadow_volume(

@@ -466,7 +466,8 @@ def test_whenever_a_loop_is_certified_the_union_is_that_loop(corners, notch, sma
     # turns away a light the compiled test certifies.
     from shadowgeo import kernels
     from shadowgeo.batchlights import _one_box_holds_all
-    from shadowgeo.orientation import POINT_SLACK, PRODUCT_SLACK
+    from shadowgeo.limits import PRODUCT_SLACK
+    from shadowgeo.orientation import POINT_SLACK
 
     points = np.concatenate(loops)
     lengths = np.array([len(loop) for loop in loops], dtype=np.int64)

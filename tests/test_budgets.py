@@ -21,7 +21,9 @@ from needs import SHARED, absent
 import shadowgeo as sg
 from cli.main import main
 from shadowgeo import limits
-from shadowgeo.io import gltf_read, x3d_budget, x3d_read
+from shadowgeo.io import gltf_read
+from shadowgeo.io.x3d import budget as x3d_budget
+from shadowgeo.io.x3d import read as x3d_read
 
 USE_CHAIN = SHARED / "findings" / "outsider-2" / "budget_cpu_USE_chain_under_node_limit"
 

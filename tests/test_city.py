@@ -290,7 +290,7 @@ def test_json_named_cityjson_is_read_as_cityjson_and_x3d_json_is_not(tmp_path):
     assert sg.load(city).shapes[0].name == "a"
     x3d = tmp_path / "box.json"
     x3d.write_text('{"X3D": {"Scene": {"-children": [{"Shape": {"-geometry": {"Box": {}}}}]}}}')
-    assert json_format(x3d) == "x3d_read"
+    assert json_format(x3d) == "x3d.read"
     assert sg.load(x3d).shapes[0].n_faces == 12
 
 

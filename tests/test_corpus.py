@@ -34,7 +34,7 @@ from x3d_schema import new_schema_errors, x3d_schema_errors
 
 import shadowgeo as sg
 from cli.main import main
-from shadowgeo.io.x3d_parse import read_bytes
+from shadowgeo.io.x3d.parse import read_bytes
 
 SAFE = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
 LIGHTS = ("PointLight", "SpotLight", "DirectionalLight")

@@ -11,7 +11,7 @@ import zlib
 import pytest
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_parse
+from shadowgeo.io.x3d import parse as x3d_parse
 
 SCENE = """<X3D profile="Immersive" version="4.0"><head/><Scene>
   <Viewpoint DEF="vp" position="0 2 20"/>
@@ -95,7 +95,7 @@ def test_urls_name_the_same_files_from_another_folder(tmp_path, source, suffix):
     written = urls(out)
     # Each rewritten url, resolved from the output's folder, is the input's file.
     texture = x3d_parse.parse(out, []).getroot().find(".//ImageTexture")
-    first, remote, encoded = sg.io.x3d_fields.parse(texture.get("url"), "MFString")
+    first, remote, encoded = sg.io.x3d.fields.parse(texture.get("url"), "MFString")
     assert (out.parent / first).resolve() == (source.parent / "tex/brick.png").resolve()
     assert (out.parent / first).read_bytes() == png()
     assert first == "../../in/tex/brick.png"

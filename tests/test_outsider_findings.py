@@ -21,8 +21,8 @@ import shadowgeo as sg
 from cli.main import main
 from shadowgeo import limits
 from shadowgeo.errors import SceneError
-from shadowgeo.io import x3d_read
-from shadowgeo.io.x3d_classic_tokens import Token, tokens
+from shadowgeo.io.x3d import read as x3d_read
+from shadowgeo.io.x3d.classic_tokens import Token, tokens
 
 ROOT = Path(__file__).resolve().parents[1]
 LONG_NAME = "a" * 300  # one path component past every file system's 255

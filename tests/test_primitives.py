@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_read
+from shadowgeo.io.x3d import read as x3d_read
 from shadowgeo.scene import primitives
 
 

@@ -27,7 +27,7 @@ from reference import ray_plane
 import shadowgeo as sg
 from cli.main import main
 from shadowgeo import limits, polygons
-from shadowgeo.io import x3d_write
+from shadowgeo.io.x3d import write as x3d_write
 from shadowgeo.scene import primitives
 
 ROOT = Path(__file__).resolve().parents[1]

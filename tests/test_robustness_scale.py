@@ -11,7 +11,7 @@ import shapely
 
 import shadowgeo as sg
 from cli.main import main
-from shadowgeo.io import x3d_extrusion
+from shadowgeo.io.x3d import extrusion as x3d_extrusion
 from shadowgeo.scene import Shape, receivers
 from shadowgeo.tolerance import Tolerance
 

@@ -410,6 +410,7 @@ def test_chained_flat_outline_is_the_chained_loops_end_to_end(name):
 def test_compiled_successors_equal_the_sorted_ones_in_blocks_and_touching(seed, monkeypatch):
     import importlib
 
+    from shadowgeo.compiled import compiled_loops
     from shadowgeo.kernels import successors
 
     module = importlib.import_module(
@@ -429,13 +430,12 @@ def test_compiled_successors_equal_the_sorted_ones_in_blocks_and_touching(seed, 
     offsets = [span * k for k in range(len(starts))]
     starts = np.concatenate([s + o for s, o in zip(starts, offsets, strict=True)])
     ends = np.concatenate([e + o for e, o in zip(ends, offsets, strict=True)])
-    topology = importlib.import_module("shadowgeo.topology")
-    monkeypatch.setattr(topology, "COMPILED_ITEMS", 10**9)
-    sorted_way = module._successors(starts, ends, span)
+    with compiled_loops("never"):
+        sorted_way = module._successors(starts, ends, span)
     compiled, matched = successors(starts, ends, span)
     assert matched and np.array_equal(compiled, sorted_way)
-    monkeypatch.setattr(topology, "COMPILED_ITEMS", 0)
-    assert np.array_equal(module._successors(starts, ends, span), sorted_way)
+    with compiled_loops("always"):
+        assert np.array_equal(module._successors(starts, ends, span), sorted_way)
     # Blocks out of order, or an outline that does not close: not matched,
     # and the sorting way tells which.
     if len(offsets) > 1:

@@ -24,7 +24,7 @@ from needs import SHARED, absent
 import shadowgeo as sg
 from cli.main import main
 from shadowgeo import polygons
-from shadowgeo.io import x3d_read
+from shadowgeo.io.x3d import read as x3d_read
 from shadowgeo.scene import receivers
 
 ROOT = Path(__file__).resolve().parents[1]

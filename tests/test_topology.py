@@ -255,6 +255,7 @@ def test_face_normals_and_facing_in_blocks_equal_the_whole_array_formulas():
 @pytest.mark.parametrize("seed", range(5))
 def test_cycle_walk_follows_every_cycle_of_a_permutation(seed, compiled, monkeypatch):
     import shadowgeo.topology as topology
+    from shadowgeo.compiled import compiled_loops
 
     rng = np.random.default_rng(seed)
     successor = rng.permutation(int(rng.integers(1, 400)))
@@ -264,12 +265,9 @@ def test_cycle_walk_follows_every_cycle_of_a_permutation(seed, compiled, monkeyp
         successor = np.empty(len(items), dtype=np.int64)
         for cycle in np.split(items, np.cumsum(sizes)[:-1]):
             successor[cycle] = np.roll(cycle, -1)
-    # the compiled walk for long permutations once numba is loaded, the
-    # doubling one for short
-    if compiled:
-        import shadowgeo.kernels  # noqa: F401
-    monkeypatch.setattr(topology, "COMPILED_ITEMS", 0 if compiled else 10**9)
-    walk, cuts = topology.cycle_walk(successor)
+    # the compiled walk, or the doubling one
+    with compiled_loops("always" if compiled else "never"):
+        walk, cuts = topology.cycle_walk(successor)
     # brute force: walk each cycle from its least item, cycles by that item
     seen, expected, starts = set(), [], []
     for item in range(len(successor)):

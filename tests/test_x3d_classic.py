@@ -21,7 +21,9 @@ from lxml import etree
 from needs import need
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_classic_read, x3d_fields, x3d_parse
+from shadowgeo.io.x3d import classic_read as x3d_classic_read
+from shadowgeo.io.x3d import fields as x3d_fields
+from shadowgeo.io.x3d import parse as x3d_parse
 
 ROOT = Path(__file__).resolve().parents[1]
 X_ITE = ROOT / "tests" / "node" / "node_modules" / "x_ite" / "dist"

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from shadowgeo.io.x3d_fields import parse
+from shadowgeo.io.x3d.fields import parse
 
 
 @pytest.mark.parametrize(

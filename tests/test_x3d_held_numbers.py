@@ -10,7 +10,7 @@ import pytest
 from lxml import etree
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_numbers
+from shadowgeo.io.x3d import numbers as x3d_numbers
 
 SAFE = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False)
 

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_parse, x3d_read
+from shadowgeo.io.x3d import parse as x3d_parse
+from shadowgeo.io.x3d import read as x3d_read
 
 TRIANGLE = '<Coordinate point="0 0 0 1 0 0 0 1 0"/>'
 

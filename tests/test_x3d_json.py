@@ -19,7 +19,8 @@ from x3d_json_schema import json_schema_errors, json_validator
 from x3d_schema import x3d_schema_errors
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_json, x3d_parse
+from shadowgeo.io.x3d import json as x3d_json
+from shadowgeo.io.x3d import parse as x3d_parse
 
 HALF_PI = math.pi / 2
 

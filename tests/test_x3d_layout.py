@@ -1,5 +1,5 @@
 """X3D XML written from ClassicVRML, VRML 97 and X3D JSON: one element a line,
-indented two spaces a level (shadowgeo.io.x3d_layout), the same scene read
+indented two spaces a level (shadowgeo.io.x3d.layout), the same scene read
 back, a Script's source and comments unchanged; XML input keeps its author's
 layout byte for byte."""
 

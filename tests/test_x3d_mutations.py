@@ -27,7 +27,7 @@ from lxml import etree
 
 import shadowgeo as sg
 from cli.main import main
-from shadowgeo.io import x3d_classic_read
+from shadowgeo.io.x3d import classic_read as x3d_classic_read
 
 CLASSIC = """#X3D V4.0 utf8
 PROFILE Immersive

@@ -18,8 +18,9 @@ from hypothesis import strategies as st
 from lxml import etree
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_extrusion, x3d_read
-from shadowgeo.io.x3d_defaults import DEFAULTS
+from shadowgeo.io.x3d import extrusion as x3d_extrusion
+from shadowgeo.io.x3d import read as x3d_read
+from shadowgeo.io.x3d.tables import DEFAULTS
 
 DATA = Path(__file__).parent / "data"
 
@@ -671,16 +672,58 @@ def test_an_inline_used_again_is_read_once(tmp_path):
 # -- the defaults table ------------------------------------------------------------------
 
 
-def test_defaults_table_is_what_the_schema_says(x3d_schema):
-    """The committed table is what tools/x3d_defaults.py makes of the schema."""
+def test_the_table_is_what_the_schemas_say(x3d_schema, shared_dir):
+    """The committed table is what tools/x3d_tables.py makes of the two schemas."""
     import importlib.util
 
+    from shadowgeo.io.x3d import tables
+
     spec = importlib.util.spec_from_file_location(
-        "x3d_defaults_tool", Path(__file__).parents[1] / "tools" / "x3d_defaults.py"
+        "x3d_tables_tool", Path(__file__).parents[1] / "tools" / "x3d_tables.py"
     )
     tool = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(tool)
-    assert tool.table(x3d_schema) == DEFAULTS
+    json_schema = shared_dir / "schemas" / "x3d" / "x3d-4.0-JSONSchema.json"
+    nodes, values, common = tool.tables(x3d_schema, json_schema)
+    assert {node: (entry[0], entry[1]) for node, entry in tables.FIELDS.items()} == nodes
+    assert tables.DEFAULT_VALUES == values and tables.FIELD_TYPES == common
+    assert {node: fields for node, fields in DEFAULTS.items()} == {
+        node: {field: (nodes[node][1][field], value) for field, value in fields.items()}
+        for node, fields in values.items()
+    }
+
+
+@pytest.mark.parametrize(
+    "node, field, kind",
+    [  # types printed in ISO/IEC 19775-1 (X3D 4.0) node definitions
+        ("Transform", "rotation", "SFRotation"), ("IndexedFaceSet", "coordIndex", "MFInt32"),
+        ("Tangent", "vector", "MFVec4f"), ("Shape", "castShadow", "SFBool"),
+        ("Shape", "-geometry", "SFNode"), ("Group", "-children", "MFNode"),
+        ("ExternProtoDeclare", "url", "MFString"), ("unit", "conversionFactor", "SFDouble"),
+    ],
+)  # fmt: skip
+def test_field_types_match_the_specification(node, field, kind):
+    from shadowgeo.io.x3d.tables import FIELDS, field_type
+
+    assert FIELDS[node][1][field] == kind
+    if not field.startswith("-"):
+        assert field_type(node, field) == kind
+
+
+@pytest.mark.parametrize(
+    "node, container",
+    [("Box", "geometry"), ("Material", "material"), ("Coordinate", "coord"),
+     ("VariationPhysicsModel", "physics"), ("Transform", None), ("Appearance", "appearance")],
+)  # fmt: skip
+def test_one_default_container_field_for_every_encoding(node, container):
+    """ClassicVRML and JSON read a node's default containerField from one
+    table (X3D 4.0's, inherited from the node's abstract type)."""
+    from shadowgeo.io.x3d import classic_read, classic_write, json, tables
+
+    assert tables.CONTAINER_FIELDS.get(node) == container
+    for module in (classic_read, classic_write):
+        assert module.CONTAINER_FIELDS is tables.CONTAINER_FIELDS
+    assert json.FIELDS[node][0] == (container or "children")
 
 
 @pytest.mark.parametrize(

@@ -13,7 +13,8 @@ from lxml import etree
 from x3d_schema import new_schema_errors, x3d_schema_errors
 
 import shadowgeo as sg
-from shadowgeo.io import x3d_numbers, x3d_write
+from shadowgeo.io.x3d import numbers as x3d_numbers
+from shadowgeo.io.x3d import write as x3d_write
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "scenes" / "courtyard.x3d"
@@ -371,7 +372,7 @@ def test_non_finite_numbers_of_the_input_are_not_copied(tmp_path):
 
 @pytest.mark.parametrize("fast", [True, False])
 def test_point_and_index_text_reads_back_exactly(monkeypatch, fast):
-    from shadowgeo.io.x3d_fields import parse as parse_field
+    from shadowgeo.io.x3d.fields import parse as parse_field
 
     if not fast:
         monkeypatch.setattr(x3d_numbers, "orjson", None)
@@ -403,7 +404,7 @@ def test_spliced_numbers_reach_the_file_whatever_the_chunks():
     # still become its numbers, each exactly once, and nothing else change.
     import io
 
-    from shadowgeo.io.x3d_numbers import Splicer
+    from shadowgeo.io.x3d.numbers import Splicer
 
     splicer = Splicer()
     root = etree.Element("X3D")

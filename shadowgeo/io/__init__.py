@@ -6,9 +6,9 @@ They know the scene model, not the shadow algorithms.
 =========  ===================================  ========================  =========================
 format     extensions                           read                      write
 =========  ===================================  ========================  =========================
-X3D XML    ``.x3d``, ``.x3dz``, ``.x3d.gz``     :mod:`.x3d_read`          :mod:`.x3d_write`
-X3D JSON   ``.x3dj``, ``.json``                 :mod:`.x3d_json`          :mod:`.x3d_json`
-Classic    ``.x3dv``, ``.x3dvz``, ``.x3dv.gz``  :mod:`.x3d_classic_read`  :mod:`.x3d_classic_write`
+X3D XML    ``.x3d``, ``.x3dz``, ``.x3d.gz``     :mod:`.x3d.read`          :mod:`.x3d.write`
+X3D JSON   ``.x3dj``, ``.json``                 :mod:`.x3d.json`          :mod:`.x3d.json`
+Classic    ``.x3dv``, ``.x3dvz``, ``.x3dv.gz``  :mod:`.x3d.classic_read`  :mod:`.x3d.classic_write`
 VRML 97    ``.wrl``, ``.wrz``, ``.wrl.gz``      (as ClassicVRML)          (as ClassicVRML)
 glTF 2.0   ``.glb``, ``.gltf``                  :mod:`.gltf_read`         :mod:`.gltf_write`
 USD        ``.usda``, ``.usdc``, ``.usd``       :mod:`.usd_read`          :mod:`.usd_write`
@@ -25,20 +25,18 @@ GeoJSON (``FeatureCollection``, ``Feature``): :func:`json_format`. The city
 readers share :mod:`.city_crs` (coordinate reference systems, the scene's
 site) and :mod:`.city_surfaces` (a city object's polygons as one shape).
 
-Every X3D encoding becomes the same XML element tree: :mod:`.x3d_parse` parses
-XML, hands JSON to :mod:`.x3d_json` and ClassicVRML and VRML 97 text
-(``#X3D``, ``#VRML V2.0``) to :mod:`.x3d_classic_read`; :mod:`.x3d_read`
-reads that tree whatever the encoding, and :mod:`.x3d_write` writes it back in
+Every X3D encoding becomes the same XML element tree, read and written by the
+:mod:`.x3d` package (its docstring names the parts): :mod:`.x3d.parse` parses
+XML, hands JSON to :mod:`.x3d.json` and ClassicVRML and VRML 97 text
+(``#X3D``, ``#VRML V2.0``) to :mod:`.x3d.classic_read`; :mod:`.x3d.read`
+reads that tree whatever the encoding, and :mod:`.x3d.write` writes it back in
 the encoding the output's extension names.
 
 What a format's reader and writer share lives beside them, named for the
 format: :mod:`.gltf_layout` (the GLB container, ``KHR_lights_punctual`` and
 ``extras["shadowgeo"]``), :mod:`.usd_layout` (usd-core, the ``shadowgeo:``
 attributes) and :mod:`.usd_assets` (every asset path checked before usd-core
-opens a stage); X3D's reader is split into ``x3d_parse``, ``x3d_fields``,
-``x3d_geometry``, ``x3d_extrusion``, ``x3d_lights``, ``x3d_proto``,
-``x3d_extern``, ``x3d_inline``, ``x3d_script`` and ``x3d_defaults``; its writer
-rewrites relative urls for the output's folder in ``x3d_urls``.
+opens a stage).
 
 Each reader provides ``read(path, **options) -> Scene`` and each writer
 ``write(scene, path, **options) -> None``; writers go through
@@ -69,13 +67,31 @@ from .. import limits
 from ..errors import SceneError
 from ..scene import Scene, Shape
 
+__all__ = [
+    "READERS",
+    "WRITERS",
+    "check_face_indices",
+    "check_writable",
+    "file_problem",
+    "float_triple",
+    "json_format",
+    "load",
+    "look_rotation",
+    "optional_module",
+    "outside_reason",
+    "reader_name",
+    "refuse_outside",
+    "save",
+    "up_and_units",
+]
+
 READERS = {
-    ".x3d": "x3d_read",
-    ".x3dz": "x3d_read",
-    ".x3dj": "x3d_read",
-    ".json": "x3d_read",
-    ".x3d.gz": "x3d_read",
-    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d_read"),
+    ".x3d": "x3d.read",
+    ".x3dz": "x3d.read",
+    ".x3dj": "x3d.read",
+    ".json": "x3d.read",
+    ".x3d.gz": "x3d.read",
+    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d.read"),
     ".glb": "gltf_read",
     ".gltf": "gltf_read",
     ".obj": "trimesh_formats",
@@ -98,11 +114,11 @@ _COMPOUND = (".city.json", ".city.jsonl")
 _JSON_TYPES = {"CityJSON": "cityjson", "FeatureCollection": "footprints", "Feature": "footprints"}
 
 WRITERS = {
-    ".x3d": "x3d_write",
-    ".x3dz": "x3d_write",
-    ".x3dj": "x3d_write",
-    ".json": "x3d_write",
-    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d_write"),
+    ".x3d": "x3d.write",
+    ".x3dz": "x3d.write",
+    ".x3dj": "x3d.write",
+    ".json": "x3d.write",
+    **dict.fromkeys([".x3dv", ".x3dvz", ".x3dv.gz", ".wrl", ".wrz", ".wrl.gz"], "x3d.write"),
     ".glb": "gltf_write",
     ".gltf": "gltf_write",
     ".usda": "usd_write",
@@ -150,10 +166,10 @@ def _module(table: dict[str, str], path: str | os.PathLike[str], verb: str) -> M
 def json_format(path: str | os.PathLike[str]) -> str:
     """The reader module of a ``.json`` file: ``"cityjson"`` or
     ``"footprints"`` when its top-level ``type`` is ``CityJSON`` or a GeoJSON
-    ``FeatureCollection`` / ``Feature``, else ``"x3d_read"`` (X3D JSON, whose
+    ``FeatureCollection`` / ``Feature``, else ``"x3d.read"`` (X3D JSON, whose
     reader says what is wrong with a file that is neither). Only a file that
     holds one of those words is parsed to tell."""
-    from .x3d_parse import read_bytes
+    from .x3d.parse import read_bytes
 
     try:
         data = read_bytes(Path(path))
@@ -171,7 +187,7 @@ def json_format(path: str | os.PathLike[str]) -> str:
 
 def reader_name(path: str | os.PathLike[str]) -> str:
     """The module of this package that :func:`load` reads ``path`` with
-    (``"x3d_read"``, ``"cityjson"``, ...): by extension, and for ``.json``
+    (``"x3d.read"``, ``"cityjson"``, ...): by extension, and for ``.json``
     by :func:`json_format`; SceneError for an extension no reader takes."""
     _module(READERS, path, "read")
     suffix = _suffix(path)
@@ -259,7 +275,7 @@ def look_rotation(direction: ArrayLike) -> np.ndarray:
     source = np.array([0.0, 0.0, -1.0])
     cosine = float(source @ target)
     axis = np.cross(source, target)
-    if cosine < -1.0 + 1e-12:
+    if cosine < -1.0 + limits.PRODUCT_ROUNDING:
         # Pointing along +Z: half a turn about X.
         return np.diag([1.0, -1.0, -1.0])
     # Rodrigues' formula for the rotation by the angle between source and target.

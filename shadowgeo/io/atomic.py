@@ -25,6 +25,8 @@ import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
+__all__ = ["atomic_path", "remove_stale"]
+
 # What follows ".<name>" in a temporary file's name: host tag, pid, random,
 # then the suffix; or usd-core's own sibling temporary file, which Export
 # writes first and renames to ours, our name with 6 random characters for

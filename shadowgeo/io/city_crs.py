@@ -38,6 +38,8 @@ if TYPE_CHECKING:
 
     from .city_surfaces import CityObject
 
+__all__ = ["Georeference", "city_scene", "georeference", "parse_crs", "place"]
+
 # The step (degrees of latitude, about 10 m) between the two points whose
 # projections give the direction of true north at the site.
 _NORTH_STEP = 1e-4

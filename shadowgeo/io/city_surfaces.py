@@ -27,6 +27,8 @@ from ..polygons import polygon_triangles, polygons_triangles
 from ..scene.model import Semantics, Shape
 from ..topology import closed_by_sort
 
+__all__ = ["CityObject", "GROUND", "ROOF", "Surfaces", "WALL", "city_shapes", "triangles"]
+
 ROOF, WALL, GROUND = "RoofSurface", "WallSurface", "GroundSurface"
 
 

@@ -42,9 +42,11 @@ import numpy as np
 from ..errors import SceneError
 from ..limits import MAX_TEMPLATE_POINTS
 from ..scene.model import Scene
-from . import x3d_parse
 from .city_crs import Georeference, city_scene, georeference, place
 from .city_surfaces import CityObject, Surfaces, city_shapes
+from .x3d import parse as x3d_parse
+
+__all__ = ["DEPTHS", "NO_FACES", "SOLIDS", "VERSIONS", "read"]
 
 VERSIONS = ("1.0", "1.1", "2.0")
 # Levels of list above one surface (a list of rings) in each geometry type's

@@ -34,9 +34,11 @@ from typing import Any
 import numpy as np
 
 from ..errors import SceneError
-from . import x3d_parse
 from .atomic import atomic_path
 from .cityjson import DEPTHS
+from .x3d import parse as x3d_parse
+
+__all__ = ["ATTRIBUTE", "SurfacePolygon", "surface_polygons", "write_surface_hours"]
 
 ATTRIBUTE = "sunlight_hours"
 

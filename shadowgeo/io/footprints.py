@@ -35,6 +35,8 @@ from ..scene.model import Scene
 from .city_crs import city_scene, georeference
 from .city_surfaces import GROUND, ROOF, WALL, CityObject, Surfaces, city_shapes
 
+__all__ = ["prism", "read"]
+
 _POLYGONAL = ("Polygon", "MultiPolygon")
 
 

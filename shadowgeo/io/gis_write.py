@@ -35,6 +35,17 @@ from ..errors import SceneError
 from ..scene.model import Site
 from .atomic import atomic_path
 
+__all__ = [
+    "CRS84",
+    "Layer",
+    "SUFFIXES",
+    "axis_names",
+    "is_gis_path",
+    "output_crs",
+    "to_output",
+    "write_layers",
+]
+
 SUFFIXES = {".gpkg": "GPKG", ".geojson": "GeoJSON"}
 CRS84 = "OGC:CRS84"
 _INSTALL = 'pip install "shadowgeo[city]"'

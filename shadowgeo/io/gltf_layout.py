@@ -33,6 +33,27 @@ from ..lights import DirectionalLight, Light, PointLight, SpotLight
 from ..scene import SceneLight, Shape
 from . import float_triple, look_rotation, optional_module
 
+__all__ = [
+    "BIN_CHUNK",
+    "GLB_MAGIC",
+    "JSON_CHUNK",
+    "LIGHTS",
+    "SCHEMA",
+    "check_types",
+    "external_uris",
+    "glb_chunks",
+    "glb_container",
+    "json_document",
+    "light_entry",
+    "orjson",
+    "quaternion_xyzw",
+    "scene_light",
+    "shadowgeo_extras",
+    "shape_extras",
+    "shape_fields",
+    "unit_float",
+]
+
 GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = b"glTF", 0x4E4F534A, 0x004E4942
 LIGHTS = "KHR_lights_punctual"
 

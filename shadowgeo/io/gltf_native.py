@@ -35,6 +35,8 @@ import numpy as np
 
 from ..limits import LARGEST_COORDINATE
 
+__all__ = ["PlainMeshes", "plain_meshes", "quaternion_matrix", "trs_matrix"]
+
 # glTF componentType -> numpy dtype (little-endian), for the types read here.
 _FLOAT = 5126
 _COMPONENTS: dict[int, np.dtype[Any]] = {

@@ -51,6 +51,8 @@ from .gltf_layout import (
 from .gltf_native import PlainMeshes, plain_meshes, trs_matrix
 from .trimesh_formats import MALFORMED, checked_shape, load_scene, mesh_shape, triangle_meshes
 
+__all__ = ["read"]
+
 
 def _gltf_document(path: Path) -> tuple[dict[str, Any], bytes | memoryview | None]:
     """The JSON document of a .gltf or .glb file, checked to be glTF 2.x with

@@ -48,6 +48,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SceneError
+from ..limits import TRS_RELATIVE as _TRS_RELATIVE
 from ..scene import Scene, SceneLight, Shape
 from ..scene.model import overview, rotate
 from . import check_face_indices, up_and_units
@@ -61,14 +62,12 @@ from .gltf_layout import (
     unit_float,
 )
 
+__all__ = ["build", "is_trs", "write"]
+
 _ARRAY_BUFFER = 34962
 _ELEMENT_ARRAY_BUFFER = 34963
 _FLOAT = 5126
 _UNSIGNED_INT = 5125
-
-# Matrices whose TRS decomposition misses them by more than this (relative)
-# are not TRS: glTF's validator rejects them, so they are baked into vertices.
-_TRS_RELATIVE = 1e-9
 
 
 def is_trs(matrix: np.ndarray) -> bool:

@@ -38,6 +38,8 @@ from ..scene.sunlight import ramp_colour
 from .atomic import atomic_path
 from .gltf_layout import glb_container
 
+__all__ = ["HOURS_ATTRIBUTE", "UNKNOWN_HOURS", "write_hours_glb"]
+
 HOURS_ATTRIBUTE = "_SUNLIGHT_HOURS"
 UNKNOWN_HOURS = -1.0
 _UNKNOWN_COLOUR = (0.6, 0.6, 0.6)

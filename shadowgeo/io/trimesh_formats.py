@@ -25,6 +25,16 @@ from ..scene import Material, Scene, Shape
 if TYPE_CHECKING:
     import trimesh
 
+__all__ = [
+    "MALFORMED",
+    "checked_shape",
+    "load_scene",
+    "mesh_shape",
+    "read",
+    "triangle_meshes",
+    "trimesh_material",
+]
+
 MALFORMED = (TypeError, ValueError, KeyError, IndexError, AttributeError)
 
 

@@ -38,6 +38,8 @@ from . import outside_reason, refuse_outside
 from .usd_layout import opened, pxr
 from .usd_text import parse_within_budget
 
+__all__ = ["LAYER_KINDS", "check_assets", "layer_assets"]
+
 # Kinds of asset path that name a layer usd-core opens.
 LAYER_KINDS = {"sublayer", "reference", "payload", "value clip", "value clip manifest"}
 

@@ -49,6 +49,17 @@ from typing import Any
 
 from ..errors import SceneError
 
+__all__ = [
+    "PREFIX",
+    "custom",
+    "error_text",
+    "opened",
+    "pxr",
+    "set_custom",
+    "stored_name",
+    "usd_text",
+]
+
 PREFIX = "shadowgeo:"
 
 

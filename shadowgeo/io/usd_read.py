@@ -44,6 +44,8 @@ from . import float_triple
 from .usd_assets import check_assets
 from .usd_layout import custom, error_text, opened, pxr, stored_name
 
+__all__ = ["read"]
+
 
 def _world(xformable: Any, time: Any, path: Path, where: str) -> np.ndarray:
     """(4, 4) column-vector local-to-world transform of a prim (named
@@ -310,7 +312,7 @@ def _exact(value: float, prim: Any, name: str, path: Path, where: str) -> float:
     attribute ``name`` shadowgeo's writer keeps beside it when the two agree
     to float32's precision."""
     exact = _custom(prim, name, "number", None, path, where)
-    if exact is not None and abs(float(exact) - value) <= 1e-6 * abs(value):
+    if exact is not None and abs(float(exact) - value) <= limits.FLOAT32_AGREEMENT * abs(value):
         return float(exact)
     return value
 
@@ -364,7 +366,7 @@ def _read_light(scene: Scene, prim: Any, time: Any, path: Path, where: str) -> b
         if cone is not None and 0 < cone <= 90:
             cut_off = math.radians(cone)
             exact = _custom(prim, "cutOffAngle", "number", None, path, where)
-            if exact is not None and abs(exact - cut_off) <= 1e-6 * cut_off:
+            if exact is not None and abs(exact - cut_off) <= limits.FLOAT32_AGREEMENT * cut_off:
                 cut_off = float(exact)
             light = SpotLight(
                 world[:3, 3],

@@ -30,6 +30,8 @@ from pathlib import Path
 from .. import limits
 from ..errors import SceneError
 
+__all__ = ["parse_within_budget"]
+
 # Exit codes of the child: parsed, usd-core refused the file, out of memory.
 _PARSED, _REFUSED, _EXHAUSTED = 0, 3, 4
 _CHILD = r"""

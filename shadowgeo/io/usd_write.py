@@ -21,6 +21,8 @@ from . import check_face_indices, look_rotation, up_and_units
 from .atomic import atomic_path
 from .usd_layout import error_text, pxr, set_custom, usd_text
 
+__all__ = ["write"]
+
 
 class _Names:
     """Valid, unique prim names per parent path."""

@@ -30,6 +30,8 @@ from ..topology import BLOCK, Caster, block_normals, closed_by_sort
 from .model import Shape, transformed
 from .opacity import casting_opacity
 
+__all__ = ["CasterSet", "SceneCaster", "distinct"]
+
 # Stacked caster meshes kept for later lights (each holds its topology: a few
 # times the size of its arrays).
 _MESHES_KEPT = 2

@@ -50,6 +50,8 @@ from numpy.typing import ArrayLike
 from ..lights import DirectionalLight, SpotLight
 from .model import Material, Scene, SceneLight, lights
 
+__all__ = ["LUMINANCE", "Lighting", "Scopes", "shadow_darkness"]
+
 # Where a shadow lies, for which lights reach it: the scopes
 # (:attr:`~.model.Shape.scopes`) of its receiver, or of each triangle's
 # receiving shape; None: every light reaches it.

@@ -19,6 +19,8 @@ import numpy as np
 from ..boxes import bounding_box
 from .model import Material, Shape
 
+__all__ = ["MARGIN", "MATERIAL", "visible_ground"]
+
 # A plain light grey, X3D's default material otherwise (no emissive light).
 MATERIAL = Material(diffuse_color=(0.7, 0.7, 0.7), name="shadowgeo_ground")
 # The quad reaches this fraction of its larger side past what it covers.

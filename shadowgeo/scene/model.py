@@ -26,6 +26,28 @@ from ..lights import (
     centre_light,
 )
 
+__all__ = [
+    "Color",
+    "MARK",
+    "Material",
+    "OVERVIEW_FROM",
+    "Placement",
+    "Scene",
+    "SceneLight",
+    "Semantics",
+    "Shape",
+    "Site",
+    "Viewpoint",
+    "axis_angle",
+    "lights",
+    "overview",
+    "rotate",
+    "safe_name",
+    "shadow_shape",
+    "transformed",
+    "unique_name",
+]
+
 Color = tuple[float, float, float]
 
 # The X3D ``class`` of the groups holding the shapes shadowgeo adds; each added

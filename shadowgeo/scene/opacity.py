@@ -25,6 +25,8 @@ import numpy as np
 
 from .model import Shape
 
+__all__ = ["LEVELS", "STEP", "casting_opacity", "opacities"]
+
 # Opacities are rounded to multiples of this: 16 levels above zero.
 LEVELS = 16
 STEP = 1.0 / LEVELS

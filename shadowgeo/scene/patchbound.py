@@ -17,8 +17,11 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from ..limits import RELATIVE_ROUNDING
 from ..tolerance import Tolerance
 from .casters import CasterSet
+
+__all__ = ["may_hold_patch"]
 
 # Side of the cells of the normal histogram (unit-normal components), and the
 # faces binned per pass (bounds its memory).
@@ -120,7 +123,7 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     middle = 0.5 * (low_box + high_box)
     radius = float(np.sqrt(((high_box - low_box) ** 2).sum())) / 2.0
     cell = _COARSE_CELL
-    band = cell * radius * (1.0 + 1e-9) + 2.0 * limit
+    band = cell * radius * (1.0 + RELATIVE_ROUNDING) + 2.0 * limit
     if not (np.isfinite(band) and band > 0):
         return True
     side = int(np.ceil(1.0 / cell))
@@ -193,9 +196,9 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     with np.errstate(invalid="ignore", over="ignore"):
         reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=0))
         loose_reach = float(np.sqrt(((loose_high - loose_low) ** 2).sum()))
-    if np.any(~(reach < size * (1.0 - 1e-9))):  # NaN or inf: keep the shape
+    if np.any(~(reach < size * (1.0 - RELATIVE_ROUNDING))):  # NaN or inf: keep the shape
         return True
-    return bool(np.isfinite(loose_low).all() and not loose_reach < size * (1.0 - 1e-9))
+    return bool(np.isfinite(loose_low).all() and not loose_reach < size * (1.0 - RELATIVE_ROUNDING))
 
 
 def _window_at(
@@ -398,7 +401,7 @@ def _patch_bound(
     low_all, high_all = stacked.low[indices].min(axis=0), stacked.high[indices].max(axis=0)
     middle = 0.5 * (low_all + high_all)
     radius = float(np.sqrt(((high_all - low_all) ** 2).sum())) / 2.0
-    band = 0.5 * _NORMAL_CELL * radius * (1.0 + 1e-9) + 2.0 * limit
+    band = 0.5 * _NORMAL_CELL * radius * (1.0 + RELATIVE_ROUNDING) + 2.0 * limit
     if not np.isfinite(band) or band <= 0:
         band = np.inf
     levels = int(min(np.ceil(radius / band), 1 << 20)) if np.isfinite(band) else 0
@@ -471,13 +474,13 @@ def _patch_bound(
             near_high[hit] = np.maximum(near_high[hit], box_high[at[hit]])
         with np.errstate(invalid="ignore", over="ignore"):
             reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=1))
-        large = ~(reach < size * (1.0 - 1e-9))  # NaN or inf: keep the shape
+        large = ~(reach < size * (1.0 - RELATIVE_ROUNDING))  # NaN or inf: keep the shape
         keep[group_owner[large]] = True
     # a shape whose faces are all thin or degenerate has no sharp seed
     # cell; its patches lie within its loose box
     with np.errstate(invalid="ignore", over="ignore"):
         loose_reach = np.sqrt(((loose_high - loose_low) ** 2).sum(axis=1))
-    keep |= np.isfinite(loose_low).all(axis=1) & ~(loose_reach < size * (1.0 - 1e-9))
+    keep |= np.isfinite(loose_low).all(axis=1) & ~(loose_reach < size * (1.0 - RELATIVE_ROUNDING))
     return keep
 
 

@@ -21,6 +21,8 @@ from ..errors import GeometryError
 from ..limits import MAX_SPHERE_SEGMENTS, check_length
 from ..tolerance import Tolerance
 
+__all__ = ["box", "cone", "cylinder", "inscribed_deviation", "quads_to_triangles", "sphere"]
+
 # A sphere gets at most MAX_SPHERE_SEGMENTS segments around (8.4 million
 # triangles): a chord below about 1e-6 of its radius is then not met (the
 # reader warns). Sizes must lie in shadowgeo.limits' range.

@@ -49,6 +49,27 @@ from .ground import MATERIAL as GROUND_MATERIAL
 from .model import Material, Scene, Shape, safe_name
 from .patchbound import may_hold_patch
 
+__all__ = [
+    "AREA_FRACTION",
+    "BOUNDING_FRACTION",
+    "FLOOR_COSINE",
+    "FLOOR_COVER",
+    "FLOOR_FRACTION",
+    "MAX_FOUND",
+    "NAMED_FRACTION",
+    "Receiver",
+    "SIZE_FRACTION",
+    "bounds_the_scene",
+    "found",
+    "given_plane",
+    "ground",
+    "is_floor",
+    "named",
+    "patches",
+    "repeated_faces",
+    "select",
+]
+
 # A found receiver: at least these fractions of the largest patch's area and of
 # the scene's bounding-box diagonal.
 AREA_FRACTION = 0.25

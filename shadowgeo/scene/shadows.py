@@ -133,6 +133,16 @@ from .softbake import (
 )
 from .surfaces import ReceivingSurface, receiving_faces, surface_covered, surface_shadow
 
+__all__ = [
+    "BULB_FRACTION",
+    "DEFAULT_SUN_DIRECTION",
+    "DEFAULT_SUN_ELEVATION",
+    "Progress",
+    "add_shadows",
+    "default_sun",
+    "in_scope",
+]
+
 # A closed caster round a positional light is its bulb (or a marker drawn
 # where the light is), casting nothing for it, when its box diagonal is at most
 # this fraction of the scene's; a larger one shuts the light in (_enclosing).

@@ -42,6 +42,17 @@ from .receivers import Receiver
 from .surfaces import ReceivingSurface, surface_darkness
 from .terminator import clip_to_lit, lit_values
 
+__all__ = [
+    "SoftSettings",
+    "UnknownLight",
+    "is_soft",
+    "soft_on_receiver",
+    "soft_on_surface",
+    "soft_suffix",
+    "translucent_note",
+    "with_light_sizes",
+]
+
 
 @dataclass(frozen=True)
 class SoftSettings:

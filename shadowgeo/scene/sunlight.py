@@ -39,6 +39,20 @@ from .model import Material, Scene, Shape, unique_name
 from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
 
+__all__ = [
+    "GROUND_COVER_HEIGHT",
+    "SceneStudy",
+    "hours_faces",
+    "level_meshes",
+    "level_regions",
+    "ramp_colour",
+    "roof_triangles",
+    "scene_study",
+    "shadows_at",
+    "study_scene",
+    "sunlight_shapes",
+]
+
 # FLOOR_COSINE as an angle from the vertical, for messages.
 FLOOR_SLOPE_DEGREES = float(np.degrees(np.arccos(FLOOR_COSINE)))
 # Metres: a city object rising less than this (a kerb, a bank, a low wall

@@ -39,6 +39,14 @@ from .model import SceneLight, Shape, lights, shadow_shape
 from .receivers import Receiver, repeated_faces
 from .terminator import clip_to_lit, corner_normals, lit_values
 
+__all__ = [
+    "ReceivingSurface",
+    "receiving_faces",
+    "surface_covered",
+    "surface_darkness",
+    "surface_shadow",
+]
+
 
 class ReceivingSurface(NamedTuple):
     """The faces that receive besides the planar receivers, in world coordinates.

@@ -34,6 +34,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..lights import Light, is_positional
+from ..limits import PRODUCT_ROUNDING, TINY
+
+__all__ = ["clip_to_lit", "corner_normals", "lit_values"]
 
 # Past this many (corner, face around its vertex) pairs, faces keep their own
 # normals: a vertex shared by thousands of faces is a fan no one smooths.
@@ -107,7 +110,10 @@ def corner_normals(
     )
     other = starts[group_of[each]] + offset
     face, neighbour = corner_face[order[each]], corner_face[order[other]]
-    near = np.einsum("ij,ij->i", unit[face], unit[neighbour]) >= np.cos(crease[face]) - 1e-12
+    near = (
+        np.einsum("ij,ij->i", unit[face], unit[neighbour])
+        >= np.cos(crease[face]) - PRODUCT_ROUNDING
+    )
     sums = np.zeros((len(key_sorted), 3))
     np.add.at(sums, each[near], weighted[neighbour[near]])
     norm = np.linalg.norm(sums, axis=1, keepdims=True)
@@ -123,7 +129,7 @@ def lit_values(corners: np.ndarray, normals: np.ndarray, light: Light) -> np.nda
     the unit direction from the corner ``corners`` (m, 3, 3) to the light."""
     if is_positional(light):
         towards = light.position - corners
-        towards /= np.maximum(np.linalg.norm(towards, axis=2, keepdims=True), 1e-300)
+        towards /= np.maximum(np.linalg.norm(towards, axis=2, keepdims=True), TINY)
     else:
         towards = np.broadcast_to(-light.direction, corners.shape)
     values: np.ndarray = np.einsum("mkd,mkd->mk", normals, towards)

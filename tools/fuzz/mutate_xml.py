@@ -8,7 +8,7 @@ from __future__ import annotations
 import random
 from copy import deepcopy
 
-from shadowgeo.io.x3d_defaults import DEFAULTS as X3D_FIELDS
+from shadowgeo.io.x3d.tables import DEFAULTS as X3D_FIELDS
 
 from .inputs import NODE_NAMES, SPECIAL_FLOATS, SPECIAL_INTS
 

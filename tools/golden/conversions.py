@@ -7,7 +7,7 @@ make the same public calls, so they run at any commit that has them. The
 example scenes also go through ``--method volume``.
 
 A writer rewrites each relative url of the scene for the folder it writes to
-(:mod:`shadowgeo.io.x3d_urls`), so the bytes depend on where the input and
+(:mod:`shadowgeo.io.x3d.urls`), so the bytes depend on where the input and
 the output lie relative to each other. The inputs are therefore copied into a
 fixed layout under a scratch folder (``in/examples/scenes/``,
 ``in/corpus/<collection>/...``) and written to the mirror of that layout under

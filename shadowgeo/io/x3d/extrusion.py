@@ -15,9 +15,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..limits import MAX_EXTRUSION_POINTS as MAX_POINTS
-from ..polygons import polygon_triangles
-from .x3d_fields import Context, Element, rotation_matrix
+from ...limits import MAX_EXTRUSION_POINTS as MAX_POINTS
+from ...limits import PRODUCT_ROUNDING, SHORTEST_DIRECTION
+from ...polygons import polygon_triangles
+from .fields import Context, Element, rotation_matrix
+
+__all__ = ["extrusion", "frames"]
 
 # MAX_POINTS: vertices one Extrusion may make (spine x section): a few
 # kilobytes of text could otherwise ask for billions.
@@ -25,14 +28,14 @@ from .x3d_fields import Context, Element, rotation_matrix
 
 def _unit(vector: np.ndarray) -> np.ndarray | None:
     length = float(np.linalg.norm(vector))
-    return vector / length if length > 1e-12 else None
+    return vector / length if length > SHORTEST_DIRECTION else None
 
 
 def _turn(source: np.ndarray, target: np.ndarray) -> np.ndarray:
     """The rotation (3x3) taking unit ``source`` onto unit ``target``."""
     axis = np.cross(source, target)
     sine, cosine = float(np.linalg.norm(axis)), float(np.dot(source, target))
-    if sine < 1e-12:
+    if sine < PRODUCT_ROUNDING:
         return np.eye(3) if cosine > 0 else np.diag([1.0, -1.0, -1.0])  # half turn about x
     return rotation_matrix(np.append(axis, np.arctan2(sine, cosine)))
 
@@ -46,7 +49,7 @@ def _units(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 3) unit vectors and (n,) whether each was long enough to have a
     direction (rows that were not are left as they are)."""
     lengths = np.linalg.norm(vectors, axis=1)
-    ok = lengths > 1e-12
+    ok = lengths > SHORTEST_DIRECTION
     units = vectors.copy()
     units[ok] /= lengths[ok, None]
     return units, ok

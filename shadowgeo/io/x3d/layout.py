@@ -1,7 +1,7 @@
 """The XML layout of an X3D tree built from another encoding.
 
 The ClassicVRML, VRML 97 and JSON readers build the lxml tree the XML parser
-gives (see :mod:`.x3d_classic_read`, :mod:`.x3d_json`), but with no text
+gives (see :mod:`.classic_read`, :mod:`.json`), but with no text
 between the elements: written as XML as it is, a whole scene would be one
 line, and every later message about it would say "line 2". :func:`lay_out`
 gives that tree the layout a person writes: each element on its own line,
@@ -13,7 +13,9 @@ out again.
 
 from __future__ import annotations
 
-from .x3d_fields import Element
+from .fields import Element
+
+__all__ = ["lay_out"]
 
 _SPACE = "  "
 

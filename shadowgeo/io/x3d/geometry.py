@@ -15,13 +15,27 @@ from typing import Any
 
 import numpy as np
 
-from .. import limits
-from ..errors import GeometryError
-from ..polygons import polygons_triangles
-from ..scene import Material, primitives
-from .x3d_defaults import DEFAULTS
-from .x3d_extrusion import extrusion
-from .x3d_fields import Context, Element, local_name
+from ... import limits
+from ...errors import GeometryError
+from ...polygons import polygons_triangles
+from ...scene import Material, primitives
+from .extrusion import extrusion
+from .fields import Context, Element, local_name
+from .tables import DEFAULTS
+
+__all__ = [
+    "COORDINATES",
+    "GEOMETRY",
+    "Instance",
+    "MESHES",
+    "Mesh",
+    "PRIMITIVES",
+    "PRIMITIVE_CREASE",
+    "Primitive",
+    "UNMODELLED_GEOMETRY",
+    "coordinates",
+    "geometry",
+]
 
 PRIMITIVES = {"Box", "Sphere", "Cone", "Cylinder"}
 # Smooth across a curved primitive's facets (a few degrees apart), sharp at a

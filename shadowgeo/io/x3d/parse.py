@@ -28,12 +28,14 @@ from pathlib import Path
 
 from lxml import etree
 
-from .. import limits
-from ..errors import SceneError
-from . import x3d_classic_read
+from ... import limits
+from ...errors import SceneError
+from . import classic_read as x3d_classic_read
+
+__all__ = ["ENCODINGS", "MAX_BYTES", "MAX_DEPTH", "parse", "read_bytes"]
 
 # X3D encodings other than XML: extension -> module whose parse(path) gives the tree.
-ENCODINGS = {".x3dj": "x3d_json", ".json": "x3d_json"}
+ENCODINGS = {".x3dj": "json", ".json": "json"}
 # Largest X3D document read, after inflating .x3dz (an inflation bomb stops here).
 MAX_BYTES = limits.MAX_DOCUMENT_BYTES  # see shadowgeo.limits
 MAX_DEPTH = limits.MAX_XML_DEPTH
@@ -78,7 +80,7 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
     the same tree.
 
     ClassicVRML and VRML 97 files (known by their ``#X3D`` / ``#VRML`` header,
-    whatever the extension) give the same tree, from :mod:`.x3d_classic_read`;
+    whatever the extension) give the same tree, from :mod:`.classic_read`;
     what it skips is noted in ``notes``.
 
     Raises

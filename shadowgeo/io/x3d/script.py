@@ -15,8 +15,10 @@ that holds the ROUTE and the Script.
 
 from __future__ import annotations
 
-from .x3d_fields import Element, local_name
-from .x3d_geometry import COORDINATES, GEOMETRY
+from .fields import Element, local_name
+from .geometry import COORDINATES, GEOMETRY
+
+__all__ = ["CHILDREN", "SHAPED", "script_note"]
 
 # Nodes a Script changes the geometry of by writing any of their fields (text,
 # lines and points cast no shadow anyway).

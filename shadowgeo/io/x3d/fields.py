@@ -1,7 +1,7 @@
 """X3D XML field values: parsing attribute text by field type, with defaults.
 
-Field types and defaults come from :mod:`.x3d_defaults` (generated from the X3D
-4.0 XML Schema by ``tools/x3d_defaults.py``). X3D 3.x files differ in a few
+Field types and defaults come from :mod:`.tables` (generated from the X3D
+4.0 schemas by ``tools/x3d_tables.py``). X3D 3.x files differ in a few
 defaults; :data:`X3D3_DEFAULTS` holds those, chosen by the ``<X3D version>``.
 
 As X3D browsers do, a field whose value cannot be read takes its default, with
@@ -26,12 +26,25 @@ from typing import TYPE_CHECKING, Any, TypeAlias
 import numpy as np
 from lxml import etree
 
-from ..errors import SceneError
-from ..limits import LARGEST_COORDINATE
-from .x3d_defaults import DEFAULTS
+from ...errors import SceneError
+from ...limits import LARGEST_COORDINATE
+from .tables import DEFAULTS
 
 if TYPE_CHECKING:
-    from .x3d_proto import Prototypes
+    from .proto import Prototypes
+
+__all__ = [
+    "ANGLE_FIELDS",
+    "Context",
+    "Element",
+    "Tree",
+    "WIDTH",
+    "X3D3_DEFAULTS",
+    "local_name",
+    "numbers_or_none",
+    "parse",
+    "rotation_matrix",
+]
 
 # lxml ships no type information: to mypy both are Any, named for the reader.
 Element: TypeAlias = etree._Element
@@ -87,7 +100,7 @@ class Context:
     # Values built from a node's attributes alone, by (kind, tag, attributes):
     # ten thousand identical Materials are read once.
     by_content: dict[tuple[Any, ...], Any] = field(default_factory=dict)
-    # The scene's long number attributes, held as bytes (an x3d_numbers
+    # The scene's long number attributes, held as bytes (a numbers
     # Splicer), and the root of the document they are held for.
     kept: Any = None
     kept_root: Element | None = None

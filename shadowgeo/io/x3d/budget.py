@@ -27,8 +27,18 @@ from dataclasses import dataclass, field
 import numpy as np
 from lxml import etree
 
-from ..limits import MAX_EXTRUSION_POINTS
-from .x3d_fields import Context, Element, local_name
+from ...limits import MAX_EXTRUSION_POINTS
+from .fields import Context, Element, local_name
+
+__all__ = [
+    "CAP",
+    "CURVED_TRIANGLES",
+    "Estimates",
+    "Expansion",
+    "expansion",
+    "flat_expansion",
+    "tokens",
+]
 
 # A Sphere, Cone or Cylinder at the default chord makes 34 to a few thousand
 # triangles (a Sphere 528 alone, 2,808 beside a box ten times smaller).

@@ -23,9 +23,19 @@ from typing import BinaryIO
 import numpy as np
 from lxml import etree
 
-from ..errors import SceneError
-from . import optional_module
-from .x3d_fields import Element, Tree
+from ...errors import SceneError
+from .. import optional_module
+from .fields import Element, Tree
+
+__all__ = [
+    "LONG_VALUE",
+    "NUMBER_CHARACTERS",
+    "Splicer",
+    "integers_text",
+    "long_number_bytes",
+    "orjson",
+    "points_text",
+]
 
 # The shortest float64 text (as repr), ten times faster: the `speed` extra.
 orjson = optional_module("orjson")
@@ -86,7 +96,7 @@ def integers_text(values: np.ndarray) -> bytes:
 
 # Attribute values at least this long made only of number characters (which
 # XML escapes nowhere) are held as bytes beside the lxml tree: the reader's
-# (see Splicer.hold) and the writer's (see x3d_write._spliced_out).
+# (see Splicer.hold) and the writer's (see write._spliced_out).
 LONG_VALUE = 1 << 16
 NUMBER_CHARACTERS = b"0123456789+-.eE ,"
 

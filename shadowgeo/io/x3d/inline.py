@@ -3,7 +3,7 @@
 Each ``url`` is tried in order, as X3D browsers do; the first that reads is
 used. Remote URLs (any ``scheme:``) are never fetched; a relative path is
 taken from the inlining file's folder and is never read when it leaves the
-top scene's folder (or the ``root`` folder :func:`.x3d_read.read` is given).
+top scene's folder (or the ``root`` folder :func:`.read.read` is given).
 X3D is read with the same rules as the scene (its own DEF names); glTF and
 GLB with the glTF reader (:mod:`.gltf_read`), lights left out (with a
 warning); a glTF whose buffers or images lie outside the folder is
@@ -14,7 +14,7 @@ includes itself, directly or not, is a SceneError (as are the reader's limits
 on nesting and expansion). A url is taken from the folder of the file the
 Inline was written in (a prototype's file, for one in an EXTERNPROTO's body).
 :func:`resolve_url` and :func:`x3d_tree` find and read EXTERNPROTO files too
-(:mod:`.x3d_extern`), under the same rules.
+(:mod:`.extern`), under the same rules.
 """
 
 from __future__ import annotations
@@ -26,13 +26,26 @@ from urllib.parse import unquote
 
 import numpy as np
 
-from .. import limits
-from ..errors import GeometryError, SceneError
-from ..scene import Scene
-from . import file_problem, outside_reason, x3d_parse
-from .gltf_layout import external_uris, json_document
-from .x3d_fields import Context, Element, Tree, local_name
-from .x3d_geometry import Instance, Mesh
+from ... import limits
+from ...errors import GeometryError, SceneError
+from ...scene import Scene
+from .. import file_problem, outside_reason
+from ..gltf_layout import external_uris, json_document
+from . import parse as x3d_parse
+from .fields import Context, Element, Tree, local_name
+from .geometry import Instance, Mesh
+
+__all__ = [
+    "GLTF_SUFFIXES",
+    "InlineReader",
+    "MAX_INLINE_DEPTH",
+    "MAX_INLINE_INSTANCES",
+    "URL_SCHEME",
+    "X3D_SUFFIXES",
+    "load_inline",
+    "resolve_url",
+    "x3d_tree",
+]
 
 # A scheme of two letters or more: a Windows drive ("C:/...") is not one.
 URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]+:")
@@ -45,7 +58,7 @@ MAX_INLINE_INSTANCES = limits.MAX_INLINE_INSTANCES
 
 
 class InlineReader(Protocol):
-    """What reading an Inline needs of the X3D reader (:mod:`.x3d_read`'s)."""
+    """What reading an Inline needs of the X3D reader (:mod:`.read`'s)."""
 
     root_folder: Path
     warnings: list[str]
@@ -180,7 +193,7 @@ def _read_gltf(reader: InlineReader, context: Context, element: Element, path: P
             return f"refers to '{uri}', outside the scene's folder (never read)"
     # the glTF reader's own checks (compression, quantized positions, ...) and materials
     try:
-        from . import gltf_read  # (trimesh: imported for a glTF Inline only)
+        from .. import gltf_read  # (trimesh: imported for a glTF Inline only)
 
         loaded = gltf_read.read(path)
     except (SceneError, GeometryError) as error:

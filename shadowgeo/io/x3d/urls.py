@@ -16,7 +16,7 @@ change: the rest of each ``MFString`` value is kept byte for byte.
 
 The files are not copied and nothing is read: a browser follows the
 rewritten urls; shadowgeo's own reader still opens nothing outside a scene's
-folder (see :mod:`.x3d_inline`).
+folder (see :mod:`.inline`).
 """
 
 from __future__ import annotations
@@ -28,9 +28,11 @@ from collections.abc import Callable
 from pathlib import Path
 from urllib.parse import quote, unquote
 
-from .x3d_classic_tokens import quote as quoted
-from .x3d_fields import Tree, local_name
-from .x3d_inline import URL_SCHEME
+from .classic_tokens import quote as quoted
+from .fields import Tree, local_name
+from .inline import URL_SCHEME
+
+__all__ = ["rewrite_urls"]
 
 # The fields that hold urls: X3D's ``url`` and Background's ``frontUrl``, ...
 _URL_FIELD = re.compile(r"url|[a-z]+Url")

@@ -13,16 +13,18 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import GeometryError
-from ..lights import DirectionalLight, Light, PointLight, SpotLight
-from ..limits import check_coordinates, check_length
-from ..scene import Material, SceneLight
-from ..scene.model import MARK
-from . import float_triple
-from .x3d_fields import Context, Element, local_name
+from ...errors import GeometryError
+from ...lights import DirectionalLight, Light, PointLight, SpotLight
+from ...limits import check_coordinates, check_length
+from ...scene import Material, SceneLight
+from ...scene.model import MARK
+from .. import float_triple
+from .fields import Context, Element, local_name
+
+__all__ = ["BAKED", "LIGHTS", "MATERIALS", "material", "scene_light"]
 
 LIGHTS = {"PointLight", "SpotLight", "DirectionalLight"}
-# The class token of a light whose shadows shadowgeo baked (see x3d_write).
+# The class token of a light whose shadows shadowgeo baked (see write.py).
 BAKED = f"{MARK}-baked"
 MATERIALS = {"Material", "PhysicalMaterial", "UnlitMaterial", "TwoSidedMaterial"}
 

@@ -1,7 +1,7 @@
 """X3D writer, every encoding of the same tree: XML (``.x3d``; ``.x3dz``, the
-same gzip-compressed), JSON (``.x3dj``, ``.json``, by :mod:`.x3d_json`),
+same gzip-compressed), JSON (``.x3dj``, ``.json``, by :mod:`.json`),
 ClassicVRML (``.x3dv``; ``.x3dvz``, ``.x3dv.gz``: gzip) or a translation to
-VRML 97 (``.wrl``; ``.wrz``, ``.wrl.gz``), both by :mod:`.x3d_classic_write`.
+VRML 97 (``.wrl``; ``.wrz``, ``.wrl.gz``), both by :mod:`.classic_write`.
 
 Two cases:
 
@@ -21,7 +21,7 @@ Two cases:
   its orientation in the document's angle unit), with a note; it has
   ``class="shadowgeo-overview"`` and is framed anew when converted again.
   Relative urls (Inline, textures, EXTERNPROTO, Script, ...) are rewritten
-  for the output's folder (:mod:`.x3d_urls`).
+  for the output's folder (:mod:`.urls`).
   A light whose shadows are baked (``SceneLight.baked``) gets
   ``shadows="false"``, the class token ``shadowgeo-shadows-baked`` (read
   back as ``baked``) and a comment before it saying why; a light that is no
@@ -79,17 +79,29 @@ import numpy as np
 from lxml import etree
 from numpy.typing import ArrayLike
 
-from ..errors import SceneError
-from ..lights import DirectionalLight, SpotLight
-from ..scene import Scene, SceneLight, Shape
-from ..scene.model import MARK, Viewpoint, overview, unique_name
-from . import up_and_units, x3d_classic_write, x3d_json
-from .atomic import atomic_path
-from .x3d_field_types import field_type
-from .x3d_fields import Element, Tree, numbers_or_none
-from .x3d_lights import BAKED
-from .x3d_numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
-from .x3d_urls import rewrite_urls
+from ...errors import SceneError
+from ...lights import DirectionalLight, SpotLight
+from ...limits import MATRIX_ROUNDING, PRODUCT_ROUNDING
+from ...scene import Scene, SceneLight, Shape
+from ...scene.model import MARK, Viewpoint, overview, unique_name
+from .. import up_and_units
+from ..atomic import atomic_path
+from . import classic_write as x3d_classic_write
+from . import json as x3d_json
+from .fields import Element, Tree, numbers_or_none
+from .lights import BAKED
+from .numbers import LONG_VALUE, Splicer, integers_text, long_number_bytes, points_text
+from .tables import field_type
+from .urls import rewrite_urls
+
+__all__ = [
+    "ADDED_ROLES",
+    "CLASSIC_SUFFIXES",
+    "LIGHT_TAGS",
+    "OVERVIEW_CLASS",
+    "VRML97_SUFFIXES",
+    "write",
+]
 
 ADDED_ROLES = ("shadow", "volume", "ground")
 LIGHT_TAGS = ("PointLight", "SpotLight", "DirectionalLight")
@@ -128,7 +140,7 @@ def write(scene: Scene, path: str | os.PathLike[str]) -> None:
     path = Path(path)
     doctype = None
     # the shapes' numbers, and the long ones the reader held, kept out of the
-    # tree (see .x3d_numbers)
+    # tree (see .numbers)
     splicer = Splicer(scene.numbers if scene.document is not None else None)
     if scene.document is not None:
         tree = _with_added(scene, splicer)
@@ -737,7 +749,7 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
         f"{{{xsd}}}noNamespaceSchemaLocation", "https://www.web3d.org/specifications/x3d-4.0.xsd"
     )
     head = etree.SubElement(root, "head")
-    from .. import __version__
+    from ... import __version__
 
     # The schema's order in <head>: component, unit, meta.
     if meters != 1.0:
@@ -827,7 +839,7 @@ def _transform_fields(matrix: np.ndarray) -> dict[str, str]:
     """X3D Transform fields that give exactly ``matrix`` (4, 4): the linear part
     ``A = R (SR S SR^-1)`` from the singular value decomposition
     ``A = U diag(s) V^T`` with ``R = U V^T``, ``SR = V``, scale ``s``."""
-    if not np.allclose(matrix[3], [0, 0, 0, 1], rtol=0, atol=1e-12):
+    if not np.allclose(matrix[3], [0, 0, 0, 1], rtol=0, atol=PRODUCT_ROUNDING):
         raise SceneError(f"cannot write a projective transform in X3D: {matrix.tolist()}")
     linear = matrix[:3, :3]
     u, s, vt = np.linalg.svd(linear)
@@ -839,11 +851,11 @@ def _transform_fields(matrix: np.ndarray) -> dict[str, str]:
         s[2] *= -1
     fields = {"translation": _numbers(matrix[:3, 3])}
     rotation = u @ vt
-    if not np.allclose(rotation, np.eye(3), rtol=0, atol=1e-15):
+    if not np.allclose(rotation, np.eye(3), rtol=0, atol=MATRIX_ROUNDING):
         fields["rotation"] = _numbers(_axis_angle(rotation))
-    if not np.allclose(s, 1.0, rtol=0, atol=1e-15):
+    if not np.allclose(s, 1.0, rtol=0, atol=MATRIX_ROUNDING):
         fields["scale"] = _numbers(s)
-        if not np.allclose(vt, np.eye(3), rtol=0, atol=1e-15):
+        if not np.allclose(vt, np.eye(3), rtol=0, atol=MATRIX_ROUNDING):
             fields["scaleOrientation"] = _numbers(_axis_angle(vt.T))
     return fields
 

@@ -1,10 +1,10 @@
 """Write an X3D XML tree in the ClassicVRML encoding (``.x3dv``).
 
-The tree is what :mod:`.x3d_write` would write as XML (the input document
+The tree is what :mod:`.write` would write as XML (the input document
 with the shadow groups added, or a fresh one); this module only changes its
 syntax, so every node, DEF/USE name, field value, PROTO, ROUTE, Script,
 IMPORT/EXPORT, head entry and comment is kept. Field types come from the
-schema table (:mod:`.x3d_field_types`), a prototype's declaration, or a
+schema table (:mod:`.tables`), a prototype's declaration, or a
 ``<field type>``: SFString values are quoted, MF values bracketed, booleans
 written ``TRUE`` / ``FALSE``. A child node goes to its ``containerField``
 (or its type's default one). Script code held as XML text is written as the
@@ -23,13 +23,21 @@ from __future__ import annotations
 
 from lxml import etree
 
-from ..errors import SceneError
-from .x3d_classic_read import classic_comment
-from .x3d_classic_tokens import is_number, quote
-from .x3d_defaults import DEFAULTS
-from .x3d_field_types import CONTAINER_FIELDS, field_type
-from .x3d_fields import Element, Tree, local_name
-from .x3d_fields import parse as parse_field
+from ...errors import SceneError
+from .classic_read import classic_comment
+from .classic_tokens import is_number, quote
+from .fields import Element, Tree, local_name
+from .fields import parse as parse_field
+from .tables import CONTAINER_FIELDS, DEFAULTS, field_type
+
+__all__ = [
+    "CODE_NODES",
+    "INDENT",
+    "VRML97_ACCESS",
+    "VRML97_FIELDS",
+    "X3D4_DEFAULTS",
+    "classic_text",
+]
 
 INDENT = "  "
 # Nodes whose XML text content is code (a CDATA section), written as a url.

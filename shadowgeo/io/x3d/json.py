@@ -16,12 +16,12 @@ from any encoding, shadows added) as X3D JSON. The mapping, both ways:
 - ``head``, ``meta``, ``component``, ``unit``, ``field``, ``fieldValue``,
   ``IS``, ``connect``, ``ProtoDeclare`` ...: statements, keyed by their name.
 
-Field types come from :mod:`.x3d_json_fields` (generated from the X3D JSON
-schema); a ``field``'s value is typed by its ``type``, a ``fieldValue``'s by
+Field types come from :mod:`.tables` (generated from the X3D JSON schema
+and XML Schema); a ``field``'s value is typed by its ``type``, a ``fieldValue``'s by
 the declaration of its prototype.
 
 Parsing is as safe as the XML parser's: the size limit and gzip-bomb guard of
-:func:`.x3d_parse.read_bytes`, nodes nested at most :data:`MAX_DEPTH` deep
+:func:`.parse.read_bytes`, nodes nested at most :data:`MAX_DEPTH` deep
 (about libxml2's limit for XML), errors naming the JSON line (up to line
 65534: lxml keeps 16 bits) and the path of keys to the node.
 """
@@ -40,11 +40,30 @@ from typing import Any
 import numpy as np
 from lxml import etree
 
-from ..errors import SceneError
-from . import x3d_parse
-from .x3d_fields import Element, Tree
-from .x3d_json_fields import NODES
-from .x3d_layout import lay_out
+from ...errors import SceneError
+from . import parse as x3d_parse
+from . import tables
+from .fields import Element, Tree
+from .layout import lay_out
+
+__all__ = [
+    "FIELDS",
+    "HOLDERS",
+    "IN_CHILDREN",
+    "JSON_SCHEMA",
+    "JSON_SUFFIXES",
+    "LISTED",
+    "MAX_DEPTH",
+    "SCHEMA_LOCATION",
+    "SINGLE",
+    "SOURCE_CODE_NODES",
+    "STATEMENT_FIELDS",
+    "XSD",
+    "dumps",
+    "is_x3d_json",
+    "parse",
+    "typed",
+]
 
 JSON_SUFFIXES = {".x3dj", ".json"}
 # Nodes nested at most this deep. libxml2 refuses XML deeper than 256; JSON
@@ -67,14 +86,7 @@ STATEMENT_FIELDS = {
     "ExternProtoDeclare": {"url": "MFString"},
 }
 # node -> (default containerField, {field: type}); a field not listed is an SFString.
-FIELDS = {
-    node: (container, dict(item.split(":") for item in fields.split()))
-    for node, (container, fields) in NODES.items()
-}
-FIELDS["MatrixTransform"] = (  # Castle Game Engine / VRML 97, outside X3D 4.0
-    "children",
-    {"matrix": "SFMatrix4f", "-children": "MFNode", "-metadata": "SFNode"},
-)
+FIELDS = {node: entry for node, entry in tables.FIELDS.items() if node not in tables.STATEMENTS}
 _INTEGER = re.compile(r"[+-]?\d+")
 _HEX = re.compile(r"[+-]?0[xX][0-9a-fA-F]+")
 _OPEN, _CLOSE, _QUOTE, _BACKSLASH = (ord(mark) for mark in '{}"\\')

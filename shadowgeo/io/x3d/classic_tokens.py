@@ -13,7 +13,9 @@ from __future__ import annotations
 import re
 from typing import NamedTuple, cast
 
-from ..errors import SceneError
+from ...errors import SceneError
+
+__all__ = ["Token", "is_number", "number_text", "quote", "tokens"]
 
 # One match a token, with the white space (and commas) before it.
 _TOKEN = re.compile(

@@ -3,7 +3,7 @@ VRML 97 ``.wrl``; gzip ``.x3dz``, ``.x3dvz``, ``.wrz``, ``*.gz``) into a
 :class:`~shadowgeo.Scene`.
 
 Every encoding is parsed into the XML encoding's element tree
-(:mod:`.x3d_parse`, :mod:`.x3d_json`, :mod:`.x3d_classic_read`), which this one
+(:mod:`.parse`, :mod:`.json`, :mod:`.classic_read`), which this one
 reader reads.
 
 Rules the reader follows, where X3D leaves a choice:
@@ -38,11 +38,11 @@ Rules the reader follows, where X3D leaves a choice:
   ``category="angle"`` scales every angle field.
 - **Prototypes.** A ProtoInstance is its ProtoBody's first node, copied with
   the instance's field values, passed on through ``IS`` to nested instances
-  (:mod:`.x3d_proto`); an ExternProtoDeclare is followed to a PROTO in a local
-  file under Inline's rules (:mod:`.x3d_extern`), whose urls are then taken
+  (:mod:`.proto`); an ExternProtoDeclare is followed to a PROTO in a local
+  file under Inline's rules (:mod:`.extern`), whose urls are then taken
   from that file's folder.
 - **Scripts** are not run: one that builds geometry, or any Script of a scene
-  with no geometry, gets one note saying so (:mod:`.x3d_script`).
+  with no geometry, gets one note saying so (:mod:`.script`).
 - **Skipped, with a warning in** ``Scene.warnings`` naming file, line and
   node, where X3D browsers are lenient: nodes shadowgeo does not model or does
   not know (scripts, sensors, interpolators, routes, text, lines, points,
@@ -58,7 +58,7 @@ Rules the reader follows, where X3D leaves a choice:
   DEF/USE, prototype, EXTERNPROTO and Inline cycles, expansion bombs (DEF/USE,
   Inline and prototypes beyond 2 million nodes, 500,000 grouping nodes and
   Shapes to walk or the triangle budget, all estimated before the walk by
-  :mod:`.x3d_budget`; prototypes beyond 10,000 copies), transforms that
+  :mod:`.budget`; prototypes beyond 10,000 copies), transforms that
   overflow.
 """
 
@@ -76,21 +76,24 @@ from typing import Any
 import numpy as np
 from lxml import etree
 
-from .. import limits
-from ..errors import GeometryError, SceneError
-from ..scene import Material, Scene, SceneLight, Shape
-from ..scene.model import MARK, Placement, Viewpoint, axis_angle
-from ..tolerance import Tolerance
-from . import file_problem, float_triple, x3d_parse
-from .x3d_budget import Estimates, Expansion, expansion, flat_expansion
-from .x3d_defaults import DEFAULTS
-from .x3d_fields import Context, Element, Tree, local_name, parse, rotation_matrix
-from .x3d_geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
-from .x3d_inline import URL_SCHEME, load_inline
-from .x3d_lights import LIGHTS, material, scene_light
-from .x3d_numbers import Splicer
-from .x3d_proto import Prototypes
-from .x3d_script import script_note
+from ... import limits
+from ...errors import GeometryError, SceneError
+from ...scene import Material, Scene, SceneLight, Shape
+from ...scene.model import MARK, Placement, Viewpoint, axis_angle
+from ...tolerance import Tolerance
+from .. import file_problem, float_triple
+from . import parse as x3d_parse
+from .budget import Estimates, Expansion, expansion, flat_expansion
+from .fields import Context, Element, Tree, local_name, parse, rotation_matrix
+from .geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
+from .inline import URL_SCHEME, load_inline
+from .lights import LIGHTS, material, scene_light
+from .numbers import Splicer
+from .proto import Prototypes
+from .script import script_note
+from .tables import DEFAULTS
+
+__all__ = ["GROUPS", "MAX_NODES", "REASONS", "RENDERED_FIELDS", "SILENT", "TEXTURES", "read"]
 
 GROUPS = {"Group", "StaticGroup", "Collision", "Anchor", "Billboard", "CADAssembly", "CADLayer"}
 GROUPS |= {"CADPart", "CADFace", "Layer", "LayerSet", "Transform", "MatrixTransform"}
@@ -136,7 +139,7 @@ class _Reader:
         self.open_groups: set[int] = set()  # ids of the grouping nodes being traversed
         self.baked: list[str] = []  # DEFs of the enclosing groups of shadows shadowgeo added
         # what the documents and prototype copies read so far expand to, and
-        # what each element does (x3d_budget)
+        # what each element does (budget)
         self.expanded = Expansion()
         self.estimates = Estimates(
             Expansion(MAX_NODES, limits.MAX_VISITS, max_triangles or limits.MAX_TRIANGLES)
@@ -181,7 +184,7 @@ class _Reader:
             self.inline_stack.pop()
 
     def _count(self, context: Context, element: Element, at: Element | None = None) -> None:
-        """Add what ``element`` expands to (x3d_budget) to what the scene does so
+        """Add what ``element`` expands to (budget) to what the scene does so
         far, counted over every document and prototype copy read (Inlines and
         prototypes used again multiply too); refuse the scene, before it is
         walked, beyond its budgets of nodes, visits or triangles, naming the
@@ -438,7 +441,7 @@ class _Reader:
 
     # -- result ------------------------------------------------------------------
     def scripts(self, root: Element, path: str) -> None:
-        """One note for a Script that builds geometry (:mod:`.x3d_script`), in
+        """One note for a Script that builds geometry (:mod:`.script`), in
         place of the usual note on skipped Scripts."""
         has_geometry = any(instance.role == "geometry" for instance in self.instances)
         note = script_note(root, path, has_geometry)
@@ -669,12 +672,12 @@ def read(
         The folder that Inlines and textures may not leave (default: the
         file's own folder). Name a folder above it for a trusted scene whose
         files lie beside its folder, as a converted scene written to another
-        folder names them (:mod:`.x3d_urls`).
+        folder names them (:mod:`.urls`).
     max_triangles : int, optional
         The triangle (memory) budget, default
         :data:`~shadowgeo.limits.MAX_TRIANGLES`: a scene estimated to pass
         it through DEF/USE, prototypes or Inline is refused before it is
-        built (:mod:`.x3d_budget`).
+        built (:mod:`.budget`).
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """Parse X3D ClassicVRML (``.x3dv``) and VRML 97 (``.wrl``) into the X3D XML tree.
 
-The result is the lxml tree the XML parser (:mod:`.x3d_parse`) gives for the
+The result is the lxml tree the XML parser (:mod:`.parse`) gives for the
 same scene, so the one X3D reader handles nodes, DEF/USE, prototypes, Inline,
 containerField and units for every encoding:
 
@@ -17,7 +17,7 @@ containerField and units for every encoding:
   the header's version the ``version`` attribute; comments become XML
   comments; every element's ``sourceline`` is its line in the file;
 - the tree is laid out as XML is written, one element a line, indented by
-  depth (:mod:`.x3d_layout`), so the XML writer gives a readable file.
+  depth (:mod:`.layout`), so the XML writer gives a readable file.
 
 VRML 97 (``#VRML V2.0 utf8``) is read as X3D 3.0: ``exposedField``,
 ``eventIn``, ``eventOut`` and ``field`` become X3D's access types, and the
@@ -46,11 +46,26 @@ from typing import cast
 
 from lxml import etree
 
-from ..errors import SceneError, excerpt
-from .x3d_classic_tokens import Token, is_number, number_text, quote, tokens
-from .x3d_field_types import CONTAINER_FIELDS, field_type
-from .x3d_fields import Element
-from .x3d_layout import lay_out
+from ...errors import SceneError, excerpt
+from .classic_tokens import Token, is_number, number_text, quote, tokens
+from .fields import Element
+from .layout import lay_out
+from .tables import CONTAINER_FIELDS, field_type
+
+__all__ = [
+    "ACCESS",
+    "MAX_DEPTH",
+    "MAX_ELEMENTS",
+    "MAX_SKIPPED",
+    "STATEMENTS",
+    "VRML97_FIELDS",
+    "XSD",
+    "ZERO_WIDTH",
+    "classic_comment",
+    "is_classic",
+    "parse_bytes",
+    "xml_comment",
+]
 
 MAX_DEPTH = 100
 MAX_ELEMENTS = 2_000_000

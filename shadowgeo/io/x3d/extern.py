@@ -4,7 +4,7 @@ Each ``url`` is tried in order, as X3D browsers do; the first that gives a
 prototype is used. ``"file.x3dv#Name"`` names the PROTO ``Name`` of that file;
 without a fragment, the file's first PROTO (VRML 97, 4.9.3); ``"#Name"`` alone,
 a PROTO of the file that declares the EXTERNPROTO. A file is found under Inline's rules
-(:func:`.x3d_inline.resolve_url`): taken from the declaring file's folder,
+(:func:`.inline.resolve_url`): taken from the declaring file's folder,
 nothing remote (a ``urn:`` neither), nothing outside the scene's folder; it is
 parsed once per scene read, whatever its encoding. A file whose prototype of
 that name is itself an EXTERNPROTO is followed on, at most
@@ -17,10 +17,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import limits
-from ..errors import SceneError
-from .x3d_fields import Element, local_name, parse
-from .x3d_inline import InlineReader, resolve_url, x3d_tree
+from ... import limits
+from ...errors import SceneError
+from .fields import Element, local_name, parse
+from .inline import InlineReader, resolve_url, x3d_tree
+
+__all__ = ["Found", "find"]
 
 
 @dataclass(frozen=True)

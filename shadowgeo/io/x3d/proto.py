@@ -12,7 +12,7 @@ private to the copy.
 A prototype's name is looked up in the file that holds the instance: the
 document, or for an instance inside a copy, the file the copied prototype was
 declared in. An ExternProtoDeclare is followed to a PROTO in a local file
-(:mod:`.x3d_extern`, under Inline's rules), whose copies then read their urls,
+(:mod:`.extern`, under Inline's rules), whose copies then read their urls,
 names and messages as that file's. Instances of an EXTERNPROTO that cannot be
 followed (remote, missing, outside the scene's folder, no such PROTO) and of
 undeclared prototypes are skipped with a warning naming the file, line and
@@ -31,13 +31,15 @@ from typing import TYPE_CHECKING
 
 from lxml import etree
 
-from .. import limits
-from .x3d_extern import Found, find
-from .x3d_fields import Element, local_name
+from ... import limits
+from .extern import Found, find
+from .fields import Element, local_name
 
 if TYPE_CHECKING:
-    from .x3d_fields import Context
-    from .x3d_inline import InlineReader
+    from .fields import Context
+    from .inline import InlineReader
+
+__all__ = ["MAX_EXPANSIONS", "MAX_FILES_DEEP", "Prototypes"]
 
 # Copies made per document at most: a prototype whose body holds an instance
 # of itself would otherwise expand for ever.
