@@ -430,6 +430,7 @@ def Xform "World"
     }
     def SphereLight "lamp"
     {
+        float inputs:radius = 0
         double3 xformOp:translate = (0, 8, 0)
         uniform token[] xformOpOrder = ["xformOp:translate"]
     }
