@@ -264,47 +264,86 @@ def _held(
     for k in range(n):
         i = first + k
         j = first + (k + 1) % n
-        ox = x[i] - cx
-        oy = y[i] - cy
         w_i, t_i = w_j, t_j  # each corner's wedge, found once
         w_j, t_j = _wedge(x[j] - cx, y[j] - cy, rel, h_n, base)
         a = h_first + w_i
         b = h_first + (w_i + 1) % h_n
-        ax = x[a] - cx
-        ay = y[a] - cy
-        bx = x[b] - cx
-        by = y[b] - cy
-        if not (
-            ax * oy - ay * ox > margin
-            and ox * by - oy * bx > margin
-            and (bx - ax) * (oy - ay) - (by - ay) * (ox - ax) > margin
-        ):
+        if not _in_wedge(x, y, i, a, b, cx, cy, margin):
             return False
         ccw = (t_j - t_i) % 4.0 < 2.0
         lo = w_i if ccw else w_j
         hi = w_j if ccw else w_i
-        if lo == hi:
-            continue
-        top = (hi + 1) % h_n
-        if top == lo or not (rel[top] - rel[lo]) % 4.0 < 1.9:
+        if lo != hi and not _spans_spokes(x, y, i, j, lo, hi, h_first, h_n, rel, cx, cy, margin):
             return False
-        dx = x[j] - x[i]
-        dy = y[j] - y[i]
-        to_centre = dx * (cy - y[i]) - dy * (cx - x[i])
-        if not abs(to_centre) > margin:
+    return True
+
+
+@nb.njit(cache=True)
+def _in_wedge(
+    x: np.ndarray,
+    y: np.ndarray,
+    i: int,
+    a: int,
+    b: int,
+    cx: float,
+    cy: float,
+    margin: float,
+) -> bool:
+    """Whether corner ``i`` lies strictly inside the triangle from the centre
+    (cx, cy) to the holder's edge ``a -> b`` (beyond ``margin``)."""
+    ox = x[i] - cx
+    oy = y[i] - cy
+    ax = x[a] - cx
+    ay = y[a] - cy
+    bx = x[b] - cx
+    by = y[b] - cy
+    inside: bool = (
+        ax * oy - ay * ox > margin
+        and ox * by - oy * bx > margin
+        and (bx - ax) * (oy - ay) - (by - ay) * (ox - ax) > margin
+    )
+    return inside
+
+
+@nb.njit(cache=True)
+def _spans_spokes(
+    x: np.ndarray,
+    y: np.ndarray,
+    i: int,
+    j: int,
+    lo: int,
+    hi: int,
+    h_first: int,
+    h_n: int,
+    rel: np.ndarray,
+    cx: float,
+    cy: float,
+    margin: float,
+) -> bool:
+    """Whether the edge ``i -> j``, its ends in the holder's wedges ``lo``
+    and ``hi`` (counter-clockwise, less than half a turn apart), crosses
+    every spoke between them short of the holder's corner: the centre and
+    each corner strictly on opposite sides of its line."""
+    top = (hi + 1) % h_n
+    if top == lo or not (rel[top] - rel[lo]) % 4.0 < 1.9:
+        return False
+    dx = x[j] - x[i]
+    dy = y[j] - y[i]
+    to_centre = dx * (cy - y[i]) - dy * (cx - x[i])
+    if not abs(to_centre) > margin:
+        return False
+    spoke = (lo + 1) % h_n
+    while True:
+        v = h_first + spoke
+        to_corner = dx * (y[v] - y[i]) - dy * (x[v] - x[i])
+        if not (
+            (to_centre > margin and to_corner < -margin)
+            or (to_centre < -margin and to_corner > margin)
+        ):
             return False
-        spoke = (lo + 1) % h_n
-        while True:
-            v = h_first + spoke
-            to_corner = dx * (y[v] - y[i]) - dy * (x[v] - x[i])
-            if not (
-                (to_centre > margin and to_corner < -margin)
-                or (to_centre < -margin and to_corner > margin)
-            ):
-                return False
-            if spoke == hi:
-                break
-            spoke = (spoke + 1) % h_n
+        if spoke == hi:
+            break
+        spoke = (spoke + 1) % h_n
     return True
 
 

@@ -121,44 +121,73 @@ def star_triangles(loop: np.ndarray) -> np.ndarray | None:
     largest coordinate from ``c`` is about :data:`MAX_COORDINATE`, the range
     the rounding margins of :func:`turns` are set for.
     """
-    loop = np.asarray(loop, dtype=np.float64)
-    n = len(loop)
-    if n < 3:
+    local = _star_local(np.asarray(loop, dtype=np.float64))
+    if local is None:
         return None
-    extent = float(np.abs(loop - loop.mean(axis=0)).max())
-    if not (np.isfinite(extent) and extent > 0):
-        return None
-    local = np.ldexp(loop, int(np.floor(np.log2(MAX_COORDINATE / extent))))
-    if not np.all(np.isfinite(local)) or np.abs(local).max() > 4 * MAX_COORDINATE:
-        return None
+    n = len(local)
     starts, lengths = np.zeros(1, dtype=np.int64), np.array([n])
-    if not star_shaped_flat(local, starts, lengths)[0]:
-        return None
     cx, cy = (float(value) for value in _loop_means(local, starts, lengths)[0])
-    xs, ys = local[:, 0].tolist(), local[:, 1].tolist()
-
-    def left(i: int, j: int, px: float, py: float) -> bool:
-        """``i -> j -> p`` certainly turns left."""
-        return turn_sign(xs[j] - xs[i], ys[j] - ys[i], px - xs[i], py - ys[i]) == 1
-
-    triangles: list[tuple[int, int, int]] = []
-    stack: list[int] = []
-    for index in [*range(n), 0]:  # the first corner again closes the loop
-        stack.append(index)
-        while len(stack) >= 3:
-            a, b, d = stack[-3], stack[-2], stack[-1]
-            if not (left(a, b, xs[d], ys[d]) and left(a, d, cx, cy)):
-                break
-            triangles.append((a, b, d))
-            del stack[-2]
-    rest = stack[:-1]  # the loop left (its first corner was pushed twice)
-    if len(rest) == 3 and left(rest[0], rest[1], xs[rest[2]], ys[rest[2]]):
+    star = _StarLoop(local[:, 0].tolist(), local[:, 1].tolist(), cx, cy)
+    triangles, rest = star.ears()
+    if len(rest) == 3 and star.left(rest[0], rest[1], star.xs[rest[2]], star.ys[rest[2]]):
         triangles.append((rest[0], rest[1], rest[2]))
     elif len(rest) >= 3:
         remainder = np.asarray(triangulate([local[rest]]), dtype=np.int64).reshape(-1, 3)
         triangles.extend(map(tuple, np.asarray(rest, dtype=np.int64)[remainder].tolist()))
     result = np.array(triangles, dtype=np.int64).reshape(-1, 3)
     return result if len(result) == n - 2 else None
+
+
+def _star_local(loop: np.ndarray) -> np.ndarray | None:
+    """The (k, 2) ``loop`` scaled by a power of two (exactly) so that its
+    largest coordinate from the mean of its corners is about
+    :data:`MAX_COORDINATE`, when it is certainly star-shaped round that
+    mean (:func:`star_shaped_flat`); None for any other loop."""
+    n = len(loop)
+    if n < 3:
+        return None
+    extent = float(np.abs(loop - loop.mean(axis=0)).max())
+    if not (np.isfinite(extent) and extent > 0):
+        return None
+    local: np.ndarray = np.ldexp(loop, int(np.floor(np.log2(MAX_COORDINATE / extent))))
+    if not np.all(np.isfinite(local)) or np.abs(local).max() > 4 * MAX_COORDINATE:
+        return None
+    starts, lengths = np.zeros(1, dtype=np.int64), np.array([n])
+    if not star_shaped_flat(local, starts, lengths)[0]:
+        return None
+    return local
+
+
+@dataclass(frozen=True)
+class _StarLoop:
+    """A loop's corners (``xs``, ``ys``, local units) star-shaped round
+    (``cx``, ``cy``), for :func:`star_triangles`' ears."""
+
+    xs: list[float]
+    ys: list[float]
+    cx: float
+    cy: float
+
+    def left(self, i: int, j: int, px: float, py: float) -> bool:
+        """``i -> j -> p`` certainly turns left."""
+        xs, ys = self.xs, self.ys
+        return turn_sign(xs[j] - xs[i], ys[j] - ys[i], px - xs[i], py - ys[i]) == 1
+
+    def ears(self) -> tuple[list[tuple[int, int, int]], list[int]]:
+        """The certain ears, cut in one pass with a stack, and the corners
+        of the loop they leave."""
+        xs, ys, left = self.xs, self.ys, self.left
+        triangles: list[tuple[int, int, int]] = []
+        stack: list[int] = []
+        for index in [*range(len(xs)), 0]:  # the first corner again closes the loop
+            stack.append(index)
+            while len(stack) >= 3:
+                a, b, d = stack[-3], stack[-2], stack[-1]
+                if not (left(a, b, xs[d], ys[d]) and left(a, d, self.cx, self.cy)):
+                    break
+                triangles.append((a, b, d))
+                del stack[-2]
+        return triangles, stack[:-1]  # (its first corner was pushed twice)
 
 
 def whole_loop(loops: list[np.ndarray], keep_triangles: bool = False) -> bool:
@@ -981,23 +1010,45 @@ def _straightened(
     chosen = [k for k, flag in enumerate(spiked) if not flag]
     if not chosen:
         return list(zip(parts, spiked, strict=True))
-    counts = [len(parts[k]) for k in chosen]
-    loops = [np.asarray(loop, dtype=np.float64) for k in chosen for loop in parts[k]]
-    owner = np.repeat(np.array(chosen, dtype=np.int64), counts)  # each loop's part
-    outer = np.zeros(len(loops), dtype=bool)
-    outer[np.cumsum([0, *counts])[:-1]] = True
-    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    loops = _OwnedLoops.of(parts, chosen)
+    sizes = np.array([len(loop) for loop in loops.loops], dtype=np.int64)
     points, sizes, left = without_collinear(
-        (np.concatenate(loops), sizes, np.arange(len(loops))), STRAIGHT_SLACK
+        (np.concatenate(loops.loops), sizes, np.arange(len(loops.loops))), STRAIGHT_SLACK
     )
     pieces = np.split(points, np.cumsum(sizes)[:-1]) if len(sizes) else []
-    rebuilt: dict[int, list[np.ndarray]] = {}
-    for index, piece in zip(left.tolist(), pieces, strict=True):
-        part = int(owner[index])
-        if outer[index] or part in rebuilt:  # holes only under their outer loop
-            rebuilt.setdefault(part, []).append(piece)
+    rebuilt = loops.regrouped(left.tolist(), pieces)
     kept = [k for k in range(len(parts)) if spiked[k] or k in rebuilt]
     return [(parts[k], True) if spiked[k] else (rebuilt[k], False) for k in kept]
+
+
+@dataclass(frozen=True)
+class _OwnedLoops:
+    """The loops of some parts in one list, with each loop's part and
+    whether it is the part's outer loop (its first)."""
+
+    loops: list[np.ndarray]
+    owner: np.ndarray
+    outer: np.ndarray
+
+    @classmethod
+    def of(cls, parts: list[list[np.ndarray]], chosen: list[int]) -> _OwnedLoops:
+        """The loops of ``parts[k]`` for each ``k`` in ``chosen``, in order."""
+        counts = [len(parts[k]) for k in chosen]
+        loops = [np.asarray(loop, dtype=np.float64) for k in chosen for loop in parts[k]]
+        owner = np.repeat(np.array(chosen, dtype=np.int64), counts)
+        outer = np.zeros(len(loops), dtype=bool)
+        outer[np.cumsum([0, *counts])[:-1]] = True
+        return cls(loops, owner, outer)
+
+    def regrouped(self, left: list[int], pieces: list[np.ndarray]) -> dict[int, list[np.ndarray]]:
+        """Part -> its loops, from the ``pieces`` left of loops ``left``: a
+        part whose outer loop went goes, holes and all."""
+        rebuilt: dict[int, list[np.ndarray]] = {}
+        for index, piece in zip(left, pieces, strict=True):
+            part = int(self.owner[index])
+            if self.outer[index] or part in rebuilt:  # holes only under their outer loop
+                rebuilt.setdefault(part, []).append(piece)
+        return rebuilt
 
 
 def _many_reflex(loop: np.ndarray) -> bool:

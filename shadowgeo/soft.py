@@ -158,25 +158,43 @@ def light_samples(
     if count < 1:
         raise GeometryError(f"samples must be >= 1, got {count!r}")
     if isinstance(light, RectLight):
-        across, up = light.axes
-        square = _hammersley(count) - 0.5
-        points = (
-            light.position
-            + (square[:, 0] * light.width)[:, None] * across
-            + (square[:, 1] * light.height)[:, None] * up
-        )
-        return [PointLight(point) for point in points]
+        return _rect_samples(light, count)
     if isinstance(light, DiskLight):
         return [
             PointLight(p)
             for p in _disc_points(light.position, light.direction, light.radius, count)
         ]
     if isinstance(light, DirectionalLight):
-        if light.angle == 0 or count == 1:
-            return [light]
-        spread = math.tan(light.angle / 2)
-        ends = _disc_points(light.direction, light.direction, spread, count)
-        return [DirectionalLight(end) for end in ends]
+        return _directional_samples(light, count)
+    return _sphere_samples(light, count, towards)
+
+
+def _rect_samples(light: RectLight, count: int) -> list[Light]:
+    """``count`` point lights over the rectangle: the Hammersley set."""
+    across, up = light.axes
+    square = _hammersley(count) - 0.5
+    points = (
+        light.position
+        + (square[:, 0] * light.width)[:, None] * across
+        + (square[:, 1] * light.height)[:, None] * up
+    )
+    return [PointLight(point) for point in points]
+
+
+def _directional_samples(light: DirectionalLight, count: int) -> list[Light]:
+    """``count`` directions over the light's cone (itself, with no angle)."""
+    if light.angle == 0 or count == 1:
+        return [light]
+    spread = math.tan(light.angle / 2)
+    ends = _disc_points(light.direction, light.direction, spread, count)
+    return [DirectionalLight(end) for end in ends]
+
+
+def _sphere_samples(
+    light: PointLight | SpotLight, count: int, towards: ArrayLike | None
+) -> list[Light]:
+    """``count`` lights over the disc of a sphere light facing ``towards``
+    (itself, with no radius); a spot light's keep its cone."""
     if light.source_radius == 0 or count == 1:
         return [light]
     centre = light.position
@@ -299,27 +317,16 @@ def soft_shadow(
     (9.0, 25.0, True)
     """
     levels, count = checked_counts(light, levels, samples)
-    sized = has_size(light)
     body = as_caster(caster)
-    towards = 0.5 * (body.bounds[0] + body.bounds[1]) if body.n_faces else np.zeros(3)
-    lights = light_samples(light, count, towards)  # (a light with no size: itself)
-    if tolerance is None:
-        positions = [s.position[None] for s in lights if not isinstance(s, DirectionalLight)]
-        known = [body.bounds] if body.n_faces else []
-        tolerance = Tolerance.for_points(*known, *positions) if known or positions else None
-    if sized:  # the part of the light behind the plane (or in it) lights none of it
-        lights = [s for s in lights if _in_front(s, plane, tolerance)]
-        if not lights:
-            raise GeometryError(f"{light!r} lies wholly behind the plane or in it")
+    lit = _lit_samples(light, body, plane, count, tolerance)
+    tolerance = lit.tolerance
     shadows = project_shadow(
-        body, lights, plane, receiver=receiver, offset=offset, tolerance=tolerance
+        body, list(lit.lights), plane, receiver=receiver, offset=offset, tolerance=tolerance
     )
-    if not sized:
+    if not has_size(light):
         (hard,) = shadows
-        return SoftShadow(plane, light, hard, hard, [(1.0, hard)], True, tuple(lights), shadows)
-    corners = _corners(light, towards) if _convex(body, tolerance) else None
-    if corners is not None and not all(_in_front(c, plane, tolerance) for c in corners):
-        corners = None  # part of the light behind the plane: from the samples
+        return SoftShadow(plane, light, hard, hard, [(1.0, hard)], True, lit.lights, shadows)
+    corners = _bounding_corners(light, body, plane, lit)
     cut = _Cut(plane, light, shadows, offset)
     bands = cut.levels(levels)
     if corners is not None:
@@ -334,8 +341,51 @@ def soft_shadow(
     graded = [(fraction, cut.shadow(region)) for fraction, region in bands]
     exact = corners is not None and isinstance(light, RectLight)
     return SoftShadow(
-        plane, light, cut.shadow(umbra), cut.shadow(penumbra), graded, exact, tuple(lights), shadows
+        plane, light, cut.shadow(umbra), cut.shadow(penumbra), graded, exact, lit.lights, shadows
     )
+
+
+@dataclass(frozen=True)
+class _LitSamples:
+    """The samples of a light that light the plane, the point they face
+    (the caster's centre) and the tolerance they were checked with."""
+
+    lights: tuple[Light, ...]
+    towards: NDArray[np.float64]
+    tolerance: Tolerance | None
+
+
+def _lit_samples(
+    light: SizedLight, body: Caster, plane: Plane, count: int, tolerance: Tolerance | None
+) -> _LitSamples:
+    """``count`` samples of ``light`` less those behind the plane or in it,
+    which light none of it, and the tolerance (the caster's and the
+    samples' when none is given)."""
+    towards = 0.5 * (body.bounds[0] + body.bounds[1]) if body.n_faces else np.zeros(3)
+    lights = light_samples(light, count, towards)  # (a light with no size: itself)
+    if tolerance is None:
+        positions = [s.position[None] for s in lights if not isinstance(s, DirectionalLight)]
+        known = [body.bounds] if body.n_faces else []
+        tolerance = Tolerance.for_points(*known, *positions) if known or positions else None
+    if has_size(light):
+        lights = [s for s in lights if _in_front(s, plane, tolerance)]
+        if not lights:
+            raise GeometryError(f"{light!r} lies wholly behind the plane or in it")
+    return _LitSamples(tuple(lights), towards, tolerance)
+
+
+def _bounding_corners(
+    light: SizedLight, body: Caster, plane: Plane, lit: _LitSamples
+) -> list[Light] | None:
+    """The corner lights whose shadows give a convex caster's umbra and
+    penumbra; None for another caster, or a light partly behind the plane
+    (both then come from the samples)."""
+    if not _convex(body, lit.tolerance):
+        return None
+    corners = _corners(light, lit.towards)
+    if corners is not None and not all(_in_front(c, plane, lit.tolerance) for c in corners):
+        return None
+    return corners
 
 
 def _in_front(sample: Light, plane: Plane, tolerance: Tolerance | None) -> bool:

@@ -69,6 +69,53 @@ def block_normals(columns: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return normals
 
 
+def _shaped(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A caster's ``vertices`` (n, 3) and ``faces`` (m, 3), empty ones
+    reshaped; GeometryError for other shapes."""
+    if vertices.size == 0:
+        vertices = vertices.reshape(0, 3)
+    if faces.size == 0:
+        faces = faces.reshape(0, 3)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise GeometryError(f"caster vertices must be (n, 3), got shape {vertices.shape}")
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise GeometryError(f"caster faces must be (m, 3) triangles, got shape {faces.shape}")
+    return vertices, faces
+
+
+def _integer_faces(faces: np.ndarray) -> NDArray[np.int64]:
+    """``faces`` as int64 (itself when it is already); GeometryError for
+    indices with a fraction."""
+    if not np.issubdtype(faces.dtype, np.integer):
+        if faces.size and not np.all(np.equal(np.mod(faces, 1), 0)):
+            raise GeometryError("caster faces must hold integer vertex indices")
+        faces = faces.astype(np.int64)
+    return faces.astype(np.int64, copy=False)
+
+
+def _check_finite(vertices: np.ndarray) -> None:
+    """GeometryError naming the first vertex with a NaN or infinite coordinate."""
+    if not np.isfinite(vertices).all():
+        bad_vertex = ~np.all(np.isfinite(vertices), axis=1)
+        index = int(np.flatnonzero(bad_vertex)[0])
+        raise GeometryError(
+            f"caster vertex {index} is not finite: {vertices[index].tolist()} "
+            f"({int(bad_vertex.sum())} such vertices)"
+        )
+
+
+def _check_indices(faces: np.ndarray, n_vertices: int) -> None:
+    """GeometryError naming the first face that indexes a missing vertex."""
+    if faces.size and (faces.min() < 0 or faces.max() >= n_vertices):
+        bad_face = np.any((faces < 0) | (faces >= n_vertices), axis=1)
+        if np.any(bad_face):
+            index = int(np.flatnonzero(bad_face)[0])
+            raise GeometryError(
+                f"caster face {index} {faces[index].tolist()} indexes a missing vertex "
+                f"(the mesh has {n_vertices} vertices)"
+            )
+
+
 class Caster:
     """A triangle mesh checked for use as a shadow caster.
 
@@ -108,34 +155,10 @@ class Caster:
     ) -> None:
         vertices = np.array(vertices, dtype=np.float64, copy=True if copy else None)
         faces = np.array(faces, copy=True if copy else None)
-        if vertices.size == 0:
-            vertices = vertices.reshape(0, 3)
-        if faces.size == 0:
-            faces = faces.reshape(0, 3)
-        if vertices.ndim != 2 or vertices.shape[1] != 3:
-            raise GeometryError(f"caster vertices must be (n, 3), got shape {vertices.shape}")
-        if faces.ndim != 2 or faces.shape[1] != 3:
-            raise GeometryError(f"caster faces must be (m, 3) triangles, got shape {faces.shape}")
-        if not np.issubdtype(faces.dtype, np.integer):
-            if faces.size and not np.all(np.equal(np.mod(faces, 1), 0)):
-                raise GeometryError("caster faces must hold integer vertex indices")
-            faces = faces.astype(np.int64)
-        faces = faces.astype(np.int64, copy=False)
-        if not np.isfinite(vertices).all():
-            bad_vertex = ~np.all(np.isfinite(vertices), axis=1)
-            index = int(np.flatnonzero(bad_vertex)[0])
-            raise GeometryError(
-                f"caster vertex {index} is not finite: {vertices[index].tolist()} "
-                f"({int(bad_vertex.sum())} such vertices)"
-            )
-        if faces.size and (faces.min() < 0 or faces.max() >= len(vertices)):
-            bad_face = np.any((faces < 0) | (faces >= len(vertices)), axis=1)
-            if np.any(bad_face):
-                index = int(np.flatnonzero(bad_face)[0])
-                raise GeometryError(
-                    f"caster face {index} {faces[index].tolist()} indexes a missing vertex "
-                    f"(the mesh has {len(vertices)} vertices)"
-                )
+        vertices, faces = _shaped(vertices, faces)
+        faces = _integer_faces(faces)
+        _check_finite(vertices)
+        _check_indices(faces, len(vertices))
         if not copy:  # read-only views: the caller's own arrays stay writable
             vertices, faces = vertices.view(), faces.view()
         vertices.setflags(write=False)

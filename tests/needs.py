@@ -93,6 +93,7 @@ TOOLS: dict[str, tuple[Callable[[], Path | None], str]] = {
         "Chromium is not installed (apt-get install chromium; .ci/run does)",
     ),
     "mypy": (_module("mypy"), 'mypy is not installed: pip install ".[test]"'),
+    "radon": (_module("radon"), 'radon is not installed: pip install ".[test]"'),
     "dask": (_module("distributed"), 'Dask is not installed: pip install ".[dask]"'),
     "shadowgeo-script": (
         _executable("shadowgeo"),
