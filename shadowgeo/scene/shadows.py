@@ -621,8 +621,7 @@ def _on_receiver(
             plan.lighting,
         )
         return _named(plan, covered, stem, _layer_suffix, light.group), []
-    notes: list[str] = []
-    layers = _receiver_layers(
+    layers, notes = _receiver_layers(
         receiver,
         light.scene_light,
         light.graded,
@@ -630,7 +629,6 @@ def _on_receiver(
         opacity=light.casting,
         tolerance=plan.tolerance,
         lift=light.height,
-        notes=notes,
         light_name=light.name,
         step=step,
         lighting=plan.lighting,
@@ -661,8 +659,7 @@ def _on_surfaces(
     # point runs inside them; each caster's topology made once for every light
     stacked = plan.casters
     reached = np.flatnonzero(stacked.lit(light.scene_light.light) & (light.casting > 0))
-    notes: list[str] = []
-    layers = _surface_layers(
+    layers, notes = _surface_layers(
         light.graded,
         receiving,
         [stacked.caster(int(k)) for k in reached],
@@ -671,7 +668,6 @@ def _on_surfaces(
         light.scene_light,
         plan.tolerance,
         light.height,
-        notes,
         light.name,
         plan.lighting,
     )
@@ -1104,9 +1100,8 @@ def _caster_loops(
     plane: Plane,
     rectangle: np.ndarray | None,
     tolerance: Tolerance,
-    notes: list[str],
     light_name: str,
-) -> list[np.ndarray]:
+) -> tuple[list[np.ndarray], list[str]]:
     """The loops of the shadows of the stacked faces ``faces`` (a mask) on
     ``plane``, in plane 2-D coordinates.
 
@@ -1115,23 +1110,22 @@ def _caster_loops(
     in numpy for every caster at once instead of paying a Python call's fixed
     cost per shape. When that call fails (a light inside or touching one of
     them), each caster is projected alone so that only the one at fault is
-    skipped, with a note.
+    skipped, with a note (the notes are returned with the loops).
     """
     owners = casters.owners(faces)
     if not len(owners):
-        return []
+        return [], []
     try:
         shadow = project_shadow(
             casters.mesh(faces), light, plane, receiver=rectangle, tolerance=tolerance
         )
-        return [loop for part in shadow.polygons for loop in part]
+        return [loop for part in shadow.polygons for loop in part], []
     except GeometryError as error:
         if len(owners) == 1:
             name = casters.casters[owners[0]].name
-            notes.append(f"shadows: {name} does not cast for light {light_name}: {error}")
-            return []
+            return [], [f"shadows: {name} does not cast for light {light_name}: {error}"]
     # find the caster at fault: each alone
-    loops = []
+    loops, notes = [], []
     for owner in owners:
         caster = casters.casters[owner]
         own = faces[casters.face_owner == owner]
@@ -1143,7 +1137,7 @@ def _caster_loops(
             continue
         for part in shadow.polygons:
             loops.extend(part)
-    return loops
+    return loops, notes
 
 
 def _shadow_on(
@@ -1154,16 +1148,15 @@ def _shadow_on(
     opacity: np.ndarray,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     step: Callable[[int], None],
     lighting: Lighting,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """The shadow of the casters on one receiver as shapes, one per casting
     opacity (``opacity``: (k,) each caster's, :mod:`.opacity`), most opaque
     first, each with that opacity: raised ``lift`` off the receiver's plane,
-    ``step(count)`` called once the casters are chosen, and a note in
-    ``notes`` for a caster that cannot cast. The layers do not overlap: each
+    ``step(count)`` called once the casters are chosen, with a note for
+    each caster that cannot cast. The layers do not overlap: each
     is its casters' united shadow less the shadows of every more opaque
     layer, so a point takes the darkness of the most opaque caster that hides
     it. Each layer is as dark as ``lighting`` says (:mod:`.darkness`) times
@@ -1171,7 +1164,7 @@ def _shadow_on(
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
     if plane is None or not lights(scene_light, receiver.scopes):
-        return []  # behind a one-sided receiver, in its plane, or out of the light's scope
+        return [], []  # behind a one-sided receiver, in its plane, or out of the light's scope
     region2d = None if receiver.triangles is None else _flat_patch(receiver.triangles, plane)
     box2d = None if region2d is None else _box_of(region2d)
     rectangle = None if box2d is None else _rectangle(plane, box2d)
@@ -1179,13 +1172,17 @@ def _shadow_on(
     off_plane = casters.off_plane(plane, tolerance) if chosen.any() else None
     step(len(casters))
     layers: list[tuple[float, list[np.ndarray]]] = []
+    notes: list[str] = []
     for level in np.unique(opacity[chosen])[::-1].tolist():  # most opaque first
         faces = casters.faces_of(chosen & (opacity == level)) & off_plane
-        loops = _caster_loops(casters, faces, light, plane, rectangle, tolerance, notes, light_name)
+        loops, loop_notes = _caster_loops(
+            casters, faces, light, plane, rectangle, tolerance, light_name
+        )
+        notes.extend(loop_notes)
         if loops:
             layers.append((level, loops))
     if not layers:
-        return []
+        return [], notes
     frame = _frame(plane, layers, region2d, tolerance, lift)
     shapes = []
     for level, parts in _layer_parts(layers, frame):
@@ -1195,7 +1192,7 @@ def _shadow_on(
         shape = _layer_shape(frame, parts, receiver, scene_light, where, level, lighting)
         if shape is not None:
             shapes.append((level, shape))
-    return shapes
+    return shapes, notes
 
 
 @dataclasses.dataclass(frozen=True)
@@ -1328,11 +1325,10 @@ def _receiver_layers(
     opacity: np.ndarray,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     step: Callable[[int], None],
     lighting: Lighting,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """:func:`_shadow_on`, or for a light with a size (``graded``) its
     graded layers (:func:`.softbake.soft_on_receiver`)."""
     if graded is None:
@@ -1343,13 +1339,13 @@ def _receiver_layers(
             opacity=opacity,
             tolerance=tolerance,
             lift=lift,
-            notes=notes,
             light_name=light_name,
             step=step,
             lighting=lighting,
         )
     step(len(casters))
-    return soft_on_receiver(
+    notes: list[str] = []
+    layers = soft_on_receiver(
         receiver,
         scene_light,
         casters=casters,
@@ -1361,6 +1357,7 @@ def _receiver_layers(
         lighting=lighting,
         settings=graded,
     )
+    return layers, notes
 
 
 def _surface_layers(
@@ -1372,14 +1369,14 @@ def _surface_layers(
     scene_light: SceneLight,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     lighting: Lighting,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """:func:`.surfaces.surface_shadow`, or for a light with a size
     (``graded``) its graded layers (:func:`.softbake.soft_on_surface`)."""
+    notes: list[str] = []
     if graded is None:
-        return surface_shadow(
+        layers = surface_shadow(
             surface,
             casters,
             opacity,
@@ -1391,9 +1388,11 @@ def _surface_layers(
             light_name,
             lighting,
         )
-    return soft_on_surface(
-        surface, casters, scene_light, tolerance, lift, notes, light_name, lighting, graded
-    )
+    else:
+        layers = soft_on_surface(
+            surface, casters, scene_light, tolerance, lift, notes, light_name, lighting, graded
+        )
+    return layers, notes
 
 
 def _volumes(plan: _ShadowPlan) -> tuple[list[Shape], list[str]]:
