@@ -392,6 +392,37 @@ def test_progress_counts_up_to_the_total():
     assert calls[-1][0] == calls[-1][1] == 2 * 1 * 4  # lights x receivers x shapes
 
 
+def test_progress_counts_each_light_after_the_ones_before():
+    # 2 lights x 1 receiver (the ground plane) x 4 shapes: each light's
+    # receiver reports once its casters are chosen, counting on from the
+    # lights before it (4 of 8, then 8 of 8), then the run's end (8 of 8)
+    cubes = [box([x, 1, -0.5], [x + 0.5, 2, 0.5], f"c{x}") for x in (-2, 0, 2)]
+    lights = [light([0, 4, 0], "a", shadows=True), light([1, 5, 0], "b", shadows=True)]
+    calls = []
+    sg.add_shadows(sg.Scene([ground(), *cubes], lights), progress=lambda *a: calls.append(a))
+    assert calls == [(4, 8), (8, 8), (8, 8)]
+
+
+def test_notes_come_in_the_order_of_the_steps():
+    # shapes (earlier shadows, repeats), then the lights chosen, then the
+    # receivers, then the runtime shadows; a second run keeps the first's notes
+    cube = box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")
+    lights = [light([0, 4, 0], "a"), light([2, 4, 0], "b")]
+    twin = box([-0.5, 1, -0.5], [0.5, 2, 0.5], "twin")
+    once = sg.add_shadows(sg.Scene([ground(), cube, twin], lights))
+    twice = sg.add_shadows(once)
+    steps = [
+        "shadows: 1 shapes repeat another's geometry exactly",
+        'shadows: no light has shadows="true"; all 2 lights that are on cast shadows (a, b)',
+        "shadows: receivers found: ground",
+        "shadows: no light draws runtime shadows over the baked ones",
+    ]
+    replaced = "shadows: 2 shadow shapes added by an earlier run are replaced"  # a and b's
+    expected = [*steps, replaced, *steps]
+    assert len(twice.warnings) == len(expected)
+    assert all(w.startswith(e) for w, e in zip(twice.warnings, expected, strict=True))
+
+
 def test_running_twice_replaces_the_first_shadows():
     scene = sg.Scene([ground(), box([-0.5, 1, -0.5], [0.5, 2, 0.5], "cube")], [light([0, 4, 0])])
     once = sg.add_shadows(scene)

@@ -129,25 +129,50 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
     side = int(np.ceil(1.0 / cell))
     levels = int(np.ceil(radius / band))
     span, depth = 2 * side + 3, 2 * levels + 3  # an empty cell past each end
-    grid_low = np.full((3, depth * span**3), np.inf)
-    grid_high = np.full((3, depth * span**3), -np.inf)
-    loose_low = np.full(3, np.inf)
-    loose_high = np.full(3, -np.inf)
-    faces = stacked.faces[start : start + count]
-    # the face normals, kept for the casters' mesh of the first light
-    normals = stacked.normal_rows(index)
-    used_low, used_high = [np.inf] * 3, [-np.inf] * 3  # the box of the faces' corners
     cells = _Cells(
         scales=(1.0 / cell, 1.0 / cell, 1.0 / cell, 1.0 / band),
         bounds=(side, side, side, levels),
         weights=(1, span, span * span, span**3),
         width=2.0 * np.pi * limit / cell,
     )
+    faces = stacked.faces[start : start + count]
+    # the face normals, kept for the casters' mesh of the first light
+    binned = _binned(faces, stacked.columns, middle, stacked.normal_rows(index), cells, size)
+    stacked.normals_known(index, binned.used)
+    return _grid_may_hold(binned, cells.weights, (3, depth, span, span, span), size)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Binned:
+    """:func:`_normal_bound`'s faces filed: the boxes under cells
+    (``records``), the box of the thin faces (``loose_low``, ``loose_high``,
+    (3,) each; inf and -inf when none) and of every corner (``used``, (2, 3))."""
+
+    records: list[_Records]
+    loose_low: np.ndarray
+    loose_high: np.ndarray
+    used: np.ndarray
+
+
+def _binned(
+    faces: np.ndarray,
+    columns: np.ndarray,
+    middle: np.ndarray,
+    normals: np.ndarray,
+    cells: _Cells,
+    size: float,
+) -> _Binned:
+    """The faces filed under the cells of ``cells``, ``_BIN_BLOCK`` at a
+    time: whole runs first, then the other runs' faces one by one, each under
+    its own cell, the thin ones into the loose box."""
+    loose_low = np.full(3, np.inf)
+    loose_high = np.full(3, -np.inf)
+    used_low, used_high = [np.inf] * 3, [-np.inf] * 3  # the box of the faces' corners
     records: list[_Records] = []
-    for first in range(0, count, _BIN_BLOCK):
+    for first in range(0, len(faces), _BIN_BLOCK):
         stop = first + _BIN_BLOCK
         low, high, unit, height, doubled = _face_values(
-            faces[first:stop], stacked.columns, middle, normals[first:stop]
+            faces[first:stop], columns, middle, normals[first:stop]
         )
         values = [*unit, height]
         whole, runs = cells.runs(low, high, values, doubled, size)
@@ -157,7 +182,6 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
             used_high[axis] = max(used_high[axis], float(high[axis].max()))
         if whole.all():
             continue
-        # the other runs' faces one by one, each under its own cell
         rest = np.flatnonzero(np.repeat(~whole, _CHUNK)[: len(doubled)])
         low, high = [x[rest] for x in low], [x[rest] for x in high]
         values, doubled = [x[rest] for x in values], doubled[rest]
@@ -173,12 +197,21 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
             low, high = [x[chosen] for x in low], [x[chosen] for x in high]
             values = [x[chosen] for x in values]
         records.append(cells.faces(low, high, values))
-    for offset, at, box_low, box_high in _Records.filed(records, cells.weights):
+    return _Binned(records, loose_low, loose_high, np.array([used_low, used_high]))
+
+
+def _grid_may_hold(
+    binned: _Binned, weights: tuple[int, ...], shape: tuple[int, ...], size: float
+) -> bool:
+    """Whether a patch ``size`` across may lie in the box of a cell's
+    neighbours and its mirror's (the grid of ``shape``: rows, then the
+    offset and normal axes) with the thin faces, or in the thin faces' box."""
+    grid_low = np.full((3, int(np.prod(shape[1:]))), np.inf)
+    grid_high = np.full((3, int(np.prod(shape[1:]))), -np.inf)
+    for offset, at, box_low, box_high in _Records.filed(binned.records, weights):
         for axis in range(3):
             np.minimum.at(grid_low[axis], at + offset, box_low[axis])
             np.maximum.at(grid_high[axis], at + offset, box_high[axis])
-    stacked.normals_known(index, np.array([used_low, used_high]))
-    shape = (3, depth, span, span, span)
     grid_low, grid_high = grid_low.reshape(shape), grid_high.reshape(shape)
     occupied = np.nonzero(np.isfinite(grid_low[0]))
     # the mirror of each occupied cell (the grid flipped along each axis)
@@ -191,6 +224,7 @@ def _normal_bound(stacked: CasterSet, index: int, size: float, limit: float) -> 
         _window_at(grid_high, 1, np.maximum, occupied, occupied),
         _window_at(grid_high, 2, np.maximum, occupied, mirrored),
     )
+    loose_low, loose_high = binned.loose_low, binned.loose_high
     near_low = np.minimum(near_low, loose_low[:, None])
     near_high = np.maximum(near_high, loose_high[:, None])
     with np.errstate(invalid="ignore", over="ignore"):
@@ -266,6 +300,16 @@ class _Records:
     high: _Columns
 
     @staticmethod
+    def joined(records: list[_Records]) -> _Records:
+        """The ``records`` as one."""
+        return _Records(
+            np.concatenate([r.cells for r in records]),
+            np.concatenate([r.spans for r in records]),
+            [np.concatenate([r.low[axis] for r in records]) for axis in range(3)],
+            [np.concatenate([r.high[axis] for r in records]) for axis in range(3)],
+        )
+
+    @staticmethod
     def filed(
         records: list[_Records], weights: tuple[int, ...]
     ) -> Iterator[tuple[int, np.ndarray, _Columns, _Columns]]:
@@ -274,10 +318,8 @@ class _Records:
         spanning those axes, under their lowest cell plus ``offset``."""
         if not records:
             return
-        cells = np.concatenate([r.cells for r in records])
-        spans = np.concatenate([r.spans for r in records])
-        low = [np.concatenate([r.low[axis] for r in records]) for axis in range(3)]
-        high = [np.concatenate([r.high[axis] for r in records]) for axis in range(3)]
+        joined = _Records.joined(records)
+        cells, spans, low, high = joined.cells, joined.spans, joined.low, joined.high
         for step in range(16):
             at = np.flatnonzero((spans & step) == step) if step else np.arange(len(cells))
             if len(at):
@@ -400,14 +442,7 @@ def _patch_bound(
     # centroid) lies within ``radius`` of it, as the band below needs.
     low_all, high_all = stacked.low[indices].min(axis=0), stacked.high[indices].max(axis=0)
     middle = 0.5 * (low_all + high_all)
-    radius = float(np.sqrt(((high_all - low_all) ** 2).sum())) / 2.0
-    band = 0.5 * _NORMAL_CELL * radius * (1.0 + RELATIVE_ROUNDING) + 2.0 * limit
-    if not np.isfinite(band) or band <= 0:
-        band = np.inf
-    levels = int(min(np.ceil(radius / band), 1 << 20)) if np.isfinite(band) else 0
-    span = 2 * side + 3
-    depth = 2 * levels + 3
-    per_shape = span**3 * depth
+    grid = _PatchGrid.of(float(np.sqrt(((high_all - low_all) ** 2).sum())) / 2.0, limit, side)
     # thin and degenerate faces: members of any patch of their shape
     loose_low = np.full((count, 3), np.inf)
     loose_high = np.full((count, 3), -np.inf)
@@ -419,69 +454,130 @@ def _patch_bound(
             stacked.faces[block], stacked.columns, middle
         )
         binned, sharp = _sharpness(low, high, unit, doubled, width)
-        loose = np.flatnonzero(~sharp)
-        if len(loose):  # owners are non-decreasing: the shapes' faces follow each other
-            held = holder[loose]
-            runs = np.flatnonzero(np.concatenate([[True], held[1:] != held[:-1]]))
-            for axis in range(3):
-                np.minimum.at(
-                    loose_low[:, axis], held[runs], np.minimum.reduceat(low[axis][loose], runs)
-                )
-                np.maximum.at(
-                    loose_high[:, axis], held[runs], np.maximum.reduceat(high[axis][loose], runs)
-                )
+        _widen_loose(loose_low, loose_high, holder, np.flatnonzero(~sharp), low, high)
         chosen = np.flatnonzero(binned)
-        if not len(chosen):
-            continue
-        # every face with a normal binned by it and by its opposite, and by
-        # its plane's offset from the middle: a member's offset is within
-        # (cell / 2) * reach + limit of its seed's
-        keys = []
-        for sign in (1.0, -1.0):
-            code = holder[chosen] * per_shape
-            for axis, weight in enumerate((1, span, span * span)):
-                cell = np.floor(sign * unit[axis][chosen] / _NORMAL_CELL)
-                code += (np.clip(cell, -side, side).astype(np.int64) + side + 1) * weight
-            if levels:
-                level = np.floor(sign * height[chosen] / band)
-                code += (np.clip(level, -levels, levels).astype(np.int64) + levels + 1) * span**3
-            else:
-                code += span**3
-            keys.append(code)
-        cells.append(_cell_boxes(np.concatenate(keys), np.concatenate([chosen, chosen]), low, high))
+        if len(chosen):
+            keys = grid.keys(holder[chosen], [x[chosen] for x in unit], height[chosen])
+            cells.append(_cell_boxes(keys, np.concatenate([chosen, chosen]), low, high))
     keep = np.zeros(count, dtype=bool)
     if cells:
-        group_keys, group_low, group_high = cells[0]
-        if len(cells) > 1:  # the blocks' cells merged: one box per cell
-            group_keys = np.concatenate([keys for keys, _, _ in cells])
-            group_low = [np.concatenate([c[1][axis] for c in cells]) for axis in range(3)]
-            group_high = [np.concatenate([c[2][axis] for c in cells]) for axis in range(3)]
-            everyone = np.arange(len(group_keys))
-            group_keys, group_low, group_high = _cell_boxes(
-                group_keys, everyone, group_low, group_high
-            )
-        box_low, box_high = np.column_stack(group_low), np.column_stack(group_high)
-        group_owner = group_keys // per_shape
-        near_low = loose_low[group_owner]
-        near_high = loose_high[group_owner]
-        for shift in offsets:
-            wanted = group_keys + int(
-                shift[0] + span * shift[1] + span * span * shift[2] + span**3 * shift[3]
-            )
-            at = np.minimum(np.searchsorted(group_keys, wanted), len(group_keys) - 1)
-            hit = np.flatnonzero(group_keys[at] == wanted)
-            near_low[hit] = np.minimum(near_low[hit], box_low[at[hit]])
-            near_high[hit] = np.maximum(near_high[hit], box_high[at[hit]])
+        group_keys, group_low, group_high = _merged_cells(cells)
+        near_low, near_high = _near_boxes(
+            group_keys, group_low, group_high, loose_low, loose_high, offsets, grid
+        )
         with np.errstate(invalid="ignore", over="ignore"):
             reach = np.sqrt(((near_high - near_low) ** 2).sum(axis=1))
         large = ~(reach < size * (1.0 - RELATIVE_ROUNDING))  # NaN or inf: keep the shape
-        keep[group_owner[large]] = True
+        keep[group_keys[large] // grid.per_shape] = True
     # a shape whose faces are all thin or degenerate has no sharp seed
     # cell; its patches lie within its loose box
     with np.errstate(invalid="ignore", over="ignore"):
         loose_reach = np.sqrt(((loose_high - loose_low) ** 2).sum(axis=1))
     keep |= np.isfinite(loose_low).all(axis=1) & ~(loose_reach < size * (1.0 - RELATIVE_ROUNDING))
     return keep
+
+
+@dataclasses.dataclass(frozen=True)
+class _PatchGrid:
+    """:func:`_patch_bound`'s cells: ``side`` normal cells each way from 0
+    along each axis, ``levels`` offset levels of ``band`` each way (none for
+    an unbounded band), an empty cell past each end; ``span`` cells along a
+    normal axis, ``per_shape`` cells in all."""
+
+    side: int
+    span: int
+    levels: int
+    band: float
+    per_shape: int
+
+    @staticmethod
+    def of(radius: float, limit: float, side: int) -> _PatchGrid:
+        band = 0.5 * _NORMAL_CELL * radius * (1.0 + RELATIVE_ROUNDING) + 2.0 * limit
+        if not np.isfinite(band) or band <= 0:
+            band = np.inf
+        levels = int(min(np.ceil(radius / band), 1 << 20)) if np.isfinite(band) else 0
+        span = 2 * side + 3
+        return _PatchGrid(side, span, levels, band, span**3 * (2 * levels + 3))
+
+    def keys(self, holder: np.ndarray, unit: _Columns, height: np.ndarray) -> np.ndarray:
+        """Every face's cell numbers: by its normal and by its opposite, and
+        by its plane's offset from the middle (a member's offset is within
+        (cell / 2) * reach + limit of its seed's), its shape's cells first."""
+        side, span, levels = self.side, self.span, self.levels
+        keys = []
+        for sign in (1.0, -1.0):
+            code = holder * self.per_shape
+            for axis, weight in enumerate((1, span, span * span)):
+                cell = np.floor(sign * unit[axis] / _NORMAL_CELL)
+                code += (np.clip(cell, -side, side).astype(np.int64) + side + 1) * weight
+            if levels:
+                level = np.floor(sign * height / self.band)
+                code += (np.clip(level, -levels, levels).astype(np.int64) + levels + 1) * span**3
+            else:
+                code += span**3
+            keys.append(code)
+        return np.concatenate(keys)
+
+
+def _widen_loose(
+    loose_low: np.ndarray,
+    loose_high: np.ndarray,
+    holder: np.ndarray,
+    loose: np.ndarray,
+    low: _Columns,
+    high: _Columns,
+) -> None:
+    """Widen each shape's box of thin faces (``loose_low``, ``loose_high``,
+    (count, 3), in place) by the boxes of the faces ``loose`` of a block;
+    ``holder`` is each face's shape."""
+    if not len(loose):
+        return
+    # owners are non-decreasing: the shapes' faces follow each other
+    held = holder[loose]
+    runs = np.flatnonzero(np.concatenate([[True], held[1:] != held[:-1]]))
+    for axis in range(3):
+        np.minimum.at(loose_low[:, axis], held[runs], np.minimum.reduceat(low[axis][loose], runs))
+        np.maximum.at(loose_high[:, axis], held[runs], np.maximum.reduceat(high[axis][loose], runs))
+
+
+def _merged_cells(
+    cells: list[tuple[np.ndarray, _Columns, _Columns]],
+) -> tuple[np.ndarray, _Columns, _Columns]:
+    """The blocks' cells merged: one box per cell."""
+    if len(cells) == 1:
+        return cells[0]
+    group_keys = np.concatenate([keys for keys, _, _ in cells])
+    group_low = [np.concatenate([c[1][axis] for c in cells]) for axis in range(3)]
+    group_high = [np.concatenate([c[2][axis] for c in cells]) for axis in range(3)]
+    everyone = np.arange(len(group_keys))
+    return _cell_boxes(group_keys, everyone, group_low, group_high)
+
+
+def _near_boxes(
+    group_keys: np.ndarray,
+    group_low: _Columns,
+    group_high: _Columns,
+    loose_low: np.ndarray,
+    loose_high: np.ndarray,
+    offsets: np.ndarray,
+    grid: _PatchGrid,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(k, 3) each: the box of each cell's neighbours at ``offsets`` (cell
+    steps along the four axes) and of its shape's thin faces."""
+    span = grid.span
+    box_low, box_high = np.column_stack(group_low), np.column_stack(group_high)
+    group_owner = group_keys // grid.per_shape
+    near_low = loose_low[group_owner]
+    near_high = loose_high[group_owner]
+    for shift in offsets:
+        wanted = group_keys + int(
+            shift[0] + span * shift[1] + span * span * shift[2] + span**3 * shift[3]
+        )
+        at = np.minimum(np.searchsorted(group_keys, wanted), len(group_keys) - 1)
+        hit = np.flatnonzero(group_keys[at] == wanted)
+        near_low[hit] = np.minimum(near_low[hit], box_low[at[hit]])
+        near_high[hit] = np.maximum(near_high[hit], box_high[at[hit]])
+    return near_low, near_high
 
 
 # Faces binned at a time by _patch_bound and _normal_bound.

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -435,6 +436,56 @@ def _anything_in_front(
     return False
 
 
+class _Candidate(NamedTuple):
+    """A flat patch large enough to receive: its shape, the shape's world
+    vertices, its plane, its faces (a mask) and its area."""
+
+    shape: Shape
+    world_vertices: np.ndarray
+    fitted: Plane
+    member: np.ndarray
+    area: float
+
+
+def _candidates(
+    geometry: list[Shape], stacked: CasterSet, tolerance: Tolerance
+) -> list[_Candidate]:
+    """The patches at least ``SIZE_FRACTION`` of the scene's diagonal across
+    with something in front of them, in the scene's order."""
+    bounds = stacked.bounds
+    scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
+    diagonals = np.linalg.norm(stacked.high - stacked.low, axis=1)
+    candidates = []
+    searched = np.flatnonzero(diagonals >= SIZE_FRACTION * scene_size)
+    searched = searched[may_hold_patch(stacked, searched, SIZE_FRACTION * scene_size, tolerance)]
+    for index in searched:
+        shape, world_vertices = geometry[index], stacked.casters[index].vertices
+        for fitted, member, area in patches(shape, tolerance, world_vertices):
+            points = world_vertices[unique_integers(shape.faces[member])]
+            low, high = bounding_box(points)
+            size = float(np.linalg.norm(high - low))
+            if size < SIZE_FRACTION * scene_size:
+                continue
+            if _anything_in_front(fitted, stacked, tolerance, two_sided=not shape.solid):
+                candidates.append(_Candidate(shape, world_vertices, fitted, member, area))
+    return candidates
+
+
+def _largest_receivers(qualify: list[_Candidate]) -> list[Receiver]:
+    """At most ``MAX_FOUND`` of the patches ``qualify``, the largest, as
+    receivers in the scene's order, numbered within their shape."""
+    # the largest first (a stable sort keeps the scene's order among equals)
+    ranked = sorted(range(len(qualify)), key=lambda k: -qualify[k].area)[:MAX_FOUND]
+    counts: dict[int, int] = {}
+    result = []
+    for k in sorted(ranked):
+        shape, world_vertices, fitted, member, area = qualify[k]
+        count = counts.get(id(shape), 0)
+        counts[id(shape)] = count + 1
+        result.append(_patch_receiver(shape, world_vertices, fitted, member, area, count))
+    return result
+
+
 def found(
     scene: Scene,
     geometry: list[Shape],
@@ -454,32 +505,10 @@ def found(
     if stacked is None:
         stacked = CasterSet(geometry)
     bounds = stacked.bounds
-    scene_size = float(np.linalg.norm(bounds[1] - bounds[0]))
-    diagonals = np.linalg.norm(stacked.high - stacked.low, axis=1)
-    candidates = []
-    searched = np.flatnonzero(diagonals >= SIZE_FRACTION * scene_size)
-    searched = searched[may_hold_patch(stacked, searched, SIZE_FRACTION * scene_size, tolerance)]
-    for index in searched:
-        shape, world_vertices = geometry[index], stacked.casters[index].vertices
-        for fitted, member, area in patches(shape, tolerance, world_vertices):
-            points = world_vertices[unique_integers(shape.faces[member])]
-            low, high = bounding_box(points)
-            size = float(np.linalg.norm(high - low))
-            if size < SIZE_FRACTION * scene_size:
-                continue
-            if _anything_in_front(fitted, stacked, tolerance, two_sided=not shape.solid):
-                candidates.append((shape, world_vertices, fitted, member, area))
-    largest = max((area for *_, area in candidates), default=0.0)
-    qualify = [item for item in candidates if item[-1] >= AREA_FRACTION * largest]
-    # the largest first (a stable sort keeps the scene's order among equals)
-    ranked = sorted(range(len(qualify)), key=lambda k: -qualify[k][-1])[:MAX_FOUND]
-    counts: dict[int, int] = {}
-    result = []
-    for k in sorted(ranked):
-        shape, world_vertices, fitted, member, area = qualify[k]
-        count = counts.get(id(shape), 0)
-        counts[id(shape)] = count + 1
-        result.append(_patch_receiver(shape, world_vertices, fitted, member, area, count))
+    candidates = _candidates(geometry, stacked, tolerance)
+    largest = max((candidate.area for candidate in candidates), default=0.0)
+    qualify = [item for item in candidates if item.area >= AREA_FRACTION * largest]
+    result = _largest_receivers(qualify)
     if not result:
         return [ground(scene, geometry, notes, bounds)] if ground_fallback else []
     notes.append("shadows: receivers found: " + ", ".join(r.name for r in result))

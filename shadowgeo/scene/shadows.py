@@ -90,7 +90,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Callable, Sequence
-from typing import Literal, cast
+from typing import TYPE_CHECKING, Literal, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -132,6 +132,9 @@ from .softbake import (
     translucent_note,
 )
 from .surfaces import ReceivingSurface, receiving_faces, surface_covered, surface_shadow
+
+if TYPE_CHECKING:
+    from manifold3d import CrossSection
 
 __all__ = [
     "BULB_FRACTION",
@@ -261,44 +264,142 @@ def add_shadows(
     ('shadow_sun_ground', 'shadows_sun', 0.0142)
     """
     with one_blas_thread():  # thin products: see shadowgeo.threads
-        return _add_shadows(
-            scene,
-            method=method,
-            lights=lights,
-            receivers=receivers,
-            plane=plane,
-            tolerance=tolerance,
-            offset=offset,
-            progress=progress,
-            extra_lights=extra_lights,
-            surfaces=surfaces,
-            keep_runtime_shadows=keep_runtime_shadows,
-            soft=SoftSettings(soft_levels, soft_samples),
+        options = _Options(
+            method,
+            lights,
+            receivers,
+            plane,
+            tolerance,
+            offset,
+            progress,
+            extra_lights,
+            surfaces,
+            keep_runtime_shadows,
+            SoftSettings(soft_levels, soft_samples),
         )
+        return _add_shadows(scene, options)
 
 
-def _add_shadows(
-    scene: Scene,
-    *,
-    method: Literal["planar", "volume"],
-    lights: Sequence[str] | None,
-    receivers: Sequence[str] | None,
-    plane: Plane | ArrayLike | None,
-    tolerance: Tolerance | float | None,
-    offset: float | None,
-    progress: Progress | None,
-    extra_lights: Sequence[SceneLight],
-    surfaces: bool | None,
-    keep_runtime_shadows: bool,
-    soft: SoftSettings,
-) -> Scene:
-    """:func:`add_shadows`, its arguments checked and passed on by name."""
-    if method not in ("planar", "volume"):
-        raise GeometryError(f"method must be 'planar' or 'volume', got {method!r}")
-    if receivers is not None and plane is not None:
-        raise GeometryError("give receivers or plane, not both")
-    notes: list[str] = []
-    kept = _without_baked(scene, notes)
+@dataclasses.dataclass(frozen=True)
+class _Options:
+    """What :func:`add_shadows` was asked besides the scene."""
+
+    method: Literal["planar", "volume"]
+    lights: Sequence[str] | None
+    receivers: Sequence[str] | None
+    plane: Plane | ArrayLike | None
+    tolerance: Tolerance | float | None
+    offset: float | None
+    progress: Progress | None
+    extra_lights: Sequence[SceneLight]
+    surfaces: bool | None
+    keep_runtime_shadows: bool
+    soft: SoftSettings
+
+    def check(self) -> None:
+        if self.method not in ("planar", "volume"):
+            raise GeometryError(f"method must be 'planar' or 'volume', got {self.method!r}")
+        if self.receivers is not None and self.plane is not None:
+            raise GeometryError("give receivers or plane, not both")
+
+
+@dataclasses.dataclass(frozen=True)
+class _Shapes:
+    """The scene's shapes less earlier shadows (``kept``), those with faces
+    (``every_shape``) and those once each (``geometry``), with the notes."""
+
+    kept: list[Shape]
+    every_shape: list[Shape]
+    geometry: list[Shape]
+    notes: tuple[str, ...]
+
+
+@dataclasses.dataclass(frozen=True)
+class _ShadowPlan:
+    """Everything every light's step shares: the shapes, the casting lights,
+    the casters stacked once, the tolerance and the lift, the names in use
+    (a collector: each step takes its names from it, in the run's order)."""
+
+    scene: Scene
+    options: _Options
+    shapes: _Shapes
+    lights: list[SceneLight]
+    casters: CasterSet
+    bounds: np.ndarray
+    tolerance: Tolerance
+    lift: float
+    names: _Names
+    opacity: np.ndarray
+    lighting: Lighting
+
+
+@dataclasses.dataclass(frozen=True)
+class _Receiving:
+    """What receives a planar run's shadows: the planar receivers ``found``,
+    every other surface (or None), the ground's home, with the notes."""
+
+    found: list[Receiver]
+    surface: ReceivingSurface | None
+    home: tuple[int, Placement] | None
+    notes: tuple[str, ...]
+
+
+@dataclasses.dataclass(frozen=True)
+class _LightCasting:
+    """One light's casting: its name and group, the lift of its shadows, its
+    graded settings (a light with a size), each caster's opacity for it, the
+    casters round it that shut it in (``shell``) and their opacity."""
+
+    scene_light: SceneLight
+    name: str
+    group: str
+    height: float
+    graded: SoftSettings | None
+    casting: np.ndarray
+    shell: list[int]
+    shut: float
+
+
+@dataclasses.dataclass(frozen=True)
+class _LightResult:
+    """One light's shadows, named; the vertices of those on the ground
+    plane; the casting when a shell round it covers the ground; the notes."""
+
+    added: list[Shape]
+    on_ground: list[np.ndarray]
+    covered: _LightCasting | None
+    notes: tuple[str, ...]
+
+
+def _add_shadows(scene: Scene, options: _Options) -> Scene:
+    """:func:`add_shadows` as its steps: the shapes, the lights, the plan,
+    then the shadows (one step per light) and the lights' runtime shadows;
+    the steps' notes become ``scene.warnings`` in the order they come."""
+    options.check()
+    shapes = _shapes_of(scene)
+    chosen, light_notes = _select_lights(scene, options.lights, options.extra_lights)
+    for index, light in enumerate(chosen):
+        check_light(light.light, f"light '{light.name or index}'")  # see shadowgeo.limits
+    notes = [*shapes.notes, *light_notes]
+    if not shapes.geometry and options.receivers is None:
+        notes.append("shadows: the scene has no geometry, so nothing casts or receives")
+        return dataclasses.replace(scene, shapes=shapes.kept, warnings=[*scene.warnings, *notes])
+    plan = _plan(scene, options, shapes, chosen)
+    notes.extend(_scoped_notes(plan))
+    added, shadow_notes = _volumes(plan) if options.method == "volume" else _planar(plan)
+    baked = chosen if options.method == "planar" else []
+    marked, runtime_notes = _runtime_shadows(
+        scene.lights, baked, options.keep_runtime_shadows, plan.names
+    )
+    warnings = [*scene.warnings, *notes, *shadow_notes, *runtime_notes]
+    return dataclasses.replace(
+        scene, shapes=[*shapes.kept, *added], lights=marked, warnings=warnings
+    )
+
+
+def _shapes_of(scene: Scene) -> _Shapes:
+    """The scene's shapes that cast and receive, each distinct one once."""
+    kept, notes = _without_baked(scene)
     every_shape = [s for s in kept if s.role == "geometry" and s.n_faces]
     geometry = distinct(every_shape)
     if len(every_shape) > len(geometry):
@@ -306,221 +407,329 @@ def _add_shadows(
             f"shadows: {len(every_shape) - len(geometry)} shapes repeat another's geometry "
             "exactly (same vertices, faces and transform); each casts and receives once"
         )
-    chosen = _select_lights(scene, lights, notes, extra_lights)
-    for index, light in enumerate(chosen):
-        check_light(light.light, f"light '{light.name or index}'")  # see shadowgeo.limits
-    if not geometry and receivers is None:
-        notes.append("shadows: the scene has no geometry, so nothing casts or receives")
-        return dataclasses.replace(scene, shapes=kept, warnings=[*scene.warnings, *notes])
+    return _Shapes(kept, every_shape, geometry, tuple(notes))
+
+
+def _plan(
+    scene: Scene, options: _Options, shapes: _Shapes, chosen: list[SceneLight]
+) -> _ShadowPlan:
+    """The plan of a run: the casters stacked (world vertices once per shape,
+    in one array), the tolerance and the lift of the shadows."""
     positions = [light.light.position for light in chosen if is_positional(light.light)]
-    stacked = CasterSet(geometry)  # world vertices once per shape, in one array
-    bounds = stacked.bounds if geometry else np.zeros((0, 3))
+    stacked = CasterSet(shapes.geometry)
+    bounds = stacked.bounds if shapes.geometry else np.zeros((0, 3))
     check_coordinates(bounds, "scene bounds")  # whatever the tolerance: see shadowgeo.limits
+    tolerance = options.tolerance
     if not isinstance(tolerance, Tolerance):
         settings = {} if tolerance is None else {"chord": float(tolerance)}
         tolerance = Tolerance.for_points(bounds, *positions, **settings)
+    offset = options.offset
     lift = _DEFAULT_OFFSET * tolerance.scale if offset is None else float(offset)
     if not math.isfinite(lift) or lift < 0:
         raise GeometryError(f"offset must be finite and >= 0, got {offset!r}")
-    names = _Names(kept, scene.lights)
-    scoped = [names.light(light, i) for i, light in enumerate(chosen) if light.scope is not None]
-    if scoped:
-        notes.append(
-            f'shadows: {_listed(scoped)}: global="false", so only the shapes of the '
-            "light's parent group receive and cast its shadows"
-        )
-    opacity = opacities(geometry)  # (see .opacity: 0 casts nothing)
-    lighting = Lighting.of(scene)
-
-    if method == "volume":
-        added = _volumes(scene, stacked, opacity, chosen, tolerance, names, notes, progress)
-    else:
-        own = dataclasses.replace(scene, shapes=geometry)  # without earlier shadows
-        if surfaces is None:
-            surfaces = receivers is None and plane is None
-        terrain = _terrain(stacked, scene.up_index) if surfaces else None
-        found = select_receivers(  # a named shape is looked for among every copy
-            own,
-            geometry if receivers is None else every_shape,
-            receivers,
-            plane,
-            tolerance,
-            notes,
-            stacked,
-            terrain is None,
-        )
-        # at most this many faces receive besides the planar receivers (fewer
-        # when faces repeat): past the budget, nothing is computed for them
-        besides = len(stacked.faces) - sum(
-            len(receiver.triangles) for receiver in found if receiver.triangles is not None
-        )
-        surface = None
-        if surfaces and besides <= limits.MAX_SURFACE_FACES:
-            surface = receiving_faces(geometry, found, tolerance, stacked)
-            besides = len(surface.faces)  # an open shape's faces count twice, one each way
-        if surfaces and besides > limits.MAX_SURFACE_FACES:
-            notes.append(
-                f"shadows: {besides:,} faces besides the planar receivers, more than "
-                f"{limits.MAX_SURFACE_FACES:,} (shadowgeo.limits.MAX_SURFACE_FACES): shadows "
-                "on the planar receivers only"
-            )
-            surface = None
-        if not found and surface is None:  # the terrain cannot receive after all
-            found = [ground(own, geometry, notes, stacked.bounds)]
-        elif not found:
-            notes.append(
-                f"shadows: no flat receiver found; {terrain} spans the scene and receives with "
-                "every other surface (no ground plane is added under it; --plane a,b,c,d adds one)"
-            )
-        home = _ground_home(chosen)
-        if home is not None:  # the ground lies in the scoped lights' group, lit by them
-            found = [
-                dataclasses.replace(r, scopes=frozenset({home[0]})) if _is_ground(r) else r
-                for r in found
-            ]
-        added = []
-        on_ground: list[np.ndarray] = []  # the shadows on the ground plane, if it receives
-        # lights shut in a caster, whose shadow is all the ground: (light,
-        # name, group, lift, opacity of the shell)
-        covered: list[tuple[SceneLight, str, str, float, float]] = []
-        total, done = len(chosen) * len(found) * len(stacked), 0
-        for index, light in enumerate(chosen):
-            light_name = names.light(light, index)
-            group = names.unique(f"shadows_{light_name}")
-            height = lift * (1 + index / len(chosen))
-            graded = _soft_for(light, soft, opacity, light_name, notes)
-            suffix = _suffix_for(graded)
-            # what it lights is what casts for it (X3D light scope); a caster
-            # the light touches or sits inside casts nothing for it, on any
-            # receiver; the others cast as ever
-            casting = opacity * in_scope(light, geometry)
-            held = stacked.holding(light.light, tolerance, casting > 0)
-            # a closed caster round the light that is no mere bulb: the light
-            # lights nothing outside it, all of which is in its shadow
-            shell = _enclosing(stacked, held, light, casting)
-            shut = float(casting[shell].max()) if shell else 0.0
-            if held:
-                casting[list(held)] = 0.0
-                for index in shell:
-                    del held[index]
-                if held:
-                    notes.append(_held_note(stacked, held, light_name))
-            if shell:
-                notes.append(_enclosed_note(stacked, shell, light_name))
-                if any(_is_ground(receiver) for receiver in found):
-                    covered.append((light, light_name, group, height, shut))
-            for receiver in found:
-                if shell and (_is_ground(receiver) or _outside(stacked, shell, receiver)):
-                    done += len(stacked)
-                    if receiver.triangles is None:  # the ground's: with the visible ground
-                        continue
-                    patch = receiver.triangles.reshape(-1, 3)
-                    faces = np.arange(len(patch)).reshape(-1, 3)
-                    for level, layer in _covered(
-                        receiver, patch, faces, light, shut, tolerance, height, lighting
-                    ):
-                        layer.name = names.unique(
-                            f"shadow_{light_name}_{receiver.name}{_layer_suffix(level)}"
-                        )
-                        layer.group = group
-                        added.append(layer)
-                    continue
-
-                def step(count: int, start: int = done) -> None:
-                    if progress is not None:
-                        progress(start + count, total)
-
-                layers = _receiver_layers(
-                    receiver,
-                    light,
-                    graded,
-                    casters=stacked,
-                    opacity=casting,
-                    tolerance=tolerance,
-                    lift=height,
-                    notes=notes,
-                    light_name=light_name,
-                    step=step,
-                    lighting=lighting,
-                )
-                done += len(stacked)
-                for level, layer in layers:
-                    if _is_ground(receiver):
-                        on_ground.append(layer.vertices)
-                    layer.name = names.unique(f"shadow_{light_name}_{receiver.name}{suffix(level)}")
-                    layer.group = group
-                    added.append(layer)
-            if surface is not None:
-                receiving = surface.lit_by(light)
-                if shell:  # the faces outside the shell are all in its shadow
-                    outside = _outside_faces(stacked, shell, receiving)
-                    for level, layer in surface_covered(
-                        receiving.only(outside), light, shut, height, light_name, lighting
-                    ):
-                        layer.name = names.unique(
-                            f"shadow_{light_name}_surfaces{_layer_suffix(level)}"
-                        )
-                        layer.group = group
-                        added.append(layer)
-                    receiving = receiving.only(~outside)
-                # only casters the light reaches (its radius, its cone): a
-                # ray to a lit point runs inside them; each caster's
-                # topology made once for every light
-                reached = np.flatnonzero(stacked.lit(light.light) & (casting > 0))
-                for level, layer in _surface_layers(
-                    graded,
-                    receiving,
-                    [stacked.caster(int(k)) for k in reached],
-                    casting[reached],
-                    reached,
-                    light,
-                    tolerance,
-                    height,
-                    notes,
-                    light_name,
-                    lighting,
-                ):
-                    layer.name = names.unique(f"shadow_{light_name}_surfaces{suffix(level)}")
-                    layer.group = group
-                    added.append(layer)
-        if progress is not None:
-            progress(total, total)
-        if not added and not covered:
-            listed = ", ".join(receiver.name for receiver in found)
-            notes.append(f"shadows: no shadow falls on the receivers ({listed})")
-        grounds = [receiver for receiver in found if _is_ground(receiver)]
-        if grounds:
-            height = -grounds[0].plane.offset / grounds[0].plane.normal[scene.up_index]
-            floor = visible_ground(np.vstack([bounds, *on_ground]), height, scene.up_index)
-            floor.name, floor.group = names.unique("ground"), names.unique("shadowgeo_ground")
-            added.insert(0, floor)
-            for light, light_name, group, lift_by, shut in covered:
-                for level, layer in _covered(
-                    grounds[0],
-                    floor.world_vertices,
-                    floor.faces,
-                    light,
-                    shut,
-                    tolerance,
-                    lift_by,
-                    lighting,
-                ):
-                    layer.name = names.unique(f"shadow_{light_name}_ground{_layer_suffix(level)}")
-                    layer.group = group
-                    added.append(layer)
-            where = ""
-            if home is not None:
-                floor.scopes, floor.placement = frozenset({home[0]}), home[1]
-                where = " (in the group of its non-global lights, so that they light it)"
-            notes.append(
-                f"shadows: a light-grey ground ({floor.name}) is added under the scene{where} "
-                "to show the shadows on the ground plane"
-            )
-    baked = chosen if method == "planar" else []
-    marked = _runtime_shadows(scene.lights, baked, keep_runtime_shadows, names, notes)
-    return dataclasses.replace(
-        scene, shapes=[*kept, *added], lights=marked, warnings=[*scene.warnings, *notes]
+    names = _Names(shapes.kept, scene.lights)
+    opacity = opacities(shapes.geometry)  # (see .opacity: 0 casts nothing)
+    return _ShadowPlan(
+        scene,
+        options,
+        shapes,
+        chosen,
+        stacked,
+        bounds,
+        tolerance,
+        lift,
+        names,
+        opacity,
+        Lighting.of(scene),
     )
+
+
+def _scoped_notes(plan: _ShadowPlan) -> list[str]:
+    """The note on the casting lights with a scope (X3D ``global="false"``)."""
+    scoped = [
+        plan.names.light(light, i) for i, light in enumerate(plan.lights) if light.scope is not None
+    ]
+    if not scoped:
+        return []
+    return [
+        f'shadows: {_listed(scoped)}: global="false", so only the shapes of the '
+        "light's parent group receive and cast its shadows"
+    ]
+
+
+def _planar(plan: _ShadowPlan) -> tuple[list[Shape], list[str]]:
+    """The shadows on the receivers, one step per light, then a visible
+    ground under the scene when the ground plane receives."""
+    receiving = _receiving(plan)
+    results = [_light_shadows(plan, receiving, index) for index in range(len(plan.lights))]
+    if plan.options.progress is not None:
+        total = len(plan.lights) * len(receiving.found) * len(plan.casters)
+        plan.options.progress(total, total)
+    added = [shape for result in results for shape in result.added]
+    notes = [*receiving.notes, *(note for result in results for note in result.notes)]
+    covered = [result.covered for result in results if result.covered is not None]
+    if not added and not covered:
+        listed = ", ".join(receiver.name for receiver in receiving.found)
+        notes.append(f"shadows: no shadow falls on the receivers ({listed})")
+    if not any(_is_ground(receiver) for receiver in receiving.found):
+        return added, notes
+    floor, on_floor, note = _visible_ground(plan, receiving, results, covered)
+    return [floor, *added, *on_floor], [*notes, note]
+
+
+def _receiving(plan: _ShadowPlan) -> _Receiving:
+    """The planar receivers (:mod:`.receivers`) and the other surfaces that
+    receive (:mod:`.surfaces`); the ground plane when nothing else does."""
+    options, geometry, stacked = plan.options, plan.shapes.geometry, plan.casters
+    own = dataclasses.replace(plan.scene, shapes=geometry)  # without earlier shadows
+    surfaces = options.surfaces
+    if surfaces is None:
+        surfaces = options.receivers is None and options.plane is None
+    terrain = _terrain(stacked, plan.scene.up_index) if surfaces else None
+    notes: list[str] = []
+    found = select_receivers(  # a named shape is looked for among every copy
+        own,
+        geometry if options.receivers is None else plan.shapes.every_shape,
+        options.receivers,
+        options.plane,
+        plan.tolerance,
+        notes,
+        stacked,
+        terrain is None,
+    )
+    surface, surface_notes = _other_surfaces(plan, found) if surfaces else (None, [])
+    notes.extend(surface_notes)
+    if not found and surface is None:  # the terrain cannot receive after all
+        found = [ground(own, geometry, notes, stacked.bounds)]
+    elif not found:
+        notes.append(
+            f"shadows: no flat receiver found; {terrain} spans the scene and receives with "
+            "every other surface (no ground plane is added under it; --plane a,b,c,d adds one)"
+        )
+    home = _ground_home(plan.lights)
+    if home is not None:  # the ground lies in the scoped lights' group, lit by them
+        found = [
+            dataclasses.replace(r, scopes=frozenset({home[0]})) if _is_ground(r) else r
+            for r in found
+        ]
+    return _Receiving(found, surface, home, tuple(notes))
+
+
+def _other_surfaces(
+    plan: _ShadowPlan, found: list[Receiver]
+) -> tuple[ReceivingSurface | None, list[str]]:
+    """Every face besides the planar receivers ``found``, or None past
+    :data:`shadowgeo.limits.MAX_SURFACE_FACES` (with a note)."""
+    stacked = plan.casters
+    # at most this many faces receive besides the planar receivers (fewer
+    # when faces repeat): past the budget, nothing is computed for them
+    besides = len(stacked.faces) - sum(
+        len(receiver.triangles) for receiver in found if receiver.triangles is not None
+    )
+    surface = None
+    if besides <= limits.MAX_SURFACE_FACES:
+        surface = receiving_faces(plan.shapes.geometry, found, plan.tolerance, stacked)
+        besides = len(surface.faces)  # an open shape's faces count twice, one each way
+    if besides <= limits.MAX_SURFACE_FACES:
+        return surface, []
+    return None, [
+        f"shadows: {besides:,} faces besides the planar receivers, more than "
+        f"{limits.MAX_SURFACE_FACES:,} (shadowgeo.limits.MAX_SURFACE_FACES): shadows "
+        "on the planar receivers only"
+    ]
+
+
+def _light_shadows(plan: _ShadowPlan, receiving: _Receiving, index: int) -> _LightResult:
+    """The step of one light: its shadows on each receiver, then on every
+    other surface."""
+    light, notes = _casting_of(plan, index)
+    added: list[Shape] = []
+    on_ground: list[np.ndarray] = []  # the shadows on the ground plane, if it receives
+    total = len(plan.lights) * len(receiving.found) * len(plan.casters)
+    for number, receiver in enumerate(receiving.found):
+        start = (index * len(receiving.found) + number) * len(plan.casters)
+        layers, receiver_notes = _on_receiver(plan, light, receiver, _step(plan, start, total))
+        if _is_ground(receiver):
+            on_ground.extend(layer.vertices for layer in layers)
+        added.extend(layers)
+        notes.extend(receiver_notes)
+    if receiving.surface is not None:
+        layers, surface_notes = _on_surfaces(plan, light, receiving.surface)
+        added.extend(layers)
+        notes.extend(surface_notes)
+    # a shell round the light covers the ground plane wholly
+    covers = bool(light.shell) and any(_is_ground(receiver) for receiver in receiving.found)
+    return _LightResult(added, on_ground, light if covers else None, tuple(notes))
+
+
+def _step(plan: _ShadowPlan, start: int, total: int) -> Callable[[int], None]:
+    """``progress`` for one receiver, its casters counted from ``start``."""
+    progress = plan.options.progress
+
+    def step(count: int) -> None:
+        if progress is not None:
+            progress(start + count, total)
+
+    return step
+
+
+def _casting_of(plan: _ShadowPlan, index: int) -> tuple[_LightCasting, list[str]]:
+    """What casts for the ``index``-th light: what it lights (X3D light
+    scope); a caster the light touches or sits inside casts nothing for it,
+    on any receiver; the others cast as ever."""
+    scene_light = plan.lights[index]
+    name = plan.names.light(scene_light, index)
+    group = plan.names.unique(f"shadows_{name}")
+    graded, notes = _soft_for(scene_light, plan.options.soft, plan.opacity, name)
+    casting = plan.opacity * in_scope(scene_light, plan.shapes.geometry)
+    held = plan.casters.holding(scene_light.light, plan.tolerance, casting > 0)
+    # a closed caster round the light that is no mere bulb: the light
+    # lights nothing outside it, all of which is in its shadow
+    shell = _enclosing(plan.casters, held, scene_light, casting)
+    shut = float(casting[shell].max()) if shell else 0.0
+    if held:
+        casting[list(held)] = 0.0
+        for caster in shell:
+            del held[caster]
+        if held:
+            notes.append(_held_note(plan.casters, held, name))
+    if shell:
+        notes.append(_enclosed_note(plan.casters, shell, name))
+    height = plan.lift * (1 + index / len(plan.lights))
+    casting_of = _LightCasting(scene_light, name, group, height, graded, casting, shell, shut)
+    return casting_of, notes
+
+
+def _on_receiver(
+    plan: _ShadowPlan, light: _LightCasting, receiver: Receiver, step: Callable[[int], None]
+) -> tuple[list[Shape], list[str]]:
+    """The named shadow layers of ``light`` on one planar receiver."""
+    stem = f"shadow_{light.name}_{receiver.name}"
+    if light.shell and (_is_ground(receiver) or _outside(plan.casters, light.shell, receiver)):
+        if receiver.triangles is None:  # the ground's: with the visible ground
+            return [], []
+        patch = receiver.triangles.reshape(-1, 3)
+        faces = np.arange(len(patch)).reshape(-1, 3)
+        covered = _covered(
+            receiver,
+            patch,
+            faces,
+            light.scene_light,
+            light.shut,
+            plan.tolerance,
+            light.height,
+            plan.lighting,
+        )
+        return _named(plan, covered, stem, _layer_suffix, light.group), []
+    layers, notes = _receiver_layers(
+        receiver,
+        light.scene_light,
+        light.graded,
+        casters=plan.casters,
+        opacity=light.casting,
+        tolerance=plan.tolerance,
+        lift=light.height,
+        light_name=light.name,
+        step=step,
+        lighting=plan.lighting,
+    )
+    return _named(plan, layers, stem, _suffix_for(light.graded), light.group), notes
+
+
+def _on_surfaces(
+    plan: _ShadowPlan, light: _LightCasting, surface: ReceivingSurface
+) -> tuple[list[Shape], list[str]]:
+    """The named shadow layers of ``light`` on every other surface."""
+    stem = f"shadow_{light.name}_surfaces"
+    receiving = surface.lit_by(light.scene_light)
+    added: list[Shape] = []
+    if light.shell:  # the faces outside the shell are all in its shadow
+        outside = _outside_faces(plan.casters, light.shell, receiving)
+        covered = surface_covered(
+            receiving.only(outside),
+            light.scene_light,
+            light.shut,
+            light.height,
+            light.name,
+            plan.lighting,
+        )
+        added = _named(plan, covered, stem, _layer_suffix, light.group)
+        receiving = receiving.only(~outside)
+    # only casters the light reaches (its radius, its cone): a ray to a lit
+    # point runs inside them; each caster's topology made once for every light
+    stacked = plan.casters
+    reached = np.flatnonzero(stacked.lit(light.scene_light.light) & (light.casting > 0))
+    layers, notes = _surface_layers(
+        light.graded,
+        receiving,
+        [stacked.caster(int(k)) for k in reached],
+        light.casting[reached],
+        reached,
+        light.scene_light,
+        plan.tolerance,
+        light.height,
+        light.name,
+        plan.lighting,
+    )
+    return [*added, *_named(plan, layers, stem, _suffix_for(light.graded), light.group)], notes
+
+
+def _named(
+    plan: _ShadowPlan,
+    layers: list[tuple[float, Shape]],
+    stem: str,
+    suffix: Callable[[float], str],
+    group: str,
+) -> list[Shape]:
+    """The ``layers`` (level, shape) named ``stem`` and the level's suffix,
+    unique in the scene, in ``group``."""
+    named = []
+    for level, layer in layers:
+        layer.name = plan.names.unique(f"{stem}{suffix(level)}")
+        layer.group = group
+        named.append(layer)
+    return named
+
+
+def _visible_ground(
+    plan: _ShadowPlan,
+    receiving: _Receiving,
+    results: list[_LightResult],
+    covered: list[_LightCasting],
+) -> tuple[Shape, list[Shape], str]:
+    """The ground shown under the scene (:mod:`.ground`) when the ground
+    plane receives, reaching every shadow on it; the shadows of the shells
+    round lights that cover it; the note."""
+    plane_receiver = next(receiver for receiver in receiving.found if _is_ground(receiver))
+    up = plan.scene.up_index
+    height = -plane_receiver.plane.offset / plane_receiver.plane.normal[up]
+    on_ground = [vertices for result in results for vertices in result.on_ground]
+    floor = visible_ground(np.vstack([plan.bounds, *on_ground]), height, up)
+    floor.name, floor.group = plan.names.unique("ground"), plan.names.unique("shadowgeo_ground")
+    on_floor = []
+    for light in covered:  # (placed as the ground was made, before it moves to its home)
+        layers = _covered(
+            plane_receiver,
+            floor.world_vertices,
+            floor.faces,
+            light.scene_light,
+            light.shut,
+            plan.tolerance,
+            light.height,
+            plan.lighting,
+        )
+        on_floor.extend(
+            _named(plan, layers, f"shadow_{light.name}_ground", _layer_suffix, light.group)
+        )
+    where = ""
+    if receiving.home is not None:
+        floor.scopes, floor.placement = frozenset({receiving.home[0]}), receiving.home[1]
+        where = " (in the group of its non-global lights, so that they light it)"
+    note = (
+        f"shadows: a light-grey ground ({floor.name}) is added under the scene{where} "
+        "to show the shadows on the ground plane"
+    )
+    return floor, on_floor, note
 
 
 def _enclosing(
@@ -684,15 +893,14 @@ def _runtime_shadows(
     baked: list[SceneLight],
     keep: bool,
     names: _Names,
-    notes: list[str],
-) -> list[SceneLight]:
+) -> tuple[list[SceneLight], list[str]]:
     """The scene's lights with ``baked`` set on those whose shadows are now
     ``baked`` and that would draw them at run time (``shadows`` true), unless
     ``keep``: a browser drawing its own shadow over the baked one darkens it
     twice. ``baked`` is cleared on the others (a light an earlier run baked
     and this one does not draws its runtime shadows again). One note says
     which lights still draw runtime shadows."""
-    result = []
+    result, notes = [], []
     turned_off, drawing = [], []
     casting = {id(light) for light in baked}  # the scene's own objects, alive meanwhile
     for index, light in enumerate(lights):
@@ -716,7 +924,7 @@ def _runtime_shadows(
         notes.append(f"shadows: runtime shadows still drawn by {_listed(drawing)}")
     elif baked:
         notes.append("shadows: no light draws runtime shadows over the baked ones")
-    return result
+    return result, notes
 
 
 def _listed(names: list[str]) -> str:
@@ -761,17 +969,17 @@ def _terrain(stacked: CasterSet, axis: int) -> str | None:
     return None
 
 
-def _without_baked(scene: Scene, notes: list[str]) -> list[Shape]:
+def _without_baked(scene: Scene) -> tuple[list[Shape], list[str]]:
     """The scene's shapes less the shadows an earlier run added: shapes with
     role "shadow" or "volume" (every reader keeps roles; X3D through the
     ``MARK`` class of the groups). They are replaced, neither cast nor stay."""
     kept = [s for s in scene.shapes if s.role not in ("shadow", "volume", "ground")]
-    if len(kept) < len(scene.shapes):
-        notes.append(
-            f"shadows: {len(scene.shapes) - len(kept)} shadow shapes added by an earlier run "
-            "are replaced"
-        )
-    return kept
+    if len(kept) == len(scene.shapes):
+        return kept, []
+    return kept, [
+        f"shadows: {len(scene.shapes) - len(kept)} shadow shapes added by an earlier run "
+        "are replaced"
+    ]
 
 
 class _Names:
@@ -813,39 +1021,60 @@ def default_sun(up_axis: str = "Y") -> SceneLight:
 def _select_lights(
     scene: Scene,
     names: Sequence[str] | None,
-    notes: list[str],
     extra: Sequence[SceneLight] = (),
-) -> list[SceneLight]:
+) -> tuple[list[SceneLight], list[str]]:
+    """The lights that cast (see the module notes), with the notes on the
+    choice: the named ones and ``extra``, else the scene's own."""
+    extra = _checked_extra(extra)
+    if extra and names is None:
+        return extra, []
+    if names is not None:
+        return [*_named_lights(scene, names), *extra], []
+    lit = [light for light in scene.lights if light.on]
+    if not lit:
+        return [default_sun(scene.up_axis)], [_default_sun_note(scene)]
+    return _casting_lights(lit)
+
+
+def _checked_extra(extra: Sequence[SceneLight]) -> list[SceneLight]:
     extra = list(extra)
     for light in extra:
         if not isinstance(light, SceneLight):
             raise GeometryError(f"extra_lights must hold SceneLight values, got {light!r}")
-    if extra and names is None:
-        return extra
-    if names is not None:
-        by_name = {light.name: light for light in scene.lights if light.name}
-        chosen = []
-        for name in names:
-            if name not in by_name:
-                known = ", ".join(sorted(by_name)) or "none has a DEF name"
-                raise SceneError(f"no light named '{name}' (lights: {known})", path=scene.path)
-            if not by_name[name].on:
-                raise SceneError(f"light '{name}' is off (on=\"false\")", path=scene.path)
-            chosen.append(by_name[name])
-        return [*chosen, *extra]
-    lit = [light for light in scene.lights if light.on]
-    if not lit:
-        sun = default_sun(scene.up_axis)
-        what = "no lights" if not scene.lights else "no light that is on"
-        sun_direction = cast(DirectionalLight, sun.light).direction
-        direction = ", ".join(f"{value:.3g}" for value in sun_direction)
-        notes.append(
-            f"shadows: the scene has {what}; a default sun casts, travelling along "
-            f"({direction}), {DEFAULT_SUN_ELEVATION:.0f} degrees above the horizon "
-            "(X3D's headlight follows the viewer and casts none; shadowgeo convert "
-            "--sun DX,DY,DZ gives another)"
-        )
-        return [sun]
+    return extra
+
+
+def _named_lights(scene: Scene, names: Sequence[str]) -> list[SceneLight]:
+    """The scene's lights named ``names`` (DEF), each on."""
+    by_name = {light.name: light for light in scene.lights if light.name}
+    chosen = []
+    for name in names:
+        if name not in by_name:
+            known = ", ".join(sorted(by_name)) or "none has a DEF name"
+            raise SceneError(f"no light named '{name}' (lights: {known})", path=scene.path)
+        if not by_name[name].on:
+            raise SceneError(f"light '{name}' is off (on=\"false\")", path=scene.path)
+        chosen.append(by_name[name])
+    return chosen
+
+
+def _default_sun_note(scene: Scene) -> str:
+    """The note on the default sun casting in a scene with no light on."""
+    what = "no lights" if not scene.lights else "no light that is on"
+    sun_direction = cast(DirectionalLight, default_sun(scene.up_axis).light).direction
+    direction = ", ".join(f"{value:.3g}" for value in sun_direction)
+    return (
+        f"shadows: the scene has {what}; a default sun casts, travelling along "
+        f"({direction}), {DEFAULT_SUN_ELEVATION:.0f} degrees above the horizon "
+        "(X3D's headlight follows the viewer and casts none; shadowgeo convert "
+        "--sun DX,DY,DZ gives another)"
+    )
+
+
+def _casting_lights(lit: list[SceneLight]) -> tuple[list[SceneLight], list[str]]:
+    """Of the lights that are on, those with ``shadows=True`` (all when none
+    has it), at most :data:`shadowgeo.limits.MAX_CASTING_LIGHTS`."""
+    notes = []
     chosen = [light for light in lit if light.shadows]
     if not chosen:
         listed = _first_ten([_Names.light(light, i) for i, light in enumerate(lit)])
@@ -861,7 +1090,7 @@ def _select_lights(
             "shadowgeo.limits.MAX_CASTING_LIGHTS; --light NAME chooses)"
         )
         chosen = chosen[: limits.MAX_CASTING_LIGHTS]
-    return chosen
+    return chosen, notes
 
 
 def _caster_loops(
@@ -871,9 +1100,8 @@ def _caster_loops(
     plane: Plane,
     rectangle: np.ndarray | None,
     tolerance: Tolerance,
-    notes: list[str],
     light_name: str,
-) -> list[np.ndarray]:
+) -> tuple[list[np.ndarray], list[str]]:
     """The loops of the shadows of the stacked faces ``faces`` (a mask) on
     ``plane``, in plane 2-D coordinates.
 
@@ -882,23 +1110,22 @@ def _caster_loops(
     in numpy for every caster at once instead of paying a Python call's fixed
     cost per shape. When that call fails (a light inside or touching one of
     them), each caster is projected alone so that only the one at fault is
-    skipped, with a note.
+    skipped, with a note (the notes are returned with the loops).
     """
     owners = casters.owners(faces)
     if not len(owners):
-        return []
+        return [], []
     try:
         shadow = project_shadow(
             casters.mesh(faces), light, plane, receiver=rectangle, tolerance=tolerance
         )
-        return [loop for part in shadow.polygons for loop in part]
+        return [loop for part in shadow.polygons for loop in part], []
     except GeometryError as error:
         if len(owners) == 1:
             name = casters.casters[owners[0]].name
-            notes.append(f"shadows: {name} does not cast for light {light_name}: {error}")
-            return []
+            return [], [f"shadows: {name} does not cast for light {light_name}: {error}"]
     # find the caster at fault: each alone
-    loops = []
+    loops, notes = [], []
     for owner in owners:
         caster = casters.casters[owner]
         own = faces[casters.face_owner == owner]
@@ -910,7 +1137,7 @@ def _caster_loops(
             continue
         for part in shadow.polygons:
             loops.extend(part)
-    return loops
+    return loops, notes
 
 
 def _shadow_on(
@@ -921,16 +1148,15 @@ def _shadow_on(
     opacity: np.ndarray,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     step: Callable[[int], None],
     lighting: Lighting,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """The shadow of the casters on one receiver as shapes, one per casting
     opacity (``opacity``: (k,) each caster's, :mod:`.opacity`), most opaque
     first, each with that opacity: raised ``lift`` off the receiver's plane,
-    ``step(count)`` called once the casters are chosen, and a note in
-    ``notes`` for a caster that cannot cast. The layers do not overlap: each
+    ``step(count)`` called once the casters are chosen, with a note for
+    each caster that cannot cast. The layers do not overlap: each
     is its casters' united shadow less the shadows of every more opaque
     layer, so a point takes the darkness of the most opaque caster that hides
     it. Each layer is as dark as ``lighting`` says (:mod:`.darkness`) times
@@ -938,25 +1164,74 @@ def _shadow_on(
     light = scene_light.light
     plane = receiver.facing(light, tolerance)
     if plane is None or not lights(scene_light, receiver.scopes):
-        return []  # behind a one-sided receiver, in its plane, or out of the light's scope
-    region2d = box2d = rectangle = None
-    if receiver.triangles is not None:
-        flat = plane.to_2d(receiver.triangles.reshape(-1, 3)).reshape(-1, 3, 2)
-        box2d = (flat.reshape(-1, 2).min(axis=0), flat.reshape(-1, 2).max(axis=0))
-        low, high = box2d
-        rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
-        region2d = flat
+        return [], []  # behind a one-sided receiver, in its plane, or out of the light's scope
+    region2d = None if receiver.triangles is None else _flat_patch(receiver.triangles, plane)
+    box2d = None if region2d is None else _box_of(region2d)
+    rectangle = None if box2d is None else _rectangle(plane, box2d)
     chosen = casters.may_shadow(light, plane, box2d, tolerance) & (opacity > 0)
     off_plane = casters.off_plane(plane, tolerance) if chosen.any() else None
     step(len(casters))
     layers: list[tuple[float, list[np.ndarray]]] = []
+    notes: list[str] = []
     for level in np.unique(opacity[chosen])[::-1].tolist():  # most opaque first
         faces = casters.faces_of(chosen & (opacity == level)) & off_plane
-        loops = _caster_loops(casters, faces, light, plane, rectangle, tolerance, notes, light_name)
+        loops, loop_notes = _caster_loops(
+            casters, faces, light, plane, rectangle, tolerance, light_name
+        )
+        notes.extend(loop_notes)
         if loops:
             layers.append((level, loops))
     if not layers:
-        return []
+        return [], notes
+    frame = _frame(plane, layers, region2d, tolerance, lift)
+    shapes = []
+    for level, parts in _layer_parts(layers, frame):
+        where = f"shadow of light {light_name} on {receiver.name}"
+        if level < 1:
+            where += f", of casters of opacity {level:g}"
+        shape = _layer_shape(frame, parts, receiver, scene_light, where, level, lighting)
+        if shape is not None:
+            shapes.append((level, shape))
+    return shapes, notes
+
+
+@dataclasses.dataclass(frozen=True)
+class _Frame:
+    """The receiver's plane and the 2-D frame its shadows are cut in: centred
+    on them, scaled for the polygon library (:func:`.polygons.local_scale`);
+    the receiver's patch in it (None for an unbounded plane) and the lift."""
+
+    plane: Plane
+    center: np.ndarray
+    scale: float
+    receiving: CrossSection | None
+    lift: float
+
+
+def _flat_patch(triangles: np.ndarray, plane: Plane) -> np.ndarray:
+    """(n, 3, 2): a receiver's triangles in ``plane``'s 2-D coordinates."""
+    return plane.to_2d(triangles.reshape(-1, 3)).reshape(-1, 3, 2)
+
+
+def _box_of(flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return flat.reshape(-1, 2).min(axis=0), flat.reshape(-1, 2).max(axis=0)
+
+
+def _rectangle(plane: Plane, box2d: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """(4, 3): the corners of the 2-D box ``box2d`` in ``plane``."""
+    low, high = box2d
+    corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]], dtype=np.float64)
+    return plane.to_3d(corners)
+
+
+def _frame(
+    plane: Plane,
+    layers: list[tuple[float, list[np.ndarray]]],
+    region2d: np.ndarray | None,
+    tolerance: Tolerance,
+    lift: float,
+) -> _Frame:
+    """The frame of the shadow loops ``layers`` and the receiver's patch."""
     points = np.concatenate([loop for _, loops in layers for loop in loops])
     center = 0.5 * (points.min(axis=0) + points.max(axis=0))
     extent = float(np.abs(points - center).max())
@@ -966,40 +1241,59 @@ def _shadow_on(
     receiving = None
     if region2d is not None:
         receiving = poly.triangles_region((region2d - center) * scale)
-    shapes = []
+    return _Frame(plane, center, scale, receiving, lift)
+
+
+def _layer_parts(
+    layers: list[tuple[float, list[np.ndarray]]], frame: _Frame
+) -> list[tuple[float, list[list[np.ndarray]]]]:
+    """Each layer's region in the frame, cut to the receiver, less every more
+    opaque layer's, as parts (outer loop, holes); empty ones left out."""
+    parts_of = []
     covered = None  # the more opaque layers' region
     for level, loops in layers:
-        local = [(loop - center) * scale for loop in loops]
-        if (
-            len(layers) == 1
-            and poly.whole_loop(local, keep_triangles=True)
-            and (
-                receiving is None
-                or poly.holds_box(receiving, local[0].min(axis=0), local[0].max(axis=0))
-            )
-        ):  # one simple loop on the receiver: no union and no cut (a sweep over the loop each)
-            parts = [local]
+        local = [(loop - frame.center) * frame.scale for loop in loops]
+        if len(layers) == 1 and _simple_on_receiver(local, frame.receiving):
+            parts = [local]  # no union and no cut (a sweep over the loop each)
         else:
             region = poly.fill(local)
-            if receiving is not None:
-                region = poly.intersect(region, receiving)
+            if frame.receiving is not None:
+                region = poly.intersect(region, frame.receiving)
             layer = region if covered is None else poly.subtract(region, covered)
             covered = region if covered is None else poly.unite(covered, region)
             parts = poly.components(layer)
-        if not parts:
-            continue
-        flat_points, faces = poly.triangulate_parts(parts)
-        if not len(faces):
-            continue  # slivers narrower than rounding: no shadow to draw
-        vertices = plane.to_3d(flat_points / scale + center) + lift * plane.normal
-        where = f"shadow of light {light_name} on {receiver.name}"
-        if level < 1:
-            where += f", of casters of opacity {level:g}"
-        darkness = lighting.darkness(
-            scene_light, vertices, faces, receiver.material, receiver.scopes
-        )
-        shapes.append((level, shadow_shape(vertices, faces, scene_light, where, level, darkness)))
-    return shapes
+        if parts:
+            parts_of.append((level, parts))
+    return parts_of
+
+
+def _simple_on_receiver(local: list[np.ndarray], receiving: CrossSection | None) -> bool:
+    """Whether the loops ``local`` are one simple loop lying on the receiver."""
+    if not poly.whole_loop(local, keep_triangles=True):
+        return False
+    return receiving is None or poly.holds_box(
+        receiving, local[0].min(axis=0), local[0].max(axis=0)
+    )
+
+
+def _layer_shape(
+    frame: _Frame,
+    parts: list[list[np.ndarray]],
+    receiver: Receiver,
+    scene_light: SceneLight,
+    where: str,
+    level: float,
+    lighting: Lighting,
+) -> Shape | None:
+    """One layer's parts triangulated, lifted off the receiver, as a shadow
+    shape; None for slivers narrower than rounding (no shadow to draw)."""
+    flat_points, faces = poly.triangulate_parts(parts)
+    if not len(faces):
+        return None
+    plane = frame.plane
+    vertices = plane.to_3d(flat_points / frame.scale + frame.center) + frame.lift * plane.normal
+    darkness = lighting.darkness(scene_light, vertices, faces, receiver.material, receiver.scopes)
+    return shadow_shape(vertices, faces, scene_light, where, level, darkness)
 
 
 def _soft_for(
@@ -1007,17 +1301,14 @@ def _soft_for(
     settings: SoftSettings,
     opacity: np.ndarray,
     light_name: str,
-    notes: list[str],
-) -> SoftSettings | None:
+) -> tuple[SoftSettings | None, list[str]]:
     """``settings`` for a light with a size, whose shadows bake as graded
     layers (:mod:`.softbake`), with a note when translucent casters cast
     for it as opaque; None for one without."""
     if not is_soft(scene_light):
-        return None
+        return None, []
     note = translucent_note(opacity, light_name)
-    if note is not None:
-        notes.append(note)
-    return settings
+    return settings, [] if note is None else [note]
 
 
 def _suffix_for(graded: SoftSettings | None) -> Callable[[float], str]:
@@ -1034,11 +1325,10 @@ def _receiver_layers(
     opacity: np.ndarray,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     step: Callable[[int], None],
     lighting: Lighting,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """:func:`_shadow_on`, or for a light with a size (``graded``) its
     graded layers (:func:`.softbake.soft_on_receiver`)."""
     if graded is None:
@@ -1049,13 +1339,13 @@ def _receiver_layers(
             opacity=opacity,
             tolerance=tolerance,
             lift=lift,
-            notes=notes,
             light_name=light_name,
             step=step,
             lighting=lighting,
         )
     step(len(casters))
-    return soft_on_receiver(
+    notes: list[str] = []
+    layers = soft_on_receiver(
         receiver,
         scene_light,
         casters=casters,
@@ -1067,6 +1357,7 @@ def _receiver_layers(
         lighting=lighting,
         settings=graded,
     )
+    return layers, notes
 
 
 def _surface_layers(
@@ -1078,14 +1369,14 @@ def _surface_layers(
     scene_light: SceneLight,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     lighting: Lighting,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """:func:`.surfaces.surface_shadow`, or for a light with a size
     (``graded``) its graded layers (:func:`.softbake.soft_on_surface`)."""
+    notes: list[str] = []
     if graded is None:
-        return surface_shadow(
+        layers = surface_shadow(
             surface,
             casters,
             opacity,
@@ -1097,24 +1388,20 @@ def _surface_layers(
             light_name,
             lighting,
         )
-    return soft_on_surface(
-        surface, casters, scene_light, tolerance, lift, notes, light_name, lighting, graded
-    )
+    else:
+        layers = soft_on_surface(
+            surface, casters, scene_light, tolerance, lift, notes, light_name, lighting, graded
+        )
+    return layers, notes
 
 
-def _volumes(
-    scene: Scene,
-    stacked: CasterSet,
-    opacity: np.ndarray,
-    chosen: list[SceneLight],
-    tolerance: Tolerance,
-    names: _Names,
-    notes: list[str],
-    progress: Progress | None,
-) -> list[Shape]:
+def _volumes(plan: _ShadowPlan) -> tuple[list[Shape], list[str]]:
     """Shadow volumes of every shape that casts (``opacity`` above 0) for every
     light, ending one scene size past the farthest corner of the scene (a
     sweep of twice its size for a sun)."""
+    stacked, opacity, chosen = plan.casters, plan.opacity, plan.lights
+    tolerance, names, progress = plan.tolerance, plan.names, plan.options.progress
+    notes: list[str] = []
     bounds = stacked.bounds
     corners = np.array(
         [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
@@ -1158,4 +1445,4 @@ def _volumes(
                     casts_shadow=False,
                 )
             )
-    return added
+    return added, notes

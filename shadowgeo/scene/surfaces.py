@@ -182,10 +182,7 @@ def surface_shadow(
     keep = [k for k, caster in enumerate(casters) if caster.n_faces]
     if not len(surface.faces) or not keep:
         return []
-    levels = sorted({float(opacity[k]) for k in keep}, reverse=True)
-    order = [k for level in levels for k in keep if opacity[k] == level]  # group by group
-    groups = [[casters[k] for k in keep if opacity[k] == level] for level in levels]
-    shapes_of = np.asarray(caster_shapes)[order]  # each caster's shape, in that order
+    levels, groups, shapes_of = _by_opacity(casters, opacity, caster_shapes, keep)
     corners = surface.vertices[surface.faces]
     values = lit_values(corners, surface.normals, light)
     try:
@@ -202,47 +199,88 @@ def surface_shadow(
     shadowed = np.concatenate([layer.face_index for layer in layers])
     past = _past_terminator(surface, values, shadowed, light)
     if len(past):
-        # turned round, each face fronts the light; lifted back out along its own normal
-        turned = surface.faces[past][:, ::-1]
-        used, inverse = unique_integers(turned.reshape(-1), return_inverse=True)
-        position = {int(shape): k for k, shape in enumerate(shapes_of)}
-        own = np.array([position.get(int(shape), -1) for shape in surface.owner[past]])
-        try:
-            parts = shadow_layers_on_surface(
-                groups,
-                light,
-                (surface.vertices[used], inverse.reshape(-1, 3)),
-                offset=-lift,
-                tolerance=tolerance,
-                not_shadowed_by=own,
-            )
-        except GeometryError:
-            pass  # these faces keep the shading's own terminator
-        else:
-            for layer_pieces, part in zip(pieces, parts, strict=True):
-                layer_pieces.append(
-                    clip_to_lit(
-                        part.vertices,
-                        part.faces,
-                        past[part.face_index],
-                        corners[:, ::-1],
-                        values[:, ::-1],
-                    )
-                )
+        turned = _turned_pieces(surface, past, groups, shapes_of, light, lift, tolerance, values)
+        for layer_pieces, part in zip(pieces, turned or [], strict=False):
+            layer_pieces.append(part)  # (none when the turned faces keep their own terminator)
     where = f"shadow of light {light_name} on the scene's surfaces"
     shapes = []
     for level, layer_pieces in zip(levels, pieces, strict=True):
-        vertices, triangles = _joined([(points, faces) for points, faces, _ in layer_pieces])
-        if not len(triangles):
-            continue
-        darkness = None
-        if lighting is not None:
-            index = np.concatenate([index for *_, index in layer_pieces])
-            darkness = surface_darkness(surface, lighting, scene_light, vertices, triangles, index)
         source = where if level >= 1 else f"{where}, of casters of opacity {level:g}"
-        shape = shadow_shape(vertices, triangles, scene_light, source, level, darkness)
-        shapes.append((level, shape))
+        shape = _pieces_shape(surface, layer_pieces, scene_light, source, level, lighting)
+        if shape is not None:
+            shapes.append((level, shape))
     return shapes
+
+
+def _by_opacity(
+    casters: list[Caster], opacity: np.ndarray, caster_shapes: np.ndarray, keep: list[int]
+) -> tuple[list[float], list[list[Caster]], np.ndarray]:
+    """The casters ``keep`` grouped by opacity, most opaque first: the
+    levels, the groups, and each caster's shape in the groups' order."""
+    levels = sorted({float(opacity[k]) for k in keep}, reverse=True)
+    order = [k for level in levels for k in keep if opacity[k] == level]  # group by group
+    groups = [[casters[k] for k in keep if opacity[k] == level] for level in levels]
+    return levels, groups, np.asarray(caster_shapes)[order]
+
+
+_Piece = tuple[np.ndarray, np.ndarray, np.ndarray]  # (vertices, faces, face of each face)
+
+
+def _turned_pieces(
+    surface: ReceivingSurface,
+    past: np.ndarray,
+    groups: list[list[Caster]],
+    shapes_of: np.ndarray,
+    light: Light,
+    lift: float,
+    tolerance: Tolerance,
+    values: np.ndarray,
+) -> list[_Piece] | None:
+    """Each layer's shadow on the faces ``past`` the terminator (turned round,
+    each face fronts the light; lifted back out along its own normal), clipped
+    to where the shading lights them; None when it cannot be made (these
+    faces keep the shading's own terminator)."""
+    turned = surface.faces[past][:, ::-1]
+    used, inverse = unique_integers(turned.reshape(-1), return_inverse=True)
+    position = {int(shape): k for k, shape in enumerate(shapes_of)}
+    own = np.array([position.get(int(shape), -1) for shape in surface.owner[past]])
+    try:
+        parts = shadow_layers_on_surface(
+            groups,
+            light,
+            (surface.vertices[used], inverse.reshape(-1, 3)),
+            offset=-lift,
+            tolerance=tolerance,
+            not_shadowed_by=own,
+        )
+    except GeometryError:
+        return None
+    corners = surface.vertices[surface.faces]
+    return [
+        clip_to_lit(
+            part.vertices, part.faces, past[part.face_index], corners[:, ::-1], values[:, ::-1]
+        )
+        for part in parts
+    ]
+
+
+def _pieces_shape(
+    surface: ReceivingSurface,
+    pieces: list[_Piece],
+    scene_light: SceneLight,
+    source: str,
+    level: float,
+    lighting: Lighting | None,
+) -> Shape | None:
+    """One layer's ``pieces`` as one shadow shape; None when they are empty."""
+    vertices, triangles = _joined([(points, faces) for points, faces, _ in pieces])
+    if not len(triangles):
+        return None
+    darkness = None
+    if lighting is not None:
+        index = np.concatenate([index for *_, index in pieces])
+        darkness = surface_darkness(surface, lighting, scene_light, vertices, triangles, index)
+    return shadow_shape(vertices, triangles, scene_light, source, level, darkness)
 
 
 def surface_darkness(
