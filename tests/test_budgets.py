@@ -322,3 +322,22 @@ def test_usd_instances_past_the_budget_are_refused_before_their_arrays_are_read(
         sg.load(scene, max_triangles=61)
     assert "copy29" in raised.value.node and "through instancing" in str(raised.value)
     assert len(read) == 30 and not any("copy29" in prim for prim in read)
+
+
+def test_many_spheres_under_the_budget_are_not_refused_for_their_estimate(tmp_path):
+    """A molecule of spheres fits its budget: the estimate counts a Sphere at
+    the fewest triangles it makes, so only the exact count, made shape by
+    shape as they are tessellated, can refuse it, and it stops at the
+    budget."""
+    spheres = "".join(
+        f'<Transform translation="{3 * k} 0 0"><Shape><Sphere/></Shape></Transform>'
+        for k in range(40)
+    )
+    path = tmp_path / "molecule.x3d"
+    path.write_text(f'<X3D version="4.0"><Scene>{spheres}</Scene></X3D>')
+    count = sum(shape.n_faces for shape in sg.load(path).shapes)
+    assert count > 40 * 48  # more than the estimate counts
+    assert len(sg.load(path, max_triangles=count).shapes) == 40
+    with pytest.raises(sg.SceneError, match=r"molecule\.x3d line 1.*after tessellation") as error:
+        sg.load(path, max_triangles=count - 1)
+    assert f"{count:,} triangles" in str(error.value)

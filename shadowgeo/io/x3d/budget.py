@@ -16,8 +16,8 @@ what it stands for, each DEF'd node once (linear time in the document):
 
 The estimate of a mesh is an upper bound on what it builds (a face of ``k``
 indices makes ``k - 2`` triangles); a curved primitive counts
-:data:`CURVED_TRIANGLES`, its size at a usual chord (the exact count is
-checked again after tessellation).
+:data:`CURVED_TRIANGLES`, the fewest its tessellation makes (the exact
+count is checked shape by shape as the reader tessellates).
 """
 
 from __future__ import annotations
@@ -40,9 +40,14 @@ __all__ = [
     "tokens",
 ]
 
-# A Sphere, Cone or Cylinder at the default chord makes 34 to a few thousand
-# triangles (a Sphere 528 alone, 2,808 beside a box ten times smaller).
-CURVED_TRIANGLES = 2048
+# A Sphere, Cone or Cylinder makes from a few dozen to a few thousand
+# triangles, by its size against the scene's chord (a Sphere 528 alone, 2,808
+# beside a box ten times smaller); the estimate counts the fewest any
+# tessellation makes (8 segments round: a Sphere 48, a Cone's or Cylinder's
+# cap 8), so a scene that fits is never refused for its primitives: the
+# reader counts their exact triangles shape by shape as it tessellates them
+# and stops at the budget (identical primitives share one tessellation).
+CURVED_TRIANGLES = {"Sphere": 48, "Cone": 8, "Cylinder": 8}
 # Beyond this a count stops growing: the budgets are far below it.
 CAP = 1 << 62
 _CHUNK = 1 << 20  # characters of a long field scanned at a time
@@ -158,8 +163,7 @@ _GEOMETRY_IN = etree.XPath(
 
 
 # Triangles a geometry node makes: a fixed count, or index (or point) tokens per triangle.
-_FIXED = {"Box": 12, "Sphere": CURVED_TRIANGLES, "Cone": CURVED_TRIANGLES}
-_FIXED["Cylinder"] = CURVED_TRIANGLES
+_FIXED = {"Box": 12, **CURVED_TRIANGLES}
 _INDEX_TOKENS = {"IndexedTriangleSet": 3, "IndexedQuadSet": 2}
 _INDEX_TOKENS |= {"IndexedTriangleFanSet": 1, "IndexedTriangleStripSet": 1}
 _POINTS = {"TriangleSet": 3, "QuadSet": 2, "TriangleFanSet": 1, "TriangleStripSet": 1}

@@ -456,6 +456,7 @@ class _Reader:
         tolerance = self._tolerance(tolerance, chord)
         tessellated: dict[tuple[Any, ...], Mesh] = {}
         scopes: dict[tuple[int, ...], frozenset[int]] = {}  # shared by a group's shapes
+        budget, built_so_far = self.estimates.budget.triangles, 0
         for instance in self.instances:
             if instance.within not in scopes:
                 scopes[instance.within] = frozenset(self.scopes.intersection(instance.within))
@@ -470,6 +471,10 @@ class _Reader:
                     for note in tessellated[key].notes:
                         self.warnings.append(f"{instance.source}: {note}")
                 built = tessellated[key]
+            # the estimate counted a curved primitive at its fewest triangles:
+            # the exact count, shape by shape, stops a scene at its budget
+            built_so_far += len(built.faces)
+            limits.check_triangles(built_so_far, instance.source, budget)
             scene.shapes.append(
                 Shape(
                     built.vertices,
