@@ -354,7 +354,7 @@ def surface_sunlight(
     >>> sorted(result.level_areas(0).items())
     [(1.0, 0.5)]
     """
-    step = step or _dt.timedelta(hours=1)
+    step = _dt.timedelta(hours=1) if step is None else step
     if step <= _dt.timedelta(0):
         raise GeometryError(f"step must be positive, got {step}")
     receiver = as_caster(surface)
