@@ -15,6 +15,7 @@ from .scene.shadows import add_shadows
 from .silhouette import Silhouette, silhouette
 from .soft import SoftShadow, soft_shadow
 from .sun import sun_direction
+from .sunlight_surfaces import SurfaceSunlight, surface_sun_study, surface_sunlight
 from .sunstudy import (
     DaySummary,
     SunStudies,
@@ -55,6 +56,7 @@ __all__ = [
     "SunStudies",
     "SunStudy",
     "SurfaceShadow",
+    "SurfaceSunlight",
     "Tolerance",
     "Viewpoint",
     "add_shadows",
@@ -72,6 +74,8 @@ __all__ = [
     "sun_study",
     "sun_study_by_day",
     "sun_summaries_by_day",
+    "surface_sun_study",
+    "surface_sunlight",
 ]
 
 __version__ = "0.1.0"

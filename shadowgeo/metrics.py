@@ -234,7 +234,11 @@ def bre_amenity(
 
 
 def en17037_level(hours: float) -> str:
-    """EN 17037's level of a sunlight exposure of ``hours`` (see the module notes)."""
+    """EN 17037's level of a sunlight exposure of ``hours`` (see the module notes).
+
+    >>> [en17037_level(hours) for hours in (1.0, 1.5, 3.25, 4.0)]
+    ['none', 'minimum', 'medium', 'high']
+    """
     for name, least in EN17037_LEVELS:
         if hours >= least or math.isclose(hours, least):
             return name
@@ -345,6 +349,14 @@ def longest_sunlit(
     (rising); a run of sunlit samples each ``step`` after the one before is
     continuous and lasts its count times ``step``. A gap in the samples (the
     night, samples dropped below a minimum elevation) ends a run.
+
+    Examples
+    --------
+    >>> import datetime as dt
+    >>> step = dt.timedelta(hours=1)
+    >>> times = [dt.datetime(2026, 3, 21, h, 30, tzinfo=dt.UTC) for h in (8, 9, 10, 13, 14)]
+    >>> longest_sunlit([[1], [1], [0], [1], [1]], times, step).tolist()
+    [2.0]
     """
     lit = np.asarray(sunlit, dtype=bool)
     if lit.ndim != 2 or lit.shape[0] != len(times):
