@@ -407,42 +407,85 @@ def _face_levels(
     frames: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
     shadows: tuple[SampleShadows, ...],
 ) -> tuple[dict[int, Parts], ...]:
-    """Each face's exactly-``k``-samples-sunlit parts, in its frame: one
-    :func:`cover_levels` of every sample's shadow, every face in its own cell."""
+    """Each face's exactly-``k``-samples-sunlit parts, in its frame:
+    :func:`cover_levels` of every sample's shadow, :data:`CHUNK` faces at a
+    time, each face in its own cell of the chunk's plane."""
     origin, u, v = frames
     n_faces = len(faces)
     flat = _to_frames(vertices[faces], np.arange(n_faces), origin, u, v)
     proper = np.abs(_twice_areas(flat)) > 0
+    # every sample's shadow triangles; a face dark at a sample is covered whole
+    # then, which only lowers its count of sunlit samples (no loops needed)
+    dark = np.zeros(n_faces, dtype=np.int64)
+    loops, owner, sample = [], [], []
+    for index, shadows_at in enumerate(shadows):
+        dark += shadows_at.dark
+        loops.append(_to_frames(shadows_at.triangles, shadows_at.face, origin, u, v))
+        owner.append(shadows_at.face)
+        sample.append(np.full(len(shadows_at.face), index, dtype=np.int64))
+    every = _Chunks(
+        np.concatenate(loops) if loops else np.zeros((0, 3, 2)),
+        np.concatenate(owner) if owner else np.zeros(0, np.int64),
+        np.concatenate(sample) if sample else np.zeros(0, np.int64),
+    )
     result: list[dict[int, Parts]] = [{} for _ in range(n_faces)]
-    if not proper.any():
-        return tuple(result)
-    extent = float(np.abs(flat[proper]).max())
-    pitch = 3.0 * extent  # cells apart: no face reaches its neighbour's cell
-    columns = math.ceil(math.sqrt(n_faces))
-    cell = np.column_stack([np.arange(n_faces) % columns, np.arange(n_faces) // columns])
-    shift = cell * pitch
-    half = 0.5 * (columns - 1) * pitch + extent
-    centre = np.full(2, 0.5 * (columns - 1) * pitch)
-    scale = poly.local_scale(2.0 * half)
-
-    def local(loops: NDArray[np.float64], owner: NDArray[np.int64]) -> NDArray[np.float64]:
-        placed: NDArray[np.float64] = (loops + shift[owner][:, None, :] - centre) * scale
-        return _counter_clockwise(placed)
-
-    window = CrossSection(list(local(flat[proper], np.flatnonzero(proper))), FillRule.Positive)
-    regions = []
-    for sample in shadows:
-        dark = np.flatnonzero(sample.dark & proper)
-        pieces = _to_frames(sample.triangles, sample.face, origin, u, v)
-        loops = np.concatenate([local(pieces, sample.face), local(flat[dark], dark)])
-        regions.append(list(loops[_twice_areas(loops) != 0]))
-    count = len(shadows)
-    for covered, parts in cover_levels(regions, window).items():
-        for part in parts:
-            owner = _cell_of(part[0][0] / scale + centre, pitch, columns)
-            back = [loop / scale + centre - shift[owner] for loop in part]
-            result[owner].setdefault(count - covered, []).append(back)
+    for first in range(0, n_faces, CHUNK):
+        chunk = np.arange(first, min(first + CHUNK, n_faces))
+        chunk = chunk[proper[chunk]]
+        if len(chunk):
+            for face, k, part in every.levels(chunk, flat[chunk], len(shadows)):
+                result[face].setdefault(k - int(dark[face]), []).append(part)
     return tuple(dict(sorted(levels.items())) for levels in result)
+
+
+# Faces cut into levels together: one cover of their cells, small enough that
+# the cover's cuts of its window (the chunk's faces) stay cheap.
+CHUNK = 256
+
+
+@dataclass(frozen=True)
+class _Chunks:
+    """Every sample's shadow loops ((t, 3, 2) in their faces' frames), the
+    face and the sample of each, for cutting chunks of faces into levels."""
+
+    loops: NDArray[np.float64]
+    owner: NDArray[np.int64]
+    sample: NDArray[np.int64]
+
+    def levels(
+        self, chunk: NDArray[np.int64], flat: NDArray[np.float64], count: int
+    ) -> list[tuple[int, int, list[NDArray[np.float64]]]]:
+        """(face, sunlit samples, [outer, hole, ...]) of the faces ``chunk``
+        (rising; ``flat`` their (f, 3, 2) corners) over ``count`` samples."""
+        slot = np.full(int(chunk.max()) + 1, -1, dtype=np.int64)
+        slot[chunk] = np.arange(len(chunk))
+        mine = np.flatnonzero(np.isin(self.owner, chunk))
+        extent = float(np.abs(flat).max())
+        pitch = 3.0 * extent  # cells apart: no face reaches its neighbour's cell
+        columns = math.ceil(math.sqrt(len(chunk)))
+        cells = np.arange(len(chunk))
+        shift = np.column_stack([cells % columns, cells // columns]) * pitch
+        centre = np.full(2, 0.5 * (columns - 1) * pitch)
+        scale = poly.local_scale(2.0 * (float(np.abs(shift - centre).max()) + extent))
+
+        def local(triangles: NDArray[np.float64], at: NDArray[np.int64]) -> NDArray[np.float64]:
+            placed: NDArray[np.float64] = (triangles + shift[at][:, None, :] - centre) * scale
+            return _counter_clockwise(placed)
+
+        window = CrossSection(list(local(flat, cells)), FillRule.Positive)
+        placed = local(self.loops[mine], slot[self.owner[mine]])
+        keep = _twice_areas(placed) != 0
+        placed, of_sample = placed[keep], self.sample[mine][keep]
+        order = np.argsort(of_sample, kind="stable")
+        bounds = np.searchsorted(of_sample[order], np.arange(count + 1))
+        regions = [list(placed[order[bounds[i] : bounds[i + 1]]]) for i in range(count)]
+        found = []
+        for covered, parts in cover_levels(regions, window).items():
+            for part in parts:
+                cell = _cell_of(part[0][0] / scale + centre, pitch, columns)
+                back = [loop / scale + centre - shift[cell] for loop in part]
+                found.append((int(chunk[cell]), count - covered, back))
+        return found
 
 
 def _to_frames(
