@@ -396,3 +396,36 @@ def test_rotterdam_walls_and_roofs_agree_with_rays_at_random_points():
         wrong += int(((exact[sample] != rays) & settled).sum())
     assert wrong == 0
     assert unsettled < 0.02 * exact.size
+
+
+def test_a_receiver_too_big_for_one_call_is_cast_in_halves_with_the_same_result(monkeypatch):
+    # A low sun over a city can pass shadow_on_surface's union budget for all
+    # faces at once; the faces are then cast in halves. Here a stand-in refuses
+    # more than 7 faces, as the budget would.
+    import shadowgeo.sunlight_surfaces as module
+
+    town = _town()
+    vertices, faces = stacked(*town)
+    directions = [[0.3, 0.8, -0.5], [-0.6, 0.2, -0.3]]
+    whole = surface_sunlight(town, (vertices, faces), directions)
+    real = module.shadow_on_surface
+
+    def refusing(casters, light, surface, **options):
+        if len(surface[1]) > 7:
+            raise GeometryError("past the budget (a stand-in)")
+        return real(casters, light, surface, **options)
+
+    monkeypatch.setattr(module, "shadow_on_surface", refusing)
+    halves = surface_sunlight(town, (vertices, faces), directions)
+    for one, other in zip(whole.shadows, halves.shadows, strict=True):
+        assert np.array_equal(one.dark, other.dark)
+        assert np.allclose(one.fraction, other.fraction, rtol=0, atol=1e-12)
+    for face in range(len(faces)):
+        assert whole.level_areas(face).keys() == halves.level_areas(face).keys()
+
+    def always(casters, light, surface, **options):
+        raise GeometryError("refused whatever its size")
+
+    monkeypatch.setattr(module, "shadow_on_surface", always)
+    with pytest.raises(GeometryError, match="whatever its size"):
+        surface_sunlight(town, (vertices, faces), directions)
