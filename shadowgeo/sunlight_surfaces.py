@@ -41,6 +41,7 @@ from .levels import cover_levels
 from .lights import DirectionalLight
 from .sun import sun_lights
 from .surface import shadow_on_surface
+from .tolerance import Tolerance
 from .topology import MeshLike, as_caster
 
 Parts = list[list[NDArray[np.float64]]]
@@ -291,18 +292,65 @@ def _frames(
 
 
 def _sample(
-    casters: MeshLike | Sequence[MeshLike], light: DirectionalLight, surface: MeshLike
+    casters: MeshLike | Sequence[MeshLike],
+    light: DirectionalLight,
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    tolerance: Tolerance,
 ) -> SampleShadows:
-    """The exact shadow on every face of ``surface`` under one sun."""
-    shadow = shadow_on_surface(casters, light, surface)
-    n_faces = len(shadow.fraction)
-    covered = np.bincount(shadow.face_index, minlength=n_faces) > 0
-    return SampleShadows(
-        triangles=shadow.vertices[shadow.faces],
-        face=shadow.face_index.astype(np.int64),
-        dark=(shadow.fraction >= 1.0) & ~covered,
-        fraction=shadow.fraction,
-    )
+    """The exact shadow on every face of the receiver under one sun."""
+    parts = _cast(casters, light, vertices, faces, np.arange(len(faces)), tolerance)
+    fraction = np.ones(len(faces))
+    for _, _, chosen, part_fraction in parts:
+        fraction[chosen] = part_fraction
+    triangles = np.concatenate([part[0] for part in parts])
+    face = np.concatenate([part[1] for part in parts])
+    covered = np.bincount(face, minlength=len(faces)) > 0
+    return SampleShadows(triangles, face, (fraction >= 1.0) & ~covered, fraction)
+
+
+def _cast(
+    casters: MeshLike | Sequence[MeshLike],
+    light: DirectionalLight,
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    chosen: NDArray[np.int64],
+    tolerance: Tolerance,
+) -> list[tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]]:
+    """:func:`shadow_on_surface` on the faces ``chosen``: (shadow triangles,
+    their faces, ``chosen``, the faces' shadowed fractions), in one call or,
+    when that call refuses the work (a low sun over a city passes a union's
+    or a pair search's budget, :mod:`shadowgeo.limits`), in halves."""
+    try:
+        shadow = shadow_on_surface(casters, light, (vertices, faces[chosen]), tolerance=tolerance)
+    except GeometryError:
+        if len(chosen) < 2:
+            raise
+        middle = len(chosen) // 2
+        return _cast(casters, light, vertices, faces, chosen[:middle], tolerance) + _cast(
+            casters, light, vertices, faces, chosen[middle:], tolerance
+        )
+    triangles = shadow.vertices[shadow.faces]
+    return [(triangles, chosen[shadow.face_index], chosen, shadow.fraction)]
+
+
+def _tolerance(
+    casters: MeshLike | Sequence[MeshLike], vertices: NDArray[np.float64], faces: NDArray[np.int64]
+) -> Tolerance:
+    """The tolerance :func:`shadow_on_surface` takes by default under a
+    directional light (the casters' and the receiver's boxes), fixed once so
+    that halves of the receiver get the same."""
+    items: list[MeshLike] = _mesh_list(casters)
+    boxes = [caster.bounds for caster in map(as_caster, items) if caster.n_faces]
+    used = vertices[np.unique(faces)] if len(faces) else np.zeros((0, 3))
+    return Tolerance.for_points(*boxes, used)
+
+
+def _mesh_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
+    """One mesh as a list of one; a list of meshes as it is."""
+    if isinstance(casters, list):
+        return list(casters)
+    return [casters]  # type: ignore[list-item]
 
 
 def surface_sunlight(
@@ -363,7 +411,10 @@ def surface_sunlight(
     rays = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
     if times and len(times) != len(rays):
         raise GeometryError(f"{len(times)} times for {len(rays)} sun directions")
-    shadows = tuple(_sample(casters, DirectionalLight(ray), receiver) for ray in rays)
+    tolerance = _tolerance(casters, vertices, faces)
+    shadows = tuple(
+        _sample(casters, DirectionalLight(ray), vertices, faces, tolerance) for ray in rays
+    )
     origin, u, v = _frames(vertices, faces)
     cut = _face_levels(vertices, faces, (origin, u, v), shadows) if levels else None
     return SurfaceSunlight(vertices, faces, rays, tuple(times), step, shadows, origin, u, v, cut)
