@@ -13,9 +13,14 @@ non-overlapping triangles (a face turned away from the sun, or edge-on, is
 dark whole), so the number of samples shadowing a point of the face is its
 winding number over all the samples' triangles, and
 :func:`shadowgeo.levels.cover_levels` cuts by that number exactly, as for the
-ground. All faces go through one cover: each face's 2-D frame is laid in its
-own cell of one plane, cells apart, so one tiled pass of unions serves every
-face and no Python loop runs over faces times samples.
+ground. Faces go through the cover :data:`CHUNK` at a time: each face's 2-D
+frame is laid in its own cell of one plane, cells apart, so one tiled pass of
+unions serves a chunk of faces and no Python loop runs over faces times
+samples; a sample at which a face is dark whole only lowers that face's count.
+
+Cost: one :func:`shadow_on_surface` call per sample (a receiver whose shadow
+passes that call's budgets, a low sun over a city, is cast in halves), and
+one cover per chunk whose work follows the shadow triangles' vertices.
 
 What a sample means: each of ``times`` stands for ``step`` around it (an hour
 by default), as in :func:`shadowgeo.sun_study`; a sunlit sample adds
