@@ -429,3 +429,22 @@ def test_a_receiver_too_big_for_one_call_is_cast_in_halves_with_the_same_result(
     monkeypatch.setattr(module, "shadow_on_surface", always)
     with pytest.raises(GeometryError, match="whatever its size"):
         surface_sunlight(town, (vertices, faces), directions)
+
+
+def test_city_files_without_semantics_or_a_site_are_refused_with_the_file_named():
+    import shadowgeo as sg
+    from shadowgeo import SceneError
+    from shadowgeo.scene.facades import city_surfaces, study_city_surfaces
+
+    delft = SHARED / "corpus" / "gis" / "delft_lod1.city.json"
+    rotterdam = SHARED / "corpus" / "gis" / "rotterdam_subset.city.json"
+    for path in (delft, rotterdam):
+        if not path.exists():
+            absent(f"{path} is not there")
+    # LoD1 blocks: no RoofSurface or WallSurface to study
+    with pytest.raises(SceneError, match="delft_lod1.*no face of the scene is a WallSurface"):
+        city_surfaces(sg.load(delft))
+    # no CRS: no site, so the place must be given
+    day = [dt.datetime(2026, 3, 21, 12, tzinfo=UTC)]
+    with pytest.raises(SceneError, match="rotterdam_subset.*latitude and longitude"):
+        study_city_surfaces(sg.load(rotterdam), day)
