@@ -93,8 +93,9 @@ def dask_run(caster, receiver, ground, region, days, workers):
         begin, cpu = time.perf_counter(), time.process_time()
         every_time = [t for times in days.values() for t in times]
         grounds = sun_summaries_by_day(caster, ground, region, every_time, **SITE, scheduler=client)
-        shared_caster = client.scatter(caster, broadcast=True)
-        shared_receiver = client.scatter(receiver, broadcast=True)
+        # one object each (a scattered tuple would travel as its items)
+        shared_caster = client.scatter([caster], broadcast=True)[0]
+        shared_receiver = client.scatter([receiver], broadcast=True)[0]
         futures = {
             day: client.submit(
                 facade_day, shared_caster, shared_receiver, times, key=f"facades-{day}"

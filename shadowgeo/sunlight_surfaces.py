@@ -328,8 +328,9 @@ def _cast(
     or a pair search's budget, :mod:`shadowgeo.limits`), in halves."""
     try:
         shadow = shadow_on_surface(casters, light, (vertices, faces[chosen]), tolerance=tolerance)
-    except GeometryError:
-        if len(chosen) < 2:
+    except GeometryError as error:
+        # only a budget (named in the message) is worth halving for; bad input is not
+        if len(chosen) < 2 or "shadowgeo.limits.MAX_" not in str(error):
             raise
         middle = len(chosen) // 2
         return _cast(casters, light, vertices, faces, chosen[:middle], tolerance) + _cast(
@@ -352,8 +353,12 @@ def _tolerance(
 
 
 def _mesh_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
-    """One mesh as a list of one; a list of meshes as it is."""
-    if isinstance(casters, list):
+    """One mesh as a list of one; a list of meshes as it is (a list of
+    (n, 3) vertices and faces is one mesh, as Dask hands back a scattered
+    ``(vertices, faces)``)."""
+    if isinstance(casters, list) and not (
+        len(casters) == 2 and isinstance(casters[0], np.ndarray) and casters[0].ndim == 2
+    ):
         return list(casters)
     return [casters]  # type: ignore[list-item]
 

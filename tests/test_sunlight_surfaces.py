@@ -412,7 +412,7 @@ def test_a_receiver_too_big_for_one_call_is_cast_in_halves_with_the_same_result(
 
     def refusing(casters, light, surface, **options):
         if len(surface[1]) > 7:
-            raise GeometryError("past the budget (a stand-in)")
+            raise GeometryError("past a budget (shadowgeo.limits.MAX_UNION_CROSSINGS)")
         return real(casters, light, surface, **options)
 
     monkeypatch.setattr(module, "shadow_on_surface", refusing)
@@ -423,12 +423,21 @@ def test_a_receiver_too_big_for_one_call_is_cast_in_halves_with_the_same_result(
     for face in range(len(faces)):
         assert whole.level_areas(face).keys() == halves.level_areas(face).keys()
 
-    def always(casters, light, surface, **options):
-        raise GeometryError("refused whatever its size")
+    calls = []
 
-    monkeypatch.setattr(module, "shadow_on_surface", always)
-    with pytest.raises(GeometryError, match="whatever its size"):
+    def bad_input(casters, light, surface, **options):
+        calls.append(len(surface[1]))
+        raise GeometryError("a bad caster: not worth halving for")
+
+    monkeypatch.setattr(module, "shadow_on_surface", bad_input)
+    with pytest.raises(GeometryError, match="not worth halving"):
         surface_sunlight(town, (vertices, faces), directions)
+    assert calls == [len(faces)]  # refused once, not halved down to single faces
+    # a scattered (vertices, faces) comes back from Dask as a list: one mesh
+    monkeypatch.setattr(module, "shadow_on_surface", real)
+    listed = surface_sunlight([vertices, faces], (vertices, faces), directions, levels=False)
+    tupled = surface_sunlight((vertices, faces), (vertices, faces), directions, levels=False)
+    assert np.array_equal(listed.shadows[0].fraction, tupled.shadows[0].fraction)
 
 
 def test_city_files_without_semantics_or_a_site_are_refused_with_the_file_named():
