@@ -199,8 +199,8 @@ def main() -> None:
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     samples_up = sum(day.samples for day in facades.values())
     parts = sum(day.level_parts for day in facades.values())
-    dask = dask_run(caster, receiver, ground, region, days, args.workers)
-    identical = same((grounds, facades), dask[:2])
+    dask = dask_run(caster, receiver, ground, region, days, args.workers) if args.workers else None
+    identical = dask is not None and same((grounds, facades), dask[:2])
     errors = ray_errors(vertices, faces, walls_and_roofs, ground, region, args.points)
 
     march = facades[MARCH]
@@ -216,6 +216,17 @@ def main() -> None:
     ).stdout.strip()
     load = os.getloadavg()[0]
     wall_total, cpu_total = ground_wall + facade_wall, ground_cpu + facade_cpu
+    if dask is None:
+        dask_text = "\nNot run on Dask this time (`--workers 0`).\n"
+    else:
+        dask_text = (
+            f"| both, Dask LocalCluster of {args.workers} | {dask[2]:.1f} s | {dask[3]:.1f} s "
+            f"| {dask[3] / samples_up:.3f} s | {dask[3] * scale / 60:.1f} min |\n\n"
+            "Serial and Dask results identical (every day's per-face mean hours, areas with at "
+            "least 2 h and level counts, and the ground's summaries, compared with `==`): "
+            f"**{'yes' if identical else 'NO'}**; speed-up on {args.workers} workers (wall) "
+            f"{wall_total / dask[2]:.2f}x; the largest worker peaked at {dask[4]:.0f} MB.\n"
+        )
     text = f"""{TITLE}
 
 `PYTHONPATH=$PWD python benchmarks/bench_city_sunlight.py --buildings {args.buildings} --every {args.every} --workers {args.workers}`
@@ -234,13 +245,9 @@ the CPU time by 365 / {len(days)}.
 | ground, serial | {ground_wall:.1f} s | {ground_cpu:.1f} s | {ground_cpu / samples_up:.3f} s | {ground_cpu * scale / 60:.1f} min |
 | walls and roofs, serial | {facade_wall:.1f} s | {facade_cpu:.1f} s | {facade_cpu / samples_up:.3f} s | {facade_cpu * scale / 60:.1f} min |
 | both, serial | {wall_total:.1f} s | {cpu_total:.1f} s | {cpu_total / samples_up:.3f} s | {cpu_total * scale / 60:.1f} min |
-| both, Dask LocalCluster of {args.workers} | {dask[2]:.1f} s | {dask[3]:.1f} s | {dask[3] / samples_up:.3f} s | {dask[3] * scale / 60:.1f} min |
-
-Serial and Dask results identical (every day's per-face mean hours, areas with at least 2 h and
-level counts, and the ground's summaries, compared with `==`): **{"yes" if identical else "NO"}**.
-Speed-up on {args.workers} workers (wall): {wall_total / dask[2]:.2f}x. Peak resident memory: {peak:.0f} MB in
-this process after the serial run (the city, one day's shadows and levels at a time), {dask[4]:.0f} MB in
-the largest Dask worker.
+{dask_text}
+Peak resident memory: {peak:.0f} MB in this process after the serial run (the city, one day's
+shadows and levels at a time).
 
 On 21 March: {ground_share:.1%} of the ground has at least 2 h of sun; walls {wall_share:.1%} and roofs
 {roof_share:.1%} of their area; mean hours of sun on walls {wall_mean:.2f} h, on roofs {roof_mean:.2f} h.
