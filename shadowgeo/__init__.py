@@ -17,6 +17,7 @@ from .silhouette import Silhouette, silhouette
 from .soft import SoftShadow, soft_shadow
 from .soft_surface import SoftSurfaceShadow, soft_shadow_on_surface
 from .sun import sun_direction
+from .sunlight_surfaces import SurfaceSunlight, surface_sun_study, surface_sunlight
 from .sunstudy import (
     DaySummary,
     SunStudies,
@@ -58,6 +59,7 @@ __all__ = [
     "SunStudies",
     "SunStudy",
     "SurfaceShadow",
+    "SurfaceSunlight",
     "Tolerance",
     "Viewpoint",
     "add_shadows",
@@ -76,6 +78,8 @@ __all__ = [
     "sun_study",
     "sun_study_by_day",
     "sun_summaries_by_day",
+    "surface_sun_study",
+    "surface_sunlight",
 ]
 
 __version__ = "0.1.0"
