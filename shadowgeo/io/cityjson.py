@@ -303,17 +303,20 @@ def _walk(
             continue
         if not isinstance(item, list) or not all(isinstance(ring, list) for ring in item):
             raise error("a surface must be a list of rings of vertex indices", where)
-        rings = []
-        for ring in item:
-            if not all(type(index) is int for index in ring):
-                raise error("a ring must be a list of vertex indices", where)
-            indices = np.array(ring, dtype=np.int64) if ring else np.zeros(0, np.int64)
-            if len(indices) and (indices.min() < 0 or indices.max() >= count):
-                bad = int(indices.max() if indices.max() >= count else indices.min())
-                raise error(f"vertex index {bad} is out of range ({count} vertices)", where)
-            rings.append(indices)
+        rings = [_ring(ring, count, where, error) for ring in item]
         if rings:
             yield rings, _surface_kind(value, surfaces, where, error)
+
+
+def _ring(ring: list[Any], count: int, where: str, error: _Error) -> np.ndarray:
+    """A ring's vertex indices, checked to be integers below ``count``."""
+    if not all(type(index) is int for index in ring):
+        raise error("a ring must be a list of vertex indices", where)
+    indices = np.array(ring, dtype=np.int64) if ring else np.zeros(0, np.int64)
+    if len(indices) and (indices.min() < 0 or indices.max() >= count):
+        bad = int(indices.max() if indices.max() >= count else indices.min())
+        raise error(f"vertex index {bad} is out of range ({count} vertices)", where)
+    return indices
 
 
 def _gather(

@@ -234,32 +234,9 @@ def _check(value: Any, spec: Any, pointer: Any, path: Path) -> None:
     a string, or ``(parent pointer, key)`` spelled out only for a message
     (a document of 10,000 nodes has some 200,000 members to check)."""
     if isinstance(spec, dict):
-        if not isinstance(value, dict):
-            _refuse(pointer, "an object", value, path)
-        if "*" in spec:
-            for key, member in value.items():
-                _check(member, spec["*"], (pointer, key), path)
-        for key, sub in spec.items():
-            if key != "*" and key in value:
-                member = value[key]
-                # the common leaves checked here, without a call each (10,000
-                # nodes, meshes and accessors have some 100,000 of them)
-                if sub is int and type(member) is int or sub is str and type(member) is str:
-                    continue
-                _check(member, sub, (pointer, key), path)
+        _check_object(value, spec, pointer, path)
     elif isinstance(spec, (list, tuple)):
-        length, sub = spec if isinstance(spec, tuple) else (None, spec[0])
-        if not isinstance(value, list):
-            _refuse(pointer, "an array", value, path)
-        if length is not None and len(value) != length:
-            _refuse(pointer, f"an array of {length}", value, path)
-        if sub is int and all(type(item) is int for item in value):
-            return  # the common case of index arrays, in one pass
-        if sub is float and all(type(item) is float for item in value):
-            if all(map(math.isfinite, value)):
-                return  # translations, matrices, accessor bounds: in two passes
-        for index, item in enumerate(value):
-            _check(item, sub, (pointer, index), path)
+        _check_array(value, spec, pointer, path)
     elif spec is dict:
         if not isinstance(value, dict):
             _refuse(pointer, "an object", value, path)
@@ -270,6 +247,39 @@ def _check(value: Any, spec: Any, pointer: Any, path: Path) -> None:
             _refuse(pointer, _NAMES[float], value, path)
     elif isinstance(value, bool) != (spec is bool) or not isinstance(value, spec):
         _refuse(pointer, _NAMES[spec], value, path)
+
+
+def _check_object(value: Any, spec: dict[str, Any], pointer: Any, path: Path) -> None:
+    """An object's members against ``spec`` (``"*"``: every member)."""
+    if not isinstance(value, dict):
+        _refuse(pointer, "an object", value, path)
+    if "*" in spec:
+        for key, member in value.items():
+            _check(member, spec["*"], (pointer, key), path)
+    for key, sub in spec.items():
+        if key != "*" and key in value:
+            member = value[key]
+            # the common leaves checked here, without a call each (10,000
+            # nodes, meshes and accessors have some 100,000 of them)
+            if sub is int and type(member) is int or sub is str and type(member) is str:
+                continue
+            _check(member, sub, (pointer, key), path)
+
+
+def _check_array(value: Any, spec: list[Any] | tuple[Any, ...], pointer: Any, path: Path) -> None:
+    """An array's items against ``[item spec]`` or ``(length, item spec)``."""
+    length, sub = spec if isinstance(spec, tuple) else (None, spec[0])
+    if not isinstance(value, list):
+        _refuse(pointer, "an array", value, path)
+    if length is not None and len(value) != length:
+        _refuse(pointer, f"an array of {length}", value, path)
+    if sub is int and all(type(item) is int for item in value):
+        return  # the common case of index arrays, in one pass
+    if sub is float and all(type(item) is float for item in value):
+        if all(map(math.isfinite, value)):
+            return  # translations, matrices, accessor bounds: in two passes
+    for index, item in enumerate(value):
+        _check(item, sub, (pointer, index), path)
 
 
 def _spelled(pointer: Any) -> str:

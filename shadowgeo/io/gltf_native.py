@@ -89,14 +89,8 @@ def _worlds(document: dict[str, Any]) -> dict[int, np.ndarray] | None:
     """World transform of each node of the default scene, or None unless the
     scene is a tree of nodes with plain local transforms."""
     nodes = document.get("nodes", [])
-    scenes = document.get("scenes")
-    if not isinstance(nodes, list) or not isinstance(scenes, list) or not scenes:
-        return None
-    default = document.get("scene", 0)
-    if not _is_index(default, len(scenes)) or not isinstance(scenes[default], dict):
-        return None
-    roots = scenes[default].get("nodes", [])
-    if not isinstance(roots, list):
+    roots = _roots(document)
+    if not isinstance(nodes, list) or roots is None:
         return None
     worlds: dict[int, np.ndarray] = {}
     pending: list[tuple[Any, np.ndarray | None]] = [(index, None) for index in reversed(roots)]
@@ -114,6 +108,28 @@ def _worlds(document: dict[str, Any]) -> dict[int, np.ndarray] | None:
             return None
         pending.extend((child, worlds[index]) for child in reversed(children))
     return worlds
+
+
+def _roots(document: dict[str, Any]) -> list[Any] | None:
+    """The root nodes' indices (unchecked) of the default scene, or None."""
+    scenes = document.get("scenes")
+    if not isinstance(scenes, list) or not scenes:
+        return None
+    default = document.get("scene", 0)
+    if not _is_index(default, len(scenes)) or not isinstance(scenes[default], dict):
+        return None
+    roots = scenes[default].get("nodes", [])
+    return roots if isinstance(roots, list) else None
+
+
+def _entry(document: dict[str, Any], key: str, index: Any) -> dict[str, Any] | None:
+    """``document[key][index]`` when ``document[key]`` is an array, ``index`` one
+    of its indices and the entry an object; None otherwise."""
+    entries = document.get(key)
+    if not isinstance(entries, list) or not _is_index(index, len(entries)):
+        return None
+    entry = entries[index]
+    return entry if isinstance(entry, dict) else None
 
 
 def _size(value: Any) -> int | None:
@@ -184,6 +200,27 @@ def quaternion_matrix(xyzw: list[float]) -> np.ndarray:
 
 
 _WIDTHS = {"SCALAR": 1, "VEC3": 3}
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Where an accessor's ``count`` items of ``width`` components lie: buffer
+    ``buffer`` (an unchecked index), its view at ``start`` of ``length`` bytes,
+    the items from ``offset`` in it, ``stride`` bytes apart."""
+
+    buffer: Any
+    dtype: np.dtype[Any]
+    width: int
+    count: int
+    offset: int
+    start: int
+    length: int
+    stride: int
+
+    @property
+    def element(self) -> int:
+        """Bytes of one item."""
+        return int(self.dtype.itemsize) * self.width
 
 
 class _Decoder:
@@ -259,26 +296,38 @@ class _Decoder:
     def accessor(self, index: Any, kind: str) -> np.ndarray | None:
         """The (count, width) array of accessor ``index`` (a view of its buffer,
         strided or not), or None unless it is of ``kind`` and lies in bounds."""
-        accessors = self.document.get("accessors")
-        if not isinstance(accessors, list) or not _is_index(index, len(accessors)):
-            return None
-        accessor = accessors[index]
-        if not isinstance(accessor, dict) or accessor.get("type") != kind:
+        accessor = _entry(self.document, "accessors", index)
+        if accessor is None or accessor.get("type") != kind:
             return None
         if "sparse" in accessor or accessor.get("normalized", False) is not False:
             return None
+        layout = self.layout(accessor, kind)
+        if layout is None:
+            return None
+        data = self.buffer(layout.buffer)
+        if data is None or layout.start + layout.length > len(data):
+            return None
+        if (
+            layout.count
+            and layout.offset + layout.stride * (layout.count - 1) + layout.element > layout.length
+        ):
+            return None
+        return np.ndarray(
+            (layout.count, layout.width),
+            dtype=layout.dtype,
+            buffer=data,
+            offset=layout.start + layout.offset,
+            strides=(layout.stride, layout.dtype.itemsize),
+        )
+
+    def layout(self, accessor: dict[str, Any], kind: str) -> _Layout | None:
+        """Where a plain accessor's items lie in its buffer view, or None unless
+        every size is a non-negative integer and the stride fits the items."""
         component = accessor.get("componentType")
         dtype = _COMPONENTS.get(component) if type(component) is int else None
         count, offset = _size(accessor.get("count")), _size(accessor.get("byteOffset", 0))
-        views = self.document.get("bufferViews")
-        if dtype is None or count is None or offset is None or not isinstance(views, list):
-            return None
-        view = (
-            views[accessor["bufferView"]]
-            if _is_index(accessor.get("bufferView"), len(views))
-            else None
-        )
-        if not isinstance(view, dict):
+        view = _entry(self.document, "bufferViews", accessor.get("bufferView"))
+        if dtype is None or count is None or offset is None or view is None:
             return None
         width = _WIDTHS[kind]
         element = dtype.itemsize * width
@@ -288,18 +337,7 @@ class _Decoder:
             return None
         if stride < element or offset % dtype.itemsize or stride % dtype.itemsize:
             return None
-        data = self.buffer(view.get("buffer"))
-        if data is None or start + length > len(data):
-            return None
-        if count and offset + stride * (count - 1) + element > length:
-            return None
-        return np.ndarray(
-            (count, width),
-            dtype=dtype,
-            buffer=data,
-            offset=start + offset,
-            strides=(stride, dtype.itemsize),
-        )
+        return _Layout(view.get("buffer"), dtype, width, count, offset, start, length, stride)
 
     def buffer(self, index: Any) -> bytes | memoryview | None:
         """The bytes of buffer ``index``: the GLB chunk, a base64 data URI or a
@@ -314,26 +352,29 @@ class _Decoder:
         length = entry.get("byteLength") if isinstance(entry, dict) else None
         if type(length) is not int or length < 0:
             return None
-        uri = entry.get("uri")
-        if uri is None:
-            data = self.binary if index == 0 else None
-        elif not isinstance(uri, str):
-            data = None
-        elif uri.startswith("data:"):
-            head, comma, text = uri.partition(",")
-            if not comma or not head.endswith(";base64"):
-                return None
-            try:
-                data = base64.b64decode(text, validate=True)
-            except ValueError:
-                return None
-        else:
-            try:
-                data = (self.path.resolve().parent / unquote(uri)).read_bytes()
-            except OSError:
-                return None
+        data = self.source(entry.get("uri"), index)
         if data is None or len(data) < length:
             return None
         data = memoryview(data)[:length]
         self.buffers[index] = data
         return data
+
+    def source(self, uri: Any, index: int) -> bytes | memoryview | None:
+        """A buffer's whole bytes: the GLB chunk (no uri), a base64 data URI or
+        a file beside the glTF; None when it cannot be had."""
+        if uri is None:
+            return self.binary if index == 0 else None
+        if not isinstance(uri, str):
+            return None
+        if uri.startswith("data:"):
+            head, comma, text = uri.partition(",")
+            if not comma or not head.endswith(";base64"):
+                return None
+            try:
+                return base64.b64decode(text, validate=True)
+            except ValueError:
+                return None
+        try:
+            return (self.path.resolve().parent / unquote(uri)).read_bytes()
+        except OSError:
+            return None

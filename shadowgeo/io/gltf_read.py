@@ -74,20 +74,8 @@ def _check_compression(document: dict[str, Any], path: Path) -> None:
     """Refuse geometry trimesh would decode wrongly without an error: compressed
     primitives (it reads placeholder zeros and only logs that) and normalized
     integer positions (it ignores ``normalized``)."""
+    _check_normalized_positions(document, path)
     used = set(document.get("extensionsUsed") or []) | set(document.get("extensionsRequired") or [])
-    accessors = document.get("accessors") or []
-    for mesh_index, mesh in enumerate(document.get("meshes") or []):
-        for primitive in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
-            position = (primitive.get("attributes") or {}).get("POSITION")
-            if isinstance(position, int) and 0 <= position < len(accessors):
-                accessor = accessors[position]
-                if isinstance(accessor, dict) and accessor.get("normalized"):
-                    # KHR_mesh_quantization; trimesh would keep the raw integers.
-                    raise SceneError(
-                        "normalized integer positions are not supported",
-                        path=str(path),
-                        node=f"meshes[{mesh_index}] POSITION accessor {position}",
-                    )
     if "EXT_meshopt_compression" in used:
         raise SceneError("EXT_meshopt_compression is not supported", path=str(path))
     if "KHR_draco_mesh_compression" in used:
@@ -98,6 +86,24 @@ def _check_compression(document: dict[str, Any], path: Path) -> None:
                 'KHR_draco_mesh_compression needs DracoPy: pip install "shadowgeo[draco]"',
                 path=str(path),
             ) from None
+
+
+def _check_normalized_positions(document: dict[str, Any], path: Path) -> None:
+    """Refuse a POSITION accessor marked ``normalized`` (KHR_mesh_quantization)."""
+    accessors = document.get("accessors") or []
+    for mesh_index, mesh in enumerate(document.get("meshes") or []):
+        for primitive in (mesh.get("primitives") or []) if isinstance(mesh, dict) else []:
+            position = (primitive.get("attributes") or {}).get("POSITION")
+            if not (isinstance(position, int) and 0 <= position < len(accessors)):
+                continue
+            accessor = accessors[position]
+            if isinstance(accessor, dict) and accessor.get("normalized"):
+                # KHR_mesh_quantization; trimesh would keep the raw integers.
+                raise SceneError(
+                    "normalized integer positions are not supported",
+                    path=str(path),
+                    node=f"meshes[{mesh_index}] POSITION accessor {position}",
+                )
 
 
 def _check_references(document: dict[str, Any], path: Path) -> None:

@@ -632,50 +632,53 @@ class _Parser:
         following = self.peek()
         if following is not None and following.kind == "numbers":
             self.take()
-            words = following.text.replace(",", " ").split()
-            if not words:
-                return None if declared is None or declared.endswith("Node") else ""
-            if declared in ("SFString", "MFString"):
-                return _text(
-                    [Token("word", word, following.line) for word in words], declared, True
-                )
-            if "x" in following.text or "X" in following.text:
-                words = [number_text(word) for word in words]
-            return " ".join(words)
+            return _numbers(following, declared)
         if self.at("["):
-            self.take()
-            items: list[Token] = []
-            nodes = len(holder) if holder is not None else 0
-            while not self.at("]"):
-                following = self.peek()
-                if following is None:
-                    raise self.error(
-                        f"the file ends inside field {field}'s [ ]", [token], _Truncated
-                    )
-                if holder is not None and (following.text in STATEMENTS or self.starts_node()):
-                    self.attempt(holder, container=container)  # ROUTE, PROTO may stand among nodes
-                elif self.starts_node():
-                    raise self.error(f"field {excerpt(field)} cannot hold nodes", [token])
-                elif following.text == "NULL":
-                    self.take()
-                elif following.kind == "punct":
-                    raise self.error(f"unexpected {_shown(following)} in field {excerpt(field)}")
-                else:
-                    items.append(self.take())
-            self.take()
-            if items:
-                return _text(items, declared, True)
-            added = holder is not None and len(holder) > nodes
-            return None if added or declared is None or declared.endswith("Node") else ""
+            return self.bracketed(field, declared, token, holder, container)
         if self.starts_node():
             if holder is None:
                 raise self.error(f"field {excerpt(field)} cannot hold nodes", [token])
             self.node_statement(holder, container)
             return None
-        following = self.peek()
         if following is not None and following.text == "NULL":
             self.take()
             return None
+        return self.scalar(kind, field, declared, token)
+
+    def bracketed(
+        self,
+        field: str,
+        declared: str | None,
+        token: Token,
+        holder: Element | None,
+        container: str | None,
+    ) -> str | None:
+        """A ``[ ... ]`` value: its values as text, its nodes appended to ``holder``."""
+        self.take()
+        items: list[Token] = []
+        nodes = len(holder) if holder is not None else 0
+        while not self.at("]"):
+            following = self.peek()
+            if following is None:
+                raise self.error(f"the file ends inside field {field}'s [ ]", [token], _Truncated)
+            if holder is not None and (following.text in STATEMENTS or self.starts_node()):
+                self.attempt(holder, container=container)  # ROUTE, PROTO may stand among nodes
+            elif self.starts_node():
+                raise self.error(f"field {excerpt(field)} cannot hold nodes", [token])
+            elif following.text == "NULL":
+                self.take()
+            elif following.kind == "punct":
+                raise self.error(f"unexpected {_shown(following)} in field {excerpt(field)}")
+            else:
+                items.append(self.take())
+        self.take()
+        if items:
+            return _text(items, declared, True)
+        added = holder is not None and len(holder) > nodes
+        return None if added else _empty(declared)
+
+    def scalar(self, kind: str | None, field: str, declared: str | None, token: Token) -> str:
+        """Single values (numbers, strings, TRUE/FALSE) up to the next field."""
         items = []
         while (following := self.peek()) is not None and _is_scalar(following):
             items.append(self.take())
@@ -683,6 +686,23 @@ class _Parser:
             found = "the end of the file" if following is None else _shown(following)
             raise self.error(f"field {excerpt(field)} of {kind}: no value (found {found})", [token])
         return _text(items, declared, False)
+
+
+def _numbers(following: Token, declared: str | None) -> str | None:
+    """A run of numbers the tokenizer took whole, as attribute text of type ``declared``."""
+    words = following.text.replace(",", " ").split()
+    if not words:
+        return _empty(declared)
+    if declared in ("SFString", "MFString"):
+        return _text([Token("word", word, following.line) for word in words], declared, True)
+    if "x" in following.text or "X" in following.text:
+        words = [number_text(word) for word in words]
+    return " ".join(words)
+
+
+def _empty(declared: str | None) -> str | None:
+    """An empty value: no attribute for nodes (or an unknown type), else empty text."""
+    return None if declared is None or declared.endswith("Node") else ""
 
 
 def _last_child(parent: Element) -> Element | None:

@@ -43,6 +43,10 @@ INDENT = "  "
 # Nodes whose XML text content is code (a CDATA section), written as a url.
 CODE_NODES = {"Script", "ShaderPart", "ShaderProgram", "PackagedShader"}
 _SKIPPED = {"DEF", "USE", "containerField"}
+# A node's IS connections: node field -> prototype field (as the XML spells them).
+_Connects = dict[str | None, str | None]
+# Children that are statements, not nodes.
+_STATEMENTS = ("ROUTE", "IMPORT", "EXPORT", "ProtoDeclare", "ExternProtoDeclare")
 # X3D names VRML 97 spells otherwise: (node, X3D field) -> VRML 97 field; access types.
 VRML97_FIELDS = {("Collision", "enabled"): "collide", ("LOD", "children"): "level"}
 # X3D fields VRML 97 lacks (its DirectionalLight keeps to its group anyway).
@@ -238,26 +242,28 @@ class _Writer:
         return [f"{start}{kind} {{", *body, INDENT * depth + "}"]
 
     def body(self, element: Element, tag: str, kind: str, instance: bool, depth: int) -> list[str]:
-        pad = INDENT * depth
-        connects = {
-            c.get("nodeField"): c.get("protoField")
-            for holder in element
-            if local_name(holder) == "IS"
-            for c in holder
-            if local_name(c) == "connect"
-        }
+        connects = _connects(element)
+        lines = self.attributes(element, tag, instance, connects, depth)
         declared = {f.get("name") for f in element if local_name(f) == "field"}
-        lines = []
+        lines += [
+            f"{INDENT * depth}{name} IS {proto_field}"
+            for name, proto_field in connects.items()
+            if name not in declared
+        ]
+        return lines + self.children(element, tag, kind, connects, depth)
+
+    def attributes(
+        self, element: Element, tag: str, instance: bool, connects: _Connects, depth: int
+    ) -> list[str]:
+        """``name value`` per written attribute, then a script's inline code as its url."""
+        pad = INDENT * depth
         attributes = dict(element.attrib)
         for (node, name), default in self.explicit.items():
             if node == tag and name not in attributes:
                 attributes[name] = default
+        lines = []
         for name, text in attributes.items():
-            if name in _SKIPPED or (instance and name == "name") or name in connects:
-                continue
-            if name.startswith("{"):
-                continue  # namespaced attributes (xsd:...) are XML-only
-            if self.vrml97 and (tag, name) in _NOT_VRML97:
+            if not self.writes(tag, name, instance, connects):
                 continue
             kind_of = field_type(tag, name)
             if self.vrml97 and tag == "IndexedTriangleSet" and name == "index":
@@ -268,9 +274,21 @@ class _Writer:
         code = (element.text or "").strip()
         if tag in CODE_NODES and code and element.get("url") is None:
             lines.append(f"{pad}url [ {quote(code)} ]")
-        for name, proto_field in connects.items():
-            if name not in declared:
-                lines.append(f"{pad}{name} IS {proto_field}")
+        return lines
+
+    def writes(self, tag: str, name: str, instance: bool, connects: _Connects) -> bool:
+        """Whether attribute ``name`` of ``tag`` is written as a field."""
+        if name in _SKIPPED or (instance and name == "name") or name in connects:
+            return False
+        if name.startswith("{"):
+            return False  # namespaced attributes (xsd:...) are XML-only
+        return not (self.vrml97 and (tag, name) in _NOT_VRML97)
+
+    def children(
+        self, element: Element, tag: str, kind: str, connects: _Connects, depth: int
+    ) -> list[str]:
+        """Declarations, field values, statements and node-valued fields, in document order."""
+        lines: list[str] = []
         groups: dict[str, list[Element]] = {}
         pending: list[Element] = []  # comments go with the node after them
         for child in element:
@@ -281,26 +299,18 @@ class _Writer:
                 lines += self.declaration(child, depth, True, connects.get(child.get("name")))
             elif child_tag == "fieldValue":
                 lines += self.field_value(child, kind, depth)
-            elif child_tag in ("ROUTE", "IMPORT", "EXPORT", "ProtoDeclare", "ExternProtoDeclare"):
+            elif child_tag in _STATEMENTS:
                 # After the nodes before it (it may USE their DEFs), before those after it.
-                lines += self.groups(groups, tag, depth)
-                groups = {}
-                lines += [line for c in pending for line in self.statement(c, depth)]
-                pending = []
+                lines += self.groups(groups, tag, depth) + self.comments(pending, depth)
+                groups, pending = {}, []
                 lines += self.statement(child, depth)
             elif child_tag and child_tag != "IS":
-                default = (
-                    "children"
-                    if child_tag == "ProtoInstance"
-                    else CONTAINER_FIELDS.get(child_tag, "children")
-                )
-                groups.setdefault(child.get("containerField") or default, []).extend(
-                    [*pending, child]
-                )
+                groups.setdefault(_container(child, child_tag), []).extend([*pending, child])
                 pending = []
-        lines += self.groups(groups, tag, depth)
-        lines += [line for c in pending for line in self.statement(c, depth)]
-        return lines
+        return lines + self.groups(groups, tag, depth) + self.comments(pending, depth)
+
+    def comments(self, pending: list[Element], depth: int) -> list[str]:
+        return [line for comment in pending for line in self.statement(comment, depth)]
 
     def groups(self, groups: dict[str, list[Element]], tag: str, depth: int) -> list[str]:
         """Node-valued fields: ``field`` and its nodes, per field."""
@@ -358,6 +368,25 @@ def _faces(index: str) -> str:
     values = index.replace(",", " ").split()
     triangles = [" ".join(values[start : start + 3]) for start in range(0, len(values), 3)]
     return " -1 ".join(triangles) + (" -1" if triangles else "")
+
+
+def _connects(element: Element) -> _Connects:
+    """A node's ``<IS><connect>`` pairs: node field -> prototype field."""
+    return {
+        connect.get("nodeField"): connect.get("protoField")
+        for holder in element
+        if local_name(holder) == "IS"
+        for connect in holder
+        if local_name(connect) == "connect"
+    }
+
+
+def _container(child: Element, child_tag: str) -> str:
+    """The field a child node goes in: its containerField, or its kind's default."""
+    if child_tag == "ProtoInstance":
+        return child.get("containerField") or "children"
+    default = CONTAINER_FIELDS.get(child_tag, "children")
+    return child.get("containerField") or default
 
 
 def _child(element: Element, tag: str) -> Element | None:

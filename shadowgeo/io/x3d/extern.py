@@ -54,35 +54,45 @@ def find(
         return f"url {problem}"
     reasons = []
     for url in urls:
-        location, _, fragment = url.partition("#")
-        name = fragment or None
-        target = file if not location else resolve_url(reader, file.parent, location, url)
-        if isinstance(target, str):
-            reasons.append(target)
-            continue
-        tree = x3d_tree(reader, target)
-        if isinstance(tree, str):
-            reasons.append(f"'{url}' {tree}")
-            continue
-        root = tree.getroot()
-        declaration = _declared(root, "ProtoDeclare", name)
-        if declaration is not None:
-            return Found(declaration, root, target)
-        onward = None if name is None else _declared(root, "ExternProtoDeclare", name)
-        if onward is None or onward is extern:
-            named = "" if name is None else f" '{name}'"
-            reasons.append(f"'{url}': {target.name} declares no PROTO{named}")
-            continue
-        if (target, name) in passed:
-            raise _error(extern, file, f"EXTERNPROTO cycle: '{url}' leads back to itself")
-        if len(passed) >= limits.MAX_INLINE_DEPTH:
-            depth = limits.MAX_INLINE_DEPTH
-            raise _error(extern, file, f"EXTERNPROTOs lead on through more than {depth} files")
-        found = find(reader, onward, target, (*passed, (target, name)))
+        found = _from_url(reader, extern, file, url, passed)
         if isinstance(found, Found):
             return found
-        reasons.append(f"'{url}': {found}")
+        reasons.append(found)
     return "; ".join(reasons) or "no url"
+
+
+def _from_url(
+    reader: InlineReader,
+    extern: Element,
+    file: Path,
+    url: str,
+    passed: tuple[tuple[Path, str | None], ...],
+) -> Found | str:
+    """The ProtoDeclare one url of ``extern`` leads to (through further
+    EXTERNPROTOs), or why it leads to none."""
+    location, _, fragment = url.partition("#")
+    name = fragment or None
+    target = file if not location else resolve_url(reader, file.parent, location, url)
+    if isinstance(target, str):
+        return target
+    tree = x3d_tree(reader, target)
+    if isinstance(tree, str):
+        return f"'{url}' {tree}"
+    root = tree.getroot()
+    declaration = _declared(root, "ProtoDeclare", name)
+    if declaration is not None:
+        return Found(declaration, root, target)
+    onward = None if name is None else _declared(root, "ExternProtoDeclare", name)
+    if onward is None or onward is extern:
+        named = "" if name is None else f" '{name}'"
+        return f"'{url}': {target.name} declares no PROTO{named}"
+    if (target, name) in passed:
+        raise _error(extern, file, f"EXTERNPROTO cycle: '{url}' leads back to itself")
+    if len(passed) >= limits.MAX_INLINE_DEPTH:
+        depth = limits.MAX_INLINE_DEPTH
+        raise _error(extern, file, f"EXTERNPROTOs lead on through more than {depth} files")
+    found = find(reader, onward, target, (*passed, (target, name)))
+    return found if isinstance(found, Found) else f"'{url}': {found}"
 
 
 def _declared(root: Element, tag: str, name: str | None) -> Element | None:

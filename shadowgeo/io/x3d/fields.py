@@ -19,7 +19,7 @@ import bisect
 import math
 import re
 import warnings
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, TypeAlias
 
@@ -292,30 +292,36 @@ def parse(text: str, kind: str) -> Any:
 
 
 def _parse(text: str, kind: str) -> Any:
-    if kind == "SFBool":
-        word = text.strip().lower()
-        if word not in ("true", "false"):
-            raise ValueError("is not a boolean (true or false)")
-        return word == "true"
-    if kind == "SFString":
-        return text
-    if kind == "MFString":
-        return _strings(text)
-    if kind == "SFInt32":
-        try:
-            numbers = _integers(text, kind)
-        except ValueError:
-            raise ValueError("is not an integer (SFInt32)") from None
-        if len(numbers) != 1:
-            raise ValueError("is not an integer (SFInt32)")
-        return int(numbers[0])
-    if kind == "MFInt32":
-        return _integers(text, kind)
-    if kind in ("SFFloat", "SFDouble", "SFTime"):
-        numbers = _numbers(text, kind)
-        if len(numbers) != 1:
-            raise ValueError(f"is not one number ({kind})")
-        return float(numbers[0])
+    scalar = _SCALARS.get(kind)
+    return _vectors(text, kind) if scalar is None else scalar(text, kind)
+
+
+def _bool(text: str, kind: str) -> bool:
+    word = text.strip().lower()
+    if word not in ("true", "false"):
+        raise ValueError("is not a boolean (true or false)")
+    return word == "true"
+
+
+def _int32(text: str, kind: str) -> int:
+    try:
+        numbers = _integers(text, kind)
+    except ValueError:
+        raise ValueError("is not an integer (SFInt32)") from None
+    if len(numbers) != 1:
+        raise ValueError("is not an integer (SFInt32)")
+    return int(numbers[0])
+
+
+def _one_number(text: str, kind: str) -> float:
+    numbers = _numbers(text, kind)
+    if len(numbers) != 1:
+        raise ValueError(f"is not one number ({kind})")
+    return float(numbers[0])
+
+
+def _vectors(text: str, kind: str) -> np.ndarray:
+    """A vector (SF) or array of vectors (MF) of ``kind``'s width."""
     numbers = _numbers(text, kind)
     width = WIDTH.get(kind)
     if width is None:
@@ -327,6 +333,19 @@ def _parse(text: str, kind: str) -> Any:
     if len(numbers) % width:
         raise ValueError(f"has {len(numbers)} numbers, not a multiple of {width} ({kind})")
     return numbers.reshape(-1, width) if width > 1 else numbers
+
+
+# Field types not read as vectors of numbers: type -> parser of (text, type).
+_SCALARS: dict[str, Callable[[str, str], Any]] = {
+    "SFBool": _bool,
+    "SFString": lambda text, kind: text,
+    "MFString": lambda text, kind: _strings(text),
+    "SFInt32": _int32,
+    "MFInt32": lambda text, kind: _integers(text, kind),
+    "SFFloat": _one_number,
+    "SFDouble": _one_number,
+    "SFTime": _one_number,
+}
 
 
 def _numbers(text: str, kind: str) -> np.ndarray:

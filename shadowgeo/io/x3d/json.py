@@ -241,25 +241,29 @@ class _Builder:
         if line is not None and line < 65535:  # lxml keeps lines in 16 bits
             element.sourceline = line
         for key, value in body.items():
-            here = f"{where}/{key}"
-            if key.startswith("@"):
-                self.attribute(element, key[1:], value, body, here)
-            elif key.startswith("-"):
-                self.nodes(element, key[1:], value, here, depth)
-            elif key == "#comment":
-                for text in value if isinstance(value, list) else [value]:
-                    element.append(self.comment(text, body, here))
-            elif key == "#sourceCode":
-                self.source_code(element, value, body, here)
-            elif tag == "X3D" and key in ("encoding", "JSON schema"):
-                continue  # the XML declaration's business, and a pointer to the schema
-            else:
-                if not isinstance(value, list):
-                    element.append(self.element(key, value, here, depth + 1))
-                    continue
-                for index, item in enumerate(value):
-                    element.append(self.element(key, item, f"{here}[{index}]", depth + 1))
+            self.member(element, tag, key, value, body, f"{where}/{key}", depth)
         return element
+
+    def member(
+        self, element: Element, tag: str, key: str, value: Any, body: Any, here: str, depth: int
+    ) -> None:
+        """One member of a node's JSON object into its ``element``."""
+        if key.startswith("@"):
+            self.attribute(element, key[1:], value, body, here)
+        elif key.startswith("-"):
+            self.nodes(element, key[1:], value, here, depth)
+        elif key == "#comment":
+            for text in value if isinstance(value, list) else [value]:
+                element.append(self.comment(text, body, here))
+        elif key == "#sourceCode":
+            self.source_code(element, value, body, here)
+        elif tag == "X3D" and key in ("encoding", "JSON schema"):
+            return  # the XML declaration's business, and a pointer to the schema
+        elif not isinstance(value, list):
+            element.append(self.element(key, value, here, depth + 1))
+        else:
+            for index, item in enumerate(value):
+                element.append(self.element(key, item, f"{here}[{index}]", depth + 1))
 
     def attribute(self, element: Element, name: str, value: Any, body: Any, where: str) -> None:
         if name.startswith("xmlns"):
@@ -457,31 +461,31 @@ class _Writer:
                 continue
             body["@" + name] = self.value(element, tag, name, text)
         for child in element:
-            if _is_comment(child):
-                body.setdefault("-children", []).append({"#comment": child.text or ""})
-                continue
-            name = _local(child)
-            if not name:
-                continue  # processing instructions and entities
-            if name in LISTED:
-                body.setdefault(name, []).append(self.object(child))
-            elif name in SINGLE and name in body:  # given twice: one, with both's content
-                for key, value in self.object(child).items():
-                    if isinstance(value, list) and isinstance(body[name].get(key), list):
-                        body[name][key].extend(value)
-                    else:
-                        body[name][key] = value
-            elif name in SINGLE:
-                body[name] = self.object(child)
-            elif name in IN_CHILDREN:
-                body.setdefault("-children", []).append({name: self.object(child)})
-            else:
-                self.node(tag, body, name, child)
+            self.child(tag, body, child)
         if tag in SOURCE_CODE_NODES:
             pieces = [element.text or ""] + [child.tail or "" for child in element]
             source = "".join(piece for piece in pieces if piece.strip())
             if source:
                 body["#sourceCode"] = source.split("\n")
+
+    def child(self, tag: str, body: dict[str, Any], child: Element) -> None:
+        """A child element of a ``tag`` into its ``body``: where its kind goes."""
+        if _is_comment(child):
+            body.setdefault("-children", []).append({"#comment": child.text or ""})
+            return
+        name = _local(child)
+        if not name:
+            return  # processing instructions and entities
+        if name in LISTED:
+            body.setdefault(name, []).append(self.object(child))
+        elif name in SINGLE and name in body:  # given twice: one, with both's content
+            _merge(body[name], self.object(child))
+        elif name in SINGLE:
+            body[name] = self.object(child)
+        elif name in IN_CHILDREN:
+            body.setdefault("-children", []).append({name: self.object(child)})
+        else:
+            self.node(tag, body, name, child)
 
     def node(self, tag: str, body: dict[str, Any], name: str, child: Element) -> None:
         kind = self.first_nodes.get(child.get("name", "")) if name == "ProtoInstance" else name
@@ -518,6 +522,15 @@ class _Writer:
         except ValueError as problem:
             line = f"line {element.sourceline}, " if element.sourceline else ""
             raise SceneError(f"{line}{tag} field {name}: {problem}") from None
+
+
+def _merge(first: dict[str, Any], second: dict[str, Any]) -> None:
+    """``second``'s members into ``first``: arrays joined, others replaced."""
+    for key, value in second.items():
+        if isinstance(value, list) and isinstance(first.get(key), list):
+            first[key].extend(value)
+        else:
+            first[key] = value
 
 
 def typed(kind: str, text: str) -> Any:

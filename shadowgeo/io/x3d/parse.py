@@ -95,6 +95,15 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
     data = read_bytes(path)
     if x3d_classic_read.is_classic(data):
         return x3d_classic_read.parse_bytes(data, str(path), notes)
+    tree = _xml_tree(data, path)
+    _refuse_entities(tree, path)
+    _check_shape(tree, path)
+    return tree
+
+
+def _xml_tree(data: bytes, path: Path) -> etree._ElementTree:
+    """``data`` parsed as XML; entity declarations refused before parsing
+    where a scan is conclusive; libxml2's errors as SceneErrors."""
     huge = _ascii_compatible(data)
     if huge and b"<!ENTITY" in data:
         raise SceneError(
@@ -104,7 +113,7 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
             line=data.count(b"\n", 0, data.index(b"<!ENTITY")) + 1,
         )
     try:
-        tree = etree.parse(io.BytesIO(data), _parser(huge))
+        return etree.parse(io.BytesIO(data), _parser(huge))
     except etree.XMLSyntaxError as problem:
         message = (problem.msg or str(problem)).strip()
         if "limit" in message.lower() and "amplification" not in message.lower():
@@ -115,6 +124,10 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
         else:
             message = f"malformed XML: {message}"
         raise SceneError(message, path=str(path), line=problem.lineno) from None
+
+
+def _refuse_entities(tree: etree._ElementTree, path: Path) -> None:
+    """Refuse a parsed document that declares or uses entities."""
     dtd = tree.docinfo.internalDTD
     if dtd is not None:
         entities = [entity.name for entity in dtd.entities()]
@@ -128,6 +141,10 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
             )
     if _has_entity_references(tree):
         raise SceneError("the document uses entity references; refused", path=str(path))
+
+
+def _check_shape(tree: etree._ElementTree, path: Path) -> None:
+    """Refuse elements nested too deep and a root other than ``<X3D>``."""
     root = tree.getroot()
     # one XPath step per level, each over the elements of that level: linear
     too_deep = tree.xpath("/*" * (MAX_DEPTH + 1))
@@ -143,7 +160,6 @@ def parse(path: Path, notes: list[str] | None = None) -> etree._ElementTree:
             path=str(path),
             line=root.sourceline,
         )
-    return tree
 
 
 def _ascii_compatible(data: bytes) -> bool:

@@ -216,28 +216,47 @@ class Prototypes:
         for holder in [e for e in body.iter("{*}IS") if not _declared_inside(e)]:
             node = holder.getparent()
             for connect in holder:
-                if local_name(connect) != "connect":
-                    continue
-                node_field, proto_field = connect.get("nodeField"), connect.get("protoField")
-                if not _FIELD_NAME.fullmatch(node_field or ""):
-                    raise context.error(
-                        connect, f"connect nodeField={node_field!r} is not a field name"
-                    )
-                nodes: list[Element] | None = None if proto_field not in node_values else []
-                for value in node_values.get(proto_field, []):
-                    target = context.resolve(value)
-                    if target is not None and nodes is not None:  # (a bad USE: noted)
-                        nodes.append(copy.deepcopy(target))
-                        self.places[nodes[-1]] = self._place(target)
-                if local_name(node) == "ProtoInstance":
-                    _pass_on(node, node_field, values.get(proto_field), nodes, connect.sourceline)
-                    continue
-                if proto_field in values:
-                    node.set(node_field, values[proto_field])
-                for child in nodes or []:
-                    child.set("containerField", node_field)
-                    node.append(child)
+                if local_name(connect) == "connect":
+                    self._connect_field(context, node, connect, values, node_values)
             node.remove(holder)
+
+    def _connect_field(
+        self,
+        context: Context,
+        node: Element,
+        connect: Element,
+        values: dict[str, str],
+        node_values: dict[str, list[Element]],
+    ) -> None:
+        """One ``<connect>``: the instance's value of the prototype field set on
+        (or its nodes appended to) ``node``, or passed on to a nested instance."""
+        node_field, proto_field = connect.get("nodeField"), connect.get("protoField")
+        if not _FIELD_NAME.fullmatch(node_field or ""):
+            raise context.error(connect, f"connect nodeField={node_field!r} is not a field name")
+        nodes = self._copies(context, node_values, proto_field)
+        if local_name(node) == "ProtoInstance":
+            _pass_on(node, node_field, values.get(proto_field), nodes, connect.sourceline)
+            return
+        if proto_field in values:
+            node.set(node_field, values[proto_field])
+        for child in nodes or []:
+            child.set("containerField", node_field)
+            node.append(child)
+
+    def _copies(
+        self, context: Context, node_values: dict[str, list[Element]], proto_field: str | None
+    ) -> list[Element] | None:
+        """Copies of the nodes the instance gives ``proto_field`` (None when it
+        is no node field of the instance)."""
+        if proto_field not in node_values:
+            return None
+        nodes: list[Element] = []
+        for value in node_values[proto_field]:
+            target = context.resolve(value)
+            if target is not None:  # (a bad USE: noted)
+                nodes.append(copy.deepcopy(target))
+                self.places[nodes[-1]] = self._place(target)
+        return nodes
 
 
 def _child(element: Element, tag: str) -> Element | None:

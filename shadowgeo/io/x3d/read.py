@@ -267,81 +267,106 @@ class _Reader:
     def node(
         self, context: Context, written: Element, matrix: np.ndarray, name: str | None
     ) -> None:
-        element = context.node(written)
+        element = self._entered(context, written)
         if element is None:  # a prototype instance that could not be expanded
             return
+        tag = local_name(element)
+        name = _public(written.get("DEF") or element.get("DEF")) or name
+        if self._hidden(context, element, tag):
+            context.warn(element, "visible='false': skipped")
+            return
+        if tag in GROUPS:
+            self.group(context, element, tag, matrix, name)
+        elif tag == "Shape":
+            self.shape(context, element, matrix, name)
+        elif tag in LIGHTS:
+            self.light(context, element, matrix)
+        elif tag == "Inline":
+            with self._scope():  # the inlined scene's own lights light it
+                load_inline(self, context, element, matrix, name)
+        elif tag in ("NavigationInfo", "Viewpoint") and len(self.inline_stack) == 1:
+            self.bindable(context, element, tag, matrix)
+        elif tag == "Viewpoint":
+            self._skip(context, element, tag, "a Viewpoint of an inlined file (X3D binds none)")
+        elif tag not in SILENT and not tag.startswith("Metadata"):
+            self._skip(context, element, tag, _why(tag))
+
+    def _entered(self, context: Context, written: Element) -> Element | None:
+        """The node ``written`` stands for (a USE's DEF, a prototype's copy), counted
+        and checked not to be a group it is inside of."""
+        element = context.node(written)
+        if element is None:
+            return None
         if local_name(written) == "ProtoInstance":
             self._count(context, element, written)  # the copy of the prototype's body
         if id(element) in self.open_groups:
             raise context.error(
                 written, f"DEF/USE cycle: '{written.get('USE')}' is used inside itself"
             )
-        tag = local_name(element)
-        name = _public(written.get("DEF") or element.get("DEF")) or name
+        return element
+
+    def _hidden(self, context: Context, element: Element, tag: str) -> bool:
+        """Whether the node says ``visible='false'`` (asked once per element)."""
         if element not in self.hidden:
             self.hidden[element] = "visible" in DEFAULTS.get(tag, {}) and not context.field(
                 element, "visible"
             )
-        if self.hidden[element]:
-            context.warn(element, "visible='false': skipped")
-            return
-        if tag in GROUPS:
-            if tag == "Billboard":
-                context.warn(element, "Billboard: children kept unrotated (no viewer)")
-            if element not in self.local_matrices:
-                self.local_matrices[element] = _local_matrix(context, element, tag)
-            with np.errstate(over="ignore", invalid="ignore"):
-                world = matrix @ self.local_matrices[element]
-            if not np.isfinite(world).all():
-                raise context.error(element, "the transforms down to here overflow to infinity")
-            if len(self.open_groups) >= limits.MAX_NESTING:  # e.g. a prototype inside itself
-                raise context.error(
-                    element,
-                    f"nodes nested too deeply (grouping nodes more than {limits.MAX_NESTING} "
-                    "deep through DEF/USE, prototypes or Inline; shadowgeo.limits.MAX_NESTING)",
-                )
-            self.open_groups.add(id(element))  # the element stays alive meanwhile
-            baked = MARK in (element.get("class") or "").split()
+        return self.hidden[element]
+
+    def group(
+        self, context: Context, element: Element, tag: str, matrix: np.ndarray, name: str | None
+    ) -> None:
+        """A grouping node: its children under its world matrix, in its own scope."""
+        if tag == "Billboard":
+            context.warn(element, "Billboard: children kept unrotated (no viewer)")
+        if element not in self.local_matrices:
+            self.local_matrices[element] = _local_matrix(context, element, tag)
+        with np.errstate(over="ignore", invalid="ignore"):
+            world = matrix @ self.local_matrices[element]
+        if not np.isfinite(world).all():
+            raise context.error(element, "the transforms down to here overflow to infinity")
+        if len(self.open_groups) >= limits.MAX_NESTING:  # e.g. a prototype inside itself
+            raise context.error(
+                element,
+                f"nodes nested too deeply (grouping nodes more than {limits.MAX_NESTING} "
+                "deep through DEF/USE, prototypes or Inline; shadowgeo.limits.MAX_NESTING)",
+            )
+        self.open_groups.add(id(element))  # the element stays alive meanwhile
+        baked = MARK in (element.get("class") or "").split()
+        if baked:
+            self.baked.append(element.get("DEF") or "shadows")
+        try:
+            with self._scope():
+                self.children(context, element, world, name)
+        finally:
+            self.open_groups.discard(id(element))
             if baked:
-                self.baked.append(element.get("DEF") or "shadows")
-            try:
-                with self._scope():
-                    self.children(context, element, world, name)
-            finally:
-                self.open_groups.discard(id(element))
-                if baked:
-                    self.baked.pop()
-        elif tag == "Shape":
-            self.shape(context, element, matrix, name)
-        elif tag in LIGHTS:
-            if len(self.lights) >= limits.MAX_LIGHTS:
-                raise context.error(element, limits.lights_message(len(self.lights) + 1))
-            light = scene_light(context, element, matrix)
-            if light is not None:
-                if not light.global_ and self.within:  # at the top of the scene: everything
-                    light.scope = self.within[-1]
-                    self.scopes.add(light.scope)
-                tree = element.getroottree()
-                if tree.getroot() is self.top_root:  # a writer of this document finds it
-                    light.node = tree.getpath(element)
-                    group = element.getparent()
-                    if light.scope is not None and _holds_added(group):
-                        light.scope_group = Placement(tree.getpath(group), matrix.copy())
-                self.lights.append(light)
-        elif tag == "Inline":
-            with self._scope():  # the inlined scene's own lights light it
-                load_inline(self, context, element, matrix, name)
-        elif tag == "NavigationInfo" and len(self.inline_stack) == 1:
-            if self.headlight is None:  # the first is the one a browser binds
-                self.headlight = bool(context.field(element, "headlight"))
-        elif tag == "Viewpoint" and len(self.inline_stack) == 1:
+                self.baked.pop()
+
+    def light(self, context: Context, element: Element, matrix: np.ndarray) -> None:
+        """A light node, scoped to its group unless global, placed for a writer."""
+        if len(self.lights) >= limits.MAX_LIGHTS:
+            raise context.error(element, limits.lights_message(len(self.lights) + 1))
+        light = scene_light(context, element, matrix)
+        if light is None:
+            return
+        if not light.global_ and self.within:  # at the top of the scene: everything
+            light.scope = self.within[-1]
+            self.scopes.add(light.scope)
+        tree = element.getroottree()
+        if tree.getroot() is self.top_root:  # a writer of this document finds it
+            light.node = tree.getpath(element)
+            group = element.getparent()
+            if light.scope is not None and _holds_added(group):
+                light.scope_group = Placement(tree.getpath(group), matrix.copy())
+        self.lights.append(light)
+
+    def bindable(self, context: Context, element: Element, tag: str, matrix: np.ndarray) -> None:
+        """A NavigationInfo or Viewpoint of the top file."""
+        if tag == "Viewpoint":
             self.viewpoints.append(_viewpoint(context, element, matrix))
-        elif tag == "Viewpoint":
-            self._skip(context, element, tag, "a Viewpoint of an inlined file (X3D binds none)")
-        elif tag in SILENT or tag.startswith("Metadata"):
-            pass
-        else:
-            self._skip(context, element, tag, _why(tag))
+        elif self.headlight is None:  # the first NavigationInfo is the one a browser binds
+            self.headlight = bool(context.field(element, "headlight"))
 
     @contextlib.contextmanager
     def _scope(self) -> Iterator[None]:
@@ -373,21 +398,7 @@ class _Reader:
         if tag in UNMODELLED_GEOMETRY:
             self._skip(context, node, tag, "geometry not modelled (no area or not supported)")
             return
-        built: Mesh | Primitive | None
-        if node not in self.geometry_cache:
-            try:
-                built = geometry(context, node)
-            except (SceneError, GeometryError) as error:  # a bad index, count, size, ...
-                self.warnings.append(f"{error}; the Shape is skipped")
-                self.geometry_cache[node] = None
-                return
-            empty = isinstance(built, Mesh) and (len(built.faces) == 0 or len(built.vertices) == 0)
-            for note in getattr(built, "notes", []):
-                context.warn(node, note)
-            if empty:
-                context.warn(node, "empty geometry (no triangles); skipped")
-            self.geometry_cache[node] = None if empty else built
-        built = self.geometry_cache[node]
+        built = self._built(context, node)
         if built is None:
             return
         appearances = context.children(element, {"Appearance"})
@@ -410,6 +421,23 @@ class _Reader:
             )
         )
 
+    def _built(self, context: Context, node: Element) -> Mesh | Primitive | None:
+        """A geometry node's mesh or primitive (built once), None when bad or empty."""
+        if node not in self.geometry_cache:
+            try:
+                built = geometry(context, node)
+            except (SceneError, GeometryError) as error:  # a bad index, count, size, ...
+                self.warnings.append(f"{error}; the Shape is skipped")
+                self.geometry_cache[node] = None
+                return None
+            empty = isinstance(built, Mesh) and (len(built.faces) == 0 or len(built.vertices) == 0)
+            for note in getattr(built, "notes", []):
+                context.warn(node, note)
+            if empty:
+                context.warn(node, "empty geometry (no triangles); skipped")
+            self.geometry_cache[node] = None if empty else built
+        return self.geometry_cache[node]
+
     def _added_role(self, element: Element) -> tuple[str, str | None]:
         """Shapes in a group of shadows shadowgeo added read back as role
         "shadow" (or "volume"), not as geometry that casts."""
@@ -425,19 +453,23 @@ class _Reader:
             if texture is None or texture in self.textures_seen:
                 continue
             self.textures_seen.add(texture)
-            urls = [u for u in context.field(texture, "url", "MFString") if u]
-            folder = Path(context.file_of(texture)).resolve().parent
-            local = [(folder / u).resolve() for u in urls if not URL_SCHEME.match(u)]
-            # only files inside the scene's folder count (nothing outside is looked at)
-            inside = [path for path in local if path.is_relative_to(self.root_folder)]
-            problems = [file_problem(path) for path in inside]
-            if urls and None not in problems:
-                # why a url cannot even be looked up (a name too long, ...) is said
-                why = sorted({p for p in problems if p not in (None, "not found", "not a file")})
-                reason = f" ({'; '.join(why)})" if why else ""
-                context.warn(texture, f"texture not found: {', '.join(urls[:3])}{reason}")
-            else:
-                self._skip(context, texture, local_name(texture), "textures not modelled")
+            self._texture(context, texture)
+
+    def _texture(self, context: Context, texture: Element) -> None:
+        """A note on one texture: not found (and why), else skipped as not modelled."""
+        urls = [u for u in context.field(texture, "url", "MFString") if u]
+        folder = Path(context.file_of(texture)).resolve().parent
+        local = [(folder / u).resolve() for u in urls if not URL_SCHEME.match(u)]
+        # only files inside the scene's folder count (nothing outside is looked at)
+        inside = [path for path in local if path.is_relative_to(self.root_folder)]
+        problems = [file_problem(path) for path in inside]
+        if urls and None not in problems:
+            # why a url cannot even be looked up (a name too long, ...) is said
+            why = sorted({p for p in problems if p not in (None, "not found", "not a file")})
+            reason = f" ({'; '.join(why)})" if why else ""
+            context.warn(texture, f"texture not found: {', '.join(urls[:3])}{reason}")
+        else:
+            self._skip(context, texture, local_name(texture), "textures not modelled")
 
     # -- result ------------------------------------------------------------------
     def scripts(self, root: Element, path: str) -> None:

@@ -76,24 +76,41 @@ def _definitions(root: Element) -> dict[tuple[Element | None, str], Element]:
 
 
 def _builds(script: Element, names: dict[tuple[Element | None, str], Element]) -> bool:
+    return _writes_directly(script, names) or _routes_to_geometry(script, names)
+
+
+def _writes_directly(script: Element, names: dict[tuple[Element | None, str], Element]) -> bool:
+    """A ``directOutput`` Script holding a shaped node in one of its fields."""
+    if script.get("directOutput", "").strip().lower() != "true":
+        return False
     scope = _scope(script)
-    if script.get("directOutput", "").strip().lower() == "true":
-        for field in (child for child in script if local_name(child) == "field"):
-            for node in (child for child in field if local_name(child)):
-                target = names.get((scope, node.get("USE")), node) if node.get("USE") else node
-                if local_name(target) in SHAPED:
-                    return True
+    for field in (child for child in script if local_name(child) == "field"):
+        for node in (child for child in field if local_name(child)):
+            target = names.get((scope, node.get("USE")), node) if node.get("USE") else node
+            if local_name(target) in SHAPED:
+                return True
+    return False
+
+
+def _routes_to_geometry(script: Element, names: dict[tuple[Element | None, str], Element]) -> bool:
+    """A Script with a ROUTE (in its scope) to a shaped node or to children."""
     name = script.get("DEF")
     if name is None:
         return False
+    scope = _scope(script)
     scope_root = script.getroottree().getroot() if scope is None else scope
-    for route in scope_root.iter("{*}ROUTE"):
-        if route.get("fromNode") != name or _scope(route) is not scope:
-            continue
-        target = names.get((scope, route.get("toNode", "")))
-        if target is None:
-            continue
-        tag = local_name(target)
-        if tag in SHAPED or (tag != "Script" and route.get("toField") in CHILDREN):
-            return True
-    return False
+    return any(
+        route.get("fromNode") == name and _scope(route) is scope and _feeds(route, scope, names)
+        for route in scope_root.iter("{*}ROUTE")
+    )
+
+
+def _feeds(
+    route: Element, scope: Element | None, names: dict[tuple[Element | None, str], Element]
+) -> bool:
+    """Whether ``route`` goes to a shaped node, or to a node's children."""
+    target = names.get((scope, route.get("toNode", "")))
+    if target is None:
+        return False
+    tag = local_name(target)
+    return tag in SHAPED or (tag != "Script" and route.get("toField") in CHILDREN)

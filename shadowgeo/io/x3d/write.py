@@ -71,7 +71,7 @@ import gzip
 import math
 import os
 import re
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import cast
 
@@ -201,7 +201,21 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
     homes = _homes(tree, added)  # (likewise: the paths are of the document as read)
     _remove_marked(tree)  # the scene's added shapes replace them
     authored = _bound_viewpoint(tree)  # (before the names are taken: ours gets its own back)
-    legacy = _legacy_version(root.get("version"))
+    _mark_lights(lights, _legacy_version(root.get("version")))
+    used = set(tree.xpath("//@DEF"))
+    if added and root.get("profile") == "Core":
+        _require_components(root, namespace)
+    x3d4 = _version(root.get("version")) >= 4.0
+    _place_added(body, added, homes, used, namespace, splicer, x3d4)
+    if authored is None:
+        if root.get("profile") == "Core":
+            _require_components(root, namespace, {"Navigation": 1})
+        _add_overview(body, scene, used, namespace)
+    return tree
+
+
+def _mark_lights(lights: list[tuple[Element, SceneLight]], legacy: bool) -> None:
+    """The document's lights told what shadows they cast at run time."""
     for element, scene_light in lights:
         _runtime_shadows(element, scene_light)
         if legacy and not scene_light.global_ and element.get("global") is None:
@@ -209,22 +223,26 @@ def _with_added(scene: Scene, splicer: Splicer | None = None) -> Tree:
             # ``global`` as global; the standard's default (false) said aloud
             # keeps it to its group there too, as shadowgeo baked it
             element.set("global", "false")
-    used = set(tree.xpath("//@DEF"))
-    if added and root.get("profile") == "Core":
-        _require_components(root, namespace)
+
+
+def _place_added(
+    body: Element,
+    added: list[Shape],
+    homes: dict[int, tuple[Element, np.ndarray]],
+    used: set[str],
+    namespace: str,
+    splicer: Splicer | None,
+    x3d4: bool,
+) -> None:
+    """The added shapes into the document: in the group they were read from
+    (their home), the others in new groups at the top of ``body``."""
     at_top = [shape for shape in added if id(shape) not in homes]
-    x3d4 = _version(root.get("version")) >= 4.0
     groups = _add_groups(body, at_top, used, namespace, splicer, x3d4)
     if groups:
         _indent(body, groups)
     for shape in added:
         if id(shape) in homes:
             _add_home(shape, *homes[id(shape)], used, namespace, splicer, x3d4)
-    if authored is None:
-        if root.get("profile") == "Core":
-            _require_components(root, namespace, {"Navigation": 1})
-        _add_overview(body, scene, used, namespace)
-    return tree
 
 
 def _version(version: str | None) -> float:
@@ -313,25 +331,43 @@ def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str |
     they are, where lxml would first copy and escape them into its own
     buffers (values of number characters alone, which XML escapes nowhere,
     so the file is the same)."""
-    info = tree.docinfo
-    doctype = None
-    if info.doctype:
-        ids = f"{info.public_id or ''}\n{info.system_url or ''}"
-        subset = info.internalDTD
-        empty = subset is None or not (list(subset.iterelements()) or list(subset.entities()))
-        standard = _STANDARD_DOCTYPE.fullmatch(ids)
-        if standard and empty:
-            version = standard.group("version")
-            doctype = (
-                f'<!DOCTYPE X3D PUBLIC "ISO//Web3D//DTD X3D {version}//EN" '
-                f'"https://www.web3d.org/specifications/x3d-{version}.dtd">'
-            )
-        else:
-            shown = info.doctype if len(info.doctype) <= 80 else info.doctype[:77] + "..."
-            notes.append(f"{source}: {shown} not written (only the standard X3D DOCTYPE is)")
-        info.clear()
+    doctype = _clean_doctype(tree.docinfo, notes, source)
     root = tree.getroot()
-    namespace = etree.QName(root).namespace
+    _drop_instructions(tree, notes, source)
+    _drop_foreign(tree, notes, source)
+    # In document order. (Not an XPath ``contains()`` per letter: it copies
+    # every attribute value once per call, 60 MB each for a big mesh.)
+    for element in root.iter(etree.Element):
+        _clean_numbers(element, notes, source, splicer)
+    return doctype
+
+
+def _clean_doctype(info: etree.DocInfo, notes: list[str], source: str) -> str | None:
+    """The standard X3D DOCTYPE to write anew (None: none), any other noted;
+    the document's own cleared."""
+    if not info.doctype:
+        return None
+    doctype = None
+    ids = f"{info.public_id or ''}\n{info.system_url or ''}"
+    subset = info.internalDTD
+    empty = subset is None or not (list(subset.iterelements()) or list(subset.entities()))
+    standard = _STANDARD_DOCTYPE.fullmatch(ids)
+    if standard and empty:
+        version = standard.group("version")
+        doctype = (
+            f'<!DOCTYPE X3D PUBLIC "ISO//Web3D//DTD X3D {version}//EN" '
+            f'"https://www.web3d.org/specifications/x3d-{version}.dtd">'
+        )
+    else:
+        shown = info.doctype if len(info.doctype) <= 80 else info.doctype[:77] + "..."
+        notes.append(f"{source}: {shown} not written (only the standard X3D DOCTYPE is)")
+    info.clear()
+    return doctype
+
+
+def _drop_instructions(tree: Tree, notes: list[str], source: str) -> None:
+    """Remove every processing instruction, in and around the root, noting each."""
+    root = tree.getroot()
     # Found by XPath, in C: a Python loop over the nodes of a document of
     # 10,000 shapes took a tenth of a second each time.
     around = [*root.itersiblings(preceding=True), *root.itersiblings()]
@@ -344,6 +380,12 @@ def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str |
             f"{source}{line}: processing instruction <?{instruction.target} ...?> not written"
         )
     etree.strip_elements(tree, etree.PI, with_tail=False)
+
+
+def _drop_foreign(tree: Tree, notes: list[str], source: str) -> None:
+    """Remove elements of other namespaces (the outermost of each, noted)."""
+    root = tree.getroot()
+    namespace = etree.QName(root).namespace
     foreign = root.xpath(".//*[namespace-uri() != $namespace]", namespace=namespace or "")
     dropped = set(foreign)
     for element in foreign:
@@ -356,21 +398,22 @@ def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str |
         )
         _drop(element)
     etree.cleanup_namespaces(tree)
-    # In document order. (Not an XPath ``contains()`` per letter: it copies
-    # every attribute value once per call, 60 MB each for a big mesh.)
-    for element in root.iter(etree.Element):
-        tag = etree.QName(element).localname
-        for name, value in element.items():
-            if name not in _TEXT_ATTRIBUTES and _non_finite(value, _kind(tag, name, element)):
-                shown = value if len(value) <= 40 else value[:37] + "..."
-                notes.append(
-                    f"{source} line {element.sourceline}, {tag}: "
-                    f"{name}='{shown}' is not finite; not written (the field's default applies)"
-                )
-                del element.attrib[name]
-            elif len(value) >= LONG_VALUE and (data := long_number_bytes(value)) is not None:
-                splicer.set(element, name, data)
-    return doctype
+
+
+def _clean_numbers(element: Element, notes: list[str], source: str, splicer: Splicer) -> None:
+    """Remove an element's non-finite number attributes (noted); long number
+    values go to ``splicer``."""
+    tag = etree.QName(element).localname
+    for name, value in element.items():
+        if name not in _TEXT_ATTRIBUTES and _non_finite(value, _kind(tag, name, element)):
+            shown = value if len(value) <= 40 else value[:37] + "..."
+            notes.append(
+                f"{source} line {element.sourceline}, {tag}: "
+                f"{name}='{shown}' is not finite; not written (the field's default applies)"
+            )
+            del element.attrib[name]
+        elif len(value) >= LONG_VALUE and (data := long_number_bytes(value)) is not None:
+            splicer.set(element, name, data)
 
 
 def _standard_transforms(tree: Tree, notes: list[str], source: str) -> None:
@@ -388,25 +431,13 @@ def _standard_transforms(tree: Tree, notes: list[str], source: str) -> None:
         for name in (route.get("fromNode"), route.get("toNode"))
         if name
     }
-    written = []
-    for element in found:
-        if element.get("DEF") in routed or element.find("{*}IS") is not None:
-            continue
-        values = numbers_or_none(element.get("matrix") or "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
-        if values is None or len(values) != 16 or not np.all(np.isfinite(values)):
-            continue
-        matrix = values.reshape(4, 4).T  # X3D's SFMatrix4f: rows, translation in the last
-        if not np.array_equal(matrix[3], [0.0, 0.0, 0.0, 1.0]):
-            continue
-        try:
-            fields = _transform_fields(matrix)
-        except SceneError:
-            continue
-        element.tag = element.tag.replace("MatrixTransform", "Transform")
-        element.attrib.pop("matrix", None)
-        for name, value in fields.items():
-            element.set(name, value)
-        written.append(str(element.sourceline or "?"))
+    written = [
+        str(element.sourceline or "?")
+        for element in found
+        if element.get("DEF") not in routed
+        and element.find("{*}IS") is None
+        and _as_transform(element)
+    ]
     if written:
         lines = ", ".join(written[:10]) + (f" and {len(written) - 10} more" * (len(written) > 10))
         notes.append(
@@ -414,6 +445,26 @@ def _standard_transforms(tree: Tree, notes: list[str], source: str) -> None:
             "Game Engine node, not X3D) written as the Transform of the same matrix, which "
             "every X3D browser draws"
         )
+
+
+def _as_transform(element: Element) -> bool:
+    """Turn a MatrixTransform into the Transform of its matrix, if it is affine
+    and finite; whether it was."""
+    values = numbers_or_none(element.get("matrix") or "1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1")
+    if values is None or len(values) != 16 or not np.all(np.isfinite(values)):
+        return False
+    matrix = values.reshape(4, 4).T  # X3D's SFMatrix4f: rows, translation in the last
+    if not np.array_equal(matrix[3], [0.0, 0.0, 0.0, 1.0]):
+        return False
+    try:
+        fields = _transform_fields(matrix)
+    except SceneError:
+        return False
+    element.tag = element.tag.replace("MatrixTransform", "Transform")
+    element.attrib.pop("matrix", None)
+    for name, value in fields.items():
+        element.set(name, value)
+    return True
 
 
 # An exponent of three digits or more (searched with its letter first: a
@@ -652,21 +703,39 @@ def _indent(body: Element, groups: list[Element]) -> None:
     children = list(body)
     first = children.index(groups[0])
     previous = children[first - 1] if first else None
-    closing = previous.tail if previous is not None else body.text
-    closing = closing if closing and "\n" in closing and not closing.strip() else "\n"
+    spacing = _spacing(body, previous.tail if previous is not None else body.text)
+    if previous is not None:
+        previous.tail = "\n" + spacing.indent
+    else:
+        body.text = "\n" + spacing.indent
+    for group in groups:
+        etree.indent(group, space=spacing.step or "  ", level=spacing.level)
+        group.tail = "\n" + spacing.indent
+    groups[-1].tail = spacing.closing
+
+
+@dataclass(frozen=True)
+class _Spacing:
+    """The whitespace of a parent's children: ``indent`` before each child,
+    ``closing`` before the parent's end tag, ``step`` per level (empty when
+    unclear) and the children's ``level``."""
+
+    indent: str
+    closing: str
+    step: str
+    level: int
+
+
+def _spacing(body: Element, before: str | None) -> _Spacing:
+    """How ``body``'s children are indented, from its text and the whitespace
+    ``before`` the first added group."""
+    closing = before if before and "\n" in before and not before.strip() else "\n"
     lead = body.text or ""
     indent = lead.rsplit("\n", 1)[1] if "\n" in lead and not lead.strip() else ""
     outer = closing.rsplit("\n", 1)[1]  # the indentation of </Scene>
     step = indent[len(outer) :] if indent.startswith(outer) and len(indent) > len(outer) else ""
     level = len(indent) // len(step) if step and len(indent) % len(step) == 0 else 1
-    if previous is not None:
-        previous.tail = "\n" + indent
-    else:
-        body.text = "\n" + indent
-    for group in groups:
-        etree.indent(group, space=step or "  ", level=level)
-        group.tail = "\n" + indent
-    groups[-1].tail = closing
+    return _Spacing(indent, closing, step, level)
 
 
 def _numbers(values: ArrayLike) -> str:
@@ -748,17 +817,7 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
     root.set(
         f"{{{xsd}}}noNamespaceSchemaLocation", "https://www.web3d.org/specifications/x3d-4.0.xsd"
     )
-    head = etree.SubElement(root, "head")
-    from ... import __version__
-
-    # The schema's order in <head>: component, unit, meta.
-    if meters != 1.0:
-        etree.SubElement(
-            head, "unit", category="length", name="metres_per_unit", conversionFactor=repr(meters)
-        )
-    etree.SubElement(head, "meta", name="generator", content=f"shadowgeo {__version__}")
-    if scene.path:
-        etree.SubElement(head, "meta", name="source", content=Path(scene.path).name)
+    _fresh_head(etree.SubElement(root, "head"), scene, meters)
     body = etree.SubElement(root, "Scene")
     used: set[str] = set()
     if up == "Z":
@@ -770,6 +829,28 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
     # ground and its shadows are edge-on).
     for viewpoint in scene.viewpoints or [overview(scene)]:
         body.append(_viewpoint_element(viewpoint, used))
+    _fresh_lights(body, scene, used)
+    _fresh_shapes(body, scene, used, splicer)
+    _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used, "", splicer)
+    etree.indent(root, space="  ")
+    return etree.ElementTree(root)
+
+
+def _fresh_head(head: Element, scene: Scene, meters: float) -> None:
+    """The ``<head>`` of a new document, in the schema's order: unit, meta."""
+    from ... import __version__
+
+    if meters != 1.0:
+        etree.SubElement(
+            head, "unit", category="length", name="metres_per_unit", conversionFactor=repr(meters)
+        )
+    etree.SubElement(head, "meta", name="generator", content=f"shadowgeo {__version__}")
+    if scene.path:
+        etree.SubElement(head, "meta", name="source", content=Path(scene.path).name)
+
+
+def _fresh_lights(body: Element, scene: Scene, used: set[str]) -> None:
+    """The scene's lights (and the headlight off when they light it)."""
     if not scene.headlight and any(light.on for light in scene.lights):
         # lit by its own lights, as in the viewers of the format it came from
         etree.SubElement(body, "NavigationInfo", headlight="false")
@@ -777,6 +858,10 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
         if light.baked:
             body.append(etree.Comment(_BAKED_COMMENT))
         body.append(_light_element(light, used))
+
+
+def _fresh_shapes(body: Element, scene: Scene, used: set[str], splicer: Splicer | None) -> None:
+    """The scene's own shapes (not the added ones), each in a Transform unless at identity."""
     for shape in scene.shapes:
         if shape.role in ADDED_ROLES:
             continue
@@ -788,9 +873,6 @@ def _fresh(scene: Scene, splicer: Splicer | None = None) -> Tree:
             transform.append(node)
         else:
             body.append(node)
-    _add_groups(body, [s for s in scene.shapes if s.role in ADDED_ROLES], used, "", splicer)
-    etree.indent(root, space="  ")
-    return etree.ElementTree(root)
 
 
 def _viewpoint_element(viewpoint: Viewpoint, used: set[str], namespace: str = "") -> Element:
