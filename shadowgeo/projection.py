@@ -44,6 +44,7 @@ from .batchlights import (
     takes_arrays,
 )
 from .errors import GeometryError
+from .lightframe import clip_batch, clip_one
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import ANGLE_SLACK, check_coordinates, check_light
 from .plane import Plane
@@ -654,7 +655,7 @@ class _Projector:
         if not closed:
             arc = np.vstack([[0.0, 0.0], arc])  # a pie slice, convex: its sweep is below pi
         shape = (arc + self.foot2d) * self.scale
-        clipped = _clip_convex(
+        clipped = clip_one(
             np.column_stack([shape, np.ones(len(shape))]), _rectangle_planes(low, high)
         )
         return clipped[:, :2] / clipped[:, 2:3] if len(clipped) >= 3 else np.zeros((0, 2))
@@ -681,14 +682,14 @@ class _Projector:
             corners = np.array(
                 [[low[0], low[1]], [high[0], low[1]], [high[0], high[1]], [low[0], high[1]]]
             )
-            clipped = _clip_convex(np.column_stack([corners, np.ones(4)]), line[None, :])
+            clipped = clip_one(np.column_stack([corners, np.ones(4)]), line[None, :])
         else:
             spread = self.tol.segments(float(np.max(np.abs([low, high]))) / self.scale)
             angles = np.linspace(0.0, 2 * np.pi, spread, endpoint=False)
             radius = math.tan(light.cut_off_angle)
             rim = axis + radius * (np.outer(np.cos(angles), side) + np.outer(np.sin(angles), up))
             homogeneous = np.column_stack([rim, np.zeros(len(rim))]) @ self.H.T
-            clipped = _clip_convex(homogeneous, rectangle_planes)
+            clipped = clip_one(homogeneous, rectangle_planes)
         if len(clipped) < 3:
             return None
         points = clipped[:, :2] / clipped[:, 2:3]
@@ -901,10 +902,10 @@ def _clipped_loops(
 ) -> list[np.ndarray]:
     """Each face clipped to ``planes`` and projected, turned counter-clockwise.
 
-    All faces are clipped at once (:func:`_clip_convex_many`): a mesh whose
+    All faces are clipped at once (:func:`clip_batch`): a mesh whose
     faces mostly leave a small receiver would otherwise pay a Python loop per
     face, for every receiver."""
-    corners, counts = _clip_convex_many(homogeneous[faces], planes)
+    corners, counts = clip_batch(homogeneous[faces], np.full(len(faces), faces.shape[1]), planes)
     kept = counts >= 3
     corners, counts = corners[kept], counts[kept]
     if not len(counts):
@@ -930,42 +931,6 @@ def _clipped_loops(
     return loops
 
 
-def _clip_convex_many(polygons: np.ndarray, planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_clip_convex` of many convex polygons (n, k, d) at once: the
-    clipped corners (n, m, d), each row's first ``counts[i]`` valid, and
-    ``counts`` (n,). The same arithmetic as the one-by-one version."""
-    corners = np.asarray(polygons, dtype=np.float64)
-    counts = np.full(len(corners), corners.shape[1], dtype=np.int64)
-    for plane in planes:
-        width = corners.shape[1]
-        if not len(corners) or width == 0:
-            break
-        slots = np.arange(width)[None, :]
-        used = slots < counts[:, None]
-        side = corners @ plane
-        inside = (side >= 0) & used
-        n_inside = inside.sum(axis=1)
-        if np.all(n_inside == counts):
-            continue
-        following = np.where(slots + 1 < counts[:, None], slots + 1, 0)
-        side_next = np.take_along_axis(side, following, axis=1)
-        inside_next = np.take_along_axis(inside, following, axis=1)
-        crossing = used & (inside != inside_next)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(crossing, side / (side - side_next), 0.0)
-        after = np.take_along_axis(corners, following[:, :, None], axis=1)
-        between = corners + t[:, :, None] * (after - corners)
-        # Slot 2i holds corner i when inside, slot 2i + 1 the crossing after it.
-        candidates = np.stack([corners, between], axis=2).reshape(len(corners), 2 * width, -1)
-        keep = np.stack([inside, crossing], axis=2).reshape(len(corners), 2 * width)
-        keep[n_inside == 0] = False  # wholly outside: nothing left
-        order = np.argsort(~keep, axis=1, kind="stable")
-        counts = keep.sum(axis=1)
-        new_width = int(counts.max()) if len(counts) else 0
-        corners = np.take_along_axis(candidates, order[:, :new_width, None], axis=1)
-    return corners, counts
-
-
 def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(4, 3) homogeneous 2-D half-planes ``l . (U, V, W) >= 0`` of the
     rectangle [low, high] (points (U / W, V / W) with W > 0)."""
@@ -977,31 +942,6 @@ def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:
             [0.0, -1.0, high[1]],
         ]
     )
-
-
-def _clip_convex(polygon: np.ndarray, planes: np.ndarray) -> np.ndarray:
-    """Sutherland-Hodgman: the part of a convex polygon (k, d) in the half-spaces
-    ``planes @ x >= 0`` (p, d). Works in homogeneous coordinates of any size."""
-    for plane in planes:
-        if len(polygon) == 0:
-            break
-        side = polygon @ plane
-        inside = side >= 0
-        if np.all(inside):
-            continue
-        if not np.any(inside):
-            return polygon[:0]
-        out = []
-        count = len(polygon)
-        for i in range(count):
-            j = (i + 1) % count
-            if inside[i]:
-                out.append(polygon[i])
-            if inside[i] != inside[j]:
-                t = side[i] / (side[i] - side[j])
-                out.append(polygon[i] + t * (polygon[j] - polygon[i]))
-        polygon = np.array(out)
-    return polygon
 
 
 def _triangle_loops(
