@@ -143,8 +143,9 @@ def _sides(points: np.ndarray, plane: np.ndarray) -> np.ndarray:
     one (n, d) a row."""
     if plane.ndim == 1:
         side: np.ndarray = points @ plane
-        return side
-    return np.einsum("nkd,nd->nk", points, plane)
+    else:
+        side = np.einsum("nkd,nd->nk", points, plane)
+    return side
 
 
 def _clip_rows(

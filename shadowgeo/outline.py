@@ -19,6 +19,7 @@ import numpy as np
 import shapely
 
 from .arrangement import strictly_convex_loops
+from .cells import grid_cells
 from .lightframe import corner_max, corner_min, misses_boxes, overlapping_boxes, twice_areas
 from .limits import PRODUCT_ROUNDING, TINY
 from .orientation import MAX_COORDINATE
@@ -340,30 +341,21 @@ class _Cutter:
         boxes_needed = np.rint(truth - winding).astype(np.int64)
         # One Clipper2 call: triangle k in cell k of a square grid, scaled alike
         # along x and y, its box within the cell.
-        columns = int(np.ceil(np.sqrt(len(sure))))
-        cell = 2.0 * MAX_COORDINATE / columns
         slot = np.full(len(images), -1, dtype=np.int64)
         slot[sure] = np.arange(len(sure))
-        centre = np.column_stack(
-            [
-                -MAX_COORDINATE + cell * (slot % columns + 0.5),
-                -MAX_COORDINATE + cell * (slot // columns + 0.5),
-            ]
-        )
         middle = 0.5 * (box_low + box_high)
         size = np.maximum((box_high - box_low).max(axis=1), TINY)
-        scale = 0.45 * cell / size
-        mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
+        cells = grid_cells(middle[sure], size[sure])
+        mapped = cells.place(flat_points, slot[point_tri])
         subject = [mapped[o : o + n] for o, n in zip(offsets.tolist(), sizes.tolist(), strict=True)]
         square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
         for k in np.flatnonzero(boxes_needed[sure] != 0):
             face = sure[k]
             half = 0.5 * (box_high[face] - box_low[face])
-            loop = (square * half) * scale[face] + centre[face]
+            loop = (square * half) * cells.scale[k] + cells.centre[k]
             count = int(boxes_needed[face])
             subject += [loop if count > 0 else loop[::-1]] * abs(count)
-        clip = (images[sure] - middle[sure][:, None]) * scale[sure][:, None, None]
-        clip = clip + centre[sure][:, None]
+        clip = cells.place(images[sure], np.arange(len(sure))[:, None])
         region = fill(subject) ^ fill(list(clip))
         out = [loop for loop in region.to_polygons() if len(loop) >= 3]
         nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
@@ -371,14 +363,9 @@ class _Cutter:
             return nothing
         out_sizes = np.array([len(loop) for loop in out], dtype=np.int64)
         out_points = np.concatenate(out)
-        first_points = out_points[np.cumsum(out_sizes) - out_sizes]
-        column = np.clip(np.floor((first_points[:, 0] + MAX_COORDINATE) / cell), 0, columns - 1)
-        row = np.clip(np.floor((first_points[:, 1] + MAX_COORDINATE) / cell), 0, columns - 1)
-        owner = sure[np.minimum((row * columns + column).astype(np.int64), len(sure) - 1)]
-        point_owner = np.repeat(owner, out_sizes)
-        out_points = (out_points - centre[point_owner]) / scale[point_owner, None] + middle[
-            point_owner
-        ]
+        found = cells.cell_of(out_points[np.cumsum(out_sizes) - out_sizes])
+        owner = sure[found]
+        out_points = cells.restore(out_points, np.repeat(found, out_sizes))
         return out_points, out_sizes, owner
 
 

@@ -23,8 +23,8 @@ from typing import Literal, cast
 import numpy as np
 from manifold3d import triangulate
 
+from .cells import column_cells
 from .limits import TINY
-from .orientation import MAX_COORDINATE
 from .polygons import fill, local_scale, region_loops, subtract, unite
 from .simplify import Loops, loops_of
 from .topology import unique_integers
@@ -255,7 +255,6 @@ def stitch(
     # Every other region triangulated in one call: each in its own cell of
     # one column (an affine stretch, which keeps a valid triangulation valid).
     n_regions = len(face_ids)
-    cell = 2.0 * MAX_COORDINATE / n_regions
     # Entries run region by region: each region's box by one reduction per column.
     starts = np.flatnonzero(np.diff(region_of, prepend=-1) != 0)
     present = region_of[starts]
@@ -267,11 +266,7 @@ def stitch(
         high[present, column] = np.maximum.reduceat(values, starts)
     middle = 0.5 * (low + high)
     reach = np.maximum(0.5 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1]), TINY)
-    stretch = np.column_stack([0.5 * MAX_COORDINATE / reach, 0.25 * cell / reach])
-    centre = np.column_stack(
-        [np.zeros(n_regions), -MAX_COORDINATE + cell * (np.arange(n_regions) + 0.5)]
-    )
-    tiled = (flat2d - middle[region_of]) * stretch[region_of] + centre[region_of]
+    tiled = column_cells(reach, middle).place(flat2d, region_of)
     bounds = np.flatnonzero(np.diff(sequence_loop)) + 1
     local = np.asarray(triangulate(np.split(tiled, bounds)), dtype=np.int64).reshape(-1, 3)
     found = sequence[local]

@@ -72,6 +72,7 @@ import shapely
 from numpy.typing import ArrayLike
 
 from . import polygons as poly
+from .cells import column_cells
 from .errors import GeometryError
 from .lightframe import (
     candidate_pairs,
@@ -83,7 +84,6 @@ from .lightframe import (
 )
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import ANGLE_SLACK, MAX_CURVE_SEGMENTS, RELATIVE_ROUNDING
-from .orientation import MAX_COORDINATE
 from .outline import Outline, OutlineSet, make_outlines
 from .seams import face_regions, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
@@ -1126,17 +1126,14 @@ class _SurfaceProjector:
             # One column of cells: Clipper2 sweeps along y, so its scanlines
             # meet one face at a time. x is stretched to the full width.
             n_cells = len(faces)
-            cell = 2.0 * MAX_COORDINATE / n_cells
             slot = np.arange(n_cells)
-            centers = np.column_stack([np.zeros(n_cells), -MAX_COORDINATE + cell * (slot + 0.5)])
-            extents = np.abs(limits.reshape(n_cells, -1)).max(axis=1)
-            scales = np.column_stack([0.5 * MAX_COORDINATE / extents, 0.25 * cell / extents])
+            cells = column_cells(np.abs(limits.reshape(n_cells, -1)).max(axis=1))
             index = np.full(len(full), -1, dtype=np.int64)
             index[faces] = slot
             rows = np.flatnonzero(index[owner] >= 0)
             mine = index[owner[rows]]
-            pieces = flat[rows] * scales[mine, None, :] + centers[mine, None, :]
-            limits = limits * scales[:, None, :] + centers[:, None, :]
+            pieces = cells.place(flat[rows], mine[:, None])
+            limits = cells.place(limits, slot[:, None])
             # (faces in cells apart: crossings are counted within cells)
             region = poly.intersect(
                 poly.fill(list(pieces), cells=mine), poly.fill(list(limits), cells=slot)
@@ -1145,11 +1142,8 @@ class _SurfaceProjector:
             if loops:
                 sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
                 points = np.concatenate(loops)
-                first_y = points[np.cumsum(sizes) - sizes, 1]
-                k = np.floor((first_y + MAX_COORDINATE) / cell).astype(np.int64)
-                k = np.clip(k, 0, n_cells - 1)
-                point_cell = np.repeat(k, sizes)
-                points = (points - centers[point_cell]) / scales[point_cell]
+                k = cells.cell_of(points[np.cumsum(sizes) - sizes])
+                points = cells.restore(points, np.repeat(k, sizes))
                 chunks.append((points, sizes, faces[k]))
         points = np.concatenate([chunk[0] for chunk in chunks])
         sizes = np.concatenate([chunk[1] for chunk in chunks])
