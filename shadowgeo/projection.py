@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass
 from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from . import polygons as poly
 from .batchlights import (
     CASTS,
+    LightFrames,
     array_shadows,
     light_frames,
     pieces,
@@ -273,6 +274,14 @@ class _Call:
         the right kinds take the array path."""
         return self.caster.is_closed and not self.per_triangle and not len(self.receiver)
 
+    @cached_property
+    def directional_tolerance(self) -> Tolerance:
+        """:meth:`scene_tolerance` of any directional light (it has no point
+        of its own), found once."""
+        caster = self.caster
+        scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
+        return Tolerance.for_points(*scene, self.receiver)
+
     def scene_tolerance(self, light: Light) -> Tolerance:
         """``Tolerance.for_points`` of the caster, the light and the receiver."""
         light_points = [light.position] if is_positional(light) else []
@@ -285,101 +294,168 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
     """One shadow per light, each equal to the single-light call's (which
     comes here too, ``single``, for a light that takes the array path).
 
-    The lights that :meth:`_Call.takes_arrays` get their frames together
-    (:func:`light_frames`), then their silhouettes, projected together;
-    the others are set up one by one and, for a closed caster, their
-    silhouettes found together. Each light's outline then goes to the 2-D
-    union on its own. Errors found while setting up come in the lights'
-    order.
+    The stages: :func:`_routes` (the frames of the lights that
+    :meth:`_Call.takes_arrays`, found together), :func:`_set_up` (the others,
+    and those the frames leave unsure, one by one), then the array path's
+    shadows (:func:`_array_stage`) and the outlines of the rest, for a closed
+    caster found together (:func:`_finished`). Each light's outline goes to
+    the 2-D union on its own. Errors found while setting up come in the
+    lights' order.
     """
     context = partial(_light_context, prefix=not single)
-    shadows: list[Shadow | None] = [None] * len(lights)
+    routes = _routes(call, lights)
+    set_up = _set_up(call, lights, routes, context)
+    shadows = dict(set_up.done)
+    if routes.frames is not None:
+        shadows.update(_array_stage(call, lights, routes.frames, set_up.arrays, context))
+    shadows.update(_finished(call, set_up.pending, context))
+    return [shadows[index] for index in range(len(lights))]
+
+
+_Context = Callable[[int], AbstractContextManager[None]]
+
+
+@dataclass(frozen=True)
+class _Routes:
+    """Which road each light takes: ``frames`` of the lights on the array
+    path (None when none is), ``arrays`` the (light index, frame row) that
+    take it as they are, ``checked`` the frame row of those to check first,
+    ``one_by_one`` the lights set up on their own or checked, in order."""
+
+    frames: LightFrames | None
+    arrays: tuple[tuple[int, int], ...]
+    checked: dict[int, int]
+    one_by_one: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class _SetUp:
+    """What setting the lights up gave: the shadows it ``done`` already, the
+    ``arrays`` (light index, frame row) for the array path, sorted, and the
+    ``pending`` projectors whose outlines remain."""
+
+    done: dict[int, Shadow]
+    arrays: list[tuple[int, int]]
+    pending: list[tuple[int, _Projector]]
+
+
+def _routes(call: _Call, lights: Sequence[Light]) -> _Routes:
+    """The lights' roads, the array path's frames found together."""
     arrays = (
         [index for index, light in enumerate(lights) if takes_arrays(light)]
         if call.takes_arrays_at_all
         else []
     )
-    fast: list[tuple[int, int]] = []  # (light index, row of frames)
-    frames = None
-    others = list(range(len(lights)))
-    row_of: dict[int, int] = {}
-    if arrays:
-        frames = light_frames(
-            call.caster,
-            call.plane.normal,
-            call.plane.offset,
-            call.basis,
-            [lights[index] for index in arrays],
-            call.tolerance,
-        )
-        # Most lights: nothing to check or refuse one by one.
-        plain = frames.in_range & (frames.verdict == CASTS) & ~frames.near & frames.inside
-        fast = [(arrays[row], row) for row in np.flatnonzero(plain).tolist()]
-        row_of = {arrays[row]: row for row in np.flatnonzero(~plain).tolist()}
-        taken = set(arrays)
-        others = sorted([index for index in others if index not in taken] + list(row_of))
+    if not arrays:
+        return _Routes(None, (), {}, tuple(range(len(lights))))
+    frames = light_frames(
+        call.caster,
+        call.plane.normal,
+        call.plane.offset,
+        call.basis,
+        [lights[index] for index in arrays],
+        call.tolerance,
+    )
+    # Most lights: nothing to check or refuse one by one.
+    plain = frames.in_range & (frames.verdict == CASTS) & ~frames.near & frames.inside
+    ready = tuple((arrays[row], row) for row in np.flatnonzero(plain).tolist())
+    checked = {arrays[row]: row for row in np.flatnonzero(~plain).tolist()}
+    taken = set(arrays)
+    own = [index for index in range(len(lights)) if index not in taken]
+    return _Routes(frames, ready, checked, tuple(sorted(own + list(checked))))
+
+
+def _set_up(call: _Call, lights: Sequence[Light], routes: _Routes, context: _Context) -> _SetUp:
+    """Each light of ``routes.one_by_one`` set up in turn: a shadow already,
+    a projector pending, or (checked) back to the array path."""
+    done: dict[int, Shadow] = {}
+    arrays = list(routes.arrays)
     pending: list[tuple[int, _Projector]] = []
-    directional_tolerance: Tolerance | None = None  # the same for every directional light
-    for index in others:
-        light = lights[index]
+    for index in routes.one_by_one:
         with context(index):
-            row = row_of.get(index)
-            if row is not None and frames is not None:
-                settled = settle(call.caster, call.plane, frames, row, light, call.tolerance)
-                if settled is not None:
-                    shadows[index] = settled
-                elif frames.inside[row]:
-                    fast.append((index, row))
-                else:
-                    projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
-                    early = projector.prepare()
-                    if early is not None:
-                        shadows[index] = early
-                    else:
-                        pending.append((index, projector))
-                continue
-            if directional_tolerance is None and isinstance(light, DirectionalLight):
-                directional_tolerance = call.scene_tolerance(light)
-            shared = None if is_positional(light) else directional_tolerance
-            projector = call.projector(light, shared)
-            early = projector.prepare()
-        if early is not None:
-            shadows[index] = early
+            outcome = _set_up_one(call, lights[index], routes, index)
+        if isinstance(outcome, _Projector):
+            pending.append((index, outcome))
+        elif outcome is None:
+            arrays.append((index, routes.checked[index]))
         else:
-            pending.append((index, projector))
-    fast.sort()
-    if frames is not None:
-        for first in range(0, len(fast), _LIGHT_CHUNK):
-            rows = fast[first : first + _LIGHT_CHUNK]
-            found = array_shadows(
-                call.caster, call.plane, call.basis, call.offset, frames, lights, rows
-            )
-            for index, row in rows:
-                with context(index):
-                    shadow = next(found)
-                    if shadow is None:  # the general path after all
-                        tolerance = frames.tolerance(row, call.tolerance)
-                        projector = _Projector(call, lights[index], tolerance)
-                        early = projector.prepare()
-                        shadow = early if early is not None else projector.finish()
-                    shadows[index] = shadow
+            done[index] = outcome
+    return _SetUp(done, sorted(arrays), pending)
+
+
+def _set_up_one(
+    call: _Call, light: Light, routes: _Routes, index: int
+) -> Shadow | _Projector | None:
+    """One light set up: its shadow when that already decides it, else its
+    projector; None for a checked light that takes the array path after all."""
+    row = routes.checked.get(index)
+    frames = routes.frames
+    if row is not None and frames is not None:
+        settled = settle(call.caster, call.plane, frames, row, light, call.tolerance)
+        if settled is not None:
+            return settled
+        if frames.inside[row]:
+            return None
+        return _prepared(_Projector(call, light, frames.tolerance(row, call.tolerance)))
+    shared = call.directional_tolerance if isinstance(light, DirectionalLight) else None
+    return _prepared(call.projector(light, shared))
+
+
+def _prepared(projector: _Projector) -> Shadow | _Projector:
+    """The projector set up (:meth:`_Projector.prepare`): the shadow when
+    that decides it, else the projector, ready to finish."""
+    early = projector.prepare()
+    return early if early is not None else projector
+
+
+def _array_stage(
+    call: _Call,
+    lights: Sequence[Light],
+    frames: LightFrames,
+    arrays: list[tuple[int, int]],
+    context: _Context,
+) -> dict[int, Shadow]:
+    """The shadows of the lights on the array path, a chunk at a time; one
+    the arrays turn back takes the general path."""
+    shadows: dict[int, Shadow] = {}
+    for first in range(0, len(arrays), _LIGHT_CHUNK):
+        rows = arrays[first : first + _LIGHT_CHUNK]
+        found = array_shadows(
+            call.caster, call.plane, call.basis, call.offset, frames, lights, rows
+        )
+        for index, row in rows:
+            with context(index):
+                shadow = next(found)
+                if shadow is None:  # the general path after all
+                    tolerance = frames.tolerance(row, call.tolerance)
+                    shadow = _Projector(call, lights[index], tolerance).run()
+                shadows[index] = shadow
+    return shadows
+
+
+def _finished(
+    call: _Call, pending: list[tuple[int, _Projector]], context: _Context
+) -> dict[int, Shadow]:
+    """The pending projectors' shadows; a closed caster's silhouettes are
+    found and projected together, a chunk of lights at a time."""
+    shadows: dict[int, Shadow] = {}
     caster = call.caster
-    if caster.is_closed and not call.per_triangle:
-        for first in range(0, len(pending), _LIGHT_CHUNK):
-            chunk = pending[first : first + _LIGHT_CHUNK]
-            fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
-            outlines = silhouette_loops_many(caster, fronts)
-            projected = projected_many(caster.centered, outlines, [p.H for _, p in chunk])
-            for (index, projector), front, (loops, _), (flat, box) in zip(
-                chunk, fronts, outlines, projected, strict=True
-            ):
-                with context(index):
-                    shadows[index] = projector.finish(_Outline(front, loops, flat, box))
-    else:
+    if not caster.is_closed or call.per_triangle:
         for index, projector in pending:
             with context(index):
                 shadows[index] = projector.finish()
-    return cast("list[Shadow]", shadows)
+        return shadows
+    for first in range(0, len(pending), _LIGHT_CHUNK):
+        chunk = pending[first : first + _LIGHT_CHUNK]
+        fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
+        outlines = silhouette_loops_many(caster, fronts)
+        projected = projected_many(caster.centered, outlines, [p.H for _, p in chunk])
+        for (index, projector), front, (loops, _), (flat, box) in zip(
+            chunk, fronts, outlines, projected, strict=True
+        ):
+            with context(index):
+                shadows[index] = projector.finish(_Outline(front, loops, flat, box))
+    return shadows
 
 
 # Lights whose silhouettes are found together: bounds the memory of the
