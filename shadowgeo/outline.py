@@ -798,38 +798,56 @@ def make_outlines(
     outlines: list[Outline | None] = [None] * len(casters)
     images: list[list[np.ndarray]] = [[] for _ in casters]
     if light_point is None:
-        shared = _framed(cast(np.ndarray, direction))  # a directional light: it has one
-        chosen = [k for k, (_, loops) in enumerate(casters) if loops]
-        every = [casters[k][0][loop] for k in chosen for loop in casters[k][1]]
-        if every:
-            counts = [len(loop) for loop in every]
-            flat = shared.to_frame(np.concatenate(every))
-            pieces = np.split(flat, np.cumsum(counts)[:-1])
-            at = 0
-            for k in chosen:
-                count = len(casters[k][1])
-                images[k], at = pieces[at : at + count], at + count
-                outlines[k] = Outline(None, shared.axis, shared.first, shared.second, direction)
+        _directional_lit(casters, cast(np.ndarray, direction), outlines, images)
     else:
         _point_lit(casters, light_point, margin, outlines, images)
-    single = [k for k, made in enumerate(outlines) if made is not None and len(images[k]) == 1]
-    convex, scales = np.zeros(0, dtype=bool), []
-    if single:
-        loops = [images[k][0] for k in single]
-        sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
-        points = np.concatenate(loops)
-        convex = strictly_convex_loops(points, sizes)
-        starts = np.cumsum(sizes) - sizes
-        scales = _scale_for(np.maximum.reduceat(np.abs(points).max(axis=1), starts)).tolist()
-    taken = set()
-    for position in np.flatnonzero(convex).tolist():
-        k = single[position]
-        cast(Outline, outlines[k]).take_convex(images[k][0], scales[position])
-        taken.add(k)
+    convex = _convex_singles(outlines, images)
+    for k, scale in convex.items():
+        cast(Outline, outlines[k]).take_convex(images[k][0], scale)
     for k, outline in enumerate(outlines):
-        if outline is not None and k not in taken:
+        if outline is not None and k not in convex:
             outline.unite(images[k])
     return outlines
+
+
+def _directional_lit(
+    casters: list[tuple[np.ndarray, list[np.ndarray]]],
+    direction: np.ndarray,
+    outlines: list[Outline | None],
+    images: list[list[np.ndarray]],
+) -> None:
+    """Under a directional light: every caster with loops gets an outline in
+    the one frame they all share, and its loops' images in it."""
+    shared = _framed(direction)
+    chosen = [k for k, (_, loops) in enumerate(casters) if loops]
+    every = [casters[k][0][loop] for k in chosen for loop in casters[k][1]]
+    if not every:
+        return
+    counts = [len(loop) for loop in every]
+    flat = shared.to_frame(np.concatenate(every))
+    pieces = np.split(flat, np.cumsum(counts)[:-1])
+    at = 0
+    for k in chosen:
+        count = len(casters[k][1])
+        images[k], at = pieces[at : at + count], at + count
+        outlines[k] = Outline(None, shared.axis, shared.first, shared.second, direction)
+
+
+def _convex_singles(
+    outlines: list[Outline | None], images: list[list[np.ndarray]]
+) -> dict[int, float]:
+    """The casters whose outline is one strictly convex loop, tested all at
+    once: each with the scale :meth:`Outline.take_convex` takes, in order."""
+    single = [k for k, made in enumerate(outlines) if made is not None and len(images[k]) == 1]
+    if not single:
+        return {}
+    loops = [images[k][0] for k in single]
+    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    points = np.concatenate(loops)
+    convex = strictly_convex_loops(points, sizes)
+    starts = np.cumsum(sizes) - sizes
+    scales = _scale_for(np.maximum.reduceat(np.abs(points).max(axis=1), starts)).tolist()
+    return {single[position]: scales[position] for position in np.flatnonzero(convex).tolist()}
 
 
 def _point_lit(
