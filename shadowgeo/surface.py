@@ -756,6 +756,38 @@ class _SurfaceProjector:
         # the index in self.casters of each chunk's caster and each outlined one
         chunk_casters: list[int] = []
         outlined_casters: list[int] = []
+        silhouettes = self._closed_outlines()
+        for index, caster in enumerate(self.casters):
+            if caster.n_faces == 0:
+                continue
+            silhouette = silhouettes.get(id(caster))
+            if silhouette is not None and silhouette[2] is not None:
+                front, vertices, outline, radius = silhouette
+                low, high = caster.bounds - self.center
+                centre = 0.5 * (low + high)
+                half = 0.5 * (high - low)
+                outlined.append((outline, (vertices, caster.faces[front]), (half, centre, radius)))
+                outlined_casters.append(index)
+                continue
+            # Repeated and zero-area faces cast nothing more: each would be
+            # one more candidate pair per face it covers.
+            faces = caster.faces[self._casting(caster, silhouette) & caster.distinct]
+            chunks.append(caster.vertices[faces] - self.center)
+            chunk_casters.append(index)
+        self.outlined_caster = np.array(outlined_casters, dtype=np.int64)
+        self.triangle_caster = np.repeat(
+            np.array(chunk_casters, dtype=np.int64), [len(chunk) for chunk in chunks]
+        )
+        if not chunks:
+            return np.zeros((0, 3, 3)), outlined
+        return np.concatenate(chunks), outlined
+
+    def _closed_outlines(
+        self,
+    ) -> dict[int, tuple[np.ndarray, np.ndarray, Outline | None, float]]:
+        """Each closed caster (by id) with faces: its light-facing faces, its
+        vertices in the centred frame, its outline (None where it has none)
+        and its bounding radius, all casters' outlines made at once."""
         # Without a light point the light is directional.
         direction = (
             None if self.light_point is not None else cast(DirectionalLight, self.light).direction
@@ -770,44 +802,29 @@ class _SurfaceProjector:
             self.tol.length,
         )
         radii = _bounding_radii(closed)
-        silhouettes = {
+        return {
             id(caster): (front, vertices, outline, radius)
             for caster, (front, _), vertices, outline, radius in zip(
                 closed, found, centred, outlines, radii, strict=True
             )
         }
-        for index, caster in enumerate(self.casters):
-            if caster.n_faces == 0:
-                continue
-            faces = caster.faces
-            if caster.is_closed:
-                front, vertices, outline, radius = silhouettes[id(caster)]
-                if outline is not None:
-                    low, high = caster.bounds - self.center
-                    centre = 0.5 * (low + high)
-                    half = 0.5 * (high - low)
-                    outlined.append((outline, (vertices, faces[front]), (half, centre, radius)))
-                    outlined_casters.append(index)
-                    continue
-                keep = front
-            elif caster is self.surface and self.geometry.single_sheet:
-                # Seen from the surface itself, a blocked ray enters the sheet's
-                # back side first, through a face turned away from the light.
-                keep = caster.facing(light_homogeneous(caster, self.light)) <= 0
-            else:
-                keep = np.ones(caster.n_faces, dtype=bool)
-            # Repeated and zero-area faces cast nothing more: each would be
-            # one more candidate pair per face it covers.
-            faces = faces[keep & caster.distinct]
-            chunks.append(caster.vertices[faces] - self.center)
-            chunk_casters.append(index)
-        self.outlined_caster = np.array(outlined_casters, dtype=np.int64)
-        self.triangle_caster = np.repeat(
-            np.array(chunk_casters, dtype=np.int64), [len(chunk) for chunk in chunks]
-        )
-        if not chunks:
-            return np.zeros((0, 3, 3)), outlined
-        return np.concatenate(chunks), outlined
+
+    def _casting(
+        self,
+        caster: Caster,
+        silhouette: tuple[np.ndarray, np.ndarray, Outline | None, float] | None,
+    ) -> np.ndarray:
+        """(f,) the faces of a caster handled one by one that can cast: a
+        closed caster's light-facing ones, else all."""
+        if silhouette is not None:
+            front: np.ndarray = silhouette[0]
+            return front
+        if caster is self.surface and self.geometry.single_sheet:
+            # Seen from the surface itself, a blocked ray enters the sheet's
+            # back side first, through a face turned away from the light.
+            turned: np.ndarray = caster.facing(light_homogeneous(caster, self.light)) <= 0
+            return turned
+        return np.ones(caster.n_faces, dtype=bool)
 
     def _outline_faces(
         self,
