@@ -225,10 +225,8 @@ def project_shadow(
     call = _Call(
         caster, plane, plane.basis, receiver_points, offset, tolerance, method == "triangles"
     )
-    if not isinstance(light, Sequence):
-        if call.takes_arrays(light):  # the same functions as a batch: the same bits
-            return _many_lights(call, [light], single=True)[0]
-        return call.projector(light).run()
+    if not isinstance(light, Sequence):  # a batch of one: the same stages, the same bits
+        return _many_lights(call, [light], single=True)[0]
     return _many_lights(call, light)
 
 
