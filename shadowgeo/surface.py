@@ -761,8 +761,9 @@ class _SurfaceProjector:
             if caster.n_faces == 0:
                 continue
             silhouette = silhouettes.get(id(caster))
-            if silhouette is not None and silhouette[2] is not None:
-                front, vertices, outline, radius = silhouette
+            outline = None if silhouette is None else silhouette[2]
+            if silhouette is not None and outline is not None:
+                front, vertices, _, radius = silhouette
                 low, high = caster.bounds - self.center
                 centre = 0.5 * (low + high)
                 half = 0.5 * (high - low)
