@@ -506,6 +506,18 @@ def caster_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
     )
 
 
+@dataclass(frozen=True)
+class _OutlinedPairs:
+    """What closed casters' outlines leave: (face, triangle) pairs still to
+    clip, the outline ``pieces`` on faces, and each caster's
+    ``front_triangles`` (t, 3, 3)."""
+
+    faces: np.ndarray
+    triangles: np.ndarray
+    pieces: list[_Pieces]
+    front_triangles: list[np.ndarray]
+
+
 class _SurfaceProjector:
     """One call of :func:`shadow_on_surface`."""
 
@@ -668,40 +680,13 @@ class _SurfaceProjector:
         # (whose image lies within its triangles') settles the faces it lies
         # wholly in front of, and the others keep their pairs with its triangles.
         if outlined:
-            fronts = [front for _, front, _ in outlined]
-            pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
-            if self.exclude is not None:
-                mine = self.outlined_caster[owner[pair_triangles]] == self.exclude[pair_faces]
-                pair_faces, pair_triangles = pair_faces[~mine], pair_triangles[~mine]
-            n_faces = np.int64(len(self.faces))
-            keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
-            near = np.unique(keys)
-            # (caster, face) pairs, by caster, then face
-            owner_of, faces = np.divmod(near, n_faces)
-            together = OutlineSet([outline for outline, _, _ in outlined])
-            bounds = [bound for _, _, bound in outlined]
-            in_front, ahead = self._outline_faces(together, bounds, owner_of, faces, corners)
-            eligible = in_front & ahead
-            extra.append(
-                self._apply_outline(together, faces[eligible], owner_of[eligible], corners, full)
+            found = self._outlined_pairs(
+                outlined, lit_faces, direction, pad, corners, full, len(caster_triangles)
             )
-            # A face reaching behind the light in the caster's frame (a floor
-            # far wider than the lamp is high): its part ahead, the only part
-            # the caster can shade, cut by the outline.
-            partly = in_front & ~ahead
-            extra.append(
-                self._apply_outline_ahead(together, faces[partly], owner_of[partly], corners)
-            )
-            eligible |= partly
-            all_triangles += [front[0][front[1]] for _, front, _ in outlined]
-            # the pairs of each caster's others that it may shadow, by face,
-            # then triangle
-            others = np.flatnonzero(~eligible)
-            reach = together.may_reach(self.vertices, self.faces[faces[others]], owner_of[others])
-            wanted = near[others[reach]]
-            own = np.isin(keys, wanted)
-            receiver_parts.append(pair_faces[own])
-            triangle_parts.append(pair_triangles[own] + len(caster_triangles))
+            receiver_parts.append(found.faces)
+            triangle_parts.append(found.triangles)
+            extra += found.pieces
+            all_triangles += found.front_triangles
         receivers, triangles = np.concatenate(receiver_parts), np.concatenate(triangle_parts)
         caster_triangles = np.concatenate(all_triangles)
         order = np.argsort(receivers, kind="stable")
@@ -719,6 +704,55 @@ class _SurfaceProjector:
         pieces = _pad_polygons([part[0] for part in extra])
         owners = np.concatenate([part[1] for part in extra] + [np.zeros(0, np.int64)])
         return receivers[front], triangles[front], caster_triangles, full, (pieces, owners), counts
+
+    def _outlined_pairs(
+        self,
+        outlined: list[_Outlined],
+        lit_faces: np.ndarray,
+        direction: np.ndarray | None,
+        pad: float,
+        corners: np.ndarray,
+        full: np.ndarray,
+        offset: int,
+    ) -> _OutlinedPairs:
+        """What the closed casters' outlines settle on the lit faces: the
+        faces wholly in front of an outline marked in ``full``, the outline's
+        pieces on others, and the pairs with their front triangles (numbered
+        from ``offset``) that they leave to clip."""
+        pieces: list[_Pieces] = []
+        fronts = [front for _, front, _ in outlined]
+        pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
+        if self.exclude is not None:
+            mine = self.outlined_caster[owner[pair_triangles]] == self.exclude[pair_faces]
+            pair_faces, pair_triangles = pair_faces[~mine], pair_triangles[~mine]
+        n_faces = np.int64(len(self.faces))
+        keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
+        near = np.unique(keys)
+        # (caster, face) pairs, by caster, then face
+        owner_of, faces = np.divmod(near, n_faces)
+        together = OutlineSet([outline for outline, _, _ in outlined])
+        bounds = [bound for _, _, bound in outlined]
+        in_front, ahead = self._outline_faces(together, bounds, owner_of, faces, corners)
+        eligible = in_front & ahead
+        pieces.append(
+            self._apply_outline(together, faces[eligible], owner_of[eligible], corners, full)
+        )
+        # A face reaching behind the light in the caster's frame (a floor
+        # far wider than the lamp is high): its part ahead, the only part
+        # the caster can shade, cut by the outline.
+        partly = in_front & ~ahead
+        pieces.append(self._apply_outline_ahead(together, faces[partly], owner_of[partly], corners))
+        eligible |= partly
+        # the pairs of each caster's others that it may shadow, by face,
+        # then triangle
+        others = np.flatnonzero(~eligible)
+        reach = together.may_reach(self.vertices, self.faces[faces[others]], owner_of[others])
+        wanted = near[others[reach]]
+        own = np.isin(keys, wanted)
+        fronts_triangles = [front[0][front[1]] for _, front, _ in outlined]
+        return _OutlinedPairs(
+            pair_faces[own], pair_triangles[own] + offset, pieces, fronts_triangles
+        )
 
     def _front_pairs(
         self,
