@@ -175,34 +175,9 @@ def light_frames(
     along = toward[:, 0] * normal[0] + toward[:, 1] * normal[1] + toward[:, 2] * normal[2]
     height = np.where(positional, along + d, 0.0)
     cosine = np.where(positional, 0.0, -along)
-    # Tolerances: the caster's box with each positional light in it.
-    if tolerance is not None:
-        scene_scale = np.full(count, tolerance.scale)
-        magnitude = np.full(count, tolerance.magnitude)
-        length = np.full(count, tolerance.length)
-        coplanar = np.full(count, tolerance.coplanar_length)
-        bound = np.full(count, tolerance.bound_length)
-        angle = tolerance.angle
-    else:
-        default = Tolerance()
-        inside_box = np.where(positional[:, None], vectors, low_box)
-        lower = np.minimum(low_box, inside_box)
-        upper = np.maximum(high_box, np.where(positional[:, None], vectors, high_box))
-        box_magnitude = float(np.abs(caster.bounds).max())
-        reach = np.abs(np.where(positional[:, None], vectors, 0.0))
-        magnitude = np.maximum(
-            np.maximum(np.maximum(reach[:, 0], reach[:, 1]), reach[:, 2]), box_magnitude
-        )
-        scene_scale = scene_scales(lower, upper, magnitude)
-        length = np.maximum(default.relative * scene_scale, resolution(magnitude))
-        coplanar = np.maximum(default.coplanar * scene_scale, length)
-        bound = default.bound * scene_scale
-        angle = default.angle
-    verdict = np.full(count, CASTS, dtype=np.int8)
-    verdict[positional & (height < 0)] = BEHIND
-    verdict[positional & (np.abs(height) <= length)] = ON_PLANE
-    verdict[~positional & (cosine < 0)] = BACK
-    verdict[~positional & (np.abs(cosine) <= angle)] = PARALLEL
+    tol = _tolerances(caster, vectors, positional, tolerance)
+    length, coplanar, bound = tol.length, tol.coplanar, tol.bound
+    verdict = _verdicts(positional, height, cosine, length, tol.angle)
     light_h = np.empty((count, 4))
     light_h[:, :3] = np.where(positional[:, None], relative, -vectors)
     light_h[:, 3] = np.where(positional, 1.0, 0.0)
@@ -228,14 +203,75 @@ def light_frames(
         H,
         scale,
         bound,
-        scene_scale,
-        magnitude,
+        tol.scene_scale,
+        tol.magnitude,
         length,
         coplanar,
         inside,
         near,
         np.all(np.abs(vectors) <= LARGEST_COORDINATE, axis=1),
     )
+
+
+@dataclass(frozen=True)
+class _Tolerances:
+    """Each light's tolerances (n,): its scene's scale and magnitude, the
+    length, coplanar length and bound; one angle for all."""
+
+    scene_scale: np.ndarray
+    magnitude: np.ndarray
+    length: np.ndarray
+    coplanar: np.ndarray
+    bound: np.ndarray
+    angle: float
+
+
+def _tolerances(
+    caster: Caster, vectors: np.ndarray, positional: np.ndarray, tolerance: Tolerance | None
+) -> _Tolerances:
+    """``tolerance`` for every light, else each light's own: the caster's box
+    with the light's position in it (a directional light: the box alone)."""
+    count = len(vectors)
+    if tolerance is not None:
+        return _Tolerances(
+            np.full(count, tolerance.scale),
+            np.full(count, tolerance.magnitude),
+            np.full(count, tolerance.length),
+            np.full(count, tolerance.coplanar_length),
+            np.full(count, tolerance.bound_length),
+            tolerance.angle,
+        )
+    low_box, high_box = caster.bounds
+    default = Tolerance()
+    inside_box = np.where(positional[:, None], vectors, low_box)
+    lower = np.minimum(low_box, inside_box)
+    upper = np.maximum(high_box, np.where(positional[:, None], vectors, high_box))
+    box_magnitude = float(np.abs(caster.bounds).max())
+    reach = np.abs(np.where(positional[:, None], vectors, 0.0))
+    magnitude = np.maximum(
+        np.maximum(np.maximum(reach[:, 0], reach[:, 1]), reach[:, 2]), box_magnitude
+    )
+    scene_scale = scene_scales(lower, upper, magnitude)
+    length = np.maximum(default.relative * scene_scale, resolution(magnitude))
+    coplanar = np.maximum(default.coplanar * scene_scale, length)
+    bound = default.bound * scene_scale
+    return _Tolerances(scene_scale, magnitude, length, coplanar, bound, default.angle)
+
+
+def _verdicts(
+    positional: np.ndarray,
+    height: np.ndarray,
+    cosine: np.ndarray,
+    length: np.ndarray,
+    angle: float,
+) -> np.ndarray:
+    """(n,) int8: whether each light casts on the plane's front, or why not."""
+    verdict = np.full(len(positional), CASTS, dtype=np.int8)
+    verdict[positional & (height < 0)] = BEHIND
+    verdict[positional & (np.abs(height) <= length)] = ON_PLANE
+    verdict[~positional & (cosine < 0)] = BACK
+    verdict[~positional & (np.abs(cosine) <= angle)] = PARALLEL
+    return verdict
 
 
 def _scales(bound: np.ndarray) -> np.ndarray:

@@ -32,6 +32,7 @@ __all__ = [
     "Triangles",
     "candidate_pairs",
     "clip_batch",
+    "clip_one",
     "corner_max",
     "corner_min",
     "indexed_triangles",
@@ -85,6 +86,10 @@ def clip_batch(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Clip many convex polygons to half-spaces ``plane . x >= 0``, at once.
 
+    Sutherland-Hodgman over arrays: the one convex clipper of the package (a
+    single polygon is a batch of one, see :func:`clip_one`). Only the rows a
+    plane cuts are rebuilt.
+
     Parameters
     ----------
     points : (n, k, d) float64
@@ -105,18 +110,15 @@ def clip_batch(
     counts = np.asarray(counts, dtype=np.int64).copy()
     n, width, size = points.shape
     planes = np.asarray(planes, dtype=np.float64)
-    if planes.ndim == 2:
-        planes = np.broadcast_to(planes, (n, *planes.shape))
     # Each plane adds at most one corner to a convex polygon.
-    out = np.zeros((n, width + planes.shape[1], size))
+    out = np.zeros((n, width + planes.shape[-2], size))
     out[:, :width] = points
-    for j in range(planes.shape[1]):
+    for j in range(planes.shape[-2]):
         used = int(counts.max()) if n else 0
         if used == 0:
             break
-        side = np.einsum("nkd,nd->nk", out[:, :used], planes[:, j])
-        slots = np.arange(used)
-        valid = slots[None, :] < counts[:, None]
+        side = _sides(out[:, :used], planes[..., j, :])
+        valid = np.arange(used)[None, :] < counts[:, None]
         rows = np.flatnonzero(np.any(valid & (side < 0), axis=1))
         if len(rows) == 0:
             continue
@@ -126,6 +128,24 @@ def clip_batch(
         out[rows, : new.shape[1]] = new
     used = max(int(counts.max()) if n else 0, 1)
     return out[:, :used], counts
+
+
+def clip_one(polygon: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """:func:`clip_batch` of one convex polygon (k, d) by half-spaces (p, d):
+    its clipped corners (k', d), none when it is clipped away."""
+    clipped, counts = clip_batch(polygon[None], np.array([len(polygon)]), planes)
+    corners: np.ndarray = clipped[0, : counts[0]]
+    return corners
+
+
+def _sides(points: np.ndarray, plane: np.ndarray) -> np.ndarray:
+    """(n, k) ``plane . x`` of each corner: one plane (d,) for all rows, or
+    one (n, d) a row."""
+    if plane.ndim == 1:
+        side: np.ndarray = points @ plane
+    else:
+        side = np.einsum("nkd,nd->nk", points, plane)
+    return side
 
 
 def _clip_rows(

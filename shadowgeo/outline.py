@@ -19,6 +19,7 @@ import numpy as np
 import shapely
 
 from .arrangement import strictly_convex_loops
+from .cells import grid_cells
 from .lightframe import corner_max, corner_min, misses_boxes, overlapping_boxes, twice_areas
 from .limits import PRODUCT_ROUNDING, TINY
 from .orientation import MAX_COORDINATE
@@ -272,114 +273,145 @@ class _Cutter:
         box_low[sure], box_high[sure] = low - pad, high + pad
         is_sure = np.zeros(len(images), dtype=bool)
         is_sure[sure] = True
-        keep = is_sure[tri]
-        order = np.lexsort((seg[keep], tri[keep]))
-        tri, seg = tri[keep][order], seg[keep][order]
-        rings = self.boundary()
-        a, b = rings.segments[seg, 0], rings.segments[seg, 1]
-        step = b - a
-        # Liang-Barsky: the part a + t (b - a), t0 <= t <= t1, inside the box.
-        t0, t1 = np.zeros(len(tri)), np.ones(len(tri))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            for axis in range(2):
-                first = (box_low[tri, axis] - a[:, axis]) / step[:, axis]
-                second = (box_high[tri, axis] - a[:, axis]) / step[:, axis]
-                flat = step[:, axis] == 0
-                within = (a[:, axis] >= box_low[tri, axis]) & (a[:, axis] <= box_high[tri, axis])
-                enter = np.where(flat, np.where(within, -np.inf, np.inf), np.minimum(first, second))
-                leave = np.where(flat, np.where(within, np.inf, -np.inf), np.maximum(first, second))
-                t0, t1 = np.maximum(t0, enter), np.minimum(t1, leave)
-        keep = t0 < t1
-        tri, seg, a, b, step, t0, t1 = (x[keep] for x in (tri, seg, a, b, step, t0, t1))
-        start = np.where((t0 == 0)[:, None], a, a + t0[:, None] * step)
-        end = np.where((t1 == 1)[:, None], b, a + t1[:, None] * step)
-        # Pieces grouped by (triangle, loop); each followed by the next of its group.
-        group_key = tri * rings.n_loops + rings.loop[seg]
-        new_group = np.ones(len(tri), dtype=bool)
-        new_group[1:] = group_key[1:] != group_key[:-1]
-        group = np.cumsum(new_group) - 1
-        group_start = np.flatnonzero(new_group)
-        following = np.arange(len(tri)) + 1
-        last = np.append(group_start[1:], len(tri)) - 1
-        following[last] = group_start
-        joined = (seg[following] == rings.following[seg]) & (t1 == 1)
-        # The way along the box, counter-clockwise, from each piece's end to
-        # the next piece's start: the box corners passed.
-        lo, hi = box_low[tri], box_high[tri]
-        leave_at = _perimeter(end, lo, hi)
-        enter_at = _perimeter(start[following], lo, hi)
-        travel = np.mod(enter_at - leave_at, 4.0)
-        steps = np.floor(leave_at)[:, None] + np.arange(1, 5)[None, :]
-        passed = ((steps - leave_at[:, None]) < travel[:, None]) & ~joined[:, None]
-        corner = np.mod(steps, 4).astype(np.int64)
-        corner_x = np.where((corner == 1) | (corner == 2), hi[:, :1], lo[:, :1])
-        corner_y = np.where(corner >= 2, hi[:, 1:], lo[:, 1:])
-        # Each piece: its start, its end, the corners it passes (masked).
-        points = np.concatenate(
-            [start[:, None], end[:, None], np.stack([corner_x, corner_y], axis=2)], axis=1
-        )
-        used = np.concatenate([np.ones((len(tri), 2), dtype=bool), passed], axis=1)
-        flat_points = points[used]
-        point_group = np.repeat(group, used.sum(axis=1))
-        point_tri = tri[group_start][point_group]
+        polygons = _box_polygons(self.boundary(), box_low, box_high, is_sure, tri, seg)
         # The polygon's winding at each triangle's reference point.
-        sizes = np.bincount(point_group, minlength=len(group_start))
-        offsets = np.cumsum(sizes) - sizes
-        successor = np.arange(len(flat_points)) + 1
-        successor[offsets + sizes - 1] = offsets
-        p, q = flat_points, flat_points[successor]
-        rp = reference[point_tri]
+        successor = np.arange(len(polygons.points)) + 1
+        successor[polygons.offsets + polygons.sizes - 1] = polygons.offsets
+        p, q = polygons.points, polygons.points[successor]
+        rp = reference[polygons.point_tri]
         side = (q[:, 0] - p[:, 0]) * (rp[:, 1] - p[:, 1]) - (rp[:, 0] - p[:, 0]) * (
             q[:, 1] - p[:, 1]
         )
         up = (p[:, 1] <= rp[:, 1]) & (rp[:, 1] < q[:, 1]) & (side > 0)
         down = (q[:, 1] <= rp[:, 1]) & (rp[:, 1] < p[:, 1]) & (side < 0)
-        winding = np.bincount(point_tri, weights=up.astype(float) - down, minlength=len(images))
+        winding = np.bincount(
+            polygons.point_tri, weights=up.astype(float) - down, minlength=len(images)
+        )
         region = self._region_of(np.arange(len(images)), owner)
         truth = shapely.contains_xy(region, reference[:, 0], reference[:, 1])
         boxes_needed = np.rint(truth - winding).astype(np.int64)
-        # One Clipper2 call: triangle k in cell k of a square grid, scaled alike
-        # along x and y, its box within the cell.
-        columns = int(np.ceil(np.sqrt(len(sure))))
-        cell = 2.0 * MAX_COORDINATE / columns
-        slot = np.full(len(images), -1, dtype=np.int64)
-        slot[sure] = np.arange(len(sure))
-        centre = np.column_stack(
-            [
-                -MAX_COORDINATE + cell * (slot % columns + 0.5),
-                -MAX_COORDINATE + cell * (slot // columns + 0.5),
-            ]
-        )
-        middle = 0.5 * (box_low + box_high)
-        size = np.maximum((box_high - box_low).max(axis=1), TINY)
-        scale = 0.45 * cell / size
-        mapped = (flat_points - middle[point_tri]) * scale[point_tri, None] + centre[point_tri]
-        subject = [mapped[o : o + n] for o, n in zip(offsets.tolist(), sizes.tolist(), strict=True)]
-        square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-        for k in np.flatnonzero(boxes_needed[sure] != 0):
-            face = sure[k]
-            half = 0.5 * (box_high[face] - box_low[face])
-            loop = (square * half) * scale[face] + centre[face]
-            count = int(boxes_needed[face])
-            subject += [loop if count > 0 else loop[::-1]] * abs(count)
-        clip = (images[sure] - middle[sure][:, None]) * scale[sure][:, None, None]
-        clip = clip + centre[sure][:, None]
-        region = fill(subject) ^ fill(list(clip))
-        out = [loop for loop in region.to_polygons() if len(loop) >= 3]
-        nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
-        if not out:
-            return nothing
-        out_sizes = np.array([len(loop) for loop in out], dtype=np.int64)
-        out_points = np.concatenate(out)
-        first_points = out_points[np.cumsum(out_sizes) - out_sizes]
-        column = np.clip(np.floor((first_points[:, 0] + MAX_COORDINATE) / cell), 0, columns - 1)
-        row = np.clip(np.floor((first_points[:, 1] + MAX_COORDINATE) / cell), 0, columns - 1)
-        owner = sure[np.minimum((row * columns + column).astype(np.int64), len(sure) - 1)]
-        point_owner = np.repeat(owner, out_sizes)
-        out_points = (out_points - centre[point_owner]) / scale[point_owner, None] + middle[
-            point_owner
-        ]
-        return out_points, out_sizes, owner
+        return _cut_in_cells(images, sure, box_low, box_high, polygons, boxes_needed)
+
+
+@dataclass(frozen=True)
+class _BoxPolygons:
+    """Each triangle's polygons inside its box: ``points`` (m, 2) loop by
+    loop, each point's triangle ``point_tri``, the loops' ``sizes`` and
+    ``offsets`` into ``points``."""
+
+    points: np.ndarray
+    point_tri: np.ndarray
+    sizes: np.ndarray
+    offsets: np.ndarray
+
+
+def _box_polygons(
+    rings: _Rings,
+    box_low: np.ndarray,
+    box_high: np.ndarray,
+    is_sure: np.ndarray,
+    tri: np.ndarray,
+    seg: np.ndarray,
+) -> _BoxPolygons:
+    """Each segment clipped to the boxes of the triangles ``is_sure`` marks
+    near it (pairs ``tri``, ``seg``); consecutive pieces of one loop joined
+    along the box's edge, counter-clockwise."""
+    keep = is_sure[tri]
+    order = np.lexsort((seg[keep], tri[keep]))
+    tri, seg = tri[keep][order], seg[keep][order]
+    a, b = rings.segments[seg, 0], rings.segments[seg, 1]
+    step = b - a
+    # Liang-Barsky: the part a + t (b - a), t0 <= t <= t1, inside the box.
+    t0, t1 = np.zeros(len(tri)), np.ones(len(tri))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for axis in range(2):
+            first = (box_low[tri, axis] - a[:, axis]) / step[:, axis]
+            second = (box_high[tri, axis] - a[:, axis]) / step[:, axis]
+            flat = step[:, axis] == 0
+            within = (a[:, axis] >= box_low[tri, axis]) & (a[:, axis] <= box_high[tri, axis])
+            enter = np.where(flat, np.where(within, -np.inf, np.inf), np.minimum(first, second))
+            leave = np.where(flat, np.where(within, np.inf, -np.inf), np.maximum(first, second))
+            t0, t1 = np.maximum(t0, enter), np.minimum(t1, leave)
+    keep = t0 < t1
+    tri, seg, a, b, step, t0, t1 = (x[keep] for x in (tri, seg, a, b, step, t0, t1))
+    start = np.where((t0 == 0)[:, None], a, a + t0[:, None] * step)
+    end = np.where((t1 == 1)[:, None], b, a + t1[:, None] * step)
+    # Pieces grouped by (triangle, loop); each followed by the next of its group.
+    group_key = tri * rings.n_loops + rings.loop[seg]
+    new_group = np.ones(len(tri), dtype=bool)
+    new_group[1:] = group_key[1:] != group_key[:-1]
+    group = np.cumsum(new_group) - 1
+    group_start = np.flatnonzero(new_group)
+    following = np.arange(len(tri)) + 1
+    last = np.append(group_start[1:], len(tri)) - 1
+    following[last] = group_start
+    joined = (seg[following] == rings.following[seg]) & (t1 == 1)
+    # The way along the box, counter-clockwise, from each piece's end to
+    # the next piece's start: the box corners passed.
+    lo, hi = box_low[tri], box_high[tri]
+    leave_at = _perimeter(end, lo, hi)
+    enter_at = _perimeter(start[following], lo, hi)
+    travel = np.mod(enter_at - leave_at, 4.0)
+    steps = np.floor(leave_at)[:, None] + np.arange(1, 5)[None, :]
+    passed = ((steps - leave_at[:, None]) < travel[:, None]) & ~joined[:, None]
+    corner = np.mod(steps, 4).astype(np.int64)
+    corner_x = np.where((corner == 1) | (corner == 2), hi[:, :1], lo[:, :1])
+    corner_y = np.where(corner >= 2, hi[:, 1:], lo[:, 1:])
+    # Each piece: its start, its end, the corners it passes (masked).
+    points = np.concatenate(
+        [start[:, None], end[:, None], np.stack([corner_x, corner_y], axis=2)], axis=1
+    )
+    used = np.concatenate([np.ones((len(tri), 2), dtype=bool), passed], axis=1)
+    flat_points = points[used]
+    point_group = np.repeat(group, used.sum(axis=1))
+    point_tri = tri[group_start][point_group]
+    sizes = np.bincount(point_group, minlength=len(group_start))
+    offsets = np.cumsum(sizes) - sizes
+    return _BoxPolygons(flat_points, point_tri, sizes, offsets)
+
+
+def _cut_in_cells(
+    images: np.ndarray,
+    sure: np.ndarray,
+    box_low: np.ndarray,
+    box_high: np.ndarray,
+    polygons: _BoxPolygons,
+    boxes_needed: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each triangle's part of its box polygons (with ``boxes_needed`` loops
+    of its box added) cut by Clipper2, every triangle in its own cell of one
+    plane, one call: the loops' points, their sizes, and their triangles."""
+    # One Clipper2 call: triangle k in cell k of a square grid, scaled alike
+    # along x and y, its box within the cell.
+    slot = np.full(len(images), -1, dtype=np.int64)
+    slot[sure] = np.arange(len(sure))
+    middle = 0.5 * (box_low + box_high)
+    size = np.maximum((box_high - box_low).max(axis=1), TINY)
+    cells = grid_cells(middle[sure], size[sure])
+    mapped = cells.place(polygons.points, slot[polygons.point_tri])
+    subject = [
+        mapped[o : o + n]
+        for o, n in zip(polygons.offsets.tolist(), polygons.sizes.tolist(), strict=True)
+    ]
+    square = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    for k in np.flatnonzero(boxes_needed[sure] != 0):
+        face = sure[k]
+        half = 0.5 * (box_high[face] - box_low[face])
+        loop = (square * half) * cells.scale[k] + cells.centre[k]
+        count = int(boxes_needed[face])
+        subject += [loop if count > 0 else loop[::-1]] * abs(count)
+    clip = cells.place(images[sure], np.arange(len(sure))[:, None])
+    region = fill(subject) ^ fill(list(clip))
+    out = [loop for loop in region.to_polygons() if len(loop) >= 3]
+    nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
+    if not out:
+        return nothing
+    out_sizes = np.array([len(loop) for loop in out], dtype=np.int64)
+    out_points = np.concatenate(out)
+    found = cells.cell_of(out_points[np.cumsum(out_sizes) - out_sizes])
+    owner = sure[found]
+    out_points = cells.restore(out_points, np.repeat(found, out_sizes))
+    return out_points, out_sizes, owner
 
 
 class Outline(_Cutter):
@@ -811,38 +843,56 @@ def make_outlines(
     outlines: list[Outline | None] = [None] * len(casters)
     images: list[list[np.ndarray]] = [[] for _ in casters]
     if light_point is None:
-        shared = _framed(cast(np.ndarray, direction))  # a directional light: it has one
-        chosen = [k for k, (_, loops) in enumerate(casters) if loops]
-        every = [casters[k][0][loop] for k in chosen for loop in casters[k][1]]
-        if every:
-            counts = [len(loop) for loop in every]
-            flat = shared.to_frame(np.concatenate(every))
-            pieces = np.split(flat, np.cumsum(counts)[:-1])
-            at = 0
-            for k in chosen:
-                count = len(casters[k][1])
-                images[k], at = pieces[at : at + count], at + count
-                outlines[k] = Outline(None, shared.axis, shared.first, shared.second, direction)
+        _directional_lit(casters, cast(np.ndarray, direction), outlines, images)
     else:
         _point_lit(casters, light_point, margin, outlines, images)
-    single = [k for k, made in enumerate(outlines) if made is not None and len(images[k]) == 1]
-    convex, scales = np.zeros(0, dtype=bool), []
-    if single:
-        loops = [images[k][0] for k in single]
-        sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
-        points = np.concatenate(loops)
-        convex = strictly_convex_loops(points, sizes)
-        starts = np.cumsum(sizes) - sizes
-        scales = _scale_for(np.maximum.reduceat(np.abs(points).max(axis=1), starts)).tolist()
-    taken = set()
-    for position in np.flatnonzero(convex).tolist():
-        k = single[position]
-        cast(Outline, outlines[k]).take_convex(images[k][0], scales[position])
-        taken.add(k)
+    convex = _convex_singles(outlines, images)
+    for k, scale in convex.items():
+        cast(Outline, outlines[k]).take_convex(images[k][0], scale)
     for k, outline in enumerate(outlines):
-        if outline is not None and k not in taken:
+        if outline is not None and k not in convex:
             outline.unite(images[k])
     return outlines
+
+
+def _directional_lit(
+    casters: list[tuple[np.ndarray, list[np.ndarray]]],
+    direction: np.ndarray,
+    outlines: list[Outline | None],
+    images: list[list[np.ndarray]],
+) -> None:
+    """Under a directional light: every caster with loops gets an outline in
+    the one frame they all share, and its loops' images in it."""
+    shared = _framed(direction)
+    chosen = [k for k, (_, loops) in enumerate(casters) if loops]
+    every = [casters[k][0][loop] for k in chosen for loop in casters[k][1]]
+    if not every:
+        return
+    counts = [len(loop) for loop in every]
+    flat = shared.to_frame(np.concatenate(every))
+    pieces = np.split(flat, np.cumsum(counts)[:-1])
+    at = 0
+    for k in chosen:
+        count = len(casters[k][1])
+        images[k], at = pieces[at : at + count], at + count
+        outlines[k] = Outline(None, shared.axis, shared.first, shared.second, direction)
+
+
+def _convex_singles(
+    outlines: list[Outline | None], images: list[list[np.ndarray]]
+) -> dict[int, float]:
+    """The casters whose outline is one strictly convex loop, tested all at
+    once: each with the scale :meth:`Outline.take_convex` takes, in order."""
+    single = [k for k, made in enumerate(outlines) if made is not None and len(images[k]) == 1]
+    if not single:
+        return {}
+    loops = [images[k][0] for k in single]
+    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    points = np.concatenate(loops)
+    convex = strictly_convex_loops(points, sizes)
+    starts = np.cumsum(sizes) - sizes
+    scales = _scale_for(np.maximum.reduceat(np.abs(points).max(axis=1), starts)).tolist()
+    return {single[position]: scales[position] for position in np.flatnonzero(convex).tolist()}
 
 
 def _point_lit(

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass
 from functools import cached_property, partial
 from typing import TYPE_CHECKING, Literal, cast, overload
@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 from . import polygons as poly
 from .batchlights import (
     CASTS,
+    LightFrames,
     array_shadows,
     light_frames,
     pieces,
@@ -44,6 +45,7 @@ from .batchlights import (
     takes_arrays,
 )
 from .errors import GeometryError
+from .lightframe import clip_batch, clip_one
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import ANGLE_SLACK, check_coordinates, check_light
 from .plane import Plane
@@ -223,10 +225,8 @@ def project_shadow(
     call = _Call(
         caster, plane, plane.basis, receiver_points, offset, tolerance, method == "triangles"
     )
-    if not isinstance(light, Sequence):
-        if call.takes_arrays(light):  # the same functions as a batch: the same bits
-            return _many_lights(call, [light], single=True)[0]
-        return call.projector(light).run()
+    if not isinstance(light, Sequence):  # a batch of one: the same stages, the same bits
+        return _many_lights(call, [light], single=True)[0]
     return _many_lights(call, light)
 
 
@@ -272,6 +272,14 @@ class _Call:
         the right kinds take the array path."""
         return self.caster.is_closed and not self.per_triangle and not len(self.receiver)
 
+    @cached_property
+    def directional_tolerance(self) -> Tolerance:
+        """:meth:`scene_tolerance` of any directional light (it has no point
+        of its own), found once."""
+        caster = self.caster
+        scene = [caster.bounds if caster.n_faces else np.zeros((0, 3))]
+        return Tolerance.for_points(*scene, self.receiver)
+
     def scene_tolerance(self, light: Light) -> Tolerance:
         """``Tolerance.for_points`` of the caster, the light and the receiver."""
         light_points = [light.position] if is_positional(light) else []
@@ -284,101 +292,168 @@ def _many_lights(call: _Call, lights: Sequence[Light], single: bool = False) -> 
     """One shadow per light, each equal to the single-light call's (which
     comes here too, ``single``, for a light that takes the array path).
 
-    The lights that :meth:`_Call.takes_arrays` get their frames together
-    (:func:`light_frames`), then their silhouettes, projected together;
-    the others are set up one by one and, for a closed caster, their
-    silhouettes found together. Each light's outline then goes to the 2-D
-    union on its own. Errors found while setting up come in the lights'
-    order.
+    The stages: :func:`_routes` (the frames of the lights that
+    :meth:`_Call.takes_arrays`, found together), :func:`_set_up` (the others,
+    and those the frames leave unsure, one by one), then the array path's
+    shadows (:func:`_array_stage`) and the outlines of the rest, for a closed
+    caster found together (:func:`_finished`). Each light's outline goes to
+    the 2-D union on its own. Errors found while setting up come in the
+    lights' order.
     """
     context = partial(_light_context, prefix=not single)
-    shadows: list[Shadow | None] = [None] * len(lights)
+    routes = _routes(call, lights)
+    set_up = _set_up(call, lights, routes, context)
+    shadows = dict(set_up.done)
+    if routes.frames is not None:
+        shadows.update(_array_stage(call, lights, routes.frames, set_up.arrays, context))
+    shadows.update(_finished(call, set_up.pending, context))
+    return [shadows[index] for index in range(len(lights))]
+
+
+_Context = Callable[[int], AbstractContextManager[None]]
+
+
+@dataclass(frozen=True)
+class _Routes:
+    """Which road each light takes: ``frames`` of the lights on the array
+    path (None when none is), ``arrays`` the (light index, frame row) that
+    take it as they are, ``checked`` the frame row of those to check first,
+    ``one_by_one`` the lights set up on their own or checked, in order."""
+
+    frames: LightFrames | None
+    arrays: tuple[tuple[int, int], ...]
+    checked: dict[int, int]
+    one_by_one: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class _SetUp:
+    """What setting the lights up gave: the shadows it ``done`` already, the
+    ``arrays`` (light index, frame row) for the array path, sorted, and the
+    ``pending`` projectors whose outlines remain."""
+
+    done: dict[int, Shadow]
+    arrays: list[tuple[int, int]]
+    pending: list[tuple[int, _Projector]]
+
+
+def _routes(call: _Call, lights: Sequence[Light]) -> _Routes:
+    """The lights' roads, the array path's frames found together."""
     arrays = (
         [index for index, light in enumerate(lights) if takes_arrays(light)]
         if call.takes_arrays_at_all
         else []
     )
-    fast: list[tuple[int, int]] = []  # (light index, row of frames)
-    frames = None
-    others = list(range(len(lights)))
-    row_of: dict[int, int] = {}
-    if arrays:
-        frames = light_frames(
-            call.caster,
-            call.plane.normal,
-            call.plane.offset,
-            call.basis,
-            [lights[index] for index in arrays],
-            call.tolerance,
-        )
-        # Most lights: nothing to check or refuse one by one.
-        plain = frames.in_range & (frames.verdict == CASTS) & ~frames.near & frames.inside
-        fast = [(arrays[row], row) for row in np.flatnonzero(plain).tolist()]
-        row_of = {arrays[row]: row for row in np.flatnonzero(~plain).tolist()}
-        taken = set(arrays)
-        others = sorted([index for index in others if index not in taken] + list(row_of))
+    if not arrays:
+        return _Routes(None, (), {}, tuple(range(len(lights))))
+    frames = light_frames(
+        call.caster,
+        call.plane.normal,
+        call.plane.offset,
+        call.basis,
+        [lights[index] for index in arrays],
+        call.tolerance,
+    )
+    # Most lights: nothing to check or refuse one by one.
+    plain = frames.in_range & (frames.verdict == CASTS) & ~frames.near & frames.inside
+    ready = tuple((arrays[row], row) for row in np.flatnonzero(plain).tolist())
+    checked = {arrays[row]: row for row in np.flatnonzero(~plain).tolist()}
+    taken = set(arrays)
+    own = [index for index in range(len(lights)) if index not in taken]
+    return _Routes(frames, ready, checked, tuple(sorted(own + list(checked))))
+
+
+def _set_up(call: _Call, lights: Sequence[Light], routes: _Routes, context: _Context) -> _SetUp:
+    """Each light of ``routes.one_by_one`` set up in turn: a shadow already,
+    a projector pending, or (checked) back to the array path."""
+    done: dict[int, Shadow] = {}
+    arrays = list(routes.arrays)
     pending: list[tuple[int, _Projector]] = []
-    directional_tolerance: Tolerance | None = None  # the same for every directional light
-    for index in others:
-        light = lights[index]
+    for index in routes.one_by_one:
         with context(index):
-            row = row_of.get(index)
-            if row is not None and frames is not None:
-                settled = settle(call.caster, call.plane, frames, row, light, call.tolerance)
-                if settled is not None:
-                    shadows[index] = settled
-                elif frames.inside[row]:
-                    fast.append((index, row))
-                else:
-                    projector = _Projector(call, light, frames.tolerance(row, call.tolerance))
-                    early = projector.prepare()
-                    if early is not None:
-                        shadows[index] = early
-                    else:
-                        pending.append((index, projector))
-                continue
-            if directional_tolerance is None and isinstance(light, DirectionalLight):
-                directional_tolerance = call.scene_tolerance(light)
-            shared = None if is_positional(light) else directional_tolerance
-            projector = call.projector(light, shared)
-            early = projector.prepare()
-        if early is not None:
-            shadows[index] = early
+            outcome = _set_up_one(call, lights[index], routes, index)
+        if isinstance(outcome, _Projector):
+            pending.append((index, outcome))
+        elif outcome is None:
+            arrays.append((index, routes.checked[index]))
         else:
-            pending.append((index, projector))
-    fast.sort()
-    if frames is not None:
-        for first in range(0, len(fast), _LIGHT_CHUNK):
-            rows = fast[first : first + _LIGHT_CHUNK]
-            found = array_shadows(
-                call.caster, call.plane, call.basis, call.offset, frames, lights, rows
-            )
-            for index, row in rows:
-                with context(index):
-                    shadow = next(found)
-                    if shadow is None:  # the general path after all
-                        tolerance = frames.tolerance(row, call.tolerance)
-                        projector = _Projector(call, lights[index], tolerance)
-                        early = projector.prepare()
-                        shadow = early if early is not None else projector.finish()
-                    shadows[index] = shadow
+            done[index] = outcome
+    return _SetUp(done, sorted(arrays), pending)
+
+
+def _set_up_one(
+    call: _Call, light: Light, routes: _Routes, index: int
+) -> Shadow | _Projector | None:
+    """One light set up: its shadow when that already decides it, else its
+    projector; None for a checked light that takes the array path after all."""
+    row = routes.checked.get(index)
+    frames = routes.frames
+    if row is not None and frames is not None:
+        settled = settle(call.caster, call.plane, frames, row, light, call.tolerance)
+        if settled is not None:
+            return settled
+        if frames.inside[row]:
+            return None
+        return _prepared(_Projector(call, light, frames.tolerance(row, call.tolerance)))
+    shared = call.directional_tolerance if isinstance(light, DirectionalLight) else None
+    return _prepared(call.projector(light, shared))
+
+
+def _prepared(projector: _Projector) -> Shadow | _Projector:
+    """The projector set up (:meth:`_Projector.prepare`): the shadow when
+    that decides it, else the projector, ready to finish."""
+    early = projector.prepare()
+    return early if early is not None else projector
+
+
+def _array_stage(
+    call: _Call,
+    lights: Sequence[Light],
+    frames: LightFrames,
+    arrays: list[tuple[int, int]],
+    context: _Context,
+) -> dict[int, Shadow]:
+    """The shadows of the lights on the array path, a chunk at a time; one
+    the arrays turn back takes the general path."""
+    shadows: dict[int, Shadow] = {}
+    for first in range(0, len(arrays), _LIGHT_CHUNK):
+        rows = arrays[first : first + _LIGHT_CHUNK]
+        found = array_shadows(
+            call.caster, call.plane, call.basis, call.offset, frames, lights, rows
+        )
+        for index, row in rows:
+            with context(index):
+                shadow = next(found)
+                if shadow is None:  # the general path after all
+                    tolerance = frames.tolerance(row, call.tolerance)
+                    shadow = _Projector(call, lights[index], tolerance).run()
+                shadows[index] = shadow
+    return shadows
+
+
+def _finished(
+    call: _Call, pending: list[tuple[int, _Projector]], context: _Context
+) -> dict[int, Shadow]:
+    """The pending projectors' shadows; a closed caster's silhouettes are
+    found and projected together, a chunk of lights at a time."""
+    shadows: dict[int, Shadow] = {}
     caster = call.caster
-    if caster.is_closed and not call.per_triangle:
-        for first in range(0, len(pending), _LIGHT_CHUNK):
-            chunk = pending[first : first + _LIGHT_CHUNK]
-            fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
-            outlines = silhouette_loops_many(caster, fronts)
-            projected = projected_many(caster.centered, outlines, [p.H for _, p in chunk])
-            for (index, projector), front, (loops, _), (flat, box) in zip(
-                chunk, fronts, outlines, projected, strict=True
-            ):
-                with context(index):
-                    shadows[index] = projector.finish(_Outline(front, loops, flat, box))
-    else:
+    if not caster.is_closed or call.per_triangle:
         for index, projector in pending:
             with context(index):
                 shadows[index] = projector.finish()
-    return cast("list[Shadow]", shadows)
+        return shadows
+    for first in range(0, len(pending), _LIGHT_CHUNK):
+        chunk = pending[first : first + _LIGHT_CHUNK]
+        fronts = [caster.facing(projector.light_h) > 0 for _, projector in chunk]
+        outlines = silhouette_loops_many(caster, fronts)
+        projected = projected_many(caster.centered, outlines, [p.H for _, p in chunk])
+        for (index, projector), front, (loops, _), (flat, box) in zip(
+            chunk, fronts, outlines, projected, strict=True
+        ):
+            with context(index):
+                shadows[index] = projector.finish(_Outline(front, loops, flat, box))
+    return shadows
 
 
 # Lights whose silhouettes are found together: bounds the memory of the
@@ -654,7 +729,7 @@ class _Projector:
         if not closed:
             arc = np.vstack([[0.0, 0.0], arc])  # a pie slice, convex: its sweep is below pi
         shape = (arc + self.foot2d) * self.scale
-        clipped = _clip_convex(
+        clipped = clip_one(
             np.column_stack([shape, np.ones(len(shape))]), _rectangle_planes(low, high)
         )
         return clipped[:, :2] / clipped[:, 2:3] if len(clipped) >= 3 else np.zeros((0, 2))
@@ -681,14 +756,14 @@ class _Projector:
             corners = np.array(
                 [[low[0], low[1]], [high[0], low[1]], [high[0], high[1]], [low[0], high[1]]]
             )
-            clipped = _clip_convex(np.column_stack([corners, np.ones(4)]), line[None, :])
+            clipped = clip_one(np.column_stack([corners, np.ones(4)]), line[None, :])
         else:
             spread = self.tol.segments(float(np.max(np.abs([low, high]))) / self.scale)
             angles = np.linspace(0.0, 2 * np.pi, spread, endpoint=False)
             radius = math.tan(light.cut_off_angle)
             rim = axis + radius * (np.outer(np.cos(angles), side) + np.outer(np.sin(angles), up))
             homogeneous = np.column_stack([rim, np.zeros(len(rim))]) @ self.H.T
-            clipped = _clip_convex(homogeneous, rectangle_planes)
+            clipped = clip_one(homogeneous, rectangle_planes)
         if len(clipped) < 3:
             return None
         points = clipped[:, :2] / clipped[:, 2:3]
@@ -901,10 +976,10 @@ def _clipped_loops(
 ) -> list[np.ndarray]:
     """Each face clipped to ``planes`` and projected, turned counter-clockwise.
 
-    All faces are clipped at once (:func:`_clip_convex_many`): a mesh whose
+    All faces are clipped at once (:func:`clip_batch`): a mesh whose
     faces mostly leave a small receiver would otherwise pay a Python loop per
     face, for every receiver."""
-    corners, counts = _clip_convex_many(homogeneous[faces], planes)
+    corners, counts = clip_batch(homogeneous[faces], np.full(len(faces), faces.shape[1]), planes)
     kept = counts >= 3
     corners, counts = corners[kept], counts[kept]
     if not len(counts):
@@ -930,42 +1005,6 @@ def _clipped_loops(
     return loops
 
 
-def _clip_convex_many(polygons: np.ndarray, planes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_clip_convex` of many convex polygons (n, k, d) at once: the
-    clipped corners (n, m, d), each row's first ``counts[i]`` valid, and
-    ``counts`` (n,). The same arithmetic as the one-by-one version."""
-    corners = np.asarray(polygons, dtype=np.float64)
-    counts = np.full(len(corners), corners.shape[1], dtype=np.int64)
-    for plane in planes:
-        width = corners.shape[1]
-        if not len(corners) or width == 0:
-            break
-        slots = np.arange(width)[None, :]
-        used = slots < counts[:, None]
-        side = corners @ plane
-        inside = (side >= 0) & used
-        n_inside = inside.sum(axis=1)
-        if np.all(n_inside == counts):
-            continue
-        following = np.where(slots + 1 < counts[:, None], slots + 1, 0)
-        side_next = np.take_along_axis(side, following, axis=1)
-        inside_next = np.take_along_axis(inside, following, axis=1)
-        crossing = used & (inside != inside_next)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(crossing, side / (side - side_next), 0.0)
-        after = np.take_along_axis(corners, following[:, :, None], axis=1)
-        between = corners + t[:, :, None] * (after - corners)
-        # Slot 2i holds corner i when inside, slot 2i + 1 the crossing after it.
-        candidates = np.stack([corners, between], axis=2).reshape(len(corners), 2 * width, -1)
-        keep = np.stack([inside, crossing], axis=2).reshape(len(corners), 2 * width)
-        keep[n_inside == 0] = False  # wholly outside: nothing left
-        order = np.argsort(~keep, axis=1, kind="stable")
-        counts = keep.sum(axis=1)
-        new_width = int(counts.max()) if len(counts) else 0
-        corners = np.take_along_axis(candidates, order[:, :new_width, None], axis=1)
-    return corners, counts
-
-
 def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:
     """(4, 3) homogeneous 2-D half-planes ``l . (U, V, W) >= 0`` of the
     rectangle [low, high] (points (U / W, V / W) with W > 0)."""
@@ -977,31 +1016,6 @@ def _rectangle_planes(low: np.ndarray, high: np.ndarray) -> np.ndarray:
             [0.0, -1.0, high[1]],
         ]
     )
-
-
-def _clip_convex(polygon: np.ndarray, planes: np.ndarray) -> np.ndarray:
-    """Sutherland-Hodgman: the part of a convex polygon (k, d) in the half-spaces
-    ``planes @ x >= 0`` (p, d). Works in homogeneous coordinates of any size."""
-    for plane in planes:
-        if len(polygon) == 0:
-            break
-        side = polygon @ plane
-        inside = side >= 0
-        if np.all(inside):
-            continue
-        if not np.any(inside):
-            return polygon[:0]
-        out = []
-        count = len(polygon)
-        for i in range(count):
-            j = (i + 1) % count
-            if inside[i]:
-                out.append(polygon[i])
-            if inside[i] != inside[j]:
-                t = side[i] / (side[i] - side[j])
-                out.append(polygon[i] + t * (polygon[j] - polygon[i]))
-        polygon = np.array(out)
-    return polygon
 
 
 def _triangle_loops(

@@ -18,13 +18,14 @@ The regions are then triangulated with those shared points, face by face.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Literal, cast
 
 import numpy as np
 from manifold3d import triangulate
 
+from .cells import column_cells
 from .limits import TINY
-from .orientation import MAX_COORDINATE
 from .polygons import fill, local_scale, region_loops, subtract, unite
 from .simplify import Loops, loops_of
 from .topology import unique_integers
@@ -126,7 +127,60 @@ def stitch(
     point_face = np.repeat(face_ids[loop_region], loop_sizes)
     point_region = np.repeat(loop_region, loop_sizes)
     corners = _corners_2d(vertices, faces, origin, u, v, face_ids)  # (r, 3, 2)
+    placed = _on_edges(flat, corners, point_region, eps)
+    face_vertices = faces[point_face]  # (P, 3)
+    clusters = _edge_clusters(vertices, face_vertices, placed, eps)
+    ids, points = _point_ids(vertices, frames, flat, point_face, face_vertices, placed, clusters)
+    # Each point's canonical parameter on its edge: the cluster's, exactly.
+    canonical = placed.param.copy()
+    cluster_t = clusters.t[clusters.point_cluster]
+    canonical[clusters.on] = np.where(clusters.forward, cluster_t, 1.0 - cluster_t)
+    loop_of = np.repeat(np.arange(len(loop_sizes)), loop_sizes)
+    ids, loop_of, point_face, edge_of, canonical, corner = _drop_repeats(
+        loop_of, ids, point_face, placed.edge_of, canonical, placed.corner
+    )
+    sequence, sequence_loop = _insert_edge_points(
+        ids,
+        loop_of,
+        faces[point_face],
+        edge_of,
+        canonical,
+        corner,
+        (clusters.key, clusters.t),
+        np.int64(len(vertices)),
+    )
+    walk = _walk(points, frames, face_ids, regions, sequence, sequence_loop)
+    if len(walk.sequence) == 0:
+        return points, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
+    direct, walk = _direct_triangles(walk, loop_region, len(loop_sizes), len(face_ids))
+    direct_owners = face_ids[direct[1]]
+    if len(walk.sequence) == 0:
+        return points, direct[0], direct_owners
+    found, owners = _cell_triangles(walk, len(face_ids))
+    return (
+        points,
+        np.concatenate([direct[0], found]),
+        np.concatenate([direct_owners, face_ids[owners]]),
+    )
 
+
+@dataclass(frozen=True)
+class _OnEdges:
+    """Where each region point (P of them) lies on its face: ``corner`` the
+    face corner it is at (-1: none), ``edge_of`` the edge ``j`` (corner j to
+    j + 1) it lies on otherwise (-1: none), ``param`` its parameter along
+    that edge from corner j."""
+
+    corner: np.ndarray
+    edge_of: np.ndarray
+    param: np.ndarray
+
+
+def _on_edges(
+    flat: np.ndarray, corners: np.ndarray, point_region: np.ndarray, eps: float
+) -> _OnEdges:
+    """Step 1: region corners within ``eps`` of a face corner, else of a face
+    edge."""
     # Distance of each point to each face edge j (corner j to j + 1), inside
     # positive, component by component: (P, 3) arrays, one column per edge.
     edge = np.roll(corners, -1, axis=1) - corners
@@ -153,20 +207,38 @@ def stitch(
     one = np.flatnonzero(~at_corner & np.isfinite(smallest))
     edge_of[one] = nearest_edge[one]
     param[one] = along[one, nearest_edge[one]]
+    return _OnEdges(corner, edge_of, param)
 
-    face_vertices = faces[point_face]  # (P, 3)
+
+@dataclass(frozen=True)
+class _EdgeClusters:
+    """The points on mesh edges, merged: ``on`` the region points on an edge,
+    ``forward`` whether their face runs that edge from its lower vertex
+    index, ``point_cluster`` each one's cluster; per cluster its edge ``key``
+    (low * n_vertices + high), parameter ``t`` from the lower vertex and 3-D
+    ``points``."""
+
+    on: np.ndarray
+    forward: np.ndarray
+    point_cluster: np.ndarray
+    key: np.ndarray
+    t: np.ndarray
+    points: np.ndarray
+
+
+def _edge_clusters(
+    vertices: np.ndarray, face_vertices: np.ndarray, placed: _OnEdges, eps: float
+) -> _EdgeClusters:
+    """Step 2: the parameters found on an edge, from both faces, merged where
+    they lie within ``eps``; one canonical parameter per cluster, from the
+    lower index."""
     n_vertices = np.int64(len(vertices))
-    ids = np.full(n_points, -1, dtype=np.int64)
-    is_corner = corner >= 0
-    ids[is_corner] = face_vertices[is_corner, corner[is_corner]]
-
-    # Edge points: one canonical parameter per cluster, from the lower index.
-    on = np.flatnonzero(edge_of >= 0)
-    j = edge_of[on]
+    on = np.flatnonzero(placed.edge_of >= 0)
+    j = placed.edge_of[on]
     a = face_vertices[on, j]
     b = face_vertices[on, (j + 1) % 3]
     low, high = np.minimum(a, b), np.maximum(a, b)
-    t = np.where(a == low, param[on], 1.0 - param[on])
+    t = np.where(a == low, placed.param[on], 1.0 - placed.param[on])
     key = low * n_vertices + high
     order = np.lexsort((t, key))
     key_sorted, t_sorted = key[order], t[order]
@@ -184,10 +256,29 @@ def stitch(
     )
     point_cluster = np.empty(len(on), dtype=np.int64)
     point_cluster[order] = cluster
-    ids[on] = n_vertices + point_cluster
+    return _EdgeClusters(on, a == low, point_cluster, cluster_key, cluster_t, edge_points)
 
+
+def _point_ids(
+    vertices: np.ndarray,
+    frames: tuple[np.ndarray, np.ndarray, np.ndarray],
+    flat: np.ndarray,
+    point_face: np.ndarray,
+    face_vertices: np.ndarray,
+    placed: _OnEdges,
+    clusters: _EdgeClusters,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each region point's index into the points: mesh vertices first, then
+    edge points, then interior points (lifted from their face's frame)."""
+    origin, u, v = frames
+    n_vertices = np.int64(len(vertices))
+    ids = np.full(len(flat), -1, dtype=np.int64)
+    corner = placed.corner
+    is_corner = corner >= 0
+    ids[is_corner] = face_vertices[is_corner, corner[is_corner]]
+    ids[clusters.on] = n_vertices + clusters.point_cluster
     inner = np.flatnonzero(ids < 0)
-    base = n_vertices + len(cluster_t)
+    base = n_vertices + len(clusters.t)
     ids[inner] = base + np.arange(len(inner))
     frame_origin, frame_u, frame_v = (
         origin[point_face[inner]],
@@ -195,25 +286,36 @@ def stitch(
         v[point_face[inner]],
     )
     inner_points = frame_origin + flat[inner, :1] * frame_u + flat[inner, 1:] * frame_v
-    points = np.concatenate([vertices, edge_points, inner_points])
+    return ids, np.concatenate([vertices, clusters.points, inner_points])
 
-    # Each point's canonical parameter on its edge: the cluster's, exactly.
-    canonical = param.copy()
-    canonical[on] = np.where(a == low, cluster_t[point_cluster], 1.0 - cluster_t[point_cluster])
-    loop_of = np.repeat(np.arange(len(loop_sizes)), loop_sizes)
-    ids, loop_of, point_face, edge_of, canonical, corner = _drop_repeats(
-        loop_of, ids, point_face, edge_of, canonical, corner
-    )
-    sequence, sequence_loop = _insert_edge_points(
-        ids,
-        loop_of,
-        faces[point_face],
-        edge_of,
-        canonical,
-        corner,
-        (cluster_key, cluster_t),
-        n_vertices,
-    )
+
+@dataclass(frozen=True)
+class _Walk:
+    """The loops as point sequences: each entry's point index ``sequence``,
+    its ``loop``, its region and its point in the face's frame (``flat``)."""
+
+    sequence: np.ndarray
+    loop: np.ndarray
+    region: np.ndarray
+    flat: np.ndarray
+
+    def taken(self, keep: np.ndarray) -> _Walk:
+        """The entries ``keep`` (a mask) only."""
+        return _Walk(self.sequence[keep], self.loop[keep], self.region[keep], self.flat[keep])
+
+
+def _walk(
+    points: np.ndarray,
+    frames: tuple[np.ndarray, np.ndarray, np.ndarray],
+    face_ids: np.ndarray,
+    regions: Loops,
+    sequence: np.ndarray,
+    sequence_loop: np.ndarray,
+) -> _Walk:
+    """The stitched loops back in their faces' frames, loops below three
+    points dropped."""
+    origin, u, v = frames
+    loop_sizes, loop_region = regions[1], regions[2]
     sequence_face = face_ids[loop_region[sequence_loop]]
     relative = points[sequence] - origin[sequence_face]
     flat2d = np.column_stack(
@@ -224,38 +326,37 @@ def stitch(
     )
     sizes = np.bincount(sequence_loop, minlength=len(loop_sizes))
     keep = sizes[sequence_loop] >= 3
-    sequence, sequence_loop, flat2d = sequence[keep], sequence_loop[keep], flat2d[keep]
-    if len(sequence) == 0:
-        return points, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
-    # A region that is one triangle (a face wholly in shadow, most often) is
-    # its own triangulation.
-    region_of = loop_region[sequence_loop]
-    loop_sizes_kept = np.bincount(sequence_loop, minlength=len(loop_sizes))
-    loops_per_region = np.bincount(loop_region[loop_sizes_kept > 0], minlength=len(face_ids))
-    entry_region_loops = loops_per_region[region_of]
-    single = (entry_region_loops == 1) & (loop_sizes_kept[sequence_loop] == 3)
-    first_of = np.flatnonzero(single & (np.diff(sequence_loop, prepend=-1) != 0))
+    return _Walk(sequence, sequence_loop, loop_region[sequence_loop], flat2d).taken(keep)
+
+
+def _direct_triangles(
+    walk: _Walk, loop_region: np.ndarray, n_loops: int, n_regions: int
+) -> tuple[tuple[np.ndarray, np.ndarray], _Walk]:
+    """A region that is one triangle (a face wholly in shadow, most often) is
+    its own triangulation: those triangles and their regions, and the walk
+    left."""
+    loop_sizes_kept = np.bincount(walk.loop, minlength=n_loops)
+    loops_per_region = np.bincount(loop_region[loop_sizes_kept > 0], minlength=n_regions)
+    entry_region_loops = loops_per_region[walk.region]
+    single = (entry_region_loops == 1) & (loop_sizes_kept[walk.loop] == 3)
+    first_of = np.flatnonzero(single & (np.diff(walk.loop, prepend=-1) != 0))
+    flat2d = walk.flat
     corner_a, corner_b, corner_c = flat2d[first_of], flat2d[first_of + 1], flat2d[first_of + 2]
     doubled = (corner_b[:, 0] - corner_a[:, 0]) * (corner_c[:, 1] - corner_a[:, 1]) - (
         corner_b[:, 1] - corner_a[:, 1]
     ) * (corner_c[:, 0] - corner_a[:, 0])
     first_of = first_of[doubled > 0]
-    direct = sequence[first_of[:, None] + np.arange(3)]
-    direct_owners = face_ids[region_of[first_of]]
-    rest = np.ones(len(sequence), dtype=bool)
+    direct = walk.sequence[first_of[:, None] + np.arange(3)]
+    rest = np.ones(len(walk.sequence), dtype=bool)
     rest[(first_of[:, None] + np.arange(3)).reshape(-1)] = False
-    sequence, sequence_loop, flat2d, region_of = (
-        sequence[rest],
-        sequence_loop[rest],
-        flat2d[rest],
-        region_of[rest],
-    )
-    if len(sequence) == 0:
-        return points, direct, direct_owners
-    # Every other region triangulated in one call: each in its own cell of
-    # one column (an affine stretch, which keeps a valid triangulation valid).
-    n_regions = len(face_ids)
-    cell = 2.0 * MAX_COORDINATE / n_regions
+    return (direct, walk.region[first_of]), walk.taken(rest)
+
+
+def _cell_triangles(walk: _Walk, n_regions: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every other region triangulated in one call: each in its own cell of
+    one column (an affine stretch, which keeps a valid triangulation valid).
+    The triangles and their regions."""
+    region_of, flat2d = walk.region, walk.flat
     # Entries run region by region: each region's box by one reduction per column.
     starts = np.flatnonzero(np.diff(region_of, prepend=-1) != 0)
     present = region_of[starts]
@@ -267,25 +368,16 @@ def stitch(
         high[present, column] = np.maximum.reduceat(values, starts)
     middle = 0.5 * (low + high)
     reach = np.maximum(0.5 * np.maximum(high[:, 0] - low[:, 0], high[:, 1] - low[:, 1]), TINY)
-    stretch = np.column_stack([0.5 * MAX_COORDINATE / reach, 0.25 * cell / reach])
-    centre = np.column_stack(
-        [np.zeros(n_regions), -MAX_COORDINATE + cell * (np.arange(n_regions) + 0.5)]
-    )
-    tiled = (flat2d - middle[region_of]) * stretch[region_of] + centre[region_of]
-    bounds = np.flatnonzero(np.diff(sequence_loop)) + 1
+    tiled = column_cells(reach, middle).place(flat2d, region_of)
+    bounds = np.flatnonzero(np.diff(walk.loop)) + 1
     local = np.asarray(triangulate(np.split(tiled, bounds)), dtype=np.int64).reshape(-1, 3)
-    found = sequence[local]
-    owners = face_ids[region_of[local[:, 0]]]
+    found = walk.sequence[local]
     # A loop that touches itself names one point twice: drop the slivers
     # between its two copies.
     proper = (
         (found[:, 0] != found[:, 1]) & (found[:, 1] != found[:, 2]) & (found[:, 2] != found[:, 0])
     )
-    return (
-        points,
-        np.concatenate([direct, found[proper]]),
-        np.concatenate([direct_owners, owners[proper]]),
-    )
+    return found[proper], region_of[local[:, 0]][proper]
 
 
 def _drop_repeats(

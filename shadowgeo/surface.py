@@ -72,6 +72,7 @@ import shapely
 from numpy.typing import ArrayLike
 
 from . import polygons as poly
+from .cells import column_cells
 from .errors import GeometryError
 from .lightframe import (
     candidate_pairs,
@@ -83,7 +84,6 @@ from .lightframe import (
 )
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
 from .limits import ANGLE_SLACK, MAX_CURVE_SEGMENTS, RELATIVE_ROUNDING
-from .orientation import MAX_COORDINATE
 from .outline import Outline, OutlineSet, make_outlines
 from .seams import face_regions, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
@@ -506,6 +506,18 @@ def caster_list(casters: MeshLike | Sequence[MeshLike]) -> list[MeshLike]:
     )
 
 
+@dataclass(frozen=True)
+class _OutlinedPairs:
+    """What closed casters' outlines leave: (face, triangle) pairs still to
+    clip, the outline ``pieces`` on faces, and each caster's
+    ``front_triangles`` (t, 3, 3)."""
+
+    faces: np.ndarray
+    triangles: np.ndarray
+    pieces: list[_Pieces]
+    front_triangles: list[np.ndarray]
+
+
 class _SurfaceProjector:
     """One call of :func:`shadow_on_surface`."""
 
@@ -668,40 +680,13 @@ class _SurfaceProjector:
         # (whose image lies within its triangles') settles the faces it lies
         # wholly in front of, and the others keep their pairs with its triangles.
         if outlined:
-            fronts = [front for _, front, _ in outlined]
-            pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
-            if self.exclude is not None:
-                mine = self.outlined_caster[owner[pair_triangles]] == self.exclude[pair_faces]
-                pair_faces, pair_triangles = pair_faces[~mine], pair_triangles[~mine]
-            n_faces = np.int64(len(self.faces))
-            keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
-            near = np.unique(keys)
-            # (caster, face) pairs, by caster, then face
-            owner_of, faces = np.divmod(near, n_faces)
-            together = OutlineSet([outline for outline, _, _ in outlined])
-            bounds = [bound for _, _, bound in outlined]
-            in_front, ahead = self._outline_faces(together, bounds, owner_of, faces, corners)
-            eligible = in_front & ahead
-            extra.append(
-                self._apply_outline(together, faces[eligible], owner_of[eligible], corners, full)
+            found = self._outlined_pairs(
+                outlined, lit_faces, direction, pad, corners, full, len(caster_triangles)
             )
-            # A face reaching behind the light in the caster's frame (a floor
-            # far wider than the lamp is high): its part ahead, the only part
-            # the caster can shade, cut by the outline.
-            partly = in_front & ~ahead
-            extra.append(
-                self._apply_outline_ahead(together, faces[partly], owner_of[partly], corners)
-            )
-            eligible |= partly
-            all_triangles += [front[0][front[1]] for _, front, _ in outlined]
-            # the pairs of each caster's others that it may shadow, by face,
-            # then triangle
-            others = np.flatnonzero(~eligible)
-            reach = together.may_reach(self.vertices, self.faces[faces[others]], owner_of[others])
-            wanted = near[others[reach]]
-            own = np.isin(keys, wanted)
-            receiver_parts.append(pair_faces[own])
-            triangle_parts.append(pair_triangles[own] + len(caster_triangles))
+            receiver_parts.append(found.faces)
+            triangle_parts.append(found.triangles)
+            extra += found.pieces
+            all_triangles += found.front_triangles
         receivers, triangles = np.concatenate(receiver_parts), np.concatenate(triangle_parts)
         caster_triangles = np.concatenate(all_triangles)
         order = np.argsort(receivers, kind="stable")
@@ -719,6 +704,55 @@ class _SurfaceProjector:
         pieces = _pad_polygons([part[0] for part in extra])
         owners = np.concatenate([part[1] for part in extra] + [np.zeros(0, np.int64)])
         return receivers[front], triangles[front], caster_triangles, full, (pieces, owners), counts
+
+    def _outlined_pairs(
+        self,
+        outlined: list[_Outlined],
+        lit_faces: np.ndarray,
+        direction: np.ndarray | None,
+        pad: float,
+        corners: np.ndarray,
+        full: np.ndarray,
+        offset: int,
+    ) -> _OutlinedPairs:
+        """What the closed casters' outlines settle on the lit faces: the
+        faces wholly in front of an outline marked in ``full``, the outline's
+        pieces on others, and the pairs with their front triangles (numbered
+        from ``offset``) that they leave to clip."""
+        pieces: list[_Pieces] = []
+        fronts = [front for _, front, _ in outlined]
+        pair_faces, pair_triangles, owner = self._front_pairs(fronts, lit_faces, direction, pad)
+        if self.exclude is not None:
+            mine = self.outlined_caster[owner[pair_triangles]] == self.exclude[pair_faces]
+            pair_faces, pair_triangles = pair_faces[~mine], pair_triangles[~mine]
+        n_faces = np.int64(len(self.faces))
+        keys = owner[pair_triangles] * n_faces + pair_faces  # (caster, face) of each pair
+        near = np.unique(keys)
+        # (caster, face) pairs, by caster, then face
+        owner_of, faces = np.divmod(near, n_faces)
+        together = OutlineSet([outline for outline, _, _ in outlined])
+        bounds = [bound for _, _, bound in outlined]
+        in_front, ahead = self._outline_faces(together, bounds, owner_of, faces, corners)
+        eligible = in_front & ahead
+        pieces.append(
+            self._apply_outline(together, faces[eligible], owner_of[eligible], corners, full)
+        )
+        # A face reaching behind the light in the caster's frame (a floor
+        # far wider than the lamp is high): its part ahead, the only part
+        # the caster can shade, cut by the outline.
+        partly = in_front & ~ahead
+        pieces.append(self._apply_outline_ahead(together, faces[partly], owner_of[partly], corners))
+        eligible |= partly
+        # the pairs of each caster's others that it may shadow, by face,
+        # then triangle
+        others = np.flatnonzero(~eligible)
+        reach = together.may_reach(self.vertices, self.faces[faces[others]], owner_of[others])
+        wanted = near[others[reach]]
+        own = np.isin(keys, wanted)
+        fronts_triangles = [front[0][front[1]] for _, front, _ in outlined]
+        return _OutlinedPairs(
+            pair_faces[own], pair_triangles[own] + offset, pieces, fronts_triangles
+        )
 
     def _front_pairs(
         self,
@@ -756,6 +790,39 @@ class _SurfaceProjector:
         # the index in self.casters of each chunk's caster and each outlined one
         chunk_casters: list[int] = []
         outlined_casters: list[int] = []
+        silhouettes = self._closed_outlines()
+        for index, caster in enumerate(self.casters):
+            if caster.n_faces == 0:
+                continue
+            silhouette = silhouettes.get(id(caster))
+            outline = None if silhouette is None else silhouette[2]
+            if silhouette is not None and outline is not None:
+                front, vertices, _, radius = silhouette
+                low, high = caster.bounds - self.center
+                centre = 0.5 * (low + high)
+                half = 0.5 * (high - low)
+                outlined.append((outline, (vertices, caster.faces[front]), (half, centre, radius)))
+                outlined_casters.append(index)
+                continue
+            # Repeated and zero-area faces cast nothing more: each would be
+            # one more candidate pair per face it covers.
+            faces = caster.faces[self._casting(caster, silhouette) & caster.distinct]
+            chunks.append(caster.vertices[faces] - self.center)
+            chunk_casters.append(index)
+        self.outlined_caster = np.array(outlined_casters, dtype=np.int64)
+        self.triangle_caster = np.repeat(
+            np.array(chunk_casters, dtype=np.int64), [len(chunk) for chunk in chunks]
+        )
+        if not chunks:
+            return np.zeros((0, 3, 3)), outlined
+        return np.concatenate(chunks), outlined
+
+    def _closed_outlines(
+        self,
+    ) -> dict[int, tuple[np.ndarray, np.ndarray, Outline | None, float]]:
+        """Each closed caster (by id) with faces: its light-facing faces, its
+        vertices in the centred frame, its outline (None where it has none)
+        and its bounding radius, all casters' outlines made at once."""
         # Without a light point the light is directional.
         direction = (
             None if self.light_point is not None else cast(DirectionalLight, self.light).direction
@@ -770,44 +837,29 @@ class _SurfaceProjector:
             self.tol.length,
         )
         radii = _bounding_radii(closed)
-        silhouettes = {
+        return {
             id(caster): (front, vertices, outline, radius)
             for caster, (front, _), vertices, outline, radius in zip(
                 closed, found, centred, outlines, radii, strict=True
             )
         }
-        for index, caster in enumerate(self.casters):
-            if caster.n_faces == 0:
-                continue
-            faces = caster.faces
-            if caster.is_closed:
-                front, vertices, outline, radius = silhouettes[id(caster)]
-                if outline is not None:
-                    low, high = caster.bounds - self.center
-                    centre = 0.5 * (low + high)
-                    half = 0.5 * (high - low)
-                    outlined.append((outline, (vertices, faces[front]), (half, centre, radius)))
-                    outlined_casters.append(index)
-                    continue
-                keep = front
-            elif caster is self.surface and self.geometry.single_sheet:
-                # Seen from the surface itself, a blocked ray enters the sheet's
-                # back side first, through a face turned away from the light.
-                keep = caster.facing(light_homogeneous(caster, self.light)) <= 0
-            else:
-                keep = np.ones(caster.n_faces, dtype=bool)
-            # Repeated and zero-area faces cast nothing more: each would be
-            # one more candidate pair per face it covers.
-            faces = faces[keep & caster.distinct]
-            chunks.append(caster.vertices[faces] - self.center)
-            chunk_casters.append(index)
-        self.outlined_caster = np.array(outlined_casters, dtype=np.int64)
-        self.triangle_caster = np.repeat(
-            np.array(chunk_casters, dtype=np.int64), [len(chunk) for chunk in chunks]
-        )
-        if not chunks:
-            return np.zeros((0, 3, 3)), outlined
-        return np.concatenate(chunks), outlined
+
+    def _casting(
+        self,
+        caster: Caster,
+        silhouette: tuple[np.ndarray, np.ndarray, Outline | None, float] | None,
+    ) -> np.ndarray:
+        """(f,) the faces of a caster handled one by one that can cast: a
+        closed caster's light-facing ones, else all."""
+        if silhouette is not None:
+            front: np.ndarray = silhouette[0]
+            return front
+        if caster is self.surface and self.geometry.single_sheet:
+            # Seen from the surface itself, a blocked ray enters the sheet's
+            # back side first, through a face turned away from the light.
+            turned: np.ndarray = caster.facing(light_homogeneous(caster, self.light)) <= 0
+            return turned
+        return np.ones(caster.n_faces, dtype=bool)
 
     def _outline_faces(
         self,
@@ -1126,17 +1178,14 @@ class _SurfaceProjector:
             # One column of cells: Clipper2 sweeps along y, so its scanlines
             # meet one face at a time. x is stretched to the full width.
             n_cells = len(faces)
-            cell = 2.0 * MAX_COORDINATE / n_cells
             slot = np.arange(n_cells)
-            centers = np.column_stack([np.zeros(n_cells), -MAX_COORDINATE + cell * (slot + 0.5)])
-            extents = np.abs(limits.reshape(n_cells, -1)).max(axis=1)
-            scales = np.column_stack([0.5 * MAX_COORDINATE / extents, 0.25 * cell / extents])
+            cells = column_cells(np.abs(limits.reshape(n_cells, -1)).max(axis=1))
             index = np.full(len(full), -1, dtype=np.int64)
             index[faces] = slot
             rows = np.flatnonzero(index[owner] >= 0)
             mine = index[owner[rows]]
-            pieces = flat[rows] * scales[mine, None, :] + centers[mine, None, :]
-            limits = limits * scales[:, None, :] + centers[:, None, :]
+            pieces = cells.place(flat[rows], mine[:, None])
+            limits = cells.place(limits, slot[:, None])
             # (faces in cells apart: crossings are counted within cells)
             region = poly.intersect(
                 poly.fill(list(pieces), cells=mine), poly.fill(list(limits), cells=slot)
@@ -1145,11 +1194,8 @@ class _SurfaceProjector:
             if loops:
                 sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
                 points = np.concatenate(loops)
-                first_y = points[np.cumsum(sizes) - sizes, 1]
-                k = np.floor((first_y + MAX_COORDINATE) / cell).astype(np.int64)
-                k = np.clip(k, 0, n_cells - 1)
-                point_cell = np.repeat(k, sizes)
-                points = (points - centers[point_cell]) / scales[point_cell]
+                k = cells.cell_of(points[np.cumsum(sizes) - sizes])
+                points = cells.restore(points, np.repeat(k, sizes))
                 chunks.append((points, sizes, faces[k]))
         points = np.concatenate([chunk[0] for chunk in chunks])
         sizes = np.concatenate([chunk[1] for chunk in chunks])

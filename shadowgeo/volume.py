@@ -148,27 +148,7 @@ def shadow_volume(
     if is_positional(light):
         check_light_outside(caster, light.position, tolerance)
 
-    facing = caster.facing(light_homogeneous(caster, light))
-    # A face with no height at the length tolerance (two corners at one point,
-    # or all three on a line) is edge-on to every light: the sign of its
-    # facing is rounding, and a cap of such faces would enclose no volume.
-    triangles = caster.triangles
-    longest = np.abs(triangles - triangles[:, [1, 2, 0]]).max(axis=(1, 2))
-    doubled = np.abs(caster.face_normals).max(axis=1)
-    edge_on = doubled <= tolerance.length * longest
-    if isinstance(light, DirectionalLight):
-        # a sun within ``tolerance.angle`` of a face's plane grazes it: edge-on
-        scale = np.where(doubled > 0, doubled, 1.0)
-        lengths = doubled * np.linalg.norm(caster.face_normals / scale[:, None], axis=1)
-        edge_on |= np.abs(facing) <= tolerance.angle * lengths * np.linalg.norm(light.direction)
-        # ... and so does one that the sweep moves off its own plane by no more
-        # than the length tolerance (far from the origin, float64's spacing
-        # there): the far cap would round onto the near one, a zero volume.
-        sweep = tolerance.bound_length if extent is None else extent
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            cosine = np.abs(facing) / (lengths * np.linalg.norm(light.direction))
-        edge_on |= cosine * sweep <= tolerance.length
-    facing = np.where(edge_on, 0.0, facing)
+    facing = _cap_facing(caster, light, extent, tolerance)
     two_sided = not caster.is_closed
     if two_sided:
         _check_edge_manifold(caster)
@@ -206,6 +186,35 @@ def shadow_volume(
     info.update(n_cap_faces=len(cap), n_side_faces=len(sides), two_sided=two_sided)
     result.metadata["shadowgeo"] = info
     return result
+
+
+def _cap_facing(
+    caster: Caster, light: Light, extent: float | None, tolerance: Tolerance
+) -> np.ndarray:
+    """(f,) each face's facing towards the light, 0 for a face edge-on to it
+    (within the tolerances)."""
+    facing = caster.facing(light_homogeneous(caster, light))
+    # A face with no height at the length tolerance (two corners at one point,
+    # or all three on a line) is edge-on to every light: the sign of its
+    # facing is rounding, and a cap of such faces would enclose no volume.
+    triangles = caster.triangles
+    longest = np.abs(triangles - triangles[:, [1, 2, 0]]).max(axis=(1, 2))
+    doubled = np.abs(caster.face_normals).max(axis=1)
+    edge_on = doubled <= tolerance.length * longest
+    if isinstance(light, DirectionalLight):
+        # a sun within ``tolerance.angle`` of a face's plane grazes it: edge-on
+        scale = np.where(doubled > 0, doubled, 1.0)
+        lengths = doubled * np.linalg.norm(caster.face_normals / scale[:, None], axis=1)
+        edge_on |= np.abs(facing) <= tolerance.angle * lengths * np.linalg.norm(light.direction)
+        # ... and so does one that the sweep moves off its own plane by no more
+        # than the length tolerance (far from the origin, float64's spacing
+        # there): the far cap would round onto the near one, a zero volume.
+        sweep = tolerance.bound_length if extent is None else extent
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            cosine = np.abs(facing) / (lengths * np.linalg.norm(light.direction))
+        edge_on |= cosine * sweep <= tolerance.length
+    edge_free: np.ndarray = np.where(edge_on, 0.0, facing)
+    return edge_free
 
 
 def _check_edge_manifold(caster: Caster) -> None:

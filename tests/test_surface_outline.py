@@ -21,7 +21,7 @@ import pytest
 import shapely
 
 from shadowgeo import GeometryError
-from shadowgeo.lightframe import candidate_pairs, clip_batch, overlapping_boxes
+from shadowgeo.lightframe import candidate_pairs, clip_batch, clip_one, overlapping_boxes
 from shadowgeo.outline import Outline, OutlineSet, make_outlines, padded_loops
 from shadowgeo.seams import loops_of, stitch
 
@@ -454,6 +454,23 @@ def test_clip_batch_cuts_convex_polygons_as_shapely_does():
         mine = clipped[k, : counts[k], :2]
         area = abs(signed_area(mine)) if counts[k] >= 3 else 0.0
         assert area == pytest.approx(region.area, rel=1e-9, abs=1e-12)
+
+
+def test_one_polygon_is_a_batch_of_one_and_shared_planes_cut_every_row():
+    # the unit square cut by x <= 0.5 and y >= x - 0.25, by hand: the pentagon
+    # (0, 0), (0.25, 0), (0.5, 0.25), (0.5, 1), (0, 1); the second row, shifted
+    # by (2, 0), lies wholly at x >= 2 and is cut away
+    square = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0]])
+    planes = np.array([[-1.0, 0.0, 0.5], [-1.0, 1.0, 0.25]])
+    expected = [[0.0, 0.0], [0.25, 0.0], [0.5, 0.25], [0.5, 1.0], [0.0, 1.0]]
+    one = clip_one(square, planes)
+    assert one.shape == (5, 3)
+    assert np.allclose(one[:, :2] / one[:, 2:], expected, atol=1e-15)
+    shifted = square + [2.0, 0.0, 0.0]
+    clipped, counts = clip_batch(np.stack([square, shifted]), np.array([4, 4]), planes)
+    assert counts.tolist() == [5, 0]
+    assert np.array_equal(clipped[0, :5], one)
+    assert len(clip_one(shifted, planes)) == 0
 
 
 def test_a_surfaces_geometry_is_kept_on_its_mesh_and_right():
