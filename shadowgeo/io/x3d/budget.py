@@ -104,7 +104,7 @@ def expansion(context: Context, element: Element, estimates: Estimates) -> Expan
     Examples
     --------
     >>> from lxml import etree
-    >>> from shadowgeo.io.x3d_fields import Context
+    >>> from shadowgeo.io.x3d.fields import Context
     >>> root = etree.fromstring(
     ...     '<Scene><Transform DEF="a"><Shape><Box/></Shape></Transform>'
     ...     '<Group><Transform USE="a"/><Transform USE="a"/></Group></Scene>'
