@@ -558,7 +558,6 @@ def fill(
         if kept is not None:
             loops = [loops[i] for i in kept]
             cells = None if cells is None else np.asarray(cells)[kept]
-    _check_sweep(loops)
     estimate, sampled = crossings_estimate(loops, cells)
     if estimate > MAX_UNION_CROSSINGS and sampled >= _FEWEST_CROSSING_EDGES:
         n_edges = sum(len(loop) for loop in loops)
@@ -567,6 +566,7 @@ def fill(
             f"{estimate:.2g} edge crossings, past the budget of {MAX_UNION_CROSSINGS:,} "
             "(shadowgeo.limits.MAX_UNION_CROSSINGS)"
         )
+    _check_sweep(loops)  # (after the crossings: a tangle is named by those)
     fill_rule = {
         "positive": FillRule.Positive,
         "nonzero": FillRule.NonZero,
