@@ -400,7 +400,8 @@ def sweep_work(loops: list[np.ndarray]) -> int:
     active there, so when many corners share a y (a soup of copies of one
     template, seen square-on) the work grows with their product, not with
     the crossings: 146,000 edges on 200 scanlines took 5.5 s with no
-    crossing at all; the same loops turned by 0.3 rad, 0.15 s.
+    crossing at all; the same loops turned by 0.3 rad, 0.15 s. (A fan of
+    32,768 thin triangles round one point, no crossing either: 33 s.)
 
     Examples
     --------
