@@ -88,6 +88,12 @@ outline crossings      2,000,000       edge crossings among the 2-D loops one sh
                                        triangles, or an Extrusion whose spine folds
                                        over itself, is refused in a fraction of a
                                        second rather than united in minutes
+union sweep            500,000,000     steps of Clipper2's sweep placing one union's
+                                       edges (per scanline, edges beginning there
+                                       times edges spanning it): a soup of copies of
+                                       one template, its corners on a few lines, is
+                                       refused rather than united in minutes with
+                                       no crossing at all
 template points        5,000,000       CityJSON: points made by placing geometry
                                        templates (GeometryInstance), counted over
                                        every instance as they are read (a small
@@ -152,6 +158,7 @@ __all__ = [
     "MAX_TEMPLATE_POINTS",
     "MAX_TRIANGLES",
     "MAX_UNION_CROSSINGS",
+    "MAX_UNION_SWEEP",
     "MAX_XML_DEPTH",
     "ORIENTATION_ERROR",
     "PRODUCT_ROUNDING",
@@ -215,6 +222,13 @@ MAX_CURVE_SEGMENTS = 1 << 16
 # Edge crossings one 2-D union may have to resolve (about half a second of
 # Clipper2 on one core); estimated by polygons.crossings_estimate.
 MAX_UNION_CROSSINGS = 2_000_000
+# Steps of Clipper2's sweep placing edges among the active ones, in one 2-D
+# union, counted by polygons.sweep_work: 2 to 10 ns each (a template soup on
+# 200 scanlines, 2.7e9 steps: 5.5 s; a fan of 32,768 thin triangles round one
+# point, 3.2e9: 33 s), so about 1 to 5 CPU s at the budget. The real scenes
+# (the corpus, the goldens, benchmarks/bench_buildings.py's 1.2M-edge union)
+# need at most 3e7.
+MAX_UNION_SWEEP = 500_000_000
 # (receiving face, caster triangle) pairs whose images from a light overlap,
 # in shadow_on_surface: each pair is clipped, so their count is its work.
 MAX_SURFACE_PAIRS = 5_000_000

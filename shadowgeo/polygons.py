@@ -21,7 +21,7 @@ from manifold3d import CrossSection, FillRule, triangulate
 from .arrangement import convex_union_arrays, convex_union_flat
 from .errors import GeometryError
 from .limits import CONVEX_TURN as _CONVEX_TURN
-from .limits import MAX_UNION_CROSSINGS
+from .limits import MAX_UNION_CROSSINGS, MAX_UNION_SWEEP
 from .orientation import MAX_COORDINATE, turn_sign, turns
 from .plane import Plane
 from .simplify import without_collinear
@@ -36,6 +36,7 @@ __all__ = [
     "clipper_parts",
     "components",
     "crossings_estimate",
+    "sweep_work",
     "fan",
     "fill",
     "holds_box",
@@ -417,6 +418,41 @@ def crossings_estimate(
     return float(np.mean(counts)) * n_edges / 2, crossing_edges
 
 
+def sweep_work(loops: list[np.ndarray]) -> int:
+    """The steps Clipper2's sweep takes to place the edges of the (k, 2)
+    ``loops`` in its list of active edges: for each distinct y of a corner
+    (a scanline), the edges that begin there times the edges that span it
+    (ends included), summed. Exact 0 when there are too few edges to pass
+    :data:`~shadowgeo.limits.MAX_UNION_SWEEP`.
+
+    Each edge that begins at a scanline is placed by a walk along the edges
+    active there, so when many corners share a y (a soup of copies of one
+    template, seen square-on) the work grows with their product, not with
+    the crossings: 146,000 edges on 200 scanlines took 5.5 s with no
+    crossing at all; the same loops turned by 0.3 rad, 0.15 s. (A fan of
+    32,768 thin triangles round one point, no crossing either: 33 s.)
+
+    Examples
+    --------
+    >>> square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    >>> sweep_work([square, square + 0.5])
+    0
+    """
+    lengths = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
+    n_edges = int(lengths.sum())
+    if n_edges * n_edges <= MAX_UNION_SWEEP:  # (the product never exceeds it)
+        return 0
+    y = np.concatenate(loops)[:, 1].astype(np.float64)
+    y_next = y[loop_rings(lengths)[1]]  # each loop closes
+    low = np.sort(np.minimum(y, y_next))
+    high = np.sort(np.maximum(y, y_next))
+    scanlines = np.unique(y)
+    begun = np.searchsorted(low, scanlines, side="right")
+    beginning = begun - np.searchsorted(low, scanlines, side="left")
+    spanning = begun - np.searchsorted(high, scanlines, side="left")
+    return int(np.dot(beginning, spanning))
+
+
 def _box_pairs_bound(points: np.ndarray, lengths: np.ndarray) -> float:
     """How many edge pairs of the loops (``points`` one loop after another,
     ``lengths[i]`` each; empty loops ignored) could
@@ -540,7 +576,10 @@ def fill(
         When the loops' edges cross each other more than
         :data:`~shadowgeo.limits.MAX_UNION_CROSSINGS` times (estimated by
         :func:`crossings_estimate`): Clipper2's work grows with the crossings,
-        more than linearly, so such a union would take minutes.
+        more than linearly, so such a union would take minutes. Or when
+        placing the edges in Clipper2's sweep takes more than
+        :data:`~shadowgeo.limits.MAX_UNION_SWEEP` steps (counted by
+        :func:`sweep_work`: many edges beginning on scanlines many edges span).
     """
     if not loops:
         return CrossSection()
@@ -557,12 +596,26 @@ def fill(
             f"{estimate:.2g} edge crossings, past the budget of {MAX_UNION_CROSSINGS:,} "
             "(shadowgeo.limits.MAX_UNION_CROSSINGS)"
         )
+    _check_sweep(loops)  # (after the crossings: a tangle is named by those)
     fill_rule = {
         "positive": FillRule.Positive,
         "nonzero": FillRule.NonZero,
         "evenodd": FillRule.EvenOdd,
     }[rule]
     return CrossSection([np.ascontiguousarray(loop, dtype=np.float64) for loop in loops], fill_rule)
+
+
+def _check_sweep(loops: list[np.ndarray]) -> None:
+    """Raise GeometryError when uniting ``loops`` would take Clipper2's sweep
+    more than MAX_UNION_SWEEP steps."""
+    work = sweep_work(loops)
+    if work > MAX_UNION_SWEEP:
+        n_edges = sum(len(loop) for loop in loops)
+        raise GeometryError(
+            f"the shadow's outline ({len(loops)} loops, {n_edges} edges) needs {work:.2g} "
+            f"steps of the union's sweep (many corners on few lines), past the budget of "
+            f"{MAX_UNION_SWEEP:,} (shadowgeo.limits.MAX_UNION_SWEEP)"
+        )
 
 
 def union_parts(

@@ -9,21 +9,27 @@ memory budget are refused before a geometry is built; the others search for
 receivers in at most the shapes of distinct geometry, and no faster-growing
 union is entered than the outline budget allows. A child process held to a
 CPU-time limit guards against a hang; no assertion is on time.
+
+CityJSON mutant 37 at seed 34 (a template placed 100,000 times, its corners
+on a few lines) is held to the union's sweep budget (``MAX_UNION_SWEEP``),
+its steps counted here scanline by scanline.
 """
 
 from __future__ import annotations
 
 import importlib
+import json
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from needs import SHARED, absent
 
 import shadowgeo as sg
 from cli.main import main
-from shadowgeo import polygons
+from shadowgeo import limits, polygons
 from shadowgeo.io.x3d import read as x3d_read
 from shadowgeo.scene import receivers
 
@@ -139,3 +145,106 @@ def test_the_slowest_mutant_ends_within_a_cpu_limit_in_a_fresh_process(seeds, tm
         env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
     )
     assert done.returncode == 0, done.stderr[-2000:]
+
+
+# Issue 34 item 1: CityJSON mutant 37 at seed 34, a GeometryInstance placing a
+# template 100,000 times, ran for minutes in one Clipper2 union without a single
+# edge crossing: its corners lie on a few lines, and the sweep places each edge
+# beginning on a line by walking every edge that spans it.
+CITY_SEED, CITY_INDEX = 34, 37
+
+
+def reference_sweep_work(loops) -> int:
+    """Scanline by scanline, as the definition reads: the edges whose lower
+    end is on the line times the edges whose y-range holds it."""
+    y = np.concatenate([np.asarray(loop, dtype=np.float64)[:, 1] for loop in loops])
+    y_next = np.concatenate([np.roll(np.asarray(loop)[:, 1], -1) for loop in loops])
+    low, high = np.minimum(y, y_next), np.maximum(y, y_next)
+    total = 0
+    for line in np.unique(y).tolist():
+        beginning = int(np.count_nonzero(low == line))
+        spanning = int(np.count_nonzero((low <= line) & (line <= high)))
+        total += beginning * spanning
+    return total
+
+
+def squares_in_a_row(count: int) -> list[np.ndarray]:
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    return [square + [2.0 * index, 0.0] for index in range(count)]
+
+
+def test_sweep_work_of_squares_in_a_row_is_twelve_k_squared(monkeypatch):
+    # k unit squares side by side: on y = 0 begin 3k edges (the bottoms and the
+    # sides) and 3k span it; on y = 1 begin the k tops, and 3k span it
+    monkeypatch.setattr(polygons, "MAX_UNION_SWEEP", 0)  # count even a small union
+    for count in (1, 7, 300):
+        assert polygons.sweep_work(squares_in_a_row(count)) == 12 * count * count
+
+
+def test_sweep_work_agrees_with_the_scanline_definition(monkeypatch):
+    monkeypatch.setattr(polygons, "MAX_UNION_SWEEP", 0)
+    rng = np.random.default_rng(5)
+    # corners on a coarse grid, so that many share a line; loops of 3 to 9 corners
+    loops = [
+        rng.integers(0, 12, size=(int(rng.integers(3, 10)), 2)).astype(float) for _ in range(400)
+    ]
+    assert polygons.sweep_work(loops) == reference_sweep_work(loops)
+
+
+def test_sweep_work_is_exactly_zero_below_the_budget():
+    loops = squares_in_a_row(100)  # 400 edges: at most 160,000 steps
+    assert polygons.sweep_work(loops) == 0
+
+
+def test_a_row_of_squares_past_the_sweep_budget_is_refused_before_clipper2():
+    loops = squares_in_a_row(10_000)  # 1.2e9 steps, no crossing at all
+    assert polygons.crossings_estimate(loops) == (0.0, 0)  # what let it through before
+    with pytest.raises(sg.GeometryError, match=r"1\.2e\+09 steps .*MAX_UNION_SWEEP"):
+        polygons.fill(loops)
+
+
+# The child: the CLI as the campaign ran it, held to 60 CPU-s, printing the most
+# sweep steps (counted by reference_sweep_work above) of any union Clipper2 entered.
+_COUNTED_CHILD = """
+import json, resource, sys
+resource.setrlimit(resource.RLIMIT_CPU, (60, 60))
+sys.path.insert(0, "tests")
+from test_slow_inputs import reference_sweep_work
+from shadowgeo import polygons
+from cli.main import main
+entered, build = [0], polygons.CrossSection
+def counted(*args):
+    if args and sum(len(loop) for loop in args[0]) ** 2 > polygons.MAX_UNION_SWEEP:
+        entered[0] = max(entered[0], reference_sweep_work(args[0]))
+    return build(*args)
+polygons.CrossSection = counted
+code = main(sys.argv[1:])
+print(json.dumps({"code": code, "most steps": entered[0]}))
+"""
+
+
+def test_the_template_soup_stays_within_the_sweep_budget(tmp_path):
+    if not (SHARED / "corpus").is_dir():
+        absent("the fuzz seeds come from ../shared/corpus, which is missing")
+    city_seeds = fuzz_module("seeds").collect_seeds(_NoWorkers(), 64 << 10, ["cityjson"])
+    task = fuzz_module("campaign").converter_task(city_seeds, "cityjson", CITY_INDEX, CITY_SEED)
+    assert task["ops"] == ["meaning:city-template-bomb-100000x10"]  # the mutant found
+    source = tmp_path / "input.city.json"
+    source.write_bytes(task["data"])
+    argv = [str(source) if a == "IN" else a for a in task["argv"]]
+    argv = [str(tmp_path / "out.x3d") if a.startswith("OUT") else a for a in argv]
+    done = subprocess.run(
+        [sys.executable, "-c", _COUNTED_CHILD, *argv],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=ROOT,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
+    assert done.returncode == 0, done.stderr[-2000:]  # not killed by the CPU guard
+    counted = json.loads(done.stdout.strip().splitlines()[-1])
+    assert counted["code"] == 0
+    assert 0 <= counted["most steps"] <= limits.MAX_UNION_SWEEP
+    # the template soup casts no shadow, with a note naming the budget and the count
+    assert "fuzz-instances does not cast" in done.stderr
+    assert "steps of the union's sweep" in done.stderr and "MAX_UNION_SWEEP" in done.stderr
