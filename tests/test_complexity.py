@@ -30,9 +30,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("cli/convert.py", "register", "lines"): 86,
     ("cli/convert.py", "run", "complexity"): 20,
     ("cli/info.py", "run", "complexity"): 18,
-    ("cli/sun.py", "register", "lines"): 108,
-    ("cli/sun.py", "run", "complexity"): 31,
-    ("cli/sun.py", "run", "lines"): 96,
 }
 
 
