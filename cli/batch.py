@@ -106,6 +106,24 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
         return 1
     if skipped:
         print(f"note: skipped {skipped} file(s) no reader takes", file=sys.stderr)
+    jobs = _checked_targets(jobs)
+    scheduler = None if args.serial else (args.scheduler or "local")
+    converted = _convert(args, jobs, scheduler)
+    if isinstance(converted, int):
+        return converted
+    outcomes, elapsed = converted
+    report(outcomes)
+    failed = sum(not outcome.ok for outcome in outcomes)
+    print(
+        f"converted {len(outcomes) - failed} of {len(outcomes)} file(s) into {out_dir} "
+        f"in {elapsed:.1f} s {_where(args, scheduler)}" + (f"; {failed} failed" if failed else "")
+    )
+    return 1 if failed else 0
+
+
+def _checked_targets(jobs: list[tuple[Path, Path]]) -> list[tuple[Path, Path]]:
+    """``jobs`` with distinct targets, each output folder found writable
+    before the long work, and a note for each input renamed."""
     jobs, renamed = distinct_targets(jobs)
     first_in = {target.parent: target for _, target in reversed(jobs)}
     for target in first_in.values():  # a folder that cannot be written, before the long work
@@ -116,9 +134,12 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
             "but for its extension",
             file=sys.stderr,
         )
-    options = options_of(args)
-    scheduler = None if args.serial else (args.scheduler or "local")
-    where = (
+    return jobs
+
+
+def _where(args: argparse.Namespace, scheduler: str | None) -> str:
+    """Where the files were converted, for the closing line."""
+    return (
         "in this process"
         if scheduler is None
         else f"on the Dask cluster at {scheduler}"
@@ -126,6 +147,14 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
         else f"on a Dask LocalCluster of {args.workers or 'one worker per core'}"
         + (" worker(s)" if args.workers else "")
     )
+
+
+def _convert(
+    args: argparse.Namespace, jobs: list[tuple[Path, Path]], scheduler: str | None
+) -> tuple[list[Outcome], float] | int:
+    """The outcomes of the jobs and the seconds they took, under a progress
+    bar; an exit code when Dask cannot run."""
+    options = options_of(args)
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar(f"{len(jobs)} files") if show else None
     begin = time.perf_counter()
@@ -138,14 +167,7 @@ def run_batch(args: argparse.Namespace, inputs: list[Path], out_dir: Path) -> in
     finally:
         if bar is not None:
             bar.close()
-    elapsed = time.perf_counter() - begin
-    report(outcomes)
-    failed = sum(not outcome.ok for outcome in outcomes)
-    print(
-        f"converted {len(outcomes) - failed} of {len(outcomes)} file(s) into {out_dir} "
-        f"in {elapsed:.1f} s {where}" + (f"; {failed} failed" if failed else "")
-    )
-    return 1 if failed else 0
+    return outcomes, time.perf_counter() - begin
 
 
 def report(outcomes: list[Outcome]) -> None:

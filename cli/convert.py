@@ -78,6 +78,18 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="the scene to read and the file to write; or scene files and folders, "
         "then the folder to write into",
     )
+    _add_casting(parser)
+    _add_quality(parser)
+    add_soft_arguments(parser)
+    parser.add_argument(
+        "--progress", action="store_true", help="show a progress bar even when not on a terminal"
+    )
+    _add_batch(parser)
+    parser.set_defaults(func=run, parser=parser)
+
+
+def _add_casting(parser: argparse.ArgumentParser) -> None:
+    """What casts onto what: --method, --light, --sun, and --receiver or --plane."""
     parser.add_argument(
         "--method",
         choices=("planar", "volume"),
@@ -112,6 +124,11 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="a,b,c,d",
         help="receive on the plane a x + b y + c z + d = 0 instead of shapes",
     )
+
+
+def _add_quality(parser: argparse.ArgumentParser) -> None:
+    """How finely, how much, and the lights' runtime shadows: --tolerance,
+    --max-triangles, --keep-runtime-shadows."""
     parser.add_argument(
         "--tolerance",
         type=tolerance_argument,
@@ -132,10 +149,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         'shadows="true": a browser then darkens them twice); by default their runtime shadows '
         "are turned off",
     )
-    add_soft_arguments(parser)
-    parser.add_argument(
-        "--progress", action="store_true", help="show a progress bar even when not on a terminal"
-    )
+
+
+def _add_batch(parser: argparse.ArgumentParser) -> None:
+    """The options of a batch: --format and Dask's."""
     batch = parser.add_argument_group("batch (several inputs or a folder)")
     batch.add_argument(
         "--format",
@@ -144,7 +161,6 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         help="write every output in this format (glb, x3d, usda, ...); default: the input's",
     )
     add_dask_arguments(batch, "file", "a LocalCluster here")
-    parser.set_defaults(func=run, parser=parser)
 
 
 def add_soft_arguments(parser: argparse.ArgumentParser) -> None:
@@ -283,7 +299,27 @@ def run(args: argparse.Namespace) -> int:
     paths = args.paths
     if len(paths) < 2:
         args.parser.error("give IN and OUT (or inputs and an output folder)")
-    batch_only = [
+    batch_only = _batch_only(args)
+    if is_batch(paths):
+        return run_batch(args, paths[:-1], paths[-1])
+    if batch_only:
+        args.parser.error(f"{', '.join(batch_only)} only apply to several inputs or a folder")
+    args.input, args.output = paths
+    _check_output(args.input, args.output)
+    scene, result = _shadowed(args)
+    known = len(scene.warnings)
+    try:
+        save_output(result, args.output)
+    finally:
+        remove_stale([args.output])  # what a run killed outright left beside it
+    print_notes(result.warnings, known, args.input)
+    _report(args, result)
+    return 0
+
+
+def _batch_only(args: argparse.Namespace) -> list[str]:
+    """The batch options given, which one IN and OUT do not take."""
+    return [
         flag
         for flag, value in (
             ("--format", args.format),
@@ -293,38 +329,38 @@ def run(args: argparse.Namespace) -> int:
         )
         if value
     ]
-    if is_batch(paths):
-        return run_batch(args, paths[:-1], paths[-1])
-    if batch_only:
-        args.parser.error(f"{', '.join(batch_only)} only apply to several inputs or a folder")
-    args.input, args.output = paths
-    source, target = args.input, args.output
+
+
+def _check_output(source: Path, target: Path) -> None:
+    """OUT is not IN and can be written: found before the long work."""
     if target.exists() and source.exists() and os.path.samefile(source, target):
         raise shadowgeo.SceneError(
             "OUT is the input file; it is never overwritten", path=str(target)
         )
     shadowgeo.io.check_writable(target)  # before the long work
+
+
+def _shadowed(args: argparse.Namespace) -> tuple[shadowgeo.Scene, shadowgeo.Scene]:
+    """The scene read and the scene with its shadows, under a progress bar."""
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar(f"shadows ({args.method})") if show else None
     try:
-        scene, result = shadowed(source, options_of(args), progress=bar)
+        return shadowed(args.input, options_of(args), progress=bar)
     except UnknownLight as error:  # --light-size names no light: a usage error
-        args.parser.error(f"--light-size: {error}")
+        parser: argparse.ArgumentParser = args.parser
+        parser.error(f"--light-size: {error}")
     finally:
         if bar is not None:
             bar.close()
-    known = len(scene.warnings)
-    try:
-        save_output(result, target)
-    finally:
-        remove_stale([target])  # what a run killed outright left beside it
-    print_notes(result.warnings, known, args.input)
+
+
+def _report(args: argparse.Namespace, result: shadowgeo.Scene) -> None:
+    """The line saying what was written: the shapes added, their triangles and groups."""
     added = [s for s in result.shapes if s.role in ("shadow", "volume")]  # not the ground
     groups = sorted({s.group for s in added if s.group})
     triangles = sum(s.n_faces for s in added)
     kind = "shadow volume" if args.method == "volume" else "shadow"
     print(
-        f"wrote {target}: {len(added)} {kind} shape(s), {triangles} triangles, "
+        f"wrote {args.output}: {len(added)} {kind} shape(s), {triangles} triangles, "
         f"in {len(groups)} group(s){': ' + ', '.join(groups) if groups else ''}"
     )
-    return 0

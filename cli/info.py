@@ -99,60 +99,80 @@ def light_where(light: shadowgeo.Light | shadowgeo.RectLight | shadowgeo.DiskLig
 
 def run(args: argparse.Namespace) -> int:
     scene = shadowgeo.load(args.input, **({"root": args.root} if args.root else {}))
-    triangles = sum(s.n_faces for s in scene.shapes)
-    print(
-        f"{args.input}: {len(scene.shapes)} shapes, {triangles} triangles, "
-        f"{len(scene.lights)} lights, {len(scene.warnings)} notes"
-    )
-    low, high = scene.bounds
-    print(f"bounds: min {vector(low)}  max {vector(high)}  size {vector(high - low)}")
+    _print_summary(args.input, scene)
     if scene.shapes:
-        rows = []
-        for index, shape in enumerate(scene.shapes):
-            points = shape.world_vertices if len(shape.faces) else np.zeros((1, 3))
-            rows.append(
-                [
-                    shape.name or f"#{index}",
-                    str(shape.n_faces),
-                    vector(points.min(axis=0)),
-                    vector(points.max(axis=0)),
-                    shape.role,
-                    shape.source or "",
-                ]
-            )
-        print("\nshapes")
-        print(table(["name", "triangles", "min", "max", "role", "source"], rows))
+        _print_shapes(scene)
     if scene.lights:
-        rows = [
-            [
-                light.name or f"#{index}",
-                type(light.emitter).__name__,
-                "on" if light.on else "off",
-                shadows_column(light),
-                number(light.intensity),
-                light_where(light.emitter),
-            ]
-            for index, light in enumerate(scene.lights)
-        ]
-        print("\nlights")
-        print(table(["name", "type", "on", "shadows", "intensity", "where"], rows))
+        _print_lights(scene)
     else:
         print("\nlights: none (convert casts from a default sun, or --sun)")
     if scene.viewpoints:
-        rows = [
-            [
-                view.name or f"#{index}",
-                vector(view.position),
-                " ".join(f"{v:.3f}" for v in view.direction + 0.0),
-                f"{math.degrees(view.field_of_view):.3g} deg",
-                view.description,
-            ]
-            for index, view in enumerate(scene.viewpoints)
-        ]
-        print("\nviewpoints (the first is shown first; shadowgeo render --viewpoint NAME)")
-        print(table(["name", "position", "direction", "field of view", "description"], rows))
+        _print_viewpoints(scene)
     if scene.warnings:
         print(f"\nskipped or noted ({len(scene.warnings)})")
         for warning in scene.warnings:
             print(f"  - {terminal(warning)}")
     return 0
+
+
+def _print_summary(source: Path, scene: shadowgeo.Scene) -> None:
+    """The counts of shapes, triangles, lights and notes, and the bounds."""
+    triangles = sum(s.n_faces for s in scene.shapes)
+    print(
+        f"{source}: {len(scene.shapes)} shapes, {triangles} triangles, "
+        f"{len(scene.lights)} lights, {len(scene.warnings)} notes"
+    )
+    low, high = scene.bounds
+    print(f"bounds: min {vector(low)}  max {vector(high)}  size {vector(high - low)}")
+
+
+def _print_shapes(scene: shadowgeo.Scene) -> None:
+    """The shapes' table: name, triangles, world bounds, role, source."""
+    rows = []
+    for index, shape in enumerate(scene.shapes):
+        points = shape.world_vertices if len(shape.faces) else np.zeros((1, 3))
+        rows.append(
+            [
+                shape.name or f"#{index}",
+                str(shape.n_faces),
+                vector(points.min(axis=0)),
+                vector(points.max(axis=0)),
+                shape.role,
+                shape.source or "",
+            ]
+        )
+    print("\nshapes")
+    print(table(["name", "triangles", "min", "max", "role", "source"], rows))
+
+
+def _print_lights(scene: shadowgeo.Scene) -> None:
+    """The lights' table: name, type, on, shadows, intensity, where."""
+    rows = [
+        [
+            light.name or f"#{index}",
+            type(light.emitter).__name__,
+            "on" if light.on else "off",
+            shadows_column(light),
+            number(light.intensity),
+            light_where(light.emitter),
+        ]
+        for index, light in enumerate(scene.lights)
+    ]
+    print("\nlights")
+    print(table(["name", "type", "on", "shadows", "intensity", "where"], rows))
+
+
+def _print_viewpoints(scene: shadowgeo.Scene) -> None:
+    """The viewpoints' table: name, position, direction, field of view, description."""
+    rows = [
+        [
+            view.name or f"#{index}",
+            vector(view.position),
+            " ".join(f"{v:.3f}" for v in view.direction + 0.0),
+            f"{math.degrees(view.field_of_view):.3g} deg",
+            view.description,
+        ]
+        for index, view in enumerate(scene.viewpoints)
+    ]
+    print("\nviewpoints (the first is shown first; shadowgeo render --viewpoint NAME)")
+    print(table(["name", "position", "direction", "field of view", "description"], rows))

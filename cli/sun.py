@@ -106,6 +106,17 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    _add_files(parser)
+    _add_days(parser)
+    _add_sun(parser)
+    _add_floor(parser)
+    _add_extra_outputs(parser)
+    add_dask_arguments(parser, "day", "a LocalCluster here for several days")
+    parser.set_defaults(func=run, parser=parser)
+
+
+def _add_files(parser: argparse.ArgumentParser) -> None:
+    """SCENE and OUT."""
     parser.add_argument("input", type=Path, metavar="SCENE", help="the scene to study")
     parser.add_argument(
         "output",
@@ -114,6 +125,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="OUT",
         help="write the scene with the day's map of sunlight hours (one day only)",
     )
+
+
+def _add_days(parser: argparse.ArgumentParser) -> None:
+    """Where and when: --at, --date, --days, --every."""
     parser.add_argument(
         "--at",
         type=place_argument,
@@ -137,6 +152,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="MINUTES",
         help="minutes between sun samples (default 60)",
     )
+
+
+def _add_sun(parser: argparse.ArgumentParser) -> None:
+    """The sun and the threshold: --sun-angle, --sun-samples, --hours."""
     parser.add_argument(
         "--sun-angle",
         type=sun_angle_argument,
@@ -161,6 +180,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="H",
         help="the threshold: the share of the region with at least H hours of sun (default 2)",
     )
+
+
+def _add_floor(parser: argparse.ArgumentParser) -> None:
+    """What is studied: --receiver or --plane, and --region."""
     receiving = parser.add_mutually_exclusive_group()
     receiving.add_argument(
         "--receiver",
@@ -180,6 +203,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         metavar="X,Z,X,Z,...",
         help="study only this polygon, corners in plan (x,z for a Y-up scene, x,y for Z up)",
     )
+
+
+def _add_extra_outputs(parser: argparse.ArgumentParser) -> None:
+    """What else is written or shown: --shadows-at, --plot, --mesh, --progress."""
     parser.add_argument(
         "--shadows-at",
         type=clock_times_argument,
@@ -203,8 +230,6 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
-    add_dask_arguments(parser, "day", "a LocalCluster here for several days")
-    parser.set_defaults(func=run, parser=parser)
 
 
 def place_argument(text: str) -> tuple[float, float]:
@@ -275,19 +300,54 @@ def local_zone(longitude: float) -> dt.timezone:
     return dt.timezone(dt.timedelta(hours=round(longitude / 15.0)))
 
 
+@dataclasses.dataclass(frozen=True)
+class _Days:
+    """The days studied: their hour zone, first day, sample step and sample times."""
+
+    zone: dt.timezone
+    first: dt.date
+    step: dt.timedelta
+    times: list[dt.datetime]
+
+
 def run(args: argparse.Namespace) -> int:
     _check_usage(args)
-    if args.output is not None:
-        same = args.output.exists() and args.input.exists()
-        if same and os.path.samefile(args.input, args.output):
-            raise shadowgeo.SceneError(
-                "OUT is the input file; it is never overwritten", path=str(args.output)
-            )
-        if not is_gis_path(args.output):
-            shadowgeo.io.check_writable(args.output)  # before the long work
+    _check_output(args)
     scene = shadowgeo.load(args.input)
     if args.output is not None and is_gis_path(args.output):
         output_crs(scene.site, args.output)  # GeoJSON of a file with no CRS: refused now
+    _settle_site(args, scene)
+    days = _days(args)
+    studied = _run_study(args, scene, days)
+    if isinstance(studied, int):
+        return studied
+    inputs, studies = studied
+    for note in [*scene.warnings, *inputs.notes]:
+        print(f"note: {terminal(note)}", file=sys.stderr)
+    if args.days == 1:  # a SunStudies of the one day (every sample lies in it)
+        ((day, study),) = studies.days.items()
+        _report_day(args, days, day, study)
+        _write_outputs(args, scene, inputs, study, day, days.zone)
+        return 0
+    _report_days(args, days, studies)
+    return 0
+
+
+def _check_output(args: argparse.Namespace) -> None:
+    """OUT is not the input and, unless GIS, can be written: found before the long work."""
+    if args.output is None:
+        return
+    same = args.output.exists() and args.input.exists()
+    if same and os.path.samefile(args.input, args.output):
+        raise shadowgeo.SceneError(
+            "OUT is the input file; it is never overwritten", path=str(args.output)
+        )
+    if not is_gis_path(args.output):
+        shadowgeo.io.check_writable(args.output)  # before the long work
+
+
+def _settle_site(args: argparse.Namespace, scene: shadowgeo.Scene) -> None:
+    """``args.at`` from the file's site when not given; neither is a usage error."""
     site = scene.site
     if args.at is None and site is None:  # a usage error (exit 2), as a missing option is
         args.parser.error(
@@ -296,12 +356,23 @@ def run(args: argparse.Namespace) -> int:
         )
     elif args.at is None and site is not None:
         args.at = (site.latitude, site.longitude)
-    latitude, longitude = args.at
+
+
+def _days(args: argparse.Namespace) -> _Days:
+    """The sample times over the days asked for, in local mean time."""
+    _, longitude = args.at
     zone = local_zone(longitude)
     first = args.date or dt.date(dt.date.today().year, 3, 21)
     start = dt.datetime(first.year, first.month, first.day, tzinfo=zone)
     step = dt.timedelta(minutes=args.every)
     times = shadowgeo.sun.hourly(start, start + dt.timedelta(days=args.days), step)
+    return _Days(zone, first, step, times)
+
+
+def _run_study(
+    args: argparse.Namespace, scene: shadowgeo.Scene, days: _Days
+) -> tuple[SceneStudy, Any] | int:
+    """The study, here or on Dask, with a progress bar; an exit code if Dask fails."""
     scheduler = None
     if args.days > 1 and not args.serial:
         scheduler = args.scheduler or "local"
@@ -312,9 +383,8 @@ def run(args: argparse.Namespace) -> int:
             from shadowgeo.parallel import client_for
 
             with client_for("local", workers=args.workers) as client:
-                inputs, studies = _study(args, scene, times, step, zone, client, bar)
-        else:
-            inputs, studies = _study(args, scene, times, step, zone, scheduler, bar)
+                return _study(args, scene, days.times, days.step, days.zone, client, bar)
+        return _study(args, scene, days.times, days.step, days.zone, scheduler, bar)
     except (ImportError, OSError) as error:
         return dask_failure("sun", error)
     except Exception as error:
@@ -331,38 +401,45 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if bar is not None:
             bar.close()
-    for note in [*scene.warnings, *inputs.notes]:
-        print(f"note: {terminal(note)}", file=sys.stderr)
+
+
+def _place(args: argparse.Namespace) -> str:
+    latitude, longitude = args.at
+    return f"{latitude:g}, {longitude:g}"
+
+
+def _report_day(
+    args: argparse.Namespace, days: _Days, day: dt.date, study: shadowgeo.SunStudy
+) -> None:
+    """One day: the header, the area sunlit for each duration, the share meeting --hours."""
     hours = args.hours
-    place = f"{latitude:g}, {longitude:g}"
-    if args.days == 1:  # a SunStudies of the one day (every sample lies in it)
-        ((day, study),) = studies.days.items()
-        print(
-            f"{args.input}: {len(study.times)} of {len(times)} samples with the sun up on "
-            f"{day} at {place} (UTC{_offset(zone)}){_disc(args, study.disc_samples)}; "
-            f"region {study.area:.6g} square units\n"
-        )
-        print("| sunlight (h) | area | share of the region |")
-        print("|---:|---:|---:|")
-        slivers = 0
-        for duration, area in _duration_rows(study):
-            if area <= SLIVER * study.area:
-                slivers += 1
-                continue
-            print(f"| {duration} | {area:.6g} | {area / study.area:.2%} |")
-        if slivers:
-            print(
-                f"\n({slivers} duration(s) covering under {SLIVER:g} of the region, slivers "
-                "where shadow edges meet the region's edges, not listed)"
-            )
-        print(
-            f"\n{study.fraction_meeting(hours):.2%} of the region has at least {hours:g} h of sun"
-        )
-        _write_outputs(args, scene, inputs, study, day, zone)
-        return 0
     print(
-        f"{args.input}: {len(studies)} days from {first} at {place} "
-        f"(UTC{_offset(zone)}), every {args.every} min"
+        f"{args.input}: {len(study.times)} of {len(days.times)} samples with the sun up on "
+        f"{day} at {_place(args)} (UTC{_offset(days.zone)}){_disc(args, study.disc_samples)}; "
+        f"region {study.area:.6g} square units\n"
+    )
+    print("| sunlight (h) | area | share of the region |")
+    print("|---:|---:|---:|")
+    slivers = 0
+    for duration, area in _duration_rows(study):
+        if area <= SLIVER * study.area:
+            slivers += 1
+            continue
+        print(f"| {duration} | {area:.6g} | {area / study.area:.2%} |")
+    if slivers:
+        print(
+            f"\n({slivers} duration(s) covering under {SLIVER:g} of the region, slivers "
+            "where shadow edges meet the region's edges, not listed)"
+        )
+    print(f"\n{study.fraction_meeting(hours):.2%} of the region has at least {hours:g} h of sun")
+
+
+def _report_days(args: argparse.Namespace, days: _Days, studies: Any) -> None:
+    """Several days: the share meeting --hours day by day, and its range."""
+    hours = args.hours
+    print(
+        f"{args.input}: {len(studies)} days from {days.first} at {_place(args)} "
+        f"(UTC{_offset(days.zone)}), every {args.every} min"
         f"{_disc(args, args.sun_samples)}\n"
     )
     print(days_table(studies, hours))
@@ -371,7 +448,6 @@ def run(args: argparse.Namespace) -> int:
         f"\nshare of the region with at least {hours:g} h of sun: {min(shares):.2%} to "
         f"{max(shares):.2%} over the days"
     )
-    return 0
 
 
 def _check_usage(args: argparse.Namespace) -> None:
