@@ -499,8 +499,11 @@ def _write_outputs(
     zone: dt.timezone,
 ) -> None:
     """The day's --plot and OUT: GIS polygons, or the scene with the map as shapes."""
+    gis = args.output is not None and is_gis_path(args.output)
+    # the levels in plan, made once for the plot and the GIS layers
+    levels = level_regions(study, inputs.up) if args.plot is not None or gis else []
     if args.plot is not None:
-        _plot(args, scene, inputs, study, day)
+        _plot(args, scene, inputs, study, day, levels)
     if args.mesh is not None:
         vertices, faces, hours, groups, names = hours_faces(scene, study, inputs.scale)
         write_hours_glb(
@@ -516,8 +519,8 @@ def _write_outputs(
         print(f"wrote {args.mesh}: {len(faces)} faces with hours of sunlight")
     if args.output is None:
         return
-    if is_gis_path(args.output):
-        _write_gis(args, scene, inputs, study, day, zone)
+    if gis:
+        _write_gis(args, scene, inputs, day, zone, levels)
         return
     shapes = sunlight_shapes(study, inputs.scale)
     added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
@@ -533,14 +536,13 @@ def _write_gis(
     args: argparse.Namespace,
     scene: shadowgeo.Scene,
     inputs: SceneStudy,
-    study: shadowgeo.SunStudy,
     day: dt.date,
     zone: dt.timezone,
+    levels: list[tuple[float, Any]],
 ) -> None:
-    """OUT as GeoPackage or GeoJSON: the day's levels of sunlight (layer
+    """OUT as GeoPackage or GeoJSON: the day's ``levels`` of sunlight (layer
     'sunlight': hours, date, threshold_h, meets) and, with --shadows-at, the
     shadows at those times (layer 'shadows': time, date)."""
-    levels = level_regions(study, inputs.up)
     layers = {
         "sunlight": Layer(
             [region for _, region in levels],
@@ -583,13 +585,13 @@ def _plot(
     inputs: SceneStudy,
     study: shadowgeo.SunStudy,
     day: dt.date,
+    levels: list[tuple[float, Any]],
 ) -> None:
-    """--plot: the day's levels and the buildings' roofs, in the input's CRS."""
+    """--plot: the day's ``levels`` and the buildings' roofs, in the input's CRS."""
     from shadowgeo.sunmap import plot_sunlight
 
     site = scene.site
     crs = None if site is None else site.source_crs
-    levels = level_regions(study, inputs.up)
     roofs = roof_triangles(inputs)
     moved_levels = to_output([region for _, region in levels], site, crs)
     moved_roofs = to_output(roofs, site, crs)

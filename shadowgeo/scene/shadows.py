@@ -621,18 +621,7 @@ def _on_receiver(
             plan.lighting,
         )
         return _named(plan, covered, stem, _layer_suffix, light.group), []
-    layers, notes = _receiver_layers(
-        receiver,
-        light.scene_light,
-        light.graded,
-        casters=plan.casters,
-        opacity=light.casting,
-        tolerance=plan.tolerance,
-        lift=light.height,
-        light_name=light.name,
-        step=step,
-        lighting=plan.lighting,
-    )
+    layers, notes = _receiver_layers(plan, light, receiver, step)
     return _named(plan, layers, stem, _suffix_for(light.graded), light.group), notes
 
 
@@ -659,18 +648,7 @@ def _on_surfaces(
     # point runs inside them; each caster's topology made once for every light
     stacked = plan.casters
     reached = np.flatnonzero(stacked.lit(light.scene_light.light) & (light.casting > 0))
-    layers, notes = _surface_layers(
-        light.graded,
-        receiving,
-        [stacked.caster(int(k)) for k in reached],
-        light.casting[reached],
-        reached,
-        light.scene_light,
-        plan.tolerance,
-        light.height,
-        light.name,
-        plan.lighting,
-    )
+    layers, notes = _surface_layers(plan, light, receiving, reached)
     return [*added, *_named(plan, layers, stem, _suffix_for(light.graded), light.group)], notes
 
 
@@ -1032,7 +1010,8 @@ def _select_lights(
         return [*_named_lights(scene, names), *extra], []
     lit = [light for light in scene.lights if light.on]
     if not lit:
-        return [default_sun(scene.up_axis)], [_default_sun_note(scene)]
+        sun = default_sun(scene.up_axis)
+        return [sun], [_default_sun_note(scene, sun)]
     return _casting_lights(lit)
 
 
@@ -1058,10 +1037,10 @@ def _named_lights(scene: Scene, names: Sequence[str]) -> list[SceneLight]:
     return chosen
 
 
-def _default_sun_note(scene: Scene) -> str:
-    """The note on the default sun casting in a scene with no light on."""
+def _default_sun_note(scene: Scene, sun: SceneLight) -> str:
+    """The note on the default ``sun`` casting in a scene with no light on."""
     what = "no lights" if not scene.lights else "no light that is on"
-    sun_direction = cast(DirectionalLight, default_sun(scene.up_axis).light).direction
+    sun_direction = cast(DirectionalLight, sun.light).direction
     direction = ", ".join(f"{value:.3g}" for value in sun_direction)
     return (
         f"shadows: the scene has {what}; a default sun casts, travelling along "
@@ -1317,80 +1296,71 @@ def _suffix_for(graded: SoftSettings | None) -> Callable[[float], str]:
 
 
 def _receiver_layers(
-    receiver: Receiver,
-    scene_light: SceneLight,
-    graded: SoftSettings | None,
-    *,
-    casters: CasterSet,
-    opacity: np.ndarray,
-    tolerance: Tolerance,
-    lift: float,
-    light_name: str,
-    step: Callable[[int], None],
-    lighting: Lighting,
+    plan: _ShadowPlan, light: _LightCasting, receiver: Receiver, step: Callable[[int], None]
 ) -> tuple[list[tuple[float, Shape]], list[str]]:
-    """:func:`_shadow_on`, or for a light with a size (``graded``) its
+    """:func:`_shadow_on`, or for a light with a size (``light.graded``) its
     graded layers (:func:`.softbake.soft_on_receiver`)."""
-    if graded is None:
+    if light.graded is None:
         return _shadow_on(
             receiver,
-            scene_light,
-            casters=casters,
-            opacity=opacity,
-            tolerance=tolerance,
-            lift=lift,
-            light_name=light_name,
+            light.scene_light,
+            casters=plan.casters,
+            opacity=light.casting,
+            tolerance=plan.tolerance,
+            lift=light.height,
+            light_name=light.name,
             step=step,
-            lighting=lighting,
+            lighting=plan.lighting,
         )
-    step(len(casters))
+    step(len(plan.casters))
     notes: list[str] = []
     layers = soft_on_receiver(
         receiver,
-        scene_light,
-        casters=casters,
-        opacity=opacity,
-        tolerance=tolerance,
-        lift=lift,
+        light.scene_light,
+        casters=plan.casters,
+        opacity=light.casting,
+        tolerance=plan.tolerance,
+        lift=light.height,
         notes=notes,
-        light_name=light_name,
-        lighting=lighting,
-        settings=graded,
+        light_name=light.name,
+        lighting=plan.lighting,
+        settings=light.graded,
     )
     return layers, notes
 
 
 def _surface_layers(
-    graded: SoftSettings | None,
-    surface: ReceivingSurface,
-    casters: list[Caster],
-    opacity: np.ndarray,
-    caster_shapes: np.ndarray,
-    scene_light: SceneLight,
-    tolerance: Tolerance,
-    lift: float,
-    light_name: str,
-    lighting: Lighting,
+    plan: _ShadowPlan, light: _LightCasting, surface: ReceivingSurface, reached: np.ndarray
 ) -> tuple[list[tuple[float, Shape]], list[str]]:
-    """:func:`.surfaces.surface_shadow`, or for a light with a size
-    (``graded``) its graded layers (:func:`.softbake.soft_on_surface`)."""
+    """:func:`.surfaces.surface_shadow` of the casters ``reached`` (indices
+    in ``plan.casters``), or for a light with a size (``light.graded``) their
+    graded layers (:func:`.softbake.soft_on_surface`)."""
     notes: list[str] = []
-    if graded is None:
+    casters = [plan.casters.caster(int(k)) for k in reached]
+    if light.graded is None:
         layers = surface_shadow(
             surface,
             casters,
-            opacity,
-            caster_shapes,
-            scene_light,
-            tolerance,
-            lift,
+            light.casting[reached],
+            reached,
+            light.scene_light,
+            plan.tolerance,
+            light.height,
             notes,
-            light_name,
-            lighting,
+            light.name,
+            plan.lighting,
         )
     else:
         layers = soft_on_surface(
-            surface, casters, scene_light, tolerance, lift, notes, light_name, lighting, graded
+            surface,
+            casters,
+            light.scene_light,
+            plan.tolerance,
+            light.height,
+            notes,
+            light.name,
+            plan.lighting,
+            light.graded,
         )
     return layers, notes
 
