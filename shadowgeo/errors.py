@@ -6,13 +6,20 @@ element it comes from, so a user can find the problem without a traceback.
 
 from __future__ import annotations
 
-__all__ = ["EXCERPT", "GeometryError", "SceneError", "excerpt"]
+__all__ = ["EXCERPT", "BudgetError", "GeometryError", "SceneError", "excerpt"]
 
 
 class GeometryError(ValueError):
     """Input geometry that has no meaningful shadow (NaN, a zero normal, a light
     on the receiving plane or inside a closed caster, faces indexing missing
     vertices, ...)."""
+
+
+class BudgetError(GeometryError):
+    """Work refused before it starts because it would pass one of the budgets
+    of :mod:`shadowgeo.limits` (a union's crossings or sweep, the pairs a
+    surface's shadow searches), which the message names. The same work in
+    smaller pieces (fewer receiving faces at a time) may pass."""
 
 
 class SceneError(ValueError):

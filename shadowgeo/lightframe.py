@@ -25,7 +25,7 @@ from typing import cast
 import numpy as np
 import shapely
 
-from .errors import GeometryError
+from .errors import BudgetError
 from .limits import MAX_SURFACE_PAIRS, TINY
 
 __all__ = [
@@ -392,7 +392,7 @@ def _tree_pairs(
 
 def _check_pairs(count: int, budget: int) -> None:
     if count > budget:
-        raise GeometryError(
+        raise BudgetError(
             f"more than {budget:,} (receiving face, caster triangle) pairs overlap as seen "
             "from the light (shadowgeo.limits.MAX_SURFACE_PAIRS)"
         )

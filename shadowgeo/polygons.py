@@ -19,7 +19,7 @@ import numpy as np
 from manifold3d import CrossSection, FillRule, triangulate
 
 from .arrangement import convex_union_arrays, convex_union_flat
-from .errors import GeometryError
+from .errors import BudgetError
 from .limits import CONVEX_TURN as _CONVEX_TURN
 from .limits import MAX_UNION_CROSSINGS, MAX_UNION_SWEEP
 from .orientation import MAX_COORDINATE, turn_sign, turns
@@ -591,7 +591,7 @@ def fill(
     estimate, sampled = crossings_estimate(loops, cells)
     if estimate > MAX_UNION_CROSSINGS and sampled >= _FEWEST_CROSSING_EDGES:
         n_edges = sum(len(loop) for loop in loops)
-        raise GeometryError(
+        raise BudgetError(
             f"the shadow's outline ({len(loops)} loops, {n_edges} edges) has about "
             f"{estimate:.2g} edge crossings, past the budget of {MAX_UNION_CROSSINGS:,} "
             "(shadowgeo.limits.MAX_UNION_CROSSINGS)"
@@ -606,12 +606,12 @@ def fill(
 
 
 def _check_sweep(loops: list[np.ndarray]) -> None:
-    """Raise GeometryError when uniting ``loops`` would take Clipper2's sweep
+    """Raise BudgetError when uniting ``loops`` would take Clipper2's sweep
     more than MAX_UNION_SWEEP steps."""
     work = sweep_work(loops)
     if work > MAX_UNION_SWEEP:
         n_edges = sum(len(loop) for loop in loops)
-        raise GeometryError(
+        raise BudgetError(
             f"the shadow's outline ({len(loops)} loops, {n_edges} edges) needs {work:.2g} "
             f"steps of the union's sweep (many corners on few lines), past the budget of "
             f"{MAX_UNION_SWEEP:,} (shadowgeo.limits.MAX_UNION_SWEEP)"

@@ -41,7 +41,7 @@ from manifold3d import CrossSection, FillRule
 from numpy.typing import ArrayLike, NDArray
 
 from . import polygons as poly
-from .errors import GeometryError
+from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight
 from .sun import sun_lights
@@ -337,9 +337,9 @@ def _cast(
     or a pair search's budget, :mod:`shadowgeo.limits`), in halves."""
     try:
         shadow = shadow_on_surface(casters, light, (vertices, faces[chosen]), tolerance=tolerance)
-    except GeometryError as error:
-        # only a budget (named in the message) is worth halving for; bad input is not
-        if len(chosen) < 2 or "shadowgeo.limits.MAX_" not in str(error):
+    except BudgetError:
+        # only a budget is worth halving for; bad input is not
+        if len(chosen) < 2:
             raise
         middle = len(chosen) // 2
         return _cast(casters, light, vertices, faces, chosen[:middle], tolerance) + _cast(

@@ -15,6 +15,7 @@ from needs import SHARED, absent
 
 from shadowgeo import GeometryError
 from shadowgeo import polygons as poly
+from shadowgeo.errors import BudgetError
 from shadowgeo.sun import hourly
 from shadowgeo.sunlight_surfaces import surface_sun_study, surface_sunlight
 
@@ -412,7 +413,7 @@ def test_a_receiver_too_big_for_one_call_is_cast_in_halves_with_the_same_result(
 
     def refusing(casters, light, surface, **options):
         if len(surface[1]) > 7:
-            raise GeometryError("past a budget (shadowgeo.limits.MAX_UNION_CROSSINGS)")
+            raise BudgetError("past a budget (shadowgeo.limits.MAX_UNION_CROSSINGS)")
         return real(casters, light, surface, **options)
 
     monkeypatch.setattr(module, "shadow_on_surface", refusing)
