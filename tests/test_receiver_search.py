@@ -362,8 +362,7 @@ def test_at_most_max_found_receivers_the_largest():
     post = trimesh.creation.box(bounds=[[-0.2, 2.0 * count, -0.2], [0.2, 2.0 * count + 1, 0.2]])
     shapes.append(sg.Shape(post.vertices, post.faces, name="post"))
     scene = sg.Scene(shapes, [sg.SceneLight(sg.DirectionalLight([0, -1, 0]), shadows=True)])
-    notes: list[str] = []
-    received = found(scene, shapes, TOLERANCE, notes, ground_fallback=False)
+    received, notes = found(scene, shapes, TOLERANCE, ground_fallback=False)
     names = [receiver.name for receiver in received]
     # the MAX_FOUND largest floors, in the scene's order
     assert names == [f"floor{k}" for k in range(count - MAX_FOUND, count)]

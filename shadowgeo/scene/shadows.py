@@ -486,21 +486,21 @@ def _receiving(plan: _ShadowPlan) -> _Receiving:
     if surfaces is None:
         surfaces = options.receivers is None and options.plane is None
     terrain = _terrain(stacked, plan.scene.up_index) if surfaces else None
-    notes: list[str] = []
-    found = select_receivers(  # a named shape is looked for among every copy
+    found, notes = select_receivers(  # a named shape is looked for among every copy
         own,
         geometry if options.receivers is None else plan.shapes.every_shape,
         options.receivers,
         options.plane,
         plan.tolerance,
-        notes,
         stacked,
         terrain is None,
     )
     surface, surface_notes = _other_surfaces(plan, found) if surfaces else (None, [])
     notes.extend(surface_notes)
     if not found and surface is None:  # the terrain cannot receive after all
-        found = [ground(own, geometry, notes, stacked.bounds)]
+        ground_plane, note = ground(own, geometry, stacked.bounds)
+        found = [ground_plane]
+        notes.append(note)
     elif not found:
         notes.append(
             f"shadows: no flat receiver found; {terrain} spans the scene and receives with "
@@ -1313,20 +1313,17 @@ def _receiver_layers(
             lighting=plan.lighting,
         )
     step(len(plan.casters))
-    notes: list[str] = []
-    layers = soft_on_receiver(
+    return soft_on_receiver(
         receiver,
         light.scene_light,
         casters=plan.casters,
         opacity=light.casting,
         tolerance=plan.tolerance,
         lift=light.height,
-        notes=notes,
         light_name=light.name,
         lighting=plan.lighting,
         settings=light.graded,
     )
-    return layers, notes
 
 
 def _surface_layers(
@@ -1335,10 +1332,9 @@ def _surface_layers(
     """:func:`.surfaces.surface_shadow` of the casters ``reached`` (indices
     in ``plan.casters``), or for a light with a size (``light.graded``) their
     graded layers (:func:`.softbake.soft_on_surface`)."""
-    notes: list[str] = []
     casters = [plan.casters.caster(int(k)) for k in reached]
     if light.graded is None:
-        layers = surface_shadow(
+        return surface_shadow(
             surface,
             casters,
             light.casting[reached],
@@ -1346,23 +1342,19 @@ def _surface_layers(
             light.scene_light,
             plan.tolerance,
             light.height,
-            notes,
             light.name,
             plan.lighting,
         )
-    else:
-        layers = soft_on_surface(
-            surface,
-            casters,
-            light.scene_light,
-            plan.tolerance,
-            light.height,
-            notes,
-            light.name,
-            plan.lighting,
-            light.graded,
-        )
-    return layers, notes
+    return soft_on_surface(
+        surface,
+        casters,
+        light.scene_light,
+        plan.tolerance,
+        light.height,
+        light.name,
+        plan.lighting,
+        light.graded,
+    )
 
 
 def _volumes(plan: _ShadowPlan) -> tuple[list[Shape], list[str]]:
