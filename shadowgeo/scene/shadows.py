@@ -1359,52 +1359,67 @@ def _surface_layers(
 
 def _volumes(plan: _ShadowPlan) -> tuple[list[Shape], list[str]]:
     """Shadow volumes of every shape that casts (``opacity`` above 0) for every
-    light, ending one scene size past the farthest corner of the scene (a
-    sweep of twice its size for a sun)."""
-    stacked, opacity, chosen = plan.casters, plan.opacity, plan.lights
-    tolerance, names, progress = plan.tolerance, plan.names, plan.options.progress
-    notes: list[str] = []
-    bounds = stacked.bounds
+    light, one step per light (:func:`_light_volumes`), ending one scene size
+    past the farthest corner of the scene (a sweep of twice its size for a
+    sun)."""
+    bounds = plan.casters.bounds
     corners = np.array(
         [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
     )
-    added = []
-    total, done = len(chosen) * len(stacked), 0
-    for index, scene_light in enumerate(chosen):
-        light = scene_light.light
-        if is_positional(light):
-            extent = float(np.linalg.norm(corners - light.position, axis=1).max()) + tolerance.scale
-        else:
-            extent = 2 * tolerance.scale
-        light_name = names.light(scene_light, index)
-        group = names.unique(f"shadows_{light_name}")
-        casting = stacked.lit(light) & (
-            opacity * in_scope(scene_light, [caster.shape for caster in stacked.casters]) > 0
-        )
-        for caster, lit in zip(stacked.casters, casting, strict=True):
-            done += 1
-            if progress is not None:
-                progress(done, total)
-            if not lit:
-                continue
-            try:
-                volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)
-            except GeometryError as error:
-                notes.append(f"shadows: {caster.name} has no volume for {light_name}: {error}")
-                continue
-            if len(volume.faces) == 0:
-                continue
-            added.append(
-                Shape(
-                    np.asarray(volume.vertices, dtype=np.float64),
-                    np.asarray(volume.faces, dtype=np.int64),
-                    material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=0.8),
-                    name=names.unique(f"volume_{light_name}_{safe_name(caster.name)}"),
-                    solid=False,
-                    role="volume",
-                    group=group,
-                    source=f"shadow volume of {caster.name} for light {light_name}",
-                    casts_shadow=False,
-                )
+    added: list[Shape] = []
+    notes: list[str] = []
+    for index in range(len(plan.lights)):
+        volumes, volume_notes = _light_volumes(plan, index, corners)
+        added.extend(volumes)
+        notes.extend(volume_notes)
+    return added, notes
+
+
+def _light_volumes(
+    plan: _ShadowPlan, index: int, corners: np.ndarray
+) -> tuple[list[Shape], list[str]]:
+    """The step of the ``index``-th light: the shadow volume of each caster it
+    lights, reaching past the scene's box ``corners`` (8, 3), with a note for
+    each caster that has none."""
+    stacked, tolerance, names = plan.casters, plan.tolerance, plan.names
+    progress = plan.options.progress
+    scene_light = plan.lights[index]
+    light = scene_light.light
+    if is_positional(light):
+        extent = float(np.linalg.norm(corners - light.position, axis=1).max()) + tolerance.scale
+    else:
+        extent = 2 * tolerance.scale
+    light_name = names.light(scene_light, index)
+    group = names.unique(f"shadows_{light_name}")
+    casting = stacked.lit(light) & (
+        plan.opacity * in_scope(scene_light, [caster.shape for caster in stacked.casters]) > 0
+    )
+    added, notes = [], []
+    total, done = len(plan.lights) * len(stacked), index * len(stacked)
+    for caster, lit in zip(stacked.casters, casting, strict=True):
+        done += 1
+        if progress is not None:
+            progress(done, total)
+        if not lit:
+            continue
+        try:
+            volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)
+        except GeometryError as error:
+            notes.append(f"shadows: {caster.name} has no volume for {light_name}: {error}")
+            continue
+        if len(volume.faces) == 0:
+            continue
+        added.append(
+            Shape(
+                np.asarray(volume.vertices, dtype=np.float64),
+                np.asarray(volume.faces, dtype=np.int64),
+                material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=0.8),
+                name=names.unique(f"volume_{light_name}_{safe_name(caster.name)}"),
+                solid=False,
+                role="volume",
+                group=group,
+                source=f"shadow volume of {caster.name} for light {light_name}",
+                casts_shadow=False,
             )
+        )
     return added, notes
