@@ -9,7 +9,8 @@ unions, intersections and valid triangulations.
 
 Clipper2 sweeps along y, so a single column of cells (:func:`column_cells`)
 has its scanlines meet one region at a time; a square grid
-(:func:`grid_cells`) keeps a uniform scale for both axes.
+(:func:`grid_cells`) keeps a uniform scale for both axes. A region worked on
+alone takes the whole plane (:func:`own_cell`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 
 from .orientation import MAX_COORDINATE
 
-__all__ = ["Cells", "column_cells", "grid_cells"]
+__all__ = ["Cells", "column_cells", "grid_cells", "own_cell"]
 
 
 @dataclass(frozen=True)
@@ -55,6 +56,8 @@ class Cells:
 
     def cell_of(self, points: np.ndarray) -> np.ndarray:
         """(m,) the cell that holds each point (m, 2) of the common plane."""
+        if len(self.scale) == 1:  # (a region alone: no arithmetic to do)
+            return np.zeros(len(points), dtype=np.int64)
         column = np.floor((points[:, 0] + MAX_COORDINATE) / (2.0 * MAX_COORDINATE / self.columns))
         row = np.floor((points[:, 1] + MAX_COORDINATE) / (2.0 * MAX_COORDINATE / self.rows))
         column = np.clip(column, 0, self.columns - 1)
@@ -100,3 +103,9 @@ def grid_cells(middle: np.ndarray, size: np.ndarray) -> Cells:
     )
     scale = 0.45 * cell / size
     return Cells(middle, np.column_stack([scale, scale]), centre, columns, columns)
+
+
+def own_cell(scale: float) -> Cells:
+    """One region alone in the plane, stretched by ``scale`` alike along x and
+    y about the origin (its frame's origin stays the plane's centre)."""
+    return Cells(None, np.array([[scale, scale]]), np.zeros((1, 2)), 1, 1)

@@ -17,8 +17,9 @@ face by face, with the same clipping before the divide as
 3. **Project and unite**: the clipped pieces are projected onto the face's
    plane, in its own 2-D frame, and united by winding number (Clipper2 through
    :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
-   own cell of one plane); spot cones and a light's range are applied as
-   exact 2-D intersections.
+   own cell of one plane, or under a light with a range each face in a call
+   of its own: one road, the layout chosen as data); spot cones and a
+   light's range are applied as exact 2-D intersections.
 4. **Stitch** (:mod:`shadowgeo.simplify`, :mod:`shadowgeo.seams`): corners
    that a straight run between two kept corners passes within the tolerance
    length of are dropped (where clipped pieces met along one shadow edge),
@@ -72,7 +73,7 @@ import shapely
 from numpy.typing import ArrayLike
 
 from . import polygons as poly
-from .cells import column_cells
+from .cells import Cells, column_cells, own_cell
 from .errors import GeometryError
 from .lightframe import (
     candidate_pairs,
@@ -88,12 +89,13 @@ from .outline import Outline, OutlineSet, make_outlines
 from .seams import face_regions, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
 from .silhouette import check_light_outside, light_homogeneous, silhouette_loops
-from .simplify import Loops, loops_of, without_collinear
+from .simplify import Loops, without_collinear
 from .tolerance import Tolerance
 from .topology import Caster, MeshLike, as_caster, closed_each, loops_taken, unique_integers
 
 if TYPE_CHECKING:
     import trimesh
+    from manifold3d import CrossSection
 
 __all__ = [
     "LightRegions",
@@ -1124,9 +1126,32 @@ class _SurfaceProjector:
         flat, owner = flat[order], owner[order]
         faces_with = unique_integers(np.concatenate([owner, np.flatnonzero(full)]))
         lit = self._lit_polygons(faces_with, corners, origin, u, v)
+        limits = self._face_limits(faces_with, lit, full)
+        return _face_loops(limits, _FacePieces.of(flat, owner, limits.faces))
+
+    def _face_limits(
+        self, faces_with: np.ndarray, lit: tuple[np.ndarray, np.ndarray], full: np.ndarray
+    ) -> _FaceLimits:
+        """The faces ``faces_with`` whose lit outline ``lit`` (padded, and
+        its corner counts) has an area and that the light's range reaches,
+        with what bounds each one's shadow (:class:`_FaceLimits`)."""
+        outlines, counts = lit
+        valid = counts >= 3
+        discs = None
         if is_positional(self.light) and math.isfinite(self.light.radius):
-            return self._regions_one_by_one(faces_with, lit, flat, owner, full)
-        return self._regions_tiled(faces_with, lit, flat, owner, full)
+            # faces the range surely holds need no disc (the same loops)
+            inside = self._inside_range(faces_with, outlines)
+            discs = [
+                _disc_near(self._range_disc(face), padded[:count]) if keep and not held else None
+                for face, padded, count, keep, held in zip(
+                    faces_with, outlines, counts, valid, inside, strict=True
+                )
+            ]
+            # (a face the range misses has no region)
+            valid &= np.array([disc is None or len(disc) >= 3 for disc in discs], dtype=bool)
+            discs = [disc for disc, keep in zip(discs, valid, strict=True) if keep]
+        faces = faces_with[valid]
+        return _FaceLimits(faces, outlines[valid], counts[valid], discs, full[faces])
 
     def _inside_range(self, faces: np.ndarray, outlines: np.ndarray) -> np.ndarray:
         """(f,) bool: True where the light's lit disc on the face's plane (the
@@ -1144,112 +1169,6 @@ class _SurfaceProjector:
         reach_y = np.maximum(np.abs(low[:, 1] - centre_y), np.abs(high[:, 1] - centre_y))
         inside: np.ndarray = (inner > 0) & (reach_x * reach_x + reach_y * reach_y < inner * inner)
         return inside
-
-    def _regions_tiled(
-        self,
-        faces_with: np.ndarray,
-        lit: tuple[np.ndarray, np.ndarray],
-        flat: np.ndarray,
-        owner: np.ndarray,
-        full: np.ndarray,
-    ) -> tuple[Loops, np.ndarray]:
-        """All faces' unions in one Clipper2 call: each face's frame is mapped
-        (by an affine stretch, which keeps unions and intersections) into its
-        own cell of one large plane, so no two faces' pieces meet, and the
-        result is cut back into faces by cell. Faces span a quarter of their
-        cell's height: with n faces, rounding on Clipper2's 1e-8 grid stays
-        near n * 1e-16 of a face."""
-        outlines, counts = lit
-        valid = counts >= 3
-        whole = valid & full[faces_with]
-        # Faces wholly in shadow: their lit outline.
-        slots = np.arange(outlines.shape[1])
-        chunks = [
-            (
-                outlines[whole][slots[None, :] < counts[whole, None]],
-                counts[whole],
-                faces_with[whole],
-            )
-        ]
-        partial = valid & ~full[faces_with]
-        if partial.any():
-            faces = faces_with[partial]
-            limits = outlines[partial]
-            # One column of cells: Clipper2 sweeps along y, so its scanlines
-            # meet one face at a time. x is stretched to the full width.
-            n_cells = len(faces)
-            slot = np.arange(n_cells)
-            cells = column_cells(np.abs(limits.reshape(n_cells, -1)).max(axis=1))
-            index = np.full(len(full), -1, dtype=np.int64)
-            index[faces] = slot
-            rows = np.flatnonzero(index[owner] >= 0)
-            mine = index[owner[rows]]
-            pieces = cells.place(flat[rows], mine[:, None])
-            limits = cells.place(limits, slot[:, None])
-            # (faces in cells apart: crossings are counted within cells)
-            region = poly.intersect(
-                poly.fill(list(pieces), cells=mine), poly.fill(list(limits), cells=slot)
-            )
-            loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
-            if loops:
-                sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
-                points = np.concatenate(loops)
-                k = cells.cell_of(points[np.cumsum(sizes) - sizes])
-                points = cells.restore(points, np.repeat(k, sizes))
-                chunks.append((points, sizes, faces[k]))
-        points = np.concatenate([chunk[0] for chunk in chunks])
-        sizes = np.concatenate([chunk[1] for chunk in chunks])
-        loop_face = np.concatenate([chunk[2] for chunk in chunks])
-        # Loops region by region.
-        order = np.argsort(loop_face, kind="stable")
-        index, sizes = loops_taken(sizes, order)
-        points = points[index]
-        region_faces, loop_region = unique_integers(loop_face[order], return_inverse=True)
-        return (points, sizes, loop_region), region_faces
-
-    def _regions_one_by_one(
-        self,
-        faces_with: np.ndarray,
-        lit: tuple[np.ndarray, np.ndarray],
-        flat: np.ndarray,
-        owner: np.ndarray,
-        full: np.ndarray,
-    ) -> tuple[Loops, np.ndarray]:
-        """Each face's union on its own, cut to the light's range on the face."""
-        starts = np.searchsorted(owner, faces_with, side="left")
-        stops = np.searchsorted(owner, faces_with, side="right")
-        regions: list[list[np.ndarray]] = []
-        region_faces: list[int] = []
-        outlines, counts = lit
-        # faces the range surely holds need no disc (the same loops)
-        inside = self._inside_range(faces_with, outlines).tolist()
-        for face, first, stop, padded, count, held in zip(
-            faces_with, starts, stops, outlines, counts, inside, strict=True
-        ):
-            if count < 3:
-                continue
-            outline = padded[:count]
-            disc = None if held else _disc_near(self._range_disc(face), outline)
-            if disc is not None and len(disc) < 3:
-                continue  # the light's range misses the face
-            if full[face] and disc is None:
-                loops = [outline]
-            else:
-                extent = float(np.abs(outline).max()) * 2.0
-                scale = poly.local_scale(extent)
-                if full[face]:
-                    region = poly.fill([outline * scale])
-                else:
-                    pieces = list(flat[first:stop] * scale)
-                    region = poly.intersect(poly.fill(pieces), poly.fill([outline * scale]))
-                if disc is not None:
-                    region = poly.intersect(region, poly.fill([disc * scale]))
-                loops = [np.asarray(loop) / scale for loop in region.to_polygons()]
-                loops = [loop for loop in loops if len(loop) >= 3]
-            if loops:
-                regions.append(loops)
-                region_faces.append(face)
-        return loops_of(regions), np.array(region_faces, dtype=np.int64)
 
     def _pieces(
         self,
@@ -1497,6 +1416,152 @@ def _pad_polygons(polygons: list[np.ndarray]) -> np.ndarray:
     return np.concatenate(
         [np.pad(p, ((0, 0), (0, width - p.shape[1]), (0, 0)), mode="edge") for p in polygons]
     )
+
+
+@dataclass(frozen=True)
+class _FaceLimits:
+    """The faces that may hold a shadow region and what bounds each: its lit
+    outline (``outlines`` (f, k, 2), padded by repeating the last corner, of
+    ``counts`` (f,) corners), the light's range where it cuts the face
+    (``discs``: (d, 2) or None each; None for a light without a range), and
+    whether the face is wholly in shadow (``full`` (f,) bool)."""
+
+    faces: np.ndarray
+    outlines: np.ndarray
+    counts: np.ndarray
+    discs: list[np.ndarray | None] | None
+    full: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Batch:
+    """Faces (``slots`` in :class:`_FaceLimits`) cut in one 2-D clipper call,
+    each in its own cell of ``cells``; ``apart``: the cells are given to the
+    union's budget, which then counts crossings cell by cell."""
+
+    slots: np.ndarray
+    cells: Cells
+    apart: bool
+
+    def labels(self, cell: np.ndarray) -> np.ndarray | None:
+        """The cells ``cell`` of some loops, as the union's budget takes them."""
+        return cell if self.apart else None
+
+
+@dataclass(frozen=True)
+class _FacePieces:
+    """The pieces ``flat`` (n, k, 2) padded, sorted by face, and where each
+    face's run of them starts (``start``) and how long it is (``count``),
+    face by face of a :class:`_FaceLimits`."""
+
+    flat: np.ndarray
+    start: np.ndarray
+    count: np.ndarray
+
+    @classmethod
+    def of(cls, flat: np.ndarray, owner: np.ndarray, faces: np.ndarray) -> _FacePieces:
+        """The pieces ``flat`` of the faces ``owner`` (sorted), run by run
+        for ``faces`` (sorted)."""
+        start = np.searchsorted(owner, faces, side="left")
+        return cls(flat, start, np.searchsorted(owner, faces, side="right") - start)
+
+    def rows(self, slots: np.ndarray, cell: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The rows of ``flat`` of the faces ``slots``, run after run, and
+        the ``cell`` of each face repeated for its rows."""
+        start, count = self.start[slots], self.count[slots]
+        first = np.repeat(start - (np.cumsum(count) - count), count)
+        return np.arange(len(first), dtype=np.int64) + first, np.repeat(cell, count)
+
+
+_Chunk = tuple[np.ndarray, np.ndarray, np.ndarray]  # loops' points, sizes and faces
+
+
+def _face_loops(limits: _FaceLimits, pieces: _FacePieces) -> tuple[Loops, np.ndarray]:
+    """Each face's shadow region, as loops in its frame: the lit outline of a
+    face wholly in shadow that the light's range does not cut; for the
+    others, their ``pieces`` cut to their bounds, batch by batch
+    (:func:`_batches`). The loops region by region, and the faces (sorted)."""
+    uncut = limits.full.copy()
+    if limits.discs is not None:
+        uncut &= np.array([disc is None for disc in limits.discs], dtype=bool)
+    chunks = [_outlines_of(limits, np.flatnonzero(uncut))]
+    for batch in _batches(limits, np.flatnonzero(~uncut)):
+        chunks.append(_cut(limits, batch, pieces))
+    points = np.concatenate([chunk[0] for chunk in chunks])
+    sizes = np.concatenate([chunk[1] for chunk in chunks])
+    loop_face = np.concatenate([chunk[2] for chunk in chunks])
+    order = np.argsort(loop_face, kind="stable")
+    index, sizes = loops_taken(sizes, order)
+    region_faces, loop_region = unique_integers(loop_face[order], return_inverse=True)
+    return (points[index], sizes, loop_region), region_faces
+
+
+def _outlines_of(limits: _FaceLimits, slots: np.ndarray) -> _Chunk:
+    """The lit outlines of the faces ``slots``, as they are."""
+    counts = limits.counts[slots]
+    corners = np.arange(limits.outlines.shape[1])
+    points = limits.outlines[slots][corners[None, :] < counts[:, None]]
+    return points, counts, limits.faces[slots]
+
+
+def _batches(limits: _FaceLimits, slots: np.ndarray) -> list[_Batch]:
+    """How the faces ``slots`` are laid out for the clipper: the one choice
+    between the two layouts. Under a light with a range, each face alone at
+    its own scale (the largest coordinate of its outline at half Clipper2's
+    range), cut to the range's disc with it, as such shadows have always been
+    rounded; else all in one call, in one column of cells: Clipper2 sweeps
+    along y, so its scanlines meet one face at a time (x is stretched to the
+    full width)."""
+    if not len(slots):
+        return []
+    if limits.discs is not None:
+        return [
+            _Batch(np.array([slot]), own_cell(poly.local_scale(2.0 * _reach(limits, slot))), False)
+            for slot in slots.tolist()
+        ]
+    reach = np.abs(limits.outlines[slots].reshape(len(slots), -1)).max(axis=1)
+    return [_Batch(slots, column_cells(reach), True)]
+
+
+def _reach(limits: _FaceLimits, slot: int) -> float:
+    """The largest coordinate of the lit outline of face ``slot``."""
+    return float(np.abs(limits.outlines[slot, : limits.counts[slot]]).max())
+
+
+def _cut(limits: _FaceLimits, batch: _Batch, pieces: _FacePieces) -> _Chunk:
+    """The regions of the faces of ``batch``, in one clipper call: each
+    face's pieces (a face wholly in shadow: its lit outline) within its lit
+    outline and, where it cuts the face, the light's range."""
+    cells, slots = batch.cells, batch.slots
+    cell = np.arange(len(slots))
+    partial = ~limits.full[slots]
+    rows, mine = pieces.rows(slots[partial], cell[partial])
+    whole = cell[~partial]
+    subject = [*cells.place(pieces.flat[rows], mine[:, None])]
+    if len(whole):
+        subject += [*cells.place(limits.outlines[slots[whole]], whole[:, None])]
+    region = poly.fill(subject, cells=batch.labels(np.concatenate([mine, whole])))
+    if partial.any():
+        bounds = cells.place(limits.outlines[slots[partial]], cell[partial][:, None])
+        region = poly.intersect(region, poly.fill([*bounds], cells=batch.labels(cell[partial])))
+    discs = [] if limits.discs is None else [limits.discs[slot] for slot in slots.tolist()]
+    ranged = [k for k, disc in enumerate(discs) if disc is not None]
+    if ranged:
+        placed = [cells.place(discs[k], np.array(k)) for k in ranged]
+        region = poly.intersect(region, poly.fill(placed, cells=batch.labels(np.array(ranged))))
+    return _chunk(region, batch, limits.faces)
+
+
+def _chunk(region: CrossSection, batch: _Batch, faces: np.ndarray) -> _Chunk:
+    """The loops of ``region`` (of at least three corners), back in their
+    faces' frames, and the face of each (``faces`` by slot)."""
+    loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
+    if not loops:
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    points = np.concatenate(loops)
+    cell = batch.cells.cell_of(points[np.cumsum(sizes) - sizes])
+    return batch.cells.restore(points, np.repeat(cell, sizes)), sizes, faces[batch.slots[cell]]
 
 
 def _disc_near(disc: np.ndarray | None, outline: np.ndarray) -> np.ndarray | None:

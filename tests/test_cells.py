@@ -4,14 +4,16 @@
   largest coordinate), x stretched to M/2 at the region's reach, y to a
   quarter of the cell; a grid of five regions is three by three;
 * each region lands inside its own cell, apart from every other, and is
-  found there again and mapped back to where it was.
+  found there again and mapped back to where it was;
+* a region alone is stretched about the origin by its scale and nothing
+  else: the plane's coordinates are its own times the scale, exactly.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from shadowgeo.cells import column_cells, grid_cells
+from shadowgeo.cells import column_cells, grid_cells, own_cell
 from shadowgeo.orientation import MAX_COORDINATE as M
 
 
@@ -46,3 +48,15 @@ def test_a_grid_of_five_is_three_by_three_and_keeps_regions_apart():
         assert cells.cell_of(placed[k]).tolist() == [k] * 4
     back = cells.restore(placed.reshape(-1, 2), np.repeat(np.arange(5), 4))
     assert np.allclose(back, boxes.reshape(-1, 2), rtol=0, atol=1e-6)
+
+
+def test_a_region_alone_is_only_stretched_about_the_origin():
+    rng = np.random.default_rng(7)
+    loop = rng.uniform(-3.0, 3.0, (9, 2))
+    scale = M / 6.0  # the largest coordinate at half the range
+    cells = own_cell(scale)
+    placed = cells.place(loop, np.zeros(9, dtype=np.int64))
+    assert np.array_equal(placed, loop * scale)  # bit for bit: the clipper sees loop * scale
+    assert np.abs(placed).max() <= M / 2
+    assert cells.cell_of(placed).tolist() == [0] * 9
+    assert np.array_equal(cells.restore(placed, np.zeros(9, dtype=np.int64)), placed / scale)

@@ -17,7 +17,7 @@ from shadowgeo.polygons import fill, without_copies
 from shadowgeo.scene import patchbound
 from shadowgeo.scene.casters import CasterSet, distinct
 from shadowgeo.scene.patchbound import may_hold_patch
-from shadowgeo.scene.receivers import MAX_FOUND, found, patches
+from shadowgeo.scene.receivers import MAX_FOUND, found, patches, select
 
 TOLERANCE = sg.Tolerance.for_points([[-10, -10, -10], [10, 10, 10]])
 
@@ -362,8 +362,7 @@ def test_at_most_max_found_receivers_the_largest():
     post = trimesh.creation.box(bounds=[[-0.2, 2.0 * count, -0.2], [0.2, 2.0 * count + 1, 0.2]])
     shapes.append(sg.Shape(post.vertices, post.faces, name="post"))
     scene = sg.Scene(shapes, [sg.SceneLight(sg.DirectionalLight([0, -1, 0]), shadows=True)])
-    notes: list[str] = []
-    received = found(scene, shapes, TOLERANCE, notes, ground_fallback=False)
+    received, notes = found(scene, shapes, TOLERANCE, ground_fallback=False)
     names = [receiver.name for receiver in received]
     # the MAX_FOUND largest floors, in the scene's order
     assert names == [f"floor{k}" for k in range(count - MAX_FOUND, count)]
@@ -440,3 +439,22 @@ def test_past_the_surface_budget_only_planar_shadows_and_no_surface_work(monkeyp
     assert f"{sphere.n_faces:,} faces besides the planar receivers" in " ".join(past.warnings)
     (shadow,) = past.shapes_with_role("shadow")
     assert shadow.name == "shadow_sun_shape"  # the ground (unnamed) only
+
+
+def test_the_search_returns_its_notes_with_the_receivers_it_chose():
+    # a lone box: nothing lies in front of its faces, so none receives, and
+    # the ground plane under its lowest corner (y = 1.5, by hand) does
+    box = trimesh.creation.box(bounds=[[-1.0, 1.5, -1.0], [1.0, 2.5, 1.0]])
+    shapes = [sg.Shape(box.vertices, box.faces, name="box")]
+    scene = sg.Scene(shapes, [sg.SceneLight(sg.DirectionalLight([0, -1, 0]), shadows=True)])
+    received, notes = found(scene, shapes, TOLERANCE)
+    assert [receiver.name for receiver in received] == ["ground"]
+    assert received[0].plane.normal.tolist() == [0.0, 1.0, 0.0]
+    assert received[0].plane.offset == -1.5
+    assert len(notes) == 1 and notes[0].startswith("shadows: no receiver found")
+    assert "the ground plane y = 1.5 under the scene's lowest point" in notes[0]
+    # without the fallback: nothing found, nothing noted
+    assert found(scene, shapes, TOLERANCE, ground_fallback=False) == ([], [])
+    # a plane given is chosen, not searched for: no note
+    given, given_notes = select(scene, shapes, None, [0, 1, 0, 0], TOLERANCE)
+    assert [receiver.name for receiver in given] == ["plane"] and given_notes == []

@@ -403,6 +403,17 @@ def test_progress_counts_each_light_after_the_ones_before():
     assert calls == [(4, 8), (8, 8), (8, 8)]
 
 
+def test_volume_progress_counts_each_light_after_the_ones_before():
+    # method="volume": one step per light, each counting its 4 shapes (the
+    # ground and three cubes) on from the lights before it: 1..4, then 5..8
+    cubes = [box([x, 1, -0.5], [x + 0.5, 2, 0.5], f"c{x}") for x in (-2, 0, 2)]
+    lights = [light([0, 4, 0], "a", shadows=True), light([1, 5, 0], "b", shadows=True)]
+    calls = []
+    scene = sg.Scene([ground(), *cubes], lights)
+    sg.add_shadows(scene, method="volume", progress=lambda *a: calls.append(a))
+    assert calls == [(done, 8) for done in range(1, 9)]
+
+
 def test_notes_come_in_the_order_of_the_steps():
     # shapes (earlier shadows, repeats), then the lights chosen, then the
     # receivers, then the runtime shadows; a second run keeps the first's notes

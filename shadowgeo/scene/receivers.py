@@ -211,14 +211,14 @@ def patches(
 def ground(
     scene: Scene,
     geometry: list[Shape],
-    notes: list[str],
     bounds: np.ndarray | None = None,
     besides: Sequence[Receiver] = (),
-) -> Receiver:
+) -> tuple[Receiver, str]:
     """The unbounded ground plane through the lowest point of the geometry
-    (height along the scene's up axis), facing up, with a note: the receiver
-    when none is found, or when those found (``besides``) hold no floor under
-    the scene. ``bounds``: the geometry's world box, when known."""
+    (height along the scene's up axis), facing up, and the note that says
+    so: the receiver when none is found, or when those found (``besides``)
+    hold no floor under the scene. ``bounds``: the geometry's world box, when
+    known."""
     axis = scene.up_index
     if bounds is None and geometry:
         bounds = bounding_box(np.concatenate([shape.world_vertices for shape in geometry]))
@@ -228,22 +228,23 @@ def ground(
     name = "xyz"[axis]
     plane = f"the ground plane {name} = {lowest:.6g} under the scene's lowest point receives"
     if besides:
-        notes.append(
+        note = (
             f"shadows: none of the receivers found is a floor under the scene; {plane} too "
             "(--receiver DEF or --plane a,b,c,d chooses others)"
         )
     else:
-        notes.append(
+        note = (
             "shadows: no receiver found (no large flat surface with something in front of "
             f"it); {plane} (--receiver DEF or --plane a,b,c,d chooses another)"
         )
-    return Receiver(
+    receiver = Receiver(
         Plane(normal, -lowest),
         "ground",
         two_sided=False,
         material=GROUND_MATERIAL,
         scopes=frozenset(),  # the ground is added at the top of the scene
     )
+    return receiver, note
 
 
 def bounds_the_scene(receiver: Receiver, bounds: np.ndarray) -> bool:
@@ -334,20 +335,20 @@ def select(
     names: Sequence[str] | None,
     plane: Plane | ArrayLike | None,
     tolerance: Tolerance,
-    notes: list[str],
     stacked: CasterSet | None = None,
     ground_fallback: bool = True,
-) -> list[Receiver]:
+) -> tuple[list[Receiver], list[str]]:
     """The receivers for :func:`shadowgeo.add_shadows` (see the module notes):
-    a given plane, the named shapes' patches, or the patches found.
-    ``stacked``: the geometry's :class:`~.casters.CasterSet`, when the caller
-    has it (its world vertices and boxes are reused). ``ground_fallback``:
-    when no patch is found, the ground plane (:func:`ground`), else none."""
+    a given plane, the named shapes' patches, or the patches found; with the
+    notes on the search (only a search notes anything). ``stacked``: the
+    geometry's :class:`~.casters.CasterSet`, when the caller has it (its
+    world vertices and boxes are reused). ``ground_fallback``: when no patch
+    is found, the ground plane (:func:`ground`), else none."""
     if plane is not None:
-        return [given_plane(plane)]
+        return [given_plane(plane)], []
     if names is not None:
-        return named(scene, geometry, names, tolerance)
-    return found(scene, geometry, tolerance, notes, stacked, ground_fallback)
+        return named(scene, geometry, names, tolerance), []
+    return found(scene, geometry, tolerance, stacked, ground_fallback)
 
 
 def given_plane(plane: Plane | ArrayLike) -> Receiver:
@@ -490,12 +491,11 @@ def found(
     scene: Scene,
     geometry: list[Shape],
     tolerance: Tolerance,
-    notes: list[str],
     stacked: CasterSet | None = None,
     ground_fallback: bool = True,
-) -> list[Receiver]:
+) -> tuple[list[Receiver], list[str]]:
     """The patches found automatically (see the module notes), or the ground
-    (none when not ``ground_fallback``).
+    (none when not ``ground_fallback``); with the notes on what was found.
 
     World vertices are computed once per shape, and a shape whose bounding
     box is smaller than a found receiver must be (``SIZE_FRACTION`` of the
@@ -510,8 +510,11 @@ def found(
     qualify = [item for item in candidates if item.area >= AREA_FRACTION * largest]
     result = _largest_receivers(qualify)
     if not result:
-        return [ground(scene, geometry, notes, bounds)] if ground_fallback else []
-    notes.append("shadows: receivers found: " + ", ".join(r.name for r in result))
+        if not ground_fallback:
+            return [], []
+        ground_plane, note = ground(scene, geometry, bounds)
+        return [ground_plane], [note]
+    notes = ["shadows: receivers found: " + ", ".join(r.name for r in result)]
     if len(qualify) > MAX_FOUND:
         notes.append(
             f"shadows: {len(qualify) - MAX_FOUND} more flat surfaces qualify as receivers; "
@@ -520,5 +523,7 @@ def found(
     axis = scene.up_index
     lowest = stacked.vertices[int(np.argmin(stacked.vertices[:, axis]))]
     if ground_fallback and not any(is_floor(r, bounds, lowest, axis) for r in result):
-        result.append(ground(scene, geometry, notes, bounds, besides=result))
-    return result
+        ground_plane, note = ground(scene, geometry, bounds, besides=result)
+        result.append(ground_plane)
+        notes.append(note)
+    return result, notes

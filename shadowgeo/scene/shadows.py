@@ -486,21 +486,21 @@ def _receiving(plan: _ShadowPlan) -> _Receiving:
     if surfaces is None:
         surfaces = options.receivers is None and options.plane is None
     terrain = _terrain(stacked, plan.scene.up_index) if surfaces else None
-    notes: list[str] = []
-    found = select_receivers(  # a named shape is looked for among every copy
+    found, notes = select_receivers(  # a named shape is looked for among every copy
         own,
         geometry if options.receivers is None else plan.shapes.every_shape,
         options.receivers,
         options.plane,
         plan.tolerance,
-        notes,
         stacked,
         terrain is None,
     )
     surface, surface_notes = _other_surfaces(plan, found) if surfaces else (None, [])
     notes.extend(surface_notes)
     if not found and surface is None:  # the terrain cannot receive after all
-        found = [ground(own, geometry, notes, stacked.bounds)]
+        ground_plane, note = ground(own, geometry, stacked.bounds)
+        found = [ground_plane]
+        notes.append(note)
     elif not found:
         notes.append(
             f"shadows: no flat receiver found; {terrain} spans the scene and receives with "
@@ -1313,20 +1313,17 @@ def _receiver_layers(
             lighting=plan.lighting,
         )
     step(len(plan.casters))
-    notes: list[str] = []
-    layers = soft_on_receiver(
+    return soft_on_receiver(
         receiver,
         light.scene_light,
         casters=plan.casters,
         opacity=light.casting,
         tolerance=plan.tolerance,
         lift=light.height,
-        notes=notes,
         light_name=light.name,
         lighting=plan.lighting,
         settings=light.graded,
     )
-    return layers, notes
 
 
 def _surface_layers(
@@ -1335,10 +1332,9 @@ def _surface_layers(
     """:func:`.surfaces.surface_shadow` of the casters ``reached`` (indices
     in ``plan.casters``), or for a light with a size (``light.graded``) their
     graded layers (:func:`.softbake.soft_on_surface`)."""
-    notes: list[str] = []
     casters = [plan.casters.caster(int(k)) for k in reached]
     if light.graded is None:
-        layers = surface_shadow(
+        return surface_shadow(
             surface,
             casters,
             light.casting[reached],
@@ -1346,73 +1342,84 @@ def _surface_layers(
             light.scene_light,
             plan.tolerance,
             light.height,
-            notes,
             light.name,
             plan.lighting,
         )
-    else:
-        layers = soft_on_surface(
-            surface,
-            casters,
-            light.scene_light,
-            plan.tolerance,
-            light.height,
-            notes,
-            light.name,
-            plan.lighting,
-            light.graded,
-        )
-    return layers, notes
+    return soft_on_surface(
+        surface,
+        casters,
+        light.scene_light,
+        plan.tolerance,
+        light.height,
+        light.name,
+        plan.lighting,
+        light.graded,
+    )
 
 
 def _volumes(plan: _ShadowPlan) -> tuple[list[Shape], list[str]]:
     """Shadow volumes of every shape that casts (``opacity`` above 0) for every
-    light, ending one scene size past the farthest corner of the scene (a
-    sweep of twice its size for a sun)."""
-    stacked, opacity, chosen = plan.casters, plan.opacity, plan.lights
-    tolerance, names, progress = plan.tolerance, plan.names, plan.options.progress
-    notes: list[str] = []
-    bounds = stacked.bounds
+    light, one step per light (:func:`_light_volumes`), ending one scene size
+    past the farthest corner of the scene (a sweep of twice its size for a
+    sun)."""
+    bounds = plan.casters.bounds
     corners = np.array(
         [[x, y, z] for x in bounds[:, 0] for y in bounds[:, 1] for z in bounds[:, 2]]
     )
-    added = []
-    total, done = len(chosen) * len(stacked), 0
-    for index, scene_light in enumerate(chosen):
-        light = scene_light.light
-        if is_positional(light):
-            extent = float(np.linalg.norm(corners - light.position, axis=1).max()) + tolerance.scale
-        else:
-            extent = 2 * tolerance.scale
-        light_name = names.light(scene_light, index)
-        group = names.unique(f"shadows_{light_name}")
-        casting = stacked.lit(light) & (
-            opacity * in_scope(scene_light, [caster.shape for caster in stacked.casters]) > 0
-        )
-        for caster, lit in zip(stacked.casters, casting, strict=True):
-            done += 1
-            if progress is not None:
-                progress(done, total)
-            if not lit:
-                continue
-            try:
-                volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)
-            except GeometryError as error:
-                notes.append(f"shadows: {caster.name} has no volume for {light_name}: {error}")
-                continue
-            if len(volume.faces) == 0:
-                continue
-            added.append(
-                Shape(
-                    np.asarray(volume.vertices, dtype=np.float64),
-                    np.asarray(volume.faces, dtype=np.int64),
-                    material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=0.8),
-                    name=names.unique(f"volume_{light_name}_{safe_name(caster.name)}"),
-                    solid=False,
-                    role="volume",
-                    group=group,
-                    source=f"shadow volume of {caster.name} for light {light_name}",
-                    casts_shadow=False,
-                )
+    added: list[Shape] = []
+    notes: list[str] = []
+    for index in range(len(plan.lights)):
+        volumes, volume_notes = _light_volumes(plan, index, corners)
+        added.extend(volumes)
+        notes.extend(volume_notes)
+    return added, notes
+
+
+def _light_volumes(
+    plan: _ShadowPlan, index: int, corners: np.ndarray
+) -> tuple[list[Shape], list[str]]:
+    """The step of the ``index``-th light: the shadow volume of each caster it
+    lights, reaching past the scene's box ``corners`` (8, 3), with a note for
+    each caster that has none."""
+    stacked, tolerance, names = plan.casters, plan.tolerance, plan.names
+    progress = plan.options.progress
+    scene_light = plan.lights[index]
+    light = scene_light.light
+    if is_positional(light):
+        extent = float(np.linalg.norm(corners - light.position, axis=1).max()) + tolerance.scale
+    else:
+        extent = 2 * tolerance.scale
+    light_name = names.light(scene_light, index)
+    group = names.unique(f"shadows_{light_name}")
+    casting = stacked.lit(light) & (
+        plan.opacity * in_scope(scene_light, [caster.shape for caster in stacked.casters]) > 0
+    )
+    added, notes = [], []
+    total, done = len(plan.lights) * len(stacked), index * len(stacked)
+    for caster, lit in zip(stacked.casters, casting, strict=True):
+        done += 1
+        if progress is not None:
+            progress(done, total)
+        if not lit:
+            continue
+        try:
+            volume = shadow_volume(caster.caster, light, extent=extent, tolerance=tolerance)
+        except GeometryError as error:
+            notes.append(f"shadows: {caster.name} has no volume for {light_name}: {error}")
+            continue
+        if len(volume.faces) == 0:
+            continue
+        added.append(
+            Shape(
+                np.asarray(volume.vertices, dtype=np.float64),
+                np.asarray(volume.faces, dtype=np.int64),
+                material=Material(diffuse_color=(0.0, 0.0, 0.0), transparency=0.8),
+                name=names.unique(f"volume_{light_name}_{safe_name(caster.name)}"),
+                solid=False,
+                role="volume",
+                group=group,
+                source=f"shadow volume of {caster.name} for light {light_name}",
+                casts_shadow=False,
             )
+        )
     return added, notes

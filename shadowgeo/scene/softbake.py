@@ -91,17 +91,17 @@ def soft_on_receiver(
     opacity: np.ndarray,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     lighting: Lighting,
     settings: SoftSettings,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """The graded layers (hidden fraction, shape) of the casters' soft shadow
     on one planar receiver, cut to it and lifted ``lift`` towards the light;
-    none when the light does not face it or nothing falls on it."""
+    none when the light does not face it or nothing falls on it. With a note
+    when the shadow could not be made."""
     plane = receiver.facing(scene_light.light, tolerance)
     if plane is None or not lights(scene_light, receiver.scopes) or not (opacity > 0).any():
-        return []
+        return [], []
     rectangle = region2d = None
     if receiver.triangles is not None:
         region2d = plane.to_2d(receiver.triangles.reshape(-1, 3)).reshape(-1, 3, 2)
@@ -109,7 +109,7 @@ def soft_on_receiver(
         rectangle = plane.to_3d([low, [high[0], low[1]], high, [low[0], high[1]]])
     faces = casters.faces_of(opacity > 0) & casters.off_plane(plane, tolerance)
     if not faces.any():
-        return []
+        return [], []
     try:
         soft = soft_shadow(
             casters.mesh(faces),
@@ -121,8 +121,7 @@ def soft_on_receiver(
             tolerance=tolerance,
         )
     except GeometryError as error:
-        notes.append(f"shadows: no soft shadow of light {light_name} on {receiver.name}: {error}")
-        return []
+        return [], [f"shadows: no soft shadow of light {light_name} on {receiver.name}: {error}"]
     shapes = []
     for fraction, level in soft.levels:
         parts = _cut_to(level.polygons, region2d, tolerance)
@@ -136,7 +135,7 @@ def soft_on_receiver(
         where = f"soft shadow of light {light_name} on {receiver.name}, hidden from {fraction:g}"
         shape = shadow_shape(vertices, triangles, scene_light, where, fraction, darkness)
         shapes.append((fraction, shape))
-    return shapes
+    return shapes, []
 
 
 def _cut_to(
@@ -162,18 +161,17 @@ def soft_on_surface(
     scene_light: SceneLight,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     lighting: Lighting,
     settings: SoftSettings,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """The graded layers (hidden fraction, shape) of the casters' soft shadow
     on every face of ``surface``, cut where the shading of the light's
     centre stops lighting it (as :func:`~.surfaces.surface_shadow` cuts the
-    hard one)."""
+    hard one); with a note when the shadow could not be made."""
     keep = [caster for caster in casters if caster.n_faces]
     if not len(surface.faces) or not keep:
-        return []
+        return [], []
     try:
         soft = soft_shadow_on_surface(
             keep,
@@ -185,8 +183,7 @@ def soft_on_surface(
             tolerance=tolerance,
         )
     except GeometryError as error:
-        notes.append(f"shadows: no soft shadows on the surfaces for light {light_name}: {error}")
-        return []
+        return [], [f"shadows: no soft shadows on the surfaces for light {light_name}: {error}"]
     corners = surface.vertices[surface.faces]
     values = lit_values(corners, surface.normals, scene_light.light)
     shapes = []
@@ -202,7 +199,7 @@ def soft_on_surface(
         )
         shape = shadow_shape(vertices, triangles, scene_light, where, fraction, darkness)
         shapes.append((fraction, shape))
-    return shapes
+    return shapes, []
 
 
 def translucent_note(opacity: np.ndarray, light_name: str) -> str | None:

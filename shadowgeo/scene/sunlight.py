@@ -144,7 +144,6 @@ def scene_study(
         When the scene has no geometry, a named shape has no patch facing
         up, or the plane is vertical.
     """
-    notes: list[str] = []
     shapes = [s for s in scene.shapes if s.role == "geometry" and s.n_faces]
     geometry = distinct(shapes)
     if not geometry:
@@ -154,8 +153,9 @@ def scene_study(
     stacked = CasterSet(geometry)
     bounds = stacked.bounds
     tolerance = Tolerance.for_points(bounds)
-    plane, cover = _city_ground(scene, geometry, notes, plane, (receivers, region))
-    floor = _floor(scene, geometry, stacked, receivers, plane, tolerance, notes)
+    plane, cover, notes = _city_ground(scene, geometry, plane, (receivers, region))
+    floor, floor_notes = _floor(scene, geometry, stacked, receivers, plane, tolerance)
+    notes.extend(floor_notes)
     facing = floor.plane
     if facing.normal[axis] < 0:
         facing = facing.flipped()
@@ -164,7 +164,8 @@ def scene_study(
         what = f"the floor '{floor.name}'" if floor.triangles is not None else "the plane"
         notes.append(f"sun study: over {what}, within the region given")
     elif floor.triangles is not None:
-        polygon = _outline(facing, floor.triangles, notes, floor.name)
+        polygon, outline_notes = _outline(facing, floor.triangles, floor.name)
+        notes.extend(outline_notes)
         what = f"the floor '{floor.name}'"
         notes.append(f"sun study: over {what}, within its outline")
     else:
@@ -186,10 +187,9 @@ def scene_study(
 def _city_ground(
     scene: Scene,
     geometry: list[Shape],
-    notes: list[str],
     plane: Plane | None,
     chosen: tuple[Any, ...],
-) -> tuple[Plane | None, np.ndarray]:
+) -> tuple[Plane | None, np.ndarray, list[str]]:
     """City data's ground: the plane of its ground cover (:func:`_ground_cover`,
     at :func:`_cover_plane`) and which shapes are cover, with a note. Only
     for a scene with a site whose user chose no ``plane`` and nothing of
@@ -197,20 +197,20 @@ def _city_ground(
     when the shapes are all cover or none is."""
     none = np.zeros(len(geometry), dtype=bool)
     if scene.site is None or plane is not None or any(item is not None for item in chosen):
-        return plane, none
+        return plane, none, []
     axis = scene.up_index
     cover = _ground_cover(geometry, axis, scene.meters_per_unit)
     if not cover.any() or cover.all():
-        return None, none
+        return None, none, []
     plane = _cover_plane(geometry, cover, axis)
-    notes.append(
+    note = (
         f"sun study: {int(cover.sum())} flat city object(s) (roads, land, water: no "
         f"face steeper than {FLOOR_SLOPE_DEGREES:.0f} degrees, or lower than "
         f"{GROUND_COVER_HEIGHT:g} m) are the ground, at "
         f"{'xyz'[axis]} = {-plane.offset:.6g} (their area's median height); "
         f"the {int((~cover).sum())} other(s) cast"
     )
-    return plane, cover
+    return plane, cover, [note]
 
 
 def _ground_cover(geometry: list[Shape], axis: int, meters_per_unit: float) -> np.ndarray:
@@ -256,10 +256,9 @@ def _floor(
     receivers: Sequence[str] | None,
     plane: Plane | None,
     tolerance: Tolerance,
-    notes: list[str],
-) -> Receiver:
+) -> tuple[Receiver, list[str]]:
     """The receiver studied: the plane given, the first named patch or found
-    floor facing up, else the ground plane under the scene."""
+    floor facing up, else the ground plane under the scene (with its note)."""
     axis = scene.up_index
     if plane is not None:
         if abs(float(plane.normal[axis])) <= tolerance.angle:
@@ -267,9 +266,10 @@ def _floor(
                 f"the plane {plane.normal.tolist()} is vertical: a sun study needs a plane "
                 "the sun shines down on"
             )
-        return Receiver(plane, "plane")
+        return Receiver(plane, "plane"), []
     own = dataclasses.replace(scene, shapes=geometry)
-    found = select_receivers(own, geometry, receivers, None, tolerance, [], stacked, False)
+    # (the search's notes speak of shadows' receivers; the study notes its floor)
+    found, _ = select_receivers(own, geometry, receivers, None, tolerance, stacked, False)
     bounds = stacked.bounds
     lowest = stacked.vertices[int(np.argmin(stacked.vertices[:, axis]))]
     across = [k for k in range(3) if k != axis]
@@ -286,18 +286,20 @@ def _floor(
             floors.append(receiver)
     if floors:
         # the first named, else the largest found (the scene's order among equals)
-        return floors[0] if receivers is not None else max(floors, key=lambda r: r.area)
+        floor = floors[0] if receivers is not None else max(floors, key=lambda r: r.area)
+        return floor, []
     if receivers is not None:
         raise SceneError(
             f"no patch of {', '.join(receivers)} faces up (within 30 degrees): a sun study "
             "needs a floor (--plane a,b,c,d studies a plane)"
         )
-    return ground(scene, geometry, notes, bounds)
+    ground_plane, note = ground(scene, geometry, bounds)
+    return ground_plane, [note]
 
 
-def _outline(plane: Plane, triangles: np.ndarray, notes: list[str], name: str) -> np.ndarray:
+def _outline(plane: Plane, triangles: np.ndarray, name: str) -> tuple[np.ndarray, list[str]]:
     """The outer loop of the largest part of a patch's ``triangles`` (world
-    corners), on ``plane``, as (n, 3) points."""
+    corners), on ``plane``, as (n, 3) points; a note when it has more parts."""
     flat = plane.to_2d(triangles.reshape(-1, 3)).reshape(-1, 3, 2)
     center = 0.5 * (flat.reshape(-1, 2).min(axis=0) + flat.reshape(-1, 2).max(axis=0))
     extent = float(np.abs(flat.reshape(-1, 2) - center).max()) or 1.0
@@ -307,11 +309,8 @@ def _outline(plane: Plane, triangles: np.ndarray, notes: list[str], name: str) -
         raise SceneError(f"the floor '{name}' has no area")
     sizes = [float(poly.signed_areas(part).sum()) for part in parts]
     largest = parts[int(np.argmax(sizes))]
-    if len(parts) > 1:
-        notes.append(
-            f"sun study: the floor '{name}' is in {len(parts)} parts; the largest is studied"
-        )
-    return plane.to_3d(largest[0] / scale + center)
+    notes = [f"sun study: the floor '{name}' is in {len(parts)} parts; the largest is studied"]
+    return plane.to_3d(largest[0] / scale + center), notes if len(parts) > 1 else []
 
 
 def _plan_polygon(plane: Plane, region: ArrayLike, axis: int) -> np.ndarray:

@@ -165,10 +165,9 @@ def surface_shadow(
     scene_light: SceneLight,
     tolerance: Tolerance,
     lift: float,
-    notes: list[str],
     light_name: str,
     lighting: Lighting | None = None,
-) -> list[tuple[float, Shape]]:
+) -> tuple[list[tuple[float, Shape]], list[str]]:
     """The shadow of ``casters`` (in world coordinates; ``opacity`` (k,) the
     casting opacity of each, above 0; ``caster_shapes`` (k,) the index of
     each one's shape) on ``surface`` as shapes (role ``"shadow"``), one per
@@ -177,11 +176,12 @@ def surface_shadow(
     each as dark as its opacity), drawn where the shading lights the surface
     (module notes); none when no shadow falls on it. As dark as ``lighting``
     says for X3D's default material (the surface spans shapes of many
-    looks), else the light's ``shadow_intensity``."""
+    looks), else the light's ``shadow_intensity``. With a note when the
+    shadow could not be made."""
     light = scene_light.light
     keep = [k for k, caster in enumerate(casters) if caster.n_faces]
     if not len(surface.faces) or not keep:
-        return []
+        return [], []
     levels, groups, shapes_of = _by_opacity(casters, opacity, caster_shapes, keep)
     corners = surface.vertices[surface.faces]
     values = lit_values(corners, surface.normals, light)
@@ -190,8 +190,7 @@ def surface_shadow(
             groups, light, (surface.vertices, surface.faces), offset=lift, tolerance=tolerance
         )
     except GeometryError as error:
-        notes.append(f"shadows: no shadows on the surfaces for light {light_name}: {error}")
-        return []
+        return [], [f"shadows: no shadows on the surfaces for light {light_name}: {error}"]
     pieces = [
         [clip_to_lit(layer.vertices, layer.faces, layer.face_index, corners, values)]
         for layer in layers
@@ -209,7 +208,7 @@ def surface_shadow(
         shape = _pieces_shape(surface, layer_pieces, scene_light, source, level, lighting)
         if shape is not None:
             shapes.append((level, shape))
-    return shapes
+    return shapes, []
 
 
 def _by_opacity(
