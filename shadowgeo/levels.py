@@ -32,7 +32,7 @@ import numpy as np
 from manifold3d import CrossSection, FillRule
 from numpy.typing import NDArray
 
-from .polygons import nest, signed_areas
+from .plane2d import nest, signed_areas
 from .topology import loop_rings
 
 __all__ = [

@@ -40,7 +40,7 @@ import numpy as np
 from manifold3d import CrossSection
 from numpy.typing import NDArray
 
-from . import polygons as poly
+from . import plane2d as poly
 from .levels import cover_bands
 from .lights import Light
 from .simplify import loops_of

@@ -40,7 +40,7 @@ import numpy as np
 from manifold3d import CrossSection, FillRule
 from numpy.typing import ArrayLike, NDArray
 
-from . import polygons as poly
+from . import plane2d as poly
 from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight

@@ -49,7 +49,7 @@ from .levels import cover_level_areas, cover_levels
 from .lights import DirectionalLight
 from .limits import RELATIVE_ROUNDING
 from .plane import Plane
-from .polygons import components, local_scale, points_in_parts, signed_areas
+from .plane2d import components, local_scale, points_in_parts, signed_areas
 from .projection import project_shadow
 from .soft import light_samples
 from .sun import days, sun_lights

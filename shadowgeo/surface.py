@@ -71,7 +71,7 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike
 
-from . import polygons as poly
+from . import plane2d as poly
 from .cells import column_cells
 from .errors import GeometryError
 from .lightframe import (
@@ -1188,7 +1188,7 @@ class _SurfaceProjector:
             limits = cells.place(limits, slot[:, None])
             # (faces in cells apart: crossings are counted within cells)
             region = poly.intersect(
-                poly.fill(list(pieces), cells=mine), poly.fill(list(limits), cells=slot)
+                poly.unite(list(pieces), cells=mine), poly.unite(list(limits), cells=slot)
             )
             loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
             if loops:
@@ -1238,12 +1238,12 @@ class _SurfaceProjector:
                 extent = float(np.abs(outline).max()) * 2.0
                 scale = poly.local_scale(extent)
                 if full[face]:
-                    region = poly.fill([outline * scale])
+                    region = poly.unite([outline * scale])
                 else:
                     pieces = list(flat[first:stop] * scale)
-                    region = poly.intersect(poly.fill(pieces), poly.fill([outline * scale]))
+                    region = poly.intersect(poly.unite(pieces), poly.unite([outline * scale]))
                 if disc is not None:
-                    region = poly.intersect(region, poly.fill([disc * scale]))
+                    region = poly.intersect(region, poly.unite([disc * scale]))
                 loops = [np.asarray(loop) / scale for loop in region.to_polygons()]
                 loops = [loop for loop in loops if len(loop) >= 3]
             if loops:

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import GeometryError, SceneError
 from ..limits import check_coordinates
-from ..polygons import polygon_triangles, polygons_triangles
+from ..plane2d import polygon_triangles, polygons_triangles
 from ..scene.model import Semantics, Shape
 from ..topology import closed_by_sort
 
