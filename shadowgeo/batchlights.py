@@ -275,7 +275,7 @@ def _verdicts(
 
 
 def _scales(bound: np.ndarray) -> np.ndarray:
-    """:func:`shadowgeo.polygons.local_scale` of each bound (the window
+    """:func:`shadowgeo.plane2d.local_scale` of each bound (the window
     [-bound, bound]^2 reaches ``bound`` at most)."""
     scales: np.ndarray = MAX_COORDINATE / bound  # local_scale, for every bound at once
     return scales
@@ -827,7 +827,7 @@ def _star_shaped_alone(
     else -1 (the first certificate of :func:`whole_outlines`).
 
     The loop is star-shaped around the mean of its corners
-    (:func:`shadowgeo.polygons.star_shaped_flat`).
+    (:func:`shadowgeo.plane2d.star_shaped_flat`).
     """
     result = np.full(count, -1, dtype=np.int64)
     light_loops = np.bincount(loop_light, minlength=count)

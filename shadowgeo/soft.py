@@ -501,7 +501,7 @@ class _Cut:
         if not any(regions):
             return []
         low, high = self.low, self.high
-        window = CrossSection(
+        window = poly.unite(
             [np.array([low, [high[0], low[1]], high, [low[0], high[1]]], dtype=np.float64)]
         )
         thresholds, starts = band_thresholds(count, len(self.shadows))

@@ -37,7 +37,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from manifold3d import CrossSection, FillRule
 from numpy.typing import ArrayLike, NDArray
 
 from . import plane2d as poly
@@ -542,7 +541,7 @@ class _Chunks:
             placed: NDArray[np.float64] = (triangles + shift[at][:, None, :] - centre) * scale
             return _counter_clockwise(placed)
 
-        window = CrossSection(list(local(flat, cells)), FillRule.Positive)
+        window = poly.unite(list(local(flat, cells)))
         placed = local(self.loops[mine], slot[self.owner[mine]])
         keep = _twice_areas(placed) != 0
         placed, of_sample = placed[keep], self.sample[mine][keep]

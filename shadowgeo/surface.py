@@ -16,7 +16,7 @@ face by face, with the same clipping before the divide as
    and no division by zero, and what survives projects inside the face.
 3. **Project and unite**: the clipped pieces are projected onto the face's
    plane, in its own 2-D frame, and united by winding number (Clipper2 through
-   :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
+   :mod:`shadowgeo.plane2d`; all faces in one call, each stretched into its
    own cell of one plane); spot cones and a light's range are applied as
    exact 2-D intersections.
 4. **Stitch** (:mod:`shadowgeo.simplify`, :mod:`shadowgeo.seams`): corners

@@ -1177,7 +1177,7 @@ def _shadow_on(
 @dataclasses.dataclass(frozen=True)
 class _Frame:
     """The receiver's plane and the 2-D frame its shadows are cut in: centred
-    on them, scaled for the polygon library (:func:`.polygons.local_scale`);
+    on them, scaled for the polygon library (:func:`shadowgeo.plane2d.local_scale`);
     the receiver's patch in it (None for an unbounded plane) and the lift."""
 
     plane: Plane
