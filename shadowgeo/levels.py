@@ -29,7 +29,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-from manifold3d import CrossSection, FillRule
+from manifold3d import CrossSection
 from numpy.typing import NDArray
 
 from .plane2d import nest, signed_areas, unite
@@ -257,7 +257,7 @@ class _Winding:
         the tile is the rectangle the loops are cut to)."""
         if m > self.deepest:
             return CrossSection()
-        union = CrossSection(self.loops + [self.clockwise] * (m - 1), FillRule.Positive)
+        union = unite(self.loops + [self.clockwise] * (m - 1))
         return union if whole else union ^ tile
 
 

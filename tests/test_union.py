@@ -116,15 +116,8 @@ def test_the_rules_count_windings_as_geos_does():
     assert unite(loops, rule="evenodd").area() == pytest.approx(15.0)
 
 
-# Modules that may build a Clipper2 region from loops themselves, and why.
-OWN_REGIONS = {
-    # the union itself
-    "shadowgeo/plane2d/union.py": "the one entry",
-    # the winding trick: a region per level per tile of at most TILE_VERTICES
-    # corners (within the budgets by construction), on the hot path of soft
-    # shadows and sun studies
-    "shadowgeo/levels.py": "tiles within the budget",
-}
+# The one module that builds a Clipper2 region from loops: the union's.
+OWN_REGIONS = {"shadowgeo/plane2d/union.py"}
 
 
 def _region_builders(path) -> list[int]:
