@@ -61,7 +61,7 @@ PHASES = [
     ("shadowgeo.batchlights", "silhouette_outlines", "silhouettes, all lights together"),
     ("shadowgeo.batchlights", "project_outlines", "silhouettes projected to 2-D, together"),
     ("shadowgeo.batchlights", "whole_outlines", "one loop the whole: certificate"),
-    ("shadowgeo.polygons", "clipper_parts", "2-D union (Clipper2, per light)"),
+    ("shadowgeo.plane2d", "unite", "2-D union (Clipper2, per light)"),
     ("shadowgeo.batchlights", "_array_result", "result: area, polygons (per light)"),
 ]
 

@@ -18,13 +18,13 @@ square of the corners:
 Per polygon, in the same process, the median of ``--repeat`` calls (a
 method past ``--cap`` seconds once is not timed at the next size):
 
-* shadowgeo's own triangulation (``polygons.star_triangles``, the
+* shadowgeo's own triangulation (``plane2d.star_triangles``, the
   star's one-pass ears, else the sweep of ``shadowgeo.sweep``), which the
   X3D reader and the shadows' triangulation take from 4,096 corners on;
 * ``manifold3d.triangulate`` (ear clipping), which the reader used before;
 * ``shapely.constrained_delaunay_triangles`` (GEOS);
 * shadowgeo's certificate that the outline is simple (star-shaped, else
-  the sweep), which ``polygons.whole_loop`` takes from 4,096 corners on
+  the sweep), which ``plane2d.whole_loop`` takes from 4,096 corners on
   to spare the shadow the Clipper2 union (``CrossSection``) beside it.
 
 Every triangulation is checked: ``n - 2`` triangles whose areas add up to
@@ -46,7 +46,7 @@ from manifold3d import CrossSection, FillRule, triangulate
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from shadowgeo import polygons  # noqa: E402
+from shadowgeo import plane2d  # noqa: E402
 from shadowgeo.orientation import MAX_COORDINATE  # noqa: E402
 from shadowgeo.sweep import simple_triangles  # noqa: E402
 
@@ -88,9 +88,9 @@ def checked(loop: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 def ours(loop: np.ndarray) -> np.ndarray:
     """shadowgeo's own triangulation of the loop (the reader takes it from
-    ``polygons._SPIKED_CORNERS`` corners on): the star's one-pass ears,
+    ``plane2d.predicates._SPIKED_CORNERS`` corners on): the star's one-pass ears,
     else the sweep."""
-    faces = polygons.star_triangles(loop)
+    faces = plane2d.star_triangles(loop)
     if faces is None:
         faces = simple_triangles(loop)[1]
     assert faces is not None, "not triangulated"
@@ -109,11 +109,11 @@ def geos(loop: np.ndarray) -> object:
 
 def certificate(loop: np.ndarray) -> bool:
     """shadowgeo's certificate that the loop is simple (``whole_loop``
-    takes it from ``polygons._SPIKED_CORNERS`` corners on): star-shaped
+    takes it from ``plane2d.predicates._SPIKED_CORNERS`` corners on): star-shaped
     round its corners' mean, else the sweep."""
     local = loop * (MAX_COORDINATE / float(np.abs(loop).max()))
     starts, lengths = np.zeros(1, dtype=np.int64), np.array([len(local)])
-    certain = bool(polygons.star_shaped_flat(local, starts, lengths)[0])
+    certain = bool(plane2d.star_shaped_flat(local, starts, lengths)[0])
     certain = certain or simple_triangles(local, triangles=False)[0]
     assert certain, "not certified"
     return certain
@@ -192,10 +192,10 @@ the median of the calls in one process; a method past {cap:g} s at one size is n
 next, "—"). A star of radii 1 and 0.5 by turns and a comb whose teeth's feet are in line: one
 X3D polygon each, the inputs on which ear clipping and scanline sweeps do work that grows with
 the square of the corners. *shadowgeo triangulation*: the star's one-pass ears
-(`polygons.star_triangles`), the comb's sweep (`shadowgeo/sweep.py`); *certificate*: that the
+(`plane2d.star_triangles`), the comb's sweep (`shadowgeo/sweep.py`); *certificate*: that the
 outline is simple, by the same two, which spares the shadow the Clipper2 union beside it. The
-reader, the shadows' triangulation and `polygons.whole_loop` take them from 4,096 corners on
-(`polygons._SPIKED_CORNERS`), where the table shows them faster than manifold3d and Clipper2;
+reader, the shadows' triangulation and `plane2d.whole_loop` take them from 4,096 corners on
+(`plane2d._SPIKED_CORNERS`), where the table shows them faster than manifold3d and Clipper2;
 below, those two. Every triangulation is checked (n - 2 counter-clockwise triangles whose areas
 add up).
 

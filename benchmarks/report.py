@@ -39,7 +39,7 @@ import shadowmap  # noqa: E402
 from common import cpu_model, median_time  # noqa: E402
 
 import shadowgeo as sg  # noqa: E402
-from shadowgeo import polygons  # noqa: E402
+from shadowgeo import plane2d  # noqa: E402
 
 GROUND = sg.Plane([0, 1, 0], 0)
 
@@ -103,7 +103,7 @@ def corpus_scene():
 
 def to_shapely_cross_section(section):
     """A manifold3d CrossSection as shapely, its parts outer loop first."""
-    parts = [shapely.Polygon(outer, holes) for outer, *holes in polygons.components(section)]
+    parts = [shapely.Polygon(outer, holes) for outer, *holes in plane2d.components(section)]
     return shapely.MultiPolygon(parts) if parts else shapely.MultiPolygon()
 
 

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from . import polygons as poly
+from . import plane2d as poly
 from .compiled import use_compiled
 from .errors import GeometryError
 from .lights import DirectionalLight, Light, PointLight
@@ -275,7 +275,7 @@ def _verdicts(
 
 
 def _scales(bound: np.ndarray) -> np.ndarray:
-    """:func:`shadowgeo.polygons.local_scale` of each bound (the window
+    """:func:`shadowgeo.plane2d.local_scale` of each bound (the window
     [-bound, bound]^2 reaches ``bound`` at most)."""
     scales: np.ndarray = MAX_COORDINATE / bound  # local_scale, for every bound at once
     return scales
@@ -563,18 +563,15 @@ def array_shadows(
             yield None
             continue
         first, last = loop_bounds[k], loop_bounds[k + 1]
-        parts: list[list[np.ndarray]] | poly.FlatParts | None = None
+        parts: list[list[np.ndarray]] | poly.FlatParts
         if whole[k] >= 0:  # one loop is the whole: no union to do (a copy: not a view of the chunk)
             begin, end = corner_bounds[whole[k]], corner_bounds[whole[k] + 1]
             parts = [[projected.points[begin:end].copy()]]
-        else:  # many convex loops (a city) stay one array from here to the result
-            corners = slice(corner_bounds[first], corner_bounds[last])
-            lengths = outlines.loop_lengths[first:last]
-            parts = poly.arranged_parts(projected.points[corners].copy(), lengths)
-        if parts is None:  # the light's loops, as views of the chunk's points
+        else:  # the light's loops, as views of the chunk's points; many convex
+            # ones (a city) stay one array from the union to the result
             own = [projected.points[a:b] for a, b in pairwise(corner_bounds[first : last + 1])]
             labels = partial(_part_labels, caster, firsts[first:last])
-            parts = poly.clipper_parts(own, labels)
+            parts = poly.unite(own, groups=labels, form="flat")
         bounded = not unbounded[k] and _reaches(parts, limits[k])
         info = ShadowDiagnostics(
             n_triangles=caster.n_faces,
@@ -596,7 +593,7 @@ _NONE_CLIPPED_DIRECTIONAL = {"below_plane": 0, "outside_bound": 0}
 
 def _part_labels(caster: Caster, firsts: np.ndarray) -> np.ndarray:
     """The connected part of the caster that each outline loop (starting
-    at vertex ``firsts``) runs on: the groups of :func:`poly.clipper_parts`."""
+    at vertex ``firsts``) runs on: the groups of :func:`poly.unite`."""
     labels: np.ndarray = vertex_components(caster)[firsts]
     return labels
 
@@ -830,7 +827,7 @@ def _star_shaped_alone(
     else -1 (the first certificate of :func:`whole_outlines`).
 
     The loop is star-shaped around the mean of its corners
-    (:func:`shadowgeo.polygons.star_shaped_flat`).
+    (:func:`shadowgeo.plane2d.star_shaped_flat`).
     """
     result = np.full(count, -1, dtype=np.int64)
     light_loops = np.bincount(loop_light, minlength=count)

@@ -29,10 +29,10 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-from manifold3d import CrossSection, FillRule
+from manifold3d import CrossSection
 from numpy.typing import NDArray
 
-from .polygons import nest, signed_areas
+from .plane2d import nest, signed_areas, unite
 from .topology import loop_rings
 
 __all__ = [
@@ -257,7 +257,7 @@ class _Winding:
         the tile is the rectangle the loops are cut to)."""
         if m > self.deepest:
             return CrossSection()
-        union = CrossSection(self.loops + [self.clockwise] * (m - 1), FillRule.Positive)
+        union = unite(self.loops + [self.clockwise] * (m - 1))
         return union if whole else union ^ tile
 
 
@@ -274,7 +274,7 @@ def _window_tiles(
     for axis in (0, 1):  # within the window's box, as every tile's loops are within the tile
         loops = loops.clip(axis, low[axis], below=False).clip(axis, high[axis], below=True)
     for tile_low, tile_high, tile_loops in _tiles(loops, low, high, tile_vertices):
-        rectangle = CrossSection([_rectangle(tile_low, tile_high)], FillRule.Positive)
+        rectangle = unite([_rectangle(tile_low, tile_high)])
         tile = window ^ rectangle
         if tile.is_empty():
             continue
@@ -299,7 +299,7 @@ def _tile_levels(tile: CrossSection, whole: bool, winding: _Winding) -> dict[int
 
 
 def _parts(region: CrossSection) -> Parts:
-    """``region`` as [outer, hole, ...] parts, as :func:`polygons.components`
+    """``region`` as [outer, hole, ...] parts, as :func:`shadowgeo.plane2d.components`
     gives them; without holes each outer loop is a part of its own, no
     nesting needed."""
     loops = [loop for loop in region.to_polygons() if len(loop) >= 3]

@@ -110,7 +110,7 @@ tessellation and instancing is refused by :func:`shadowgeo.load` (its
 ``max_triangles`` argument, or ``convert --max-triangles N``, raises the
 budget for a trusted file): time and memory grow with them. Duplicate and
 zero-area triangles, and copied outline loops, cost nothing in the shadow's
-2-D union (:func:`shadowgeo.project_shadow` and :func:`~shadowgeo.polygons.fill`
+2-D union (:func:`shadowgeo.project_shadow` and :func:`~shadowgeo.plane2d.union.unite`
 drop them first), and shapes that repeat another's geometry exactly cast once.
 What the union costs grows with the crossings of its edges (Clipper2's sweep
 does work for each one, and more than linearly in practice), so that is what
@@ -220,10 +220,10 @@ MAX_EXTRUSION_POINTS = 2_500_000
 MAX_SPHERE_SEGMENTS = 2048
 MAX_CURVE_SEGMENTS = 1 << 16
 # Edge crossings one 2-D union may have to resolve (about half a second of
-# Clipper2 on one core); estimated by polygons.crossings_estimate.
+# Clipper2 on one core); estimated by plane2d.crossings_estimate.
 MAX_UNION_CROSSINGS = 2_000_000
 # Steps of Clipper2's sweep placing edges among the active ones, in one 2-D
-# union, counted by polygons.sweep_work: 2 to 10 ns each (a template soup on
+# union, counted by plane2d.sweep_work: 2 to 10 ns each (a template soup on
 # 200 scanlines, 2.7e9 steps: 5.5 s; a fan of 32,768 thin triangles round one
 # point, 3.2e9: 33 s), so about 1 to 5 CPU s at the budget. The real scenes
 # (the corpus, the goldens, benchmarks/bench_buildings.py's 1.2M-edge union)

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import polygons as poly
+from . import plane2d as poly
 from .errors import GeometryError
 from .sun import frame, hourly, sun_position
 from .sunlight_surfaces import SurfaceSunlight, surface_sun_study

@@ -2,9 +2,9 @@
 
 Shadow regions are worked in a local frame whose coordinates stay within
 +-:data:`MAX_COORDINATE` (the range Clipper2 handles safely, see
-:mod:`shadowgeo.polygons`). Within it, :func:`turns` and :func:`turn_sign`
+:mod:`shadowgeo.plane2d`). Within it, :func:`turns` and :func:`turn_sign`
 tell left from right turns beyond float64's rounding, or say that rounding
-could decide it; the star-shaped certificates of :mod:`shadowgeo.polygons`,
+could decide it; the star-shaped certificates of :mod:`shadowgeo.plane2d`,
 the sweep of :mod:`shadowgeo.sweep` and the many-lights arrays of
 :mod:`shadowgeo.batchlights` rest on them.
 """

@@ -23,7 +23,7 @@ from .cells import grid_cells
 from .lightframe import corner_max, corner_min, misses_boxes, overlapping_boxes, twice_areas
 from .limits import PRODUCT_ROUNDING, TINY
 from .orientation import MAX_COORDINATE
-from .polygons import components, fill
+from .plane2d import components, unite
 from .topology import loop_rings
 
 if TYPE_CHECKING:
@@ -401,7 +401,7 @@ def _cut_in_cells(
         count = int(boxes_needed[face])
         subject += [loop if count > 0 else loop[::-1]] * abs(count)
     clip = cells.place(images[sure], np.arange(len(sure))[:, None])
-    region = fill(subject) ^ fill(list(clip))
+    region = unite(subject) ^ unite(list(clip))
     out = [loop for loop in region.to_polygons() if len(loop) >= 3]
     nothing = (np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
     if not out:
@@ -448,7 +448,7 @@ class Outline(_Cutter):
     def unite(self, points2d_loops: list[np.ndarray]) -> None:
         """Set the region: the positive-winding union of the projected loops."""
         self.scale = float(_scale_for(np.abs(np.concatenate(points2d_loops)).max()))
-        united = fill([loop * self.scale for loop in points2d_loops])
+        united = unite([loop * self.scale for loop in points2d_loops])
         self.__dict__["cross_section"] = united
         self._hold(components(united))
 
@@ -474,7 +474,7 @@ class Outline(_Cutter):
     def cross_section(self) -> CrossSection:
         """The region scaled by ``scale``, for Clipper2 (made from
         :attr:`parts` when :meth:`take_convex` set the region)."""
-        return fill([loop for part in self.parts for loop in part])
+        return unite([loop for part in self.parts for loop in part])
 
     def boundary(self) -> _Rings:
         return self._rings
@@ -536,7 +536,7 @@ class Outline(_Cutter):
         loops: list[np.ndarray] = []
         owners: list[int] = []
         for k, image in enumerate(images):
-            piece = self.cross_section ^ fill([image * self.scale])
+            piece = self.cross_section ^ unite([image * self.scale])
             for loop in piece.to_polygons():
                 loops.append(np.asarray(loop) / self.scale)
                 owners.append(k)

@@ -33,7 +33,7 @@ import numpy as np
 from manifold3d import CrossSection
 from numpy.typing import ArrayLike
 
-from . import polygons as poly
+from . import plane2d as poly
 from .batchlights import (
     CASTS,
     LightFrames,
@@ -561,15 +561,15 @@ class _Projector:
             if np.any(box[0] < low) or np.any(box[1] > high):
                 # Whole faces project past the bound: cut them there.
                 corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
-                limit_regions.append(poly.fill([corners]))
+                limit_regions.append(poly.unite([corners]))
         groups = partial(self._loop_groups, outline_loops)
         if poly.whole_loop(loops):  # one simple loop: no union, and no cut when inside
             low2d, high2d = loops[0].min(axis=0), loops[0].max(axis=0)
             if all(poly.holds_box(limit, low2d, high2d) for limit in limit_regions):
                 return self._result([loops], 1)
         if not limit_regions:
-            return self._result(poly.union_parts(loops, groups), len(loops))
-        region = poly.union_region(loops, groups)
+            return self._result(poly.unite(loops, groups=groups, form="parts"), len(loops))
+        region = poly.unite(loops, groups=groups)
         for limit in limit_regions:
             region = poly.intersect(region, limit)
         return self._result(poly.components(region), len(loops))
@@ -654,7 +654,7 @@ class _Projector:
         self.H = np.diag([self.scale, self.scale, 1.0]) @ self.raw
         low, high = low * self.scale, high * self.scale
         if receiver2d is not None:
-            limit_regions.append(poly.fill([receiver2d * self.scale], "evenodd"))
+            limit_regions.append(poly.unite([receiver2d * self.scale], rule="evenodd"))
             self.limits.append("receiver")
         if is_positional(self.light) and math.isfinite(self.light.radius):
             disc = self._range_disc(low, high)
@@ -662,14 +662,14 @@ class _Projector:
                 return self.empty("the light's range does not reach the receiver or bound")
             if disc is not None:
                 low, high = np.maximum(low, disc.min(axis=0)), np.minimum(high, disc.max(axis=0))
-                limit_regions.append(poly.fill([disc]))
+                limit_regions.append(poly.unite([disc]))
                 self.limits.append("range")
         if isinstance(self.light, SpotLight):
             cone = self._spot_polygon(self.light, low, high)
             if cone is None:
                 return self.empty("the spot light's cone misses the receiver")
             low, high = np.maximum(low, cone.min(axis=0)), np.minimum(high, cone.max(axis=0))
-            limit_regions.append(poly.fill([cone]))
+            limit_regions.append(poly.unite([cone]))
             self.limits.append("spot_cone")
         if np.any(high <= low):
             return self.empty("the lit part of the plane misses the receiver")
@@ -773,7 +773,7 @@ class _Projector:
         return cone
 
     def _loop_groups(self, outline_loops: list[np.ndarray]) -> np.ndarray:
-        """Labels for :func:`poly.union_parts`: each outline loop the
+        """Labels for :func:`poly.unite`'s ``groups``: each outline loop the
         connected part of the caster it runs on (a part's loops together
         wind >= 0: they count its front faces), each clipped face its own."""
         parts = vertex_components(self.caster)

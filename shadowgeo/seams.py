@@ -26,7 +26,7 @@ from manifold3d import triangulate
 
 from .cells import column_cells
 from .limits import TINY
-from .polygons import fill, local_scale, region_loops, subtract, unite
+from .plane2d import add, local_scale, region_loops, subtract, unite
 from .simplify import Loops, loops_of
 from .topology import unique_integers
 
@@ -47,7 +47,7 @@ def face_regions(
     (points, sizes, region), faces = one
     (other_points, other_sizes, other_region), other_faces = other
     uniting = operation == "unite"
-    combine = unite if uniting else subtract
+    combine = add if uniting else subtract
     own = _split(points, sizes, region, len(faces))
     theirs = _split(other_points, other_sizes, other_region, len(other_faces))
     slot = {int(face): k for k, face in enumerate(faces.tolist())}
@@ -63,8 +63,8 @@ def face_regions(
             both = np.concatenate(own[mine] + theirs[yours])
             scale = local_scale(2.0 * float(np.abs(both).max()))
             result = combine(
-                fill([loop * scale for loop in own[mine]]),
-                fill([loop * scale for loop in theirs[yours]]),
+                unite([loop * scale for loop in own[mine]]),
+                unite([loop * scale for loop in theirs[yours]]),
             )
             loops = [loop / scale for loop in region_loops(result)]
         if loops:

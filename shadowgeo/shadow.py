@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import polygons as poly
+from . import plane2d as poly
 from .lights import Light
 from .plane import Plane
 

@@ -5,7 +5,7 @@
 points passes within ``eps`` of (and, first, repeated points and the tips of
 zero-width spikes), every loop in one pass. The regions of
 :mod:`shadowgeo.surface` go through it before :mod:`shadowgeo.seams` stitches
-them, and so do the parts :mod:`shadowgeo.polygons` triangulates.
+them, and so do the parts :mod:`shadowgeo.plane2d.triangulation` triangulates.
 """
 
 from __future__ import annotations

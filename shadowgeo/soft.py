@@ -66,7 +66,7 @@ import numpy as np
 from manifold3d import CrossSection
 from numpy.typing import ArrayLike, NDArray
 
-from . import polygons as poly
+from . import plane2d as poly
 from .errors import GeometryError
 from .levels import cover_bands
 from .lights import DirectionalLight, DiskLight, Light, PointLight, RectLight, SpotLight
@@ -482,12 +482,12 @@ class _Cut:
     def common(self, each: list[Parts]) -> CrossSection:
         region = CrossSection()
         for index, parts in enumerate(each):
-            filled = poly.fill(self.local(parts))
+            filled = poly.unite(self.local(parts))
             region = filled if index == 0 else poly.intersect(region, filled)
         return region
 
     def union(self, each: list[Parts]) -> CrossSection:
-        return poly.fill([loop for parts in each for loop in self.local(parts)])
+        return poly.unite([loop for parts in each for loop in self.local(parts)])
 
     def hull(self, each: list[Parts]) -> CrossSection:
         return self.union(each).hull()
@@ -501,13 +501,13 @@ class _Cut:
         if not any(regions):
             return []
         low, high = self.low, self.high
-        window = CrossSection(
+        window = poly.unite(
             [np.array([low, [high[0], low[1]], high, [low[0], high[1]]], dtype=np.float64)]
         )
         thresholds, starts = band_thresholds(count, len(self.shadows))
         bands = cover_bands(regions, window, thresholds)
         return [
-            (starts[t] / count, poly.fill([loop for part in parts for loop in part]))
+            (starts[t] / count, poly.unite([loop for part in parts for loop in part]))
             for t, parts in zip(thresholds, bands, strict=True)
             if parts
         ]

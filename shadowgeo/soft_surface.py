@@ -37,10 +37,9 @@ from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
-from manifold3d import CrossSection
 from numpy.typing import NDArray
 
-from . import polygons as poly
+from . import plane2d as poly
 from .levels import cover_bands
 from .lights import Light
 from .simplify import loops_of
@@ -201,7 +200,7 @@ def _face_bands(
     thresholds, starts = band_thresholds(levels, total)
     scale = poly.local_scale(2.0 * float(np.abs(outline).max()))
     corners = outline if poly.signed_areas([outline])[0] > 0 else outline[::-1]
-    window = CrossSection([corners * scale])
+    window = poly.unite([corners * scale])
     regions = [[loop * scale for loop in _counter_clockwise(loops)] for loops in cover]
     bands = cover_bands(regions, window, thresholds)
     return {

@@ -37,10 +37,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from manifold3d import CrossSection, FillRule
 from numpy.typing import ArrayLike, NDArray
 
-from . import polygons as poly
+from . import plane2d as poly
 from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight
@@ -542,7 +541,7 @@ class _Chunks:
             placed: NDArray[np.float64] = (triangles + shift[at][:, None, :] - centre) * scale
             return _counter_clockwise(placed)
 
-        window = CrossSection(list(local(flat, cells)), FillRule.Positive)
+        window = poly.unite(list(local(flat, cells)))
         placed = local(self.loops[mine], slot[self.owner[mine]])
         keep = _twice_areas(placed) != 0
         placed, of_sample = placed[keep], self.sample[mine][keep]

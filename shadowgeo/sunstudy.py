@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from manifold3d import CrossSection, FillRule
+from manifold3d import CrossSection
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import GeometryError
@@ -49,7 +49,7 @@ from .levels import cover_level_areas, cover_levels
 from .lights import DirectionalLight
 from .limits import RELATIVE_ROUNDING
 from .plane import Plane
-from .polygons import components, local_scale, points_in_parts, signed_areas
+from .plane2d import components, local_scale, points_in_parts, signed_areas, unite
 from .projection import project_shadow
 from .soft import light_samples
 from .sun import days, sun_lights
@@ -425,7 +425,7 @@ def _day_shadows(
         region_2d = region_2d[::-1]
     extent = float(np.max(np.abs(region_2d - region_2d.mean(axis=0)))) or 1.0
     frame = _Frame(region_2d.mean(axis=0), local_scale(2.0 * extent))
-    region_cs = CrossSection([frame.to_local(region_2d)], FillRule.Positive)
+    region_cs = unite([frame.to_local(region_2d)])
     if disc is not None and disc.samples > 1:
         return frame, region_cs, kept, disc.shadows(caster, lights, plane, polygon, [[region_2d]])
     # one call for the day: the caster is checked and prepared once for every sun position

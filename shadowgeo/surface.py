@@ -16,7 +16,7 @@ face by face, with the same clipping before the divide as
    and no division by zero, and what survives projects inside the face.
 3. **Project and unite**: the clipped pieces are projected onto the face's
    plane, in its own 2-D frame, and united by winding number (Clipper2 through
-   :mod:`shadowgeo.polygons`; all faces in one call, each stretched into its
+   :mod:`shadowgeo.plane2d`; all faces in one call, each stretched into its
    own cell of one plane, or under a light with a range each face in a call
    of its own: one road, the layout chosen as data); spot cones and a
    light's range are applied as exact 2-D intersections.
@@ -72,7 +72,7 @@ import numpy as np
 import shapely
 from numpy.typing import ArrayLike
 
-from . import polygons as poly
+from . import plane2d as poly
 from .cells import Cells, column_cells, own_cell
 from .errors import GeometryError
 from .lightframe import (
@@ -1540,15 +1540,15 @@ def _cut(limits: _FaceLimits, batch: _Batch, pieces: _FacePieces) -> _Chunk:
     subject = [*cells.place(pieces.flat[rows], mine[:, None])]
     if len(whole):
         subject += [*cells.place(limits.outlines[slots[whole]], whole[:, None])]
-    region = poly.fill(subject, cells=batch.labels(np.concatenate([mine, whole])))
+    region = poly.unite(subject, cells=batch.labels(np.concatenate([mine, whole])))
     if partial.any():
         bounds = cells.place(limits.outlines[slots[partial]], cell[partial][:, None])
-        region = poly.intersect(region, poly.fill([*bounds], cells=batch.labels(cell[partial])))
+        region = poly.intersect(region, poly.unite([*bounds], cells=batch.labels(cell[partial])))
     discs = [] if limits.discs is None else [limits.discs[slot] for slot in slots.tolist()]
     ranged = [k for k, disc in enumerate(discs) if disc is not None]
     if ranged:
         placed = [cells.place(discs[k], np.array(k)) for k in ranged]
-        region = poly.intersect(region, poly.fill(placed, cells=batch.labels(np.array(ranged))))
+        region = poly.intersect(region, poly.unite(placed, cells=batch.labels(np.array(ranged))))
     return _chunk(region, batch, limits.faces)
 
 

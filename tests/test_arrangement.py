@@ -11,7 +11,7 @@ import pytest
 import shapely
 
 from shadowgeo.arrangement import convex_union, strictly_convex_loops
-from shadowgeo.polygons import nest, parts_area, union_parts, union_region
+from shadowgeo.plane2d import nest, parts_area, unite
 
 
 def _square(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
@@ -118,11 +118,13 @@ def test_collinear_edges_far_apart_along_one_line_are_not_a_doubt():
 def test_uncertain_signs_are_handed_back_and_the_cells_unite_them(case):
     loops = case + [_square(40 + 3 * k, 40, 41 + 3 * k, 41) for k in range(70)]
     assert convex_union(loops) is None
-    parts = union_parts([loop * 1e6 for loop in loops], lambda: np.arange(len(loops)))
+    parts = unite(
+        [loop * 1e6 for loop in loops], groups=lambda: np.arange(len(loops)), form="parts"
+    )
     reference = shapely.union_all([shapely.Polygon(loop * 1e6) for loop in loops])
     assert parts_area(parts) == pytest.approx(reference.area, rel=1e-12)
     assert _region(parts).symmetric_difference(reference).area < 1e-12 * reference.area
-    region = union_region([loop * 1e6 for loop in loops], lambda: np.arange(len(loops)))
+    region = unite([loop * 1e6 for loop in loops], groups=lambda: np.arange(len(loops)))
     assert region.area() == pytest.approx(reference.area, rel=1e-12)
 
 
@@ -159,7 +161,7 @@ def test_convexity_loop_by_loop_sees_rounding_and_short_loops():
     ]
 
 
-def test_union_parts_takes_the_arrangement_for_a_city_and_matches_shapely():
+def test_the_union_takes_the_arrangement_for_a_city_and_matches_shapely():
     # 300 rotated rectangles, cells of the pairing grid crossed everywhere
     rng = np.random.default_rng(4)
     loops = []
@@ -170,9 +172,9 @@ def test_union_parts_takes_the_arrangement_for_a_city_and_matches_shapely():
         loops.append(centre + corners @ axes)
     scaled = [loop * 1e5 for loop in loops]
     assert convex_union(scaled) is not None
-    parts = union_parts(scaled, lambda: np.arange(len(loops)))
+    parts = unite(scaled, groups=lambda: np.arange(len(loops)), form="parts")
     _check_against_shapely(scaled, parts)
-    region = union_region(scaled, lambda: np.arange(len(loops)))  # to intersect with limits
+    region = unite(scaled, groups=lambda: np.arange(len(loops)))  # to intersect with limits
     assert region.area() == pytest.approx(parts_area(parts), rel=1e-12)
 
 
@@ -212,7 +214,7 @@ def _boxes_mesh(corners_low: np.ndarray, size: np.ndarray) -> tuple[np.ndarray, 
 
 @pytest.mark.parametrize("terraced", [False, True], ids=["apart", "terraced"])
 def test_a_city_shadow_matches_the_union_of_each_box_shadow(monkeypatch, terraced):
-    import shadowgeo.polygons as polygons
+    import shadowgeo.arrangement as arrangement
     from shadowgeo import DirectionalLight, Plane, project_shadow
 
     # Rows of boxes on the ground y = 0; terraced rows share their side
@@ -229,9 +231,9 @@ def test_a_city_shadow_matches_the_union_of_each_box_shadow(monkeypatch, terrace
     sun = DirectionalLight([0.45, -0.75, 0.3])
     ground = Plane([0, 1, 0], 0)
     taken = []
-    arranged = polygons.convex_union_arrays
+    arranged = arrangement.convex_union_arrays
     monkeypatch.setattr(
-        polygons,
+        arrangement,
         "convex_union_arrays",
         lambda points, sizes: taken.append(arranged(points, sizes)) or taken[-1],
     )

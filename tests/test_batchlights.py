@@ -295,7 +295,7 @@ def _hull_shadow(points, light):
 
 
 def test_a_convex_caster_needs_no_union_and_casts_the_hull(monkeypatch):
-    import shadowgeo.polygons as polygons
+    import shadowgeo.plane2d as plane2d
 
     mesh = trimesh.creation.icosphere(subdivisions=2)  # convex
     mesh.apply_translation([0.5, 3, -0.5])
@@ -306,7 +306,7 @@ def test_a_convex_caster_needs_no_union_and_casts_the_hull(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("a 2-D union for a single convex outline")
 
-    monkeypatch.setattr(polygons, "clipper_parts", refuse)
+    monkeypatch.setattr(plane2d, "unite", refuse)
     batch = project_shadow(mesh, lights, GROUND)
     for light, shadow in zip(lights, batch, strict=True):
         _same(shadow, project_shadow(mesh, light, GROUND))
@@ -319,12 +319,12 @@ def test_a_convex_caster_needs_no_union_and_casts_the_hull(monkeypatch):
 def test_one_loop_that_is_not_star_shaped_is_still_united(monkeypatch):
     # An L-shaped prism seen from above: one loop, not star-shaped around
     # the mean of its corners (which lies outside it), so Clipper2 unites it.
-    import shadowgeo.polygons as polygons
+    import shadowgeo.plane2d as plane2d
 
     calls = []
-    clipper_parts = polygons.clipper_parts
+    unite = plane2d.unite
     monkeypatch.setattr(
-        polygons, "clipper_parts", lambda *args: calls.append(1) or clipper_parts(*args)
+        plane2d, "unite", lambda *args, **kwargs: calls.append(1) or unite(*args, **kwargs)
     )
     outline = np.array([[0, 0], [6, 0], [6, 1], [1, 1], [1, 6], [0, 6]], dtype=float)
     prism = trimesh.creation.extrude_polygon(shapely.Polygon(outline), 1.0)
@@ -376,10 +376,10 @@ def _filled_area_outside(loops, region_loop):
     """Area of the positive winding of ``loops`` outside ``region_loop``
     and of ``region_loop`` outside it (Clipper2, independent of the
     certificate)."""
-    from shadowgeo.polygons import fill
+    from shadowgeo.plane2d import unite
 
-    union = fill(loops)
-    region = fill([region_loop])
+    union = unite(loops)
+    region = unite([region_loop])
     return (union - region).area(), (region - union).area()
 
 

@@ -2,7 +2,7 @@
 
 * A 2-D union whose edges cross millions of times (a soup of thousands of
   overlapping triangles, an Extrusion whose 20,000-point spine folds over
-  itself) took minutes in Clipper2: ``polygons.fill`` now estimates the
+  itself) took minutes in Clipper2: ``plane2d.unite`` now estimates the
   crossings and refuses past ``limits.MAX_UNION_CROSSINGS``.
 * Faces that leave a small receiver were clipped one by one in Python, for
   every receiver: they are clipped all at once, with the same result.
@@ -19,7 +19,7 @@ import shapely
 
 import shadowgeo as sg
 from cli.main import main as cli_main
-from shadowgeo import limits, polygons
+from shadowgeo import limits, plane2d
 
 
 def brute_force_crossings(starts: np.ndarray, ends: np.ndarray) -> int:
@@ -50,29 +50,29 @@ def test_crossings_estimate_agrees_with_brute_force():
     starts = np.concatenate(loops)
     ends = np.concatenate([np.roll(loop, -1, axis=0) for loop in loops])
     exact = brute_force_crossings(starts, ends)
-    estimate, sampled = polygons.crossings_estimate(loops)
+    estimate, sampled = plane2d.crossings_estimate(loops)
     assert sampled > 1000
     assert abs(estimate - exact) < 0.05 * exact
 
 
 def test_crossings_estimate_is_exactly_zero_below_the_budget():
     loops = random_triangles(100, seed=1)  # 300 edges: fewer pairs than the budget
-    assert polygons.crossings_estimate(loops) == (0.0, 0)
+    assert plane2d.crossings_estimate(loops) == (0.0, 0)
 
 
 def test_fill_refuses_a_union_past_the_crossing_budget():
     loops = random_triangles(3000, seed=2)  # ~1e7 crossings: minutes of Clipper2
     with pytest.raises(sg.GeometryError, match="MAX_UNION_CROSSINGS"):
-        polygons.fill(loops)
+        plane2d.unite(loops)
 
 
 def test_fill_unites_many_edges_that_do_not_cross():
     # 4,000 disjoint triangles: 8e7 edge pairs, no crossing, so no refusal.
     cells = np.stack(np.meshgrid(np.arange(80.0), np.arange(50.0)), axis=-1).reshape(-1, 2)
     loops = [cell + np.array([[0.1, 0.1], [0.8, 0.1], [0.1, 0.7]]) for cell in cells]
-    region = polygons.fill(loops)
+    region = plane2d.unite(loops)
     expected = shapely.union_all(shapely.polygons(np.array(loops))).area
-    assert polygons.parts_area(polygons.components(region)) == pytest.approx(expected)
+    assert plane2d.parts_area(plane2d.components(region)) == pytest.approx(expected)
     assert expected == pytest.approx(4000 * 0.5 * 0.7 * 0.6)
 
 
@@ -237,11 +237,11 @@ def test_crossings_estimate_sees_many_small_unions_side_by_side():
     per_cell = brute_force_crossings(starts, ends)
     assert per_cell == 28 * 6  # 28 pairs of triangles, 6 crossings each
     loops = rotated_triangle_cells(16_000, 8)
-    estimate, crossing_edges = polygons.crossings_estimate(loops)
+    estimate, crossing_edges = plane2d.crossings_estimate(loops)
     assert estimate == pytest.approx(16_000 * per_cell)
     assert crossing_edges >= 16
     with pytest.raises(sg.GeometryError, match="MAX_UNION_CROSSINGS"):
-        polygons.fill(loops)
+        plane2d.unite(loops)
 
 
 def test_crossings_estimate_within_cells_counts_each_cells_crossings_only():
@@ -252,13 +252,13 @@ def test_crossings_estimate_within_cells_counts_each_cells_crossings_only():
     # sample at all.
     loops = rotated_triangle_cells(16_000, 8)
     cells = np.repeat(np.arange(16_000), 8)
-    estimate, sampled = polygons.crossings_estimate(loops, cells)
+    estimate, sampled = plane2d.crossings_estimate(loops, cells)
     assert estimate == pytest.approx(16_000 * 28 * 6, rel=0.02)
     assert sampled > 30_000  # most sampled pairs cross: the pairs are within cells
     with pytest.raises(sg.GeometryError, match="MAX_UNION_CROSSINGS"):
-        polygons.fill(loops, cells=cells)
+        plane2d.unite(loops, cells=cells)
     few = rotated_triangle_cells(4_000, 4)
-    assert polygons.crossings_estimate(few, np.repeat(np.arange(4_000), 4)) == (0.0, 0)
+    assert plane2d.crossings_estimate(few, np.repeat(np.arange(4_000), 4)) == (0.0, 0)
     # one cell holding a tangle past the budget, beside many quiet ones
     tangle = random_triangles(900, seed=4)
     starts = np.concatenate(tangle)
@@ -266,15 +266,15 @@ def test_crossings_estimate_within_cells_counts_each_cells_crossings_only():
     exact = brute_force_crossings(starts, ends)
     quiet = [loop + [10.0, 0.0] for loop in rotated_triangle_cells(2_000, 2)]
     cells = np.concatenate([np.zeros(900, np.int64), 1 + np.repeat(np.arange(2_000), 2)])
-    estimate, _ = polygons.crossings_estimate(tangle + quiet, cells)
+    estimate, _ = plane2d.crossings_estimate(tangle + quiet, cells)
     assert abs(estimate - exact - 2_000 * 6) < 0.05 * exact
 
 
 def test_many_small_unions_under_the_budget_are_united():
     loops = rotated_triangle_cells(4_000, 4)  # 144,000 crossings in all
-    region = polygons.fill(loops)
+    region = plane2d.unite(loops)
     star = shapely.union_all(shapely.polygons(np.array(loops[:4])))
-    assert polygons.parts_area(polygons.components(region)) == pytest.approx(4_000 * star.area)
+    assert plane2d.parts_area(plane2d.components(region)) == pytest.approx(4_000 * star.area)
 
 
 def test_a_proto_body_of_only_is_elements_is_skipped_with_a_note(tmp_path):

@@ -148,8 +148,7 @@ def _level_areas(study: sg.SunStudy) -> dict[float, float]:
     origin = study.region[0][0][0]
     return {
         study.hours(k): sum(
-            float(sg.polygons.signed_areas([loop - origin for loop in part]).sum())
-            for part in parts
+            float(sg.plane2d.signed_areas([loop - origin for loop in part]).sum()) for part in parts
         )
         for k, parts in study.levels.items()
     }

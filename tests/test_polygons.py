@@ -9,7 +9,7 @@ import pytest
 import shapely
 from reference import check_tiling
 
-from shadowgeo.polygons import fan, is_convex, polygons_triangles
+from shadowgeo.plane2d import fan, is_convex, polygons_triangles
 from shadowgeo.topology import empty_mesh
 
 
@@ -88,10 +88,10 @@ def _random_outlines(count: int, seed: int) -> list[np.ndarray]:
 
 @pytest.mark.parametrize("seed", range(4))
 def test_parts_match_clipper_decompose_and_shapely(seed):
-    from shadowgeo.polygons import components, fill, parts_area
+    from shadowgeo.plane2d import components, parts_area, unite
 
     outlines = _random_outlines(300, seed)
-    region = fill([loop * 1e6 for loop in outlines])
+    region = unite([loop * 1e6 for loop in outlines])
     parts = components(region)
     reference = shapely.union_all([shapely.Polygon(loop * 1e6) for loop in outlines])
     assert parts_area(parts) == pytest.approx(reference.area, rel=1e-12)
@@ -111,7 +111,7 @@ def test_parts_match_clipper_decompose_and_shapely(seed):
 
 
 def test_nest_puts_an_island_in_a_hole_in_its_own_part():
-    from shadowgeo.polygons import nest
+    from shadowgeo.plane2d import nest
 
     outer = np.array([[0.0, 0], [10, 0], [10, 10], [0, 10]])
     hole = np.array([[2.0, 2], [2, 8], [8, 8], [8, 2]])  # clockwise
@@ -123,13 +123,13 @@ def test_nest_puts_an_island_in_a_hole_in_its_own_part():
 
 
 def test_a_part_with_many_holes_is_triangulated_in_tiles_with_its_exact_area():
-    from shadowgeo.polygons import components, fill, parts_area, triangulate_parts
+    from shadowgeo.plane2d import components, parts_area, triangulate_parts, unite
 
     grid = np.arange(20) * 3.0
     square = np.array([[0.0, 0], [0, 1], [1, 1], [1, 0]])  # clockwise: holes
     holes = [square + [x, y] for x in grid for y in grid]
     outer = np.array([[-1.0, -1], [60, -1], [60, 60], [-1, 60]])
-    parts = components(fill([outer * 1e6] + [hole * 1e6 for hole in holes]))
+    parts = components(unite([outer * 1e6] + [hole * 1e6 for hole in holes]))
     assert len(parts) == 1 and len(parts[0]) == 401
     points, faces = triangulate_parts(parts)
     corners = points[faces]
@@ -142,7 +142,7 @@ def test_a_part_with_many_holes_is_triangulated_in_tiles_with_its_exact_area():
 
 
 def test_union_parts_equal_one_union_and_shapely_past_the_cell_threshold():
-    from shadowgeo.polygons import components, fill, parts_area, union_parts, union_region
+    from shadowgeo.plane2d import components, parts_area, unite
 
     rng = np.random.default_rng(9)
     outlines = _random_outlines(2400, 1)
@@ -165,8 +165,8 @@ def test_union_parts_equal_one_union_and_shapely_past_the_cell_threshold():
     loops = outlines + [loop for ring in rings for loop in ring]
     groups = np.array(groups + [len(outlines) + k for k in range(len(rings)) for _ in range(2)])
     scaled = [loop * 1e4 for loop in loops]
-    grouped = union_parts(scaled, lambda: groups)
-    direct = fill(scaled)
+    grouped = unite(scaled, groups=lambda: groups, form="parts")
+    direct = unite(scaled)
     reference = shapely.union_all(
         [shapely.Polygon(loop * 1e4) for loop in outlines]
         + [shapely.Polygon(outer * 1e4, [hole * 1e4]) for outer, hole in rings]
@@ -174,15 +174,16 @@ def test_union_parts_equal_one_union_and_shapely_past_the_cell_threshold():
     assert parts_area(grouped) == pytest.approx(reference.area, rel=1e-12)
     assert parts_area(components(direct)) == pytest.approx(reference.area, rel=1e-12)
     assert len(grouped) == len(getattr(reference, "geoms", [reference]))
-    region = union_region(scaled, lambda: groups)
+    region = unite(scaled, groups=lambda: groups)
     assert region.area() == pytest.approx(reference.area, rel=1e-12)
     # a few loops take the one-union path, the same region
     few = scaled[:50]
-    assert parts_area(union_parts(few, lambda: groups[:50])) == pytest.approx(fill(few).area())
+    few_parts = unite(few, groups=lambda: groups[:50], form="parts")
+    assert parts_area(few_parts) == pytest.approx(unite(few).area())
 
 
 def test_union_parts_keep_an_islands_hole_when_the_part_around_it_is_united_again():
-    from shadowgeo.polygons import parts_area, union_parts
+    from shadowgeo.plane2d import parts_area, unite
 
     def square(x0, y0, x1, y1):
         return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=float)
@@ -199,7 +200,7 @@ def test_union_parts_keep_an_islands_hole_when_the_part_around_it_is_united_agai
     fillers.append(square(95, 50, 205, 52))  # reaches from the fillers into the ring
     loops = ring + island + fillers
     groups = np.array([0, 0, 1, 1] + list(range(2, 2 + len(fillers))))
-    parts = union_parts([loop * 1e5 for loop in loops], lambda: groups)
+    parts = unite([loop * 1e5 for loop in loops], groups=lambda: groups, form="parts")
     reference = shapely.union_all(
         [shapely.Polygon(ring[0], [ring[1]]), shapely.Polygon(island[0], [island[1]])]
         + [shapely.Polygon(loop) for loop in fillers]
@@ -210,14 +211,14 @@ def test_union_parts_keep_an_islands_hole_when_the_part_around_it_is_united_agai
 
 @pytest.mark.parametrize("batch", [4_000_000, 7])
 def test_nest_puts_each_hole_in_the_smallest_loop_around_it(monkeypatch, batch):
-    import shadowgeo.polygons as polygons
+    import shadowgeo.plane2d as plane2d
 
     # Concentric rings of squares, two nests side by side: outer loops
     # (counter-clockwise) at half-widths 10, 6, 2 and holes (clockwise) at
     # 8, 4; every hole has all the larger outer loops of its nest as
     # candidates, and the test must pick the nearest one. Small batches
     # split one hole's candidates between batches.
-    monkeypatch.setattr(polygons, "_NEST_EDGES", batch)
+    monkeypatch.setattr(plane2d.nesting, "_NEST_EDGES", batch)
 
     def square(centre, half, clockwise):
         loop = centre + half * np.array([[-1.0, -1], [1, -1], [1, 1], [-1, 1]])
@@ -229,7 +230,7 @@ def test_nest_puts_each_hole_in_the_smallest_loop_around_it(monkeypatch, batch):
         for half in (10, 8, 6, 4, 2)
     ]
     order = np.random.default_rng(1).permutation(len(loops))
-    parts = polygons.nest([loops[i] for i in order])
+    parts = plane2d.nest([loops[i] for i in order])
     shapes = sorted(
         (float(part[0][:, 0].mean()), float(part[0][:, 0].max() - part[0][:, 0].mean()),
          [float(hole[:, 0].max() - hole[:, 0].mean()) for hole in part[1:]])
@@ -251,14 +252,14 @@ def test_union_parts_of_one_group_past_the_cell_threshold_is_one_part():
     # as floats.) The triangles share the centre, so the arrangement hands
     # them back to the cells.
     from shadowgeo.arrangement import convex_union
-    from shadowgeo.polygons import parts_area, union_parts
+    from shadowgeo.plane2d import parts_area, unite
 
     count = 2400
     angles = np.arange(count + 1) * 2 * np.pi / count
     rim = 1e6 * np.column_stack([np.cos(angles), np.sin(angles)])
     loops = [np.array([[0.0, 0.0], rim[k], rim[k + 1]]) for k in range(count)]
     assert convex_union(loops) is None
-    parts = union_parts(loops, lambda: np.zeros(count, dtype=np.int64))
+    parts = unite(loops, groups=lambda: np.zeros(count, dtype=np.int64), form="parts")
     assert len(parts) == 1 and len(parts[0]) == 1
     expected = 0.5 * count * np.sin(2 * np.pi / count) * 1e12  # the regular 2,400-gon
     assert parts_area(parts) == pytest.approx(expected, rel=1e-12)
@@ -268,7 +269,7 @@ def test_loops_that_are_all_holes_bound_no_region():
     """Found by the fuzzing campaign (x3dv mutant 2618): Clipper2 rounds a
     sliver to its grid and can hand back only clockwise loops; nesting them
     with no outer loop raised from an argmax over nothing."""
-    from shadowgeo.polygons import nest, nest_flat
+    from shadowgeo.plane2d import nest, nest_flat
 
     square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
     holes = [square[::-1], square[::-1] + 3.0]
@@ -283,7 +284,7 @@ def test_flat_parts_give_the_area_and_reach_of_their_nested_loops():
     # Two squares with a hole each, one with an island in its hole, a hole
     # in nothing: the flat parts' area and reach are those of the parts
     # nest gives, loop arrays cut from one array.
-    from shadowgeo.polygons import FlatParts, nest, parts_area
+    from shadowgeo.plane2d import FlatParts, nest, parts_area
 
     square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
     loops = [
@@ -326,7 +327,7 @@ def _star(n: int, rng: np.random.Generator, spikes: bool = True) -> np.ndarray:
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("spikes", [True, False])
 def test_a_star_shaped_loop_is_cut_into_ears_of_its_own_corners(seed, spikes):
-    from shadowgeo.polygons import star_triangles
+    from shadowgeo.plane2d import star_triangles
 
     rng = np.random.default_rng(seed)
     n = 2 * int(rng.integers(3, 200)) if spikes else 2 * int(rng.integers(3, 30))
@@ -338,7 +339,7 @@ def test_a_star_shaped_loop_is_cut_into_ears_of_its_own_corners(seed, spikes):
 
 
 def test_loops_not_star_shaped_round_their_mean_are_left_to_the_general_way():
-    from shadowgeo.polygons import star_triangles
+    from shadowgeo.plane2d import star_triangles
 
     # a C whose corners' mean lies in its gap; the same loop clockwise; a
     # star that winds twice
@@ -351,7 +352,7 @@ def test_loops_not_star_shaped_round_their_mean_are_left_to_the_general_way():
 
 
 def test_a_rectangle_whose_diagonals_meet_at_its_mean_is_still_triangulated():
-    from shadowgeo.polygons import star_triangles
+    from shadowgeo.plane2d import star_triangles
 
     square = np.array([[0, 0], [2, 0], [2, 1], [0, 1]], float)
     faces = star_triangles(square)
@@ -363,7 +364,7 @@ def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
     """manifold3d's ear clipping is quadratic in reflex corners (a star of
     50,000 spikes takes it 7 s): polygon_triangles and triangulate_parts cut
     such a loop themselves, and still tile it exactly."""
-    import shadowgeo.polygons as polygons
+    import shadowgeo.plane2d as plane2d
 
     rng = np.random.default_rng(3)
     loop = _star(8000, rng)
@@ -371,13 +372,13 @@ def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
     def refuse(loops):
         raise AssertionError("manifold3d triangulated the star")
 
-    monkeypatch.setattr(polygons, "triangulate", refuse)
-    points, faces = polygons.triangulate_parts([[loop * 1e6]])
+    monkeypatch.setattr(plane2d.triangulation, "triangulate", refuse)
+    points, faces = plane2d.triangulate_parts([[loop * 1e6]])
     check_tiling(points / 1e6, faces)
     spatial = np.column_stack([loop[:, 0], np.full(len(loop), 2.0), loop[:, 1]])
     # counter-clockwise in (x, z) is clockwise seen from +y: its normal is -y
     for corners, sign in ((spatial, -1.0), (spatial[::-1], 1.0)):
-        faces = polygons.polygon_triangles(corners)
+        faces = plane2d.polygon_triangles(corners)
         triangles = corners[faces]
         normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
         assert len(faces) == len(loop) - 2
@@ -388,7 +389,7 @@ def test_a_star_of_many_spikes_is_not_handed_to_manifold3d(monkeypatch):
 
 
 def test_copies_of_loops_from_any_start_are_dropped_the_first_kept():
-    from shadowgeo.polygons import without_copies
+    from shadowgeo.plane2d import without_copies
 
     square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
     with_repeat = np.array([[0.0, 0], [1, 0], [1, 0], [0, 1]])  # a corner twice

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 import shadowgeo as sg
 from shadowgeo import limits
-from shadowgeo.polygons import fill, without_copies
+from shadowgeo.plane2d import unite, without_copies
 from shadowgeo.scene import patchbound
 from shadowgeo.scene.casters import CasterSet, distinct
 from shadowgeo.scene.patchbound import may_hold_patch
@@ -377,15 +377,15 @@ def test_copies_of_loops_are_dropped_before_the_union_and_the_region_kept():
     kept = without_copies(loops)
     assert len(kept) == 6
     expected = shapely.union_all([shapely.Polygon(t) for t in triangles]).area
-    assert fill(loops).area() == fill(triangles).area()
-    assert fill(loops).area() == pytest.approx(expected, rel=1e-8)  # Clipper2's precision
+    assert unite(loops).area() == unite(triangles).area()
+    assert unite(loops).area() == pytest.approx(expected, rel=1e-8)  # Clipper2's precision
     # even-odd is not a union: copies cancel, so they must stay
     square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
-    assert fill([square] * 64 + [square * 3.0], "evenodd").area() == pytest.approx(9.0)
+    assert unite([square] * 64 + [square * 3.0], rule="evenodd").area() == pytest.approx(9.0)
     # with a clockwise loop, copies count: two squares less one is a square
     assert len(without_copies([square] * 70 + [square[::-1]])) == 71
-    assert fill([square] * 70 + [square[::-1]]).area() == pytest.approx(1.0)
-    assert fill([square, square[::-1]] * 40).area() == 0.0
+    assert unite([square] * 70 + [square[::-1]]).area() == pytest.approx(1.0)
+    assert unite([square, square[::-1]] * 40).area() == 0.0
 
 
 def test_a_scene_past_the_triangle_budget_is_refused_naming_the_file(tmp_path, monkeypatch):

@@ -26,7 +26,7 @@ from reference import ray_plane
 
 import shadowgeo as sg
 from cli.main import main
-from shadowgeo import limits, polygons
+from shadowgeo import limits, plane2d
 from shadowgeo.io.x3d import write as x3d_write
 from shadowgeo.scene import primitives
 
@@ -298,7 +298,7 @@ def test_a_near_degenerate_triangle_never_has_a_negative_area():
     shadow = sg.project_shadow((vertices, [[0, 1, 2]]), light, sg.Plane([0, 1, 0], -0.0348))
     assert 0 <= shadow.area < 1e-9
     for loops in shadow.polygons:
-        assert polygons.signed_areas(loops).sum() >= 0
+        assert plane2d.signed_areas(loops).sum() >= 0
 
 
 def test_components_drop_parts_rounded_inside_out():
@@ -306,9 +306,9 @@ def test_components_drop_parts_rounded_inside_out():
     # rounding does to it, no part with a negative area comes back.
     for offset in (1e-10, 3e-9, 7e-9):
         sliver = np.array([[1e8, -4e7], [1e6, 9e4], [1e8, -4e7 + offset], [1e8 - 1e-7, -4e7]])
-        parts = polygons.components(polygons.fill([sliver]))
-        assert polygons.parts_area(parts) >= 0
-        assert all(polygons.signed_areas(loops).sum() > 0 for loops in parts)
+        parts = plane2d.components(plane2d.unite([sliver]))
+        assert plane2d.parts_area(parts) >= 0
+        assert all(plane2d.signed_areas(loops).sum() > 0 for loops in parts)
 
 
 # -- duplicated and zero-area faces ---------------------------------------------------------

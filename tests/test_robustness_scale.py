@@ -232,7 +232,7 @@ def test_a_polygon_of_many_reflex_corners_casts_its_exact_shadow_without_a_quadr
     sweep of shadowgeo.sweep), inside the receiver, and cut into triangles
     by shadowgeo itself, so neither sees more than a few corners. The
     shadow's area is the polygon's."""
-    import shadowgeo.polygons as polygons
+    import shadowgeo.plane2d as plane2d
 
     flat = outline()
     n = len(flat)
@@ -256,8 +256,10 @@ def test_a_polygon_of_many_reflex_corners_casts_its_exact_shadow_without_a_quadr
 
         return checked
 
-    monkeypatch.setattr(polygons, "fill", few(polygons.fill))
-    monkeypatch.setattr(polygons, "triangulate", few(polygons.triangulate))
+    monkeypatch.setattr(plane2d.union, "_clipped", few(plane2d.union._clipped))
+    monkeypatch.setattr(
+        plane2d.triangulation, "triangulate", few(plane2d.triangulation.triangulate)
+    )
     scene = sg.load(path)
     (shape,) = [shape for shape in scene.shapes if shape.name == "flat"]
     assert len(shape.faces) == n - 2

@@ -29,7 +29,7 @@ from needs import SHARED, absent
 
 import shadowgeo as sg
 from cli.main import main
-from shadowgeo import limits, polygons
+from shadowgeo import limits, plane2d
 from shadowgeo.errors import BudgetError
 from shadowgeo.io.x3d import read as x3d_read
 from shadowgeo.scene import receivers
@@ -85,7 +85,7 @@ def mutant(seeds, encoding: str, index: int, folder: Path) -> tuple[Path, list[s
 def work(monkeypatch):
     """Counts: geometry nodes built, shapes searched for receivers, edges united."""
     counts = {"built": 0, "searched": 0, "union edges": 0}
-    built, search, unite = x3d_read.geometry, receivers.patches, polygons.fill
+    built, search, clipped = x3d_read.geometry, receivers.patches, plane2d.union._clipped
 
     def counted_geometry(*args):
         counts["built"] += 1
@@ -95,13 +95,13 @@ def work(monkeypatch):
         counts["searched"] += 1
         return search(*args, **kwargs)
 
-    def counted_fill(loops, *args, **kwargs):
+    def counted_union(loops, *args, **kwargs):
         counts["union edges"] += sum(len(loop) for loop in loops)
-        return unite(loops, *args, **kwargs)
+        return clipped(loops, *args, **kwargs)
 
     monkeypatch.setattr(x3d_read, "geometry", counted_geometry)
     monkeypatch.setattr(receivers, "patches", counted_patches)
-    monkeypatch.setattr(polygons, "fill", counted_fill)
+    monkeypatch.setattr(plane2d.union, "_clipped", counted_union)  # every Clipper2 union
     return counts
 
 
@@ -177,31 +177,31 @@ def squares_in_a_row(count: int) -> list[np.ndarray]:
 def test_sweep_work_of_squares_in_a_row_is_twelve_k_squared(monkeypatch):
     # k unit squares side by side: on y = 0 begin 3k edges (the bottoms and the
     # sides) and 3k span it; on y = 1 begin the k tops, and 3k span it
-    monkeypatch.setattr(polygons, "MAX_UNION_SWEEP", 0)  # count even a small union
+    monkeypatch.setattr(plane2d.budget, "MAX_UNION_SWEEP", 0)  # count even a small union
     for count in (1, 7, 300):
-        assert polygons.sweep_work(squares_in_a_row(count)) == 12 * count * count
+        assert plane2d.sweep_work(squares_in_a_row(count)) == 12 * count * count
 
 
 def test_sweep_work_agrees_with_the_scanline_definition(monkeypatch):
-    monkeypatch.setattr(polygons, "MAX_UNION_SWEEP", 0)
+    monkeypatch.setattr(plane2d.budget, "MAX_UNION_SWEEP", 0)
     rng = np.random.default_rng(5)
     # corners on a coarse grid, so that many share a line; loops of 3 to 9 corners
     loops = [
         rng.integers(0, 12, size=(int(rng.integers(3, 10)), 2)).astype(float) for _ in range(400)
     ]
-    assert polygons.sweep_work(loops) == reference_sweep_work(loops)
+    assert plane2d.sweep_work(loops) == reference_sweep_work(loops)
 
 
 def test_sweep_work_is_exactly_zero_below_the_budget():
     loops = squares_in_a_row(100)  # 400 edges: at most 160,000 steps
-    assert polygons.sweep_work(loops) == 0
+    assert plane2d.sweep_work(loops) == 0
 
 
 def test_a_row_of_squares_past_the_sweep_budget_is_refused_before_clipper2():
     loops = squares_in_a_row(10_000)  # 1.2e9 steps, no crossing at all
-    assert polygons.crossings_estimate(loops) == (0.0, 0)  # what let it through before
+    assert plane2d.crossings_estimate(loops) == (0.0, 0)  # what let it through before
     with pytest.raises(sg.GeometryError, match=r"1\.2e\+09 steps .*MAX_UNION_SWEEP") as error:
-        polygons.fill(loops)
+        plane2d.unite(loops)
     assert isinstance(error.value, BudgetError)  # smaller pieces may pass: worth halving for
 
 
@@ -212,14 +212,14 @@ import json, resource, sys
 resource.setrlimit(resource.RLIMIT_CPU, (60, 60))
 sys.path.insert(0, "tests")
 from test_slow_inputs import reference_sweep_work
-from shadowgeo import polygons
+from shadowgeo.plane2d import union
 from cli.main import main
-entered, build = [0], polygons.CrossSection
+entered, build = [0], union.CrossSection
 def counted(*args):
-    if args and sum(len(loop) for loop in args[0]) ** 2 > polygons.MAX_UNION_SWEEP:
+    if args and sum(len(loop) for loop in args[0]) ** 2 > union.MAX_UNION_SWEEP:
         entered[0] = max(entered[0], reference_sweep_work(args[0]))
     return build(*args)
-polygons.CrossSection = counted
+union.CrossSection = counted
 code = main(sys.argv[1:])
 print(json.dumps({"code": code, "most steps": entered[0]}))
 """

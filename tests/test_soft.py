@@ -18,7 +18,7 @@ import trimesh
 
 import shadowgeo as sg
 from shadowgeo.lights import DiskLight, RectLight
-from shadowgeo.polygons import points_in_parts
+from shadowgeo.plane2d import points_in_parts
 from shadowgeo.soft import light_samples, soft_shadow
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))

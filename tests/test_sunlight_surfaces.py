@@ -14,7 +14,7 @@ import trimesh
 from needs import SHARED, absent
 
 from shadowgeo import GeometryError
-from shadowgeo import polygons as poly
+from shadowgeo import plane2d as poly
 from shadowgeo.errors import BudgetError
 from shadowgeo.sun import hourly
 from shadowgeo.sunlight_surfaces import surface_sun_study, surface_sunlight

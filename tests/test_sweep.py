@@ -104,7 +104,7 @@ def test_a_certified_outline_is_cut_by_the_sweep_that_certified_it(monkeypatch):
     keep_triangles the certifying sweep's triangles serve the triangulation,
     so a comb of 4,096 teeth is swept once, not twice; a loop that differs in
     one bit is swept again (the kept triangles are found by content)."""
-    import shadowgeo.polygons as polygons
+    import shadowgeo.plane2d as plane2d
     import shadowgeo.sweep as sweep
 
     xs = np.linspace(-3.9, 3.9, 2 * 4096)
@@ -120,15 +120,17 @@ def test_a_certified_outline_is_cut_by_the_sweep_that_certified_it(monkeypatch):
         calls.append(triangles)
         return original(loop, triangles)
 
-    monkeypatch.setattr(polygons, "simple_triangles", counted)  # the name polygons calls
-    assert polygons.whole_loop([comb], keep_triangles=True)
-    _, faces = polygons.triangulate_parts([[comb]])
+    # the name each certifies and triangulates by
+    monkeypatch.setattr(plane2d.predicates, "simple_triangles", counted)
+    monkeypatch.setattr(plane2d.triangulation, "simple_triangles", counted)
+    assert plane2d.whole_loop([comb], keep_triangles=True)
+    _, faces = plane2d.triangulate_parts([[comb]])
     assert calls == [True]  # one sweep for the certificate and the triangles
     assert np.array_equal(faces, original(comb)[1])
     check_tiling(comb, faces)
     nudged = comb.copy()
     nudged[5, 1] = np.nextafter(nudged[5, 1], 2.0)
-    polygons.triangulate_parts([[nudged]])
+    plane2d.triangulate_parts([[nudged]])
     assert calls == [True, True]  # not the kept triangles of another loop
-    assert polygons.whole_loop([comb])  # without keep_triangles: a certificate only
+    assert plane2d.whole_loop([comb])  # without keep_triangles: a certificate only
     assert calls == [True, True, False]

@@ -5,7 +5,7 @@ A city object (a building, a building part, a road) is a set of planar
 polygons, each an outer ring and perhaps holes (ring: vertex indices into the
 object's points), each of a semantic kind (``RoofSurface``, ``WallSurface``,
 ``GroundSurface``, ...). It becomes one shape, so a building casts as one
-caster: the polygons triangulated by :mod:`shadowgeo.polygons` (fans for
+caster: the polygons triangulated by :mod:`shadowgeo.plane2d` (fans for
 convex ones, ear clipping for the rest and for those with holes), no vertex
 added, so polygons that share corners in the file share them in the mesh and
 a closed solid stays closed; each triangle keeps its polygon's kind in
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import GeometryError, SceneError
 from ..limits import check_coordinates
-from ..polygons import polygon_triangles, polygons_triangles
+from ..plane2d import polygon_triangles, polygons_triangles
 from ..scene.model import Semantics, Shape
 from ..topology import closed_by_sort
 

@@ -38,7 +38,7 @@ from ..lights import (
     SpotLight,
     centre_light,
 )
-from ..polygons import polygons_triangles
+from ..plane2d import polygons_triangles
 from ..scene import Material, Scene, SceneLight, Shape
 from . import float_triple
 from .usd_assets import check_assets

@@ -96,7 +96,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import limits
-from .. import polygons as poly
+from .. import plane2d as poly
 from ..errors import GeometryError, SceneError
 from ..lights import DirectionalLight, Light, is_positional
 from ..limits import check_coordinates, check_light
@@ -1177,7 +1177,7 @@ def _shadow_on(
 @dataclasses.dataclass(frozen=True)
 class _Frame:
     """The receiver's plane and the 2-D frame its shadows are cut in: centred
-    on them, scaled for the polygon library (:func:`.polygons.local_scale`);
+    on them, scaled for the polygon library (:func:`shadowgeo.plane2d.local_scale`);
     the receiver's patch in it (None for an unbounded plane) and the lift."""
 
     plane: Plane
@@ -1235,11 +1235,11 @@ def _layer_parts(
         if len(layers) == 1 and _simple_on_receiver(local, frame.receiving):
             parts = [local]  # no union and no cut (a sweep over the loop each)
         else:
-            region = poly.fill(local)
+            region = poly.unite(local)
             if frame.receiving is not None:
                 region = poly.intersect(region, frame.receiving)
             layer = region if covered is None else poly.subtract(region, covered)
-            covered = region if covered is None else poly.unite(covered, region)
+            covered = region if covered is None else poly.add(covered, region)
             parts = poly.components(layer)
         if parts:
             parts_of.append((level, parts))

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import polygons as poly
+from .. import plane2d as poly
 from ..errors import GeometryError, SceneError
 from ..lights import DirectionalLight, PointLight, SpotLight
 from ..soft import checked_counts, has_size, soft_shadow
@@ -149,7 +149,7 @@ def _cut_to(
     center = 0.5 * (points.min(axis=0) + points.max(axis=0))
     scale = poly.local_scale(max(float(np.abs(points - center).max()), tolerance.length))
     region = poly.intersect(
-        poly.fill([(loop - center) * scale for part in parts for loop in part]),
+        poly.unite([(loop - center) * scale for part in parts for loop in part]),
         poly.triangles_region((region2d - center) * scale),
     )
     return [[loop / scale + center for loop in part] for part in poly.components(region)]

@@ -28,7 +28,7 @@ import shapely
 from numpy.typing import ArrayLike
 from shapely.geometry.polygon import orient
 
-from .. import polygons as poly
+from .. import plane2d as poly
 from ..errors import SceneError
 from ..plane import Plane
 from ..sunstudy import SunStudy, sun_study, sun_study_by_day, sun_summaries_by_day

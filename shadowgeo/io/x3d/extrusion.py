@@ -17,7 +17,7 @@ import numpy as np
 
 from ...limits import MAX_EXTRUSION_POINTS as MAX_POINTS
 from ...limits import PRODUCT_ROUNDING, SHORTEST_DIRECTION
-from ...polygons import polygon_triangles
+from ...plane2d import polygon_triangles
 from .fields import Context, Element, rotation_matrix
 
 __all__ = ["extrusion", "frames"]

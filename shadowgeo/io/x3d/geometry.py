@@ -17,7 +17,7 @@ import numpy as np
 
 from ... import limits
 from ...errors import GeometryError
-from ...polygons import polygons_triangles
+from ...plane2d import polygons_triangles
 from ...scene import Material, primitives
 from .extrusion import extrusion
 from .fields import Context, Element, local_name
