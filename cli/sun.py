@@ -390,7 +390,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _check_output(args: argparse.Namespace) -> None:
-    """OUT is not the input and, unless GIS, can be written: found before the long work."""
+    """OUT is not the input and, unless GIS, can be written, and --mesh's
+    folder can be written in: found before the long work."""
+    if args.mesh is not None:
+        shadowgeo.io.check_folder(args.mesh)
     if args.output is None:
         return
     same = args.output.exists() and args.input.exists()
@@ -431,7 +434,8 @@ def _cityjson_polygons(args: argparse.Namespace, kinds: tuple[str, ...]) -> list
     except shadowgeo.SceneError as error:
         args.parser.error(
             f"--cityjson adds hours to the input's own CityJSON, and {error} (footprints "
-            "have no CityJSON file to carry them: write them with --mesh, as a .glb)"
+            "have no CityJSON file to carry them: give walls and roofs their hours with "
+            "--mesh, as a .glb)"
         )
     if not any(polygon.kind in kinds for polygon in polygons):
         args.parser.error(
@@ -443,6 +447,7 @@ def _cityjson_polygons(args: argparse.Namespace, kinds: tuple[str, ...]) -> list
         raise shadowgeo.SceneError(
             "--cityjson is the input file; it is never overwritten", path=str(args.cityjson)
         )
+    shadowgeo.io.check_folder(args.cityjson)
     return polygons
 
 
@@ -618,6 +623,12 @@ def _facades(
     finally:
         if bar is not None:
             bar.close()
+    _report_facades(found)
+    return found
+
+
+def _report_facades(found: FacadeHours) -> None:
+    """Each kind's faces, area and mean hours of sun."""
     print()
     for slot, kind in enumerate(found.kinds):
         chosen = found.kind == slot
@@ -630,7 +641,6 @@ def _facades(
             f"{mean:.3g} h of sun on average (a face {hours.min():.3g} to {hours.max():.3g} h), "
             f"of {found.most_hours:g} h with the sun up"
         )
-    return found
 
 
 _WORDS = {WALLS: "walls", ROOFS: "roofs"}

@@ -376,3 +376,17 @@ def test_surfaces_usage_errors(tmp_path, capsys):
         assert stopped.value.code == 2
         assert message in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("option, name", [("--mesh", "a.glb"), ("--cityjson", "a.city.json")])
+def test_an_output_that_cannot_be_written_is_refused_before_the_study(
+    tmp_path, capsys, option, name
+):
+    blocker = tmp_path / "plain"
+    blocker.write_text("a file, not a folder")
+    target = blocker / name
+    args = ["sun", str(_gis("rotterdam_subset.city.json")), "--at", "51.92,4.48"]
+    code, out, err = _run([*args, option, str(target)], capsys)
+    assert code == 1
+    assert str(target) in err and "not a folder" in err
+    assert out == ""  # no study ran
