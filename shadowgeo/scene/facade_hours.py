@@ -2,11 +2,12 @@
 ``shadowgeo sun`` writes beside the ground's levels.
 
 :func:`facade_hours` studies the faces of a scene's buildings at the sun
-samples of a sun study with :func:`shadowgeo.sunlight_surfaces.surface_sun_study`
-(the engine of :func:`shadowgeo.scene.facades.study_city_surfaces`), one
-sample at a time so that a progress bar can follow it, and sums each face's
-mean hours of sun over its area (:meth:`SurfaceSunlight.mean_hours`: exact,
-from the shadows' areas; no levels are cut).
+samples of a sun study with :func:`shadowgeo.sunlight_surfaces.surface_sunlight`
+(the engine of :func:`shadowgeo.scene.facades.study_city_surfaces`), the
+samples with the sun up a few at a time so that a progress bar can follow,
+and sums each face's mean hours of sun over its area
+(:meth:`SurfaceSunlight.mean_hours`: exact, from the shadows' areas; no
+levels are cut).
 
 What is studied: the buildings are the scene's geometry less its ground
 cover (:func:`shadowgeo.scene.sunlight.ground_cover`: a city file's roads,
@@ -29,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as _dt
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -36,7 +38,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import SceneError
-from ..sunlight_surfaces import surface_sun_study
+from ..sun import sun_lights
+from ..sunlight_surfaces import surface_sunlight
 from .facades import city_casters
 from .model import Scene, Semantics, Shape
 from .receivers import FLOOR_COSINE
@@ -44,6 +47,7 @@ from .sunlight import ground_cover
 
 __all__ = [
     "FacadeHours",
+    "PROGRESS_STEPS",
     "ROOFS",
     "SURFACE_KINDS",
     "WALLS",
@@ -55,6 +59,8 @@ __all__ = [
 WALLS, ROOFS, GROUND = "WallSurface", "RoofSurface", "GroundSurface"
 # The command line's words for the kinds studied.
 SURFACE_KINDS = {"walls": WALLS, "roofs": ROOFS}
+# At most this many calls of progress (batches of samples) in a study.
+PROGRESS_STEPS = 100
 
 
 @dataclass(frozen=True)
@@ -220,7 +226,9 @@ def facade_hours(
 ) -> FacadeHours:
     """Hours of sun on the walls and roofs (``kinds``) of ``scene``'s
     buildings over ``times`` (see the module notes), each sample standing for
-    ``step`` (an hour by default); ``progress(done, total)`` after each sample.
+    ``step`` (an hour by default); ``progress(done, total)`` as the samples
+    with the sun up are done (after each, or each of :data:`PROGRESS_STEPS`
+    batches of them).
     True north is the scene's site's (grid north when it has none).
 
     Raises
@@ -250,24 +258,30 @@ def facade_hours(
     receiver = _receiver(shapes, wanted, scene)
     casters = city_casters(dataclasses.replace(scene, shapes=shapes))
     site = scene.site
+    _, lights = sun_lights(
+        latitude,
+        longitude,
+        times,
+        up=scene.up_axis,
+        north=None if site is None else site.north,
+    )
+    directions = np.array([light.direction for light in lights]).reshape(-1, 3)
     total = np.zeros(len(receiver.faces))
-    samples = 0
-    for done, time in enumerate(times, start=1):
-        sunlight = surface_sun_study(
+    # the sun-up samples in at most PROGRESS_STEPS batches: each call sets up its
+    # receiver and tolerance again, a tenth of a sample's time on Delft
+    size = max(1, math.ceil(len(directions) / PROGRESS_STEPS))
+    for first in range(0, len(directions), size):
+        sunlight = surface_sunlight(
             casters,
             (receiver.vertices, receiver.faces),
-            [time],
-            latitude=latitude,
-            longitude=longitude,
+            directions[first : first + size],
             step=step,
-            up=scene.up_axis,
-            north=None if site is None else site.north,
             levels=False,
         )
         total += sunlight.mean_hours()
-        samples += len(sunlight.times)
         if progress is not None:
-            progress(done, len(times))
+            progress(min(first + size, len(directions)), len(directions))
+    samples = len(directions)
     each = (step or _dt.timedelta(hours=1)).total_seconds() / 3600.0
     corners = receiver.vertices[receiver.faces]
     areas = 0.5 * np.linalg.norm(
