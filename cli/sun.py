@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import shapely
 
 import shadowgeo
 from shadowgeo.batch import save_output
@@ -105,7 +106,9 @@ than 30 degrees a wall, facing up a roof). --mesh colours them by the map's
 legend; --cityjson writes the input CityJSON with, on each RoofSurface and
 WallSurface, an attribute 'sunlight_hours': the polygon's mean hours of sun
 over all the days studied (any --days). Footprints have no CityJSON to carry
-them: use --mesh. Walls and roofs take the sun as a point (--sun-angle is for
+them: use --mesh. A GIS OUT gets, when walls and roofs are studied (ask with
+--surfaces), a layer 'surfaces': each face a 3-D triangle (object, kind,
+hours, date). Walls and roofs take the sun as a point (--sun-angle is for
 the ground).
 Several days run on a Dask LocalCluster started here (--workers N), on a
 running cluster (--scheduler ADDRESS) or here (--serial); the results are the
@@ -263,7 +266,8 @@ def _add_extra_outputs(parser: argparse.ArgumentParser) -> None:
         type=surfaces_argument,
         metavar="KINDS",
         help="the building faces given hours: walls,roofs (the default for city data "
-        "when --mesh or --cityjson is asked), walls, roofs, or none (the ground only)",
+        "when --mesh or --cityjson is asked), walls, roofs, or none (the ground only); "
+        "with a .gpkg or .geojson OUT, their faces in a layer 'surfaces'",
     )
     parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
@@ -703,7 +707,7 @@ def _write_outputs(
     if args.output is None:
         return
     if gis:
-        _write_gis(args, scene, inputs, day, zone, levels)
+        _write_gis(args, scene, inputs, (day, zone), levels, facades)
         return
     shapes = sunlight_shapes(study, inputs.scale)
     added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
@@ -719,13 +723,16 @@ def _write_gis(
     args: argparse.Namespace,
     scene: shadowgeo.Scene,
     inputs: SceneStudy,
-    day: dt.date,
-    zone: dt.timezone,
+    when: tuple[dt.date, dt.timezone],
     levels: list[tuple[float, Any]],
+    facades: FacadeHours | None,
 ) -> None:
     """OUT as GeoPackage or GeoJSON: the day's ``levels`` of sunlight (layer
-    'sunlight': hours, date, threshold_h, meets) and, with --shadows-at, the
-    shadows at those times (layer 'shadows': time, date)."""
+    'sunlight': hours, date, threshold_h, meets), with --shadows-at the
+    shadows at those times (layer 'shadows': time, date), and with walls and
+    roofs studied their faces in 3-D (layer 'surfaces': object, kind, hours,
+    date)."""
+    day, zone = when
     layers = {
         "sunlight": Layer(
             [region for _, region in levels],
@@ -757,9 +764,26 @@ def _write_gis(
                 "date": [day.isoformat()] * len(found),
             },
         )
+    if facades is not None:
+        layers["surfaces"] = _surfaces_layer(scene, facades, day)
     crs = write_layers(args.output, layers, scene.site)
     counts = ", ".join(f"{len(layer.polygons)} {name}" for name, layer in layers.items())
     print(f"wrote {args.output}: {counts} feature(s), CRS {crs or 'none (the input has none)'}")
+
+
+def _surfaces_layer(scene: shadowgeo.Scene, facades: FacadeHours, day: dt.date) -> Layer:
+    """Each studied face of the walls and roofs as a 3-D triangle with its
+    building's name, its kind and its hours."""
+    names = [scene.shapes[index].name or "" for index in facades.shape]
+    return Layer(
+        list(shapely.polygons(facades.corners(scene))),
+        {
+            "object": names,
+            "kind": [facades.kinds[slot] for slot in facades.kind],
+            "hours": [float(value) for value in facades.hours],
+            "date": [day.isoformat()] * len(names),
+        },
+    )
 
 
 def _plot(

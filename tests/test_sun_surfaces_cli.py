@@ -390,3 +390,35 @@ def test_an_output_that_cannot_be_written_is_refused_before_the_study(
     assert code == 1
     assert str(target) in err and "not a folder" in err
     assert out == ""  # no study ran
+
+
+def test_delft_geopackage_gets_a_layer_of_wall_and_roof_faces_in_3d(tmp_path, capsys):
+    gpd = pytest.importorskip("geopandas")
+    source = _subset_cityjson(
+        _gis("delft_lod1.city.json"), tmp_path / "delft.city.json", DELFT_BUILDINGS + DELFT_GROUND
+    )
+    target = tmp_path / "delft.gpkg"
+    args = ["sun", str(source), str(target), "--date", DAY.isoformat(), "--every", str(EVERY)]
+    code, out, err = _run([*args, "--surfaces", "walls,roofs"], capsys)
+    assert code == 0, err
+    frame = gpd.read_file(target, layer="surfaces")
+    assert frame.crs.equals("EPSG:7415", ignore_axis_order=True)  # the file's own, RD New + NAP
+    assert frame.has_z.all()
+    assert set(frame["object"]) == set(DELFT_BUILDINGS)  # the ground is not given hours
+    assert set(frame["kind"]) == {"WallSurface", "RoofSurface"}
+    most = _sun_up_hours(52.0132, 4.3661, 0)
+    assert frame["hours"].between(0, most + 1e-9).all()
+    corners = np.array([np.asarray(item.geoms[0].exterior.coords)[:3] for item in frame.geometry])
+    # the tallest block's roof, as in the glb
+    top = corners[:, :, 2].max()
+    roof = (frame["kind"] == "RoofSurface").to_numpy() & np.isclose(
+        corners[:, :, 2].min(axis=1), top
+    )
+    assert roof.any()
+    assert frame["hours"][roof].to_numpy() == pytest.approx(np.full(roof.sum(), most), abs=1e-9)
+    # each kind's area adds up to what the command printed
+    areas = _areas(corners)
+    for word, kind in (("walls", "WallSurface"), ("roofs", "RoofSurface")):
+        line = next(row for row in out.splitlines() if row.startswith(f"{word}: "))
+        printed = float(line.split(", ")[1].split()[0])
+        assert areas[(frame["kind"] == kind).to_numpy()].sum() == pytest.approx(printed, rel=1e-5)

@@ -105,6 +105,15 @@ class FacadeHours:
             found[int(index)] = values
         return found
 
+    def corners(self, scene: Scene) -> NDArray[np.float64]:
+        """(m, 3, 3) each face's corners in the world (``scene``'s frame)."""
+        found = np.zeros((len(self.face), 3, 3))
+        for index in np.unique(self.shape):
+            chosen = self.shape == index
+            shape = scene.shapes[index]
+            found[chosen] = shape.world_vertices[shape.faces[self.face[chosen]]]
+        return found
+
     def polygon_hours(self, scene: Scene) -> dict[tuple[str, int], tuple[str, float]]:
         """(object name, polygon number within the object) -> (kind, hours:
         the area-weighted mean of its faces'), for the faces whose kind the
