@@ -26,6 +26,7 @@ from shadowgeo.io.atomic import remove_stale
 from shadowgeo.io.cityjson_write import (
     ATTRIBUTE,
     SurfacePolygon,
+    object_types,
     polygon_values,
     surface_polygons,
     write_surface_hours,
@@ -97,8 +98,9 @@ input's CRS. City data (a file naming its CRS) with flat objects (roads,
 land, water: no wall, or lower than 1 m) is studied on their ground: the
 plane at their median height over the file's plan, the rest casting.
 Walls and roofs: for city data (CityJSON, footprints), --mesh and --cityjson
-also get the hours of sun on every wall and roof of the buildings (the
-objects that are not ground), which shade each other, at the same samples:
+also get the hours of sun on every wall and roof of the buildings (a
+CityJSON's Building and BuildingPart objects; trees and the rest only
+cast), which shade each other, at the same samples:
 each face's mean over its area, exact (--surfaces walls, roofs or none
 chooses; given for any scene, it also prints their summary). A face's kind
 is its semantic surface in the file, else its facing (LoD1 blocks: steeper
@@ -612,6 +614,7 @@ def _facades(
             file=sys.stderr,
         )
     latitude, longitude = args.at
+    receivers = _buildings_named(args.input)
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar("walls and roofs") if show else None
     try:
@@ -622,6 +625,7 @@ def _facades(
             longitude=longitude,
             step=days.step,
             kinds=kinds,
+            receivers=receivers,
             progress=bar,
         )
     finally:
@@ -648,6 +652,30 @@ def _report_facades(found: FacadeHours) -> None:
 
 
 _WORDS = {WALLS: "walls", ROOFS: "roofs"}
+# The CityJSON object types whose walls and roofs are studied; the others
+# (trees, bridges, land use with steps, city furniture) only cast.
+_BUILDINGS = {"Building", "BuildingPart"}
+
+
+def _buildings_named(path: Path) -> set[str] | None:
+    """The ids of a CityJSON file's buildings, with a note; None (every
+    standing object) for other input (footprints are all buildings) or a
+    file with none."""
+    if not path.name.lower().endswith(".json"):
+        return None
+    try:
+        types = object_types(path)
+    except shadowgeo.SceneError:
+        return None
+    found = {name for name, kind in types.items() if kind in _BUILDINGS}
+    if not found:
+        return None
+    print(
+        f"note: walls and roofs of the {len(found)} Building and BuildingPart object(s) are "
+        "studied; other standing objects (trees, bridges, ...) only cast",
+        file=sys.stderr,
+    )
+    return found
 
 
 def _write_cityjson(

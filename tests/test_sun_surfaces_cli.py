@@ -42,6 +42,9 @@ DELFT_BUILDINGS = [
     "b112715f4-00ba-11e6-b420-2bdcc4ab5d7f",
 ]
 DELFT_GROUND = ["b984231ca-00c9-11e6-b420-2bdcc4ab5d7f", "b492910e5-00b4-11e6-b420-2bdcc4ab5d7f"]
+# a tree (PlantCover, a 2 m block 10.8 m high) 2 m south-west of a 2.8 m block
+DELFT_TREE = "b8e4fa919-00b3-11e6-b420-2bdcc4ab5d7f"
+DELFT_SHADED = "b31be49f5-00ba-11e6-b420-2bdcc4ab5d7f"
 
 
 def _gis(name: str) -> Path:
@@ -422,3 +425,26 @@ def test_delft_geopackage_gets_a_layer_of_wall_and_roof_faces_in_3d(tmp_path, ca
         line = next(row for row in out.splitlines() if row.startswith(f"{word}: "))
         printed = float(line.split(", ")[1].split()[0])
         assert areas[(frame["kind"] == kind).to_numpy()].sum() == pytest.approx(printed, rel=1e-5)
+
+
+def test_a_tree_casts_on_the_walls_but_gets_no_hours_of_its_own(tmp_path, capsys):
+    """Only a CityJSON file's Building and BuildingPart objects receive."""
+    building = DELFT_SHADED
+    args = ["sun", "--date", DAY.isoformat(), "--every", str(EVERY), "--mesh"]
+    found = {}
+    for label, keep in (("alone", [building]), ("tree", [building, DELFT_TREE])):
+        source = _subset_cityjson(
+            _gis("delft_lod1.city.json"), tmp_path / f"{label}.city.json", keep
+        )
+        target = tmp_path / f"{label}.glb"
+        code, _, err = _run([*args, str(target), str(source)], capsys)
+        assert code == 0, err
+        found[label] = _faces(_read(target)[1])
+    assert "1 Building and BuildingPart object(s) are studied" in err
+    assert np.all(found["tree"][DELFT_TREE][1] == UNKNOWN_HOURS)
+    alone, shaded = found["alone"][building][1], found["tree"][building][1]
+    studied = alone != UNKNOWN_HOURS
+    assert np.array_equal(studied, shaded != UNKNOWN_HOURS)
+    # the tree only takes sun away (float32 hours; the site moves a little with the box)
+    assert np.all(shaded[studied] <= alone[studied] + 1e-3)
+    assert shaded[studied].sum() < alone[studied].sum() - 0.1  # and some it does take

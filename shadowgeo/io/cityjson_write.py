@@ -41,6 +41,7 @@ from .x3d import parse as x3d_parse
 __all__ = [
     "ATTRIBUTE",
     "SurfacePolygon",
+    "object_types",
     "polygon_values",
     "surface_polygons",
     "write_surface_hours",
@@ -116,6 +117,15 @@ def _polygons(
             depth = DEPTHS[geometry["type"]]
             for rings, holder, index in _surfaces(geometry["boundaries"], values, depth):
                 yield str(name), geometry, rings, holder, index
+
+
+def object_types(path: str | os.PathLike[str]) -> dict[str, str]:
+    """Each city object's id -> its type (``Building``, ``PlantCover``, ...)
+    as the file gives it; SceneError for a file that is not CityJSON."""
+    objects = _document(Path(path)).get("CityObjects", {})
+    return {
+        str(name): str(body.get("type")) for name, body in objects.items() if isinstance(body, dict)
+    }
 
 
 def surface_polygons(path: str | os.PathLike[str]) -> list[SurfacePolygon]:

@@ -12,7 +12,8 @@ levels are cut).
 What is studied: the buildings are the scene's geometry less its ground
 cover (:func:`shadowgeo.scene.sunlight.ground_cover`: a city file's roads,
 land use and water, the ground of its ground study); they cast on each
-other and on themselves, and their faces of the kinds asked for receive.
+other and on themselves, and the faces of the kinds asked for of those
+named as ``receivers`` (all of them by default) receive.
 A face's kind is its semantic surface in the file (CityJSON's
 ``RoofSurface``, ``WallSurface``, a footprint's extruded walls and roof);
 a face the file gives none (LoD1 blocks, an X3D scene) is sorted by its
@@ -31,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as _dt
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -199,11 +200,16 @@ class _Receiver:
     kind: NDArray[np.int64]
 
 
-def _receiver(shapes: list[Shape], kinds: tuple[str, ...], scene: Scene) -> _Receiver:
-    """The faces of ``kinds`` of the buildings ``shapes``; SceneError when none is."""
+def _receiver(
+    shapes: list[Shape], kinds: tuple[str, ...], names: Collection[str] | None, scene: Scene
+) -> _Receiver:
+    """The faces of ``kinds`` of the buildings ``shapes`` (those ``names``
+    only, unless None); SceneError when none is."""
     vertices, faces, owner, face, kind = [], [], [], [], []
     base = 0
     for number, shape in enumerate(shapes):
+        if names is not None and shape.name not in names:
+            continue
         semantics = shape.semantics
         assert semantics is not None  # buildings() labels every shape
         wanted = np.array([kinds.index(name) if name in kinds else -1 for name in semantics.kinds])
@@ -231,6 +237,7 @@ def facade_hours(
     longitude: float,
     step: _dt.timedelta | None = None,
     kinds: Sequence[str] = (WALLS, ROOFS),
+    receivers: Collection[str] | None = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> FacadeHours:
     """Hours of sun on the walls and roofs (``kinds``) of ``scene``'s
@@ -239,6 +246,8 @@ def facade_hours(
     with the sun up are done (after each, or each of :data:`PROGRESS_STEPS`
     batches of them).
     True north is the scene's site's (grid north when it has none).
+    ``receivers``: the names of the buildings whose faces are studied (a
+    city file's ``Building`` objects, not its trees); the others only cast.
 
     Raises
     ------
@@ -264,7 +273,7 @@ def facade_hours(
     shapes, indices = buildings(scene)
     if not shapes:
         raise SceneError("the scene has no building to study", path=scene.path)
-    receiver = _receiver(shapes, wanted, scene)
+    receiver = _receiver(shapes, wanted, receivers, scene)
     casters = city_casters(dataclasses.replace(scene, shapes=shapes))
     site = scene.site
     _, lights = sun_lights(
