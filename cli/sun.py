@@ -17,9 +17,20 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+import shapely
+
 import shadowgeo
 from shadowgeo.batch import save_output
 from shadowgeo.io.atomic import remove_stale
+from shadowgeo.io.cityjson_write import (
+    ATTRIBUTE,
+    SurfacePolygon,
+    object_types,
+    polygon_values,
+    surface_polygons,
+    write_surface_hours,
+)
 from shadowgeo.io.gis_write import (
     Layer,
     axis_names,
@@ -29,6 +40,7 @@ from shadowgeo.io.gis_write import (
     write_layers,
 )
 from shadowgeo.io.sunlight_glb import write_hours_glb
+from shadowgeo.scene.facade_hours import ROOFS, SURFACE_KINDS, WALLS, FacadeHours, facade_hours
 from shadowgeo.scene.sunlight import (
     SceneStudy,
     hours_faces,
@@ -60,6 +72,8 @@ examples:
   shadowgeo sun city.glb --at 40.7,-74.0 --days 30 --scheduler tcp://10.0.0.5:8786
   shadowgeo sun delft.city.json levels.gpkg --date 2026-03-21 --shadows-at 09:00,12:00,15:00
   shadowgeo sun suzhou.geojson levels.geojson --date 2026-03-21 --plot map.png
+  shadowgeo sun delft.city.json --date 2026-03-21 --mesh hours.glb   (ground, walls, roofs)
+  shadowgeo sun rotterdam.city.json --at 51.92,4.48 --cityjson hours.city.json
 
 The floor is the largest flat surface found that faces up under the scene
 (--receiver DEF names one, --plane a,b,c,d gives a plane), else the ground
@@ -83,6 +97,21 @@ adds the shadows at those local times (layer 'shadows', attribute 'time').
 input's CRS. City data (a file naming its CRS) with flat objects (roads,
 land, water: no wall, or lower than 1 m) is studied on their ground: the
 plane at their median height over the file's plan, the rest casting.
+Walls and roofs: for city data (CityJSON, footprints), --mesh and --cityjson
+also get the hours of sun on every wall and roof of the buildings (a
+CityJSON's Building and BuildingPart objects; trees and the rest only
+cast), which shade each other, at the same samples:
+each face's mean over its area, exact (--surfaces walls, roofs or none
+chooses; given for any scene, it also prints their summary). A face's kind
+is its semantic surface in the file, else its facing (LoD1 blocks: steeper
+than 30 degrees a wall, facing up a roof). --mesh colours them by the map's
+legend; --cityjson writes the input CityJSON with, on each RoofSurface and
+WallSurface, an attribute 'sunlight_hours': the polygon's mean hours of sun
+over all the days studied (any --days). Footprints have no CityJSON to carry
+them: use --mesh. A GIS OUT gets, when walls and roofs are studied (ask with
+--surfaces), a layer 'surfaces': each face a 3-D triangle (object, kind,
+hours, date). Walls and roofs take the sun as a point (--sun-angle is for
+the ground).
 Several days run on a Dask LocalCluster started here (--workers N), on a
 running cluster (--scheduler ADDRESS) or here (--serial); the results are the
 same either way. Exit codes: 0 done, 1 bad input or OUT cannot be written,
@@ -228,6 +257,21 @@ def _add_extra_outputs(parser: argparse.ArgumentParser) -> None:
         "sunlight per face (attribute _SUNLIGHT_HOURS, -1 where not studied) and colours",
     )
     parser.add_argument(
+        "--cityjson",
+        type=Path,
+        metavar="CITY.json",
+        help="write the input CityJSON with the hours of sun over the days studied on each "
+        "RoofSurface and WallSurface polygon (attribute 'sunlight_hours')",
+    )
+    parser.add_argument(
+        "--surfaces",
+        type=surfaces_argument,
+        metavar="KINDS",
+        help="the building faces given hours: walls,roofs (the default for city data "
+        "when --mesh or --cityjson is asked), walls, roofs, or none (the ground only); "
+        "with a .gpkg or .geojson OUT, their faces in a layer 'surfaces'",
+    )
+    parser.add_argument(
         "--progress", action="store_true", help="show a progress bar even when not on a terminal"
     )
 
@@ -270,6 +314,18 @@ def clock_times_argument(text: str) -> list[dt.time]:
         raise argparse.ArgumentTypeError(
             f"expected local times HH:MM[,HH:MM...], got {text!r}"
         ) from None
+
+
+def surfaces_argument(text: str) -> tuple[str, ...]:
+    """``walls,roofs`` -> the semantic kinds; ``none`` -> ()."""
+    words = [part.strip() for part in text.split(",")]
+    if words == ["none"]:
+        return ()
+    if not all(word in SURFACE_KINDS for word in words):
+        raise argparse.ArgumentTypeError(
+            f"expected walls, roofs, walls,roofs or none, got {text!r}"
+        )
+    return tuple(dict.fromkeys(SURFACE_KINDS[word] for word in words))
 
 
 def sun_angle_argument(text: str) -> float:
@@ -317,6 +373,8 @@ def run(args: argparse.Namespace) -> int:
     if args.output is not None and is_gis_path(args.output):
         output_crs(scene.site, args.output)  # GeoJSON of a file with no CRS: refused now
     _settle_site(args, scene)
+    kinds = _surface_kinds(args, scene)
+    polygons = _cityjson_polygons(args, kinds)  # before the long work
     days = _days(args)
     studied = _run_study(args, scene, days)
     if isinstance(studied, int):
@@ -327,14 +385,21 @@ def run(args: argparse.Namespace) -> int:
     if args.days == 1:  # a SunStudies of the one day (every sample lies in it)
         ((day, study),) = studies.days.items()
         _report_day(args, days, day, study)
-        _write_outputs(args, scene, inputs, study, day, days.zone)
-        return 0
-    _report_days(args, days, studies)
+    else:
+        _report_days(args, days, studies)
+    facades = _facades(args, scene, days, kinds)
+    if args.days == 1:
+        _write_outputs(args, scene, inputs, study, day, days.zone, facades)
+    if facades is not None and args.cityjson is not None:
+        _write_cityjson(args, scene, facades, polygons)
     return 0
 
 
 def _check_output(args: argparse.Namespace) -> None:
-    """OUT is not the input and, unless GIS, can be written: found before the long work."""
+    """OUT is not the input and, unless GIS, can be written, and --mesh's
+    folder can be written in: found before the long work."""
+    if args.mesh is not None:
+        shadowgeo.io.check_folder(args.mesh)
     if args.output is None:
         return
     same = args.output.exists() and args.input.exists()
@@ -344,6 +409,52 @@ def _check_output(args: argparse.Namespace) -> None:
         )
     if not is_gis_path(args.output):
         shadowgeo.io.check_writable(args.output)  # before the long work
+
+
+def _surface_kinds(args: argparse.Namespace, scene: shadowgeo.Scene) -> tuple[str, ...]:
+    """The building faces given hours: --surfaces, else walls and roofs for
+    city data (a site, or semantic surfaces) when --mesh or --cityjson asks."""
+    if args.surfaces is not None:
+        kinds: tuple[str, ...] = args.surfaces
+    elif args.mesh is None and args.cityjson is None:
+        kinds = ()
+    else:
+        city = scene.site is not None or any(shape.semantics for shape in scene.shapes)
+        kinds = (WALLS, ROOFS) if city else ()
+    if args.cityjson is not None and not kinds:
+        args.parser.error(
+            "--cityjson writes the hours of walls and roofs: not with --surfaces none"
+        )
+    return kinds
+
+
+def _cityjson_polygons(args: argparse.Namespace, kinds: tuple[str, ...]) -> list[SurfacePolygon]:
+    """--cityjson's polygons of the input: usage errors (exit 2) for an input
+    that is not CityJSON or has no semantic surface of ``kinds``."""
+    if args.cityjson is None:
+        return []
+    if args.cityjson.suffix.lower() != ".json":
+        args.parser.error(f"--cityjson writes CityJSON (.city.json), not {args.cityjson.name!r}")
+    try:
+        polygons = surface_polygons(args.input)
+    except shadowgeo.SceneError as error:
+        args.parser.error(
+            f"--cityjson adds hours to the input's own CityJSON, and {error} (footprints "
+            "have no CityJSON file to carry them: give walls and roofs their hours with "
+            "--mesh, as a .glb)"
+        )
+    if not any(polygon.kind in kinds for polygon in polygons):
+        args.parser.error(
+            f"--cityjson: no polygon of {args.input} has a {' or '.join(kinds)} semantic "
+            "surface to carry hours (LoD1 blocks often have none): --mesh gives their "
+            "faces hours, by their facing"
+        )
+    if args.cityjson.exists() and os.path.samefile(args.input, args.cityjson):
+        raise shadowgeo.SceneError(
+            "--cityjson is the input file; it is never overwritten", path=str(args.cityjson)
+        )
+    shadowgeo.io.check_folder(args.cityjson)
+    return polygons
 
 
 def _settle_site(args: argparse.Namespace, scene: shadowgeo.Scene) -> None:
@@ -490,6 +601,105 @@ def _study(
     )
 
 
+def _facades(
+    args: argparse.Namespace, scene: shadowgeo.Scene, days: _Days, kinds: tuple[str, ...]
+) -> FacadeHours | None:
+    """Hours of sun on the buildings' ``kinds`` of face at the ground study's
+    samples, with a progress bar, and their summary; None for no kinds."""
+    if not kinds:
+        return None
+    if args.sun_angle:
+        print(
+            "note: walls and roofs take the sun as a point (--sun-angle is for the ground)",
+            file=sys.stderr,
+        )
+    latitude, longitude = args.at
+    receivers = _buildings_named(args.input)
+    show = args.progress or sys.stderr.isatty()
+    bar = ProgressBar("walls and roofs") if show else None
+    try:
+        found = facade_hours(
+            scene,
+            days.times,
+            latitude=latitude,
+            longitude=longitude,
+            step=days.step,
+            kinds=kinds,
+            receivers=receivers,
+            progress=bar,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    _report_facades(found)
+    return found
+
+
+def _report_facades(found: FacadeHours) -> None:
+    """Each kind's faces, area and mean hours of sun."""
+    print()
+    for slot, kind in enumerate(found.kinds):
+        chosen = found.kind == slot
+        if not chosen.any():
+            continue
+        hours, areas = found.hours[chosen], found.areas[chosen]
+        mean = float(np.average(hours, weights=areas)) if areas.sum() > 0 else 0.0
+        print(
+            f"{_WORDS[kind]}: {int(chosen.sum())} faces, {areas.sum():.6g} square units, "
+            f"{mean:.3g} h of sun on average (a face {hours.min():.3g} to {hours.max():.3g} h), "
+            f"of {found.most_hours:g} h with the sun up"
+        )
+
+
+_WORDS = {WALLS: "walls", ROOFS: "roofs"}
+# The CityJSON object types whose walls and roofs are studied; the others
+# (trees, bridges, land use with steps, city furniture) only cast.
+_BUILDINGS = {"Building", "BuildingPart"}
+
+
+def _buildings_named(path: Path) -> set[str] | None:
+    """The ids of a CityJSON file's buildings, with a note; None (every
+    standing object) for other input (footprints are all buildings) or a
+    file with none."""
+    if not path.name.lower().endswith(".json"):
+        return None
+    try:
+        types = object_types(path)
+    except shadowgeo.SceneError:
+        return None
+    found = {name for name, kind in types.items() if kind in _BUILDINGS}
+    if not found:
+        return None
+    print(
+        f"note: walls and roofs of the {len(found)} Building and BuildingPart object(s) are "
+        "studied; other standing objects (trees, bridges, ...) only cast",
+        file=sys.stderr,
+    )
+    return found
+
+
+def _write_cityjson(
+    args: argparse.Namespace,
+    scene: shadowgeo.Scene,
+    facades: FacadeHours,
+    polygons: list[SurfacePolygon],
+) -> None:
+    """--cityjson: the input with each studied polygon's hours on its semantic surface."""
+    hours, mismatched = polygon_values(polygons, facades.polygon_hours(scene))
+    write_surface_hours(args.input, args.cityjson, hours)
+    given = sum(value is not None for value in hours)
+    if mismatched:
+        print(
+            f"note: {mismatched} polygon(s) read with another kind than their semantic "
+            "surface's were given no hours",
+            file=sys.stderr,
+        )
+    print(
+        f"wrote {args.cityjson}: {given} semantic surface(s) with '{ATTRIBUTE}', the hours "
+        f"of sun over the {args.days} day(s) studied"
+    )
+
+
 def _write_outputs(
     args: argparse.Namespace,
     scene: shadowgeo.Scene,
@@ -497,6 +707,7 @@ def _write_outputs(
     study: shadowgeo.SunStudy,
     day: dt.date,
     zone: dt.timezone,
+    facades: FacadeHours | None = None,
 ) -> None:
     """The day's --plot and OUT: GIS polygons, or the scene with the map as shapes."""
     gis = args.output is not None and is_gis_path(args.output)
@@ -505,7 +716,10 @@ def _write_outputs(
     if args.plot is not None:
         _plot(args, scene, inputs, study, day, levels)
     if args.mesh is not None:
-        vertices, faces, hours, groups, names = hours_faces(scene, study, inputs.scale)
+        given = None if facades is None else facades.shape_hours(scene)
+        vertices, faces, hours, groups, names = hours_faces(
+            scene, study, inputs.scale, shape_hours=given
+        )
         write_hours_glb(
             args.mesh,
             vertices,
@@ -516,11 +730,12 @@ def _write_outputs(
             names=names,
             up="Z" if scene.up_index == 2 else "Y",
         )
-        print(f"wrote {args.mesh}: {len(faces)} faces with hours of sunlight")
+        studied = int(np.count_nonzero(~np.isnan(hours)))
+        print(f"wrote {args.mesh}: {len(faces)} faces, {studied} with hours of sunlight")
     if args.output is None:
         return
     if gis:
-        _write_gis(args, scene, inputs, day, zone, levels)
+        _write_gis(args, scene, inputs, (day, zone), levels, facades)
         return
     shapes = sunlight_shapes(study, inputs.scale)
     added = dataclasses.replace(scene, shapes=[*scene.shapes, *shapes])
@@ -536,13 +751,16 @@ def _write_gis(
     args: argparse.Namespace,
     scene: shadowgeo.Scene,
     inputs: SceneStudy,
-    day: dt.date,
-    zone: dt.timezone,
+    when: tuple[dt.date, dt.timezone],
     levels: list[tuple[float, Any]],
+    facades: FacadeHours | None,
 ) -> None:
     """OUT as GeoPackage or GeoJSON: the day's ``levels`` of sunlight (layer
-    'sunlight': hours, date, threshold_h, meets) and, with --shadows-at, the
-    shadows at those times (layer 'shadows': time, date)."""
+    'sunlight': hours, date, threshold_h, meets), with --shadows-at the
+    shadows at those times (layer 'shadows': time, date), and with walls and
+    roofs studied their faces in 3-D (layer 'surfaces': object, kind, hours,
+    date)."""
+    day, zone = when
     layers = {
         "sunlight": Layer(
             [region for _, region in levels],
@@ -574,9 +792,26 @@ def _write_gis(
                 "date": [day.isoformat()] * len(found),
             },
         )
+    if facades is not None:
+        layers["surfaces"] = _surfaces_layer(scene, facades, day)
     crs = write_layers(args.output, layers, scene.site)
     counts = ", ".join(f"{len(layer.polygons)} {name}" for name, layer in layers.items())
     print(f"wrote {args.output}: {counts} feature(s), CRS {crs or 'none (the input has none)'}")
+
+
+def _surfaces_layer(scene: shadowgeo.Scene, facades: FacadeHours, day: dt.date) -> Layer:
+    """Each studied face of the walls and roofs as a 3-D triangle with its
+    building's name, its kind and its hours."""
+    names = [scene.shapes[index].name or "" for index in facades.shape]
+    return Layer(
+        list(shapely.polygons(facades.corners(scene))),
+        {
+            "object": names,
+            "kind": [facades.kinds[slot] for slot in facades.kind],
+            "hours": [float(value) for value in facades.hours],
+            "date": [day.isoformat()] * len(names),
+        },
+    )
 
 
 def _plot(

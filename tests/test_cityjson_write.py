@@ -54,3 +54,19 @@ def test_hours_not_one_per_polygon_or_not_finite_are_refused(tmp_path):
     with pytest.raises(SceneError, match="not finite"):
         write_surface_hours(source, tmp_path / "x.city.json", [float("nan")] + [None] * 5)
     assert not (tmp_path / "x.city.json").exists()
+
+
+def test_each_face_knows_the_file_polygon_it_was_cut_from(tmp_path):
+    """Semantics.polygon against the file: every triangle's corners are
+    corners of its polygon's outer ring (the cube's six quads, two
+    objects, so numbers restart per object)."""
+    body = {"type": "Building", "geometry": [_cube()]}
+    source = _cityjson(tmp_path / "two.city.json", {"a": body, "b": body})
+    polygons = surface_polygons(source)
+    for shape in sg.load(source).shapes:
+        rings = [polygon.outer for polygon in polygons if polygon.object_id == shape.name]
+        numbers = shape.semantics.polygon
+        assert sorted(set(numbers.tolist())) == list(range(6))
+        for corners, number in zip(shape.world_vertices[shape.faces], numbers, strict=True):
+            ring = rings[number]
+            assert all(np.abs(ring - corner).max(axis=1).min() < 1e-9 for corner in corners)

@@ -71,6 +71,7 @@ __all__ = [
     "READERS",
     "WRITERS",
     "check_face_indices",
+    "check_folder",
     "check_writable",
     "file_problem",
     "float_triple",
@@ -320,6 +321,14 @@ def check_writable(path: str | os.PathLike[str]) -> None:
     not writable: for callers that check before long work. (Only a hint: the
     write itself still fails cleanly if the folder changes meanwhile.)"""
     _module(WRITERS, path, "write")
+    check_folder(path)
+
+
+def check_folder(path: str | os.PathLike[str]) -> None:
+    """SceneError naming ``path`` when the folder it would go in (or the
+    nearest one above that exists) is not a folder or is not writable: for a
+    writer of any format, checked before long work (a hint, as
+    :func:`check_writable`)."""
     folder = Path(path).parent
     while not folder.exists() and folder != folder.parent:
         folder = folder.parent

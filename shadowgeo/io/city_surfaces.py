@@ -141,12 +141,14 @@ def city_shapes(objects: list[CityObject], *, path: Path, kind: str) -> list[Sha
     kinds = np.concatenate(
         [np.asarray(item.surfaces.kinds, dtype=np.int64).reshape(-1) for item in objects]
     )[polygons]
+    # each triangle's polygon numbered within its object, as the file lists them
+    numbers = polygons - (np.cumsum(counts) - counts)[owner]
     shapes = []
     for number, item in enumerate(objects):
         chosen = order[bounds[number] : bounds[number + 1]]
         if len(chosen):
-            shape = _shape(item, points, faces[chosen], kinds[chosen], path, kind)
-            shapes.append(shape)
+            cut = Semantics(tuple(item.surfaces.names), kinds[chosen], numbers[chosen])
+            shapes.append(_shape(item, points, faces[chosen], cut, path, kind))
     return shapes
 
 
@@ -184,12 +186,12 @@ def _shape(
     item: CityObject,
     points: np.ndarray,
     faces: np.ndarray,
-    kinds: np.ndarray,
+    semantics: Semantics,
     path: Path,
     kind: str,
 ) -> Shape:
     """One object's shape from its triangles (indices into ``points``) and
-    their kinds (indices into its surfaces' names)."""
+    their ``semantics`` (kinds, indices into its surfaces' names, and polygons)."""
     where = f"{kind} {item.name!r}"
     used, local_faces = np.unique(faces, return_inverse=True)
     corners = points[used]
@@ -200,7 +202,7 @@ def _shape(
     solid = item.solid
     if solid is None:
         solid = bool(closed_by_sort(local_faces, len(corners))) or _wound_outward(
-            corners[local_faces], kinds, item.surfaces.names
+            corners[local_faces], semantics.face_kind, item.surfaces.names
         )
     origin = corners.min(axis=0)
     transform = np.eye(4)
@@ -212,5 +214,5 @@ def _shape(
         name=item.name,
         solid=solid,
         source=f"{path.name}, {where}",
-        semantics=Semantics(tuple(item.surfaces.names), kinds),
+        semantics=semantics,
     )

@@ -26,7 +26,7 @@ from __future__ import annotations
 import copy
 import json
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -38,7 +38,14 @@ from .atomic import atomic_path
 from .cityjson import DEPTHS
 from .x3d import parse as x3d_parse
 
-__all__ = ["ATTRIBUTE", "SurfacePolygon", "surface_polygons", "write_surface_hours"]
+__all__ = [
+    "ATTRIBUTE",
+    "SurfacePolygon",
+    "object_types",
+    "polygon_values",
+    "surface_polygons",
+    "write_surface_hours",
+]
 
 ATTRIBUTE = "sunlight_hours"
 
@@ -112,6 +119,15 @@ def _polygons(
                 yield str(name), geometry, rings, holder, index
 
 
+def object_types(path: str | os.PathLike[str]) -> dict[str, str]:
+    """Each city object's id -> its type (``Building``, ``PlantCover``, ...)
+    as the file gives it; SceneError for a file that is not CityJSON."""
+    objects = _document(Path(path)).get("CityObjects", {})
+    return {
+        str(name): str(body.get("type")) for name, body in objects.items() if isinstance(body, dict)
+    }
+
+
 def surface_polygons(path: str | os.PathLike[str]) -> list[SurfacePolygon]:
     """The file's polygons, in the order :func:`write_surface_hours` takes
     hours (see the module notes)."""
@@ -125,6 +141,37 @@ def surface_polygons(path: str | os.PathLike[str]) -> list[SurfacePolygon]:
         kind = None if value is None else surfaces[value].get("type")
         listed.append(SurfacePolygon(name, kind, points[np.asarray(rings[0], dtype=np.int64)]))
     return listed
+
+
+def polygon_values(
+    polygons: Sequence[SurfacePolygon], values: Mapping[tuple[str, int], tuple[str, float]]
+) -> tuple[list[float | None], int]:
+    """Per polygon of ``polygons`` (:func:`surface_polygons`), the value
+    ``values`` gives its (object id, number within the object, counting
+    from 0 in the file's order), as :func:`write_surface_hours` takes them
+    (None: none given), and how many given values were left out because
+    the kind they were found for is not the polygon's semantic type (a
+    reader and this module reading the object's geometry differently).
+
+    Examples
+    --------
+    >>> wall = SurfacePolygon("b", "WallSurface", np.zeros((3, 3)))
+    >>> roof = SurfacePolygon("b", "RoofSurface", np.zeros((3, 3)))
+    >>> polygon_values([wall, roof], {("b", 1): ("RoofSurface", 9.5)})
+    ([None, 9.5], 0)
+    """
+    listed: list[float | None] = []
+    numbers: dict[str, int] = {}
+    mismatched = 0
+    for polygon in polygons:
+        number = numbers.get(polygon.object_id, 0)
+        numbers[polygon.object_id] = number + 1
+        found = values.get((polygon.object_id, number))
+        if found is not None and found[0] != polygon.kind:
+            mismatched += 1
+            found = None
+        listed.append(None if found is None else found[1])
+    return listed, mismatched
 
 
 def write_surface_hours(

@@ -12,6 +12,8 @@ back, through the inverse of that projection (pyproj, ``always_xy``), to:
   WGS 84 (``OGC:CRS84``), whatever the input's; a GeoJSON file holds one
   layer, so every layer's features go in it with a ``layer`` attribute.
 
+Polygons with heights (the faces of walls and roofs) are written in 3-D
+(``MultiPolygon Z``), their heights as the scene has them (metres up).
 A scene with no site (a file naming no CRS) is written to GeoPackage in its
 own coordinates with no CRS; GeoJSON, whose coordinates must be longitude
 and latitude, is refused for it. Files are written through pyogrio (GDAL)
@@ -106,9 +108,10 @@ def to_output(polygons: list[Any], site: Site | None, crs: str | None) -> list[A
 
     def move(points: np.ndarray) -> np.ndarray:
         x, y = transformer.transform(points[:, 0], points[:, 1])
-        return np.column_stack([x, y])
+        return np.column_stack([x, y, *points.T[2:]])  # heights, if any, kept
 
-    moved = shapely.transform(np.asarray(polygons, dtype=object), move)
+    items = np.asarray(polygons, dtype=object)
+    moved = shapely.transform(items, move, include_z=bool(shapely.has_z(items).any()))
     return list(moved)
 
 
@@ -193,7 +196,8 @@ def _write_one(
         item if isinstance(item, shapely.MultiPolygon) else shapely.MultiPolygon([item])
         for item in polygons
     ]
-    geometry = shapely.to_wkb(np.asarray(multi, dtype=object), output_dimension=2)
+    solid = bool(shapely.has_z(np.asarray(multi, dtype=object)).any())  # 3-D faces
+    geometry = shapely.to_wkb(np.asarray(multi, dtype=object), output_dimension=3 if solid else 2)
     arrays = [_column(values) for values in layer.fields.values()]
     with warnings.catch_warnings():
         # no CRS is what the input had (said in the module notes), not a slip
@@ -205,7 +209,7 @@ def _write_one(
             list(layer.fields),
             layer=name,
             driver=_driver(path),
-            geometry_type="MultiPolygon",
+            geometry_type="MultiPolygon Z" if solid else "MultiPolygon",
             crs=crs,
             append=append,
         )

@@ -190,6 +190,11 @@ class Semantics:
     face_kind : (m,) int64
         Per face of the shape, an index into ``kinds``, or -1 for a face the
         file gives no kind.
+    polygon : (m,) int64, optional
+        Per face, the polygon of its city object it was cut from, the
+        object's polygons numbered in the file's order (what a writer of
+        values per polygon, :mod:`shadowgeo.io.cityjson_write`, matches them
+        by); None when not known.
 
     Examples
     --------
@@ -202,12 +207,18 @@ class Semantics:
 
     kinds: tuple[str, ...]
     face_kind: np.ndarray
+    polygon: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         index = np.asarray(self.face_kind, dtype=np.int64).reshape(-1)
         if index.size and (index.min() < -1 or index.max() >= len(self.kinds)):
             raise ValueError(f"face kinds must be -1 or below {len(self.kinds)}")
         object.__setattr__(self, "face_kind", index)
+        if self.polygon is not None:
+            polygon = np.asarray(self.polygon, dtype=np.int64).reshape(-1)
+            if polygon.shape != index.shape:
+                raise ValueError(f"{len(polygon)} polygon numbers for {len(index)} faces")
+            object.__setattr__(self, "polygon", polygon)
 
     def faces(self, kind: str) -> np.ndarray:
         """(k,) int64 the faces of ``kind`` (none for a kind it does not have)."""

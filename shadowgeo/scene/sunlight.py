@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as _dt
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -42,6 +42,7 @@ from .receivers import select as select_receivers
 __all__ = [
     "GROUND_COVER_HEIGHT",
     "SceneStudy",
+    "ground_cover",
     "hours_faces",
     "level_meshes",
     "level_regions",
@@ -190,7 +191,7 @@ def _city_ground(
     plane: Plane | None,
     chosen: tuple[Any, ...],
 ) -> tuple[Plane | None, np.ndarray, list[str]]:
-    """City data's ground: the plane of its ground cover (:func:`_ground_cover`,
+    """City data's ground: the plane of its ground cover (:func:`ground_cover`,
     at :func:`_cover_plane`) and which shapes are cover, with a note. Only
     for a scene with a site whose user chose no ``plane`` and nothing of
     ``chosen`` (receivers, region); else ``plane`` as given and no cover, as
@@ -199,7 +200,7 @@ def _city_ground(
     if scene.site is None or plane is not None or any(item is not None for item in chosen):
         return plane, none, []
     axis = scene.up_index
-    cover = _ground_cover(geometry, axis, scene.meters_per_unit)
+    cover = ground_cover(geometry, axis, scene.meters_per_unit)
     if not cover.any() or cover.all():
         return None, none, []
     plane = _cover_plane(geometry, cover, axis)
@@ -213,7 +214,7 @@ def _city_ground(
     return plane, cover, [note]
 
 
-def _ground_cover(geometry: list[Shape], axis: int, meters_per_unit: float) -> np.ndarray:
+def ground_cover(geometry: list[Shape], axis: int, meters_per_unit: float) -> np.ndarray:
     """Per shape, whether it is ground cover, which receives sunlight and
     does not block it (city data's roads, land use, water): every face
     within ``FLOOR_COSINE`` of the up axis (no wall), or the whole shape
@@ -532,33 +533,42 @@ def roof_triangles(inputs: SceneStudy) -> list[Any]:
 
 
 def hours_faces(
-    scene: Scene, study: SunStudy, scale: float, ground: str = "ground"
+    scene: Scene,
+    study: SunStudy,
+    scale: float,
+    ground: str = "ground",
+    shape_hours: Mapping[int, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """The day's ground levels (:func:`level_meshes`) and the scene's
     geometry as plain arrays for a writer of hours per face
     (:func:`shadowgeo.io.sunlight_glb.write_hours_glb`): (n, 3) world
-    vertices, (m, 3) faces, (m,) hours (NaN on the scene's own faces, not
-    studied), (m,) group of each face and the groups' names (``ground``
-    first, then each shape's name)."""
+    vertices, (m, 3) faces, (m,) hours, (m,) group of each face and the
+    groups' names (``ground`` first, then each shape's name). The scene's
+    own faces have NaN hours (not studied) unless ``shape_hours`` gives
+    them: shape ``i`` of ``scene.shapes`` -> its faces' hours, (f,) float
+    (NaN where not studied; walls and roofs from
+    :func:`shadowgeo.scene.facade_hours.facade_hours`)."""
     vertices, faces, hours, groups = [], [], [], []
     names = [ground]
     base = 0
+    given = shape_hours or {}
 
-    def add(points: np.ndarray, triangles: np.ndarray, value: float, group: int) -> None:
+    def add(points: np.ndarray, triangles: np.ndarray, value: ArrayLike, group: int) -> None:
         nonlocal base
         vertices.append(points)
         faces.append(triangles + base)
-        hours.append(np.full(len(triangles), value))
+        hours.append(np.broadcast_to(np.asarray(value, dtype=np.float64), len(triangles)))
         groups.append(np.full(len(triangles), group, dtype=np.int64))
         base += len(points)
 
     for value, _, points, triangles in level_meshes(study, scale):
         add(points, triangles, value, 0)
     used: set[str] = {ground}
-    for shape in scene.shapes:
+    for index, shape in enumerate(scene.shapes):
         if shape.role == "geometry" and shape.n_faces:
             names.append(unique_name(shape.name or "shape", used))
-            add(shape.world_vertices, shape.faces.astype(np.int64), float("nan"), len(names) - 1)
+            own = given.get(index, np.nan)
+            add(shape.world_vertices, shape.faces.astype(np.int64), own, len(names) - 1)
     if not faces:
         return (
             np.zeros((0, 3)),
