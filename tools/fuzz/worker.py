@@ -25,6 +25,11 @@ def _alarm(signum, frame):
 
 def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
     """Serve runs from ``connection`` until it sends None."""
+    # Its own process group: a Ctrl-C at the terminal reaches the campaign,
+    # which stops and kills its workers, not the run in flight (the command
+    # line would exit 130, a false finding).
+    os.setpgid(0, 0)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
     os.dup2(devnull, 2)
