@@ -6,9 +6,12 @@ from __future__ import annotations
 
 import importlib
 import json
+import os
 import random
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -118,3 +121,91 @@ def test_the_campaign_command_writes_its_table_into_the_report(tmp_path):
     assert f"at commit {head}" in text and "seed 4, 1 workers: 9 runs" in text
     assert "`python tools/fuzz.py campaign --per-encoding 2 --geometry 3 --seed 4" in text
     assert "would take about" in text
+
+
+# -- stopped and resumed ------------------------------------------------------------------------
+
+TINY = ["--inputs", "3", "--geometry", "6", "--seed", "5", "--jobs", "1", "--no-known"]
+TINY += ["--encodings", "x3d,geojson", "--shrink-tries", "2", "--quiet"]
+TINY_RUNS = 3 * 2 + 6
+
+
+def fuzz(out: Path, *extra: str) -> subprocess.CompletedProcess:
+    command = [sys.executable, str(ROOT / "tools" / "fuzz.py"), *TINY, "--out", str(out), *extra]
+    return subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=ROOT)
+
+
+def runs_of(out: Path) -> list[tuple]:
+    """Each recorded run: which one it is and how it ended (not its timing)."""
+    runs = []
+    for line in (out / "results.jsonl").read_text().splitlines():
+        entry = json.loads(line)
+        which = (
+            ("geometry", entry["case"]) if "case" in entry else (entry["encoding"], entry["index"])
+        )
+        runs.append((which, entry["ok"], entry["signature"], entry.get("code")))
+    return runs
+
+
+def stopped_part_way(out: Path, signum: int) -> subprocess.Popen:
+    """A campaign sent ``signum`` as soon as it has recorded a run."""
+    command = [sys.executable, str(ROOT / "tools" / "fuzz.py"), *TINY, "--out", str(out)]
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    results = out / "results.jsonl"
+    deadline = time.monotonic() + 300
+    while not (results.is_file() and results.read_bytes().count(b"\n")):
+        assert process.poll() is None and time.monotonic() < deadline
+        time.sleep(0.01)
+    os.kill(process.pid, signum)
+    process.communicate(timeout=120)
+    return process
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL])
+def test_a_campaign_stopped_part_way_and_resumed_records_the_runs_of_an_uninterrupted_one(
+    tmp_path, signum
+):
+    whole = fuzz(tmp_path / "whole")
+    assert whole.returncode in (0, 1), whole.stderr[-2000:]
+    expected = runs_of(tmp_path / "whole")
+    assert len(expected) == TINY_RUNS
+
+    out = tmp_path / "stopped"
+    process = stopped_part_way(out, signum)
+    assert process.returncode == (143 if signum == signal.SIGTERM else -signal.SIGKILL)
+    kept = runs_of(out)  # whole lines only, each run's as it ended
+    assert 1 <= len(kept) < TINY_RUNS and set(kept) <= set(expected)
+    with (out / "results.jsonl").open("a") as stream:
+        stream.write('{"encoding": "x3d", "ind')  # a line torn by a kill during the write
+
+    resumed = fuzz(out, "--resume")
+    assert resumed.returncode == whole.returncode, resumed.stderr[-2000:]
+    runs = runs_of(out)
+    assert sorted(runs) == sorted(expected)  # each run once: none lost, none run twice
+    assert runs[: len(kept)] == kept
+
+    def table(text: str) -> list[str]:  # the runs and exits per encoding, of every session
+        return [line for line in text.splitlines() if line.startswith("| ")]
+
+    assert table((out / "summary.md").read_text()) == table(
+        (tmp_path / "whole" / "summary.md").read_text()
+    )
+
+
+def test_resuming_is_refused_when_the_seed_or_the_commit_differ(tmp_path):
+    out = tmp_path / "campaign"
+    first = fuzz(out)
+    assert first.returncode in (0, 1), first.stderr[-2000:]
+    results = (out / "results.jsonl").read_bytes()
+    other_seed = [sys.executable, str(ROOT / "tools" / "fuzz.py"), *TINY, "--out", str(out)]
+    other_seed[other_seed.index("--seed") + 1] = "6"
+    done = subprocess.run(other_seed, capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert done.returncode == 2 and "seed 5 now 6" in done.stderr
+    plan = json.loads((out / "campaign.json").read_text())
+    (out / "campaign.json").write_text(json.dumps(dict(plan, commit="0" * 40)))
+    done = fuzz(out)
+    assert done.returncode == 2 and "commit '" + "0" * 40 in done.stderr
+    assert (out / "results.jsonl").read_bytes() == results  # nothing run, nothing lost
+    empty = tmp_path / "empty"
+    done = fuzz(empty, "--resume")
+    assert done.returncode == 2 and "nothing to resume" in done.stderr

@@ -461,6 +461,64 @@ def test_bad_cityjson_is_a_scene_error_naming_the_file_and_object(tmp_path, edit
         sg.load(path)
 
 
+def _faulty_cube(faults: dict[int, tuple[list, object]]) -> dict:
+    """The cube with, per face number, its ring and its semantics value replaced."""
+    cube = json.loads(json.dumps(_cube()))  # its own lists, not CUBE_FACES
+    for face, (ring, value) in faults.items():
+        if ring is not None:
+            cube["boundaries"][0][face] = [ring]
+        if value is not None:
+            cube["semantics"]["values"][0][face] = value
+    return cube
+
+
+# Faults in two faces (or two in one face): the message names the one a
+# reader going face by face, each face's rings before its semantics, meets first.
+@pytest.mark.parametrize(
+    ("faults", "message"),
+    [
+        ({0: (None, 7), 3: ([1, 2, 6, 99], None)}, "semantics value 7 is not one"),
+        ({0: ([0, 3, 2, 99], None), 3: (None, 7)}, r"vertex index 99 is out of range"),
+        ({1: ([4, 5, 6, -3], 9)}, r"vertex index -3 is out of range"),
+        ({2: ([0, True, 5, 4], None), 4: ([2, 3, 7, 60], None)}, "a ring must be a list of"),
+        ({2: ([0, 1, 5, 4.0], None), 4: ([2, 3, 7, 60], None)}, "a ring must be a list of"),
+        ({4: ([2, 3, 7, 60], None), 5: ([3, 0, "4", 7], None)}, r"vertex index 60 is out of"),
+    ],
+)
+def test_the_first_fault_in_the_files_order_is_the_one_named(tmp_path, faults, message):
+    path = _cityjson(tmp_path / "bad.city.json", {"house": {"type": "Building"}})
+    document = json.loads(path.read_text())
+    document["CityObjects"]["house"]["geometry"] = [_faulty_cube(faults)]
+    path.write_text(json.dumps(document))
+    with pytest.raises(sg.SceneError, match=r"bad\.city\.json.*CityObject 'house': " + message):
+        sg.load(path)
+
+
+def test_repeated_and_closing_indices_and_degenerate_rings_are_dropped(tmp_path):
+    # A 2 x 2 m square with a 1 x 1 m hole, both rings written with a corner
+    # repeated in a row and the first corner again at the end; a second
+    # polygon whose outer ring is one index twice (no area, dropped), and a
+    # two-corner hole in the first polygon (dropped): 4 - 1 = 3 m2 in all.
+    vertices = [[0, 0, 0], [2000, 0, 0], [2000, 2000, 0], [0, 2000, 0]]
+    vertices += [[500, 500, 0], [1500, 500, 0], [1500, 1500, 0], [500, 1500, 0]]
+    square = [0, 1, 1, 2, 3, 0]
+    hole = [4, 7, 7, 6, 5, 4]
+    surface = {
+        "type": "MultiSurface",
+        "lod": "1",
+        "boundaries": [[square, hole, [5, 6]], [[2, 2]], [[3]]],
+    }
+    path = _cityjson(
+        tmp_path / "holed.city.json",
+        {"slab": {"type": "Building", "geometry": [surface]}},
+        vertices=vertices,
+    )
+    (shape,) = sg.load(path).shapes
+    assert _areas(shape).sum() == pytest.approx(3.0, rel=1e-12)
+    assert len(shape.faces) == 8  # a square with a square hole: 8 triangles
+    assert len(shape.world_vertices) == 8
+
+
 def test_template_bomb_and_deep_nesting_are_refused(tmp_path, monkeypatch):
     from shadowgeo.io import cityjson
 

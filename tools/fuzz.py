@@ -40,6 +40,13 @@ Usage::
 Exit status 1 when any run failed. ``kill -USR1`` the campaign to stop starting
 runs early and go on to shrinking and the summary.
 
+Each run is appended to ``--out``'s ``results.jsonl`` as it ends. Stopped by
+SIGINT or SIGTERM (exit 130 or 143) or killed, the campaign goes on where it
+stopped when run again with the same ``--out`` (or ``campaign --resume OUT``):
+the runs recorded are not run again, and the summary counts them all. It is
+refused (exit 2) when the commit, its uncommitted changes, the seed, the
+sizes, the budgets or the seed files differ from those in ``campaign.json``.
+
 The whole campaign on one commit, every encoding (X3D XML, x3dz, ClassicVRML,
 VRML 97, X3D JSON, glTF, glb, USD text and crate, OBJ, STL, PLY, OFF,
 CityJSON, GeoJSON footprints) and the geometry cases, its table written into
@@ -51,10 +58,10 @@ CityJSON, GeoJSON footprints) and the geometry cases, its table written into
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import signal
 import sys
-import time
 from pathlib import Path
 
 # One BLAS thread a worker: the campaign runs --jobs workers side by side.
@@ -69,6 +76,7 @@ from fuzz.campaign import campaign  # noqa: E402
 from fuzz.inputs import ENCODINGS  # noqa: E402
 from fuzz.pool import Pool  # noqa: E402
 from fuzz.report import TITLE, commit, section, write_section  # noqa: E402
+from fuzz.resume import PLAN  # noqa: E402
 from fuzz.seeds import collect_seeds  # noqa: E402
 
 REPORT = Path(__file__).resolve().parents[1] / "benchmarks" / "REPORT.md"
@@ -85,13 +93,19 @@ def whole_campaign(argv: list[str]) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", type=Path, help="default /tmp/shadowgeo-campaign-SEED")
+    parser.add_argument(
+        "--resume",
+        type=Path,
+        metavar="OUT",
+        help="go on with the campaign in OUT (the same as --out OUT, which resumes too when OUT "
+        "holds runs; refused unless they are of this commit, seed and sizes)",
+    )
     parser.add_argument("--report", type=Path, default=REPORT, help="default %(default)s")
     parser.add_argument("--no-report", action="store_true", help="write no REPORT.md section")
     parser.add_argument("--encodings", default=",".join(ENCODINGS), help="default: all")
     args = parser.parse_args(argv)
-    out = args.out or Path(f"/tmp/shadowgeo-campaign-{args.seed}")
+    out = args.resume or args.out or Path(f"/tmp/shadowgeo-campaign-{args.seed}")
     at = commit()  # the code the runs use (before anything changes meanwhile)
-    started = time.monotonic()
     code = main(
         [
             f"--inputs={args.per_encoding}",
@@ -100,9 +114,13 @@ def whole_campaign(argv: list[str]) -> int:
             f"--jobs={args.jobs}",
             f"--out={out}",
             f"--encodings={args.encodings}",
+            *(["--resume"] if args.resume else []),
         ]
     )
-    wall = time.monotonic() - started
+    if code not in (0, 1):  # refused, or stopped by a signal: no table yet
+        return code
+    # every session's wall clock, when the campaign was stopped and resumed
+    wall = json.loads((out / PLAN).read_text())["wall_seconds"]
     command = f"python tools/fuzz.py campaign {' '.join(argv)}"
     text = section(
         out / "results.jsonl", seed=args.seed, jobs=args.jobs, command=command, wall=wall, at=at
@@ -143,6 +161,12 @@ def main(argv: list[str] | None = None) -> int:
         "made with the same --seed, and shrink those",
     )
     parser.add_argument("--no-known", action="store_true", help="skip matching known findings")
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on with the campaign recorded in --out (any --out holding runs is resumed; "
+        "with this flag, one holding none is refused)",
+    )
     parser.add_argument("--quiet", action="store_true")
     args = parser.parse_args(argv)
     encodings = [e.strip() for e in args.encodings.split(",") if e.strip()]

@@ -57,25 +57,45 @@ class Surfaces:
         self.kinds.extend([-1 if kind is None else self.names.index(kind)] * len(polygons))
 
 
-def _ring(indices: np.ndarray) -> np.ndarray:
-    """A ring's indices without repeats in a row or a closing copy of its first."""
-    if len(indices) > 1:
-        keep = np.append(indices[1:] != indices[:-1], indices[-1] != indices[0])
-        indices = indices[keep]
-    return indices
+def _cleaned(polygons: list[list[np.ndarray]], offsets: np.ndarray) -> list[list[np.ndarray]]:
+    """Each polygon's rings, moved by its offset, without repeats in a row or
+    a closing copy of the first index: an index is kept when it differs from
+    the next one round its ring, all rings at once (a ring of one index
+    becomes empty: like one of two, it has no area and is dropped all the same)."""
+    rings = [ring for polygon in polygons for ring in polygon]
+    if not rings:
+        return [[] for _ in polygons]
+    sizes = np.array([len(ring) for ring in rings], dtype=np.int64)
+    per_ring = np.repeat(offsets, [len(polygon) for polygon in polygons])
+    flat = np.concatenate(rings).astype(np.int64) + np.repeat(per_ring, sizes)
+    starts = np.cumsum(sizes) - sizes
+    following = np.arange(1, len(flat) + 1)
+    closed = sizes > 0
+    following[(starts + sizes - 1)[closed]] = starts[closed]  # the last index's next is the first
+    keep = flat != flat[following] if len(flat) else np.zeros(0, dtype=bool)
+    owner = np.repeat(np.arange(len(rings)), sizes)
+    kept_sizes = np.bincount(owner[keep], minlength=len(rings))
+    ends = np.cumsum(kept_sizes).tolist()
+    kept = flat[keep]
+    pieces = [kept[end - size : end] for end, size in zip(ends, kept_sizes.tolist(), strict=True)]
+    bounds = np.cumsum([0] + [len(polygon) for polygon in polygons])
+    return [pieces[bounds[n] : bounds[n + 1]] for n in range(len(polygons))]
 
 
-def triangles(points: np.ndarray, surfaces: Surfaces) -> tuple[np.ndarray, np.ndarray]:
-    """(t, 3) int64 triangles of every polygon (indices into ``points``, wound
-    as their outer rings) and (t,) int64 the polygon each comes from. A ring
-    of fewer than three corners is dropped (it has no area)."""
+def triangles(
+    points: np.ndarray, surfaces: Surfaces, offsets: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """(t, 3) int64 triangles of every polygon (indices into ``points``: the
+    polygon's own moved by its ``offsets`` entry, (p,) int64; wound as their
+    outer rings) and (t,) int64 the polygon each comes from. A ring of fewer
+    than three corners is dropped (it has no area)."""
     plain: dict[int, list[tuple[int, np.ndarray]]] = {}  # corner count -> polygons
     found, owners = [], []
-    for number, rings in enumerate(surfaces.rings):
-        outer = _ring(rings[0])
+    for number, rings in enumerate(_cleaned(surfaces.rings, offsets)):
+        outer = rings[0]
         if len(outer) < 3:
             continue  # no outer ring: nothing to fill
-        kept = [outer, *(ring for ring in map(_ring, rings[1:]) if len(ring) >= 3)]
+        kept = [outer, *(ring for ring in rings[1:] if len(ring) >= 3)]
         if len(kept) == 1:
             plain.setdefault(len(kept[0]), []).append((number, kept[0]))
             continue
@@ -125,16 +145,12 @@ def city_shapes(objects: list[CityObject], *, path: Path, kind: str) -> list[Sha
     sizes = np.array([len(item.points) for item in objects], dtype=np.int64)
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     counts = np.array([len(item.surfaces.rings) for item in objects], dtype=np.int64)
-    everything = Surfaces(
-        [
-            [ring + start for ring in rings]
-            for item, start in zip(objects, starts, strict=True)
-            for rings in item.surfaces.rings
-        ]
-    )
+    # every object's polygons, each to be moved by its object's first point
+    everything = Surfaces([rings for item in objects for rings in item.surfaces.rings])
+    offsets = np.repeat(starts, counts)
     points = np.concatenate([item.points for item in objects])
     _check(points, objects, path, kind)  # before triangles: a NaN corner would drop its face
-    faces, polygons = triangles(points, everything)
+    faces, polygons = triangles(points, everything, offsets)
     owner = np.repeat(np.arange(len(objects)), counts)[polygons]
     order = np.argsort(owner, kind="stable")
     bounds = np.searchsorted(owner[order], np.arange(len(objects) + 1))

@@ -34,6 +34,7 @@ import json
 import os
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass
+from itertools import chain
 from pathlib import Path
 from typing import Any
 
@@ -281,17 +282,12 @@ def _surface_kind(index: Any, surfaces: list[Any], where: str, error: _Error) ->
 
 
 def _walk(
-    boundaries: Any,
-    values: Any,
-    depth: int,
-    surfaces: list[Any],
-    count: int,
-    where: str,
-    error: _Error,
-) -> Iterator[tuple[list[np.ndarray], str | None]]:
-    """Each polygon (its rings as index arrays, checked below ``count``) of
-    ``boundaries`` ``depth`` list levels above the surfaces, with the kind
-    its semantics ``values`` (the same nesting, or None) give it."""
+    boundaries: Any, values: Any, depth: int, where: str, error: _Error
+) -> Iterator[tuple[list[list[Any]], Any]]:
+    """Each surface (a list of rings, as the file has them) of
+    ``boundaries`` ``depth`` list levels above the surfaces, with its
+    semantics value (from ``values``, the same nesting, or None); the rings'
+    contents and the value are checked by the caller."""
     if not isinstance(boundaries, list):
         raise error("boundaries do not nest as the geometry type says", where)
     if values is not None and (not isinstance(values, list) or len(values) != len(boundaries)):
@@ -299,13 +295,12 @@ def _walk(
     for number, item in enumerate(boundaries):
         value = None if values is None else values[number]
         if depth > 0:
-            yield from _walk(item, value, depth - 1, surfaces, count, where, error)
+            yield from _walk(item, value, depth - 1, where, error)
             continue
         if not isinstance(item, list) or not all(isinstance(ring, list) for ring in item):
             raise error("a surface must be a list of rings of vertex indices", where)
-        rings = [_ring(ring, count, where, error) for ring in item]
-        if rings:
-            yield rings, _surface_kind(value, surfaces, where, error)
+        if item:
+            yield item, value
 
 
 def _ring(ring: list[Any], count: int, where: str, error: _Error) -> np.ndarray:
@@ -319,6 +314,60 @@ def _ring(ring: list[Any], count: int, where: str, error: _Error) -> np.ndarray:
     return indices
 
 
+@dataclass(frozen=True)
+class _Polygons:
+    """A geometry's polygons: every ring's vertex indices end to end, how
+    many each ring has, how many rings each polygon has, and each polygon's
+    semantic kind."""
+
+    indices: np.ndarray
+    ring_sizes: list[int]
+    polygon_sizes: list[int]
+    kinds: list[str | None]
+
+
+def _polygons(
+    geometry: Any, listed: list[Any], values: Any, count: int, where: str, error: _Error
+) -> _Polygons:
+    """The polygons of ``geometry`` (whose points number ``count``), checked:
+    all the rings' indices at once, as one array. On any problem the checks
+    run again one surface at a time, in the file's order, for the message
+    naming the first."""
+    try:
+        surfaces = list(
+            _walk(geometry.get("boundaries"), values, DEPTHS[geometry.get("type")], where, error)
+        )
+        kinds = [_surface_kind(value, listed, where, error) for _, value in surfaces]
+        rings = [ring for item, _ in surfaces for ring in item]
+        flat = list(chain.from_iterable(rings))
+        integers = set(map(type, flat)) <= {int}
+        indices = np.array(flat if integers else [], dtype=np.int64)
+    except (SceneError, OverflowError):
+        integers = False
+    if not integers or (len(indices) and (indices.min() < 0 or indices.max() >= count)):
+        raise _first_problem(geometry, listed, values, count, where, error)
+    return _Polygons(
+        indices, [len(ring) for ring in rings], [len(item) for item, _ in surfaces], kinds
+    )
+
+
+def _first_problem(
+    geometry: Any, listed: list[Any], values: Any, count: int, where: str, error: _Error
+) -> Exception:
+    """The error that checking ``geometry``'s surfaces one at a time (each
+    one's rings, then its semantics) raises first."""
+    try:
+        for item, value in _walk(
+            geometry.get("boundaries"), values, DEPTHS[geometry.get("type")], where, error
+        ):
+            for ring in item:
+                _ring(ring, count, where, error)
+            _surface_kind(value, listed, where, error)
+    except (SceneError, OverflowError) as problem:
+        return problem
+    raise AssertionError("the whole check failed where the surfaces one at a time pass")
+
+
 def _gather(
     chosen: list[tuple[Any, np.ndarray]], where: str, error: _Error
 ) -> tuple[np.ndarray, Surfaces, bool]:
@@ -326,30 +375,25 @@ def _gather(
     its polygons indexing them, and whether every geometry is a solid."""
     surfaces, pieces, base = Surfaces(), [], 0
     for geometry, points in chosen:
-        kind = geometry.get("type")
         semantics = geometry.get("semantics") or {}
         if not isinstance(semantics, dict):
             raise error("semantics must be an object", where)
         listed = semantics.get("surfaces", [])
         if not isinstance(listed, list):
             raise error("semantics surfaces must be a list", where)
-        polygons = list(
-            _walk(
-                geometry.get("boundaries"),
-                semantics.get("values"),
-                DEPTHS[kind],
-                listed,
-                len(points),
-                where,
-                error,
-            )
-        )
-        used = [ring for rings, _ in polygons for ring in rings]
-        if not used:
+        polygons = _polygons(geometry, listed, semantics.get("values"), len(points), where, error)
+        if not polygons.ring_sizes:
             continue
-        keep = np.unique(np.concatenate(used))
-        for rings, surface_kind in polygons:
-            surfaces.add([np.searchsorted(keep, ring) + base for ring in rings], surface_kind)
+        keep = np.unique(polygons.indices)
+        moved = np.searchsorted(keep, polygons.indices) + base
+        ends = np.cumsum(polygons.ring_sizes).tolist()
+        rings = [
+            moved[end - size : end] for end, size in zip(ends, polygons.ring_sizes, strict=True)
+        ]
+        first = 0
+        for size, kind in zip(polygons.polygon_sizes, polygons.kinds, strict=True):
+            surfaces.add(rings[first : first + size], kind)
+            first += size
         pieces.append(points[keep])
         base += len(keep)
     solid = all(geometry.get("type") in SOLIDS for geometry, _ in chosen)

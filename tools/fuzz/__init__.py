@@ -21,5 +21,6 @@ Runs and checks:
 
 The campaign: ``worker`` and ``pool`` (forked workers with time and memory
 budgets), ``shrink`` (delta debugging), ``campaign`` (the run, the failures'
-folders and the summary).
+folders and the summary), ``resume`` (a stopped campaign gone on with, on
+the same commit and plan only).
 """

@@ -13,6 +13,9 @@ import signal
 import sys
 import time
 from collections import Counter, defaultdict
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 
 from .geometry import geometry_case, geometry_reproducer
 from .inputs import (
@@ -26,16 +29,19 @@ from .inputs import (
 )
 from .mutate import mutate
 from .pool import Pool
+from .resume import RESULTS, ResumeRefused, plan_of, recorded, run_key, save_plan
 from .shrink import shrink_case, shrink_input
 
 
-def converter_tasks(seeds, encodings, count: int, seed: int, first: int = 0):
+def converter_tasks(seeds, encodings, count: int, seed: int, first: int = 0, done=frozenset()):
     """``count`` mutants per encoding, interleaved, from index ``first`` (mutant
-    ``i`` is the same whatever chunk it is run in)."""
+    ``i`` is the same whatever chunk it is run in), but those whose
+    (encoding, index) is in ``done``."""
     plans = [e for e in encodings if seeds.get(e)]
     for index in range(first, first + count):
         for encoding in plans:
-            yield converter_task(seeds, encoding, index, seed)
+            if (encoding, index) not in done:
+                yield converter_task(seeds, encoding, index, seed)
 
 
 def converter_task(seeds, encoding: str, index: int, seed: int) -> dict:
@@ -129,39 +135,139 @@ def replay(args, seeds, pool: Pool) -> int:
     return 1 if by_signature else 0
 
 
+class Interrupted(Exception):
+    """SIGINT or SIGTERM reached the campaign: stop, keep what is recorded."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+@dataclass
+class Tally:
+    """Runs per group and exit, failures per signature, and each signature's
+    first failing task (with its result), over every recorded run."""
+
+    counts: dict[str, Counter] = field(default_factory=lambda: defaultdict(Counter))
+    first: dict[str, dict] = field(default_factory=dict)
+    by_signature: Counter = field(default_factory=Counter)
+
+    def add(self, entry: dict, task: Callable[[], dict]) -> None:
+        """Count ``entry`` (a line of results.jsonl); ``task()`` gives its task
+        when it is the first failure of its signature."""
+        group = entry.get("encoding", "geometry")
+        self.counts[group]["runs"] += 1
+        self.counts[group][f"exit {entry.get('code')}" if entry["ok"] else "FAIL"] += 1
+        if entry["ok"]:
+            return
+        signature = entry["signature"]
+        self.by_signature[signature] += 1
+        self.counts[group][signature] += 1
+        if signature not in self.first:
+            self.first[signature] = task()
+
+
+def earlier_task(entry: dict, seeds, seed: int) -> dict:
+    """The task of a recorded failing run, made again (mutants and cases are
+    the same for the same seed), with the result it had."""
+    if "case" in entry:
+        task = {"kind": "geometry", "case": geometry_case(seed, entry["case"])}
+    else:
+        task = converter_task(seeds, entry["encoding"], entry["index"], seed)
+    result = {k: v for k, v in entry.items() if k in ("ok", "signature", "detail", "code")}
+    return dict(task, result={"detail": "", **result})
+
+
+def results_entry(task: dict, result: dict) -> dict:
+    """The line of results.jsonl for one run: the task without its data, and the result."""
+    entry = {k: v for k, v in task.items() if k not in ("data", "case", "slot")}
+    if "case" in task:
+        entry.update(case=task["case"]["index"], kind=task["case"]["kind"])
+    entry.update({k: v for k, v in result.items() if k != "detail"})
+    if not result["ok"]:
+        entry["detail"] = result["detail"][-600:]
+    return entry
+
+
 def campaign(args, encodings, seeds, pool: Pool) -> int:
+    """Run what ``args.out`` has not recorded yet of this campaign (all of it
+    in a new folder), then shrink the failures and write the summary of every
+    recorded run. Returns 1 when a run failed, 2 when the folder holds runs of
+    another campaign, 128 + the signal's number when SIGINT or SIGTERM stopped it."""
     if args.replay:
         return replay(args, seeds, pool)
     started = time.monotonic()
+    plan = plan_of(args, encodings, seeds)
+    try:
+        earlier, wall_before = recorded(args.out, plan)
+    except ResumeRefused as error:
+        print(f"fuzz.py: {error}", file=sys.stderr)
+        return 2
+    if getattr(args, "resume", False) and not earlier:
+        print(f"fuzz.py: nothing to resume in {args.out}", file=sys.stderr)
+        return 2
+    save_plan(args.out, plan, wall_before)
     known = {} if args.no_known else known_signatures(pool)
-    counts: dict[str, Counter] = defaultdict(Counter)
-    first: dict[str, dict] = {}
-    by_signature: Counter = Counter()
-    log = (args.out / "results.jsonl").open("w")
+    tally = Tally()
+    for entry in earlier:
+        tally.add(entry, lambda entry=entry: earlier_task(entry, seeds, args.seed))
+    done = {run_key(entry) for entry in earlier}
+    try:
+        with _signals_interrupt(), (args.out / RESULTS).open("a") as log:
+            _run_remaining(args, encodings, seeds, pool, tally, done, log)
+    except Interrupted as interrupt:
+        save_plan(args.out, plan, wall_before + time.monotonic() - started)
+        recorded_runs = sum(c["runs"] for c in tally.counts.values())
+        print(
+            f"\nfuzz.py: stopped by {interrupt}; {recorded_runs} runs kept in "
+            f"{args.out / RESULTS}; go on with the same command (or --resume)",
+            file=sys.stderr,
+        )
+        return 128 + interrupt.signum
+    save_plan(args.out, plan, wall_before + time.monotonic() - started)
+    if not args.quiet:
+        print(file=sys.stderr)
+    rows = write_failures(args, pool, tally.first, tally.by_signature, known)
+    summary = summary_table(tally.counts, rows, time.monotonic() - started + wall_before, args)
+    (args.out / "summary.md").write_text(summary)
+    print(summary)
+    return 1 if tally.by_signature else 0
+
+
+@contextmanager
+def _signals_interrupt() -> Iterator[None]:
+    """Inside the block SIGINT and SIGTERM raise :class:`Interrupted`."""
+
+    def interrupt(signum, frame):
+        raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, interrupt) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _run_remaining(args, encodings, seeds, pool: Pool, tally: Tally, done: set, log) -> None:
+    """The runs not in ``done``, each added to ``tally`` and written to ``log``
+    (flushed: a kill loses only the runs in flight)."""
+    started = time.monotonic()
     total = args.inputs * len([e for e in encodings if seeds.get(e)]) + args.geometry
-    done = 0
+    progress = [len(done)]
 
     def record(task, result):
-        nonlocal done
-        done += 1
-        group = task.get("encoding", "geometry")
-        counts[group]["runs"] += 1
-        counts[group][f"exit {result.get('code')}" if result["ok"] else "FAIL"] += 1
-        entry = {k: v for k, v in task.items() if k not in ("data", "case", "slot")}
-        if "case" in task:
-            entry.update(case=task["case"]["index"], kind=task["case"]["kind"])
-        entry.update({k: v for k, v in result.items() if k != "detail"})
-        if not result["ok"]:
-            by_signature[result["signature"]] += 1
-            counts[group][result["signature"]] += 1
-            first.setdefault(result["signature"], dict(task, result=result))
-            entry["detail"] = result["detail"][-600:]
+        entry = results_entry(task, result)
+        tally.add(entry, lambda: dict(task, result=result))
         log.write(json.dumps(entry, default=str) + "\n")
-        if not args.quiet and (done % 25 == 0 or not result["ok"]):
-            rate = done / max(time.monotonic() - started, 1e-9)
+        log.flush()
+        progress[0] += 1
+        if not args.quiet and (progress[0] % 25 == 0 or not result["ok"]):
+            rate = (progress[0] - len(done)) / max(time.monotonic() - started, 1e-9)
+            failures = sum(tally.by_signature.values())
             print(
-                f"\r[{done}/{total}] {rate:5.1f} runs/s, {sum(by_signature.values())} failures, "
-                f"{len(by_signature)} signatures",
+                f"\r[{progress[0]}/{total}] {rate:5.1f} runs/s, {failures} failures, "
+                f"{len(tally.by_signature)} signatures",
                 end="",
                 file=sys.stderr,
                 flush=True,
@@ -182,21 +288,15 @@ def campaign(args, encodings, seeds, pool: Pool) -> int:
 
     # Geometry first when both run: it is quick, and a deadline then cuts mutants.
     cases = (
-        {"kind": "geometry", "case": geometry_case(args.seed, i)} for i in range(args.geometry)
+        {"kind": "geometry", "case": geometry_case(args.seed, i)}
+        for i in range(args.geometry)
+        if ("geometry", i) not in done
     )
     for task, result in pool.run(until_deadline(cases)):
         record(task, result)
-    mutants = converter_tasks(seeds, encodings, args.inputs, args.seed, args.first_index)
+    mutants = converter_tasks(seeds, encodings, args.inputs, args.seed, args.first_index, done)
     for task, result in pool.run(until_deadline(mutants)):
         record(task, result)
-    log.close()
-    if not args.quiet:
-        print(file=sys.stderr)
-    rows = write_failures(args, pool, first, by_signature, known)
-    summary = summary_table(counts, rows, time.monotonic() - started, args)
-    (args.out / "summary.md").write_text(summary)
-    print(summary)
-    return 1 if by_signature else 0
 
 
 def write_failures(args, pool: Pool, first, by_signature, known) -> list[list[str]]:

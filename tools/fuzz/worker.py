@@ -25,11 +25,16 @@ def _alarm(signum, frame):
 
 def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
     """Serve runs from ``connection`` until it sends None."""
+    # Its own process group: a Ctrl-C at the terminal reaches the campaign,
+    # which stops and kills its workers, not the run in flight (the command
+    # line would exit 130, a false finding).
+    os.setpgid(0, 0)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, 1)
     os.dup2(devnull, 2)
     signal.signal(signal.SIGPROF, _alarm)
-    scratch = Path(tempfile.mkdtemp(prefix="shadowgeo-fuzz-"))
+    scratch = Path(tempfile.mkdtemp(prefix="shadowgeo-fuzz-", dir=_scratch_root()))
     try:
         while True:
             task = connection.recv()
@@ -74,6 +79,14 @@ def worker_main(connection, memory_bytes: int, time_budget: float) -> None:
             connection.send(result)
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
+
+
+def _scratch_root() -> str | None:
+    """Where runs write: /dev/shm (memory) when there is one, for the
+    converter's atomic writes sync each output to disk, a wait on a real disk
+    that is no part of what a run tests; else the usual temporary folder."""
+    shm = Path("/dev/shm")
+    return str(shm) if shm.is_dir() and os.access(shm, os.W_OK | os.X_OK) else None
 
 
 def _children_cpu_seconds() -> float:
