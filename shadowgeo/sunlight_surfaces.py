@@ -16,11 +16,17 @@ winding number over all the samples' triangles, and
 ground. Faces go through the cover :data:`CHUNK` at a time: each face's 2-D
 frame is laid in its own cell of one plane, cells apart, so one tiled pass of
 unions serves a chunk of faces and no Python loop runs over faces times
-samples; a sample at which a face is dark whole only lowers that face's count.
+samples. A sample at which a face is dark, or shadowed whole (its shadow's
+area is the face's), only lowers that face's count and sends no loops; and
+faces shadowed in part at as many samples share a chunk, since a chunk's
+unions, one per level, go up to its deepest face.
 
 Cost: one :func:`shadow_on_surface` call per sample (a receiver whose shadow
 passes that call's budgets, a low sun over a city, is cast in halves), and
 one cover per chunk whose work follows the shadow triangles' vertices.
+
+Days: :func:`surface_sun_study_by_day` studies each calendar day on its own,
+in this process or as one Dask task a day, with the same results.
 
 What a sample means: each of ``times`` stands for ``step`` around it (an hour
 by default), as in :func:`shadowgeo.sun_study`; a sunlit sample adds
