@@ -17,7 +17,12 @@ from .silhouette import Silhouette, silhouette
 from .soft import SoftShadow, soft_shadow
 from .soft_surface import SoftSurfaceShadow, soft_shadow_on_surface
 from .sun import sun_direction
-from .sunlight_surfaces import SurfaceSunlight, surface_sun_study, surface_sunlight
+from .sunlight_surfaces import (
+    SurfaceSunlight,
+    surface_sun_study,
+    surface_sun_study_by_day,
+    surface_sunlight,
+)
 from .sunstudy import (
     DaySummary,
     SunStudies,
@@ -79,6 +84,7 @@ __all__ = [
     "sun_study_by_day",
     "sun_summaries_by_day",
     "surface_sun_study",
+    "surface_sun_study_by_day",
     "surface_sunlight",
 ]
 

@@ -16,11 +16,17 @@ winding number over all the samples' triangles, and
 ground. Faces go through the cover :data:`CHUNK` at a time: each face's 2-D
 frame is laid in its own cell of one plane, cells apart, so one tiled pass of
 unions serves a chunk of faces and no Python loop runs over faces times
-samples; a sample at which a face is dark whole only lowers that face's count.
+samples. A sample at which a face is dark, or shadowed whole (its shadow's
+area is the face's), only lowers that face's count and sends no loops; and
+faces shadowed in part at as many samples share a chunk, since a chunk's
+unions, one per level, go up to its deepest face.
 
 Cost: one :func:`shadow_on_surface` call per sample (a receiver whose shadow
 passes that call's budgets, a low sun over a city, is cast in halves), and
 one cover per chunk whose work follows the shadow triangles' vertices.
+
+Days: :func:`surface_sun_study_by_day` studies each calendar day on its own,
+in this process or as one Dask task a day, with the same results.
 
 What a sample means: each of ``times`` stands for ``step`` around it (an hour
 by default), as in :func:`shadowgeo.sun_study`; a sunlit sample adds
@@ -33,8 +39,9 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -43,7 +50,7 @@ from . import plane2d as poly
 from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight
-from .sun import sun_lights
+from .sun import days, sun_lights
 from .surface import shadow_on_surface
 from .tolerance import Tolerance
 from .topology import MeshLike, as_caster
@@ -54,6 +61,7 @@ __all__ = [
     "SampleShadows",
     "SurfaceSunlight",
     "surface_sun_study",
+    "surface_sun_study_by_day",
     "surface_sunlight",
 ]
 
@@ -470,6 +478,97 @@ def surface_sun_study(
     return surface_sunlight(casters, surface, directions, step=step, times=kept, levels=levels)
 
 
+def surface_sun_study_by_day(
+    casters: MeshLike | Sequence[MeshLike],
+    surface: MeshLike,
+    times: Sequence[_dt.datetime],
+    *,
+    latitude: float,
+    longitude: float,
+    step: _dt.timedelta | None = None,
+    up: str = "Y",
+    north: ArrayLike | None = None,
+    levels: bool = True,
+    tz: _dt.tzinfo | None = None,
+    scheduler: Any = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[_dt.date, SurfaceSunlight]:
+    """:func:`surface_sun_study` for each calendar day (in ``tz``, UTC by
+    default) of ``times``, as :func:`shadowgeo.sun_study_by_day` does for a
+    plane.
+
+    ``scheduler``: None runs the days one after another in this process; a
+    ``dask.distributed.Client``, a scheduler address (``"tcp://host:8786"``)
+    or ``"local"`` (a ``LocalCluster`` on this machine, started and closed
+    here) runs them on Dask, one task a day, the casters and the surface sent
+    to the workers once. Results are identical either way (each day is the
+    same call on the same input). ``progress(done, total)`` is called as days
+    finish.
+
+    Examples
+    --------
+    >>> import datetime as dt
+    >>> wall = ([[0, 0, 0], [1, 0, 0], [1, 0, 1], [0, 0, 1]], [[0, 1, 2], [0, 2, 3]])
+    >>> post = ([[9, 9, 9], [9, 9, 9.1], [9, 9.1, 9]], [[0, 1, 2]])
+    >>> days = [dt.datetime(2026, 6, d, h, tzinfo=dt.UTC) for d in (20, 21) for h in range(24)]
+    >>> by_day = surface_sun_study_by_day(post, wall, days, latitude=51.5, longitude=0.0, up="Z")
+    >>> {day.isoformat(): len(study.times) for day, study in by_day.items()}
+    {'2026-06-20': 17, '2026-06-21': 17}
+    """
+    options: dict[str, Any] = dict(
+        latitude=latitude, longitude=longitude, step=step, up=up, north=north, levels=levels
+    )
+    chosen = {day: [times[i] for i in indices] for day, indices in days(times, tz).items()}
+    if scheduler is None:
+        results = {}
+        for done, (day, day_times) in enumerate(chosen.items(), start=1):
+            results[day] = surface_sun_study(casters, surface, day_times, **options)
+            if progress:
+                progress(done, len(chosen))
+        return results
+    return _days_on_dask(casters, surface, chosen, scheduler, progress, options)
+
+
+def _days_on_dask(
+    casters: MeshLike | Sequence[MeshLike],
+    surface: MeshLike,
+    chosen: dict[_dt.date, list[_dt.datetime]],
+    scheduler: Any,
+    progress: Callable[[int, int], None] | None,
+    options: dict[str, Any],
+) -> dict[_dt.date, SurfaceSunlight]:
+    """Each day's :func:`surface_sun_study` as a Dask task (see
+    :func:`surface_sun_study_by_day`), fetched as it finishes."""
+    from dask.distributed import as_completed
+
+    from .parallel import client_for
+
+    with client_for(scheduler) as client:
+        # each scattered as one object (a scattered tuple would travel as its items)
+        shared_casters = client.scatter([casters], broadcast=True)[0]
+        shared_surface = client.scatter([surface], broadcast=True)[0]
+        futures = {
+            day: client.submit(
+                surface_sun_study,
+                shared_casters,
+                shared_surface,
+                day_times,
+                key=f"surface-sun-study-{day}",
+                **options,
+            )
+            for day, day_times in chosen.items()
+        }
+        day_of = {future.key: day for day, future in futures.items()}
+        finished: dict[_dt.date, SurfaceSunlight] = {}
+        # each result is fetched as it comes, so the workers let go of it
+        for future in as_completed(list(futures.values())):
+            finished[day_of[future.key]] = future.result()
+            future.release()
+            if progress:
+                progress(len(finished), len(chosen))
+        return {day: finished[day] for day in futures}
+
+
 def _face_levels(
     vertices: NDArray[np.float64],
     faces: NDArray[np.int64],
@@ -477,34 +576,64 @@ def _face_levels(
     shadows: tuple[SampleShadows, ...],
 ) -> tuple[dict[int, Parts], ...]:
     """Each face's exactly-``k``-samples-sunlit parts, in its frame:
-    :func:`cover_levels` of every sample's shadow, :data:`CHUNK` faces at a
-    time, each face in its own cell of the chunk's plane."""
+    :func:`cover_levels` of the samples' partial shadows, :data:`CHUNK` faces
+    at a time, each face in its own cell of the chunk's plane."""
     origin, u, v = frames
-    n_faces = len(faces)
-    flat = _to_frames(vertices[faces], np.arange(n_faces), origin, u, v)
+    flat = _to_frames(vertices[faces], np.arange(len(faces)), origin, u, v)
     proper = np.abs(_twice_areas(flat)) > 0
-    # every sample's shadow triangles; a face dark at a sample is covered whole
-    # then, which only lowers its count of sunlit samples (no loops needed)
-    dark = np.zeros(n_faces, dtype=np.int64)
-    loops, owner, sample = [], [], []
-    for index, shadows_at in enumerate(shadows):
-        dark += shadows_at.dark
-        loops.append(_to_frames(shadows_at.triangles, shadows_at.face, origin, u, v))
-        owner.append(shadows_at.face)
-        sample.append(np.full(len(shadows_at.face), index, dtype=np.int64))
-    every = _Chunks(
-        np.concatenate(loops) if loops else np.zeros((0, 3, 2)),
-        np.concatenate(owner) if owner else np.zeros(0, np.int64),
-        np.concatenate(sample) if sample else np.zeros(0, np.int64),
-    )
-    result: list[dict[int, Parts]] = [{} for _ in range(n_faces)]
-    for first in range(0, n_faces, CHUNK):
-        chunk = np.arange(first, min(first + CHUNK, n_faces))
-        chunk = chunk[proper[chunk]]
-        if len(chunk):
-            for face, k, part in every.levels(chunk, flat[chunk], len(shadows)):
-                result[face].setdefault(k - int(dark[face]), []).append(part)
+    partial = _PartialShadows.of(shadows, len(faces), frames)
+    result: list[dict[int, Parts]] = [{} for _ in faces]
+    for chunk in partial.chunks(np.flatnonzero(proper)):
+        for face, k, part in partial.every.levels(chunk, flat[chunk], len(shadows)):
+            result[face].setdefault(k - int(partial.whole[face]), []).append(part)
     return tuple(dict(sorted(levels.items())) for levels in result)
+
+
+@dataclass(frozen=True)
+class _PartialShadows:
+    """The samples' shadows for cutting levels: ``whole`` (m,) counts the
+    samples at which each face is dark or shadowed whole (its shadow's area
+    is the face's: those lower its count of sunlit samples and need no
+    loops), ``depth`` (m,) the samples that shadow it in part, and ``every``
+    the loops of those partial shadows."""
+
+    whole: NDArray[np.int64]
+    depth: NDArray[np.int64]
+    every: _Chunks
+
+    @classmethod
+    def of(
+        cls,
+        shadows: tuple[SampleShadows, ...],
+        n_faces: int,
+        frames: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
+    ) -> _PartialShadows:
+        whole = np.zeros(n_faces, dtype=np.int64)
+        depth = np.zeros(n_faces, dtype=np.int64)
+        loops, owner, sample = (
+            [np.zeros((0, 3, 2))],
+            [np.zeros(0, np.int64)],
+            [np.zeros(0, np.int64)],
+        )
+        for index, shadows_at in enumerate(shadows):
+            covered = shadows_at.fraction >= 1.0  # dark, or its triangles tile the face
+            whole += covered
+            kept = ~covered[shadows_at.face]
+            face = shadows_at.face[kept]
+            depth += np.bincount(face, minlength=n_faces) > 0
+            loops.append(_to_frames(shadows_at.triangles[kept], face, *frames))
+            owner.append(face)
+            sample.append(np.full(len(face), index, dtype=np.int64))
+        every = _Chunks(np.concatenate(loops), np.concatenate(owner), np.concatenate(sample))
+        return cls(whole, depth, every)
+
+    def chunks(self, faces: NDArray[np.int64]) -> Iterator[NDArray[np.int64]]:
+        """``faces`` :data:`CHUNK` at a time (each rising), those shadowed at
+        as many samples together: a chunk's unions, one per level, stop at
+        its deepest face, so shallow faces do not pay for deep ones."""
+        ordered = faces[np.argsort(self.depth[faces], kind="stable")]
+        for first in range(0, len(ordered), CHUNK):
+            yield np.sort(ordered[first : first + CHUNK])
 
 
 # Faces cut into levels together: one cover of their cells, small enough that
