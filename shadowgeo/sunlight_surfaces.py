@@ -24,9 +24,16 @@ one cover per chunk whose work follows the shadow triangles' vertices.
 
 What a sample means: each of ``times`` stands for ``step`` around it (an hour
 by default), as in :func:`shadowgeo.sun_study`; a sunlit sample adds
-``step`` to a point's hours. Translucent casters are not weighed by their
-opacity here: every caster given is opaque (pass only the opaque ones, or
-all of them for the darkest reading).
+``step`` to a point's hours.
+
+Translucent casters (``opacity``, one value a caster face) count by their
+opacity, as the converter's rule (:mod:`shadowgeo.scene.opacity`): at a sample
+a point gets ``(1 - a) * step``, ``a`` the largest opacity among the casters
+hiding it. Each sample is cast once per distinct opacity, with the faces at
+least that opaque (:mod:`shadowgeo.opacity`); the mean hours weigh each
+threshold's shadowed areas, and the levels count each threshold's shadow
+triangles a whole number of times in the cover, in steps of ``step / units``.
+With every caster opaque the result is the opaque one, bit for bit.
 """
 
 from __future__ import annotations
@@ -43,6 +50,7 @@ from . import plane2d as poly
 from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight
+from .opacity import Layers, layers
 from .sun import sun_lights
 from .surface import shadow_on_surface
 from .tolerance import Tolerance
@@ -106,8 +114,19 @@ class SurfaceSunlight:
     levels : tuple of dict[int, polygons], or None
         For each face, ``k`` sunlit samples -> the part of the face sunlit for
         exactly ``k * step`` (``[outer, hole, ...]`` loops in the face's
-        frame); levels with no area are left out, and together a face's
-        levels tile it. None when not asked for.
+        frame; with translucent casters ``k`` units of ``step /
+        opacity_units``); levels with no area are left out, and together a
+        face's levels tile it. None when not asked for.
+    layer_shadows : tuple of tuple of SampleShadows
+        With translucent casters, for each opacity threshold above the
+        lowest, each sample's shadow of the casters at least that opaque
+        (``shadows`` is the lowest's: every caster's); empty when all are
+        opaque.
+    layer_weights : tuple of int
+        How many units of a sample's sun each threshold's shadow takes
+        (``shadows``' first), of ``opacity_units``.
+    opacity_units : int
+        The parts a sample's sunlight is counted in (1 with every caster opaque).
     """
 
     vertices: NDArray[np.float64]
@@ -120,10 +139,23 @@ class SurfaceSunlight:
     u: NDArray[np.float64] = field(repr=False)
     v: NDArray[np.float64] = field(repr=False)
     levels: tuple[dict[int, Parts], ...] | None = field(repr=False)
+    layer_shadows: tuple[tuple[SampleShadows, ...], ...] = field(default=(), repr=False)
+    layer_weights: tuple[int, ...] = (1,)
+    opacity_units: int = 1
 
     @property
     def hours_per_sample(self) -> float:
         return self.step.total_seconds() / 3600.0
+
+    @property
+    def hours_per_unit(self) -> float:
+        """The hours of one level step: a sample's, over ``opacity_units``."""
+        return self.hours_per_sample / self.opacity_units
+
+    def _layers(self) -> tuple[tuple[int, tuple[SampleShadows, ...]], ...]:
+        """(weight, each sample's shadow) of each opacity threshold, lowest first."""
+        every = (self.shadows, *self.layer_shadows)
+        return tuple(zip(self.layer_weights, every, strict=True))
 
     @property
     def face_areas(self) -> NDArray[np.float64]:
@@ -137,7 +169,15 @@ class SurfaceSunlight:
         """(s, m) the sunlit share of each face's area at each sample."""
         if not self.shadows:
             return np.zeros((0, len(self.faces)))
-        return 1.0 - np.stack([sample.fraction for sample in self.shadows])
+        if self.opacity_units == 1:  # every caster opaque
+            return 1.0 - np.stack([sample.fraction for sample in self.shadows])
+        shadowed = sum(
+            weight * np.stack([sample.fraction for sample in samples])
+            for weight, samples in self._layers()
+        )
+        dark = np.stack([sample.dark for sample in self.shadows])
+        lit: NDArray[np.float64] = np.where(dark, 0.0, 1.0 - shadowed / self.opacity_units)
+        return lit
 
     def mean_hours(self) -> NDArray[np.float64]:
         """(m,) each face's mean hours of sun over its area (the area-weighted
@@ -150,7 +190,7 @@ class SurfaceSunlight:
         """Hours of sun -> area of ``face`` sunlit that long (needs levels)."""
         levels = self._levels()[face]
         return {
-            k * self.hours_per_sample: float(sum(poly.signed_areas(part).sum() for part in parts))
+            k * self.hours_per_unit: float(sum(poly.signed_areas(part).sum() for part in parts))
             for k, parts in sorted(levels.items())
         }
 
@@ -185,7 +225,7 @@ class SurfaceSunlight:
         face's front, holes clockwise): what a writer colours."""
         origin, u, v = self.origin[face], self.u[face], self.v[face]
         return {
-            k * self.hours_per_sample: [
+            k * self.hours_per_unit: [
                 origin + loop[:, :1] * u + loop[:, 1:] * v for part in parts for loop in part
             ]
             for k, parts in sorted(self._levels()[face].items())
@@ -203,8 +243,16 @@ class SurfaceSunlight:
         return lit
 
     def sunlit_hours(self, points: ArrayLike, faces: ArrayLike) -> NDArray[np.float64]:
-        """(n,) hours of sun at ``points`` (n, 3) on ``faces`` (n,)."""
-        hours: NDArray[np.float64] = self.sunlit(points, faces).sum(axis=0) * self.hours_per_sample
+        """(n,) hours of sun at ``points`` (n, 3) on ``faces`` (n,): with
+        translucent casters each sample's units of sun, less each
+        threshold's weight where its shadow holds the point."""
+        uv, face = self._on_faces(points, faces)
+        units = np.full((len(self.shadows), len(face)), self.opacity_units, dtype=np.int64)
+        for weight, samples in self._layers():
+            for index, sample in enumerate(samples):
+                units[index] -= weight * self._in_triangles(uv, face, sample)
+        units[np.stack([sample.dark[face] for sample in self.shadows])] = 0
+        hours: NDArray[np.float64] = units.sum(axis=0) * self.hours_per_unit
         return hours
 
     def _levels(self) -> tuple[dict[int, Parts], ...]:
@@ -215,9 +263,9 @@ class SurfaceSunlight:
     def _samples_for(self, hours: float) -> int:
         """The fewest samples that make at least ``hours`` (a sum of samples
         equal to ``hours`` up to rounding, ``math.isclose``, makes it)."""
-        wanted = math.ceil(hours / self.hours_per_sample)
+        wanted = math.ceil(hours / self.hours_per_unit)
         fewer = wanted - 1
-        return fewer if math.isclose(fewer * self.hours_per_sample, hours) else wanted
+        return fewer if math.isclose(fewer * self.hours_per_unit, hours) else wanted
 
     def _on_faces(
         self, points: ArrayLike, faces: ArrayLike
@@ -379,6 +427,7 @@ def surface_sunlight(
     step: _dt.timedelta | None = None,
     times: Sequence[_dt.datetime] = (),
     levels: bool = True,
+    opacity: ArrayLike | None = None,
 ) -> SurfaceSunlight:
     """Exact sunlight on every face of ``surface`` for given sun directions.
 
@@ -399,6 +448,11 @@ def surface_sunlight(
         Also cut each face into polygons of equal sunlight duration (the
         costly part for many samples; hours at points and the faces' mean
         hours need none).
+    opacity : (c,) array_like, optional
+        Each caster face's opacity (0 to 1, rounded to sixteenths; a list of
+        casters' faces in order): a point hidden at a sample gets ``1 - a``
+        of its sun, ``a`` the largest opacity of the faces hiding it (see
+        the module notes). None, the default: every caster is opaque.
 
     Returns
     -------
@@ -430,12 +484,35 @@ def surface_sunlight(
     if times and len(times) != len(rays):
         raise GeometryError(f"{len(times)} times for {len(rays)} sun directions")
     tolerance = _tolerance(casters, vertices, faces)
-    shadows = tuple(
-        _sample(casters, DirectionalLight(ray), vertices, faces, tolerance) for ray in rays
+    layered, parts = _layered(casters, opacity)
+    every = tuple(
+        tuple(_sample(part, DirectionalLight(ray), vertices, faces, tolerance) for ray in rays)
+        for part in parts
     )
     origin, u, v = _frames(vertices, faces)
-    cut = _face_levels(vertices, faces, (origin, u, v), shadows) if levels else None
-    return SurfaceSunlight(vertices, faces, rays, tuple(times), step, shadows, origin, u, v, cut)
+    cut = _face_levels(vertices, faces, (origin, u, v), every, layered) if levels else None
+    return SurfaceSunlight(
+        vertices, faces, rays, tuple(times), step, every[0], origin, u, v, cut,
+        every[1:], layered.weights, layered.units,
+    )  # fmt: skip
+
+
+def _layered(
+    casters: MeshLike | Sequence[MeshLike], opacity: ArrayLike | None
+) -> tuple[Layers, list[MeshLike | Sequence[MeshLike]]]:
+    """The opacity thresholds of the casters' faces and the casters of each
+    (the faces at least that opaque, as one mesh); every face opaque: the
+    casters as given."""
+    if opacity is None:
+        return layers(None, 0), [casters]
+    meshes = [as_caster(mesh) for mesh in _mesh_list(casters)]
+    starts = np.cumsum([0] + [len(mesh.vertices) for mesh in meshes[:-1]])
+    vertices = np.concatenate([mesh.vertices for mesh in meshes])
+    faces = np.concatenate([mesh.faces + start for mesh, start in zip(meshes, starts, strict=True)])
+    layered = layers(opacity, len(faces))
+    if layered.opaque:
+        return layered, [casters]
+    return layered, [(vertices, faces[chosen]) for chosen in layered.faces]
 
 
 def surface_sun_study(
@@ -449,11 +526,13 @@ def surface_sun_study(
     up: str = "Y",
     north: ArrayLike | None = None,
     levels: bool = True,
+    opacity: ArrayLike | None = None,
 ) -> SurfaceSunlight:
     """:func:`surface_sunlight` at ``times`` for a site: the sun's directions
     from :mod:`shadowgeo.sun`; samples with the sun below the horizon are
     dropped (dark everywhere). ``up`` and ``north`` give the scene's frame
-    (a city scene from :func:`shadowgeo.load` is Z up, its site's north).
+    (a city scene from :func:`shadowgeo.load` is Z up, its site's north);
+    ``opacity``: each caster face's, as :func:`surface_sunlight` takes it.
 
     Examples
     --------
@@ -467,28 +546,43 @@ def surface_sun_study(
     """
     kept, lights = sun_lights(latitude, longitude, times, up=up, north=north)
     directions = np.array([light.direction for light in lights]).reshape(-1, 3)
-    return surface_sunlight(casters, surface, directions, step=step, times=kept, levels=levels)
+    return surface_sunlight(
+        casters, surface, directions, step=step, times=kept, levels=levels, opacity=opacity
+    )
 
 
 def _face_levels(
     vertices: NDArray[np.float64],
     faces: NDArray[np.int64],
     frames: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
-    shadows: tuple[SampleShadows, ...],
+    thresholds: tuple[tuple[SampleShadows, ...], ...],
+    layered: Layers,
 ) -> tuple[dict[int, Parts], ...]:
-    """Each face's exactly-``k``-samples-sunlit parts, in its frame:
-    :func:`cover_levels` of every sample's shadow, :data:`CHUNK` faces at a
-    time, each face in its own cell of the chunk's plane."""
+    """Each face's exactly-``k``-units-sunlit parts, in its frame:
+    :func:`cover_levels` of every sample's shadow (with translucent casters,
+    each threshold's, its weight's number of times), :data:`CHUNK` faces at
+    a time, each face in its own cell of the chunk's plane."""
     origin, u, v = frames
     n_faces = len(faces)
     flat = _to_frames(vertices[faces], np.arange(n_faces), origin, u, v)
     proper = np.abs(_twice_areas(flat)) > 0
-    # every sample's shadow triangles; a face dark at a sample is covered whole
-    # then, which only lowers its count of sunlit samples (no loops needed)
+    # a face dark at a sample (turned away) is dark in every unit, whatever
+    # casts: it only lowers the face's count (no loops needed)
     dark = np.zeros(n_faces, dtype=np.int64)
+    for turned in thresholds[0]:
+        dark += turned.dark
+    dark *= layered.units
+    count = len(thresholds[0])
+    shadows = [
+        sample
+        for at in range(count)
+        for weight, samples in zip(layered.weights, thresholds, strict=True)
+        for sample in [samples[at]] * weight
+    ]
+    # the units no shadow takes: a sample's beyond the thresholds' weights
+    clear = count * (layered.units - sum(layered.weights))
     loops, owner, sample = [], [], []
     for index, shadows_at in enumerate(shadows):
-        dark += shadows_at.dark
         loops.append(_to_frames(shadows_at.triangles, shadows_at.face, origin, u, v))
         owner.append(shadows_at.face)
         sample.append(np.full(len(shadows_at.face), index, dtype=np.int64))
@@ -503,7 +597,7 @@ def _face_levels(
         chunk = chunk[proper[chunk]]
         if len(chunk):
             for face, k, part in every.levels(chunk, flat[chunk], len(shadows)):
-                result[face].setdefault(k - int(dark[face]), []).append(part)
+                result[face].setdefault(k + clear - int(dark[face]), []).append(part)
     return tuple(dict(sorted(levels.items())) for levels in result)
 
 

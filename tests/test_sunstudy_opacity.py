@@ -199,3 +199,115 @@ def test_a_nearly_clear_caster_casts_nothing_and_bad_opacity_is_refused():
     assert plan_areas(next(iter(studies.days.values())), inputs) == pytest.approx({1.0: 400.0})
     with pytest.raises(sg.GeometryError, match="3 values for 12 caster faces"):
         sun_study(cube, sg.Plane([0, 1, 0]), FLOOR, DAY, **LONDON, opacity=[1, 1, 1])
+
+
+# Walls and roofs (shadowgeo.sunlight_surfaces): a 4 x 4 wall in y = 0 facing +y.
+WALL = (
+    np.array([[0, 0, 0], [4, 0, 0], [4, 0, 4], [0, 0, 4]], dtype=float),
+    np.array([[0, 2, 1], [0, 3, 2]]),
+)
+
+
+@pytest.mark.parametrize("opacity", [0.25, 0.75])
+def test_a_wall_behind_a_translucent_pane_keeps_the_sun_it_lets_through(opacity):
+    pane = box([2, 0.1, 2], [2, 2, 2])  # its shadow: the square [1, 3] x [1, 3] of the wall
+    # the second sun is behind the wall: its front is dark, whatever the pane lets through
+    suns = [[0, -1, 0], [0, 1, 0]]
+    result = sg.surface_sunlight(pane, WALL, suns, opacity=np.full(12, opacity))
+    through = 1.0 - opacity
+    # hand-derived: each half of the wall (area 8) has 2 in the pane's shadow
+    assert result.opacity_units == 4
+    assert result.mean_hours() == pytest.approx([(6 + 2 * through) / 8] * 2, abs=1e-12)
+    for face in (0, 1):
+        areas = result.level_areas(face)
+        assert areas == pytest.approx({through: 2.0, 1.0: 6.0}, abs=1e-9)
+    points = np.array([[2, 0, 2.5], [0.5, 0, 3.5]])
+    assert result.sunlit_hours(points, [1, 1]).tolist() == [through, 1.0]
+    assert result.fraction_meeting(0.8).tolist() == pytest.approx([0.75, 0.75])
+
+
+def test_random_wall_points_get_the_sun_the_most_opaque_hit_caster_lets_through():
+    casters = [
+        (box([1.5, 0.3, 1.5], [1.5, 1.5, 2.0]), 0.25),
+        (box([0.5, 0.5, 3.0], [2.5, 2.5, 2.2]), 1.0),
+        (box([2.0, 0.4, 1.0], [2.2, 1.0, 1.2]), 0.5),
+        (box([1.0, 1.0, 1.0], [1.0, 3.0, 3.0]), 0.75),
+    ]
+    meshes = [(np.asarray(mesh.vertices), np.asarray(mesh.faces)) for mesh, _ in casters]
+    opacity = np.concatenate([np.full(len(mesh.faces), value) for mesh, value in casters])
+    directions = np.array([[0.3, -1, -0.4], [-0.2, -1, -0.6], [0.1, -1, 0.2], [0, 1, -1]])
+    result = sg.surface_sunlight(meshes, WALL, directions, opacity=opacity)
+    rng = np.random.default_rng(34)
+    plan = rng.uniform(0, 4, (3000, 2))
+    points = np.column_stack([plan[:, 0], np.zeros(len(plan)), plan[:, 1]])
+    face = np.where(plan[:, 0] >= plan[:, 1], 0, 1)  # the diagonal splits the wall
+    triangles = np.concatenate([np.asarray(mesh.vertices)[mesh.faces] for mesh, _ in casters])
+    expected = np.zeros(len(points))
+    for direction in directions[:3]:  # the last lights the wall's back: no sun on its front
+        expected += 1.0 - hit_opacity(points, direction, triangles, opacity)
+    # each point's level polygon, read with shapely in its face's frame
+    relative = points - result.origin[face]
+    uv = np.column_stack([np.einsum("ij,ij->i", relative, result.u[face]),
+                          np.einsum("ij,ij->i", relative, result.v[face])])  # fmt: skip
+    from_levels = np.full(len(points), np.nan)
+    near_edge = np.zeros(len(points), dtype=bool)
+    for index in (0, 1):
+        mine = face == index
+        dots = shapely.points(uv[mine])
+        loops = [loop for parts in result.levels[index].values() for p in parts for loop in p]
+        near_edge[mine] = shapely.distance(shapely.MultiLineString(loops), dots) < 1e-7
+        for k, parts in result.levels[index].items():
+            region = shapely.MultiPolygon([shapely.Polygon(p[0], p[1:]) for p in parts])
+            inside = np.flatnonzero(mine)[shapely.contains_xy(region, uv[mine, 0], uv[mine, 1])]
+            from_levels[inside] = k * result.hours_per_unit
+    clear = ~near_edge
+    assert clear.sum() > 2900
+    assert np.abs(from_levels - expected)[clear].max() < 1e-12
+    assert np.abs(result.sunlit_hours(points, face) - expected)[clear].max() < 1e-12
+    assert set(np.round(expected * 4) % 4) >= {1, 2, 3}  # the translucent levels were met
+    # the faces' mean hours: the points' mean, to the sampling's error
+    for index in (0, 1):
+        assert result.mean_hours()[index] == pytest.approx(expected[face == index].mean(), abs=0.06)
+
+
+def test_facade_hours_weigh_a_translucent_canopy_over_a_roof():
+    from shadowgeo.scene.facade_hours import ROOFS, facade_hours
+
+    cube = box([10, 10, 10], [0, 0, 5])
+    canopy = box([200, 200, 0.2], [0, 0, 20])  # over the roof at every sample below
+    scene = Scene(
+        [
+            Shape(np.asarray(cube.vertices), np.asarray(cube.faces), name="box"),
+            Shape(np.asarray(canopy.vertices), np.asarray(canopy.faces), name="canopy",
+                  material=Material(transparency=0.5)),
+        ],
+        up_axis="Z",
+    )  # fmt: skip
+    midday = [dt.datetime(2026, 6, 21, hour, 0, tzinfo=dt.UTC) for hour in range(10, 15)]
+    found = facade_hours(scene, midday, latitude=52.0, longitude=0.0, receivers=["box"])
+    roof = found.hours[found.kind == found.kinds.index(ROOFS)]
+    # hand-derived: five samples, each through the canopy's half
+    assert roof == pytest.approx(np.full(len(roof), 2.5), abs=1e-12)
+
+
+def test_shadowgeo_sun_notes_the_translucent_casters_and_bins_their_levels(capsys, tmp_path):
+    from cli.main import main
+
+    scene_file = tmp_path / "glass.x3d"
+    scene_file.write_text(
+        """<X3D profile="Interchange" version="4.0"><Scene>
+        <Transform translation="0 -0.25 0">
+          <Shape DEF="slab"><Box size="20 0.5 20"/></Shape>
+        </Transform>
+        <Transform translation="2 1 1"><Shape DEF="glass">
+          <Appearance><Material transparency="0.75"/></Appearance><Box size="1 2 1"/>
+        </Shape></Transform></Scene></X3D>"""
+    )
+    code = main(["sun", str(scene_file), "--at", "51.5,-0.12", "--date", "2026-03-21"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "1 translucent caster(s) let part of the sun through (opacity 0.25" in err
+    rows = [line.split("|") for line in out.splitlines() if line.startswith("| ") and "%" in line]
+    # a quarter-step level sits in its whole sample's bin, and the bins tile the slab
+    assert any(" to " in row[1] for row in rows)
+    assert sum(float(row[2]) for row in rows) == pytest.approx(400.0, rel=1e-5)

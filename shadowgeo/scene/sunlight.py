@@ -195,7 +195,21 @@ def scene_study(
     caster = stacked.mesh(faces)
     cast = stacked.faces_of(opacity)[faces]
     translucent = cast if (cast < 1).any() else None
+    notes.extend(_translucent_note(opacity[stacked.owners(faces)]))
     return SceneStudy(caster, facing, polygon, what, up_name, tolerance.scale, notes, translucent)
+
+
+def _translucent_note(casting: np.ndarray) -> list[str]:
+    """A note naming how many of the casters (their opacities ``casting``)
+    are translucent, when any is."""
+    translucent = casting[casting < 1]
+    if not len(translucent):
+        return []
+    values = ", ".join(f"{value:g}" for value in np.unique(translucent))
+    return [
+        f"sun study: {len(translucent)} translucent caster(s) let part of the sun through "
+        f"(opacity {values}: 1 - their material's transparency)"
+    ]
 
 
 def _city_ground(
