@@ -105,7 +105,8 @@ class SurfaceSunlight:
     step : timedelta
         The time each sample stands for.
     shadows : tuple of SampleShadows
-        The exact shadow on the receiver at each sample.
+        The exact shadow on the receiver at each sample (of every caster,
+        translucent ones too: see ``layer_shadows``).
     origin, u, v : (m, 3) float64
         Each face's 2-D frame: a point ``p`` of face ``f`` is at
         ``((p - origin[f]) . u[f], (p - origin[f]) . v[f])``; ``u``, ``v``

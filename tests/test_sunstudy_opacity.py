@@ -87,6 +87,9 @@ def test_a_box_of_transparency_075_leaves_three_quarters_of_the_sun(tmp_path):
     assert sorted(areas) == [0.75, 1.0]
     assert areas[0.75] == pytest.approx(shadow.area, rel=1e-9)
     assert areas[1.0] == pytest.approx(400.0 - shadow.area, rel=1e-9)
+    # a day's summary (the levels' areas alone) weighs it the same
+    (summary,) = study_scene(sg.load(scene_file), [NOON], **LONDON, summaries=True)[1].values()
+    assert summary.level_areas == pytest.approx({0.75: shadow.area, 1.0: 400.0 - shadow.area})
     inside = np.asarray(shadow.representative_point().coords)[0]
     uv = inputs.plane.to_2d(np.array([[inside[0], 0.0, inside[1]], [-9.0, 0.0, -9.0]]))
     assert study.sunlit_hours(uv).tolist() == [0.75, 1.0]
