@@ -725,7 +725,7 @@ def _write_outputs(
             vertices,
             faces,
             hours,
-            most_hours=study.hours(len(study.times) * study.disc_samples),
+            most_hours=study.hours(study.full_level),
             groups=groups,
             names=names,
             up="Z" if scene.up_index == 2 else "Y",
@@ -835,7 +835,7 @@ def _plot(
         args.plot,
         [(hours, region) for (hours, _), region in zip(levels, moved_levels, strict=True)],
         moved_roofs,
-        most_hours=study.hours(len(study.times) * study.disc_samples),
+        most_hours=study.hours(study.full_level),
         title=f"{args.input.name}: hours of sunlight on {day}",
         axis_names=names,
         degrees=degrees,
@@ -845,13 +845,13 @@ def _plot(
 
 def _duration_rows(study: shadowgeo.SunStudy) -> list[tuple[str, float]]:
     """The day's table rows, (duration, area): one per duration for a point
-    sun; for a sun disc, whose partly covered samples make a duration of
-    every fraction of a step, one per step ("2 to 3": at least 2 h, under 3),
-    so a day is a dozen rows, not hundreds."""
+    sun; for a sun disc or translucent casters, whose partly covered samples
+    make a duration of every fraction of a step, one per step ("2 to 3": at
+    least 2 h, under 3), so a day is a dozen rows, not hundreds."""
     areas = study.level_areas()
-    if study.disc_samples == 1:
+    per = study.disc_samples * study.opacity_units  # the levels in a sample
+    if per == 1:
         return [(f"{duration:g}", area) for duration, area in areas.items()]
-    per = study.disc_samples
     step = study.hours(per)  # one whole sample's hours
     rows: dict[int, float] = {}
     for duration, area in areas.items():

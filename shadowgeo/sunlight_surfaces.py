@@ -30,9 +30,16 @@ in this process or as one Dask task a day, with the same results.
 
 What a sample means: each of ``times`` stands for ``step`` around it (an hour
 by default), as in :func:`shadowgeo.sun_study`; a sunlit sample adds
-``step`` to a point's hours. Translucent casters are not weighed by their
-opacity here: every caster given is opaque (pass only the opaque ones, or
-all of them for the darkest reading).
+``step`` to a point's hours.
+
+Translucent casters (``opacity``, one value a caster face) count by their
+opacity, as the converter's rule (:mod:`shadowgeo.scene.opacity`): at a sample
+a point gets ``(1 - a) * step``, ``a`` the largest opacity among the casters
+hiding it. Each sample is cast once per distinct opacity, with the faces at
+least that opaque (:mod:`shadowgeo.opacity`); the mean hours weigh each
+threshold's shadowed areas, and the levels count each threshold's shadow
+triangles a whole number of times in the cover, in steps of ``step / units``.
+With every caster opaque the result is the opaque one, bit for bit.
 """
 
 from __future__ import annotations
@@ -50,6 +57,7 @@ from . import plane2d as poly
 from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight
+from .opacity import Layers, layers
 from .sun import days, sun_lights
 from .surface import shadow_on_surface
 from .tolerance import Tolerance
@@ -105,7 +113,8 @@ class SurfaceSunlight:
     step : timedelta
         The time each sample stands for.
     shadows : tuple of SampleShadows
-        The exact shadow on the receiver at each sample.
+        The exact shadow on the receiver at each sample (of every caster,
+        translucent ones too: see ``layer_shadows``).
     origin, u, v : (m, 3) float64
         Each face's 2-D frame: a point ``p`` of face ``f`` is at
         ``((p - origin[f]) . u[f], (p - origin[f]) . v[f])``; ``u``, ``v``
@@ -114,8 +123,19 @@ class SurfaceSunlight:
     levels : tuple of dict[int, polygons], or None
         For each face, ``k`` sunlit samples -> the part of the face sunlit for
         exactly ``k * step`` (``[outer, hole, ...]`` loops in the face's
-        frame); levels with no area are left out, and together a face's
-        levels tile it. None when not asked for.
+        frame; with translucent casters ``k`` units of ``step /
+        opacity_units``); levels with no area are left out, and together a
+        face's levels tile it. None when not asked for.
+    layer_shadows : tuple of tuple of SampleShadows
+        With translucent casters, for each opacity threshold above the
+        lowest, each sample's shadow of the casters at least that opaque
+        (``shadows`` is the lowest's: every caster's); empty when all are
+        opaque.
+    layer_weights : tuple of int
+        How many units of a sample's sun each threshold's shadow takes
+        (``shadows``' first), of ``opacity_units``.
+    opacity_units : int
+        The parts a sample's sunlight is counted in (1 with every caster opaque).
     """
 
     vertices: NDArray[np.float64]
@@ -128,10 +148,23 @@ class SurfaceSunlight:
     u: NDArray[np.float64] = field(repr=False)
     v: NDArray[np.float64] = field(repr=False)
     levels: tuple[dict[int, Parts], ...] | None = field(repr=False)
+    layer_shadows: tuple[tuple[SampleShadows, ...], ...] = field(default=(), repr=False)
+    layer_weights: tuple[int, ...] = (1,)
+    opacity_units: int = 1
 
     @property
     def hours_per_sample(self) -> float:
         return self.step.total_seconds() / 3600.0
+
+    @property
+    def hours_per_unit(self) -> float:
+        """The hours of one level step: a sample's, over ``opacity_units``."""
+        return self.hours_per_sample / self.opacity_units
+
+    def _layers(self) -> tuple[tuple[int, tuple[SampleShadows, ...]], ...]:
+        """(weight, each sample's shadow) of each opacity threshold, lowest first."""
+        every = (self.shadows, *self.layer_shadows)
+        return tuple(zip(self.layer_weights, every, strict=True))
 
     @property
     def face_areas(self) -> NDArray[np.float64]:
@@ -145,7 +178,15 @@ class SurfaceSunlight:
         """(s, m) the sunlit share of each face's area at each sample."""
         if not self.shadows:
             return np.zeros((0, len(self.faces)))
-        return 1.0 - np.stack([sample.fraction for sample in self.shadows])
+        if self.opacity_units == 1:  # every caster opaque
+            return 1.0 - np.stack([sample.fraction for sample in self.shadows])
+        shadowed = sum(
+            weight * np.stack([sample.fraction for sample in samples])
+            for weight, samples in self._layers()
+        )
+        dark = np.stack([sample.dark for sample in self.shadows])
+        lit: NDArray[np.float64] = np.where(dark, 0.0, 1.0 - shadowed / self.opacity_units)
+        return lit
 
     def mean_hours(self) -> NDArray[np.float64]:
         """(m,) each face's mean hours of sun over its area (the area-weighted
@@ -158,7 +199,7 @@ class SurfaceSunlight:
         """Hours of sun -> area of ``face`` sunlit that long (needs levels)."""
         levels = self._levels()[face]
         return {
-            k * self.hours_per_sample: float(sum(poly.signed_areas(part).sum() for part in parts))
+            k * self.hours_per_unit: float(sum(poly.signed_areas(part).sum() for part in parts))
             for k, parts in sorted(levels.items())
         }
 
@@ -193,7 +234,7 @@ class SurfaceSunlight:
         face's front, holes clockwise): what a writer colours."""
         origin, u, v = self.origin[face], self.u[face], self.v[face]
         return {
-            k * self.hours_per_sample: [
+            k * self.hours_per_unit: [
                 origin + loop[:, :1] * u + loop[:, 1:] * v for part in parts for loop in part
             ]
             for k, parts in sorted(self._levels()[face].items())
@@ -211,8 +252,16 @@ class SurfaceSunlight:
         return lit
 
     def sunlit_hours(self, points: ArrayLike, faces: ArrayLike) -> NDArray[np.float64]:
-        """(n,) hours of sun at ``points`` (n, 3) on ``faces`` (n,)."""
-        hours: NDArray[np.float64] = self.sunlit(points, faces).sum(axis=0) * self.hours_per_sample
+        """(n,) hours of sun at ``points`` (n, 3) on ``faces`` (n,): with
+        translucent casters each sample's units of sun, less each
+        threshold's weight where its shadow holds the point."""
+        uv, face = self._on_faces(points, faces)
+        units = np.full((len(self.shadows), len(face)), self.opacity_units, dtype=np.int64)
+        for weight, samples in self._layers():
+            for index, sample in enumerate(samples):
+                units[index] -= weight * self._in_triangles(uv, face, sample)
+        units[np.stack([sample.dark[face] for sample in self.shadows])] = 0
+        hours: NDArray[np.float64] = units.sum(axis=0) * self.hours_per_unit
         return hours
 
     def _levels(self) -> tuple[dict[int, Parts], ...]:
@@ -223,9 +272,9 @@ class SurfaceSunlight:
     def _samples_for(self, hours: float) -> int:
         """The fewest samples that make at least ``hours`` (a sum of samples
         equal to ``hours`` up to rounding, ``math.isclose``, makes it)."""
-        wanted = math.ceil(hours / self.hours_per_sample)
+        wanted = math.ceil(hours / self.hours_per_unit)
         fewer = wanted - 1
-        return fewer if math.isclose(fewer * self.hours_per_sample, hours) else wanted
+        return fewer if math.isclose(fewer * self.hours_per_unit, hours) else wanted
 
     def _on_faces(
         self, points: ArrayLike, faces: ArrayLike
@@ -387,6 +436,7 @@ def surface_sunlight(
     step: _dt.timedelta | None = None,
     times: Sequence[_dt.datetime] = (),
     levels: bool = True,
+    opacity: ArrayLike | None = None,
 ) -> SurfaceSunlight:
     """Exact sunlight on every face of ``surface`` for given sun directions.
 
@@ -407,6 +457,11 @@ def surface_sunlight(
         Also cut each face into polygons of equal sunlight duration (the
         costly part for many samples; hours at points and the faces' mean
         hours need none).
+    opacity : (c,) array_like, optional
+        Each caster face's opacity (0 to 1, rounded to sixteenths; a list of
+        casters' faces in order): a point hidden at a sample gets ``1 - a``
+        of its sun, ``a`` the largest opacity of the faces hiding it (see
+        the module notes). None, the default: every caster is opaque.
 
     Returns
     -------
@@ -438,12 +493,35 @@ def surface_sunlight(
     if times and len(times) != len(rays):
         raise GeometryError(f"{len(times)} times for {len(rays)} sun directions")
     tolerance = _tolerance(casters, vertices, faces)
-    shadows = tuple(
-        _sample(casters, DirectionalLight(ray), vertices, faces, tolerance) for ray in rays
+    layered, parts = _layered(casters, opacity)
+    every = tuple(
+        tuple(_sample(part, DirectionalLight(ray), vertices, faces, tolerance) for ray in rays)
+        for part in parts
     )
     origin, u, v = _frames(vertices, faces)
-    cut = _face_levels(vertices, faces, (origin, u, v), shadows) if levels else None
-    return SurfaceSunlight(vertices, faces, rays, tuple(times), step, shadows, origin, u, v, cut)
+    cut = _face_levels(vertices, faces, (origin, u, v), every, layered) if levels else None
+    return SurfaceSunlight(
+        vertices, faces, rays, tuple(times), step, every[0], origin, u, v, cut,
+        every[1:], layered.weights, layered.units,
+    )  # fmt: skip
+
+
+def _layered(
+    casters: MeshLike | Sequence[MeshLike], opacity: ArrayLike | None
+) -> tuple[Layers, list[MeshLike | Sequence[MeshLike]]]:
+    """The opacity thresholds of the casters' faces and the casters of each
+    (the faces at least that opaque, as one mesh); every face opaque: the
+    casters as given."""
+    if opacity is None:
+        return layers(None, 0), [casters]
+    meshes = [as_caster(mesh) for mesh in _mesh_list(casters)]
+    starts = np.cumsum([0] + [len(mesh.vertices) for mesh in meshes[:-1]])
+    vertices = np.concatenate([mesh.vertices for mesh in meshes])
+    faces = np.concatenate([mesh.faces + start for mesh, start in zip(meshes, starts, strict=True)])
+    layered = layers(opacity, len(faces))
+    if layered.opaque:
+        return layered, [casters]
+    return layered, [(vertices, faces[chosen]) for chosen in layered.faces]
 
 
 def surface_sun_study(
@@ -457,11 +535,13 @@ def surface_sun_study(
     up: str = "Y",
     north: ArrayLike | None = None,
     levels: bool = True,
+    opacity: ArrayLike | None = None,
 ) -> SurfaceSunlight:
     """:func:`surface_sunlight` at ``times`` for a site: the sun's directions
     from :mod:`shadowgeo.sun`; samples with the sun below the horizon are
     dropped (dark everywhere). ``up`` and ``north`` give the scene's frame
-    (a city scene from :func:`shadowgeo.load` is Z up, its site's north).
+    (a city scene from :func:`shadowgeo.load` is Z up, its site's north);
+    ``opacity``: each caster face's, as :func:`surface_sunlight` takes it.
 
     Examples
     --------
@@ -475,7 +555,9 @@ def surface_sun_study(
     """
     kept, lights = sun_lights(latitude, longitude, times, up=up, north=north)
     directions = np.array([light.direction for light in lights]).reshape(-1, 3)
-    return surface_sunlight(casters, surface, directions, step=step, times=kept, levels=levels)
+    return surface_sunlight(
+        casters, surface, directions, step=step, times=kept, levels=levels, opacity=opacity
+    )
 
 
 def surface_sun_study_by_day(
@@ -489,13 +571,14 @@ def surface_sun_study_by_day(
     up: str = "Y",
     north: ArrayLike | None = None,
     levels: bool = True,
+    opacity: ArrayLike | None = None,
     tz: _dt.tzinfo | None = None,
     scheduler: Any = None,
     progress: Callable[[int, int], None] | None = None,
 ) -> dict[_dt.date, SurfaceSunlight]:
     """:func:`surface_sun_study` for each calendar day (in ``tz``, UTC by
     default) of ``times``, as :func:`shadowgeo.sun_study_by_day` does for a
-    plane.
+    plane. ``opacity``: each caster face's, as for :func:`surface_sun_study`.
 
     ``scheduler``: None runs the days one after another in this process; a
     ``dask.distributed.Client``, a scheduler address (``"tcp://host:8786"``)
@@ -516,7 +599,13 @@ def surface_sun_study_by_day(
     {'2026-06-20': 17, '2026-06-21': 17}
     """
     options: dict[str, Any] = dict(
-        latitude=latitude, longitude=longitude, step=step, up=up, north=north, levels=levels
+        latitude=latitude,
+        longitude=longitude,
+        step=step,
+        up=up,
+        north=north,
+        levels=levels,
+        opacity=opacity,
     )
     chosen = {day: [times[i] for i in indices] for day, indices in days(times, tz).items()}
     if scheduler is None:
@@ -573,29 +662,49 @@ def _face_levels(
     vertices: NDArray[np.float64],
     faces: NDArray[np.int64],
     frames: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
-    shadows: tuple[SampleShadows, ...],
+    thresholds: tuple[tuple[SampleShadows, ...], ...],
+    layered: Layers,
 ) -> tuple[dict[int, Parts], ...]:
-    """Each face's exactly-``k``-samples-sunlit parts, in its frame:
-    :func:`cover_levels` of the samples' partial shadows, :data:`CHUNK` faces
-    at a time, each face in its own cell of the chunk's plane."""
+    """Each face's exactly-``k``-units-sunlit parts, in its frame:
+    :func:`cover_levels` of every sample's shadow (with translucent casters,
+    each threshold's, its weight's number of times), :data:`CHUNK` faces at
+    a time, each face in its own cell of the chunk's plane."""
     origin, u, v = frames
-    flat = _to_frames(vertices[faces], np.arange(len(faces)), origin, u, v)
+    n_faces = len(faces)
+    flat = _to_frames(vertices[faces], np.arange(n_faces), origin, u, v)
     proper = np.abs(_twice_areas(flat)) > 0
-    partial = _PartialShadows.of(shadows, len(faces), frames)
-    result: list[dict[int, Parts]] = [{} for _ in faces]
+    # a face dark at a sample (turned away) is dark in every unit, whatever
+    # casts: it only lowers the face's count (no loops needed)
+    dark = np.zeros(n_faces, dtype=np.int64)
+    for turned in thresholds[0]:
+        dark += turned.dark
+    dark *= layered.units
+    count = len(thresholds[0])
+    shadows = tuple(
+        sample
+        for at in range(count)
+        for weight, samples in zip(layered.weights, thresholds, strict=True)
+        for sample in [samples[at]] * weight
+    )
+    # the units no shadow takes: a sample's beyond the thresholds' weights
+    clear = count * (layered.units - sum(layered.weights))
+    partial = _PartialShadows.of(shadows, n_faces, frames)
+    result: list[dict[int, Parts]] = [{} for _ in range(n_faces)]
     for chunk in partial.chunks(np.flatnonzero(proper)):
         for face, k, part in partial.every.levels(chunk, flat[chunk], len(shadows)):
-            result[face].setdefault(k - int(partial.whole[face]), []).append(part)
+            level = k + clear - int(dark[face]) - int(partial.whole[face])
+            result[face].setdefault(level, []).append(part)
     return tuple(dict(sorted(levels.items())) for levels in result)
 
 
 @dataclass(frozen=True)
 class _PartialShadows:
     """The samples' shadows for cutting levels: ``whole`` (m,) counts the
-    samples at which each face is dark or shadowed whole (its shadow's area
-    is the face's: those lower its count of sunlit samples and need no
-    loops), ``depth`` (m,) the samples that shadow it in part, and ``every``
-    the loops of those partial shadows."""
+    samples at which each face, lit (not turned away: those are counted
+    apart, in every unit), is shadowed whole (its shadow's area is the
+    face's: those lower its count of sunlit samples and need no loops),
+    ``depth`` (m,) the samples that shadow it in part, and ``every`` the
+    loops of those partial shadows."""
 
     whole: NDArray[np.int64]
     depth: NDArray[np.int64]
@@ -617,7 +726,7 @@ class _PartialShadows:
         )
         for index, shadows_at in enumerate(shadows):
             covered = shadows_at.fraction >= 1.0  # dark, or its triangles tile the face
-            whole += covered
+            whole += covered & ~shadows_at.dark
             kept = ~covered[shadows_at.face]
             face = shadows_at.face[kept]
             depth += np.bincount(face, minlength=n_faces) > 0

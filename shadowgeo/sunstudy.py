@@ -26,6 +26,17 @@ crosses the disc the share is the circular segment's, to the samples' error
 up, as without the disc; its directions under the horizon are dark. With
 ``sun_angle`` 0 (the default) the study is the point sun's, bit for bit.
 
+Translucent casters (``opacity``, one value a caster face) count by their
+opacity, as the converter's rule (:mod:`shadowgeo.scene.opacity`: opacity
+``1 - Material.transparency`` in sixteenths; a point takes the darkness of the
+most opaque caster hiding it): at a sample a point gets ``(1 - a) * step`` of
+sun, ``a`` the largest opacity among the casters hiding it. The study adds
+up one opaque study a distinct opacity, of the faces at least that opaque,
+each shadow counted a whole number of times in the winding-number cover
+(:mod:`shadowgeo.opacity`), so the levels stay exact, in steps of
+``step / units`` (16 units at most, 2 for opacities 0.5 and 1). Every caster
+opaque is the opaque study, bit for bit.
+
 Studies over many days (a year of hourly samples) are cut into one study a day
 (:func:`sun_study_by_day`); days are independent, so they run in parallel on
 Dask when a scheduler is given, with results identical to the serial run.
@@ -48,13 +59,14 @@ from .errors import GeometryError
 from .levels import cover_level_areas, cover_levels
 from .lights import DirectionalLight
 from .limits import RELATIVE_ROUNDING
+from .opacity import Layers, layers
 from .plane import Plane
 from .plane2d import components, local_scale, points_in_parts, signed_areas, unite
 from .projection import project_shadow
 from .soft import light_samples
 from .sun import days, sun_lights
 from .sun import frame as sun_frame
-from .topology import as_caster
+from .topology import Caster, as_caster
 
 __all__ = [
     "DaySummary",
@@ -131,6 +143,16 @@ class SunStudy:
         The sun's angular diameter in radians (0: a point sun).
     disc_samples : int
         The directions each sample's sun disc is spread over (1 for a point sun).
+    shadow_weights : tuple of int
+        How many units each of ``shadows`` takes from the sun at a point it
+        covers (empty: 1 each). With translucent casters a direction has one
+        shadow a distinct opacity, lowest first, each of the casters at least
+        that opaque; a direction under the horizon has the whole region,
+        weighing ``opacity_units``.
+    opacity_units : int
+        The parts a direction's sunlight is counted in (1 with every caster
+        opaque, see :mod:`shadowgeo.opacity`); a level ``k`` is
+        ``k * step / (disc_samples * opacity_units)``.
     """
 
     plane: Plane
@@ -141,6 +163,8 @@ class SunStudy:
     levels: dict[int, Polygons] = field(repr=False)
     sun_angle: float = 0.0
     disc_samples: int = 1
+    shadow_weights: tuple[int, ...] = ()
+    opacity_units: int = 1
 
     @property
     def area(self) -> float:
@@ -149,7 +173,13 @@ class SunStudy:
 
     def hours(self, k: int) -> float:
         """Sunlight duration, in hours, of level ``k``."""
-        return _hours(k, self.step, self.disc_samples)
+        return _hours(k, self.step, self.disc_samples * self.opacity_units)
+
+    @property
+    def full_level(self) -> int:
+        """The level of a point in sunlight at every sample: the units of all
+        the samples' directions."""
+        return len(self.times) * self.disc_samples * self.opacity_units
 
     def level_areas(self) -> dict[float, float]:
         """Area of the region sunlit for each duration (hours -> area)."""
@@ -176,10 +206,11 @@ class SunStudy:
         uv = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         inside_region = points_in_parts(uv, self.region)
         shadowed = np.zeros(len(uv))
-        for shadow in self.shadows:
-            shadowed += points_in_parts(uv, shadow)
-        total = len(self.times) * self.disc_samples
-        lit = (total - shadowed) * self.step.total_seconds() / 3600.0 / self.disc_samples
+        weights = self.shadow_weights or (1,) * len(self.shadows)
+        for shadow, weight in zip(self.shadows, weights, strict=True):
+            shadowed += weight * points_in_parts(uv, shadow)
+        units = self.disc_samples * self.opacity_units
+        lit = (self.full_level - shadowed) * self.step.total_seconds() / 3600.0 / units
         return np.where(inside_region, lit, np.nan)
 
 
@@ -240,15 +271,41 @@ def _region_polygon(plane: Plane, region: ArrayLike) -> NDArray[np.float64]:
     return points
 
 
-def _levels(
-    frame: _Frame, region: CrossSection, shadows: Sequence[Polygons]
-) -> dict[int, Polygons]:
-    """Exactly-``k``-samples-sunlit parts of ``region`` (:func:`cover_levels`
-    of the shadows: ``k`` sunlit is ``count - k`` shadowed)."""
-    count = len(shadows)
-    covered = sorted(cover_levels(_local_regions(frame, shadows), region).items(), reverse=True)
+@dataclass(frozen=True)
+class _Cast:
+    """A day's exact shadows on the region, as its levels count them: each
+    of ``shadows`` ``weights`` times (see :class:`SunStudy`)."""
+
+    frame: _Frame
+    region: CrossSection
+    kept: list[_dt.datetime]
+    shadows: list[Polygons]
+    weights: list[int]
+    units: int
+    directions: int
+
+    @property
+    def count(self) -> int:
+        """The level of a point no shadow covers."""
+        return self.directions * self.units
+
+    def local_regions(self) -> list[list[NDArray[np.float64]]]:
+        """Each shadow in the frame's local coordinates, once per unit of its weight."""
+        regions = _local_regions(self.frame, self.shadows)
+        return [
+            region
+            for region, weight in zip(regions, self.weights, strict=True)
+            for _ in range(weight)
+        ]
+
+
+def _levels(cast: _Cast) -> dict[int, Polygons]:
+    """Exactly-``k``-units-sunlit parts of the region (:func:`cover_levels`
+    of the weighted shadows: ``k`` sunlit is ``count - k`` shadowed)."""
+    count = cast.count
+    covered = sorted(cover_levels(cast.local_regions(), cast.region).items(), reverse=True)
     flat = [loop for _, parts in covered for part in parts for loop in part]
-    plane = iter(_map_loops(frame.to_plane, flat))
+    plane = iter(_map_loops(cast.frame.to_plane, flat))
     return {count - m: [[next(plane) for _ in part] for part in parts] for m, parts in covered}
 
 
@@ -283,6 +340,7 @@ def sun_study(
     north: ArrayLike | None = None,
     sun_angle: float = 0.0,
     sun_samples: int | None = None,
+    opacity: ArrayLike | None = None,
 ) -> SunStudy:
     """Exact sunlight durations over ``region`` on ``plane`` at ``times``.
 
@@ -313,6 +371,12 @@ def sun_study(
         The directions each sample's disc is spread over (default
         :data:`SUN_DISC_SAMPLES`, 16); the levels' cost grows with about
         the cube of the shadows cut, ``len(times) * sun_samples``.
+    opacity : (m,) array_like, optional
+        Each caster face's opacity (0 to 1, rounded to sixteenths; the
+        faces of a list of casters in order). A point hidden at a sample
+        gets ``1 - a`` of its sun, ``a`` the largest opacity of the faces
+        hiding it (see the module notes); None, the default: every face is
+        opaque.
 
     Returns
     -------
@@ -342,18 +406,20 @@ def sun_study(
     """
     step = step or _dt.timedelta(hours=1)
     disc = _Disc.of(sun_angle, sun_samples, up, north)
-    frame, region_cs, kept, shadows = _day_shadows(
-        casters, plane, region, times, latitude, longitude, up, north, disc
+    cast = _day_shadows(
+        casters, plane, region, times, latitude, longitude, up, north, disc, opacity
     )
     return SunStudy(
         plane=plane,
-        region=frame.polygons(region_cs),
-        times=tuple(kept),
+        region=cast.frame.polygons(cast.region),
+        times=tuple(cast.kept),
         step=step,
-        shadows=tuple(shadows),
-        levels=_levels(frame, region_cs, shadows),
+        shadows=tuple(cast.shadows),
+        levels=_levels(cast),
         sun_angle=disc.angle,
         disc_samples=disc.samples,
+        shadow_weights=tuple(cast.weights),
+        opacity_units=cast.units,
     )
 
 
@@ -391,16 +457,15 @@ class _Disc:
         lights: list[DirectionalLight],
         plane: Plane,
         polygon: NDArray[np.float64],
-        whole: Polygons,
-    ) -> list[Polygons]:
+    ) -> list[Polygons | None]:
         """Each sun position's directions' exact shadows on the region
-        ``polygon`` (``whole`` in plane coordinates, for those under the
-        horizon), position after position."""
+        ``polygon`` (None for those under the horizon), position after
+        position."""
         spread = [d for light in lights for d in self.directions(light)]
         up = [float(d.direction @ self.up) < 0 for d in spread]
         above = [d for d, lit in zip(spread, up, strict=True) if lit]
         cast = iter(project_shadow(caster, above, plane, receiver=polygon) if above else [])
-        return [next(cast).polygons if lit else whole for lit in up]
+        return [next(cast).polygons if lit else None for lit in up]
 
 
 def _day_shadows(
@@ -412,11 +477,13 @@ def _day_shadows(
     longitude: float,
     up: str,
     north: ArrayLike | None,
-    disc: _Disc | None = None,
-) -> tuple[_Frame, CrossSection, list[_dt.datetime], list[Polygons]]:
+    disc: _Disc,
+    opacity: ArrayLike | None = None,
+) -> _Cast:
     """The local frame, the region in it, the samples with the sun up and
     their exact shadows on the region (plane coordinates; with the sun's
-    ``disc``, those of each sample's directions, sample after sample)."""
+    ``disc``, those of each sample's directions, sample after sample; with
+    translucent casters, each direction's shadow of each opacity threshold)."""
     polygon = _region_polygon(plane, region)
     caster = _one_caster(casters)
     kept, lights = sun_lights(latitude, longitude, times, up=up, north=north)
@@ -426,12 +493,59 @@ def _day_shadows(
     extent = float(np.max(np.abs(region_2d - region_2d.mean(axis=0)))) or 1.0
     frame = _Frame(region_2d.mean(axis=0), local_scale(2.0 * extent))
     region_cs = unite([frame.to_local(region_2d)])
-    if disc is not None and disc.samples > 1:
-        return frame, region_cs, kept, disc.shadows(caster, lights, plane, polygon, [[region_2d]])
+    layered, parts = _layered(caster, opacity)
+    per_layer = [_directions_shadows(part, lights, plane, polygon, disc) for part in parts]
+    shadows, weights = _weighted(per_layer, layered, [[region_2d]])
+    directions = len(kept) * disc.samples
+    return _Cast(frame, region_cs, kept, shadows, weights, layered.units, directions)
+
+
+def _layered(caster: Any, opacity: ArrayLike | None) -> tuple[Layers, list[Any]]:
+    """The opacity thresholds of ``caster``'s faces and the caster of each
+    (the faces at least that opaque); every face opaque: the caster as given."""
+    if opacity is None:
+        return layers(None, 0), [caster]
+    whole = caster if isinstance(caster, Caster) else as_caster(caster)
+    layered = layers(opacity, len(whole.faces))
+    if layered.opaque:
+        return layered, [caster]
+    return layered, [(whole.vertices, whole.faces[faces]) for faces in layered.faces]
+
+
+def _directions_shadows(
+    caster: Any,
+    lights: list[DirectionalLight],
+    plane: Plane,
+    polygon: NDArray[np.float64],
+    disc: _Disc,
+) -> list[Polygons | None]:
+    """Each sample's (or with the sun's disc, each direction's) exact shadow
+    of ``caster`` on the region ``polygon``; None under the horizon."""
+    if disc.samples > 1:
+        return disc.shadows(caster, lights, plane, polygon)
     # one call for the day: the caster is checked and prepared once for every sun position
     cast = project_shadow(caster, lights, plane, receiver=polygon) if lights else []
     # each shadow is already cut to the region, a union of non-overlapping parts
-    return frame, region_cs, kept, [shadow.polygons for shadow in cast]
+    return [shadow.polygons for shadow in cast]
+
+
+def _weighted(
+    per_layer: list[list[Polygons | None]], layered: Layers, whole: Polygons
+) -> tuple[list[Polygons], list[int]]:
+    """The shadows a study counts, direction after direction (each
+    threshold's, lowest first), and each one's weight: a direction under
+    the horizon is the ``whole`` region, dark in every unit."""
+    shadows: list[Polygons] = []
+    weights: list[int] = []
+    for direction in zip(*per_layer, strict=True):
+        cast = [shadow for shadow in direction if shadow is not None]
+        if len(cast) < len(direction):
+            shadows.append(whole)
+            weights.append(layered.units)
+        else:
+            shadows.extend(cast)
+            weights.extend(layered.weights)
+    return shadows, weights
 
 
 def _one_caster(casters: Any) -> Any:
@@ -484,6 +598,7 @@ def sun_study_by_day(
     progress: Callable[[int, int], None] | None = None,
     sun_angle: float = 0.0,
     sun_samples: int | None = None,
+    opacity: ArrayLike | None = None,
 ) -> SunStudies:
     """:func:`sun_study` for each calendar day (in ``tz``, UTC by default) of ``times``.
 
@@ -492,11 +607,11 @@ def sun_study_by_day(
     ``"local"`` (a ``LocalCluster`` on this machine, started and closed here)
     runs them on Dask, one task a day, the caster sent to the workers once.
     Results are identical either way. ``progress(done, total)`` is called as
-    days finish. ``sun_angle`` and ``sun_samples``: the sun's disc, as
-    :func:`sun_study` takes it.
+    days finish. ``sun_angle`` and ``sun_samples``: the sun's disc, and
+    ``opacity``: each caster face's, as :func:`sun_study` takes them.
     """
     options = dict(latitude=latitude, longitude=longitude, step=step, up=up, north=north)
-    options.update(sun_angle=sun_angle, sun_samples=sun_samples)
+    options.update(sun_angle=sun_angle, sun_samples=sun_samples, opacity=opacity)
     return SunStudies(
         _by_day(sun_study, casters, plane, region, times, tz, scheduler, progress, options)
     )
@@ -518,6 +633,7 @@ def sun_summaries_by_day(
     progress: Callable[[int, int], None] | None = None,
     sun_angle: float = 0.0,
     sun_samples: int | None = None,
+    opacity: ArrayLike | None = None,
 ) -> dict[_dt.date, DaySummary]:
     """:func:`sun_study_by_day`'s figures without its polygons, a
     :class:`DaySummary` a day made where the day is studied: the level sets'
@@ -527,7 +643,7 @@ def sun_summaries_by_day(
     however many days. The areas agree with the full studies' to rounding
     (about 1e-15 of the region); serial and Dask runs are identical."""
     options = dict(latitude=latitude, longitude=longitude, step=step, up=up, north=north)
-    options.update(sun_angle=sun_angle, sun_samples=sun_samples)
+    options.update(sun_angle=sun_angle, sun_samples=sun_samples, opacity=opacity)
     return _by_day(_summary, casters, plane, region, times, tz, scheduler, progress, options)
 
 
@@ -544,22 +660,22 @@ def _summary(
     north: ArrayLike | None = None,
     sun_angle: float = 0.0,
     sun_samples: int | None = None,
+    opacity: ArrayLike | None = None,
 ) -> DaySummary:
     """A day's :class:`DaySummary`, from the areas of its levels only
     (:func:`shadowgeo.levels.cover_level_areas`: no level polygon is made)."""
     step = step or _dt.timedelta(hours=1)
     disc = _Disc.of(sun_angle, sun_samples, up, north)
-    frame, region_cs, kept, shadows = _day_shadows(
-        casters, plane, region, times, latitude, longitude, up, north, disc
+    cast = _day_shadows(
+        casters, plane, region, times, latitude, longitude, up, north, disc, opacity
     )
-    count = len(shadows)
+    count, frame = cast.count, cast.frame
     unit = 1.0 / (frame.scale * frame.scale)  # a local area in plane units
-    covered = cover_level_areas(_local_regions(frame, shadows), region_cs)
-    level_areas = {
-        _hours(count - m, step, disc.samples): area * unit for m, area in covered.items()
-    }
-    area = _area(frame.polygons(region_cs))
-    return DaySummary(len(kept), area, dict(sorted(level_areas.items())))
+    covered = cover_level_areas(cast.local_regions(), cast.region)
+    per_sample = disc.samples * cast.units
+    level_areas = {_hours(count - m, step, per_sample): area * unit for m, area in covered.items()}
+    area = _area(frame.polygons(cast.region))
+    return DaySummary(len(cast.kept), area, dict(sorted(level_areas.items())))
 
 
 def _by_day(

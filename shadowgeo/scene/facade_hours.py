@@ -7,7 +7,8 @@ samples of a sun study with :func:`shadowgeo.sunlight_surfaces.surface_sunlight`
 samples with the sun up a few at a time so that a progress bar can follow,
 and sums each face's mean hours of sun over its area
 (:meth:`SurfaceSunlight.mean_hours`: exact, from the shadows' areas; no
-levels are cut).
+levels are cut). Translucent casters count by their opacity, as the
+converter's rule (:func:`shadowgeo.scene.facades.caster_opacity`).
 
 What is studied: the buildings are the scene's geometry less its ground
 cover (:func:`shadowgeo.scene.sunlight.ground_cover`: a city file's roads,
@@ -41,7 +42,7 @@ from numpy.typing import NDArray
 from ..errors import SceneError
 from ..sun import sun_lights
 from ..sunlight_surfaces import surface_sunlight
-from .facades import city_casters
+from .facades import caster_opacity, city_casters
 from .model import Scene, Semantics, Shape
 from .receivers import FLOOR_COSINE
 from .sunlight import ground_cover
@@ -274,7 +275,8 @@ def facade_hours(
     if not shapes:
         raise SceneError("the scene has no building to study", path=scene.path)
     receiver = _receiver(shapes, wanted, receivers, scene)
-    casters = city_casters(dataclasses.replace(scene, shapes=shapes))
+    own = dataclasses.replace(scene, shapes=shapes)
+    casters, opacity = city_casters(own), caster_opacity(own)
     site = scene.site
     _, lights = sun_lights(
         latitude,
@@ -295,6 +297,7 @@ def facade_hours(
             directions[first : first + size],
             step=step,
             levels=False,
+            opacity=opacity,
         )
         total += sunlight.mean_hours()
         if progress is not None:

@@ -5,7 +5,9 @@ what each face is (:class:`~shadowgeo.scene.model.Semantics`: RoofSurface,
 WallSurface, GroundSurface). :func:`city_surfaces` gathers the faces of the
 kinds asked for (walls and roofs by default) into one receiving mesh, with
 each face's building and kind; every shape that casts is a caster, so the
-buildings shade each other and themselves. :func:`study_city_surfaces` runs
+buildings shade each other and themselves, translucent ones (trees given a
+``Material.transparency``) by their opacity, as the converter's rule
+(:func:`caster_opacity`). :func:`study_city_surfaces` runs
 :func:`shadowgeo.sunlight_surfaces.surface_sun_study` over them at the
 scene's site.
 """
@@ -21,11 +23,13 @@ from numpy.typing import NDArray
 
 from ..errors import SceneError
 from ..sunlight_surfaces import SurfaceSunlight, surface_sun_study
-from .model import Scene
+from .model import Scene, Shape
+from .opacity import opacities
 
 __all__ = [
     "CitySurfaces",
     "WALLS_AND_ROOFS",
+    "caster_opacity",
     "city_casters",
     "city_surfaces",
     "study_city_surfaces",
@@ -97,13 +101,28 @@ def city_surfaces(scene: Scene, kinds: Sequence[str] = WALLS_AND_ROOFS) -> CityS
     )
 
 
-def city_casters(scene: Scene) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """Every geometry shape that casts, as one (vertices, faces) mesh."""
-    shapes = [
+def _casting(scene: Scene) -> list[Shape]:
+    """The geometry shapes that cast, in the scene's order."""
+    return [
         shape
         for shape in scene.shapes
         if shape.role == "geometry" and shape.n_faces and shape.casts_shadow
     ]
+
+
+def caster_opacity(scene: Scene) -> NDArray[np.float64] | None:
+    """Each face of :func:`city_casters`' mesh's casting opacity
+    (:func:`shadowgeo.scene.opacity.casting_opacity` of its shape), for
+    :func:`shadowgeo.surface_sunlight`; None when every one is opaque."""
+    shapes = _casting(scene)
+    counts = [len(shape.faces) for shape in shapes]
+    faces: NDArray[np.float64] = np.repeat(opacities(shapes), counts)
+    return faces if (faces < 1).any() else None
+
+
+def city_casters(scene: Scene) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Every geometry shape that casts, as one (vertices, faces) mesh."""
+    shapes = _casting(scene)
     if not shapes:
         raise SceneError("nothing in the scene casts a shadow", path=scene.path)
     sizes = np.cumsum([0] + [len(shape.vertices) for shape in shapes[:-1]])
@@ -147,5 +166,6 @@ def study_city_surfaces(
         up=scene.up_axis,
         north=None if site is None else site.north,
         levels=levels,
+        opacity=caster_opacity(scene),
     )
     return surfaces, sunlight

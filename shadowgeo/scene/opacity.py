@@ -14,7 +14,8 @@ A shape casts as much shadow as it is opaque, as the author set it:
 
 Rounding keeps the passes few: a scene of many slightly different glass
 panes casts one translucent layer per level, at most 16 per light and
-receiver, not one per pane.
+receiver, not one per pane. Sun studies weigh translucent casters by the same
+rule (:mod:`shadowgeo.opacity`).
 """
 
 from __future__ import annotations
@@ -23,13 +24,10 @@ import math
 
 import numpy as np
 
+from ..opacity import LEVELS, STEP
 from .model import Shape
 
 __all__ = ["LEVELS", "STEP", "casting_opacity", "opacities"]
-
-# Opacities are rounded to multiples of this: 16 levels above zero.
-LEVELS = 16
-STEP = 1.0 / LEVELS
 
 
 def casting_opacity(shape: Shape) -> float:

@@ -10,6 +10,11 @@ the ground plane under the scene's lowest point. The region studied is the
 floor's outline (its largest part; holes in it are studied too), or for an
 unbounded plane the scene's plan (its bounding box on the plane). Every other
 face of the scene casts; the floor's own faces, lying in the plane, do not.
+Translucent casters count by their opacity, as the converter's rule
+(:mod:`shadowgeo.scene.opacity`: ``1 - Material.transparency`` in sixteenths,
+none for ``casts_shadow`` False): a point hidden at a sample gets ``1 - a`` of
+its sun, ``a`` the largest opacity of the casters hiding it
+(:func:`shadowgeo.sun_study`'s ``opacity``).
 
 :func:`sunlight_shapes` turns a day's study into shapes, one per duration of
 sunlight, coloured from dark purple (no sun) to yellow (sun all day), lifted off
@@ -36,6 +41,7 @@ from ..tolerance import Tolerance
 from ..topology import Caster
 from .casters import CasterSet, distinct
 from .model import Material, Scene, Shape, unique_name
+from .opacity import opacities
 from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
 
@@ -113,6 +119,10 @@ class SceneStudy:
         The scene's size (for the lift of :func:`sunlight_shapes`).
     notes : list of str
         What was chosen and why.
+    opacity : (m,) float64 or None
+        Each of ``caster``'s faces' casting opacity
+        (:func:`shadowgeo.scene.opacity.casting_opacity` of its shape), for
+        :func:`shadowgeo.sun_study`; None when every one is opaque.
     """
 
     caster: Caster
@@ -122,6 +132,7 @@ class SceneStudy:
     up: str
     scale: float
     notes: list[str]
+    opacity: np.ndarray | None = None
 
 
 def scene_study(
@@ -174,15 +185,31 @@ def scene_study(
         what = "the plane given" if plane is not None else "the ground plane"
         what = _CITY_GROUND if cover.any() else what
         notes.append(f"sun study: over {what}, within the scene's plan (its bounding box)")
-    casting = np.array([shape.casts_shadow for shape in geometry], dtype=bool) & ~cover
-    faces = stacked.off_plane(facing, tolerance) & stacked.faces_of(casting)
+    opacity = opacities(geometry)
+    faces = stacked.off_plane(facing, tolerance) & stacked.faces_of((opacity > 0) & ~cover)
     if not faces.any():
         raise SceneError(
             "nothing in the scene casts a shadow on the floor studied (it has the sun "
             "whenever the sun is up)"
         )
     caster = stacked.mesh(faces)
-    return SceneStudy(caster, facing, polygon, what, up_name, tolerance.scale, notes)
+    cast = stacked.faces_of(opacity)[faces]
+    translucent = cast if (cast < 1).any() else None
+    notes.extend(_translucent_note(opacity[stacked.owners(faces)]))
+    return SceneStudy(caster, facing, polygon, what, up_name, tolerance.scale, notes, translucent)
+
+
+def _translucent_note(casting: np.ndarray) -> list[str]:
+    """A note naming how many of the casters (their opacities ``casting``)
+    are translucent, when any is."""
+    translucent = casting[casting < 1]
+    if not len(translucent):
+        return []
+    values = ", ".join(f"{value:g}" for value in np.unique(translucent))
+    return [
+        f"sun study: {len(translucent)} translucent caster(s) let part of the sun through "
+        f"(opacity {values}: 1 - their material's transparency)"
+    ]
 
 
 def _city_ground(
@@ -369,7 +396,8 @@ def study_scene(
     with ``summaries``, :func:`shadowgeo.sun_summaries_by_day`'s
     ``{day: DaySummary}`` instead (no polygons kept: for many days).
     ``sun_angle`` and ``sun_samples``: the sun's disc, as
-    :func:`shadowgeo.sun_study` takes it (0: a point sun).
+    :func:`shadowgeo.sun_study` takes it (0: a point sun). Translucent
+    casters count by their opacity (:attr:`SceneStudy.opacity`).
 
     ``latitude`` and ``longitude`` default to the scene's :attr:`Scene.site`
     (city data whose file names its CRS), which also gives true north in the
@@ -401,6 +429,7 @@ def study_scene(
         progress=progress,
         sun_angle=sun_angle,
         sun_samples=sun_samples,
+        opacity=inputs.opacity,
     )
     return inputs, studies
 
@@ -416,7 +445,7 @@ def level_meshes(
     plane = study.plane
     lift = _LIFT * scale * plane.normal
     # every sample sunlit (every direction of each one's sun disc): the brightest
-    most = max(len(study.times) * study.disc_samples, 1)
+    most = max(study.full_level, 1)
     meshes = []
     for k, parts in sorted(study.levels.items()):
         if not parts:
