@@ -47,6 +47,7 @@ from shadowgeo.scene.facade_hours import (
     WALLS,
     FacadeHours,
     facade_hours,
+    is_terrain,
 )
 from shadowgeo.scene.sunlight import (
     SceneStudy,
@@ -473,9 +474,7 @@ def _terrain(
     from shadowgeo.io.dem import read_terrain, stand_on
 
     points = [
-        shape.world_vertices
-        for shape in scene.shapes
-        if shape.role == "geometry" and shape.n_faces
+        shape.world_vertices for shape in scene.shapes if shape.role == "geometry" and shape.n_faces
     ]
     if not points:
         raise shadowgeo.SceneError("no geometry to put a terrain under", path=scene.path)
@@ -697,7 +696,7 @@ def _facades(
     latitude, longitude = args.at
     receivers = _buildings_named(args.input)
     if receivers is not None and TERRAIN in kinds:
-        receivers |= {shape.name or "" for shape in scene.shapes if _is_terrain(shape)}
+        receivers |= {shape.name or "" for shape in scene.shapes if is_terrain(shape)}
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar("walls and roofs") if show else None
     try:
@@ -735,10 +734,6 @@ def _report_facades(found: FacadeHours) -> None:
 
 
 _WORDS = {WALLS: "walls", ROOFS: "roofs", TERRAIN: "terrain"}
-
-
-def _is_terrain(shape: shadowgeo.Shape) -> bool:
-    return shape.semantics is not None and TERRAIN in shape.semantics.kinds
 # The CityJSON object types whose walls and roofs are studied; the others
 # (trees, bridges, land use with steps, city furniture) only cast.
 _BUILDINGS = {"Building", "BuildingPart"}

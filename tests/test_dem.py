@@ -335,9 +335,7 @@ def test_a_building_on_the_dem_shadows_the_slope(tmp_path):
     corner, cell = (RD_X - 120.0, RD_Y + 120.0), (8.0, 8.0)
     x, y = _centres(corner, cell, 30, 30)
     slope = 0.3  # falling to the east
-    dem = _write_dem(
-        tmp_path / "east.tif", -slope * (x - RD_X), corner, cell, "EPSG:28992"
-    )
+    dem = _write_dem(tmp_path / "east.tif", -slope * (x - RD_X), corner, cell, "EPSG:28992")
     city = _footprints(tmp_path / "tower.geojson", [(RD_X + 3.0, RD_Y - 2.0, 12.0, 20.0)])
     scene = shadowgeo.load(city)
     terrain = read_terrain(

@@ -23,6 +23,7 @@ before a pixel is read; a file that is not a raster is a SceneError naming it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from dataclasses import dataclass
@@ -213,9 +214,7 @@ def _grid(dataset: Any, window: tuple[int, int, int, int], cells: int) -> tuple[
     factor = max(1, math.ceil(math.sqrt(rows * cols / cells)))
     shape = (max(2, math.ceil(rows / factor)), max(2, math.ceil(cols / factor)))
     read = Window(col, row, cols, rows)
-    band = dataset.read(
-        1, window=read, out_shape=shape, resampling=Resampling.average, masked=True
-    )
+    band = dataset.read(1, window=read, out_shape=shape, resampling=Resampling.average, masked=True)
     heights = np.ma.filled(band.astype(np.float64), np.nan)
     heights[~np.isfinite(heights)] = np.nan
     corner = dataset.window_transform(read)
@@ -311,8 +310,6 @@ def stand_on(scene: Scene, terrain: Terrain) -> tuple[Scene, str]:
     """``scene``'s geometry (footprint prisms standing at 0) raised, each
     shape by the terrain's height under the centroid of its plan, and a note;
     a shape over a hole or off the terrain is left where it is."""
-    import dataclasses
-
     shapes, moved = [], 0
     for shape in scene.shapes:
         if shape.role != "geometry" or not shape.n_faces:
@@ -339,6 +336,6 @@ def _plan_centroid(shape: Shape) -> NDArray[np.float64]:
     first, second = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     areas = np.abs(first[:, 0] * second[:, 1] - first[:, 1] * second[:, 0])
     centres = corners.mean(axis=1)
-    if areas.sum() <= 0:
-        return centres.mean(axis=0).reshape(1, 2)
-    return (np.average(centres, axis=0, weights=areas)).reshape(1, 2)
+    weights = areas if areas.sum() > 0 else None
+    centre: NDArray[np.float64] = np.average(centres, axis=0, weights=weights)
+    return centre.reshape(1, 2)

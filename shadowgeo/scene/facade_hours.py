@@ -58,6 +58,7 @@ __all__ = [
     "WALLS",
     "buildings",
     "facade_hours",
+    "is_terrain",
     "oriented_semantics",
 ]
 
@@ -174,7 +175,7 @@ def buildings(scene: Scene) -> tuple[list[Shape], NDArray[np.int64]]:
     shapes = [scene.shapes[index] for index in indices]
     if scene.site is not None and shapes:
         cover = ground_cover(shapes, scene.up_index, scene.meters_per_unit)
-        cover &= ~np.array([_is_terrain(shape) for shape in shapes])
+        cover &= ~np.array([is_terrain(shape) for shape in shapes])
         if not cover.all():
             indices = indices[~cover]
             shapes = [scene.shapes[index] for index in indices]
@@ -184,7 +185,7 @@ def buildings(scene: Scene) -> tuple[list[Shape], NDArray[np.int64]]:
     return labelled, indices
 
 
-def _is_terrain(shape: Shape) -> bool:
+def is_terrain(shape: Shape) -> bool:
     """Whether the shape is a terrain (its semantics name TERRAIN): it casts
     and receives however flat it is."""
     return shape.semantics is not None and TERRAIN in shape.semantics.kinds
