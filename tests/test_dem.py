@@ -429,3 +429,48 @@ def test_a_file_that_is_not_a_raster_is_refused(tmp_path):
     with pytest.raises(SceneError, match="cannot read as a raster") as raised:
         read_terrain(path, scene, np.array([0.0, 0.0]), np.array([1.0, 1.0]))
     assert "notes.tif" in str(raised.value)
+
+
+def _cityjson_box(path: Path, centre: tuple[float, float], side: float, low: float, high: float):
+    """A CityJSON 2.0 file in EPSG:7415 (RD New + NAP heights) with one LoD1
+    Building, a box from ``low`` to ``high`` (absolute heights)."""
+    half = side / 2
+    x0, x1, y0, y1 = centre[0] - half, centre[0] + half, centre[1] - half, centre[1] + half
+    points = [[x, y, z] for z in (low, high) for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))]
+    faces = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
+    document = {
+        "type": "CityJSON",
+        "version": "2.0",
+        "transform": {"scale": [0.001, 0.001, 0.001], "translate": [0.0, 0.0, 0.0]},
+        "metadata": {"referenceSystem": "https://www.opengis.net/def/crs/EPSG/0/7415"},
+        "CityObjects": {
+            "tower": {
+                "type": "Building",
+                "geometry": [
+                    {"type": "Solid", "lod": "1", "boundaries": [[[face] for face in faces]]}
+                ],
+            }
+        },
+        "vertices": [[round(v * 1000) for v in point] for point in points],
+    }
+    path.write_text(json.dumps(document))
+    return path
+
+
+def test_cityjson_buildings_keep_their_heights_and_the_terrain_gets_hours(tmp_path, capsys):
+    """A CityJSON Building (absolute heights, its walls and roofs studied by
+    name) on the slope: the terrain is studied beside it, and the building
+    stays at the heights the file gives."""
+    corner, cell = (RD_X - 400.0, RD_Y + 400.0), (25.0, 25.0)
+    x, y = _centres(corner, cell, 32, 32)
+    dem = _write_dem(tmp_path / "slope.tif", _plane(x, y), corner, cell, "EPSG:28992")
+    building = (RD_X + 10.0, RD_Y - 20.0)
+    city = _cityjson_box(tmp_path / "tower.city.json", building, 4.0, 3.0, 9.0)
+    code, out, err, glb, gpkg = _sun_run(tmp_path, city, dem, capsys, "--dem-margin", "390")
+    assert code == 0, err
+    assert "stand on the DEM" not in err
+    assert "terrain: 1922 faces" in out
+    _check_plane_hours(glb, gpkg, building)
+    walls, _ = _faces(shadowgeo_glb(glb))["tower"]
+    assert walls[:, :, 2].min() == pytest.approx(3.0, abs=1e-5)
+    assert walls[:, :, 2].max() == pytest.approx(9.0, abs=1e-5)
