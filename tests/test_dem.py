@@ -474,3 +474,46 @@ def test_cityjson_buildings_keep_their_heights_and_the_terrain_gets_hours(tmp_pa
     walls, _ = _faces(shadowgeo_glb(glb))["tower"]
     assert walls[:, :, 2].min() == pytest.approx(3.0, abs=1e-5)
     assert walls[:, :, 2].max() == pytest.approx(9.0, abs=1e-5)
+
+
+def test_the_command_shadows_the_valley_with_the_ridge(tmp_path, capsys):
+    """``sun --dem``: a ridge 100 m high (slopes of 1 in 2: no face steep
+    enough to be a wall, so the terrain must not be taken for ground cover)
+    west of a flat valley floor. Each floor face of a strip across the
+    valley against rays cast from 15 points of it to the sun at every
+    sample (the library's sun positions, tested on their own in
+    test_sun_position.py, at the site the command reads)."""
+    corner, cell = (RD_X - 420.0, RD_Y + 200.0), (20.0, 20.0)
+    x, _ = _centres(corner, cell, 20, 42)
+    heights = np.clip(100.0 - 0.5 * np.abs(x - (RD_X - 200.0)), 0.0, None)
+    dem = _write_dem(tmp_path / "ridge.tif", heights, corner, cell, "EPSG:28992")
+    building = (RD_X + 350.0, RD_Y - 150.0)  # far from the strip
+    city = _footprints(tmp_path / "hut.geojson", [(*building, 2.0, 2.0)])
+    code, out, err, glb, _ = _sun_run(tmp_path, city, dem, capsys, "--dem-margin", "400")
+    assert code == 0, err
+    triangles, hours = _faces(shadowgeo_glb(glb))["terrain"]
+    site = shadowgeo.load(city).site
+    start = dt.datetime(DAY.year, DAY.month, DAY.day, tzinfo=dt.UTC)
+    times = shadowgeo.sun.hourly(start, start + dt.timedelta(days=1), dt.timedelta(minutes=EVERY))
+    suns = [
+        shadowgeo.sun_direction(site.latitude, site.longitude, when, up="Z", north=site.north)
+        for when in times
+    ]
+    toward = [-np.asarray(sun) for sun in suns if sun is not None]
+    plan = triangles[:, :, :2].mean(axis=1)
+    strip = (np.abs(plan[:, 1] - (RD_Y + 10.0)) < 10.0) & (triangles[:, :, 2].max(axis=1) == 0)
+    receiver = triangles[strip].astype(np.float64)
+    points, faces = _face_points(receiver)
+    lit = np.zeros(len(points))
+    for direction in toward:
+        lit += ~_blocked(points, direction, triangles.astype(np.float64))
+    lit = lit.reshape(len(receiver), -1) * EVERY / 60.0
+    agreed = np.all(lit == lit[:, :1], axis=1)
+    assert agreed.sum() >= 0.8 * len(receiver) and len(receiver) >= 30
+    expected = lit[agreed, 0]
+    assert expected.min() < len(toward) * EVERY / 60.0 - 1  # the ridge takes evening hours
+    # a face whose 15 points agree can still have a shadow edge cross a
+    # corner of it at a sample or two: part of one sample, never more
+    found = hours[strip][agreed]
+    assert np.all(np.abs(found - expected) < EVERY / 60.0)
+    assert np.mean(np.abs(found - expected) < 1e-5) >= 0.75  # float32
