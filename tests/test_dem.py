@@ -517,3 +517,34 @@ def test_the_command_shadows_the_valley_with_the_ridge(tmp_path, capsys):
     found = hours[strip][agreed]
     assert np.all(np.abs(found - expected) < EVERY / 60.0)
     assert np.mean(np.abs(found - expected) < 1e-5) >= 0.75  # float32
+
+
+def test_a_big_window_is_averaged_to_the_cell_budget(tmp_path):
+    """30 x 41 cells of a plane read with a budget of 100: averaged in whole
+    blocks of 4 x 4 (the raster has no more cells to grow to 32 x 44, so 28 x
+    40 are read: 7 x 10 cells); the mean of a block of a plane's cells is
+    the plane at the block's centre, so every point stays on it
+    (hand-derived: the coarse centres lie 20 m apart, 10 m in from the
+    raster's corner)."""
+    corner, cell = (RD_X - 205.0, RD_Y + 150.0), (5.0, 5.0)
+    x, y = _centres(corner, cell, 30, 41)
+    dem = _write_dem(
+        tmp_path / "fine.tif", 0.2 * (x - RD_X) - 0.1 * (y - RD_Y), corner, cell, "EPSG:28992"
+    )
+    scene = _rd_scene(tmp_path / "site.geojson")
+    terrain = read_terrain(
+        dem,
+        scene,
+        np.array([RD_X - 500, RD_Y - 500]),
+        np.array([RD_X + 500, RD_Y + 500]),
+        cells=100,
+    )
+    assert terrain.grid.heights.shape == (7, 10)
+    assert len(terrain.faces) == 2 * 6 * 9
+    points = terrain.vertices
+    assert points[:, 2] == pytest.approx(
+        0.2 * (points[:, 0] - RD_X) - 0.1 * (points[:, 1] - RD_Y), abs=1e-9
+    )
+    assert points[0, :2] == pytest.approx([corner[0] + 10.0, corner[1] - 10.0], abs=1e-9)
+    assert np.diff(np.unique(points[:, 0]))[:9] == pytest.approx(np.full(9, 20.0))
+    assert any("averaged to 7 x 10" in note for note in terrain.notes)

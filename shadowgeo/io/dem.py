@@ -212,7 +212,13 @@ def _grid(dataset: Any, window: tuple[int, int, int, int], cells: int) -> tuple[
 
     row, col, rows, cols = window
     factor = max(1, math.ceil(math.sqrt(rows * cols / cells)))
-    shape = (max(2, math.ceil(rows / factor)), max(2, math.ceil(cols / factor)))
+    while math.ceil(rows / factor) * math.ceil(cols / factor) > cells:  # ceil's extra cells
+        factor += 1
+    # whole blocks of factor x factor cells: each average is then the plane's
+    # value at its block's centre on a plane
+    rows = _whole_blocks(row, rows, dataset.height, factor)
+    cols = _whole_blocks(col, cols, dataset.width, factor)
+    shape = (max(2, rows // factor), max(2, cols // factor))
     read = Window(col, row, cols, rows)
     band = dataset.read(1, window=read, out_shape=shape, resampling=Resampling.average, masked=True)
     heights = np.ma.filled(band.astype(np.float64), np.nan)
@@ -226,6 +232,15 @@ def _grid(dataset: Any, window: tuple[int, int, int, int], cells: int) -> tuple[
             f"(at most {cells:,})"
         )
     return _Grid(heights, tuple(scaled)[:6]), notes
+
+
+def _whole_blocks(start: int, size: int, limit: int, factor: int) -> int:
+    """``size`` cells from ``start`` made a multiple of ``factor``: grown
+    while the raster (``limit`` cells) has them, else cut."""
+    grown = math.ceil(size / factor) * factor
+    if start + grown <= limit:
+        return grown
+    return max(size // factor, 1) * factor if size >= factor else size
 
 
 def read_terrain(
@@ -248,6 +263,8 @@ def read_terrain(
         only, a window that misses the study or holds no height.
     """
     name = str(path)
+    if cells < 4:
+        raise SceneError(f"a terrain needs a budget of 4 cells or more, got {cells}", path=name)
     rasterio = _rasterio(name)
     try:
         dataset = rasterio.open(name)
