@@ -548,3 +548,17 @@ def test_a_big_window_is_averaged_to_the_cell_budget(tmp_path):
     assert points[0, :2] == pytest.approx([corner[0] + 10.0, corner[1] - 10.0], abs=1e-9)
     assert np.diff(np.unique(points[:, 0]))[:9] == pytest.approx(np.full(9, 20.0))
     assert any("averaged to 7 x 10" in note for note in terrain.notes)
+
+
+def test_a_truncated_geotiff_is_refused_naming_it(tmp_path):
+    """A DEM cut short after its header: its heights cannot be read."""
+    corner, cell = (RD_X - 100.0, RD_Y + 100.0), (1.0, 1.0)
+    full = _write_dem(
+        tmp_path / "full.tif", np.arange(200 * 200.0).reshape(200, 200), corner, cell, "EPSG:28992"
+    )
+    cut = tmp_path / "cut.tif"
+    cut.write_bytes(full.read_bytes()[:4000])
+    scene = _rd_scene(tmp_path / "site.geojson")
+    with pytest.raises(SceneError, match="cannot read") as raised:
+        read_terrain(cut, scene, np.array([RD_X - 50, RD_Y - 50]), np.array([RD_X + 50, RD_Y + 50]))
+    assert "cut.tif" in str(raised.value)

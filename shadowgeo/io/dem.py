@@ -169,7 +169,10 @@ def _transformers(dataset: Any, site: Site | None, path: str) -> tuple[Any, Any,
         )
     import pyproj
 
-    raster = pyproj.CRS.from_wkt(crs.to_wkt())
+    try:
+        raster = pyproj.CRS.from_wkt(crs.to_wkt())
+    except pyproj.exceptions.CRSError as error:
+        raise SceneError(f"the DEM's CRS is not one pyproj knows: {error}", path=path) from None
     scene = pyproj.CRS.from_wkt(site.crs)
     if raster == scene:
         return None, None, []
@@ -205,9 +208,12 @@ def _window(
     return first_row, first_col, last_row - first_row, last_col - first_col
 
 
-def _grid(dataset: Any, window: tuple[int, int, int, int], cells: int) -> tuple[_Grid, list[str]]:
+def _grid(
+    dataset: Any, window: tuple[int, int, int, int], cells: int, path: str
+) -> tuple[_Grid, list[str]]:
     """The window's heights, averaged down to at most ``cells`` cells."""
     from rasterio.enums import Resampling
+    from rasterio.errors import RasterioError
     from rasterio.windows import Window
 
     row, col, rows, cols = window
@@ -220,7 +226,12 @@ def _grid(dataset: Any, window: tuple[int, int, int, int], cells: int) -> tuple[
     cols = _whole_blocks(col, cols, dataset.width, factor)
     shape = (max(2, rows // factor), max(2, cols // factor))
     read = Window(col, row, cols, rows)
-    band = dataset.read(1, window=read, out_shape=shape, resampling=Resampling.average, masked=True)
+    try:
+        band = dataset.read(
+            1, window=read, out_shape=shape, resampling=Resampling.average, masked=True
+        )
+    except RasterioError as error:  # a truncated or corrupt block
+        raise SceneError(f"cannot read the DEM's heights: {error}", path=path) from None
     heights = np.ma.filled(band.astype(np.float64), np.nan)
     heights[~np.isfinite(heights)] = np.nan
     corner = dataset.window_transform(read)
@@ -295,7 +306,7 @@ def _terrain(
     pad = margin / scene.meters_per_unit
     low = np.asarray(box[0], dtype=np.float64)[:2] - pad
     high = np.asarray(box[1], dtype=np.float64)[:2] + pad
-    grid, more = _grid(dataset, _window(dataset, backward, low, high, path), cells)
+    grid, more = _grid(dataset, _window(dataset, backward, low, high, path), cells, path)
     rows, cols = grid.heights.shape
     a, b, c, d, e, f = grid.affine
     col, row = np.meshgrid(np.arange(cols) + 0.5, np.arange(rows) + 0.5)
