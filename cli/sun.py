@@ -40,7 +40,15 @@ from shadowgeo.io.gis_write import (
     write_layers,
 )
 from shadowgeo.io.sunlight_glb import write_hours_glb
-from shadowgeo.scene.facade_hours import ROOFS, SURFACE_KINDS, WALLS, FacadeHours, facade_hours
+from shadowgeo.scene.facade_hours import (
+    ROOFS,
+    SURFACE_KINDS,
+    TERRAIN,
+    WALLS,
+    FacadeHours,
+    facade_hours,
+    is_terrain,
+)
 from shadowgeo.scene.sunlight import (
     SceneStudy,
     hours_faces,
@@ -74,6 +82,7 @@ examples:
   shadowgeo sun suzhou.geojson levels.geojson --date 2026-03-21 --plot map.png
   shadowgeo sun delft.city.json --date 2026-03-21 --mesh hours.glb   (ground, walls, roofs)
   shadowgeo sun rotterdam.city.json --at 51.92,4.48 --cityjson hours.city.json
+  shadowgeo sun delft.city.json --dem ahn.tif --mesh hours.glb      (terrain: hours, casts)
 
 The floor is the largest flat surface found that faces up under the scene
 (--receiver DEF names one, --plane a,b,c,d gives a plane), else the ground
@@ -112,6 +121,15 @@ them: use --mesh. A GIS OUT gets, when walls and roofs are studied (ask with
 --surfaces), a layer 'surfaces': each face a 3-D triangle (object, kind,
 hours, date). Walls and roofs take the sun as a point (--sun-angle is for
 the ground).
+--dem TIF (a GeoTIFF DEM, read with rasterio) adds the terrain under the
+city: the raster around the buildings (plus --dem-margin metres, 100),
+projected into the city data's CRS, averaged down to at most 40,000 cells,
+nodata cells left as holes. It receives (its faces' hours, kind
+TerrainSurface, in --mesh and the GIS 'surfaces' layer) and casts on the
+buildings and on itself. CityJSON heights are absolute and stay as given;
+footprints give heights above a base, so each footprint building is stood
+on the DEM's height at its footprint's centroid (with a note). The ground
+plane study and its table are as without --dem.
 Several days run on a Dask LocalCluster started here (--workers N), on a
 running cluster (--scheduler ADDRESS) or here (--serial); the results are the
 same either way. Exit codes: 0 done, 1 bad input or OUT cannot be written,
@@ -140,6 +158,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     _add_sun(parser)
     _add_floor(parser)
     _add_extra_outputs(parser)
+    _add_terrain(parser)
     add_dask_arguments(parser, "day", "a LocalCluster here for several days")
     parser.set_defaults(func=run, parser=parser)
 
@@ -276,6 +295,34 @@ def _add_extra_outputs(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_terrain(parser: argparse.ArgumentParser) -> None:
+    """The terrain: --dem and --dem-margin."""
+    parser.add_argument(
+        "--dem",
+        type=Path,
+        metavar="TIF",
+        help="a DEM (GeoTIFF) giving the terrain under city data, which receives (hours "
+        "per face in --mesh and the GIS 'surfaces' layer) and casts",
+    )
+    parser.add_argument(
+        "--dem-margin",
+        type=margin_argument,
+        default=100.0,
+        metavar="METRES",
+        help="how far round the buildings the DEM is read (default 100 m)",
+    )
+
+
+def margin_argument(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"expected a distance in metres >= 0, got {text!r}")
+    return value
+
+
 def place_argument(text: str) -> tuple[float, float]:
     try:
         latitude, longitude = (float(part) for part in text.split(","))
@@ -375,6 +422,8 @@ def run(args: argparse.Namespace) -> int:
     _settle_site(args, scene)
     kinds = _surface_kinds(args, scene)
     polygons = _cityjson_polygons(args, kinds)  # before the long work
+    scene, terrain = _terrain(args, scene)
+    kinds = kinds if terrain is None else (*kinds, TERRAIN)
     days = _days(args)
     studied = _run_study(args, scene, days)
     if isinstance(studied, int):
@@ -387,6 +436,8 @@ def run(args: argparse.Namespace) -> int:
         _report_day(args, days, day, study)
     else:
         _report_days(args, days, studies)
+    if terrain is not None:  # receives and casts from here on; not in the ground study
+        scene = dataclasses.replace(scene, shapes=[*scene.shapes, terrain])
     facades = _facades(args, scene, days, kinds)
     if args.days == 1:
         _write_outputs(args, scene, inputs, study, day, days.zone, facades)
@@ -409,6 +460,35 @@ def _check_output(args: argparse.Namespace) -> None:
         )
     if not is_gis_path(args.output):
         shadowgeo.io.check_writable(args.output)  # before the long work
+
+
+def _terrain(
+    args: argparse.Namespace, scene: shadowgeo.Scene
+) -> tuple[shadowgeo.Scene, shadowgeo.Shape | None]:
+    """--dem: the terrain under the scene's geometry as a shape, and the
+    scene with footprint buildings stood on it (notes printed)."""
+    if args.dem is None:
+        return scene, None
+    if scene.up_index != 2:
+        args.parser.error("--dem puts a terrain under city data (z up), not a Y-up scene")
+    from shadowgeo.io.dem import read_terrain, stand_on
+
+    points = [
+        shape.world_vertices for shape in scene.shapes if shape.role == "geometry" and shape.n_faces
+    ]
+    if not points:
+        raise shadowgeo.SceneError("no geometry to put a terrain under", path=scene.path)
+    plan = np.concatenate(points)[:, :2]
+    terrain = read_terrain(
+        args.dem, scene, plan.min(axis=0), plan.max(axis=0), margin=args.dem_margin
+    )
+    notes = list(terrain.notes)
+    if shadowgeo.io.reader_name(args.input) == "footprints":
+        scene, note = stand_on(scene, terrain)
+        notes.append(note)
+    for note in notes:
+        print(f"note: {terminal(note)}", file=sys.stderr)
+    return scene, terrain.shape()
 
 
 def _surface_kinds(args: argparse.Namespace, scene: shadowgeo.Scene) -> tuple[str, ...]:
@@ -615,6 +695,8 @@ def _facades(
         )
     latitude, longitude = args.at
     receivers = _buildings_named(args.input)
+    if receivers is not None and TERRAIN in kinds:
+        receivers |= {shape.name or "" for shape in scene.shapes if is_terrain(shape)}
     show = args.progress or sys.stderr.isatty()
     bar = ProgressBar("walls and roofs") if show else None
     try:
@@ -651,7 +733,7 @@ def _report_facades(found: FacadeHours) -> None:
         )
 
 
-_WORDS = {WALLS: "walls", ROOFS: "roofs"}
+_WORDS = {WALLS: "walls", ROOFS: "roofs", TERRAIN: "terrain"}
 # The CityJSON object types whose walls and roofs are studied; the others
 # (trees, bridges, land use with steps, city furniture) only cast.
 _BUILDINGS = {"Building", "BuildingPart"}

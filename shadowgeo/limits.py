@@ -103,6 +103,10 @@ surface pairs          5,000,000       (receiving face, caster triangle) pairs t
                                        overlap as seen from a light in
                                        ``shadow_on_surface``; past it, an error
                                        before the pairs fill memory
+DEM raster             1,000,000,000   a GeoTIFF's width x height, checked from its
+                       cells           header before any pixel is read
+                                       (``shadowgeo.io.dem``); the window read is
+                                       averaged down to ``DEM_CELLS`` (40,000)
 =====================  ==============  =============================================
 
 Triangles: a scene of more than ``MAX_TRIANGLES`` (5,000,000) after
@@ -138,12 +142,14 @@ __all__ = [
     "ANGLE_SLACK",
     "CONVEX_TURN",
     "CROSSING_RESOLUTION",
+    "DEM_CELLS",
     "FLOAT32_AGREEMENT",
     "FRAME_ROUNDING",
     "LARGEST_COORDINATE",
     "MATRIX_ROUNDING",
     "MAX_CASTING_LIGHTS",
     "MAX_CURVE_SEGMENTS",
+    "MAX_DEM_RASTER_CELLS",
     "MAX_DOCUMENT_BYTES",
     "MAX_EXTRUSION_POINTS",
     "MAX_INLINE_DEPTH",
@@ -237,6 +243,14 @@ MAX_SURFACE_PAIRS = 5_000_000
 # At this size (benchmarks/bench_surface.py's terrain at 100,000 faces under a
 # sphere) a point light costs about 0.2 s, a low sun with long shadows about 3 s.
 MAX_SURFACE_FACES = 100_000
+# A DEM (shadowgeo.io.dem): a raster whose width x height passes this is
+# refused from its header, before a pixel is read (a hostile header can claim
+# 2^31 x 2^31 cells in a few bytes); the window read around the study is then
+# averaged down to at most DEM_CELLS cells (two terrain triangles each: 80,000
+# triangles, the size of a city district's buildings, received and cast at
+# every sun sample).
+MAX_DEM_RASTER_CELLS = 1_000_000_000
+DEM_CELLS = 40_000
 # A USD text layer is first parsed in a child process within this address
 # space (on top of what the process maps already) and CPU time (see
 # shadowgeo.io.usd_text): a malformed .usda can make usd-core's parser take

@@ -14,7 +14,10 @@ What is studied: the buildings are the scene's geometry less its ground
 cover (:func:`shadowgeo.scene.sunlight.ground_cover`: a city file's roads,
 land use and water, the ground of its ground study); they cast on each
 other and on themselves, and the faces of the kinds asked for of those
-named as ``receivers`` (all of them by default) receive.
+named as ``receivers`` (all of them by default) receive. A terrain (a
+shape whose faces are ``TerrainSurface``, :mod:`shadowgeo.io.dem`) is never
+ground cover: it casts and receives as a building does, its faces studied
+when :data:`TERRAIN` is among the kinds.
 A face's kind is its semantic surface in the file (CityJSON's
 ``RoofSurface``, ``WallSurface``, a footprint's extruded walls and roof);
 a face the file gives none (LoD1 blocks, an X3D scene) is sorted by its
@@ -52,13 +55,18 @@ __all__ = [
     "PROGRESS_STEPS",
     "ROOFS",
     "SURFACE_KINDS",
+    "TERRAIN",
     "WALLS",
     "buildings",
     "facade_hours",
+    "is_terrain",
     "oriented_semantics",
 ]
 
 WALLS, ROOFS, GROUND = "WallSurface", "RoofSurface", "GroundSurface"
+# The faces of a terrain (shadowgeo.io.dem, CityGML's name for relief): studied
+# and casting like a building's, never taken for ground cover.
+TERRAIN = "TerrainSurface"
 # The command line's words for the kinds studied.
 SURFACE_KINDS = {"walls": WALLS, "roofs": ROOFS}
 # At most this many calls of progress (batches of samples) in a study.
@@ -168,6 +176,7 @@ def buildings(scene: Scene) -> tuple[list[Shape], NDArray[np.int64]]:
     shapes = [scene.shapes[index] for index in indices]
     if scene.site is not None and shapes:
         cover = ground_cover(shapes, scene.up_index, scene.meters_per_unit)
+        cover &= ~np.array([is_terrain(shape) for shape in shapes])
         if not cover.all():
             indices = indices[~cover]
             shapes = [scene.shapes[index] for index in indices]
@@ -175,6 +184,12 @@ def buildings(scene: Scene) -> tuple[list[Shape], NDArray[np.int64]]:
         dataclasses.replace(shape, semantics=_labelled(shape, scene.up_index)) for shape in shapes
     ]
     return labelled, indices
+
+
+def is_terrain(shape: Shape) -> bool:
+    """Whether the shape is a terrain (its semantics name TERRAIN): it casts
+    and receives however flat it is."""
+    return shape.semantics is not None and TERRAIN in shape.semantics.kinds
 
 
 def _labelled(shape: Shape, up_index: int) -> Semantics:
