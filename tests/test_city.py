@@ -483,6 +483,10 @@ def _faulty_cube(faults: dict[int, tuple[list, object]]) -> dict:
         ({2: ([0, True, 5, 4], None), 4: ([2, 3, 7, 60], None)}, "a ring must be a list of"),
         ({2: ([0, 1, 5, 4.0], None), 4: ([2, 3, 7, 60], None)}, "a ring must be a list of"),
         ({4: ([2, 3, 7, 60], None), 5: ([3, 0, "4", 7], None)}, r"vertex index 60 is out of"),
+        # past int64 (the fuzz campaign's cityjson mutant 273 at seed 36 raised
+        # OverflowError): named, and shortened to a bounded message
+        ({1: ([4, 5, 6, 10**40], None)}, r"vertex index 100000000000\.\.\. \(41 digits\) is out"),
+        ({1: ([4, 5, 6, -(2**63) - 1], None)}, r"vertex index -92233720368547758\d* is out"),
     ],
 )
 def test_the_first_fault_in_the_files_order_is_the_one_named(tmp_path, faults, message):

@@ -307,11 +307,12 @@ def _ring(ring: list[Any], count: int, where: str, error: _Error) -> np.ndarray:
     """A ring's vertex indices, checked to be integers below ``count``."""
     if not all(type(index) is int for index in ring):
         raise error("a ring must be a list of vertex indices", where)
-    indices = np.array(ring, dtype=np.int64) if ring else np.zeros(0, np.int64)
-    if len(indices) and (indices.min() < 0 or indices.max() >= count):
-        bad = int(indices.max() if indices.max() >= count else indices.min())
-        raise error(f"vertex index {bad} is out of range ({count} vertices)", where)
-    return indices
+    outside = [index for index in ring if not 0 <= index < count]
+    if outside:  # (checked as Python integers: one may pass int64's range)
+        bad = str(outside[0])
+        shown = bad if len(bad) <= 20 else f"{bad[:12]}... ({len(bad)} digits)"
+        raise error(f"vertex index {shown} is out of range ({count} vertices)", where)
+    return np.array(ring, dtype=np.int64) if ring else np.zeros(0, np.int64)
 
 
 @dataclass(frozen=True)
@@ -363,7 +364,7 @@ def _first_problem(
             for ring in item:
                 _ring(ring, count, where, error)
             _surface_kind(value, listed, where, error)
-    except (SceneError, OverflowError) as problem:
+    except SceneError as problem:
         return problem
     raise AssertionError("the whole check failed where the surfaces one at a time pass")
 
