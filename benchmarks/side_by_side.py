@@ -55,7 +55,15 @@ BENCHMARKS: dict[str, list[str]] = {
     "bench_robustness.py": [],
     "bench_lights.py": ["--lights", "1000", "--repeat", "3"],
     "bench_buildings.py": ["--sizes", "1000", "10000", "--repeat", "3"],
-    "bench_batch.py": ["--workers", "1"],
+    # the corpus folders both commits read (the old one reads no city data)
+    "bench_batch.py": [
+        "--workers",
+        "1",
+        "--",
+        "../shared/corpus/castle-demo-models",
+        "../shared/corpus/castle-demo-models-classic",
+        "../shared/corpus/web3d-json-pairs",
+    ],
     "bench_sunstudy.py": ["--buildings", "1000", "--days", "8", "--workers", "1"],
     "bench_compiled.py": [],
     "bench_memory.py": ["--quick", "--no-write"],
