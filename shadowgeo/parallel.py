@@ -7,11 +7,13 @@ started. Dask is an extra: ``pip install "shadowgeo[dask]"``.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Hashable, Iterator
 from contextlib import contextmanager
-from typing import Any
+from typing import Any, TypeVar
 
-__all__ = ["client_for"]
+__all__ = ["client_for", "results_as_they_finish"]
+
+Key = TypeVar("Key", bound=Hashable)
 
 
 def _distributed() -> Any:
@@ -53,3 +55,20 @@ def client_for(scheduler: Any, *, workers: int | None = None) -> Iterator[Any]:
         raise ValueError(f"scheduler must be a Client, an address or 'local', got {scheduler!r}")
     with distributed.Client(scheduler) as client:
         yield client
+
+
+def results_as_they_finish(
+    futures: dict[Key, Any], progress: Callable[[int, int], None] | None = None
+) -> dict[Key, Any]:
+    """Each of ``futures``' results, fetched as it finishes and released at
+    once (so the workers let go of it), keyed and ordered as ``futures``;
+    ``progress(done, total)`` is called after each."""
+    as_completed = _distributed().as_completed
+    key_of = {future.key: key for key, future in futures.items()}
+    finished: dict[Key, Any] = {}
+    for future in as_completed(list(futures.values())):
+        finished[key_of[future.key]] = future.result()
+        future.release()
+        if progress:
+            progress(len(finished), len(futures))
+    return {key: finished[key] for key in futures}

@@ -628,9 +628,7 @@ def _days_on_dask(
 ) -> dict[_dt.date, SurfaceSunlight]:
     """Each day's :func:`surface_sun_study` as a Dask task (see
     :func:`surface_sun_study_by_day`), fetched as it finishes."""
-    from dask.distributed import as_completed
-
-    from .parallel import client_for
+    from .parallel import client_for, results_as_they_finish
 
     with client_for(scheduler) as client:
         # each scattered as one object (a scattered tuple would travel as its items)
@@ -647,15 +645,7 @@ def _days_on_dask(
             )
             for day, day_times in chosen.items()
         }
-        day_of = {future.key: day for day, future in futures.items()}
-        finished: dict[_dt.date, SurfaceSunlight] = {}
-        # each result is fetched as it comes, so the workers let go of it
-        for future in as_completed(list(futures.values())):
-            finished[day_of[future.key]] = future.result()
-            future.release()
-            if progress:
-                progress(len(finished), len(chosen))
-        return {day: finished[day] for day in futures}
+        return results_as_they_finish(futures, progress)
 
 
 def _face_levels(

@@ -703,7 +703,7 @@ def _by_day(
             if progress:
                 progress(done, total)
         return results
-    from .parallel import client_for
+    from .parallel import client_for, results_as_they_finish
 
     name = "sun-study" if function is sun_study else "sun-summary"
     with client_for(scheduler) as client:
@@ -714,14 +714,4 @@ def _by_day(
             )
             for day, day_times in chosen.items()
         }
-        from dask.distributed import as_completed
-
-        day_of = {future.key: day for day, future in futures.items()}
-        finished: dict[_dt.date, Any] = {}
-        # each result is fetched as it comes, so the workers let go of it
-        for future in as_completed(list(futures.values())):
-            finished[day_of[future.key]] = future.result()
-            future.release()
-            if progress:
-                progress(len(finished), total)
-        return {day: finished[day] for day in futures}
+        return results_as_they_finish(futures, progress)

@@ -23,6 +23,7 @@ import pytest
 
 rasterio = pytest.importorskip("rasterio")  # the test extra installs it; CI fails a skip
 pyproj = pytest.importorskip("pyproj")
+from noaa_sun import sun_vector  # noqa: E402
 from rasterio.transform import from_origin  # noqa: E402
 from test_sun_surfaces_cli import _faces, _normals, _run  # noqa: E402
 
@@ -96,37 +97,8 @@ def _footprints(path: Path, squares: list[tuple[float, float, float, float]]) ->
 
 def _sun(latitude: float, longitude: float, time: dt.datetime) -> np.ndarray:
     """(3,) unit vector towards the sun, x east, y north, z up, by NOAA's
-    general solar position formulas (no refraction)."""
-    utc = time.astimezone(dt.UTC)
-    hour = utc.hour + utc.minute / 60.0
-    gamma = 2 * math.pi / 365 * (utc.timetuple().tm_yday - 1 + (hour - 12) / 24)
-    equation = 229.18 * (
-        0.000075
-        + 0.001868 * math.cos(gamma)
-        - 0.032077 * math.sin(gamma)
-        - 0.014615 * math.cos(2 * gamma)
-        - 0.040849 * math.sin(2 * gamma)
-    )
-    declination = (
-        0.006918
-        - 0.399912 * math.cos(gamma)
-        + 0.070257 * math.sin(gamma)
-        - 0.006758 * math.cos(2 * gamma)
-        + 0.000907 * math.sin(2 * gamma)
-        - 0.002697 * math.cos(3 * gamma)
-        + 0.00148 * math.sin(3 * gamma)
-    )
-    hour_angle = math.radians((hour * 60 + equation + 4 * longitude) / 4 - 180)
-    phi = math.radians(latitude)
-    # east, north, up of the sun's direction in the local horizon frame
-    east = -math.cos(declination) * math.sin(hour_angle)
-    north = math.cos(phi) * math.sin(declination) - math.sin(phi) * math.cos(
-        declination
-    ) * math.cos(hour_angle)
-    up = math.sin(phi) * math.sin(declination) + math.cos(phi) * math.cos(declination) * math.cos(
-        hour_angle
-    )
-    return np.array([east, north, up])
+    general solar position formulas (:mod:`noaa_sun`)."""
+    return sun_vector(latitude, longitude, time)
 
 
 def _samples(latitude: float, longitude: float) -> list[np.ndarray]:

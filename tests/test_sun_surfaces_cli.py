@@ -17,12 +17,12 @@ from __future__ import annotations
 
 import datetime as dt
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 from needs import SHARED, absent
+from noaa_sun import elevation
 from test_sunlight_glb import _read
 from validators import gltf_problems, gltf_report
 
@@ -56,32 +56,8 @@ def _gis(name: str) -> Path:
 
 def _elevation(latitude: float, longitude: float, time: dt.datetime) -> float:
     """The sun's elevation in degrees, by NOAA's general solar position
-    formulas (Spencer's series for the declination and equation of time)."""
-    utc = time.astimezone(dt.UTC)
-    hour = utc.hour + utc.minute / 60.0
-    gamma = 2 * math.pi / 365 * (utc.timetuple().tm_yday - 1 + (hour - 12) / 24)
-    equation = 229.18 * (
-        0.000075
-        + 0.001868 * math.cos(gamma)
-        - 0.032077 * math.sin(gamma)
-        - 0.014615 * math.cos(2 * gamma)
-        - 0.040849 * math.sin(2 * gamma)
-    )
-    declination = (
-        0.006918
-        - 0.399912 * math.cos(gamma)
-        + 0.070257 * math.sin(gamma)
-        - 0.006758 * math.cos(2 * gamma)
-        + 0.000907 * math.sin(2 * gamma)
-        - 0.002697 * math.cos(3 * gamma)
-        + 0.00148 * math.sin(3 * gamma)
-    )
-    hour_angle = math.radians((hour * 60 + equation + 4 * longitude) / 4 - 180)
-    phi = math.radians(latitude)
-    sine = math.sin(phi) * math.sin(declination) + math.cos(phi) * math.cos(declination) * math.cos(
-        hour_angle
-    )
-    return math.degrees(math.asin(sine))
+    formulas (:mod:`noaa_sun`)."""
+    return elevation(latitude, longitude, time)
 
 
 def _sun_up_hours(latitude: float, longitude: float, zone_hours: int, every: int = EVERY) -> float:
