@@ -800,3 +800,25 @@ def test_rect_and_disk_lights_x3d_and_gltf_cannot_hold_are_noted(tmp_path, suffi
     assert len(back) == 1 and isinstance(back[0].light, sg.SpotLight)
     assert np.allclose(back[0].light.position, [0, 3, 0])
     assert back[0].light.cut_off_angle == pytest.approx(math.pi / 2)
+
+
+def test_a_scene_past_float32s_range_gets_a_finite_camera_clipping_range(tmp_path):
+    # The fuzz campaign (seed 36, wrl mutant 572) wrote clippingRange = (3e35, inf):
+    # the far end is the scene's size times 1000, in a float2 attribute.
+    source = tmp_path / "huge.x3d"
+    source.write_text(
+        '<X3D profile="Interchange" version="4.0"><Scene><Shape>'
+        '<IndexedTriangleSet index="0 1 2"><Coordinate point="0 0 0 3e36 0 0 0 3e36 0"/>'
+        "</IndexedTriangleSet></Shape></Scene></X3D>"
+    )
+    target = tmp_path / "huge.usda"
+    sg.save(sg.load(source), target)
+    stage = Usd.Stage.Open(str(target))
+    ranges = [
+        tuple(UsdGeom.Camera(prim).GetClippingRangeAttr().Get())
+        for prim in stage.Traverse()
+        if prim.IsA(UsdGeom.Camera)
+    ]
+    assert ranges
+    for near, far in ranges:
+        assert math.isfinite(near) and math.isfinite(far) and 0 < near < far

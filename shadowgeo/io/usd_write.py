@@ -236,7 +236,9 @@ class _Writer:
             vertical = 2 * focal * math.tan(view.field_of_view / 2)
             camera.CreateVerticalApertureAttr(vertical)
             camera.CreateHorizontalApertureAttr(vertical * _ASPECT)
-            camera.CreateClippingRangeAttr(Gf.Vec2f(size / 1000, size * 1000))
+            # a float2: a scene past 3.4e35 across would make its far end inf
+            near, far = (min(value, _FLOAT32_MAX) for value in (size / 1000, size * 1000))
+            camera.CreateClippingRangeAttr(Gf.Vec2f(near, far))
             transform = np.eye(4)
             transform[:3, :3] = np.column_stack(
                 [rotate(view.orientation, axis) for axis in np.eye(3)]
@@ -252,6 +254,8 @@ class _Writer:
 
 
 # The picture's width over its height: usd-core's default apertures' (20.955 / 15.2908).
+# The largest finite float32 (USD float attributes).
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 _ASPECT = 20.955 / 15.2908
 
 
