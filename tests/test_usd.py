@@ -822,3 +822,19 @@ def test_a_scene_past_float32s_range_gets_a_finite_camera_clipping_range(tmp_pat
     assert ranges
     for near, far in ranges:
         assert math.isfinite(near) and math.isfinite(far) and 0 < near < far
+
+
+def test_face_vertex_counts_that_are_not_numbers_name_the_mesh(tmp_path):
+    # The fuzz campaign (seed 37, usdc mutant 2720): a flipped byte turned
+    # faceVertexCounts into text, and the triangle count before the budget
+    # raised a bare ValueError.
+    source = tmp_path / "bad.usda"
+    source.write_text(
+        "#usda 1.0\n"
+        'def Mesh "tri"\n{\n'
+        "    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0)]\n"
+        '    string faceVertexCounts = "int[]"\n'
+        "    int[] faceVertexIndices = [0, 1, 2]\n}\n"
+    )
+    with pytest.raises(sg.SceneError, match=r"bad\.usda.*tri.*faceVertexCounts holds str"):
+        sg.load(source)

@@ -536,7 +536,7 @@ def _stage_scene(
         where = _where(prim)
         with _corrupt_data(path, where):
             if prim.IsA(UsdGeom.Mesh):
-                triangles += _mesh_triangles(prim, time)
+                triangles += _mesh_triangles(prim, time, path, where)
                 through = "instancing and references"
                 limits.check_expansion(
                     triangles, str(path), where, None, max_triangles, through=through
@@ -549,13 +549,12 @@ def _stage_scene(
     return scene
 
 
-def _mesh_triangles(prim: Any, time: Any) -> int:
+def _mesh_triangles(prim: Any, time: Any, path: Path, where: str) -> int:
     """Triangles the mesh at ``prim`` makes at most (a face of ``k`` corners
-    ``k - 2``), from its ``faceVertexCounts`` alone."""
-    counts = pxr()[4].Mesh(prim).GetFaceVertexCountsAttr().Get(time)
-    if counts is None:
-        return 0
-    return int(np.maximum(np.asarray(counts, dtype=np.int64) - 2, 0).sum())
+    ``k - 2``), from its ``faceVertexCounts`` alone (a SceneError naming the
+    prim when they are not numbers)."""
+    counts = _array(pxr()[4].Mesh(prim).GetFaceVertexCountsAttr(), time, np.int64, path, where)
+    return int(np.maximum(counts.reshape(-1) - 2, 0).sum())
 
 
 def _read_prim(
