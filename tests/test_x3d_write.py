@@ -637,3 +637,32 @@ def test_added_shapes_cast_no_runtime_shadow_in_x3d_4(tmp_path, version, x3d_sch
     wrl = tmp_path / "out.wrl"
     sg.save(result, wrl)
     assert "castShadow" not in wrl.read_text()
+
+
+def test_a_prototype_instances_non_finite_field_value_is_not_copied(tmp_path):
+    # The fuzz campaign (seed 37, x3d mutant 1928) found a ProtoInstance's
+    # <fieldValue value="-2 -inf 0"> copied verbatim: its type is in the
+    # ProtoDeclare's interface, not on the element. A string field's value
+    # that spells inf is text, and stays.
+    scene, target = written(
+        tmp_path,
+        '<X3D version="4.0"><Scene>\n'
+        '<ProtoDeclare name="Moved"><ProtoInterface>'
+        '<field name="at" type="SFVec3f" accessType="inputOutput" value="0 0 0"/>'
+        '<field name="label" type="SFString" accessType="inputOutput" value=\'"x"\'/>'
+        "</ProtoInterface><ProtoBody><Transform><IS>"
+        '<connect nodeField="translation" protoField="at"/></IS>'
+        "<Shape><Box/></Shape></Transform></ProtoBody></ProtoDeclare>\n"
+        '<ProtoInstance name="Moved"><fieldValue name="at" value="-2 -inf 0"/>'
+        '<fieldValue name="label" value=\'"inf"\'/></ProtoInstance>\n'
+        '<ProtoInstance name="Moved"><fieldValue name="at" value="1 2 3"/></ProtoInstance>\n'
+        "</Scene></X3D>",
+    )
+    values = {
+        (i, v.get("name")): v.get("value")
+        for i, instance in enumerate(parse(target).iter("ProtoInstance"))
+        for v in instance.iter("fieldValue")
+    }
+    assert values[(0, "at")] is None  # dropped: the declaration's default applies
+    assert values[(0, "label")] == '"inf"' and values[(1, "at")] == "1 2 3"
+    assert any("fieldValue: value='-2 -inf 0' is not finite" in n for n in scene.warnings)

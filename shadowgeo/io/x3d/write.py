@@ -492,10 +492,44 @@ def _kind(tag: str, name: str, element: Element) -> str:
     """What attribute ``name`` of an element ``tag`` holds, as far as the
     schema (or a ``<field>``'s ``type``) says: ``"numbers"``, ``"other"``
     (strings, booleans, nodes), or ``"unknown"``."""
-    kind = element.get("type") if tag == "field" and name == "value" else field_type(tag, name)
+    if tag == "field" and name == "value":
+        kind = element.get("type")
+    elif tag == "fieldValue" and name == "value":
+        kind = _declared_type(element)
+    else:
+        kind = field_type(tag, name)
     if kind is None:
         return "unknown"
     return "other" if kind.endswith(("String", "Bool", "Node")) else "numbers"
+
+
+def _declared_type(field_value: Element) -> str | None:
+    """The type a ProtoInstance's ``<fieldValue>`` has: its field's in the
+    ProtoDeclare or ExternProtoDeclare of that name (None when none says)."""
+    instance = field_value.getparent()
+    if instance is None or etree.QName(instance).localname != "ProtoInstance":
+        return None
+    declared = _declared_types(field_value.getroottree().getroot())
+    return declared.get((instance.get("name"), field_value.get("name")))
+
+
+@functools.lru_cache(maxsize=1)
+def _declared_types(root: Element) -> dict[tuple[str | None, str | None], str]:
+    """(prototype, field) -> type of every field declared in the document,
+    found in one walk (the first declaration of a name wins), so that many
+    fieldValues cost one walk, not one each."""
+    declared: dict[tuple[str | None, str | None], str] = {}
+    for declare in root.iter():
+        if not isinstance(declare.tag, str):
+            continue
+        if etree.QName(declare).localname not in ("ProtoDeclare", "ExternProtoDeclare"):
+            continue
+        for field in declare.iter():
+            if isinstance(field.tag, str) and etree.QName(field).localname == "field":
+                if field.get("type") is not None:
+                    key = (declare.get("name"), field.get("name"))
+                    declared.setdefault(key, str(field.get("type")))
+    return declared
 
 
 def _non_finite(value: str, kind: str = "unknown") -> bool:
