@@ -7,13 +7,14 @@ started. Dask is an extra: ``pip install "shadowgeo[dask]"``.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable, Iterator
+import datetime as _dt
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from typing import Any, TypeVar
+from typing import Any
 
-__all__ = ["client_for", "results_as_they_finish"]
+from .sun import days
 
-Key = TypeVar("Key", bound=Hashable)
+__all__ = ["client_for", "each_day"]
 
 
 def _distributed() -> Any:
@@ -57,18 +58,44 @@ def client_for(scheduler: Any, *, workers: int | None = None) -> Iterator[Any]:
         yield client
 
 
-def results_as_they_finish(
-    futures: dict[Key, Any], progress: Callable[[int, int], None] | None = None
-) -> dict[Key, Any]:
-    """Each of ``futures``' results, fetched as it finishes and released at
-    once (so the workers let go of it), keyed and ordered as ``futures``;
-    ``progress(done, total)`` is called after each."""
+def each_day(
+    function: Callable[..., Any],
+    shared: tuple[Any, ...],
+    times: Sequence[_dt.datetime],
+    *,
+    tz: _dt.tzinfo | None,
+    scheduler: Any,
+    progress: Callable[[int, int], None] | None,
+    name: str,
+    options: dict[str, Any],
+) -> dict[_dt.date, Any]:
+    """``function(*shared, day_times, **options)`` for each calendar day of
+    ``times`` (in ``tz``, UTC by default), in day order: one after another
+    here when ``scheduler`` is None, else one Dask task a day (key
+    ``name-day``) on :func:`client_for`'s client, ``shared`` sent to the
+    workers once and each result fetched as it finishes and released at once
+    (so the workers let go of it). ``progress(done, total)`` after each day."""
+    chosen = {day: [times[i] for i in indices] for day, indices in days(times, tz).items()}
+    if scheduler is None:
+        results = {}
+        for done, (day, day_times) in enumerate(chosen.items(), start=1):
+            results[day] = function(*shared, day_times, **options)
+            if progress:
+                progress(done, len(chosen))
+        return results
     as_completed = _distributed().as_completed
-    key_of = {future.key: key for key, future in futures.items()}
-    finished: dict[Key, Any] = {}
-    for future in as_completed(list(futures.values())):
-        finished[key_of[future.key]] = future.result()
-        future.release()
-        if progress:
-            progress(len(finished), len(futures))
-    return {key: finished[key] for key in futures}
+    with client_for(scheduler) as client:
+        # each scattered as one object (a scattered tuple would travel as its items)
+        sent = [client.scatter([value], broadcast=True)[0] for value in shared]
+        futures = {
+            day: client.submit(function, *sent, day_times, key=f"{name}-{day}", **options)
+            for day, day_times in chosen.items()
+        }
+        day_of = {future.key: day for day, future in futures.items()}
+        finished: dict[_dt.date, Any] = {}
+        for future in as_completed(list(futures.values())):
+            finished[day_of[future.key]] = future.result()
+            future.release()
+            if progress:
+                progress(len(finished), len(futures))
+        return {day: finished[day] for day in futures}

@@ -58,7 +58,8 @@ from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight
 from .opacity import Layers, layers
-from .sun import days, sun_lights
+from .parallel import each_day
+from .sun import sun_lights
 from .surface import shadow_on_surface
 from .tolerance import Tolerance
 from .topology import MeshLike, as_caster
@@ -607,45 +608,16 @@ def surface_sun_study_by_day(
         levels=levels,
         opacity=opacity,
     )
-    chosen = {day: [times[i] for i in indices] for day, indices in days(times, tz).items()}
-    if scheduler is None:
-        results = {}
-        for done, (day, day_times) in enumerate(chosen.items(), start=1):
-            results[day] = surface_sun_study(casters, surface, day_times, **options)
-            if progress:
-                progress(done, len(chosen))
-        return results
-    return _days_on_dask(casters, surface, chosen, scheduler, progress, options)
-
-
-def _days_on_dask(
-    casters: MeshLike | Sequence[MeshLike],
-    surface: MeshLike,
-    chosen: dict[_dt.date, list[_dt.datetime]],
-    scheduler: Any,
-    progress: Callable[[int, int], None] | None,
-    options: dict[str, Any],
-) -> dict[_dt.date, SurfaceSunlight]:
-    """Each day's :func:`surface_sun_study` as a Dask task (see
-    :func:`surface_sun_study_by_day`), fetched as it finishes."""
-    from .parallel import client_for, results_as_they_finish
-
-    with client_for(scheduler) as client:
-        # each scattered as one object (a scattered tuple would travel as its items)
-        shared_casters = client.scatter([casters], broadcast=True)[0]
-        shared_surface = client.scatter([surface], broadcast=True)[0]
-        futures = {
-            day: client.submit(
-                surface_sun_study,
-                shared_casters,
-                shared_surface,
-                day_times,
-                key=f"surface-sun-study-{day}",
-                **options,
-            )
-            for day, day_times in chosen.items()
-        }
-        return results_as_they_finish(futures, progress)
+    return each_day(
+        surface_sun_study,
+        (casters, surface),
+        times,
+        tz=tz,
+        scheduler=scheduler,
+        progress=progress,
+        name="surface-sun-study",
+        options=options,
+    )
 
 
 def _face_levels(

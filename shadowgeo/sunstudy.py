@@ -60,12 +60,13 @@ from .levels import cover_level_areas, cover_levels
 from .lights import DirectionalLight
 from .limits import RELATIVE_ROUNDING
 from .opacity import Layers, layers
+from .parallel import each_day
 from .plane import Plane
 from .plane2d import components, local_scale, points_in_parts, signed_areas, unite
 from .projection import project_shadow
 from .soft import light_samples
-from .sun import days, sun_lights
 from .sun import frame as sun_frame
+from .sun import sun_lights
 from .topology import Caster, as_caster
 
 __all__ = [
@@ -692,26 +693,14 @@ def _by_day(
     """``function`` (:func:`sun_study` or :func:`_summary`) of each calendar
     day of ``times`` with the keywords ``options`` (the site, step and
     frame), here or on Dask (see :func:`sun_study_by_day`)."""
-    caster = _one_caster(casters)
-    groups = days(times, tz)
-    chosen = {day: [times[i] for i in indices] for day, indices in groups.items()}
-    total = len(chosen)
-    if scheduler is None:
-        results = {}
-        for done, (day, day_times) in enumerate(chosen.items(), start=1):
-            results[day] = function(caster, plane, region, day_times, **options)
-            if progress:
-                progress(done, total)
-        return results
-    from .parallel import client_for, results_as_they_finish
-
     name = "sun-study" if function is sun_study else "sun-summary"
-    with client_for(scheduler) as client:
-        shared = client.scatter(caster, broadcast=True)
-        futures = {
-            day: client.submit(
-                function, shared, plane, region, day_times, key=f"{name}-{day}", **options
-            )
-            for day, day_times in chosen.items()
-        }
-        return results_as_they_finish(futures, progress)
+    return each_day(
+        function,
+        (_one_caster(casters), plane, region),
+        times,
+        tz=tz,
+        scheduler=scheduler,
+        progress=progress,
+        name=name,
+        options=options,
+    )

@@ -86,8 +86,10 @@ def crossings_estimate(
     >>> crossings_estimate([square, square + 0.5])
     (0.0, 0)
     """
+    n_edges = sum(map(len, loops))
+    if n_edges * (n_edges - 1) // 2 <= MAX_UNION_CROSSINGS:  # (cells only lower the pairs)
+        return 0.0, 0
     lengths = np.array([len(loop) for loop in loops])
-    n_edges = int(lengths.sum())
     if cells is None:
         pairs = n_edges * (n_edges - 1) / 2
     else:  # each cell's edges, and where they begin
@@ -172,10 +174,10 @@ def sweep_work(loops: list[np.ndarray]) -> int:
     >>> sweep_work([square, square + 0.5])
     0
     """
-    lengths = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
-    n_edges = int(lengths.sum())
+    n_edges = sum(map(len, loops))
     if n_edges * n_edges <= MAX_UNION_SWEEP:  # (the product never exceeds it)
         return 0
+    lengths = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
     y = np.concatenate(loops)[:, 1].astype(np.float64)
     y_next = y[loop_rings(lengths)[1]]  # each loop closes
     low = np.sort(np.minimum(y, y_next))

@@ -223,11 +223,9 @@ def _check_budget(loops: list[np.ndarray], cells: np.ndarray | None) -> None:
     """Raise BudgetError when uniting ``loops`` would take Clipper2 past
     MAX_UNION_CROSSINGS crossings or MAX_UNION_SWEEP steps of its sweep
     (the crossings first: a tangle is named by those)."""
-    n_edges = sum(map(len, loops))
-    if n_edges * (n_edges - 1) // 2 <= MAX_UNION_CROSSINGS and n_edges**2 <= MAX_UNION_SWEEP:
-        return  # too few edges to pass either (both checks would say 0 at once)
     estimate, sampled = crossings_estimate(loops, cells)
     if estimate > MAX_UNION_CROSSINGS and sampled >= FEWEST_CROSSING_EDGES:
+        n_edges = sum(map(len, loops))
         raise BudgetError(
             f"the shadow's outline ({len(loops)} loops, {n_edges} edges) has about "
             f"{estimate:.2g} edge crossings, past the budget of {MAX_UNION_CROSSINGS:,} "
@@ -235,6 +233,7 @@ def _check_budget(loops: list[np.ndarray], cells: np.ndarray | None) -> None:
         )
     work = sweep_work(loops)
     if work > MAX_UNION_SWEEP:
+        n_edges = sum(map(len, loops))
         raise BudgetError(
             f"the shadow's outline ({len(loops)} loops, {n_edges} edges) needs {work:.2g} "
             f"steps of the union's sweep (many corners on few lines), past the budget of "

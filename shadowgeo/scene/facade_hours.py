@@ -46,7 +46,7 @@ from ..errors import SceneError
 from ..sun import sun_lights
 from ..sunlight_surfaces import surface_sunlight
 from .facades import caster_opacity, city_casters
-from .model import Scene, Semantics, Shape
+from .model import Scene, Semantics, Shape, located
 from .receivers import FLOOR_COSINE
 from .sunlight import ground_cover
 
@@ -292,14 +292,8 @@ def facade_hours(
     receiver = _receiver(shapes, wanted, receivers, scene)
     own = dataclasses.replace(scene, shapes=shapes)
     casters, opacity = city_casters(own), caster_opacity(own)
-    site = scene.site
-    _, lights = sun_lights(
-        latitude,
-        longitude,
-        times,
-        up=scene.up_axis,
-        north=None if site is None else site.north,
-    )
+    _, _, north = located(scene, latitude, longitude)
+    _, lights = sun_lights(latitude, longitude, times, up=scene.up_axis, north=north)
     directions = np.array([light.direction for light in lights]).reshape(-1, 3)
     total = np.zeros(len(receiver.faces))
     # the sun-up samples in at most PROGRESS_STEPS batches: each call sets up its

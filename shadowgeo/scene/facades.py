@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from ..errors import SceneError
 from ..sunlight_surfaces import SurfaceSunlight, surface_sun_study
-from .model import Scene, Shape
+from .model import Scene, Shape, located
 from .opacity import opacities
 
 __all__ = [
@@ -145,16 +145,7 @@ def study_city_surfaces(
     """Sunlight on the walls and roofs (``kinds``) of a city scene at
     ``times``; the site and true north from :attr:`Scene.site` unless
     ``latitude`` and ``longitude`` are given (SceneError when neither is)."""
-    site = scene.site
-    if latitude is None or longitude is None:
-        if site is None:
-            raise SceneError(
-                "the scene does not say where it is (no CRS in its file): give the "
-                "latitude and longitude",
-                path=scene.path,
-            )
-        latitude = site.latitude if latitude is None else latitude
-        longitude = site.longitude if longitude is None else longitude
+    latitude, longitude, north = located(scene, latitude, longitude)
     surfaces = city_surfaces(scene, kinds)
     sunlight = surface_sun_study(
         city_casters(scene),
@@ -164,7 +155,7 @@ def study_city_surfaces(
         longitude=longitude,
         step=step,
         up=scene.up_axis,
-        north=None if site is None else site.north,
+        north=north,
         levels=levels,
         opacity=caster_opacity(scene),
     )

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..boxes import bounding_box
+from ..errors import SceneError
 from ..lights import (
     AreaLight,
     DirectionalLight,
@@ -39,6 +40,7 @@ __all__ = [
     "Site",
     "Viewpoint",
     "axis_angle",
+    "located",
     "lights",
     "overview",
     "rotate",
@@ -260,6 +262,26 @@ class Site:
     latitude: float
     longitude: float
     north: tuple[float, float, float] = (0.0, 1.0, 0.0)
+
+
+def located(
+    scene: Scene, latitude: float | None, longitude: float | None
+) -> tuple[float, float, tuple[float, float, float] | None]:
+    """Where a sun study of ``scene`` stands: (latitude, longitude, true
+    north in the scene's frame). The degrees given win; what is not given
+    comes from :attr:`Scene.site`, which also gives north (None: the
+    scene's grid north). SceneError naming the file when neither says."""
+    site = scene.site
+    if latitude is None or longitude is None:
+        if site is None:
+            raise SceneError(
+                "the scene does not say where it is (no CRS in its file): give the "
+                "latitude and longitude",
+                path=scene.path,
+            )
+        latitude = site.latitude if latitude is None else latitude
+        longitude = site.longitude if longitude is None else longitude
+    return latitude, longitude, None if site is None else site.north
 
 
 @dataclass

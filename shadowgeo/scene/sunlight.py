@@ -40,7 +40,7 @@ from ..sunstudy import SunStudy, sun_study, sun_study_by_day, sun_summaries_by_d
 from ..tolerance import Tolerance
 from ..topology import Caster
 from .casters import CasterSet, distinct
-from .model import Material, Scene, Shape, unique_name
+from .model import Material, Scene, Shape, located, unique_name
 from .opacity import opacities
 from .receivers import FLOOR_COSINE, FLOOR_COVER, Receiver, ground, is_floor
 from .receivers import select as select_receivers
@@ -403,15 +403,7 @@ def study_scene(
     (city data whose file names its CRS), which also gives true north in the
     scene's frame (a projected CRS's grid north turns from it); a scene with
     no site needs them (SceneError)."""
-    site = scene.site
-    if latitude is None or longitude is None:
-        if site is None:
-            raise SceneError(
-                "the scene does not say where it is (no CRS in its file): give the "
-                "latitude and longitude"
-            )
-        latitude = site.latitude if latitude is None else latitude
-        longitude = site.longitude if longitude is None else longitude
+    latitude, longitude, north = located(scene, latitude, longitude)
     inputs = scene_study(scene, receivers=receivers, plane=plane, region=region)
     by_day = sun_summaries_by_day if summaries else sun_study_by_day
     studies = by_day(
@@ -423,7 +415,7 @@ def study_scene(
         longitude=longitude,
         step=step,
         up=inputs.up,
-        north=None if site is None else site.north,
+        north=north,
         tz=tz,
         scheduler=scheduler,
         progress=progress,

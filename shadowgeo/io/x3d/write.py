@@ -337,8 +337,9 @@ def _clean(tree: Tree, notes: list[str], source: str, splicer: Splicer) -> str |
     _drop_foreign(tree, notes, source)
     # In document order. (Not an XPath ``contains()`` per letter: it copies
     # every attribute value once per call, 60 MB each for a big mesh.)
+    declared = _declared_types(root)
     for element in root.iter(etree.Element):
-        _clean_numbers(element, notes, source, splicer)
+        _clean_numbers(element, notes, source, splicer, declared)
     return doctype
 
 
@@ -400,12 +401,14 @@ def _drop_foreign(tree: Tree, notes: list[str], source: str) -> None:
     etree.cleanup_namespaces(tree)
 
 
-def _clean_numbers(element: Element, notes: list[str], source: str, splicer: Splicer) -> None:
+def _clean_numbers(
+    element: Element, notes: list[str], source: str, splicer: Splicer, declared: _Declared
+) -> None:
     """Remove an element's non-finite number attributes (noted); long number
-    values go to ``splicer``."""
+    values go to ``splicer``. ``declared``: the prototypes' field types."""
     tag = etree.QName(element).localname
     for name, value in element.items():
-        if name not in _TEXT_ATTRIBUTES and _non_finite(value, _kind(tag, name, element)):
+        if name not in _TEXT_ATTRIBUTES and _non_finite(value, _kind(tag, name, element, declared)):
             shown = value if len(value) <= 40 else value[:37] + "..."
             notes.append(
                 f"{source} line {element.sourceline}, {tag}: "
@@ -488,14 +491,17 @@ def _drop(node: Element) -> None:
     parent.remove(node)
 
 
-def _kind(tag: str, name: str, element: Element) -> str:
+def _kind(tag: str, name: str, element: Element, declared: _Declared) -> str:
     """What attribute ``name`` of an element ``tag`` holds, as far as the
-    schema (or a ``<field>``'s ``type``) says: ``"numbers"``, ``"other"``
-    (strings, booleans, nodes), or ``"unknown"``."""
+    schema (or a ``<field>``'s ``type``, or a ``<fieldValue>``'s field's in
+    ``declared``) says: ``"numbers"``, ``"other"`` (strings, booleans,
+    nodes), or ``"unknown"``."""
     if tag == "field" and name == "value":
         kind = element.get("type")
     elif tag == "fieldValue" and name == "value":
-        kind = _declared_type(element)
+        instance = element.getparent()  # its ProtoInstance, named as its prototype
+        prototype = None if instance is None else instance.get("name")
+        kind = declared.get((prototype, element.get("name")))
     else:
         kind = field_type(tag, name)
     if kind is None:
@@ -503,32 +509,22 @@ def _kind(tag: str, name: str, element: Element) -> str:
     return "other" if kind.endswith(("String", "Bool", "Node")) else "numbers"
 
 
-def _declared_type(field_value: Element) -> str | None:
-    """The type a ProtoInstance's ``<fieldValue>`` has: its field's in the
-    ProtoDeclare or ExternProtoDeclare of that name (None when none says)."""
-    instance = field_value.getparent()
-    if instance is None or etree.QName(instance).localname != "ProtoInstance":
-        return None
-    declared = _declared_types(field_value.getroottree().getroot())
-    return declared.get((instance.get("name"), field_value.get("name")))
+# (prototype name, field name) -> the field's declared type
+_Declared = dict[tuple[str | None, str | None], str]
 
 
-@functools.lru_cache(maxsize=1)
-def _declared_types(root: Element) -> dict[tuple[str | None, str | None], str]:
-    """(prototype, field) -> type of every field declared in the document,
-    found in one walk (the first declaration of a name wins), so that many
-    fieldValues cost one walk, not one each."""
-    declared: dict[tuple[str | None, str | None], str] = {}
-    for declare in root.iter():
-        if not isinstance(declare.tag, str):
-            continue
+def _declared_types(root: Element) -> _Declared:
+    """The type of every field a ProtoDeclare or ExternProtoDeclare of the
+    document declares (the first declaration of a name wins): what a
+    ProtoInstance's ``<fieldValue>`` of that name holds."""
+    declared: _Declared = {}
+    for declare in root.iter(etree.Element):
         if etree.QName(declare).localname not in ("ProtoDeclare", "ExternProtoDeclare"):
             continue
-        for field in declare.iter():
-            if isinstance(field.tag, str) and etree.QName(field).localname == "field":
-                if field.get("type") is not None:
-                    key = (declare.get("name"), field.get("name"))
-                    declared.setdefault(key, str(field.get("type")))
+        for field in declare.iter(etree.Element):
+            kind = field.get("type")
+            if etree.QName(field).localname == "field" and kind is not None:
+                declared.setdefault((declare.get("name"), field.get("name")), kind)
     return declared
 
 
