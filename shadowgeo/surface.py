@@ -1475,6 +1475,9 @@ class _FacePieces:
 
 _Chunk = tuple[np.ndarray, np.ndarray, np.ndarray]  # loops' points, sizes and faces
 
+# The layout of a face cut alone (:func:`_cut_alone` scales it itself).
+_alone = own_cell(1.0)
+
 
 def _face_loops(limits: _FaceLimits, pieces: _FacePieces) -> tuple[Loops, np.ndarray]:
     """Each face's shadow region, as loops in its frame: the lit outline of a
@@ -1515,10 +1518,7 @@ def _batches(limits: _FaceLimits, slots: np.ndarray) -> list[_Batch]:
     if not len(slots):
         return []
     if limits.discs is not None:
-        return [
-            _Batch(np.array([slot]), own_cell(poly.local_scale(2.0 * _reach(limits, slot))), False)
-            for slot in slots.tolist()
-        ]
+        return [_Batch(np.array([slot]), _alone, False) for slot in slots.tolist()]
     reach = np.abs(limits.outlines[slots].reshape(len(slots), -1)).max(axis=1)
     return [_Batch(slots, column_cells(reach), True)]
 
@@ -1532,6 +1532,8 @@ def _cut(limits: _FaceLimits, batch: _Batch, pieces: _FacePieces) -> _Chunk:
     """The regions of the faces of ``batch``, in one clipper call: each
     face's pieces (a face wholly in shadow: its lit outline) within its lit
     outline and, where it cuts the face, the light's range."""
+    if batch.cells is _alone:
+        return _cut_alone(limits, int(batch.slots[0]), pieces)
     cells, slots = batch.cells, batch.slots
     cell = np.arange(len(slots))
     partial = ~limits.full[slots]
@@ -1550,6 +1552,31 @@ def _cut(limits: _FaceLimits, batch: _Batch, pieces: _FacePieces) -> _Chunk:
         placed = [cells.place(discs[k], np.array(k)) for k in ranged]
         region = poly.intersect(region, poly.unite(placed, cells=batch.labels(np.array(ranged))))
     return _chunk(region, batch, limits.faces)
+
+
+def _cut_alone(limits: _FaceLimits, slot: int, pieces: _FacePieces) -> _Chunk:
+    """:func:`_cut` of the one face ``slot`` in the whole plane, scaled about
+    its frame's origin (:func:`~shadowgeo.cells.own_cell`'s map, the same
+    arithmetic and so the same bytes): thousands of faces under a light with
+    a range come one by one, and the cells' bookkeeping cost each more than
+    its clipping did."""
+    outline = limits.outlines[slot]
+    scale = poly.local_scale(2.0 * _reach(limits, slot))
+    if limits.full[slot]:
+        region = poly.unite([outline * scale])
+    else:
+        start, stop = pieces.start[slot], pieces.start[slot] + pieces.count[slot]
+        region = poly.intersect(
+            poly.unite(list(pieces.flat[start:stop] * scale)), poly.unite([outline * scale])
+        )
+    disc = None if limits.discs is None else limits.discs[slot]
+    if disc is not None:
+        region = poly.intersect(region, poly.unite([disc * scale]))
+    loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
+    if not loops:
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
+    return np.concatenate(loops) / scale, sizes, np.full(len(loops), limits.faces[slot])
 
 
 def _chunk(region: CrossSection, batch: _Batch, faces: np.ndarray) -> _Chunk:
