@@ -66,7 +66,7 @@ BENCHMARKS: dict[str, list[str]] = {
         "../shared/corpus/web3d-json-pairs",
     ],
     "bench_sunstudy.py": ["--buildings", "1000", "--days", "8", "--workers", "1"],
-    "bench_compiled.py": [],
+    "bench_compiled.py": ["--repeat", "5"],
     "bench_memory.py": ["--quick", "--no-write"],
     "bench_soft.py": ["--quick", "--no-write"],
     "bench_city_sunlight.py": ["--buildings", "100", "--every", "120", "--workers", "0"],
