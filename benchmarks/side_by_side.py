@@ -206,7 +206,9 @@ def least(runs: list[Run]) -> tuple[float, dict[tuple, float]]:
 
 
 def ratios(old: dict[tuple, float], new: dict[tuple, float]) -> list[float]:
-    return [new[k] / old[k] for k in old.keys() & new.keys()]
+    """new / old of each row both have, where both are above zero (a time
+    printed as 0.000 has no digit to compare)."""
+    return [new[k] / old[k] for k in old.keys() & new.keys() if old[k] > 0 and new[k] > 0]
 
 
 def geometric_mean(values: list[float]) -> float:

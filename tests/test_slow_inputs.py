@@ -250,3 +250,25 @@ def test_the_template_soup_stays_within_the_sweep_budget(tmp_path):
     # the template soup casts no shadow, with a note naming the budget and the count
     assert "fuzz-instances does not cast" in done.stderr
     assert "steps of the union's sweep" in done.stderr and "MAX_UNION_SWEEP" in done.stderr
+
+
+def test_sweep_bound_is_at_least_the_work_and_skips_only_below_the_budget(monkeypatch):
+    # the bound that lets sweep_work skip its exact count must never be below it
+    rng = np.random.default_rng(11)
+    for trial in range(40):
+        loops = [
+            rng.integers(0, int(rng.integers(2, 30)), size=(int(rng.integers(3, 10)), 2)).astype(
+                float
+            )
+            for _ in range(int(rng.integers(1, 120)))
+        ]
+        y = np.concatenate([loop[:, 1] for loop in loops])
+        lengths = np.array([len(loop) for loop in loops])
+        assert plane2d.sweep_bound(y, lengths) >= reference_sweep_work(loops), trial
+    # a budget between the work and the bound: the exact count is still made
+    loops = squares_in_a_row(50)  # 30,000 steps
+    monkeypatch.setattr(plane2d.budget, "MAX_UNION_SWEEP", 29_999)
+    assert plane2d.sweep_work(loops) == 30_000
+    bound = plane2d.sweep_bound(np.concatenate([s[:, 1] for s in loops]), np.full(50, 4))
+    monkeypatch.setattr(plane2d.budget, "MAX_UNION_SWEEP", bound)
+    assert plane2d.sweep_work(loops) == 0  # cannot pass: no count

@@ -17,7 +17,7 @@ API (that is ``shadowgeo.__all__``).
 
 from __future__ import annotations
 
-from .budget import FEWEST_CROSSING_EDGES, crossings_estimate, sweep_work
+from .budget import FEWEST_CROSSING_EDGES, crossings_estimate, sweep_bound, sweep_work
 from .nesting import FlatParts, components, nest, nest_flat, parts_area, region_loops
 from .predicates import (
     is_convex,
@@ -80,6 +80,7 @@ __all__ = [
     "star_triangles",
     "subtract",
     "swept_triangles",
+    "sweep_bound",
     "sweep_work",
     "triangles_region",
     "triangulate_parts",

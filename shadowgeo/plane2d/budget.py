@@ -12,7 +12,7 @@ import numpy as np
 from ..limits import MAX_UNION_CROSSINGS, MAX_UNION_SWEEP
 from ..topology import loop_rings
 
-__all__ = ["FEWEST_CROSSING_EDGES", "crossings_estimate", "sweep_work"]
+__all__ = ["FEWEST_CROSSING_EDGES", "crossings_estimate", "sweep_bound", "sweep_work"]
 
 
 # Edge pairs sampled to estimate the crossings of a union, and the fewest
@@ -159,7 +159,8 @@ def sweep_work(loops: list[np.ndarray]) -> int:
     ``loops`` in its list of active edges: for each distinct y of a corner
     (a scanline), the edges that begin there times the edges that span it
     (ends included), summed. Exact 0 when there are too few edges to pass
-    :data:`~shadowgeo.limits.MAX_UNION_SWEEP`.
+    :data:`~shadowgeo.limits.MAX_UNION_SWEEP`, or when :func:`sweep_bound`
+    shows the work cannot pass it.
 
     Each edge that begins at a scanline is placed by a walk along the edges
     active there, so when many corners share a y (a soup of copies of one
@@ -179,14 +180,46 @@ def sweep_work(loops: list[np.ndarray]) -> int:
         return 0
     lengths = np.fromiter(map(len, loops), dtype=np.int64, count=len(loops))
     y = np.concatenate(loops)[:, 1].astype(np.float64)
-    y_next = y[loop_rings(lengths)[1]]  # each loop closes
-    low = np.sort(np.minimum(y, y_next))
-    high = np.sort(np.maximum(y, y_next))
-    scanlines = np.unique(y)
-    begun = np.searchsorted(low, scanlines, side="right")
-    beginning = begun - np.searchsorted(low, scanlines, side="left")
-    spanning = begun - np.searchsorted(high, scanlines, side="left")
+    if sweep_bound(y, lengths) <= MAX_UNION_SWEEP:
+        return 0
+    # each corner's scanline by rank (one sort), and each edge's lower and
+    # upper scanline (each loop closes)
+    scanlines, rank = np.unique(y, return_inverse=True)
+    rank = rank.reshape(-1)
+    rank_next = rank[loop_rings(lengths)[1]]
+    beginning = np.bincount(np.minimum(rank, rank_next), minlength=len(scanlines))
+    ending = np.bincount(np.maximum(rank, rank_next), minlength=len(scanlines))
+    # spanning scanline s: begun at or below it, less those ended below it
+    spanning = np.cumsum(beginning) - (np.cumsum(ending) - ending)
     return int(np.dot(beginning, spanning))
+
+
+def sweep_bound(y: np.ndarray, lengths: np.ndarray) -> int:
+    """An upper bound on :func:`sweep_work` from the loops' y-ranges alone
+    (``y`` the corners' y, loop after loop, ``lengths[i]`` each, none empty):
+    an edge that begins on a scanline of loop i is placed past edges of the
+    loops whose y-range holds that line, all of which meet loop i's range, so
+    the work is at most the sum over loops of its edges times the edges of
+    every loop whose range meets its own. Sorting the loops, not the edges:
+    many faces' pieces in cells of one plane (thousands of small loops in
+    bands apart) cost about a seventh of the exact count.
+
+    Examples
+    --------
+    >>> y = np.array([0.0, 0.0, 1.0, 1.0, 0.5, 0.5, 1.5, 1.5])
+    >>> sweep_bound(y, np.array([4, 4]))  # two squares overlapping in y (exactly 32)
+    64
+    """
+    starts = np.cumsum(lengths) - lengths
+    low, high = np.minimum.reduceat(y, starts), np.maximum.reduceat(y, starts)
+    by_low, by_high = np.argsort(low), np.argsort(high)
+    below_low = np.concatenate([[0], np.cumsum(lengths[by_low])])
+    below_high = np.concatenate([[0], np.cumsum(lengths[by_high])])
+    # edges of loops beginning at or below each loop's top, less those of loops
+    # ending below its bottom
+    meeting = below_low[np.searchsorted(low[by_low], high, side="right")]
+    meeting -= below_high[np.searchsorted(high[by_high], low, side="left")]
+    return int(np.dot(lengths, meeting))
 
 
 def _box_pairs_bound(points: np.ndarray, lengths: np.ndarray) -> float:
