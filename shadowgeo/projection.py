@@ -48,6 +48,7 @@ from .errors import GeometryError
 from .lightframe import clip_batch, clip_one
 from .lights import DirectionalLight, Light, SpotLight, is_positional, require_light
 from .limits import ANGLE_SLACK, check_coordinates, check_light
+from .orientation import MAX_COORDINATE
 from .plane import Plane
 
 # Shadow and ShadowDiagnostics live in .shadow; they are re-exported here,
@@ -554,11 +555,9 @@ class _Projector:
         low, high, limit_regions = self.low, self.high, list(self.limit_regions)
         loops, outline_loops, box = self._shadow_loops(low, high, outline)
         self.n_loops = len(loops)
-        if not limit_regions and loops:
-            if box is None:
-                points = np.concatenate(loops)
-                box = np.array([points.min(axis=0), points.max(axis=0)])
-            if np.any(box[0] < low) or np.any(box[1] > high):
+        if loops:
+            reached = self._within_reach(loops, box)
+            if not limit_regions and (np.any(reached[0] < low) or np.any(reached[1] > high)):
                 # Whole faces project past the bound: cut them there.
                 corners = np.array([low, [high[0], low[1]], high, [low[0], high[1]]])
                 limit_regions.append(poly.unite([corners]))
@@ -573,6 +572,27 @@ class _Projector:
         for limit in limit_regions:
             region = poly.intersect(region, limit)
         return self._result(poly.components(region), len(loops))
+
+    def _within_reach(self, loops: list[np.ndarray], box: np.ndarray | None) -> np.ndarray:
+        """The box of the 2-D ``loops`` (``box`` when known), checked to lie
+        within the widened rectangle every face was sorted by (``_REACH``).
+        Only rounding puts a point beyond it: a caster whose coordinates
+        reach so far past the receiver's size (one vertex at 3e35 beside
+        houses of 10 m) that float64's last place of its largest coordinate
+        is wider than the receiver. Its shadow cannot be told from rounding,
+        so it is a GeometryError rather than a union fed points past the
+        range it accepts."""
+        if box is None:
+            points = np.concatenate(loops)
+            box = np.array([points.min(axis=0), points.max(axis=0)])
+        if np.abs(box).max() <= _REACH_LIMIT:
+            return box
+        largest = float(np.abs(self.caster.vertices).max())
+        raise GeometryError(
+            f"the caster's coordinates (up to {largest:.3g}) are too large beside the "
+            f"{MAX_COORDINATE / self.scale:.3g} the shadow is sought within: float64 rounds "
+            "them by more than that, so their shadow cannot be told apart from rounding"
+        )
 
     def _light_frame(self) -> Shadow | None:
         """The light in the caster's centred frame (``light_h``) and the
@@ -911,6 +931,9 @@ class _Projector:
 # per-triangle clipping. The widened rectangle stays far inside the range the
 # 2-D union accepts (9 * MAX_COORDINATE).
 _REACH = 4.0
+# Twice the widened rectangle's reach in local units: a projected point past
+# it is rounding, not geometry (:meth:`_Projector._within_reach`).
+_REACH_LIMIT = 2.0 * (1.0 + 2.0 * _REACH) * MAX_COORDINATE
 
 
 def _outline(
