@@ -94,6 +94,12 @@ union sweep            500,000,000     steps of Clipper2's sweep placing one uni
                                        one template, its corners on a few lines, is
                                        refused rather than united in minutes with
                                        no crossing at all
+polygon corners        20,000          corners of one polygon triangulated in its
+                                       plane (an X3D face that is not convex, a
+                                       CityJSON ring with its holes): the ear
+                                       clipper's worst case grows with their
+                                       square (a face retracing its corners
+                                       10,000 times: 40,000 corners, over 30 s)
 template points        5,000,000       CityJSON: points made by placing geometry
                                        templates (GeometryInstance), counted over
                                        every instance as they are read (a small
@@ -157,6 +163,7 @@ __all__ = [
     "MAX_LIGHTS",
     "MAX_NESTING",
     "MAX_NODES",
+    "MAX_POLYGON_CORNERS",
     "MAX_PROTO_EXPANSIONS",
     "MAX_SPHERE_SEGMENTS",
     "MAX_SURFACE_FACES",
@@ -235,6 +242,11 @@ MAX_UNION_CROSSINGS = 2_000_000
 # (the corpus, the goldens, benchmarks/bench_buildings.py's 1.2M-edge union)
 # need at most 3e7.
 MAX_UNION_SWEEP = 500_000_000
+# Corners of one polygon triangulated in its plane (plane2d.polygon_triangles):
+# manifold3d's ear clipper costs about 15 ns x corners^2 at worst (a face
+# retracing its corners: 8,006 corners 0.93 s, 40,006 over 30 s), so about 6 s
+# here; a simple polygon of 20,000 corners takes 0.1 s.
+MAX_POLYGON_CORNERS = 20_000
 # (receiving face, caster triangle) pairs whose images from a light overlap,
 # in shadow_on_surface: each pair is clipped, so their count is its work.
 MAX_SURFACE_PAIRS = 5_000_000

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from manifold3d import triangulate
 
+from ..errors import BudgetError
+from ..limits import MAX_POLYGON_CORNERS
 from ..orientation import MAX_COORDINATE, turn_sign
 from ..plane import Plane
 from ..simplify import without_collinear
@@ -267,7 +269,8 @@ def polygon_triangles(points: np.ndarray, holes: Sequence[np.ndarray] = ()) -> n
 
     Returns (m, 3) indices into ``points`` followed by each hole's corners,
     wound as the polygon is (its Newell normal). A polygon with no area
-    gives no triangles.
+    gives no triangles. BudgetError past
+    :data:`~shadowgeo.limits.MAX_POLYGON_CORNERS` corners, holes included.
 
     Examples
     --------
@@ -278,6 +281,12 @@ def polygon_triangles(points: np.ndarray, holes: Sequence[np.ndarray] = ()) -> n
     ...                               corners[:, 2] - corners[:, 0]), axis=1).sum() / 2)
     12.0
     """
+    corners = len(points) + sum(len(hole) for hole in holes)
+    if corners > MAX_POLYGON_CORNERS:
+        raise BudgetError(
+            f"a polygon of {corners:,} corners is past the budget of {MAX_POLYGON_CORNERS:,} "
+            "for triangulating one polygon (shadowgeo.limits.MAX_POLYGON_CORNERS)"
+        )
     shifted = np.roll(points, -1, axis=0)
     normal = np.array(
         [
