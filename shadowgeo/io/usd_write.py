@@ -29,16 +29,20 @@ class _Names:
 
     def __init__(self) -> None:
         self.taken: dict[str, set[str]] = {}
+        # the next suffix to try for each (parent, base): 10,000 shapes of one
+        # name would otherwise each walk past every suffix taken before
+        self.next: dict[tuple[str, str], int] = {}
 
     def child(self, parent: str, wanted: str | None, fallback: str) -> str:
         from pxr import Tf
 
         base = Tf.MakeValidIdentifier(usd_text(wanted)) if wanted else fallback
         taken = self.taken.setdefault(parent, set())
-        name, count = base, 1
+        name, count = base, self.next.get((parent, base), 1)
         while name in taken:
             name = f"{base}_{count}"
             count += 1
+        self.next[parent, base] = count
         taken.add(name)
         return f"{parent}/{name}"
 
@@ -74,16 +78,50 @@ class _Writer:
         self.names.taken["/World"] = {"Looks"}
         self.looks: dict[tuple[Any, ...], object] = {}
         self.groups: dict[object, str] = {}
+        self.group_paths: dict[object, str] = {}
 
     def write_shapes(self) -> None:
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+        places = []
         for index, shape in enumerate(self.scene.shapes):
             parent = "/World"
             if shape.role != "geometry" or shape.group:
-                parent = self._group(shape)
-            path = self.names.child(parent, shape.name, f"Shape_{index}")
+                parent = self._group_path(shape)
+            places.append((parent, self.names.child(parent, shape.name, f"Shape_{index}")))
+        self._declare(places)
+        for index, (shape, (parent, path)) in enumerate(zip(self.scene.shapes, places, strict=True)):
+            if parent != "/World":
+                self._group(shape)
             # Group Xforms change the traversal order; keep the scene's.
             set_custom(self._mesh(shape, path), "index", Sdf.ValueTypeNames.Int, index)
+
+    def _declare(self, places: list[tuple[str, str]]) -> None:
+        """Every group's Xform and every shape's Mesh (``(parent, path)``
+        each) declared in the layer first, in the order they come, in one
+        change block. Defining them one by one through the stage recomposes
+        the parent's children each time, so 10,000 meshes under one parent
+        took seconds just to be defined (quadratic); the stage API that
+        fills them in afterwards finds them defined, and the layer holds
+        the same specs in the same order."""
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+        layer, declared = self.stage.GetRootLayer(), set()
+        with Sdf.ChangeBlock():
+            for number, (parent, path) in enumerate(places):
+                if parent != "/World" and parent not in declared:
+                    declared.add(parent)
+                    _declared(layer, parent, "Xform")
+                _declared(layer, path, "Mesh")
+                if number == 0:  # the first shape's look makes the scope of looks
+                    _declared(layer, "/World/Looks", "Scope")
+
+    def _group_path(self, shape: Shape) -> str:
+        """The path of the Xform holding ``shape``'s light group, named at
+        the group's first shape."""
+        key = shape.group or (None, shape.role)
+        if key not in self.group_paths:
+            label = shape.group or f"shadowgeo {shape.role}s"
+            self.group_paths[key] = self.names.child("/World", label, "Group")
+        return self.group_paths[key]
 
     def _group(self, shape: Shape) -> str:
         """The Xform holding a light group's shadows; unnamed groups (one per
@@ -92,7 +130,7 @@ class _Writer:
         key = shape.group or (None, shape.role)
         if key not in self.groups:
             label = shape.group or f"shadowgeo {shape.role}s"
-            path = self.names.child("/World", label, "Group")
+            path = self._group_path(shape)
             prim = UsdGeom.Xform.Define(self.stage, path).GetPrim()
             prim.SetDisplayName(usd_text(label))
             if shape.group:
@@ -145,10 +183,10 @@ class _Writer:
             mesh.AddTransformOp(UsdGeom.XformOp.PrecisionDouble).Set(_matrix(shape.transform))
         look = shape.material
         mesh.CreateDisplayColorPrimvar(UsdGeom.Tokens.constant).Set(
-            Vt.Vec3fArray([Gf.Vec3f(*look.diffuse_color)])
+            Vt.Vec3fArray([Gf.Vec3f(*_float3(look.diffuse_color))])
         )
         mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.constant).Set(
-            Vt.FloatArray([1.0 - look.transparency])
+            Vt.FloatArray([_float(1.0 - look.transparency)])
         )
         UsdShade.MaterialBindingAPI.Apply(prim).Bind(self._look(look))
         return prim
@@ -172,9 +210,9 @@ class _Writer:
             shader = UsdShade.Shader.Define(self.stage, f"{path}/PreviewSurface")
             shader.CreateIdAttr("UsdPreviewSurface")
             color = Sdf.ValueTypeNames.Color3f
-            shader.CreateInput("diffuseColor", color).Set(Gf.Vec3f(*look.diffuse_color))
-            shader.CreateInput("emissiveColor", color).Set(Gf.Vec3f(*look.emissive_color))
-            shader.CreateInput("opacity", Sdf.ValueTypeNames.Float).Set(1.0 - look.transparency)
+            shader.CreateInput("diffuseColor", color).Set(Gf.Vec3f(*_float3(look.diffuse_color)))
+            shader.CreateInput("emissiveColor", color).Set(Gf.Vec3f(*_float3(look.emissive_color)))
+            shader.CreateInput("opacity", Sdf.ValueTypeNames.Float).Set(_float(1.0 - look.transparency))
             roughness = min(max(1.0 - look.shininess, 0.0), 1.0)
             shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(roughness)
             shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(0.0)
@@ -202,8 +240,8 @@ class _Writer:
                 set_custom(prim, "cutOffAngle", Sdf.ValueTypeNames.Double, light.cut_off_angle)
             if not isinstance(light, DirectionalLight) and math.isfinite(light.radius):
                 set_custom(prim, "range", Sdf.ValueTypeNames.Double, float(light.radius))
-            usd_light.CreateIntensityAttr(float(scene_light.intensity))
-            usd_light.CreateColorAttr(Gf.Vec3f(*scene_light.color))
+            usd_light.CreateIntensityAttr(_float(scene_light.intensity))
+            usd_light.CreateColorAttr(Gf.Vec3f(*_float3(scene_light.color)))
             shadow = UsdLux.ShadowAPI.Apply(prim)
             shadow.CreateShadowEnableAttr(bool(scene_light.runtime_shadows))
             if scene_light.baked:  # shadowgeo baked them and turned them off
@@ -256,6 +294,18 @@ class _Writer:
 # The picture's width over its height: usd-core's default apertures' (20.955 / 15.2908).
 # The largest finite float32 (USD float attributes).
 _FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
+def _float(value: float) -> float:
+    """``value`` for a USD float (float32) attribute, held inside float32's
+    finite range: a finite double past it (a light's intensity of -1e308 in
+    a glTF) would be written as inf, which no reader takes back."""
+    return min(max(float(value), -_FLOAT32_MAX), _FLOAT32_MAX)
+
+
+def _float3(values: tuple[float, float, float]) -> tuple[float, float, float]:
+    """:func:`_float` of each of three (a colour)."""
+    return (_float(values[0]), _float(values[1]), _float(values[2]))
 _ASPECT = 20.955 / 15.2908
 
 
@@ -294,6 +344,14 @@ def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
             raise SceneError("usd-core could not save the stage", path=str(path))
 
 
+def _declared(layer: Any, path: str, kind: str) -> None:
+    """A ``def`` prim spec of type ``kind`` at ``path`` in ``layer``."""
+    Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+    spec = Sdf.CreatePrimInLayer(layer, path)
+    spec.specifier = Sdf.SpecifierDef
+    spec.typeName = kind
+
+
 def _light_shape(stage: Any, path: str, scene_light: SceneLight) -> tuple[Any, np.ndarray]:
     """The UsdLux light at ``path`` of the kind and size of ``scene_light``
     (a DistantLight, a SphereLight, or a RectLight or DiskLight), and its
@@ -311,7 +369,7 @@ def _light_shape(stage: Any, path: str, scene_light: SceneLight) -> tuple[Any, n
     else:
         usd_light = UsdLux.SphereLight.Define(stage, path)
         usd_light.CreateTreatAsPointAttr(light.source_radius == 0)
-        usd_light.CreateRadiusAttr(float(light.source_radius))
+        usd_light.CreateRadiusAttr(_float(light.source_radius))
         if light.source_radius:  # float32: the exact value too
             set_custom(
                 usd_light.GetPrim(), "sourceRadius", Sdf.ValueTypeNames.Double, light.source_radius
