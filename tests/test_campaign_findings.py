@@ -21,8 +21,10 @@
 from __future__ import annotations
 
 import contextlib
+import importlib
 import io
 import math
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -110,3 +112,41 @@ def test_many_shapes_of_one_name_get_unique_usd_names_in_order(tmp_path):
     )
     back = sg.load(target)
     assert len(back.shapes) == 300
+
+
+def area_check():
+    folder = str(Path(__file__).resolve().parents[1] / "tools")
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    return importlib.import_module("fuzz.check_area")
+
+
+BOX_ON_GROUND = """<X3D profile="Interchange" version="4.0"><Scene>
+  <Transform translation="0 2 0"><Shape>
+    <Appearance><Material transparency="{transparency}"/></Appearance>
+    <Box size="2 2 2"/></Shape></Transform>
+  <Transform translation="3 1 0"><Shape><Box size="1 1 1"/></Shape></Transform>
+</Scene></X3D>"""
+ARGV = ["convert", "IN", "OUT.glb", "--sun", "0.3,-1,0.2", "--plane", "0,1,0,0"]
+
+
+def test_the_campaigns_area_check_takes_casters_by_their_opacity(tmp_path):
+    # x3d mutants 4645 and 5151 at seed 38: transparency="10" and "3e38" are
+    # clamped to 1 (as browsers do), so the box casts nothing; the check took
+    # it for an opaque caster and reported the converter's area as wrong
+    check = area_check()
+    source = tmp_path / "scene.x3d"
+    for transparency in ("10", "3e38", "1"):
+        source.write_text(BOX_ON_GROUND.format(transparency=transparency))
+        assert check.reference_area_problem(source, ARGV) is None, transparency
+    source.write_text(BOX_ON_GROUND.format(transparency="0.5"))  # translucent: no reference
+    assert check.reference_area_problem(source, ARGV) is None
+    # an opaque scene is still compared: a shadow area off by a little is caught
+    source.write_text(BOX_ON_GROUND.format(transparency="0"))
+    assert check.reference_area_problem(source, ARGV) is None
+    original = check.triangles_area
+    try:
+        check.triangles_area = lambda triangles: 1.001 * original(triangles)
+        assert "textbook union" in (check.reference_area_problem(source, ARGV) or "")
+    finally:
+        check.triangles_area = original
