@@ -19,6 +19,7 @@ import argparse
 import importlib
 import re
 import sys
+from pathlib import Path
 
 import shadowgeo
 import shadowgeo.compiled
@@ -91,5 +92,16 @@ def run(argv: list[str] | None) -> int:
     try:
         return int(args.func(args) or 0)
     except (shadowgeo.SceneError, shadowgeo.GeometryError) as error:
-        print(f"shadowgeo {args.command}: {terminal(error)}", file=sys.stderr)
+        where = "" if isinstance(error, shadowgeo.SceneError) else _scene_of(args)
+        print(f"shadowgeo {args.command}: {where}{terminal(error)}", file=sys.stderr)
         return 1
+
+
+def _scene_of(args: argparse.Namespace) -> str:
+    """``"FILE: "`` for the one scene a command read, to name it in a message
+    about its geometry (a SceneError names its file itself); else ``""``."""
+    source = getattr(args, "input", None)
+    paths = getattr(args, "paths", None)
+    if source is None and isinstance(paths, list) and len(paths) == 2:
+        source = paths[0]
+    return f"{terminal(str(source))}: " if isinstance(source, Path) else ""
