@@ -73,7 +73,7 @@ import shapely
 from numpy.typing import ArrayLike
 
 from . import plane2d as poly
-from .cells import Cells, column_cells, own_cell
+from .cells import column_cells
 from .errors import GeometryError
 from .lightframe import (
     candidate_pairs,
@@ -1434,21 +1434,6 @@ class _FaceLimits:
 
 
 @dataclass(frozen=True)
-class _Batch:
-    """Faces (``slots`` in :class:`_FaceLimits`) cut in one 2-D clipper call,
-    each in its own cell of ``cells``; ``apart``: the cells are given to the
-    union's budget, which then counts crossings cell by cell."""
-
-    slots: np.ndarray
-    cells: Cells
-    apart: bool
-
-    def labels(self, cell: np.ndarray) -> np.ndarray | None:
-        """The cells ``cell`` of some loops, as the union's budget takes them."""
-        return cell if self.apart else None
-
-
-@dataclass(frozen=True)
 class _FacePieces:
     """The pieces ``flat`` (n, k, 2) padded, sorted by face, and where each
     face's run of them starts (``start``) and how long it is (``count``),
@@ -1475,21 +1460,27 @@ class _FacePieces:
 
 _Chunk = tuple[np.ndarray, np.ndarray, np.ndarray]  # loops' points, sizes and faces
 
-# The layout of a face cut alone (:func:`_cut_alone` scales it itself).
-_alone = own_cell(1.0)
-
 
 def _face_loops(limits: _FaceLimits, pieces: _FacePieces) -> tuple[Loops, np.ndarray]:
     """Each face's shadow region, as loops in its frame: the lit outline of a
     face wholly in shadow that the light's range does not cut; for the
-    others, their ``pieces`` cut to their bounds, batch by batch
-    (:func:`_batches`). The loops region by region, and the faces (sorted)."""
+    others, their ``pieces`` cut to their bounds. The loops region by region,
+    and the faces (sorted).
+
+    The one choice between the two layouts: under a light with a range, each
+    face alone at its own scale (:func:`_cut_alone`), cut to the range's disc
+    with it, as such shadows have always been rounded; else all in one call
+    (:func:`_cut`), in one column of cells: Clipper2 sweeps along y, so its
+    scanlines meet one face at a time (x is stretched to the full width)."""
     uncut = limits.full.copy()
     if limits.discs is not None:
         uncut &= np.array([disc is None for disc in limits.discs], dtype=bool)
     chunks = [_outlines_of(limits, np.flatnonzero(uncut))]
-    for batch in _batches(limits, np.flatnonzero(~uncut)):
-        chunks.append(_cut(limits, batch, pieces))
+    cut = np.flatnonzero(~uncut)
+    if limits.discs is not None:
+        chunks += [_cut_alone(limits, slot, pieces) for slot in cut.tolist()]
+    elif len(cut):
+        chunks.append(_cut(limits, cut, pieces))
     points = np.concatenate([chunk[0] for chunk in chunks])
     sizes = np.concatenate([chunk[1] for chunk in chunks])
     loop_face = np.concatenate([chunk[2] for chunk in chunks])
@@ -1507,34 +1498,18 @@ def _outlines_of(limits: _FaceLimits, slots: np.ndarray) -> _Chunk:
     return points, counts, limits.faces[slots]
 
 
-def _batches(limits: _FaceLimits, slots: np.ndarray) -> list[_Batch]:
-    """How the faces ``slots`` are laid out for the clipper: the one choice
-    between the two layouts. Under a light with a range, each face alone at
-    its own scale (the largest coordinate of its outline at half Clipper2's
-    range), cut to the range's disc with it, as such shadows have always been
-    rounded; else all in one call, in one column of cells: Clipper2 sweeps
-    along y, so its scanlines meet one face at a time (x is stretched to the
-    full width)."""
-    if not len(slots):
-        return []
-    if limits.discs is not None:
-        return [_Batch(np.array([slot]), _alone, False) for slot in slots.tolist()]
-    reach = np.abs(limits.outlines[slots].reshape(len(slots), -1)).max(axis=1)
-    return [_Batch(slots, column_cells(reach), True)]
-
-
 def _reach(limits: _FaceLimits, slot: int) -> float:
     """The largest coordinate of the lit outline of face ``slot``."""
     return float(np.abs(limits.outlines[slot, : limits.counts[slot]]).max())
 
 
-def _cut(limits: _FaceLimits, batch: _Batch, pieces: _FacePieces) -> _Chunk:
-    """The regions of the faces of ``batch``, in one clipper call: each
-    face's pieces (a face wholly in shadow: its lit outline) within its lit
-    outline and, where it cuts the face, the light's range."""
-    if batch.cells is _alone:
-        return _cut_alone(limits, int(batch.slots[0]), pieces)
-    cells, slots = batch.cells, batch.slots
+def _cut(limits: _FaceLimits, slots: np.ndarray, pieces: _FacePieces) -> _Chunk:
+    """The regions of the faces ``slots`` under a light without a range, in
+    one clipper call, each face in its own cell of one column: each face's
+    pieces (a face wholly in shadow: its lit outline) within its lit outline.
+    The cells are given to the union's budget, which then counts crossings
+    cell by cell."""
+    cells = column_cells(np.abs(limits.outlines[slots].reshape(len(slots), -1)).max(axis=1))
     cell = np.arange(len(slots))
     partial = ~limits.full[slots]
     rows, mine = pieces.rows(slots[partial], cell[partial])
@@ -1542,24 +1517,21 @@ def _cut(limits: _FaceLimits, batch: _Batch, pieces: _FacePieces) -> _Chunk:
     subject = [*cells.place(pieces.flat[rows], mine[:, None])]
     if len(whole):
         subject += [*cells.place(limits.outlines[slots[whole]], whole[:, None])]
-    region = poly.unite(subject, cells=batch.labels(np.concatenate([mine, whole])))
+    region = poly.unite(subject, cells=np.concatenate([mine, whole]))
     if partial.any():
         bounds = cells.place(limits.outlines[slots[partial]], cell[partial][:, None])
-        region = poly.intersect(region, poly.unite([*bounds], cells=batch.labels(cell[partial])))
-    discs = [] if limits.discs is None else [limits.discs[slot] for slot in slots.tolist()]
-    ranged = [k for k, disc in enumerate(discs) if disc is not None]
-    if ranged:
-        placed = [cells.place(discs[k], np.array(k)) for k in ranged]
-        region = poly.intersect(region, poly.unite(placed, cells=batch.labels(np.array(ranged))))
-    return _chunk(region, batch, limits.faces)
+        region = poly.intersect(region, poly.unite([*bounds], cells=cell[partial]))
+    points, sizes = _region_loops(region)
+    cell = cells.cell_of(points[np.cumsum(sizes) - sizes])
+    return cells.restore(points, np.repeat(cell, sizes)), sizes, limits.faces[slots[cell]]
 
 
 def _cut_alone(limits: _FaceLimits, slot: int, pieces: _FacePieces) -> _Chunk:
     """:func:`_cut` of the one face ``slot`` in the whole plane, scaled about
-    its frame's origin (:func:`~shadowgeo.cells.own_cell`'s map, the same
-    arithmetic and so the same bytes): thousands of faces under a light with
-    a range come one by one, and the cells' bookkeeping cost each more than
-    its clipping did."""
+    its frame's origin (the largest coordinate of its outline at half
+    Clipper2's range) and cut to the light's range where that cuts the face:
+    thousands of faces under a light with a range come one by one, so this
+    keeps to the clipping, with no cells' bookkeeping."""
     outline = limits.outlines[slot]
     scale = poly.local_scale(2.0 * _reach(limits, slot))
     if limits.full[slot]:
@@ -1572,23 +1544,17 @@ def _cut_alone(limits: _FaceLimits, slot: int, pieces: _FacePieces) -> _Chunk:
     disc = None if limits.discs is None else limits.discs[slot]
     if disc is not None:
         region = poly.intersect(region, poly.unite([disc * scale]))
-    loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
-    if not loops:
-        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
-    return np.concatenate(loops) / scale, sizes, np.full(len(loops), limits.faces[slot])
+    points, sizes = _region_loops(region)
+    return points / scale, sizes, np.full(len(sizes), limits.faces[slot])
 
 
-def _chunk(region: CrossSection, batch: _Batch, faces: np.ndarray) -> _Chunk:
-    """The loops of ``region`` (of at least three corners), back in their
-    faces' frames, and the face of each (``faces`` by slot)."""
+def _region_loops(region: CrossSection) -> tuple[np.ndarray, np.ndarray]:
+    """The corners of the loops of ``region`` of at least three corners, one
+    loop after another, and the corners of each."""
     loops = [loop for loop in region.to_polygons() if len(loop) >= 3]
     if not loops:
-        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    sizes = np.array([len(loop) for loop in loops], dtype=np.int64)
-    points = np.concatenate(loops)
-    cell = batch.cells.cell_of(points[np.cumsum(sizes) - sizes])
-    return batch.cells.restore(points, np.repeat(cell, sizes)), sizes, faces[batch.slots[cell]]
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
+    return np.concatenate(loops), np.array([len(loop) for loop in loops], dtype=np.int64)
 
 
 def _disc_near(disc: np.ndarray | None, outline: np.ndarray) -> np.ndarray | None:

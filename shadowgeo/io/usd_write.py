@@ -78,7 +78,6 @@ class _Writer:
         self.names.taken["/World"] = {"Looks"}
         self.looks: dict[tuple[Any, ...], object] = {}
         self.groups: dict[object, str] = {}
-        self.group_paths: dict[object, str] = {}
 
     def write_shapes(self) -> None:
         Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
@@ -89,9 +88,11 @@ class _Writer:
                 parent = self._group_path(shape)
             places.append((parent, self.names.child(parent, shape.name, f"Shape_{index}")))
         self._declare(places)
+        filled = {"/World"}
         for index, (shape, (parent, path)) in enumerate(zip(self.scene.shapes, places, strict=True)):
-            if parent != "/World":
-                self._group(shape)
+            if parent not in filled:
+                filled.add(parent)
+                self._fill_group(shape, parent)
             # Group Xforms change the traversal order; keep the scene's.
             set_custom(self._mesh(shape, path), "index", Sdf.ValueTypeNames.Int, index)
 
@@ -118,25 +119,19 @@ class _Writer:
         """The path of the Xform holding ``shape``'s light group, named at
         the group's first shape."""
         key = shape.group or (None, shape.role)
-        if key not in self.group_paths:
-            label = shape.group or f"shadowgeo {shape.role}s"
-            self.group_paths[key] = self.names.child("/World", label, "Group")
-        return self.group_paths[key]
-
-    def _group(self, shape: Shape) -> str:
-        """The Xform holding a light group's shadows; unnamed groups (one per
-        role) get a display name but no ``shadowgeo:group``, so read back as None."""
-        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
-        key = shape.group or (None, shape.role)
         if key not in self.groups:
-            label = shape.group or f"shadowgeo {shape.role}s"
-            path = self._group_path(shape)
-            prim = UsdGeom.Xform.Define(self.stage, path).GetPrim()
-            prim.SetDisplayName(usd_text(label))
-            if shape.group:
-                set_custom(prim, "group", Sdf.ValueTypeNames.String, usd_text(shape.group))
-            self.groups[key] = path
+            self.groups[key] = self.names.child("/World", _group_label(shape), "Group")
         return self.groups[key]
+
+    def _fill_group(self, shape: Shape, path: str) -> None:
+        """The Xform at ``path`` holding ``shape``'s light group's shadows;
+        unnamed groups (one per role) get a display name but no
+        ``shadowgeo:group``, so read back as None."""
+        Gf, Sdf, Tf, Usd, UsdGeom, UsdLux, UsdShade, Vt = pxr()
+        prim = UsdGeom.Xform.Define(self.stage, path).GetPrim()
+        prim.SetDisplayName(usd_text(_group_label(shape)))
+        if shape.group:
+            set_custom(prim, "group", Sdf.ValueTypeNames.String, usd_text(shape.group))
 
     def _mesh(self, shape: Shape, path: str) -> Any:
         """Define the shape's Mesh prim at ``path`` and return the prim."""
@@ -275,8 +270,7 @@ class _Writer:
             camera.CreateVerticalApertureAttr(vertical)
             camera.CreateHorizontalApertureAttr(vertical * _ASPECT)
             # a float2: a scene past 3.4e35 across would make its far end inf
-            near, far = (min(value, _FLOAT32_MAX) for value in (size / 1000, size * 1000))
-            camera.CreateClippingRangeAttr(Gf.Vec2f(near, far))
+            camera.CreateClippingRangeAttr(Gf.Vec2f(_float(size / 1000), _float(size * 1000)))
             transform = np.eye(4)
             transform[:3, :3] = np.column_stack(
                 [rotate(view.orientation, axis) for axis in np.eye(3)]
@@ -292,6 +286,7 @@ class _Writer:
 
 
 # The picture's width over its height: usd-core's default apertures' (20.955 / 15.2908).
+_ASPECT = 20.955 / 15.2908
 # The largest finite float32 (USD float attributes).
 _FLOAT32_MAX = float(np.finfo(np.float32).max)
 
@@ -306,7 +301,11 @@ def _float(value: float) -> float:
 def _float3(values: tuple[float, float, float]) -> tuple[float, float, float]:
     """:func:`_float` of each of three (a colour)."""
     return (_float(values[0]), _float(values[1]), _float(values[2]))
-_ASPECT = 20.955 / 15.2908
+
+
+def _group_label(shape: Shape) -> str:
+    """The display name of ``shape``'s light group: its name, or one per role."""
+    return shape.group or f"shadowgeo {shape.role}s"
 
 
 def write(scene: Scene, path: str | os.PathLike[str], **options: Any) -> None:
