@@ -8,6 +8,7 @@ started. Dask is an extra: ``pip install "shadowgeo[dask]"``.
 from __future__ import annotations
 
 import datetime as _dt
+import logging
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
@@ -23,6 +24,23 @@ def _distributed() -> Any:
     except ImportError:
         raise ImportError('parallel runs need Dask: pip install "shadowgeo[dask]"') from None
     return distributed
+
+
+def _quiet_workers(distributed: Any) -> Any:
+    """A worker plugin that raises the ``distributed`` loggers of each worker
+    process of a LocalCluster started here to CRITICAL. ``silence_logs`` quiets
+    only the nanny's logger there, and when the cluster shuts down under an
+    interrupt a worker's heartbeat can fail first, logging a traceback at ERROR
+    that a user would read as a crash. A task's own error still reaches the
+    caller through its future."""
+
+    class QuietWorkers(distributed.WorkerPlugin):  # type: ignore[misc]
+        name = "shadowgeo-quiet-workers"
+
+        def setup(self, worker: Any) -> None:
+            logging.getLogger("distributed").setLevel(logging.CRITICAL)
+
+    return QuietWorkers()
 
 
 @contextmanager
@@ -48,6 +66,7 @@ def client_for(scheduler: Any, *, workers: int | None = None) -> Iterator[Any]:
         )
         try:
             with distributed.Client(cluster) as client:
+                client.register_plugin(_quiet_workers(distributed))
                 yield client
         finally:
             cluster.close()

@@ -614,6 +614,35 @@ def test_a_worker_killed_in_a_sun_study_on_dask_is_one_line_naming_the_day(capsy
     assert stderr.splitlines()[-1].startswith("shadowgeo sun: the Dask worker studying 2026-03-2")
 
 
+def _distributed_level() -> int:
+    import logging
+
+    return logging.getLogger("distributed.worker").getEffectiveLevel()
+
+
+def test_a_local_clusters_workers_log_only_critical_and_a_users_cluster_is_left_alone():
+    """The workers of a LocalCluster started here log nothing below CRITICAL:
+    under an interrupt a worker's heartbeat can fail while the cluster shuts
+    down, and its ERROR traceback (CI, once) reads as a crash after the one
+    line saying the run was stopped. A cluster the user runs keeps its levels."""
+    need("dask")
+    import logging
+
+    from dask.distributed import Client, LocalCluster
+
+    from shadowgeo.parallel import client_for
+
+    with client_for("local", workers=1) as client:
+        assert set(client.run(_distributed_level).values()) == {logging.CRITICAL}
+    with LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster, Client(cluster) as own:
+        before = set(own.run(_distributed_level).values())
+        with client_for(own) as client:
+            assert client is own
+        assert set(own.run(_distributed_level).values()) == before != {logging.CRITICAL}
+
+
 def test_sigterm_mid_batch_on_a_local_cluster_leaves_whole_files_and_no_worker(tmp_path):
     """SIGTERM to a batch on a LocalCluster of two worker processes once its
     first file is written: exit 143, each output whole or absent, no
