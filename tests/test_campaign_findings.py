@@ -16,6 +16,23 @@
   through the stage recomposed its parent's 10,000 children. Names now
   resume from their last suffix, and the prims are declared in one change
   block first (the golden USD outputs are byte for byte the same).
+
+And at seed 39:
+
+* geometry case 11905: a point light 0.08 from a corner of a convex caster
+  cast a shadow of 330,000 square units whose united outline came back with a
+  slit: two edges along one line, ending 4e-6 apart (local units) at its
+  mouth. The spike test dropped a tip only where its neighbours met, so the
+  slit stayed and the ear clipping crossed it with a triangle turned over:
+  the mesh's area was 0.7% over the shadow's. A tip whose two edges run
+  along one line is now dropped however far apart they end.
+* x3dz mutant 1236: a twisted Extrusion of 160,000 faces cast, on each of
+  nine receivers, a shadow of 40,000 to 90,000 loops. Its union went cell by
+  cell, each cell under the crossing budget (up to 1.9e6 crossings, 8 CPU-s)
+  and the whole far past it (2.6e7 to 3e9): the budget was met only at the
+  last union, after the cells, twice per receiver (the casters together, then
+  alone to find the one at fault), 55 CPU-s in all. The cells are now counted
+  together before the first runs.
 """
 
 from __future__ import annotations
@@ -30,11 +47,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from needs import SHARED, absent
 
 import shadowgeo as sg
 from cli.main import main as cli_main
 from shadowgeo import limits, plane2d
 from shadowgeo.errors import BudgetError
+from shadowgeo.plane2d.budget import crossings_estimate
+from shadowgeo.simplify import without_collinear
 
 DATA = Path(__file__).parent / "data"
 EXAMPLES = Path(__file__).parents[1] / "examples" / "scenes"
@@ -50,8 +70,9 @@ def run_cli(*argv: str) -> tuple[int, str]:
 def test_a_city_vertex_far_past_the_receiver_is_one_clear_line_and_no_output(tmp_path):
     target = tmp_path / "out.x3d"
     source = DATA / "findings" / "far_vertex.city.json"
-    code, message = run_cli("sun", str(source), str(target), "--at", "52.0,4.36", "--serial",
-                            "--every", "240")
+    code, message = run_cli(
+        "sun", str(source), str(target), "--at", "52.0,4.36", "--serial", "--every", "240"
+    )
     assert code == 1
     lines = [line for line in message.splitlines() if line.strip()]
     assert len(lines) == 1, message
@@ -62,7 +83,9 @@ def test_a_city_vertex_far_past_the_receiver_is_one_clear_line_and_no_output(tmp
 
 def test_usd_float_attributes_stay_finite_for_numbers_past_float32(tmp_path):
     scene = sg.load(EXAMPLES / "courtyard.x3d")
-    lights = [replace(light, intensity=-1e308, color=(1e308, 0.5, -1e300)) for light in scene.lights]
+    lights = [
+        replace(light, intensity=-1e308, color=(1e308, 0.5, -1e300)) for light in scene.lights
+    ]
     target = tmp_path / "out.usda"
     sg.save(replace(scene, lights=lights), target)
     text = target.read_text()
@@ -105,10 +128,14 @@ def test_many_shapes_of_one_name_get_unique_usd_names_in_order(tmp_path):
     target = tmp_path / "out.usda"
     sg.save(replace(scene, shapes=shapes), target)
     text = target.read_text()
-    names = [line.split('"')[1] for line in text.splitlines() if line.strip().startswith("def Mesh")]
+    names = [
+        line.split('"')[1] for line in text.splitlines() if line.strip().startswith("def Mesh")
+    ]
     assert names == ["tent", *[f"tent_{k}" for k in range(1, 300)]]
-    assert text.index('def Mesh "tent"') < text.index('def Scope "Looks"') < text.index(
-        'def Mesh "tent_1"'
+    assert (
+        text.index('def Mesh "tent"')
+        < text.index('def Scope "Looks"')
+        < text.index('def Mesh "tent_1"')
     )
     back = sg.load(target)
     assert len(back.shapes) == 300
@@ -150,3 +177,125 @@ def test_the_campaigns_area_check_takes_casters_by_their_opacity(tmp_path):
         assert "textbook union" in (check.reference_area_problem(source, ARGV) or "")
     finally:
         check.triangles_area = original
+
+
+# seed 39, geometry case 11905, as tools/fuzz/geometry.py drew it (repr: every digit)
+_SLIT_CASTER = np.array(
+    [
+        ["1163.6859863889597", "-78.32587109959424", "1535.3562198657055"],
+        ["1166.0755724312012", "-78.29236402890312", "1534.453787222271"],
+        ["1165.3839585549313", "-79.33230205581962", "1535.1896249058393"],
+        ["1163.547516282944", "-77.01941279626924", "1535.733827756204"],
+        ["1163.217020906267", "-79.53574421716041", "1536.2256583846881"],
+        ["1163.2084130451294", "-78.5746187558329", "1537.3195535229559"],
+        ["1163.373852128518", "-80.14646690942585", "1537.0590989419134"],
+        ["1165.6622175739956", "-77.36819900610635", "1536.4496224091074"],
+        ["1164.204027038746", "-77.02015354568567", "1536.3514026616504"],
+        ["1164.6078731045293", "-77.37287517217183", "1535.123562282222"],
+        ["1162.5346624373683", "-77.46216066052452", "1536.7938576598722"],
+    ],
+    dtype=float,
+)
+_SLIT_FACES = np.array(
+    [
+        [10, 6, 5],
+        [10, 5, 7],
+        [7, 5, 6],
+        [10, 7, 8],
+        [2, 0, 1],
+        [1, 7, 2],
+        [2, 7, 6],
+        [3, 0, 10],
+        [10, 8, 3],
+        [4, 2, 6],
+        [0, 2, 4],
+        [4, 6, 10],
+        [10, 0, 4],
+        [1, 0, 9],
+        [0, 3, 9],
+        [9, 7, 1],
+        [9, 8, 7],
+        [9, 3, 8],
+    ]
+)
+_SLIT_LIGHT = sg.PointLight(
+    ["1164.603829149225", "-77.29788360144302", "1535.133023321679"], radius=4.55809683480517e45
+)
+_SLIT_PLANE = sg.Plane([0.0, 1.0, 0.0], 82.14646690942585)
+
+
+def test_a_shadow_near_its_light_triangulates_to_its_own_area_with_no_triangle_turned_over():
+    """The convex caster's shadow is convex: its area is its corners' hull's,
+    the mesh covers that area once, and no triangle of more than rounding's
+    area is turned over (before: 0.7% of the area)."""
+    from scipy.spatial import ConvexHull
+
+    shadow = sg.project_shadow((_SLIT_CASTER, _SLIT_FACES), _SLIT_LIGHT, _SLIT_PLANE)
+    (loop,) = (loop for part in shadow.polygons for loop in part)
+    assert shadow.area == pytest.approx(ConvexHull(loop).volume, rel=1e-9)
+    corners = shadow.mesh.vertices[shadow.mesh.faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    turned = normals @ _SLIT_PLANE.normal < 0  # (a sliver of rounding may be)
+    assert 0.5 * np.linalg.norm(normals[turned], axis=1).sum() < 1e-9 * shadow.area
+    assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(shadow.area, rel=1e-9)
+
+
+def test_a_slit_whose_sides_run_along_one_line_loses_its_tip():
+    """A square with a slit 90 deep whose sides end 4e-6 apart at its mouth
+    but run along one line to 1e-9 (the line joining their ends is turned
+    a quarter of a milliradian from the slit, so the tip stands 0.02 off
+    it): the tip goes, the area stays. A slit with a real width (its sides
+    1e-3 apart at the mouth, across the line) stays."""
+    eps = 1.4e-6
+    for mouth, kept in (((50.0 + 1e-9, 4e-6), False), ((50.001, 0.0), True)):
+        loop = np.array([[0, 0], [50, 0], [50, 90], mouth, [100, 0], [100, 100], [0, 100]])
+        points, sizes, _ = without_collinear(
+            (loop.astype(float), np.array([len(loop)]), np.array([0])), eps
+        )
+        assert ([50.0, 90.0] in points.tolist()) is kept
+        x, y = points[:, 0], points[:, 1]
+        area = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+        assert area == pytest.approx(10_000 - (0.045 if kept else 0.0), abs=1e-3)
+
+
+class _NoWorkers:
+    """X3D seeds (and their gzipped x3dz) come from the corpus: no worker writes any."""
+
+    def run(self, tasks):
+        assert not list(tasks)
+        return iter(())
+
+
+def test_a_shadow_whose_cells_pass_the_crossing_budget_together_is_refused_before_they_run(
+    tmp_path, monkeypatch, capsys
+):
+    """x3dz mutant 1236 at seed 39, made again by the fuzz tool from the
+    corpus and run as the campaign ran it: it converts (the Extrusion skipped
+    with a note naming the budget), and the unions Clipper2 is given cross
+    at most a budget's worth of edges in all (before: about 40 budgets'
+    worth). The work is counted, not timed."""
+    if not (SHARED / "corpus").is_dir():
+        absent("the fuzz seeds come from ../shared/corpus, which is missing")
+    tools = str(Path(__file__).parents[1] / "tools")
+    if tools not in sys.path:
+        sys.path.insert(0, tools)
+    seeds = importlib.import_module("fuzz.seeds").collect_seeds(
+        _NoWorkers(), 64 << 10, ["x3d", "x3dz"]
+    )
+    task = importlib.import_module("fuzz.campaign").converter_task(seeds, "x3dz", 1236, 39)
+    source = tmp_path / f"input{task['suffix']}"
+    source.write_bytes(task["data"])
+    argv = [str(source) if a == "IN" else a for a in task["argv"]]
+    argv = [str(tmp_path / ("output" + a[3:])) if a.startswith("OUT") else a for a in argv]
+    crossings = []
+    clipped = plane2d.union._clipped
+
+    def counted(loops, *args, **kwargs):
+        crossings.append(crossings_estimate(loops)[0])
+        return clipped(loops, *args, **kwargs)
+
+    monkeypatch.setattr(plane2d.union, "_clipped", counted)
+    assert cli_main(argv) == 0
+    error = capsys.readouterr().err
+    assert "crossings in its cells together" in error
+    assert sum(crossings) <= limits.MAX_UNION_CROSSINGS
