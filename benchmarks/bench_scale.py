@@ -32,9 +32,10 @@ peers run the same way on the same files, in the same run:
   the *format yardstick* of each case (read its input, write its output).
 
 Times are CPU seconds of the process (the tools are single-threaded in these
-steps), each step timed from a collected heap (:func:`started`), the least of ``--repeat`` runs (3) of each case, taken in rounds (every
-case once, peers among them, then again) so that a drift in the machine's speed
-weighs on all alike. Ratios are shadowgeo
+steps), each step timed from a collected heap (:func:`started`), the least
+of ``--repeat`` runs (3) of each case, taken in rounds (every case once,
+peers among them, then again) so that a drift in the machine's speed weighs
+on all alike. Ratios are shadowgeo
 over peer, from one run: the machine may be shared, so absolute times are noisy
 but the ratios are measured side by side. The memory
 yardstick is the raw float64 vertex + int64 face arrays of the scene.

@@ -89,7 +89,9 @@ class _Writer:
             places.append((parent, self.names.child(parent, shape.name, f"Shape_{index}")))
         self._declare(places)
         filled = {"/World"}
-        for index, (shape, (parent, path)) in enumerate(zip(self.scene.shapes, places, strict=True)):
+        for index, (shape, (parent, path)) in enumerate(
+            zip(self.scene.shapes, places, strict=True)
+        ):
             if parent not in filled:
                 filled.add(parent)
                 self._fill_group(shape, parent)
@@ -207,7 +209,9 @@ class _Writer:
             color = Sdf.ValueTypeNames.Color3f
             shader.CreateInput("diffuseColor", color).Set(Gf.Vec3f(*_float3(look.diffuse_color)))
             shader.CreateInput("emissiveColor", color).Set(Gf.Vec3f(*_float3(look.emissive_color)))
-            shader.CreateInput("opacity", Sdf.ValueTypeNames.Float).Set(_float(1.0 - look.transparency))
+            shader.CreateInput("opacity", Sdf.ValueTypeNames.Float).Set(
+                _float(1.0 - look.transparency)
+            )
             roughness = min(max(1.0 - look.shininess, 0.0), 1.0)
             shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(roughness)
             shader.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(0.0)
