@@ -26,6 +26,27 @@ def _distributed() -> Any:
     return distributed
 
 
+# The loggers a LocalCluster started here quiets, in its workers and, while it
+# runs and shuts down, in this process: Dask's, and those of the event loop it
+# runs on (tornado logs an exception in a callback at ERROR, as a traceback).
+_QUIET_LOGGERS = ("distributed", "tornado", "tornado.application", "asyncio")
+
+
+@contextmanager
+def _quiet_here() -> Iterator[None]:
+    """:data:`_QUIET_LOGGERS` at CRITICAL in this process inside the block,
+    their levels restored after it."""
+    loggers = [logging.getLogger(name) for name in _QUIET_LOGGERS]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for logger, level in zip(loggers, levels, strict=True):
+            logger.setLevel(level)
+
+
 def _quiet_workers(distributed: Any) -> Any:
     """A worker plugin that raises the ``distributed`` loggers of each worker
     process of a LocalCluster started here to CRITICAL. ``silence_logs`` quiets
@@ -38,7 +59,8 @@ def _quiet_workers(distributed: Any) -> Any:
         name = "shadowgeo-quiet-workers"
 
         def setup(self, worker: Any) -> None:
-            logging.getLogger("distributed").setLevel(logging.CRITICAL)
+            for name in _QUIET_LOGGERS:
+                logging.getLogger(name).setLevel(logging.CRITICAL)
 
     return QuietWorkers()
 
@@ -57,24 +79,31 @@ def client_for(scheduler: Any, *, workers: int | None = None) -> Iterator[Any]:
         yield scheduler
         return
     if scheduler == "local":
-        cluster = distributed.LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            silence_logs=40,  # logging.ERROR: a run's output is its progress and results
-        )
-        try:
-            with distributed.Client(cluster) as client:
-                client.register_plugin(_quiet_workers(distributed))
-                yield client
-        finally:
-            cluster.close()
+        with _quiet_here():
+            yield from _local_client(distributed, workers)
         return
     if not isinstance(scheduler, str) or not scheduler:
         raise ValueError(f"scheduler must be a Client, an address or 'local', got {scheduler!r}")
     with distributed.Client(scheduler) as client:
         yield client
+
+
+def _local_client(distributed: Any, workers: int | None) -> Iterator[Any]:
+    """A client of a LocalCluster of ``workers`` processes started here,
+    its workers quieted (:func:`_quiet_workers`), shut down after."""
+    cluster = distributed.LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        silence_logs=40,  # logging.ERROR: a run's output is its progress and results
+    )
+    try:
+        with distributed.Client(cluster) as client:
+            client.register_plugin(_quiet_workers(distributed))
+            yield client
+    finally:
+        cluster.close()
 
 
 def each_day(
