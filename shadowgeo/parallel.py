@@ -32,35 +32,40 @@ def _distributed() -> Any:
 _QUIET_LOGGERS = ("distributed", "tornado", "tornado.application", "asyncio")
 
 
-@contextmanager
-def _quiet_here() -> Iterator[None]:
-    """:data:`_QUIET_LOGGERS` at CRITICAL in this process inside the block,
-    their levels restored after it."""
+def _quiet() -> list[tuple[logging.Logger, int]]:
+    """:data:`_QUIET_LOGGERS` set to CRITICAL in this process; each logger
+    with the level it had."""
     loggers = [logging.getLogger(name) for name in _QUIET_LOGGERS]
-    levels = [logger.level for logger in loggers]
+    before = [(logger, logger.level) for logger in loggers]
     for logger in loggers:
         logger.setLevel(logging.CRITICAL)
+    return before
+
+
+@contextmanager
+def _quiet_here() -> Iterator[None]:
+    """:func:`_quiet` inside the block, the levels restored after it."""
+    before = _quiet()
     try:
         yield
     finally:
-        for logger, level in zip(loggers, levels, strict=True):
+        for logger, level in before:
             logger.setLevel(level)
 
 
 def _quiet_workers(distributed: Any) -> Any:
-    """A worker plugin that raises the ``distributed`` loggers of each worker
-    process of a LocalCluster started here to CRITICAL. ``silence_logs`` quiets
-    only the nanny's logger there, and when the cluster shuts down under an
-    interrupt a worker's heartbeat can fail first, logging a traceback at ERROR
-    that a user would read as a crash. A task's own error still reaches the
-    caller through its future."""
+    """A worker plugin that quiets (:func:`_quiet`) each worker process of a
+    LocalCluster started here. ``silence_logs`` sets only the nanny's logger
+    there, and when the cluster shuts down under an interrupt a worker's
+    heartbeat can fail first, logging a traceback at ERROR that a user would
+    read as a crash. A task's own error still reaches the caller through its
+    future."""
 
     class QuietWorkers(distributed.WorkerPlugin):  # type: ignore[misc]
         name = "shadowgeo-quiet-workers"
 
         def setup(self, worker: Any) -> None:
-            for name in _QUIET_LOGGERS:
-                logging.getLogger(name).setLevel(logging.CRITICAL)
+            _quiet()
 
     return QuietWorkers()
 
@@ -96,7 +101,9 @@ def _local_client(distributed: Any, workers: int | None) -> Iterator[Any]:
         threads_per_worker=1,
         processes=True,
         dashboard_address=None,
-        silence_logs=40,  # logging.ERROR: a run's output is its progress and results
+        # a run's output is its progress and results: the nanny's loggers at the
+        # level _quiet gives the others
+        silence_logs=logging.CRITICAL,
     )
     try:
         with distributed.Client(cluster) as client:

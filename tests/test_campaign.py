@@ -4,7 +4,6 @@ report."""
 
 from __future__ import annotations
 
-import importlib
 import json
 import os
 import random
@@ -15,19 +14,13 @@ import time
 from pathlib import Path
 
 import pytest
+from fuzz_replay import fuzz_module
 from needs import SHARED, absent
 
 import shadowgeo as sg
 
 ROOT = Path(__file__).resolve().parents[1]
 GIS = SHARED / "corpus" / "gis"
-
-
-def fuzz_module(name: str):
-    folder = str(ROOT / "tools")
-    if folder not in sys.path:
-        sys.path.insert(0, folder)
-    return importlib.import_module(f"fuzz.{name}")
 
 
 def corpus_file(name: str) -> Path:

@@ -46,17 +46,15 @@ And at seed 40:
 from __future__ import annotations
 
 import contextlib
-import importlib
 import io
 import json
 import math
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
-from needs import SHARED, absent
+from fuzz_replay import corpus_seeds, fuzz_module, written_mutant
 
 import shadowgeo as sg
 from cli.main import main as cli_main
@@ -151,10 +149,7 @@ def test_many_shapes_of_one_name_get_unique_usd_names_in_order(tmp_path):
 
 
 def area_check():
-    folder = str(Path(__file__).resolve().parents[1] / "tools")
-    if folder not in sys.path:
-        sys.path.insert(0, folder)
-    return importlib.import_module("fuzz.check_area")
+    return fuzz_module("check_area")
 
 
 BOX_ON_GROUND = """<X3D profile="Interchange" version="4.0"><Scene>
@@ -188,49 +183,21 @@ def test_the_campaigns_area_check_takes_casters_by_their_opacity(tmp_path):
         check.triangles_area = original
 
 
-# seed 39, geometry case 11905, as tools/fuzz/geometry.py drew it (repr: every digit)
-_SLIT_CASTER = np.array(
-    [
-        ["1163.6859863889597", "-78.32587109959424", "1535.3562198657055"],
-        ["1166.0755724312012", "-78.29236402890312", "1534.453787222271"],
-        ["1165.3839585549313", "-79.33230205581962", "1535.1896249058393"],
-        ["1163.547516282944", "-77.01941279626924", "1535.733827756204"],
-        ["1163.217020906267", "-79.53574421716041", "1536.2256583846881"],
-        ["1163.2084130451294", "-78.5746187558329", "1537.3195535229559"],
-        ["1163.373852128518", "-80.14646690942585", "1537.0590989419134"],
-        ["1165.6622175739956", "-77.36819900610635", "1536.4496224091074"],
-        ["1164.204027038746", "-77.02015354568567", "1536.3514026616504"],
-        ["1164.6078731045293", "-77.37287517217183", "1535.123562282222"],
-        ["1162.5346624373683", "-77.46216066052452", "1536.7938576598722"],
-    ],
-    dtype=float,
-)
-_SLIT_FACES = np.array(
-    [
-        [10, 6, 5],
-        [10, 5, 7],
-        [7, 5, 6],
-        [10, 7, 8],
-        [2, 0, 1],
-        [1, 7, 2],
-        [2, 7, 6],
-        [3, 0, 10],
-        [10, 8, 3],
-        [4, 2, 6],
-        [0, 2, 4],
-        [4, 6, 10],
-        [10, 0, 4],
-        [1, 0, 9],
-        [0, 3, 9],
-        [9, 7, 1],
-        [9, 8, 7],
-        [9, 3, 8],
-    ]
-)
-_SLIT_LIGHT = sg.PointLight(
-    ["1164.603829149225", "-77.29788360144302", "1535.133023321679"], radius=4.55809683480517e45
-)
-_SLIT_PLANE = sg.Plane([0.0, 1.0, 0.0], 82.14646690942585)
+def geometry_finding(name: str) -> tuple[tuple[np.ndarray, np.ndarray], sg.Light, sg.Plane]:
+    """The caster, light and plane of a geometry case of the campaign, kept
+    in tests/data/findings as ``tools/fuzz/geometry.py`` drew it (JSON keeps
+    every digit)."""
+    case = json.loads((DATA / "findings" / f"{name}.json").read_text())
+    caster = (np.array(case["vertices"], dtype=float), np.array(case["faces"]))
+    light = fuzz_module("geometry").make_light(case["light"])
+    return caster, light, sg.Plane(case["normal"], case["offset"])
+
+
+def area_vectors(shadow: sg.Shadow) -> np.ndarray:
+    """(m, 3) each triangle of the shadow's mesh: its normal, twice its area long."""
+    corners = shadow.mesh.vertices[shadow.mesh.faces]
+    vectors: np.ndarray = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    return vectors
 
 
 def test_a_shadow_near_its_light_triangulates_to_its_own_area_with_no_triangle_turned_over():
@@ -239,12 +206,12 @@ def test_a_shadow_near_its_light_triangulates_to_its_own_area_with_no_triangle_t
     area is turned over (before: 0.7% of the area)."""
     from scipy.spatial import ConvexHull
 
-    shadow = sg.project_shadow((_SLIT_CASTER, _SLIT_FACES), _SLIT_LIGHT, _SLIT_PLANE)
+    caster, light, plane = geometry_finding("geometry_39_11905")
+    shadow = sg.project_shadow(caster, light, plane)
     (loop,) = (loop for part in shadow.polygons for loop in part)
     assert shadow.area == pytest.approx(ConvexHull(loop).volume, rel=1e-9)
-    corners = shadow.mesh.vertices[shadow.mesh.faces]
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    turned = normals @ _SLIT_PLANE.normal < 0  # (a sliver of rounding may be)
+    normals = area_vectors(shadow)
+    turned = normals @ plane.normal < 0  # (a sliver of rounding may be)
     assert 0.5 * np.linalg.norm(normals[turned], axis=1).sum() < 1e-9 * shadow.area
     assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(shadow.area, rel=1e-9)
 
@@ -267,14 +234,6 @@ def test_a_slit_whose_sides_run_along_one_line_loses_its_tip():
         assert area == pytest.approx(10_000 - (0.045 if kept else 0.0), abs=1e-3)
 
 
-class _NoWorkers:
-    """X3D seeds (and their gzipped x3dz) come from the corpus: no worker writes any."""
-
-    def run(self, tasks):
-        assert not list(tasks)
-        return iter(())
-
-
 def test_a_shadow_whose_cells_pass_the_crossing_budget_together_is_refused_before_they_run(
     tmp_path, monkeypatch, capsys
 ):
@@ -284,19 +243,8 @@ def test_a_shadow_whose_cells_pass_the_crossing_budget_together_is_refused_befor
     most a budget's worth of edges in all (before: about 58 budgets' worth,
     the cells run before the last union was refused). The work is counted,
     not timed."""
-    if not (SHARED / "corpus").is_dir():
-        absent("the fuzz seeds come from ../shared/corpus, which is missing")
-    tools = str(Path(__file__).parents[1] / "tools")
-    if tools not in sys.path:
-        sys.path.insert(0, tools)
-    seeds = importlib.import_module("fuzz.seeds").collect_seeds(
-        _NoWorkers(), 64 << 10, ["x3d", "x3dz"]
-    )
-    task = importlib.import_module("fuzz.campaign").converter_task(seeds, "x3dz", 1236, 39)
-    source = tmp_path / f"input{task['suffix']}"
-    source.write_bytes(task["data"])
-    argv = [str(source) if a == "IN" else a for a in task["argv"]]
-    argv = [str(tmp_path / ("output" + a[3:])) if a.startswith("OUT") else a for a in argv]
+    seeds = corpus_seeds(["x3d", "x3dz"])
+    _, argv, _ = written_mutant(seeds, "x3dz", 1236, 39, tmp_path)
     crossings = []
     clipped = plane2d.union._clipped
 
@@ -342,10 +290,7 @@ def test_a_dented_spheres_shadow_triangulates_to_its_own_area():
     """Seed 40, geometry case 19499 (a dented sphere under a point light
     between it and the plane, coordinates near 1e14): the mesh covers the
     shadow's area once (before: 3.9% more)."""
-    case = json.loads((DATA / "findings" / "geometry_40_19499.json").read_text())
-    light = sg.PointLight(case["light"]["position"])
-    plane = sg.Plane(case["normal"], case["offset"])
-    shadow = sg.project_shadow((np.array(case["vertices"]), np.array(case["faces"])), light, plane)
-    corners = shadow.mesh.vertices[shadow.mesh.faces]
-    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    assert 0.5 * np.linalg.norm(normals, axis=1).sum() == pytest.approx(shadow.area, rel=1e-6)
+    shadow = sg.project_shadow(*geometry_finding("geometry_40_19499"))
+    assert 0.5 * np.linalg.norm(area_vectors(shadow), axis=1).sum() == pytest.approx(
+        shadow.area, rel=1e-6
+    )

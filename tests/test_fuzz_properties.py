@@ -16,7 +16,6 @@ are left out until their fixes land: see the ``# widen after`` notes.
 from __future__ import annotations
 
 import contextlib
-import importlib
 import io
 import json
 import math
@@ -25,12 +24,12 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
 import shapely
 import trimesh
+from fuzz_replay import fuzz_module
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from reference import basis
@@ -46,14 +45,6 @@ SETTINGS = dict(
     database=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
-
-
-def fuzz_module(name: str) -> ModuleType:
-    """A module of tools/fuzz/, the package tools/fuzz.py runs (tools/ is not a package)."""
-    folder = str(ROOT / "tools")
-    if folder not in sys.path:
-        sys.path.insert(0, folder)
-    return importlib.import_module(f"fuzz.{name}")
 
 
 mutate = fuzz_module("mutate").mutate

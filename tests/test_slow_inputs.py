@@ -17,7 +17,6 @@ its steps counted here scanline by scanline.
 
 from __future__ import annotations
 
-import importlib
 import json
 import subprocess
 import sys
@@ -25,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from needs import SHARED, absent
+from fuzz_replay import corpus_seeds, written_mutant
 
 import shadowgeo as sg
 from cli.main import main
@@ -48,36 +47,15 @@ MUTANTS = [
 ]
 
 
-def fuzz_module(name: str):
-    folder = str(ROOT / "tools")
-    if folder not in sys.path:
-        sys.path.insert(0, folder)
-    return importlib.import_module(f"fuzz.{name}")
-
-
-class _NoWorkers:
-    """X3D and ClassicVRML seeds are read from the corpus: no worker writes any."""
-
-    def run(self, tasks):
-        assert not list(tasks)
-        return iter(())
-
-
 @pytest.fixture(scope="module")
 def seeds():
-    if not (SHARED / "corpus").is_dir():
-        absent("the fuzz seeds come from ../shared/corpus, which is missing")
-    collect = fuzz_module("seeds").collect_seeds
-    return collect(_NoWorkers(), 64 << 10, ["x3d", "x3dv"])
+    return corpus_seeds(["x3d", "x3dv"])
 
 
 def mutant(seeds, encoding: str, index: int, folder: Path) -> tuple[Path, list[str]]:
-    """The mutant written to ``folder`` and its command line, as the campaign runs it."""
-    task = fuzz_module("campaign").converter_task(seeds, encoding, index, SEED)
-    source = folder / f"input{task['suffix']}"
-    source.write_bytes(task["data"])
-    argv = [str(source) if a == "IN" else a for a in task["argv"]]
-    argv = [str(folder / "out" / ("output" + a[3:])) if a.startswith("OUT") else a for a in argv]
+    """The mutant at seed 12 written to ``folder`` and its command line, as
+    the campaign runs it."""
+    source, argv, _ = written_mutant(seeds, encoding, index, SEED, folder)
     return source, argv
 
 
@@ -226,15 +204,9 @@ print(json.dumps({"code": code, "most steps": entered[0]}))
 
 
 def test_the_template_soup_stays_within_the_sweep_budget(tmp_path):
-    if not (SHARED / "corpus").is_dir():
-        absent("the fuzz seeds come from ../shared/corpus, which is missing")
-    city_seeds = fuzz_module("seeds").collect_seeds(_NoWorkers(), 64 << 10, ["cityjson"])
-    task = fuzz_module("campaign").converter_task(city_seeds, "cityjson", CITY_INDEX, CITY_SEED)
+    city_seeds = corpus_seeds(["cityjson"])
+    _, argv, task = written_mutant(city_seeds, "cityjson", CITY_INDEX, CITY_SEED, tmp_path)
     assert task["ops"] == ["meaning:city-template-bomb-100000x10"]  # the mutant found
-    source = tmp_path / "input.city.json"
-    source.write_bytes(task["data"])
-    argv = [str(source) if a == "IN" else a for a in task["argv"]]
-    argv = [str(tmp_path / "out.x3d") if a.startswith("OUT") else a for a in argv]
     done = subprocess.run(
         [sys.executable, "-c", _COUNTED_CHILD, *argv],
         capture_output=True,
