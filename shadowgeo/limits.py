@@ -213,9 +213,15 @@ MAX_NODES = 2_000_000
 # empty Transforms, each USEing the one before ten times, asked for 1.1M
 # (under MAX_NODES) and took 19-36 CPU-s.
 MAX_VISITS = 500_000
+# Prototype copies a scene makes. A file that writes more ProtoInstances than
+# this outside its declarations is refused before the walk (10,001 copies made
+# one by one took 16 CPU-s to reach the count); copies inside copies are
+# counted as the walk makes them.
 MAX_PROTO_EXPANSIONS = 10_000
 # Lights of a scene as read: each is a node of the output, and a fuzzed file
-# that copies one 30,000 times took 11 CPU-s to read and write.
+# that copies one 30,000 times took 11 CPU-s to read and write. An X3D file
+# that writes more light nodes than this outside its declarations is refused
+# before the walk.
 MAX_LIGHTS = 10_000
 # Lights whose shadows add_shadows bakes unless the caller names them: each
 # is a shadow pass over every caster and receiver.

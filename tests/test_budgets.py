@@ -341,3 +341,58 @@ def test_many_spheres_under_the_budget_are_not_refused_for_their_estimate(tmp_pa
     with pytest.raises(sg.SceneError, match=r"molecule\.x3d line 1.*after tessellation") as error:
         sg.load(path, max_triangles=count - 1)
     assert f"{count:,} triangles" in str(error.value)
+
+
+def test_the_flat_count_is_the_node_by_node_count_with_namespaces_and_declarations():
+    # flat_expansion counts a subtree with no USE by lxml (its tag filter, or
+    # XPath where a prototype declaration is in or above it); the node-by-node
+    # expansion is the reference, in a namespace, without, and with a
+    # ProtoDeclare whose body counts as its nodes only
+    import copy
+
+    from lxml import etree
+
+    from shadowgeo.io.x3d.fields import Context
+
+    shapes = "<Transform><Shape><Box/></Shape><Group><Shape><Sphere/></Shape></Group></Transform>"
+    declared = '<ProtoDeclare name="P"><ProtoBody><Shape><Box/></Shape></ProtoBody></ProtoDeclare>'
+    documents = [
+        f"<Scene>{shapes}</Scene>",
+        f'<Scene xmlns="http://www.web3d.org/specifications/x3d-namespace">{shapes}</Scene>',
+        '<Scene xmlns:x="urn:x"><x:Transform><x:Shape><x:Box/></x:Shape></x:Transform>'
+        f"{shapes}</Scene>",
+        f"<Scene>{declared}{shapes}</Scene>",
+    ]
+    budget = x3d_budget.Expansion(10**6, 10**6, 10**6)
+    for text in documents:
+        root = etree.fromstring(text)
+        context = Context("t.x3d", (4, 0))
+        # the document, its subtrees, and a body copied out as an instance is
+        copies = [copy.deepcopy(body) for body in root.iter("{*}ProtoBody")]
+        for element in [root, *root.iter("{*}Transform"), *copies]:
+            reference = x3d_budget.expansion(context, element, x3d_budget.Estimates(budget))
+            assert x3d_budget.flat_expansion(context, element) == reference, (text, element.tag)
+
+
+@pytest.mark.parametrize("kind", ["light", "prototype"])
+def test_more_lights_or_prototype_instances_than_the_budget_are_refused_before_the_walk(
+    tmp_path, monkeypatch, work, kind
+):
+    # the budget made small here; nodes inside a declaration never instanced
+    # are not counted (they exist only in copies, which the walk counts)
+    monkeypatch.setattr(limits, "MAX_LIGHTS", 4)
+    monkeypatch.setattr(limits, "MAX_PROTO_EXPANSIONS", 4)
+    node = "<PointLight/>" if kind == "light" else '<ProtoInstance name="P"/>'
+    declarations = (
+        '<ProtoDeclare name="P"><ProtoBody><Group/></ProtoBody></ProtoDeclare>'
+        f'<ProtoDeclare name="Q"><ProtoBody><Group>{node * 3}</Group></ProtoBody></ProtoDeclare>'
+    )
+    scene = sg.load(x3d(tmp_path / "four.x3d", declarations + "\n".join([node] * 4)))
+    assert len(scene.lights) == (4 if kind == "light" else 0)
+    walked = work["walked"]
+    assert walked >= 4
+    over = x3d(tmp_path / "five.x3d", declarations + "\n" + "\n".join([node] * 5))
+    with pytest.raises(sg.SceneError, match="refused before") as refused:
+        sg.load(over)
+    assert work["walked"] == walked  # not one node of it walked
+    assert "five.x3d line 7" in str(refused.value)  # the fifth, on line 7

@@ -344,3 +344,24 @@ def test_writers_name_the_face_index_that_has_no_vertex(tmp_path, vertices, face
     with pytest.raises(sg.SceneError, match=rf"'bad'.*{message}"):
         sg.save(sg.Scene(shapes=[shape]), tmp_path / f"bad{suffix}")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_is_trs_takes_rotation_scale_translation_and_refuses_the_rest():
+    turn = np.eye(4)
+    c, s = np.cos(0.7), np.sin(0.7)
+    turn[:3, :3] = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]]) @ np.diag([2.0, 3.0, 0.5])
+    turn[:3, 3] = [1e6, -4, 2]
+    assert is_trs(turn) and is_trs(np.eye(4))
+    for row, column, value in [
+        (0, 1, 0.25),  # a shear
+        (3, 0, 0.1),  # projective
+        (1, 1, float("nan")),
+        (2, 3, float("inf")),
+        (0, 0, float("nan")),
+    ]:
+        broken = turn.copy()
+        broken[row, column] += value
+        assert not is_trs(broken), (row, column, value)
+    flat = turn.copy()
+    flat[:3, 2] = 0.0  # a zero scale: no rotation to give glTF
+    assert not is_trs(flat)

@@ -126,6 +126,69 @@ def test_the_slowest_mutant_ends_within_a_cpu_limit_in_a_fresh_process(seeds, tm
     assert done.returncode == 0, done.stderr[-2000:]
 
 
+# The one failure of the seed-41 campaign: x3dv mutant 9181 repeats a
+# Transform holding a Shape 10,000 times inside a PROTO used five times, 50,000
+# shapes of a few distinct geometries. No step was slow; the work per shape
+# was, in the reader's budget count, the tessellation's scale and the glTF
+# writer. Each is now done once per distinct thing, counted here.
+def test_fifty_thousand_copies_are_measured_and_packed_once_per_distinct_geometry(
+    tmp_path, monkeypatch, capsys
+):
+    from shadowgeo.io import gltf_write
+    from shadowgeo.io.x3d import read as reader
+
+    source, argv, _ = written_mutant(corpus_seeds(["x3dv"]), "x3dv", 9181, 41, tmp_path)
+    counts = {"packed": 0, "stretch": 0}
+    packed, norm = gltf_write._packed, np.linalg.norm
+
+    def counted_packed(*args):
+        counts["packed"] += 1
+        return packed(*args)
+
+    def counted_norm(x, ord=None, *args, **kwargs):
+        counts["stretch"] += ord == 2 and np.ndim(x) == 2
+        return norm(x, ord, *args, **kwargs)
+
+    monkeypatch.setattr(gltf_write, "_packed", counted_packed)
+    monkeypatch.setattr(reader.np.linalg, "norm", counted_norm)
+    assert main(argv) == 0, capsys.readouterr().err
+    monkeypatch.undo()
+    scene = sg.load(source)
+    assert len(scene.shapes) >= 50_000
+    linear = {s.transform[:3, :3].tobytes() for s in scene.shapes}
+    assert counts["stretch"] <= len(linear) < 10
+    # one packing per distinct (vertices, faces) of the scene, and one for the shadow
+    arrays = {(s.vertices.tobytes(), s.faces.tobytes()) for s in scene.shapes}
+    assert counts["packed"] <= len(arrays) + 1 < 20
+    # and every shape (and the shadow) still has its node and mesh in the file
+    document, binary = _glb(Path(argv[2]))
+    assert sum(1 for node in document["nodes"] if "mesh" in node) == len(scene.shapes) + 1
+
+
+# The slowest runs that passed: x3dv mutant 6736 at seed 41 (10,000 copies of
+# a ProtoInstance, refused at the 10,001st after 16.6 CPU-s) and 3136 at seed
+# 39 (10,001 PointLights, refused at the last after 16.3 CPU-s). The file's
+# own count of such nodes is over the budget: refused before the walk.
+@pytest.mark.parametrize(
+    ("index", "seed", "what"), [(6736, 41, "ProtoInstance"), (3136, 39, "light")]
+)
+def test_a_file_over_the_lights_or_prototypes_budget_is_refused_before_the_walk(
+    tmp_path, work, capsys, index, seed, what
+):
+    _, argv, _ = written_mutant(corpus_seeds(["x3dv"]), "x3dv", index, seed, tmp_path)
+    assert main(argv) == 1
+    error = capsys.readouterr().err
+    said = f"the file holds more {what} nodes than that; refused before"
+    assert error.count("\n") == 1 and said in error, error
+    assert work["built"] == 0
+
+
+def _glb(path: Path) -> tuple[dict, bytes]:
+    data = path.read_bytes()
+    length = int.from_bytes(data[12:16], "little")
+    return json.loads(data[20 : 20 + length]), data[28 + length :]
+
+
 # Issue 34 item 1: CityJSON mutant 37 at seed 34, a GeometryInstance placing a
 # template 100,000 times, ran for minutes in one Clipper2 union without a single
 # edge crossing: its corners lie on a few lines, and the sweep places each edge

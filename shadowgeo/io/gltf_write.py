@@ -72,14 +72,31 @@ _UNSIGNED_INT = 5125
 
 def is_trs(matrix: np.ndarray) -> bool:
     """True when a (4, 4) affine matrix is translation x rotation x scale
-    (its linear part has orthogonal columns), as glTF requires of ``matrix``."""
-    linear = matrix[:3, :3]
-    if not np.allclose(matrix[3], [0, 0, 0, 1], rtol=0, atol=_TRS_RELATIVE):
+    (its linear part has orthogonal columns), as glTF requires of ``matrix``.
+
+    (In plain floats: one call per shape node, and numpy's per-call cost on a
+    3 x 3 was seconds in a scene of 50,000 shapes.)"""
+    rows = matrix.tolist()
+    if not all(math.isfinite(value) for row in rows for value in row):
         return False
-    gram = linear.T @ linear
-    size = max(float(np.abs(gram).max()), np.finfo(float).tiny)
-    off_diagonal = gram - np.diag(np.diag(gram))
-    return bool(np.abs(off_diagonal).max() <= _TRS_RELATIVE * size and np.diag(gram).min() > 0)
+    last_row = zip(rows[3], _LAST_ROW, strict=True)
+    if not all(abs(value - unit) <= _TRS_RELATIVE for value, unit in last_row):
+        return False
+    return _orthogonal_columns([[rows[0][j], rows[1][j], rows[2][j]] for j in range(3)])
+
+
+def _orthogonal_columns(columns: list[list[float]]) -> bool:
+    """Whether three columns, none zero, are orthogonal to within
+    :data:`~shadowgeo.limits.TRS_RELATIVE` of the largest product."""
+    gram = [[u[0] * v[0] + u[1] * v[1] + u[2] * v[2] for v in columns] for u in columns]
+    size = max(max(abs(value) for row in gram for value in row), _TINY)
+    off_diagonal = max(abs(gram[i][j]) for i in range(3) for j in range(3) if i != j)
+    return bool(off_diagonal <= _TRS_RELATIVE * size and min(gram[i][i] for i in range(3)) > 0)
+
+
+_TINY = float(np.finfo(float).tiny)
+_LAST_ROW = (0.0, 0.0, 0.0, 1.0)
+_IDENTITY = np.eye(4)
 
 
 def _root_matrix(scene: Scene) -> np.ndarray | None:
@@ -107,6 +124,7 @@ class _Builder:
         }
         self.binary = bytearray()
         self.materials: dict[tuple[Any, ...], int] = {}
+        self.packed: dict[tuple[Any, ...], tuple[Any, ...]] = {}
 
     def _view(self, data: np.ndarray, target: int) -> int:
         """A buffer view of the contiguous array ``data`` (copied once, into
@@ -181,42 +199,22 @@ class _Builder:
         check_face_indices(shape)
         if len(shape.faces) == 0:
             return None
-        # Only the vertices the faces use: glTF's validator flags unused ones
-        # (a mask, not np.unique: linear, and no copy when all are used).
-        in_use = np.zeros(len(vertices), dtype=bool)
-        in_use[shape.faces.ravel()] = True
-        if not in_use.all():
-            used = np.flatnonzero(in_use)
-            remap = np.zeros(len(vertices), dtype=np.int64)
-            remap[used] = np.arange(len(used))
-            vertices, faces = vertices[used], remap[shape.faces]
+        # shapes that share their arrays (DEF/USE, prototype copies, equal
+        # primitives) are packed once; the arrays are held, so ids stay theirs
+        if vertices is not shape.vertices:  # (world vertices: this shape's own)
+            positions, indices, low, high = _packed(shape, vertices)
         else:
-            faces = shape.faces
-        # a float64 past float32's range becomes inf: said below, not warned
-        with np.errstate(over="ignore"):
-            positions = np.ascontiguousarray(vertices, dtype="<f4")
-        indices = np.ascontiguousarray(faces, dtype="<u4")
-        # column by column (a strided axis-0 reduction is several times
-        # slower); NaN or inf anywhere shows in the bounds
-        low = [float(positions[:, k].min()) for k in range(3)]
-        high = [float(positions[:, k].max()) for k in range(3)]
-        if not all(math.isfinite(value) for value in low + high):
-            # name where the shape was read: the cause is there, not in the output
-            where = f"shape {shape.name!r}" if shape.name else "a shape"
-            where += f" ({shape.source})" if shape.source else ""
-            if not np.isfinite(vertices).all():
-                raise SceneError("non-finite vertex", node=where)
-            raise SceneError(
-                "a vertex past float32's range (about 3.4e38), which glTF positions hold",
-                node=where,
-            )
+            key = (_memory(vertices), _memory(shape.faces))
+            if key not in self.packed:
+                self.packed[key] = (vertices, shape.faces, *_packed(shape, vertices))
+            positions, indices, low, high = self.packed[key][2:]
         position = self._accessor(
             bufferView=self._view(positions, _ARRAY_BUFFER),
             componentType=_FLOAT,
             count=len(positions),
             type="VEC3",
-            min=low,
-            max=high,
+            min=list(low),
+            max=list(high),
         )
         index = self._accessor(
             bufferView=self._view(indices, _ELEMENT_ARRAY_BUFFER),
@@ -231,15 +229,58 @@ class _Builder:
         return len(meshes) - 1
 
 
+def _memory(array: np.ndarray) -> tuple[Any, ...]:
+    """Where ``array``'s numbers are: two views of the same memory (a shape
+    used again, Shape's own ``asarray`` of an array) have the same."""
+    return (array.__array_interface__["data"][0], array.shape, array.strides)
+
+
+def _packed(
+    shape: Shape, vertices: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, list[float], list[float]]:
+    """glTF's float32 positions and uint32 indices of ``vertices`` and the
+    shape's faces (only the vertices the faces use), with the positions' bounds."""
+    # Only the vertices the faces use: glTF's validator flags unused ones
+    # (a mask, not np.unique: linear, and no copy when all are used).
+    in_use = np.zeros(len(vertices), dtype=bool)
+    in_use[shape.faces.ravel()] = True
+    if not in_use.all():
+        used = np.flatnonzero(in_use)
+        remap = np.zeros(len(vertices), dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        vertices, faces = vertices[used], remap[shape.faces]
+    else:
+        faces = shape.faces
+    # a float64 past float32's range becomes inf: said below, not warned
+    with np.errstate(over="ignore"):
+        positions = np.ascontiguousarray(vertices, dtype="<f4")
+    indices = np.ascontiguousarray(faces, dtype="<u4")
+    # column by column (a strided axis-0 reduction is several times
+    # slower); NaN or inf anywhere shows in the bounds
+    low = [float(positions[:, k].min()) for k in range(3)]
+    high = [float(positions[:, k].max()) for k in range(3)]
+    if not all(math.isfinite(value) for value in low + high):
+        # name where the shape was read: the cause is there, not in the output
+        where = f"shape {shape.name!r}" if shape.name else "a shape"
+        where += f" ({shape.source})" if shape.source else ""
+        if not np.isfinite(vertices).all():
+            raise SceneError("non-finite vertex", node=where)
+        raise SceneError(
+            "a vertex past float32's range (about 3.4e38), which glTF positions hold",
+            node=where,
+        )
+    return positions, indices, low, high
+
+
 def _shape_node(builder: _Builder, shape: Shape) -> dict[str, Any]:
     node: dict[str, Any] = {}
     if shape.name:
         node["name"] = shape.name
     transform = shape.transform
     vertices = shape.vertices
-    if not np.array_equal(transform, np.eye(4)):
-        if is_trs(transform) and np.all(np.isfinite(transform)):
-            node["matrix"] = [float(v) for v in transform.T.reshape(-1)]
+    if not np.array_equal(transform, _IDENTITY):
+        if is_trs(transform) and np.isfinite(transform).all():
+            node["matrix"] = transform.T.reshape(-1).tolist()
         else:
             vertices = shape.world_vertices
     mesh = builder.mesh(shape, vertices)

@@ -83,7 +83,7 @@ from ...scene.model import MARK, Placement, Viewpoint, axis_angle
 from ...tolerance import Tolerance
 from .. import file_problem, float_triple
 from . import parse as x3d_parse
-from .budget import Estimates, Expansion, expansion, flat_expansion
+from .budget import Estimates, Expansion, expansion, flat_expansion, past_budget
 from .fields import Context, Element, Tree, local_name, parse, rotation_matrix
 from .geometry import GEOMETRY, UNMODELLED_GEOMETRY, Instance, Mesh, Primitive, geometry
 from .inline import URL_SCHEME, load_inline
@@ -177,6 +177,7 @@ class _Reader:
         if not scenes:
             raise SceneError("no <Scene> element", path=display, line=root.sourceline)
         self._count(context, scenes[0])
+        _refuse_written_past(context, scenes[0])
         self.inline_stack.append(path.resolve())
         try:
             self.children(context, scenes[0], matrix, name)
@@ -488,13 +489,14 @@ class _Reader:
         tolerance = self._tolerance(tolerance, chord)
         tessellated: dict[tuple[Any, ...], Mesh] = {}
         scopes: dict[tuple[int, ...], frozenset[int]] = {}  # shared by a group's shapes
+        stretches: dict[bytes, float] = {}  # by linear part: shapes side by side share one
         budget, built_so_far = self.estimates.budget.triangles, 0
         for instance in self.instances:
             if instance.within not in scopes:
                 scopes[instance.within] = frozenset(self.scopes.intersection(instance.within))
             built = instance.geometry
             if isinstance(built, Primitive):
-                stretch = float(np.linalg.norm(instance.transform[:3, :3], 2)) or 1.0
+                stretch = _stretch(instance.transform[:3, :3], stretches)
                 local_chord = tolerance.chord_length / stretch
                 # equal primitives share one tessellation (and its arrays)
                 key = (built.key, None if built.kind == "Box" else local_chord)
@@ -551,6 +553,15 @@ class _Reader:
 _IDENTITY = np.eye(4)
 
 
+def _stretch(linear: np.ndarray, known: dict[bytes, float]) -> float:
+    """The most ``linear`` (3, 3) lengthens a vector (its largest singular
+    value; 1 for a degenerate one), remembered in ``known`` by its bytes."""
+    key = linear.tobytes()
+    if key not in known:
+        known[key] = float(np.linalg.norm(linear, 2)) or 1.0
+    return known[key]
+
+
 def _casts_shadow(context: Context, shape: Element, appearance: Element | None) -> bool:
     """False when the author said the Shape casts no shadow: X3D 4's
     ``Shape castShadow="false"`` or Castle Game Engine's ``Appearance
@@ -592,6 +603,27 @@ def _viewpoint(context: Context, element: Element, matrix: np.ndarray) -> Viewpo
         context.field(element, "description"),
         _public(element.get("DEF")),
     )
+
+
+def _refuse_written_past(context: Context, scene: Element) -> None:
+    """Refuse, before the walk, a document holding more light nodes than the
+    scene may have lights, or more ProtoInstances than prototypes may expand:
+    the walk would refuse it after reading that many (10,000 in seconds)."""
+    light = past_budget(scene, LIGHTS, limits.MAX_LIGHTS)
+    if light is not None:
+        raise context.error(
+            light,
+            f"more than {limits.MAX_LIGHTS:,} lights (the file holds more light nodes than "
+            "that; refused before it is read; shadowgeo.limits.MAX_LIGHTS)",
+        )
+    instance = past_budget(scene, {"ProtoInstance"}, limits.MAX_PROTO_EXPANSIONS)
+    if instance is not None:
+        raise context.error(
+            instance,
+            f"more than {limits.MAX_PROTO_EXPANSIONS:,} prototype copies (the file holds more "
+            "ProtoInstance nodes than that; refused before they are expanded; "
+            "shadowgeo.limits.MAX_PROTO_EXPANSIONS)",
+        )
 
 
 def _why(tag: str) -> str:
