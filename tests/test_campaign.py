@@ -4,6 +4,7 @@ report."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import random
@@ -140,6 +141,23 @@ def runs_of(out: Path) -> list[tuple]:
     return runs
 
 
+def workers_left(out: Path, wait: float = 10.0) -> list[int]:
+    """The processes still running whose command line names ``out`` (the
+    campaign's forked workers have its command line), after up to ``wait`` s."""
+    deadline = time.monotonic() + wait
+    while True:
+        left = []
+        for entry in Path("/proc").iterdir():
+            with contextlib.suppress(OSError):
+                if entry.name.isdigit() and str(out).encode() in (entry / "cmdline").read_bytes():
+                    state = (entry / "stat").read_text().rsplit(")", 1)[1].split()[0]
+                    if state != "Z":  # (a zombie is dead, waiting for its reaper)
+                        left.append(int(entry.name))
+        if not left or time.monotonic() > deadline:
+            return left
+        time.sleep(0.1)
+
+
 def stopped_part_way(out: Path, signum: int) -> subprocess.Popen:
     """A campaign sent ``signum`` as soon as it has recorded a run."""
     command = [sys.executable, str(ROOT / "tools" / "fuzz.py"), *TINY, "--out", str(out)]
@@ -166,6 +184,7 @@ def test_a_campaign_stopped_part_way_and_resumed_records_the_runs_of_an_uninterr
     out = tmp_path / "stopped"
     process = stopped_part_way(out, signum)
     assert process.returncode == (143 if signum == signal.SIGTERM else -signal.SIGKILL)
+    assert not workers_left(out)  # even SIGKILL, which the campaign cannot see, ends them
     kept = runs_of(out)  # whole lines only, each run's as it ended
     assert 1 <= len(kept) < TINY_RUNS and set(kept) <= set(expected)
     with (out / "results.jsonl").open("a") as stream:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import time
 from dataclasses import dataclass, field
 from multiprocessing import get_context
@@ -37,7 +38,9 @@ class Pool:
     def _start(self) -> Worker:
         parent, child = self.context.Pipe()
         process = self.context.Process(
-            target=worker_main, args=(child, self.memory_bytes, self.time_budget), daemon=True
+            target=worker_main,
+            args=(child, self.memory_bytes, self.time_budget, os.getpid()),
+            daemon=True,
         )
         process.start()
         child.close()
