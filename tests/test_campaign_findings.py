@@ -294,3 +294,14 @@ def test_a_dented_spheres_shadow_triangulates_to_its_own_area():
     assert 0.5 * np.linalg.norm(area_vectors(shadow), axis=1).sum() == pytest.approx(
         shadow.area, rel=1e-6
     )
+
+
+def test_a_city_geometry_whose_type_is_not_a_string_is_one_clear_line(tmp_path):
+    # CityJSON mutant 4872 at seed 42: a geometry's "type" retyped to an
+    # object raised "unhashable type: 'dict'" from the reader
+    source, argv, _ = written_mutant(corpus_seeds(["cityjson"]), "cityjson", 4872, 42, tmp_path)
+    code, message = run_cli(*argv)
+    assert code == 1 and message.count("\n") == 1, message
+    assert "a geometry's type must be a string, got an object" in message
+    assert source.name in message and "CityObject" in message
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())

@@ -270,6 +270,14 @@ def _resolved(
     return found, placed
 
 
+def _json_kind(value: Any) -> str:
+    """What JSON calls ``value``'s type: "an object", "a number", ..."""
+    if isinstance(value, bool):
+        return "a boolean"
+    names = {dict: "an object", list: "an array", str: "a string", type(None): "null"}
+    return names.get(type(value), "a number")
+
+
 def _surface_kind(index: Any, surfaces: list[Any], where: str, error: _Error) -> str | None:
     if index is None:
         return None
@@ -422,6 +430,8 @@ def _object_geometry(
     faces = []
     for geometry, points in resolved:
         kind = geometry.get("type")
+        if not isinstance(kind, str):
+            raise error(f"a geometry's type must be a string, got {_json_kind(kind)}", where)
         if kind in DEPTHS:
             faces.append((geometry, points))
         elif kind in NO_FACES:
@@ -481,7 +491,8 @@ def read(
     gathered: list[tuple[str, np.ndarray, Surfaces, bool]] = []
     for model in models:
         for name, body in model.objects.items():
-            if types is not None and (not isinstance(body, dict) or body.get("type") not in types):
+            kind = body.get("type") if isinstance(body, dict) else None
+            if types is not None and not (isinstance(kind, str) and kind in types):
                 continue
             chosen = _object_geometry(str(name), body, model, lod, budget, notes, error)
             if chosen:
