@@ -429,3 +429,33 @@ def test_the_campaign_runs_end_to_end(tmp_path):
 def _quiet_numpy():
     with np.errstate(all="ignore"):
         yield
+
+
+def _copied_out_reference(text: str) -> str | None:
+    """The check as it was, copying the text out (strings, then comments,
+    dropped): the reference for the scan in place."""
+    import re
+
+    text = re.sub(r'"(?:[^"\\]|\\.)*"', '""', text)
+    text = re.sub(r"#[^\n]*", "", text)
+    match = re.search(r"(?<![\w\"])[-+]?(nan|inf|infinity)(?![\w\"])", text, re.IGNORECASE)
+    return None if match is None else match.group(0)
+
+
+def test_the_output_check_scans_in_place_as_the_copying_check_did(tmp_path, monkeypatch):
+    # The seed-42 campaign's x3dv mutant 5761 (1,000 copies) wrote a 546 MB
+    # USDA; copying its text out took the check past the worker's memory
+    # budget. The check now scans the file in place, lowered a chunk at a
+    # time: chunks of 7 bytes here, so that words straddle them.
+    check_output = fuzz_module("check_output")
+    monkeypatch.setattr(check_output, "_CHUNK", 7)
+    rng = random.Random(42)
+    words = ["nan", "NaN", "-inf", "+Infinity", "info:id", "infinite", "0.5", "1e3", "x_nan"]
+    words += ['"nan"', '"a b"', "# inf here\n", "\n", " ", ",", "(", ")", "[", "=", "nanx"]
+    for case in range(300):
+        text = "#usda 1.0\n" + "".join(rng.choice(words) + rng.choice(" \n,") for _ in range(12))
+        path = tmp_path / f"case{case}.usda"
+        path.write_text(text)
+        expected = _copied_out_reference(text)
+        found = check_output.non_finite_in_output(path)
+        assert (found is None) == (expected is None), (text, found, expected)
