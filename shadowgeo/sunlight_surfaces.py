@@ -54,13 +54,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import plane2d as poly
+from .compiled import use_compiled
 from .errors import BudgetError, GeometryError
 from .levels import cover_levels
 from .lights import DirectionalLight
 from .opacity import Layers, layers
 from .parallel import each_day
 from .sun import sun_lights
-from .surface import shadow_on_surface
+from .surface import shadow_on_surface, shadowed_fractions
 from .tolerance import Tolerance
 from .topology import MeshLike, as_caster
 
@@ -137,6 +138,10 @@ class SurfaceSunlight:
         (``shadows``' first), of ``opacity_units``.
     opacity_units : int
         The parts a sample's sunlight is counted in (1 with every caster opaque).
+    where : bool
+        Whether the samples keep where each shadow lies (their triangles):
+        False for a study made with ``shadows=False``, whose samples hold
+        each face's shadowed share only (points cannot be asked then).
     """
 
     vertices: NDArray[np.float64]
@@ -152,6 +157,7 @@ class SurfaceSunlight:
     layer_shadows: tuple[tuple[SampleShadows, ...], ...] = field(default=(), repr=False)
     layer_weights: tuple[int, ...] = (1,)
     opacity_units: int = 1
+    where: bool = True
 
     @property
     def hours_per_sample(self) -> float:
@@ -247,6 +253,7 @@ class SurfaceSunlight:
         and outside every shadow triangle of its face (a point on a shadow's
         edge counts as shadowed)."""
         uv, face = self._on_faces(points, faces)
+        self._where()
         lit = np.ones((len(self.shadows), len(face)), dtype=bool)
         for index, sample in enumerate(self.shadows):
             lit[index] = ~(sample.dark[face] | self._in_triangles(uv, face, sample))
@@ -257,6 +264,7 @@ class SurfaceSunlight:
         translucent casters each sample's units of sun, less each
         threshold's weight where its shadow holds the point."""
         uv, face = self._on_faces(points, faces)
+        self._where()
         units = np.full((len(self.shadows), len(face)), self.opacity_units, dtype=np.int64)
         for weight, samples in self._layers():
             for index, sample in enumerate(samples):
@@ -264,6 +272,13 @@ class SurfaceSunlight:
         units[np.stack([sample.dark[face] for sample in self.shadows])] = 0
         hours: NDArray[np.float64] = units.sum(axis=0) * self.hours_per_unit
         return hours
+
+    def _where(self) -> None:
+        if not self.where:
+            raise GeometryError(
+                "this result was made without the shadows' outlines (shadows=False): "
+                "it holds each face's hours, not a point's"
+            )
 
     def _levels(self) -> tuple[dict[int, Parts], ...]:
         if self.levels is None:
@@ -368,8 +383,15 @@ def _sample(
     vertices: NDArray[np.float64],
     faces: NDArray[np.int64],
     tolerance: Tolerance,
+    where: bool = True,
+    compiled: bool = False,
 ) -> SampleShadows:
-    """The exact shadow on every face of the receiver under one sun."""
+    """The exact shadow on every face of the receiver under one sun (without
+    ``where``: each face's shadowed share only, by the compiled loops or not)."""
+    if not where:
+        chosen = np.arange(len(faces))
+        fraction, facing = _fractions(casters, light, vertices, faces, chosen, tolerance, compiled)
+        return SampleShadows(np.zeros((0, 3, 3)), np.zeros(0, np.int64), ~facing, fraction)
     parts = _cast(casters, light, vertices, faces, np.arange(len(faces)), tolerance)
     fraction = np.ones(len(faces))
     for _, _, chosen, part_fraction in parts:
@@ -406,6 +428,29 @@ def _cast(
     return [(triangles, chosen[shadow.face_index], chosen, shadow.fraction)]
 
 
+def _fractions(
+    casters: MeshLike | Sequence[MeshLike],
+    light: DirectionalLight,
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    chosen: NDArray[np.int64],
+    tolerance: Tolerance,
+    compiled: bool,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """:func:`shadowgeo.surface.shadowed_fractions` on the faces ``chosen``
+    (in halves when the pair search refuses the work, as :func:`_cast`)."""
+    try:
+        receiver = (vertices, faces[chosen])
+        return shadowed_fractions(casters, light, receiver, tolerance=tolerance, compiled=compiled)
+    except BudgetError:
+        if len(chosen) < 2:
+            raise
+        middle = len(chosen) // 2
+        first = _fractions(casters, light, vertices, faces, chosen[:middle], tolerance, compiled)
+        second = _fractions(casters, light, vertices, faces, chosen[middle:], tolerance, compiled)
+        return np.concatenate([first[0], second[0]]), np.concatenate([first[1], second[1]])
+
+
 def _tolerance(
     casters: MeshLike | Sequence[MeshLike], vertices: NDArray[np.float64], faces: NDArray[np.int64]
 ) -> Tolerance:
@@ -438,6 +483,7 @@ def surface_sunlight(
     times: Sequence[_dt.datetime] = (),
     levels: bool = True,
     opacity: ArrayLike | None = None,
+    shadows: bool = True,
 ) -> SurfaceSunlight:
     """Exact sunlight on every face of ``surface`` for given sun directions.
 
@@ -463,6 +509,12 @@ def surface_sunlight(
         casters' faces in order): a point hidden at a sample gets ``1 - a``
         of its sun, ``a`` the largest opacity of the faces hiding it (see
         the module notes). None, the default: every caster is opaque.
+    shadows : bool
+        Keep where each sample's shadow lies (its triangles, for hours at
+        points). False (with ``levels=False``): each face's shadowed share
+        only, measured without building the shadow
+        (:func:`shadowgeo.surface.shadowed_fractions`), for a long study of
+        each face's hours: the same hours to about 1e-12 of a face's area.
 
     Returns
     -------
@@ -493,17 +545,24 @@ def surface_sunlight(
     rays = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
     if times and len(times) != len(rays):
         raise GeometryError(f"{len(times)} times for {len(rays)} sun directions")
+    if levels and not shadows:
+        raise GeometryError("levels need the shadows: levels=True with shadows=False")
     tolerance = _tolerance(casters, vertices, faces)
     layered, parts = _layered(casters, opacity)
+    # (one choice for the whole study: its size is faces times samples)
+    compiled = not shadows and use_compiled("areas", len(faces) * len(rays))
     every = tuple(
-        tuple(_sample(part, DirectionalLight(ray), vertices, faces, tolerance) for ray in rays)
+        tuple(
+            _sample(part, DirectionalLight(ray), vertices, faces, tolerance, shadows, compiled)
+            for ray in rays
+        )
         for part in parts
     )
     origin, u, v = _frames(vertices, faces)
     cut = _face_levels(vertices, faces, (origin, u, v), every, layered) if levels else None
     return SurfaceSunlight(
         vertices, faces, rays, tuple(times), step, every[0], origin, u, v, cut,
-        every[1:], layered.weights, layered.units,
+        every[1:], layered.weights, layered.units, shadows,
     )  # fmt: skip
 
 
@@ -537,6 +596,7 @@ def surface_sun_study(
     north: ArrayLike | None = None,
     levels: bool = True,
     opacity: ArrayLike | None = None,
+    shadows: bool = True,
 ) -> SurfaceSunlight:
     """:func:`surface_sunlight` at ``times`` for a site: the sun's directions
     from :mod:`shadowgeo.sun`; samples with the sun below the horizon are
@@ -557,7 +617,14 @@ def surface_sun_study(
     kept, lights = sun_lights(latitude, longitude, times, up=up, north=north)
     directions = np.array([light.direction for light in lights]).reshape(-1, 3)
     return surface_sunlight(
-        casters, surface, directions, step=step, times=kept, levels=levels, opacity=opacity
+        casters,
+        surface,
+        directions,
+        step=step,
+        times=kept,
+        levels=levels,
+        opacity=opacity,
+        shadows=shadows,
     )
 
 
@@ -573,6 +640,7 @@ def surface_sun_study_by_day(
     north: ArrayLike | None = None,
     levels: bool = True,
     opacity: ArrayLike | None = None,
+    shadows: bool = True,
     tz: _dt.tzinfo | None = None,
     scheduler: Any = None,
     progress: Callable[[int, int], None] | None = None,
@@ -607,6 +675,7 @@ def surface_sun_study_by_day(
         north=north,
         levels=levels,
         opacity=opacity,
+        shadows=shadows,
     )
     return each_day(
         surface_sun_study,

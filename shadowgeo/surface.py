@@ -74,6 +74,7 @@ from numpy.typing import ArrayLike
 
 from . import plane2d as poly
 from .cells import column_cells
+from .compiled import use_compiled
 from .errors import GeometryError
 from .lightframe import (
     candidate_pairs,
@@ -98,6 +99,7 @@ if TYPE_CHECKING:
     from manifold3d import CrossSection
 
 __all__ = [
+    "shadowed_fractions",
     "LightRegions",
     "SurfaceDiagnostics",
     "SurfaceShadow",
@@ -370,6 +372,37 @@ def shadow_layers_on_surface(
     return layers
 
 
+def shadowed_fractions(
+    casters: MeshLike | Sequence[MeshLike],
+    light: DirectionalLight,
+    surface: MeshLike,
+    *,
+    tolerance: Tolerance | None = None,
+    compiled: bool | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The share of each face of ``surface`` that ``casters`` shadow under
+    the sun, without the shadow itself: (m,) fractions, 1 on faces turned
+    away from the light, and (m,) bool, the faces turned to it.
+
+    The same numbers as :func:`shadow_on_surface`'s ``fraction`` to about
+    1e-12 of a face's area, from the area of the union of each face's convex
+    pieces measured by compiled loops (:func:`shadowgeo.kernels.union_areas`),
+    not a 2-D union and its triangles: for studies that need the hours of
+    each face, not where on it the shadow lies. A face whose pieces include
+    a closed caster's outline (not convex) takes the union's way.
+
+    ``compiled``: whether to take the compiled loops; None, the default: as
+    :mod:`shadowgeo.compiled`'s rule says for the job ``"areas"`` of this
+    surface's faces. Without them, :func:`shadow_on_surface`'s fractions
+    (the same to rounding).
+    """
+    receiver, (group,), _, _, tolerance = _prepared([casters], [light], surface, 0.0, tolerance)
+    if compiled is None:
+        compiled = use_compiled("areas", receiver.n_faces)
+    projector = _SurfaceProjector(group, light, receiver, 0.0, tolerance)
+    return projector.fractions(compiled)
+
+
 def _prepared(
     groups: Sequence[MeshLike | Sequence[MeshLike]],
     lights: Sequence[Light],
@@ -606,6 +639,31 @@ class _SurfaceProjector:
         info = replace(found.diagnostics, n_shadowed_faces=len(unique_integers(face_index)))
         area = float(areas.sum())
         return SurfaceShadow(self.light, vertices, triangles, face_index, fraction, area, info)
+
+    def fractions(self, compiled: bool) -> tuple[np.ndarray, np.ndarray]:
+        """The shadowed share of each face and the faces turned to the light
+        (see :func:`shadowed_fractions`)."""
+        corners, facing, lit = self._faces()
+        receivers, triangles, caster_triangles, full, extra, _ = self._pairs(corners, lit)
+        # (outlines are not convex; a light's range cuts faces)
+        if not compiled or len(extra[1]) or is_positional(self.light):
+            found = self._regions(receivers, triangles, caster_triangles, corners, full, extra)
+            diagnostics = SurfaceDiagnostics(n_surface_faces=self.surface.n_faces)
+            shadow = self.shadow(FaceRegions(*found, facing, diagnostics))
+            return shadow.fraction, facing
+        flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
+        fraction = np.where(facing, 0.0, 1.0)
+        fraction[full] = 1.0
+        if len(owner):
+            from .kernels import union_areas
+
+            faces, start, count = np.unique(owner, return_index=True, return_counts=True)
+            corners_each = np.full(len(flat), flat.shape[1], dtype=np.int64)
+            areas = union_areas(flat, corners_each, start, count, self.tol.length)
+            partial = ~full[faces]
+            faces, areas = faces[partial], areas[partial]
+            fraction[faces] = np.minimum(areas / self.face_area[faces], 1.0)
+        return fraction, facing
 
     def _faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The surface in the centred frame, with vertices merged by position:

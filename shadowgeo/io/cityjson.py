@@ -427,6 +427,21 @@ def _object_geometry(
     if not isinstance(listed, list):
         raise error("geometry must be a list", where)
     resolved = [_resolved(geometry, model, budget, where, error) for geometry in listed]
+    faces = _with_faces(resolved, where, notes, error)
+    wanted = [item for item in faces if _wanted(item[0].get("lod"), lod)]
+    if faces and not wanted:
+        notes.append(f"{error.path.name}: {where}: no LoD {lod} geometry; left out")
+    if not wanted:
+        return []
+    top = max(_lod_key(geometry.get("lod")) for geometry, _ in wanted)
+    return [item for item in wanted if _lod_key(item[0].get("lod")) == top]
+
+
+def _with_faces(
+    resolved: list[tuple[Any, np.ndarray]], where: str, notes: list[str], error: _Error
+) -> list[tuple[Any, np.ndarray]]:
+    """The geometries of ``resolved`` that have faces (points and lines
+    skipped with a note); a type that is none of them is an error."""
     faces = []
     for geometry, points in resolved:
         kind = geometry.get("type")
@@ -438,13 +453,7 @@ def _object_geometry(
             notes.append(f"{error.path.name}: {where}: skipped a {kind} (no faces)")
         else:
             raise error(f"unknown geometry type {kind!r}", where)
-    wanted = [item for item in faces if _wanted(item[0].get("lod"), lod)]
-    if faces and not wanted:
-        notes.append(f"{error.path.name}: {where}: no LoD {lod} geometry; left out")
-    if not wanted:
-        return []
-    top = max(_lod_key(geometry.get("lod")) for geometry, _ in wanted)
-    return [item for item in wanted if _lod_key(item[0].get("lod")) == top]
+    return faces
 
 
 def read(

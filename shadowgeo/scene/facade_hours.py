@@ -307,6 +307,7 @@ def facade_hours(
             step=step,
             levels=False,
             opacity=opacity,
+            shadows=False,  # each face's hours: no outlines kept, the compiled areas
         )
         total += sunlight.mean_hours()
         if progress is not None:
