@@ -48,7 +48,7 @@ import datetime as _dt
 import math
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -389,8 +389,16 @@ def _sample(
     """The exact shadow on every face of the receiver under one sun (without
     ``where``: each face's shadowed share only, by the compiled loops or not)."""
     if not where:
-        chosen = np.arange(len(faces))
-        fraction, facing = _fractions(casters, light, vertices, faces, chosen, tolerance, compiled)
+
+        def measure(part: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+            receiver = (vertices, faces[part])
+            return shadowed_fractions(
+                casters, light, receiver, tolerance=tolerance, compiled=compiled
+            )
+
+        measured = _in_halves(measure, np.arange(len(faces)))
+        fraction = np.concatenate([part[0] for part in measured])
+        facing = np.concatenate([part[1] for part in measured])
         return SampleShadows(np.zeros((0, 3, 3)), np.zeros(0, np.int64), ~facing, fraction)
     parts = _cast(casters, light, vertices, faces, np.arange(len(faces)), tolerance)
     fraction = np.ones(len(faces))
@@ -411,44 +419,36 @@ def _cast(
     tolerance: Tolerance,
 ) -> list[tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]]:
     """:func:`shadow_on_surface` on the faces ``chosen``: (shadow triangles,
-    their faces, ``chosen``, the faces' shadowed fractions), in one call or,
-    when that call refuses the work (a low sun over a city passes a union's
-    or a pair search's budget, :mod:`shadowgeo.limits`), in halves."""
+    their faces, ``chosen``, the faces' shadowed fractions) of each part of
+    :func:`_in_halves`."""
+
+    def cast(
+        part: NDArray[np.int64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+        shadow = shadow_on_surface(casters, light, (vertices, faces[part]), tolerance=tolerance)
+        triangles = shadow.vertices[shadow.faces]
+        return triangles, part[shadow.face_index], part, shadow.fraction
+
+    return _in_halves(cast, chosen)
+
+
+_Part = TypeVar("_Part")
+
+
+def _in_halves(
+    work: Callable[[NDArray[np.int64]], _Part], chosen: NDArray[np.int64]
+) -> list[_Part]:
+    """``work(chosen)`` in one call or, when that call refuses the work (a
+    low sun over a city passes a union's or a pair search's budget,
+    :mod:`shadowgeo.limits`), on each half in turn, halved again as needed."""
     try:
-        shadow = shadow_on_surface(casters, light, (vertices, faces[chosen]), tolerance=tolerance)
+        return [work(chosen)]
     except BudgetError:
         # only a budget is worth halving for; bad input is not
         if len(chosen) < 2:
             raise
         middle = len(chosen) // 2
-        return _cast(casters, light, vertices, faces, chosen[:middle], tolerance) + _cast(
-            casters, light, vertices, faces, chosen[middle:], tolerance
-        )
-    triangles = shadow.vertices[shadow.faces]
-    return [(triangles, chosen[shadow.face_index], chosen, shadow.fraction)]
-
-
-def _fractions(
-    casters: MeshLike | Sequence[MeshLike],
-    light: DirectionalLight,
-    vertices: NDArray[np.float64],
-    faces: NDArray[np.int64],
-    chosen: NDArray[np.int64],
-    tolerance: Tolerance,
-    compiled: bool,
-) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """:func:`shadowgeo.surface.shadowed_fractions` on the faces ``chosen``
-    (in halves when the pair search refuses the work, as :func:`_cast`)."""
-    try:
-        receiver = (vertices, faces[chosen])
-        return shadowed_fractions(casters, light, receiver, tolerance=tolerance, compiled=compiled)
-    except BudgetError:
-        if len(chosen) < 2:
-            raise
-        middle = len(chosen) // 2
-        first = _fractions(casters, light, vertices, faces, chosen[:middle], tolerance, compiled)
-        second = _fractions(casters, light, vertices, faces, chosen[middle:], tolerance, compiled)
-        return np.concatenate([first[0], second[0]]), np.concatenate([first[1], second[1]])
+        return _in_halves(work, chosen[:middle]) + _in_halves(work, chosen[middle:])
 
 
 def _tolerance(

@@ -15,6 +15,7 @@ import trimesh
 
 import shadowgeo as sg
 from shadowgeo.compiled import compiled_loops
+from shadowgeo.errors import BudgetError
 from shadowgeo.kernels import union_areas
 from shadowgeo.surface import shadowed_fractions
 
@@ -121,3 +122,30 @@ def test_a_study_without_shadows_has_the_same_hours_and_refuses_points():
         quick.sunlit_hours(point, [0])
     with pytest.raises(sg.GeometryError, match="levels need the shadows"):
         sg.surface_sun_study(block, block, day, shadows=False, latitude=51.5, longitude=-0.12)
+
+
+def test_shares_refused_for_all_faces_at_once_are_measured_in_halves(monkeypatch):
+    # as the shadows are (test_sunlight_surfaces): a stand-in refuses more
+    # than 7 faces at once, as a pair search's budget would
+    import shadowgeo.sunlight_surfaces as module
+
+    block = _block(6, 4)
+    directions = [[0.3, -0.8, -0.5], [-0.6, -0.2, 0.3]]
+    with compiled_loops("always"):
+        whole = sg.surface_sunlight(block, block, directions, levels=False, shadows=False)
+    real = module.shadowed_fractions
+    sizes = []
+
+    def refusing(casters, light, surface, **options):
+        sizes.append(len(surface[1]))
+        if len(surface[1]) > 7:
+            raise BudgetError("past a budget (shadowgeo.limits.MAX_PAIRS)")
+        return real(casters, light, surface, **options)
+
+    monkeypatch.setattr(module, "shadowed_fractions", refusing)
+    with compiled_loops("always"):
+        halves = sg.surface_sunlight(block, block, directions, levels=False, shadows=False)
+    assert max(sizes) == len(block[1]) and min(sizes) <= 7
+    for one, other in zip(whole.shadows, halves.shadows, strict=True):
+        assert np.array_equal(one.dark, other.dark)
+        np.testing.assert_allclose(one.fraction, other.fraction, rtol=0, atol=1e-12)
