@@ -279,7 +279,7 @@ def _shape_node(builder: _Builder, shape: Shape) -> dict[str, Any]:
     transform = shape.transform
     vertices = shape.vertices
     if not np.array_equal(transform, _IDENTITY):
-        if is_trs(transform) and np.isfinite(transform).all():
+        if is_trs(transform):  # (finite too)
             node["matrix"] = transform.T.reshape(-1).tolist()
         else:
             vertices = shape.world_vertices
