@@ -29,9 +29,12 @@ kinds of job can:
 ``"areas"``
     Each face's shadowed share under the sun, for a study that keeps no
     shadow outlines (:func:`shadowgeo.surface.shadowed_fractions`,
-    ``surface_sunlight(..., shadows=False)``): the area of the union of a
-    face's convex pieces by compiled loops instead of a 2-D union and its
-    triangles, about twice as fast per sun position over a city. Its size
+    ``surface_sunlight(..., shadows=False)``): each convex body's shadow on
+    each face as one convex piece, and the area of the union of a face's
+    convex pieces, by compiled loops instead of a 2-D union and its
+    triangles, about four to ten times as fast per sun position over a city
+    (a box of a block is one piece a face, not its three to six
+    light-facing triangles', and a face inside one is shadowed whole). Its size
     is faces times sun positions; from :data:`AREAS_FACE_SAMPLES` (a day of
     a few thousand faces) the saving repays the import. Without it the
     union gives the same shares to rounding (about 1e-12 of a face's area),

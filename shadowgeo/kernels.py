@@ -8,10 +8,11 @@ repays it: :func:`shadowgeo.batchlights.whole_outlines` for a light of two to
 dented caster's folds; not a few shapes side by side, nor a small scene's
 sphere and box); :func:`shadowgeo.topology.cycle_walk` and
 ``shadowgeo.silhouette._successors`` for walks of a million items or more (the
-same results as their numpy ways, bit for bit); :func:`union_areas` for the
-shadowed share of each face in a long sun study
+same results as their numpy ways, bit for bit); :func:`union_areas` and
+:func:`ring_pieces` for the shadowed share of each face in a long sun study
 (:func:`shadowgeo.surface.shadowed_fractions`, the same to about 1e-12 of a
-face's area as the 2-D union it replaces). ``SHADOWGEO_COMPILED=never``
+face's area as the 2-D union it replaces: each convex body's shadow on a
+face as one convex piece, and the area of the union of a face's pieces). ``SHADOWGEO_COMPILED=never``
 keeps numba out, ``always`` takes these loops for every job. Each function is
 compiled once and cached beside this file (or in numba's user cache when this
 folder is read-only).
@@ -26,7 +27,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-__all__ = ["cycle_walk", "successors", "union_areas", "whole_loops"]
+__all__ = ["cycle_walk", "ring_pieces", "successors", "union_areas", "whole_loops"]
 
 # A sign is certain when the cross product is beyond its light's margin
 # (see whole_loops), an order along an axis when the difference is beyond
@@ -591,12 +592,16 @@ def _face_area(
     first: int,
     last: int,
     eps: float,
+    thin: np.ndarray,
 ) -> float:
-    """The area of the union of the pieces ``first`` to ``last`` of ``flat``."""
+    """The area of the union of the pieces ``first`` to ``last`` of ``flat``
+    (those ``thin`` left out)."""
     total = 0.0
     starts = np.empty(last - first)
     stops = np.empty(last - first)
     for i in range(first, last):
+        if thin[i]:
+            continue
         n = counts[i]
         for k in range(n):
             ax, ay = flat[i, k, 0], flat[i, k, 1]
@@ -607,7 +612,7 @@ def _face_area(
             sx0, sx1 = min(ax, bx), max(ax, bx)
             sy0, sy1 = min(ay, by), max(ay, by)
             for j in range(first, last):
-                if j == i:
+                if j == i or thin[j]:
                     continue
                 if (
                     sx1 + eps < low[j, 0]
@@ -631,15 +636,267 @@ def union_areas(
 ) -> np.ndarray:
     """(f,) the area of the union of the convex counter-clockwise polygons
     ``flat[start[f]:start[f] + count[f]]`` ((n, k, 2), ``counts`` corners
-    each) of each face ``f``."""
+    each) of each face ``f``. A polygon no wider than about ``eps`` (its area
+    at most ``eps`` times its perimeter: a sliver, or corners repeated) is
+    left out: its edges, one way and back along a line or of no length, would
+    cover the others' edges it meets, not an area."""
     low = np.empty((flat.shape[0], 2))
     high = np.empty((flat.shape[0], 2))
+    thin = np.zeros(flat.shape[0], dtype=np.bool_)
     for i in range(flat.shape[0]):
-        low[i, 0] = flat[i, : counts[i], 0].min()
-        low[i, 1] = flat[i, : counts[i], 1].min()
-        high[i, 0] = flat[i, : counts[i], 0].max()
-        high[i, 1] = flat[i, : counts[i], 1].max()
+        n = counts[i]
+        low[i, 0] = flat[i, :n, 0].min()
+        low[i, 1] = flat[i, :n, 1].min()
+        high[i, 0] = flat[i, :n, 0].max()
+        high[i, 1] = flat[i, :n, 1].max()
+        twice, perimeter = 0.0, 0.0
+        for k in range(n):
+            ax, ay = flat[i, k, 0], flat[i, k, 1]
+            bx, by = flat[i, (k + 1) % n, 0], flat[i, (k + 1) % n, 1]
+            twice += ax * by - bx * ay
+            perimeter += np.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
+        thin[i] = 0.5 * twice <= eps * perimeter
     out = np.zeros(len(start))
     for f in range(len(start)):
-        out[f] = _face_area(flat, counts, low, high, start[f], start[f] + count[f], eps)
+        out[f] = _face_area(flat, counts, low, high, start[f], start[f] + count[f], eps, thin)
     return out
+
+
+@nb.njit(cache=True)
+def _before(x: np.ndarray, y: np.ndarray, a: int, b: int) -> bool:
+    """Whether point ``a`` comes before ``b`` in (x, y) order."""
+    return bool(x[a] < x[b] or (x[a] == x[b] and y[a] < y[b]))
+
+
+@nb.njit(cache=True)
+def _turn(x: np.ndarray, y: np.ndarray, o: int, a: int, b: int) -> float:
+    """Twice the signed area of the triangle o, a, b (positive: a left turn)."""
+    return float((x[a] - x[o]) * (y[b] - y[o]) - (y[a] - y[o]) * (x[b] - x[o]))
+
+
+@nb.njit(cache=True)
+def _hull(x: np.ndarray, y: np.ndarray, n: int, order: np.ndarray, chain: np.ndarray) -> int:
+    """The convex hull of the first ``n`` points (x, y), counter-clockwise
+    and without collinear corners, into ``chain`` (Andrew's monotone chain):
+    its corner count (below 3 for collinear points); ``order`` is room for
+    the sort."""
+    for i in range(n):
+        order[i] = i
+    for i in range(1, n):  # insertion sort: a body has a few dozen corners
+        item, j = order[i], i - 1
+        while j >= 0 and _before(x, y, item, order[j]):
+            order[j + 1] = order[j]
+            j -= 1
+        order[j + 1] = item
+    k = 0
+    for i in range(n):  # lower chain
+        while k >= 2 and _turn(x, y, chain[k - 2], chain[k - 1], order[i]) <= 0.0:
+            k -= 1
+        chain[k] = order[i]
+        k += 1
+    lower = k + 1
+    for i in range(n - 2, -1, -1):  # upper chain
+        while k >= lower and _turn(x, y, chain[k - 2], chain[k - 1], order[i]) <= 0.0:
+            k -= 1
+        chain[k] = order[i]
+        k += 1
+    return k - 1 if k - 1 >= 3 else 0  # the last repeats the first
+
+
+@nb.njit(cache=True)
+def _height(p: np.ndarray, origin: np.ndarray, normal: np.ndarray) -> float:
+    """The height of point ``p`` above the plane through ``origin`` with unit ``normal``."""
+    return float(
+        (p[0] - origin[0]) * normal[0]
+        + (p[1] - origin[1]) * normal[1]
+        + (p[2] - origin[2]) * normal[2]
+    )
+
+
+@nb.njit(cache=True)
+def _cut_body(
+    points: np.ndarray,
+    vertices: np.ndarray,
+    edges: np.ndarray,
+    normal: np.ndarray,
+    origin: np.ndarray,
+    eps: float,
+    found: np.ndarray,
+    heights: np.ndarray,
+) -> int:
+    """The corners of a convex body (its ``vertices`` and ``edges``, indices
+    into ``points``) ahead of the plane through ``origin`` with unit
+    ``normal``, into ``found``: all of them when none lies more than ``eps``
+    behind it, else those on or ahead of it and where its edges cross it;
+    none when no corner lies more than ``eps`` ahead. Returns their count;
+    ``heights`` is room for the vertices' heights."""
+    low, high = np.inf, -np.inf
+    for k in range(len(vertices)):
+        h = _height(points[vertices[k]], origin, normal)
+        heights[k] = h
+        low, high = min(low, h), max(high, h)
+    if high <= eps:
+        return 0
+    c = 0
+    for k in range(len(vertices)):
+        if low >= -eps or heights[k] >= 0.0:
+            for d in range(3):
+                found[c, d] = points[vertices[k], d]
+            c += 1
+    if low >= -eps:
+        return c
+    for k in range(len(edges)):
+        a, b = points[edges[k, 0]], points[edges[k, 1]]
+        ha, hb = _height(a, origin, normal), _height(b, origin, normal)
+        if (ha > 0.0 and hb < 0.0) or (ha < 0.0 and hb > 0.0):
+            t = ha / (ha - hb)
+            for d in range(3):
+                found[c, d] = a[d] + (b[d] - a[d]) * t
+            c += 1
+    return c
+
+
+@nb.njit(cache=True)
+def _holds(x: np.ndarray, y: np.ndarray, chain: np.ndarray, k: int, px: float, py: float) -> bool:
+    """Whether the point (px, py) lies in the counter-clockwise ring
+    ``chain[:k]`` of the points (x, y), on its edge included (to rounding:
+    a point this test misses is measured the exact way)."""
+    for j in range(k):
+        a, b = chain[j], chain[(j + 1) % k]
+        if (x[b] - x[a]) * (py - y[a]) - (y[b] - y[a]) * (px - x[a]) < 0.0:
+            return False
+    return True
+
+
+@nb.njit(cache=True)
+def _clip_to_triangle(polygon: np.ndarray, n: int, triangle: np.ndarray, spare: np.ndarray) -> int:
+    """The convex ``polygon[:n]`` (2-D, counter-clockwise) cut to the
+    counter-clockwise ``triangle`` (3, 2) (Sutherland-Hodgman, a pass an
+    edge, back and forth between ``polygon`` and ``spare``, each with room
+    for ``n + 3`` corners): the result's corner count, its corners in
+    ``spare`` (after the third pass; 0 when less than three are left)."""
+    source, target = polygon, spare
+    for e in range(3):
+        ax, ay = triangle[e, 0], triangle[e, 1]
+        ex, ey = triangle[(e + 1) % 3, 0] - ax, triangle[(e + 1) % 3, 1] - ay
+        m = 0
+        for j in range(n):
+            px, py = source[j, 0], source[j, 1]
+            qx, qy = source[(j + 1) % n, 0], source[(j + 1) % n, 1]
+            sp = ex * (py - ay) - ey * (px - ax)
+            sq = ex * (qy - ay) - ey * (qx - ax)
+            if sp >= 0.0:
+                target[m, 0], target[m, 1] = px, py
+                m += 1
+            if (sp >= 0.0) != (sq >= 0.0):
+                t = sp / (sp - sq)
+                target[m, 0], target[m, 1] = px + t * (qx - px), py + t * (qy - py)
+                m += 1
+        source, target = target, source
+        n = m
+        if n < 3:
+            return 0
+    return n
+
+
+@nb.njit(cache=True)
+def ring_pieces(
+    points: np.ndarray,
+    vertices: np.ndarray,
+    vertex_starts: np.ndarray,
+    edges: np.ndarray,
+    edge_starts: np.ndarray,
+    body: np.ndarray,
+    face: np.ndarray,
+    frames: np.ndarray,
+    direction: np.ndarray,
+    eps: float,
+    offsets: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each convex body's shadow on each face it may shade, under a
+    directional light travelling along ``direction``: for each pair ``i``
+    (sorted by face), body ``body[i]`` (its vertices
+    ``vertices[vertex_starts[b]:vertex_starts[b + 1]]`` and its edges
+    likewise, indices into ``points``) cut to the part ahead of face
+    ``face[i]``'s plane (see :func:`_cut_body`), projected along the light
+    onto that plane, and the convex hull of the images cut to the face: a
+    convex counter-clockwise polygon in the face's frame, its corners from
+    ``offsets[i]`` on in the (offsets[-1], 2) result.
+
+    ``frames`` (f, 6, 3) holds each face's three corners (either way round
+    its normal), unit normal and in-plane axes u and v (``u x v`` = normal),
+    all in ``points``' frame; a face's 2-D frame has its origin at
+    its first corner. ``offsets``: room for each pair's corners, its body's
+    vertices and edges and three more.
+
+    Also (m,) the corner counts (0: nothing with area, or not needed) and
+    (m,) whether the hull holds the whole face (it is then wholly shadowed,
+    and its face's later pairs are not measured)."""
+    flat = np.zeros((offsets[-1], 2))
+    counts = np.zeros(len(body), dtype=np.int64)
+    covers = np.zeros(len(body), dtype=np.bool_)
+    room = 3
+    for i in range(len(body)):
+        room = max(room, offsets[i + 1] - offsets[i])
+    found = np.empty((room, 3))  # scratch, reused by every pair
+    x, y, heights = np.empty(room), np.empty(room), np.empty(room)
+    chain = np.empty(2 * room + 1, dtype=np.int64)
+    order = np.empty(room, dtype=np.int64)
+    polygon, spare = np.empty((room + 3, 2)), np.empty((room + 3, 2))
+    triangle = np.empty((3, 2))
+    done = -1  # a face already wholly shadowed
+    for i in range(len(body)):
+        f = face[i]
+        if f == done:
+            continue
+        b = body[i]
+        corner, normal, u, v = frames[f, 0], frames[f, 3], frames[f, 4], frames[f, 5]
+        mine = vertices[vertex_starts[b] : vertex_starts[b + 1]]
+        lines = edges[edge_starts[b] : edge_starts[b + 1]]
+        n = _cut_body(points, mine, lines, normal, corner, eps, found, heights)
+        if n < 3:
+            continue
+        cosine = -(normal[0] * direction[0] + normal[1] * direction[1] + normal[2] * direction[2])
+        for j in range(n):  # along the light onto the face's plane, in its frame (scalars:
+            # a small array a corner was most of the time)
+            qx, qy, qz = found[j, 0] - corner[0], found[j, 1] - corner[1], found[j, 2] - corner[2]
+            along = (qx * normal[0] + qy * normal[1] + qz * normal[2]) / cosine
+            qx, qy, qz = (
+                qx + along * direction[0],
+                qy + along * direction[1],
+                qz + along * direction[2],
+            )
+            x[j] = qx * u[0] + qy * u[1] + qz * u[2]
+            y[j] = qx * v[0] + qy * v[1] + qz * v[2]
+        k = _hull(x, y, n, order, chain)
+        if k == 0:
+            continue
+        for c in range(3):
+            qx, qy, qz = (
+                frames[f, c, 0] - corner[0],
+                frames[f, c, 1] - corner[1],
+                frames[f, c, 2] - corner[2],
+            )
+            triangle[c, 0] = qx * u[0] + qy * u[1] + qz * u[2]
+            triangle[c, 1] = qx * v[0] + qy * v[1] + qz * v[2]
+        turn = (triangle[1, 0] - triangle[0, 0]) * (triangle[2, 1] - triangle[0, 1]) - (
+            triangle[1, 1] - triangle[0, 1]
+        ) * (triangle[2, 0] - triangle[0, 0])
+        if turn < 0.0:  # wound against its normal: counter-clockwise for the cut
+            for d in range(2):
+                triangle[1, d], triangle[2, d] = triangle[2, d], triangle[1, d]
+        whole = True
+        for c in range(3):
+            whole = whole and _holds(x, y, chain, k, triangle[c, 0], triangle[c, 1])
+        if whole:
+            covers[i] = True
+            done = f
+            continue
+        for j in range(k):
+            polygon[j, 0], polygon[j, 1] = x[chain[j]], y[chain[j]]
+        m = _clip_to_triangle(polygon, k, triangle, spare)
+        if m < 3:
+            continue
+        flat[offsets[i] : offsets[i] + m] = spare[:m]
+        counts[i] = m
+    return flat, counts, covers

@@ -145,6 +145,8 @@ if TYPE_CHECKING:
     from .topology import Caster
 
 __all__ = [
+    "MAX_BODY_FACES",
+    "MAX_PIECE_PAIRS",
     "ANGLE_SLACK",
     "CONVEX_TURN",
     "CROSSING_RESOLUTION",
@@ -261,6 +263,14 @@ MAX_SURFACE_PAIRS = 5_000_000
 # At this size (benchmarks/bench_surface.py's terrain at 100,000 faces under a
 # sphere) a point light costs about 0.2 s, a low sun with long shadows about 3 s.
 MAX_SURFACE_FACES = 100_000
+# Faces of one closed body tested for being convex (shadowgeo.bodies): the test
+# measures every vertex against every face plane of its body (a box: 12 x 8),
+# so a larger body keeps its triangles rather than cost faces x vertices.
+MAX_BODY_FACES = 512
+# Pairs of convex pieces on one face whose overlap the compiled union of
+# shadowed_fractions measures (its cost: about 0.3 us a pair of hexagons, so
+# some 6 s here); beyond it the faces' shares come from the 2-D union.
+MAX_PIECE_PAIRS = 20_000_000
 # A DEM (shadowgeo.io.dem): a raster whose width x height passes this is
 # refused from its header, before a pixel is read (a hostile header can claim
 # 2^31 x 2^31 cells in a few bytes); the window read around the study is then

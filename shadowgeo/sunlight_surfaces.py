@@ -63,7 +63,7 @@ from .parallel import each_day
 from .sun import sun_lights
 from .surface import shadow_on_surface, shadowed_fractions
 from .tolerance import Tolerance
-from .topology import MeshLike, as_caster
+from .topology import Caster, MeshLike, as_caster
 
 __all__ = [
     "CHUNK",
@@ -385,16 +385,19 @@ def _sample(
     tolerance: Tolerance,
     where: bool = True,
     compiled: bool = False,
+    receiver: Caster | None = None,
 ) -> SampleShadows:
     """The exact shadow on every face of the receiver under one sun (without
-    ``where``: each face's shadowed share only, by the compiled loops or not)."""
+    ``where``: each face's shadowed share only, by the compiled loops or not,
+    of ``receiver`` (``vertices`` and ``faces`` as a mesh) when given)."""
     if not where:
+        # (the whole receiver as one mesh, made once for the study: what is
+        # derived from it is kept on it from sample to sample)
+        whole = Caster(vertices, faces, copy=False) if receiver is None else receiver
 
         def measure(part: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-            receiver = (vertices, faces[part])
-            return shadowed_fractions(
-                casters, light, receiver, tolerance=tolerance, compiled=compiled
-            )
+            mesh = whole if len(part) == len(faces) else (vertices, faces[part])
+            return shadowed_fractions(casters, light, mesh, tolerance=tolerance, compiled=compiled)
 
         measured = _in_halves(measure, np.arange(len(faces)))
         fraction = np.concatenate([part[0] for part in measured])
@@ -551,9 +554,15 @@ def surface_sunlight(
     layered, parts = _layered(casters, opacity)
     # (one choice for the whole study: its size is faces times samples)
     compiled = not shadows and use_compiled("areas", len(faces) * len(rays))
+    whole = None
+    if not shadows:  # the meshes made once: what is derived from them is kept
+        parts = [[as_caster(mesh) for mesh in _mesh_list(part)] for part in parts]
+        whole = Caster(vertices, faces, copy=False)
     every = tuple(
         tuple(
-            _sample(part, DirectionalLight(ray), vertices, faces, tolerance, shadows, compiled)
+            _sample(
+                part, DirectionalLight(ray), vertices, faces, tolerance, shadows, compiled, whole
+            )
             for ray in rays
         )
         for part in parts

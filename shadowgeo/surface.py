@@ -73,6 +73,7 @@ import shapely
 from numpy.typing import ArrayLike
 
 from . import plane2d as poly
+from .bodies import Bodies, convex_bodies, light_bodies, ring_pieces
 from .cells import column_cells
 from .compiled import use_compiled
 from .errors import GeometryError
@@ -85,7 +86,7 @@ from .lightframe import (
     twice_areas,
 )
 from .lights import DirectionalLight, Light, PointLight, SpotLight, is_positional, require_light
-from .limits import ANGLE_SLACK, MAX_CURVE_SEGMENTS, RELATIVE_ROUNDING
+from .limits import ANGLE_SLACK, MAX_CURVE_SEGMENTS, MAX_PIECE_PAIRS, RELATIVE_ROUNDING
 from .outline import Outline, OutlineSet, make_outlines
 from .seams import face_regions, stitch
 from .sheets import SurfaceGeometry, face_frames, lift_directions, surface_geometry
@@ -388,8 +389,14 @@ def shadowed_fractions(
     1e-12 of a face's area, from the area of the union of each face's convex
     pieces measured by compiled loops (:func:`shadowgeo.kernels.union_areas`),
     not a 2-D union and its triangles: for studies that need the hours of
-    each face, not where on it the shadow lies. A face whose pieces include
-    a closed caster's outline (not convex) takes the union's way.
+    each face, not where on it the shadow lies. A convex closed body of a
+    caster (a box of a city block, :mod:`shadowgeo.bodies`) casts one piece
+    a face, the hull of its corners' images, made by compiled loops
+    (:func:`shadowgeo.kernels.ring_pieces`), and a face one such piece holds
+    whole is shadowed whole without more; other casters give their
+    triangles' pieces (a closed one's light-facing triangles). Where a face
+    has too many pieces for the loops (:data:`shadowgeo.limits.MAX_PIECE_PAIRS`
+    pairs), the 2-D union measures it.
 
     ``compiled``: whether to take the compiled loops; None, the default: as
     :mod:`shadowgeo.compiled`'s rule says for the job ``"areas"`` of this
@@ -592,6 +599,9 @@ class _SurfaceProjector:
         self.offset = offset
         self.tol = tol
         self.limits: list[str] = []
+        # closed casters by their outlines (False: their light-facing
+        # triangles, each a convex piece for the compiled union)
+        self.outlines = True
 
     def run(self) -> SurfaceShadow:
         return self.shadow(self.regions())
@@ -644,26 +654,110 @@ class _SurfaceProjector:
         """The shadowed share of each face and the faces turned to the light
         (see :func:`shadowed_fractions`)."""
         corners, facing, lit = self._faces()
+        if compiled and self.exclude is None and not is_positional(self.light):
+            shares = self._convex_fractions(corners, facing, lit)
+            if shares is not None:
+                return shares, facing
         receivers, triangles, caster_triangles, full, extra, _ = self._pairs(corners, lit)
-        # (outlines are not convex; a light's range cuts faces)
-        if not compiled or len(extra[1]) or is_positional(self.light):
-            found = self._regions(receivers, triangles, caster_triangles, corners, full, extra)
-            diagnostics = SurfaceDiagnostics(n_surface_faces=self.surface.n_faces)
-            shadow = self.shadow(FaceRegions(*found, facing, diagnostics))
-            return shadow.fraction, facing
-        flat, owner = self._pieces(receivers, triangles, caster_triangles, corners)
+        found = self._regions(receivers, triangles, caster_triangles, corners, full, extra)
+        diagnostics = SurfaceDiagnostics(n_surface_faces=self.surface.n_faces)
+        shadow = self.shadow(FaceRegions(*found, facing, diagnostics))
+        return shadow.fraction, facing
+
+    def _convex_fractions(
+        self, corners: np.ndarray, facing: np.ndarray, lit: np.ndarray
+    ) -> np.ndarray | None:
+        """:meth:`fractions` from convex pieces, their union's area by compiled
+        loops: each caster's convex bodies (:mod:`shadowgeo.bodies`) as one
+        convex ring a face (the body cut to the part ahead of the face's
+        plane), the other casters' triangles as ever (a closed one's
+        light-facing triangles, not its outline, whose pieces are not
+        convex). None where the faces' pieces are too many for the loops
+        (:data:`shadowgeo.limits.MAX_PIECE_PAIRS`)."""
+        found = [convex_bodies(caster, self.tol.length) for caster in self.casters]
+        rest = [
+            caster if bodies.count == 0 else Caster(caster.vertices, caster.faces[bodies.rest],
+                                                    copy=False, closed=True)
+            for caster, bodies in zip(self.casters, found, strict=True)
+            if len(bodies.rest)
+        ]  # fmt: skip
+        everyone, self.casters, self.outlines = self.casters, rest, False
+        try:
+            receivers, triangles, caster_triangles, full, _, _ = self._pairs(corners, lit)
+        finally:
+            self.casters, self.outlines = everyone, True
+        ring_flat, ring_owner = self._ring_pairs(found, corners, lit, full)
+        keep = ~full[receivers]  # (faces a body's shadow holds whole need no pieces)
+        flat, owner = self._pieces(receivers[keep], triangles[keep], caster_triangles, corners)
+        # the bodies' pieces in the frames of _pieces' (origin at the centroid)
+        ring_flat = ring_flat + self._first_corners(corners, ring_owner)[:, None, :]
+        flat = _pad_polygons([flat, ring_flat])
+        owner = np.concatenate([owner, ring_owner])
+        order = np.argsort(owner, kind="stable")
+        return self._union_fractions(flat[order], owner[order], facing, full)
+
+    def _union_fractions(
+        self, flat: np.ndarray, owner: np.ndarray, facing: np.ndarray, full: np.ndarray
+    ) -> np.ndarray | None:
+        """Each face's shadowed share from its convex pieces ``flat`` (sorted
+        by their faces ``owner``): the area of their union by the compiled
+        loops; 1 on faces ``full`` or turned away, 0 on others without one.
+        None where the loops would test more than
+        :data:`shadowgeo.limits.MAX_PIECE_PAIRS` pairs of pieces."""
         fraction = np.where(facing, 0.0, 1.0)
         fraction[full] = 1.0
-        if len(owner):
-            from .kernels import union_areas
+        if len(owner) == 0:
+            return fraction
+        from .kernels import union_areas
 
-            faces, start, count = np.unique(owner, return_index=True, return_counts=True)
-            corners_each = np.full(len(flat), flat.shape[1], dtype=np.int64)
-            areas = union_areas(flat, corners_each, start, count, self.tol.length)
-            partial = ~full[faces]
-            faces, areas = faces[partial], areas[partial]
-            fraction[faces] = np.minimum(areas / self.face_area[faces], 1.0)
-        return fraction, facing
+        faces, start, count = np.unique(owner, return_index=True, return_counts=True)
+        if np.sum(count.astype(np.float64) ** 2) > MAX_PIECE_PAIRS:
+            return None
+        corners_each = np.full(len(flat), flat.shape[1], dtype=np.int64)
+        areas = union_areas(flat, corners_each, start, count, self.tol.length)
+        partial = ~full[faces]
+        faces, areas = faces[partial], areas[partial]
+        fraction[faces] = np.minimum(areas / self.face_area[faces], 1.0)
+        return fraction
+
+    def _ring_pairs(
+        self, found: list[Bodies], corners: np.ndarray, lit: np.ndarray, full: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The convex bodies' shadows on the lit faces (not ``full``) that
+        their images meet (:func:`shadowgeo.bodies.ring_pieces`): (n, k, 2)
+        convex pieces in the faces' frames with the origin at each face's
+        first corner, padded, and (n,) their faces. Faces that one body's
+        shadow holds whole are marked in ``full`` and get none."""
+        if not any(bodies.count for bodies in found):
+            return np.zeros((0, 3, 2)), np.zeros(0, np.int64)
+        direction = cast(DirectionalLight, self.light).direction
+        bodies = light_bodies(self.casters, found, self.center, direction)
+        lit_faces = np.flatnonzero(lit & ~full)
+        face, triangle = candidate_pairs(
+            (self.vertices, self.faces[lit_faces]),
+            (bodies.points, bodies.triangles),
+            None,
+            direction,
+            self.tol.length,
+        )
+        n_bodies = np.int64(bodies.count)
+        near = unique_integers(lit_faces[face] * n_bodies + bodies.triangle_body[triangle])
+        face, body = np.divmod(near, n_bodies)  # by face, then body
+        frames = np.concatenate(
+            [corners, self.unit[:, None], self.u[:, None], self.v[:, None]], axis=1
+        )
+        pieces, counts, covers = ring_pieces(bodies, body, face, frames, direction, self.tol.length)
+        full[face[covers]] = True
+        kept = (counts >= 3) & ~full[face]
+        return pieces[kept], face[kept]
+
+    def _first_corners(self, corners: np.ndarray, faces: np.ndarray) -> np.ndarray:
+        """(n, 2) each face's first corner in its frame (origin at its centroid)."""
+        relative = corners[faces, 0] - self.origin[faces]
+        return np.stack(
+            [np.einsum("ij,ij->i", relative, self.u[faces]),
+             np.einsum("ij,ij->i", relative, self.v[faces])], axis=1
+        )  # fmt: skip
 
     def _faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The surface in the centred frame, with vertices merged by position:
@@ -850,7 +944,7 @@ class _SurfaceProjector:
         # the index in self.casters of each chunk's caster and each outlined one
         chunk_casters: list[int] = []
         outlined_casters: list[int] = []
-        silhouettes = self._closed_outlines()
+        silhouettes = self._closed_outlines() if self.outlines else {}
         for index, caster in enumerate(self.casters):
             if caster.n_faces == 0:
                 continue
@@ -914,6 +1008,9 @@ class _SurfaceProjector:
         if silhouette is not None:
             front: np.ndarray = silhouette[0]
             return front
+        if not self.outlines and caster.is_closed:
+            facing: np.ndarray = caster.facing(light_homogeneous(caster, self.light)) > 0
+            return facing
         if caster is self.surface and self.geometry.single_sheet:
             # Seen from the surface itself, a blocked ray enters the sheet's
             # back side first, through a face turned away from the light.
@@ -1234,30 +1331,36 @@ class _SurfaceProjector:
         triangles: np.ndarray,
         caster_triangles: np.ndarray,
         corners: np.ndarray,
+        rings: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Each pair's triangle clipped to the region between its face and the
         light and projected onto the face: (n, k, 2) counter-clockwise polygons
         in the face frames (padded by repeating the last corner), and (n,) faces,
-        sorted by face."""
+        sorted by face. With ``rings`` (the corner count of each of
+        ``caster_triangles``, then convex bodies' silhouette rings (t, k, 3),
+        padded, each pair's body wholly in front of its face): each ring cut
+        by the face's side planes only (a ring's corners need not be the
+        body's nearest to the light, nor lie ahead of the face)."""
         if len(receivers) == 0:
             return np.zeros((0, 3, 2)), np.zeros(0, np.int64)
         shadowed = unique_integers(receivers)
         slot = np.searchsorted(shadowed, receivers)
         planes = self._side_planes(shadowed, corners)
+        first = 0 if rings is None else 1
         pieces: list[np.ndarray] = []
         owners: list[np.ndarray] = []
         for start in range(0, len(receivers), _BATCH):
             part = slice(start, start + _BATCH)
             faces, pair_slot = receivers[part], slot[part]
-            homogeneous = np.concatenate(
-                [caster_triangles[triangles[part]], np.ones((len(faces), 3, 1))], axis=2
-            )
+            chosen = caster_triangles[triangles[part]]
+            homogeneous = np.concatenate([chosen, np.ones((*chosen.shape[:2], 1))], axis=2)
+            sizes = np.full(len(faces), 3) if rings is None else rings[triangles[part]]
             # A triangle within a length tolerance of outside one plane casts
             # nothing there (at most a sliver that thin): drop it unclipped.
-            sides = np.einsum("nkd,npd->nkp", homogeneous, planes[pair_slot])
+            sides = np.einsum("nkd,npd->nkp", homogeneous, planes[pair_slot, first:])
             keep = ~np.any(np.all(sides < self.tol.length, axis=1), axis=1)
             homogeneous, faces, pair_slot = homogeneous[keep], faces[keep], pair_slot[keep]
-            clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes[pair_slot])
+            clipped, counts = clip_batch(homogeneous, sizes[keep], planes[pair_slot, first:])
             keep = counts >= 3
             clipped, counts, faces, pair_slot = (
                 clipped[keep],

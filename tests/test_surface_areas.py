@@ -18,6 +18,7 @@ from shadowgeo.compiled import compiled_loops
 from shadowgeo.errors import BudgetError
 from shadowgeo.kernels import union_areas
 from shadowgeo.surface import shadowed_fractions
+from shadowgeo.topology import as_caster
 
 
 def _padded(polygons: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
@@ -60,6 +61,18 @@ def test_the_union_area_of_convex_pieces_is_geos_union_area():
         reference = shapely.union_all([shapely.Polygon(p) for p in pieces]).area
         worst = max(worst, abs(face - reference) / reference)
     assert worst < 1e-12
+
+
+def test_a_piece_with_no_width_covers_nothing():
+    # corners repeated, and a sliver there and back along a line through the
+    # square: each would cover the edges it meets if taken as a polygon
+    square = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], float)
+    point = np.array([[2, 1]] * 4, float)  # on the square's right edge
+    sliver = np.array([[-1, 1], [3, 1], [3, 1 + 1e-13], [-1, 1]], float)
+    for other in (point, sliver):
+        flat, counts = _padded([square, other])
+        area = union_areas(flat, counts, np.array([0]), np.array([2]), 1e-9)[0]
+        assert area == pytest.approx(4.0, abs=1e-9)
 
 
 def test_pieces_of_several_faces_are_measured_face_by_face():
@@ -137,8 +150,8 @@ def test_shares_refused_for_all_faces_at_once_are_measured_in_halves(monkeypatch
     sizes = []
 
     def refusing(casters, light, surface, **options):
-        sizes.append(len(surface[1]))
-        if len(surface[1]) > 7:
+        sizes.append(as_caster(surface).n_faces)
+        if sizes[-1] > 7:
             raise BudgetError("past a budget (shadowgeo.limits.MAX_PAIRS)")
         return real(casters, light, surface, **options)
 

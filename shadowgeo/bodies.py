@@ -1,0 +1,278 @@
+"""Convex closed bodies of a caster, each casting one convex shadow a face.
+
+A closed caster is often many bodies: a city block's buildings in one mesh.
+Where a body is convex (no corner of it ahead of the plane of one of its
+faces), its shadow on a plane it lies wholly ahead of, under a directional
+light, is one convex polygon: the convex hull of its corners' images. That
+polygon stands for the images of the body's three to six light-facing
+triangles (a box's), which tile it edge to edge: one convex piece per
+receiving face and body for the compiled union of
+:func:`shadowgeo.surface.shadowed_fractions`, in place of several that meet
+along shared edges. A body that crosses the face's plane is first cut to its
+part ahead of it (its corners there and where its edges cross the plane),
+still convex; a face whose whole lies inside one hull is wholly shadowed,
+and its other pairs are not measured.
+
+:func:`convex_bodies` finds the bodies once per caster (kept on it, as
+:meth:`Caster.derived` keeps derived data); :func:`light_bodies` gathers
+them for one light, and :func:`ring_pieces` makes the shadow of each
+(body, face) pair by compiled loops (:func:`shadowgeo.kernels.ring_pieces`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .limits import MAX_BODY_FACES
+from .silhouette import vertex_components
+from .topology import BLOCK, Caster
+
+__all__ = ["Bodies", "LightBodies", "convex_bodies", "light_bodies", "ring_pieces"]
+
+
+@dataclass(frozen=True)
+class Bodies:
+    """The convex closed bodies of a caster, body by body.
+
+    Attributes
+    ----------
+    vertices : (n,) int64
+        The caster's vertex indices of each body in turn.
+    vertex_starts : (b + 1,) int64
+        Where each body's vertices start in ``vertices`` (and the end).
+    faces : (f,) int64
+        The caster's face indices of each body in turn.
+    face_starts : (b + 1,) int64
+        Where each body's faces start in ``faces`` (and the end).
+    normals : (f, 3) float64
+        The unit normal of each of ``faces`` (zero for a face without area).
+    edges : (e, 2) int64
+        Each body's edges in turn, as pairs of the caster's vertex indices.
+    edge_starts : (b + 1,) int64
+        Where each body's edges start in ``edges`` (and the end).
+    rest : (r,) int64
+        The caster's faces in no convex body (those of a body that is not
+        convex, or too large to test, or of a caster that is not closed).
+    """
+
+    vertices: np.ndarray
+    vertex_starts: np.ndarray
+    faces: np.ndarray
+    face_starts: np.ndarray
+    normals: np.ndarray
+    edges: np.ndarray
+    edge_starts: np.ndarray
+    rest: np.ndarray
+
+    @property
+    def count(self) -> int:
+        """The number of bodies."""
+        return len(self.vertex_starts) - 1
+
+
+def convex_bodies(caster: Caster, length: float) -> Bodies:
+    """The convex closed bodies of ``caster``: its connected parts (joined by
+    shared vertices) whose every vertex lies within ``length`` (the scene's
+    tolerance length) in front of no face plane of its part, of at least four
+    faces and at most :data:`shadowgeo.limits.MAX_BODY_FACES`. A caster that
+    is not closed has none: an open sheet's shadow is its faces'. Kept on the
+    caster per ``length``."""
+    return caster.derived(f"convex_bodies:{length!r}", lambda mesh: _bodies(mesh, length))
+
+
+def _bodies(caster: Caster, length: float) -> Bodies:
+    faces = caster.faces
+    none = np.zeros(0, np.int64)
+    if caster.n_faces == 0 or not caster.is_closed:
+        start = np.zeros(1, np.int64)
+        return Bodies(none, start, none, start, np.zeros((0, 3)), np.zeros((0, 2), np.int64),
+                      start, np.arange(caster.n_faces))  # fmt: skip
+    label = vertex_components(caster)
+    face_label = label[faces[:, 0]]
+    face_order = np.argsort(face_label, kind="stable")
+    parts, face_counts = np.unique(face_label, return_counts=True)
+    used = np.unique(faces)
+    vertex_order = used[np.argsort(label[used], kind="stable")]
+    vertex_counts = np.bincount(np.searchsorted(parts, label[vertex_order]), minlength=len(parts))
+    tested = (face_counts >= 4) & (face_counts <= MAX_BODY_FACES)
+    normals = _unit_normals(caster.vertices, faces[face_order])
+    convex = tested & _convex(caster.vertices, faces[face_order], normals, vertex_order,
+                              face_counts, vertex_counts, tested, length)  # fmt: skip
+    face_body = np.repeat(convex, face_counts)
+    vertex_body = np.repeat(convex, vertex_counts)
+    body_faces = face_order[face_body]
+    edges, edge_counts = _edges(faces[body_faces], np.repeat(np.arange(int(convex.sum())),
+                                                             face_counts[convex]))  # fmt: skip
+    return Bodies(
+        vertex_order[vertex_body],
+        np.concatenate([[0], np.cumsum(vertex_counts[convex])]),
+        body_faces,
+        np.concatenate([[0], np.cumsum(face_counts[convex])]),
+        normals[face_body],
+        edges,
+        np.concatenate([[0], np.cumsum(edge_counts)]),
+        np.sort(face_order[~face_body]),
+    )
+
+
+def _edges(faces: np.ndarray, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The edges of faces grouped by ``body`` (sorted), each once: (e, 2)
+    vertex pairs, body by body, and each body's edge count."""
+    pairs = np.sort(np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
+    owner = np.repeat(body, 3)
+    keys = np.unique(np.stack([owner, pairs[:, 0], pairs[:, 1]], axis=1), axis=0)
+    return keys[:, 1:], np.bincount(keys[:, 0], minlength=int(body[-1]) + 1 if len(body) else 0)
+
+
+def _unit_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(f, 3) unit normals of ``faces`` (zero where a face has no area)."""
+    corners = vertices[faces]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    size = np.linalg.norm(normal, axis=1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(size > 0, normal / size, 0.0)
+
+
+def _convex(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    normals: np.ndarray,
+    vertex_order: np.ndarray,
+    face_counts: np.ndarray,
+    vertex_counts: np.ndarray,
+    tested: np.ndarray,
+    length: float,
+) -> np.ndarray:
+    """(p,) whether each part (its faces and vertices consecutive in
+    ``faces`` and ``vertex_order``) has no vertex more than ``length`` in
+    front of one of its face planes; parts not ``tested`` are not measured."""
+    part_of_face = np.repeat(np.arange(len(face_counts)), face_counts)
+    vertex_start = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]])
+    chosen = np.flatnonzero(tested[part_of_face])
+    outside = np.zeros(len(face_counts), dtype=bool)
+    # one row per (face, vertex of its part), a block of faces at a time
+    step = max(1, BLOCK // max(1, MAX_BODY_FACES))
+    for start in range(0, len(chosen), step):
+        block = chosen[start : start + step]
+        part = part_of_face[block]
+        rows = vertex_counts[part]
+        face_row = np.repeat(block, rows)
+        first = np.repeat(vertex_start[part] - np.cumsum(rows) + rows, rows)
+        vertex_row = vertex_order[first + np.arange(len(face_row))]
+        height = np.einsum(
+            "ij,ij->i", normals[face_row], vertices[vertex_row] - vertices[faces[face_row, 0]]
+        )
+        outside[part_of_face[face_row[height > length]]] = True
+    return ~outside
+
+
+@dataclass(frozen=True)
+class LightBodies:
+    """The convex bodies of several casters under one directional light, in
+    one frame.
+
+    Attributes
+    ----------
+    points : (p, 3) float64
+        The casters' vertices, one caster after another, in the frame.
+    triangles : (t, 3) int64
+        Each body's light-facing faces, as indices into ``points``.
+    triangle_body : (t,) int64
+        The body of each of ``triangles``.
+    vertices : (n,) int64
+        Each body's vertices in turn, as indices into ``points``.
+    vertex_starts : (b + 1,) int64
+        Where each body's vertices start in ``vertices`` (and the end).
+    edges : (e, 2) int64
+        Each body's edges in turn, as pairs of indices into ``points``.
+    edge_starts : (b + 1,) int64
+        Where each body's edges start in ``edges`` (and the end).
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    triangle_body: np.ndarray
+    vertices: np.ndarray
+    vertex_starts: np.ndarray
+    edges: np.ndarray
+    edge_starts: np.ndarray
+
+    @property
+    def count(self) -> int:
+        """The number of bodies."""
+        return len(self.vertex_starts) - 1
+
+
+def light_bodies(
+    casters: list[Caster], found: list[Bodies], center: np.ndarray, direction: np.ndarray
+) -> LightBodies:
+    """The convex bodies ``found`` of ``casters`` (:func:`convex_bodies` of
+    each) under a directional light travelling along ``direction`` (unit), in
+    the frame centred on ``center``."""
+    chosen = [
+        (caster, bodies) for caster, bodies in zip(casters, found, strict=True) if bodies.count
+    ]
+    starts = np.cumsum([0] + [len(caster.vertices) for caster, _ in chosen])
+    firsts = np.cumsum([0] + [bodies.count for _, bodies in chosen])
+    triangles, owners = [], []
+    for (caster, bodies), start, first in zip(chosen, starts, firsts, strict=False):
+        front = bodies.normals @ direction < 0.0
+        per_body = np.repeat(np.arange(bodies.count), np.diff(bodies.face_starts))
+        triangles.append(caster.faces[bodies.faces[front]] + start)
+        owners.append(per_body[front] + first)
+    pairs = zip(chosen, starts, strict=False)
+    return LightBodies(
+        np.concatenate([caster.vertices - center for caster, _ in chosen]),
+        np.concatenate(triangles),
+        np.concatenate(owners),
+        np.concatenate([bodies.vertices + start for (_, bodies), start in pairs]),
+        _joined([np.diff(bodies.vertex_starts) for _, bodies in chosen]),
+        np.concatenate(
+            [bodies.edges + start for (_, bodies), start in zip(chosen, starts, strict=False)]
+        ),
+        _joined([np.diff(bodies.edge_starts) for _, bodies in chosen]),
+    )
+
+
+def _joined(sizes: list[np.ndarray]) -> np.ndarray:
+    """(n + 1,) the starts (and the end) of consecutive groups of ``sizes``."""
+    return np.concatenate([[0], np.cumsum(np.concatenate(sizes))]).astype(np.int64)
+
+
+def ring_pieces(
+    bodies: LightBodies,
+    body: np.ndarray,
+    face: np.ndarray,
+    frames: np.ndarray,
+    direction: np.ndarray,
+    length: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each pair ``i`` (sorted by face): the shadow of body ``body[i]``
+    on face ``face[i]`` under a light travelling along ``direction``: the body
+    cut to the part ahead of the face's plane (the whole body where no corner
+    lies more than ``length`` behind it), its image on that plane and their
+    convex hull cut to the face (:func:`shadowgeo.kernels.ring_pieces`;
+    ``frames`` (f, 6, 3): each face's corners, counter-clockwise about its
+    unit normal, the normal and in-plane axes u and v). Returns (m, k, 2)
+    convex counter-clockwise polygons in the faces' frames (origin at a
+    face's first corner), padded by repeating the last corner; (m,) their
+    counts (0 where the body lies no more than ``length`` ahead of the plane,
+    its shadow there has no area, or an earlier pair's hull holds the face);
+    and (m,) whether the hull holds the whole face (it is wholly shadowed)."""
+    from .kernels import ring_pieces as compiled_ring_pieces
+
+    if len(body) == 0:
+        return np.zeros((0, 3, 2)), np.zeros(0, np.int64), np.zeros(0, dtype=bool)
+    # room for each pair's corners: its body's vertices and edge crossings, and
+    # three more from the cut to the face
+    room = np.diff(bodies.vertex_starts)[body] + np.diff(bodies.edge_starts)[body] + 3
+    offsets = np.concatenate([[0], np.cumsum(room)]).astype(np.int64)
+    flat, counts, covers = compiled_ring_pieces(
+        bodies.points, bodies.vertices, bodies.vertex_starts, bodies.edges, bodies.edge_starts,
+        body, face, frames, direction, length, offsets,
+    )  # fmt: skip
+    width = max(3, int(counts.max()))
+    slots = np.minimum(np.arange(width)[None, :], np.maximum(counts, 1)[:, None] - 1)
+    return flat[offsets[:-1, None] + slots], counts, covers
