@@ -133,8 +133,8 @@ def facades_dask(caster, receiver, days, workers) -> Run:
         before = sum(client.run(time.process_time).values())
         begin, cpu = time.perf_counter(), time.process_time()
         # one object each (a scattered tuple would travel as its items)
-        shared_caster = client.scatter([caster], broadcast=True)[0]
-        shared_receiver = client.scatter([receiver], broadcast=True)[0]
+        shared_caster = client.scatter([caster], broadcast=True, hash=False)[0]
+        shared_receiver = client.scatter([receiver], broadcast=True, hash=False)[0]
         futures = {
             day: client.submit(
                 facade_day, shared_caster, shared_receiver, times, key=f"facades-{day}"

@@ -141,7 +141,9 @@ def each_day(
     as_completed = _distributed().as_completed
     with client_for(scheduler) as client:
         # each scattered as one object (a scattered tuple would travel as its items)
-        sent = [client.scatter([value], broadcast=True)[0] for value in shared]
+        # under keys of their own (hash=False): content-hashed keys are shared with an
+        # earlier call of the same data, whose release as it returned lost them here
+        sent = [client.scatter([value], broadcast=True, hash=False)[0] for value in shared]
         futures = {
             day: client.submit(function, *sent, day_times, key=f"{name}-{day}", **options)
             for day, day_times in chosen.items()
