@@ -12,10 +12,10 @@ same results as their numpy ways, bit for bit); :func:`union_areas` and
 :func:`ring_pieces` for the shadowed share of each face in a long sun study
 (:func:`shadowgeo.surface.shadowed_fractions`, the same to about 1e-12 of a
 face's area as the 2-D union it replaces: each convex body's shadow on a
-face as one convex piece, and the area of the union of a face's pieces). ``SHADOWGEO_COMPILED=never``
-keeps numba out, ``always`` takes these loops for every job. Each function is
-compiled once and cached beside this file (or in numba's user cache when this
-folder is read-only).
+face as one convex piece, and the area of the union of a face's pieces).
+``SHADOWGEO_COMPILED=never`` keeps numba out, ``always`` takes these loops
+for every job. Each function is compiled once and cached beside this file
+(or in numba's user cache when this folder is read-only).
 
 The signs of :func:`whole_loops` are certificates: each is taken only when it holds beyond the
 rounding of the numbers that give it, and a loop or light that is not
