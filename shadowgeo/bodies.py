@@ -32,8 +32,20 @@ from .topology import BLOCK, Caster
 __all__ = ["Bodies", "LightBodies", "convex_bodies", "light_bodies", "ring_pieces"]
 
 
+class _Counted:
+    """Bodies numbered by where their vertices start (``vertex_starts``,
+    one more than there are bodies)."""
+
+    vertex_starts: np.ndarray
+
+    @property
+    def count(self) -> int:
+        """The number of bodies."""
+        return len(self.vertex_starts) - 1
+
+
 @dataclass(frozen=True)
-class Bodies:
+class Bodies(_Counted):
     """The convex closed bodies of a caster, body by body.
 
     Attributes
@@ -65,11 +77,6 @@ class Bodies:
     edges: np.ndarray
     edge_starts: np.ndarray
     rest: np.ndarray
-
-    @property
-    def count(self) -> int:
-        """The number of bodies."""
-        return len(self.vertex_starts) - 1
 
 
 def convex_bodies(caster: Caster, length: float) -> Bodies:
@@ -169,7 +176,7 @@ def _convex(
 
 
 @dataclass(frozen=True)
-class LightBodies:
+class LightBodies(_Counted):
     """The convex bodies of several casters under one directional light, in
     one frame.
 
@@ -198,11 +205,6 @@ class LightBodies:
     vertex_starts: np.ndarray
     edges: np.ndarray
     edge_starts: np.ndarray
-
-    @property
-    def count(self) -> int:
-        """The number of bodies."""
-        return len(self.vertex_starts) - 1
 
 
 def light_bodies(
