@@ -81,18 +81,21 @@ class Bodies(_Counted):
 
 def convex_bodies(caster: Caster, length: float) -> Bodies:
     """The convex closed bodies of ``caster``: its connected parts (joined by
-    shared vertices) whose every vertex lies within ``length`` (the scene's
-    tolerance length) in front of no face plane of its part, of at least four
-    faces and at most :data:`shadowgeo.limits.MAX_BODY_FACES`. A caster that
-    is not closed has none: an open sheet's shadow is its faces'. Kept on the
-    caster per ``length``."""
+    shared vertices) that are closed (every edge used by two of the part's
+    faces, once each way) and whose every vertex lies within ``length`` (the
+    scene's tolerance length) in front of no face plane of the part, of at
+    least four faces and at most :data:`shadowgeo.limits.MAX_BODY_FACES`. An
+    open part's shadow is its faces'. A body whose vertices are another's, the
+    same points (a building repeated in the data), casts nothing more and is
+    left out, its faces in neither the bodies nor the rest. Kept on the caster
+    per ``length``."""
     return caster.derived(f"convex_bodies:{length!r}", lambda mesh: _bodies(mesh, length))
 
 
 def _bodies(caster: Caster, length: float) -> Bodies:
     faces = caster.faces
     none = np.zeros(0, np.int64)
-    if caster.n_faces == 0 or not caster.is_closed:
+    if caster.n_faces == 0:
         start = np.zeros(1, np.int64)
         return Bodies(none, start, none, start, np.zeros((0, 3)), np.zeros((0, 2), np.int64),
                       start, np.arange(caster.n_faces))  # fmt: skip
@@ -103,13 +106,18 @@ def _bodies(caster: Caster, length: float) -> Bodies:
     used = np.unique(faces)
     vertex_order = used[np.argsort(label[used], kind="stable")]
     vertex_counts = np.bincount(np.searchsorted(parts, label[vertex_order]), minlength=len(parts))
+    part_of_face = np.searchsorted(parts, face_label)
     tested = (face_counts >= 4) & (face_counts <= MAX_BODY_FACES)
+    tested &= _closed_parts(faces, part_of_face, len(parts))
     normals = _unit_normals(caster.vertices, faces[face_order])
     convex = tested & _convex(caster.vertices, faces[face_order], normals, vertex_order,
                               face_counts, vertex_counts, tested, length)  # fmt: skip
-    face_body = np.repeat(convex, face_counts)
-    vertex_body = np.repeat(convex, vertex_counts)
+    repeated = _repeated(caster.vertices, vertex_order, vertex_counts, convex)
+    face_body = np.repeat(convex & ~repeated, face_counts)
+    vertex_body = np.repeat(convex & ~repeated, vertex_counts)
     body_faces = face_order[face_body]
+    convex &= ~repeated
+    left_out = np.repeat(repeated, face_counts)
     edges, edge_counts = _edges(faces[body_faces], np.repeat(np.arange(int(convex.sum())),
                                                              face_counts[convex]))  # fmt: skip
     return Bodies(
@@ -120,8 +128,45 @@ def _bodies(caster: Caster, length: float) -> Bodies:
         normals[face_body],
         edges,
         np.concatenate([[0], np.cumsum(edge_counts)]),
-        np.sort(face_order[~face_body]),
+        np.sort(face_order[~face_body & ~left_out]),
     )
+
+
+def _closed_parts(faces: np.ndarray, part_of_face: np.ndarray, count: int) -> np.ndarray:
+    """(count,) whether each part (``part_of_face``, its index for each face)
+    is closed: each of its edges used by two faces, once each way."""
+    start, stop = faces.reshape(-1), np.roll(faces, -1, axis=1).reshape(-1)
+    low, high = np.minimum(start, stop), np.maximum(start, stop)
+    keys, inverse = np.unique(low * np.int64(faces.max() + 1) + high, return_inverse=True)
+    forward = np.bincount(inverse, weights=start < stop, minlength=len(keys))
+    backward = np.bincount(inverse, weights=start > stop, minlength=len(keys))
+    bad_edge = (forward != 1) | (backward != 1)
+    open_part = np.zeros(count, dtype=bool)
+    open_part[np.repeat(part_of_face, 3)[bad_edge[inverse]]] = True
+    return ~open_part
+
+
+def _repeated(
+    vertices: np.ndarray, vertex_order: np.ndarray, vertex_counts: np.ndarray, chosen: np.ndarray
+) -> np.ndarray:
+    """(p,) whether each part among ``chosen`` has the same points as an
+    earlier chosen part (its vertices consecutive in ``vertex_order``)."""
+    repeated = np.zeros(len(vertex_counts), dtype=bool)
+    starts = np.concatenate([[0], np.cumsum(vertex_counts)[:-1]])
+    for size in np.unique(vertex_counts[chosen]):
+        group = np.flatnonzero(chosen & (vertex_counts == size))
+        if len(group) < 2:
+            continue
+        points = vertices[vertex_order[starts[group][:, None] + np.arange(size)]]  # (g, size, 3)
+        order = np.lexsort(points.transpose(2, 0, 1)[::-1], axis=-1)  # each part's points sorted
+        points = np.take_along_axis(points, order[:, :, None], axis=1)
+        rows = np.ascontiguousarray(points.reshape(len(group), -1)).view(
+            np.dtype((np.void, points.itemsize * size * 3))
+        )
+        _, first = np.unique(rows.ravel(), return_index=True)
+        repeated[group] = True
+        repeated[group[first]] = False
+    return repeated
 
 
 def _edges(faces: np.ndarray, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

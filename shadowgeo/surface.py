@@ -677,7 +677,7 @@ class _SurfaceProjector:
         found = [convex_bodies(caster, self.tol.length) for caster in self.casters]
         rest = [
             caster if bodies.count == 0 else Caster(caster.vertices, caster.faces[bodies.rest],
-                                                    copy=False, closed=True)
+                                                    copy=False)
             for caster, bodies in zip(self.casters, found, strict=True)
             if len(bodies.rest)
         ]  # fmt: skip

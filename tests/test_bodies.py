@@ -232,3 +232,21 @@ def test_pieces_past_their_budget_are_measured_by_the_union(monkeypatch):
     assert unions  # the 2-D union measured them
     np.testing.assert_allclose(past, within, rtol=0, atol=1e-10)
     assert 0 < np.count_nonzero((within > 0) & (within < 1))
+
+
+def test_a_box_repeated_in_the_data_casts_once_and_an_open_one_keeps_its_faces():
+    boxes = [_box([4 * k, 0, 0], [4 * k + 2, 3 + k, 2]) for k in range(4)]
+    lid = _box([0, 0, 6], [2, 5, 8])
+    keep = lid.face_normals[:, 1] < 0.5  # without its top: open
+    open_box = trimesh.Trimesh(lid.vertices, lid.faces[keep], process=False)
+    city = trimesh.util.concatenate([*boxes, boxes[1].copy(), boxes[1].copy(), open_box])
+    found = convex_bodies(Caster(city.vertices, city.faces), 1e-9)
+    assert found.count == 4  # the two repeats left out, the open box not a body
+    assert np.array_equal(found.rest, np.arange(72, 72 + len(open_box.faces)))
+    mesh = (np.asarray(city.vertices), np.asarray(city.faces))
+    for direction in ([0.3, -1, 0.2], [-0.9, -0.4, 0.1]):
+        light = sg.DirectionalLight(direction)
+        shadow = sg.shadow_on_surface(mesh, light, mesh)
+        with compiled_loops("always"):
+            fraction, _ = shadowed_fractions(mesh, light, mesh)
+        np.testing.assert_allclose(fraction, shadow.fraction, rtol=0, atol=1e-10)
