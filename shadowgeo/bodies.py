@@ -106,44 +106,36 @@ def _bodies(caster: Caster, length: float) -> Bodies:
     used = np.unique(faces)
     vertex_order = used[np.argsort(label[used], kind="stable")]
     vertex_counts = np.bincount(np.searchsorted(parts, label[vertex_order]), minlength=len(parts))
-    part_of_face = np.searchsorted(parts, face_label)
+    edge_part = np.searchsorted(parts, label[caster.edges[:, 0]])
     tested = (face_counts >= 4) & (face_counts <= MAX_BODY_FACES)
-    tested &= _closed_parts(faces, part_of_face, len(parts))
+    # closed parts only: each edge used by two faces, once each way
+    unpaired = (caster.edge_face_count != 2) | (caster.edge_net_direction != 0)
+    tested[edge_part[unpaired]] = False
     normals = _unit_normals(caster.vertices, faces[face_order])
     convex = tested & _convex(caster.vertices, faces[face_order], normals, vertex_order,
                               face_counts, vertex_counts, tested, length)  # fmt: skip
     repeated = _repeated(caster.vertices, vertex_order, vertex_counts, convex)
-    face_body = np.repeat(convex & ~repeated, face_counts)
-    vertex_body = np.repeat(convex & ~repeated, vertex_counts)
-    body_faces = face_order[face_body]
-    convex &= ~repeated
+    kept = convex & ~repeated
+    face_body = np.repeat(kept, face_counts)
     left_out = np.repeat(repeated, face_counts)
-    edges, edge_counts = _edges(faces[body_faces], np.repeat(np.arange(int(convex.sum())),
-                                                             face_counts[convex]))  # fmt: skip
+    # the caster's edges of each body, body by body
+    edge_order = np.argsort(edge_part, kind="stable")
+    edge_counts = np.bincount(edge_part, minlength=len(parts))
     return Bodies(
-        vertex_order[vertex_body],
-        np.concatenate([[0], np.cumsum(vertex_counts[convex])]),
-        body_faces,
-        np.concatenate([[0], np.cumsum(face_counts[convex])]),
+        vertex_order[np.repeat(kept, vertex_counts)],
+        _starts(vertex_counts[kept]),
+        face_order[face_body],
+        _starts(face_counts[kept]),
         normals[face_body],
-        edges,
-        np.concatenate([[0], np.cumsum(edge_counts)]),
+        caster.edges[edge_order[np.repeat(kept, edge_counts)]],
+        _starts(edge_counts[kept]),
         np.sort(face_order[~face_body & ~left_out]),
     )
 
 
-def _closed_parts(faces: np.ndarray, part_of_face: np.ndarray, count: int) -> np.ndarray:
-    """(count,) whether each part (``part_of_face``, its index for each face)
-    is closed: each of its edges used by two faces, once each way."""
-    start, stop = faces.reshape(-1), np.roll(faces, -1, axis=1).reshape(-1)
-    low, high = np.minimum(start, stop), np.maximum(start, stop)
-    keys, inverse = np.unique(low * np.int64(faces.max() + 1) + high, return_inverse=True)
-    forward = np.bincount(inverse, weights=start < stop, minlength=len(keys))
-    backward = np.bincount(inverse, weights=start > stop, minlength=len(keys))
-    bad_edge = (forward != 1) | (backward != 1)
-    open_part = np.zeros(count, dtype=bool)
-    open_part[np.repeat(part_of_face, 3)[bad_edge[inverse]]] = True
-    return ~open_part
+def _starts(sizes: np.ndarray) -> np.ndarray:
+    """(n + 1,) where each of consecutive groups of ``sizes`` starts (and the end)."""
+    return np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
 
 
 def _repeated(
@@ -167,15 +159,6 @@ def _repeated(
         repeated[group] = True
         repeated[group[first]] = False
     return repeated
-
-
-def _edges(faces: np.ndarray, body: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The edges of faces grouped by ``body`` (sorted), each once: (e, 2)
-    vertex pairs, body by body, and each body's edge count."""
-    pairs = np.sort(np.stack([faces, np.roll(faces, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
-    owner = np.repeat(body, 3)
-    keys = np.unique(np.stack([owner, pairs[:, 0], pairs[:, 1]], axis=1), axis=0)
-    return keys[:, 1:], np.bincount(keys[:, 0], minlength=int(body[-1]) + 1 if len(body) else 0)
 
 
 def _unit_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -263,29 +246,23 @@ def light_bodies(
     ]
     starts = np.cumsum([0] + [len(caster.vertices) for caster, _ in chosen])
     firsts = np.cumsum([0] + [bodies.count for _, bodies in chosen])
-    triangles, owners = [], []
+    triangles, owners, vertices, edges = [], [], [], []
     for (caster, bodies), start, first in zip(chosen, starts, firsts, strict=False):
         front = bodies.normals @ direction < 0.0
         per_body = np.repeat(np.arange(bodies.count), np.diff(bodies.face_starts))
         triangles.append(caster.faces[bodies.faces[front]] + start)
         owners.append(per_body[front] + first)
-    pairs = zip(chosen, starts, strict=False)
+        vertices.append(bodies.vertices + start)
+        edges.append(bodies.edges + start)
     return LightBodies(
         np.concatenate([caster.vertices - center for caster, _ in chosen]),
         np.concatenate(triangles),
         np.concatenate(owners),
-        np.concatenate([bodies.vertices + start for (_, bodies), start in pairs]),
-        _joined([np.diff(bodies.vertex_starts) for _, bodies in chosen]),
-        np.concatenate(
-            [bodies.edges + start for (_, bodies), start in zip(chosen, starts, strict=False)]
-        ),
-        _joined([np.diff(bodies.edge_starts) for _, bodies in chosen]),
+        np.concatenate(vertices),
+        _starts(np.concatenate([np.diff(bodies.vertex_starts) for _, bodies in chosen])),
+        np.concatenate(edges),
+        _starts(np.concatenate([np.diff(bodies.edge_starts) for _, bodies in chosen])),
     )
-
-
-def _joined(sizes: list[np.ndarray]) -> np.ndarray:
-    """(n + 1,) the starts (and the end) of consecutive groups of ``sizes``."""
-    return np.concatenate([[0], np.cumsum(np.concatenate(sizes))]).astype(np.int64)
 
 
 def ring_pieces(
@@ -301,10 +278,10 @@ def ring_pieces(
     cut to the part ahead of the face's plane (the whole body where no corner
     lies more than ``length`` behind it), its image on that plane and their
     convex hull cut to the face (:func:`shadowgeo.kernels.ring_pieces`;
-    ``frames`` (f, 6, 3): each face's corners, counter-clockwise about its
-    unit normal, the normal and in-plane axes u and v). Returns (m, k, 2)
-    convex counter-clockwise polygons in the faces' frames (origin at a
-    face's first corner), padded by repeating the last corner; (m,) their
+    ``frames`` (f, 7, 3): each face's corners, its unit normal, in-plane axes
+    u and v and its frame's origin). Returns (m, k, 2) convex
+    counter-clockwise polygons in the faces' frames, padded by repeating the
+    last corner; (m,) their
     counts (0 where the body lies no more than ``length`` ahead of the plane,
     its shadow there has no area, or an earlier pair's hull holds the face);
     and (m,) whether the hull holds the whole face (it is wholly shadowed)."""
@@ -314,8 +291,7 @@ def ring_pieces(
         return np.zeros((0, 3, 2)), np.zeros(0, np.int64), np.zeros(0, dtype=bool)
     # room for each pair's corners: its body's vertices and edge crossings, and
     # three more from the cut to the face
-    room = np.diff(bodies.vertex_starts)[body] + np.diff(bodies.edge_starts)[body] + 3
-    offsets = np.concatenate([[0], np.cumsum(room)]).astype(np.int64)
+    offsets = _starts(np.diff(bodies.vertex_starts)[body] + np.diff(bodies.edge_starts)[body] + 3)
     flat, counts, covers = compiled_ring_pieces(
         bodies.points, bodies.vertices, bodies.vertex_starts, bodies.edges, bodies.edge_starts,
         body, face, frames, direction, length, offsets,

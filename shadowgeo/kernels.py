@@ -800,6 +800,23 @@ def _clip_to_triangle(polygon: np.ndarray, n: int, triangle: np.ndarray, spare: 
 
 
 @nb.njit(cache=True)
+def _face_triangle(frame: np.ndarray, triangle: np.ndarray) -> None:
+    """A face's corners (``frame``: corners, normal, u, v, origin; see
+    :func:`ring_pieces`) in its 2-D frame, counter-clockwise, into ``triangle``."""
+    u, v, origin = frame[4], frame[5], frame[6]
+    for c in range(3):
+        qx, qy, qz = frame[c, 0] - origin[0], frame[c, 1] - origin[1], frame[c, 2] - origin[2]
+        triangle[c, 0] = qx * u[0] + qy * u[1] + qz * u[2]
+        triangle[c, 1] = qx * v[0] + qy * v[1] + qz * v[2]
+    turn = (triangle[1, 0] - triangle[0, 0]) * (triangle[2, 1] - triangle[0, 1]) - (
+        triangle[1, 1] - triangle[0, 1]
+    ) * (triangle[2, 0] - triangle[0, 0])
+    if turn < 0.0:  # wound against its normal
+        for d in range(2):
+            triangle[1, d], triangle[2, d] = triangle[2, d], triangle[1, d]
+
+
+@nb.njit(cache=True)
 def ring_pieces(
     points: np.ndarray,
     vertices: np.ndarray,
@@ -823,10 +840,10 @@ def ring_pieces(
     convex counter-clockwise polygon in the face's frame, its corners from
     ``offsets[i]`` on in the (offsets[-1], 2) result.
 
-    ``frames`` (f, 6, 3) holds each face's three corners (either way round
-    its normal), unit normal and in-plane axes u and v (``u x v`` = normal),
-    all in ``points``' frame; a face's 2-D frame has its origin at
-    its first corner. ``offsets``: room for each pair's corners, its body's
+    ``frames`` (f, 7, 3) holds each face's three corners (either way round
+    its normal), unit normal, in-plane axes u and v (``u x v`` = normal) and
+    the origin of its 2-D frame (a point of its plane), all in ``points``'
+    frame. ``offsets``: room for each pair's corners, its body's
     vertices and edges and three more.
 
     Also (m,) the corner counts (0: nothing with area, or not needed) and
@@ -845,21 +862,34 @@ def ring_pieces(
     polygon, spare = np.empty((room + 3, 2)), np.empty((room + 3, 2))
     triangle = np.empty((3, 2))
     done = -1  # a face already wholly shadowed
+    current = -1  # the face whose triangle and cosine are set
+    cosine = 1.0
     for i in range(len(body)):
         f = face[i]
         if f == done:
             continue
         b = body[i]
-        corner, normal, u, v = frames[f, 0], frames[f, 3], frames[f, 4], frames[f, 5]
+        corner, normal, u, v, origin = (
+            frames[f, 0],
+            frames[f, 3],
+            frames[f, 4],
+            frames[f, 5],
+            frames[f, 6],
+        )
+        if f != current:  # the face's triangle in its frame, counter-clockwise, once a face
+            cosine = -(
+                normal[0] * direction[0] + normal[1] * direction[1] + normal[2] * direction[2]
+            )
+            _face_triangle(frames[f], triangle)
+            current = f
         mine = vertices[vertex_starts[b] : vertex_starts[b + 1]]
         lines = edges[edge_starts[b] : edge_starts[b + 1]]
         n = _cut_body(points, mine, lines, normal, corner, eps, found, heights)
         if n < 3:
             continue
-        cosine = -(normal[0] * direction[0] + normal[1] * direction[1] + normal[2] * direction[2])
         for j in range(n):  # along the light onto the face's plane, in its frame (scalars:
             # a small array a corner was most of the time)
-            qx, qy, qz = found[j, 0] - corner[0], found[j, 1] - corner[1], found[j, 2] - corner[2]
+            qx, qy, qz = found[j, 0] - origin[0], found[j, 1] - origin[1], found[j, 2] - origin[2]
             along = (qx * normal[0] + qy * normal[1] + qz * normal[2]) / cosine
             qx, qy, qz = (
                 qx + along * direction[0],
@@ -871,20 +901,6 @@ def ring_pieces(
         k = _hull(x, y, n, order, chain)
         if k == 0:
             continue
-        for c in range(3):
-            qx, qy, qz = (
-                frames[f, c, 0] - corner[0],
-                frames[f, c, 1] - corner[1],
-                frames[f, c, 2] - corner[2],
-            )
-            triangle[c, 0] = qx * u[0] + qy * u[1] + qz * u[2]
-            triangle[c, 1] = qx * v[0] + qy * v[1] + qz * v[2]
-        turn = (triangle[1, 0] - triangle[0, 0]) * (triangle[2, 1] - triangle[0, 1]) - (
-            triangle[1, 1] - triangle[0, 1]
-        ) * (triangle[2, 0] - triangle[0, 0])
-        if turn < 0.0:  # wound against its normal: counter-clockwise for the cut
-            for d in range(2):
-                triangle[1, d], triangle[2, d] = triangle[2, d], triangle[1, d]
         whole = True
         for c in range(3):
             whole = whole and _holds(x, y, chain, k, triangle[c, 0], triangle[c, 1])

@@ -145,8 +145,6 @@ if TYPE_CHECKING:
     from .topology import Caster
 
 __all__ = [
-    "MAX_BODY_FACES",
-    "MAX_PIECE_PAIRS",
     "ANGLE_SLACK",
     "CONVEX_TURN",
     "CROSSING_RESOLUTION",
@@ -155,6 +153,7 @@ __all__ = [
     "FRAME_ROUNDING",
     "LARGEST_COORDINATE",
     "MATRIX_ROUNDING",
+    "MAX_BODY_FACES",
     "MAX_CASTING_LIGHTS",
     "MAX_CURVE_SEGMENTS",
     "MAX_DEM_RASTER_CELLS",
@@ -165,6 +164,7 @@ __all__ = [
     "MAX_LIGHTS",
     "MAX_NESTING",
     "MAX_NODES",
+    "MAX_PIECE_PAIRS",
     "MAX_POLYGON_CORNERS",
     "MAX_PROTO_EXPANSIONS",
     "MAX_SPHERE_SEGMENTS",

@@ -380,23 +380,20 @@ def _frames(
 def _sample(
     casters: MeshLike | Sequence[MeshLike],
     light: DirectionalLight,
-    vertices: NDArray[np.float64],
-    faces: NDArray[np.int64],
+    receiver: Caster,
     tolerance: Tolerance,
     where: bool = True,
     compiled: bool = False,
-    receiver: Caster | None = None,
 ) -> SampleShadows:
-    """The exact shadow on every face of the receiver under one sun (without
-    ``where``: each face's shadowed share only, by the compiled loops or not,
-    of ``receiver`` (``vertices`` and ``faces`` as a mesh) when given)."""
+    """The exact shadow on every face of ``receiver`` under one sun (without
+    ``where``: each face's shadowed share only, by the compiled loops or not)."""
+    vertices, faces = receiver.vertices, receiver.faces
     if not where:
-        # (the whole receiver as one mesh, made once for the study: what is
-        # derived from it is kept on it from sample to sample)
-        whole = Caster(vertices, faces, copy=False) if receiver is None else receiver
 
         def measure(part: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-            mesh = whole if len(part) == len(faces) else (vertices, faces[part])
+            # the whole receiver as the study's one mesh: what is derived from
+            # it is kept on it from sample to sample
+            mesh = receiver if len(part) == len(faces) else (vertices, faces[part])
             return shadowed_fractions(casters, light, mesh, tolerance=tolerance, compiled=compiled)
 
         measured = _in_halves(measure, np.arange(len(faces)))
@@ -554,15 +551,12 @@ def surface_sunlight(
     layered, parts = _layered(casters, opacity)
     # (one choice for the whole study: its size is faces times samples)
     compiled = not shadows and use_compiled("areas", len(faces) * len(rays))
-    whole = None
-    if not shadows:  # the meshes made once: what is derived from them is kept
-        parts = [[as_caster(mesh) for mesh in _mesh_list(part)] for part in parts]
-        whole = Caster(vertices, faces, copy=False)
+    # the casters made meshes once: what is derived from them is kept from
+    # sample to sample
+    parts = [[as_caster(mesh) for mesh in _mesh_list(part)] for part in parts]
     every = tuple(
         tuple(
-            _sample(
-                part, DirectionalLight(ray), vertices, faces, tolerance, shadows, compiled, whole
-            )
+            _sample(part, DirectionalLight(ray), receiver, tolerance, shadows, compiled)
             for ray in rays
         )
         for part in parts

@@ -100,7 +100,6 @@ if TYPE_CHECKING:
     from manifold3d import CrossSection
 
 __all__ = [
-    "shadowed_fractions",
     "LightRegions",
     "SurfaceDiagnostics",
     "SurfaceShadow",
@@ -109,6 +108,7 @@ __all__ = [
     "regions_per_light",
     "shadow_layers_on_surface",
     "shadow_on_surface",
+    "shadowed_fractions",
 ]
 
 # Candidate pairs clipped per batch: bounds the memory of the (pairs, 7, 4) arrays.
@@ -599,9 +599,6 @@ class _SurfaceProjector:
         self.offset = offset
         self.tol = tol
         self.limits: list[str] = []
-        # closed casters by their outlines (False: their light-facing
-        # triangles, each a convex piece for the compiled union)
-        self.outlines = True
 
     def run(self) -> SurfaceShadow:
         return self.shadow(self.regions())
@@ -681,16 +678,12 @@ class _SurfaceProjector:
             for caster, bodies in zip(self.casters, found, strict=True)
             if len(bodies.rest)
         ]  # fmt: skip
-        everyone, self.casters, self.outlines = self.casters, rest, False
-        try:
-            receivers, triangles, caster_triangles, full, _, _ = self._pairs(corners, lit)
-        finally:
-            self.casters, self.outlines = everyone, True
+        receivers, triangles, caster_triangles, full, _, _ = self._pairs(
+            corners, lit, rest, outlines=False
+        )
         ring_flat, ring_owner = self._ring_pairs(found, corners, lit, full)
         keep = ~full[receivers]  # (faces a body's shadow holds whole need no pieces)
         flat, owner = self._pieces(receivers[keep], triangles[keep], caster_triangles, corners)
-        # the bodies' pieces in the frames of _pieces' (origin at the centroid)
-        ring_flat = ring_flat + self._first_corners(corners, ring_owner)[:, None, :]
         flat = _pad_polygons([flat, ring_flat])
         owner = np.concatenate([owner, ring_owner])
         order = np.argsort(owner, kind="stable")
@@ -725,8 +718,8 @@ class _SurfaceProjector:
     ) -> tuple[np.ndarray, np.ndarray]:
         """The convex bodies' shadows on the lit faces (not ``full``) that
         their images meet (:func:`shadowgeo.bodies.ring_pieces`): (n, k, 2)
-        convex pieces in the faces' frames with the origin at each face's
-        first corner, padded, and (n,) their faces. Faces that one body's
+        convex pieces in the faces' frames (those of :meth:`_pieces`),
+        padded, and (n,) their faces. Faces that one body's
         shadow holds whole are marked in ``full`` and get none."""
         if not any(bodies.count for bodies in found):
             return np.zeros((0, 3, 2)), np.zeros(0, np.int64)
@@ -744,20 +737,13 @@ class _SurfaceProjector:
         near = unique_integers(lit_faces[face] * n_bodies + bodies.triangle_body[triangle])
         face, body = np.divmod(near, n_bodies)  # by face, then body
         frames = np.concatenate(
-            [corners, self.unit[:, None], self.u[:, None], self.v[:, None]], axis=1
+            [corners, self.unit[:, None], self.u[:, None], self.v[:, None], self.origin[:, None]],
+            axis=1,
         )
         pieces, counts, covers = ring_pieces(bodies, body, face, frames, direction, self.tol.length)
         full[face[covers]] = True
         kept = (counts >= 3) & ~full[face]
         return pieces[kept], face[kept]
-
-    def _first_corners(self, corners: np.ndarray, faces: np.ndarray) -> np.ndarray:
-        """(n, 2) each face's first corner in its frame (origin at its centroid)."""
-        relative = corners[faces, 0] - self.origin[faces]
-        return np.stack(
-            [np.einsum("ij,ij->i", relative, self.u[faces]),
-             np.einsum("ij,ij->i", relative, self.v[faces])], axis=1
-        )  # fmt: skip
 
     def _faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The surface in the centred frame, with vertices merged by position:
@@ -800,14 +786,21 @@ class _SurfaceProjector:
         return corners, facing, lit
 
     def _pairs(
-        self, corners: np.ndarray, lit: np.ndarray
+        self,
+        corners: np.ndarray,
+        lit: np.ndarray,
+        casters: list[Caster] | None = None,
+        outlines: bool = True,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, _Pieces, tuple[int, int]]:
         """(face, caster triangle) pairs to clip, sorted by face; the caster
         triangles; faces wholly inside an outline; outline pieces on the
-        others; and (candidate pairs, outlined casters) counts."""
+        others; and (candidate pairs, outlined casters) counts. ``casters``:
+        those of the call unless given; ``outlines``: closed casters by their
+        outlines (False: by their light-facing triangles, each a convex piece)."""
         tol, light = self.tol, self.light
         lit_faces = np.flatnonzero(lit)
-        caster_triangles, outlined = self._caster_triangles()
+        chosen = self.casters if casters is None else casters
+        caster_triangles, outlined = self._caster_triangles(chosen, outlines)
         direction = None if is_positional(light) else light.direction
         pad = RELATIVE_ROUNDING if is_positional(light) else tol.length
         found_faces, found_triangles = candidate_pairs(
@@ -934,18 +927,21 @@ class _SurfaceProjector:
         owner = np.repeat(np.arange(len(fronts)), [len(front) for _, front in fronts])
         return faces[found], their, owner
 
-    def _caster_triangles(self) -> tuple[np.ndarray, list[_Outlined]]:
-        """(t, 3, 3) caster triangles handled one by one, in the centred frame
-        (a closed caster's light-facing ones only), and for each closed caster
-        with an outline: (outline, its light-facing triangles, (its box
-        half-sizes, box centre, bounding radius about it))."""
+    def _caster_triangles(
+        self, casters: list[Caster], outlines: bool
+    ) -> tuple[np.ndarray, list[_Outlined]]:
+        """(t, 3, 3) triangles of ``casters`` handled one by one, in the
+        centred frame (a closed caster's light-facing ones only), and for each
+        closed caster with an outline (none without ``outlines``): (outline,
+        its light-facing triangles, (its box half-sizes, box centre, bounding
+        radius about it))."""
         chunks: list[np.ndarray] = []
         outlined: list[_Outlined] = []
-        # the index in self.casters of each chunk's caster and each outlined one
+        # the index in casters of each chunk's caster and each outlined one
         chunk_casters: list[int] = []
         outlined_casters: list[int] = []
-        silhouettes = self._closed_outlines() if self.outlines else {}
-        for index, caster in enumerate(self.casters):
+        silhouettes = self._closed_outlines(casters) if outlines else {}
+        for index, caster in enumerate(casters):
             if caster.n_faces == 0:
                 continue
             silhouette = silhouettes.get(id(caster))
@@ -972,7 +968,7 @@ class _SurfaceProjector:
         return np.concatenate(chunks), outlined
 
     def _closed_outlines(
-        self,
+        self, casters: list[Caster]
     ) -> dict[int, tuple[np.ndarray, np.ndarray, Outline | None, float]]:
         """Each closed caster (by id) with faces: its light-facing faces, its
         vertices in the centred frame, its outline (None where it has none)
@@ -981,7 +977,7 @@ class _SurfaceProjector:
         direction = (
             None if self.light_point is not None else cast(DirectionalLight, self.light).direction
         )
-        closed = [caster for caster in self.casters if caster.n_faces and caster.is_closed]
+        closed = [caster for caster in casters if caster.n_faces and caster.is_closed]
         found = closed_silhouettes(closed, self.light)
         centred = [caster.vertices - self.center for caster in closed]
         outlines = make_outlines(
@@ -1004,11 +1000,12 @@ class _SurfaceProjector:
         silhouette: tuple[np.ndarray, np.ndarray, Outline | None, float] | None,
     ) -> np.ndarray:
         """(f,) the faces of a caster handled one by one that can cast: a
-        closed caster's light-facing ones, else all."""
+        closed caster's light-facing ones (from its silhouette where it has
+        one), else all."""
         if silhouette is not None:
             front: np.ndarray = silhouette[0]
             return front
-        if not self.outlines and caster.is_closed:
+        if caster.is_closed:  # (taken without its outline)
             facing: np.ndarray = caster.facing(light_homogeneous(caster, self.light)) > 0
             return facing
         if caster is self.surface and self.geometry.single_sheet:
@@ -1331,36 +1328,30 @@ class _SurfaceProjector:
         triangles: np.ndarray,
         caster_triangles: np.ndarray,
         corners: np.ndarray,
-        rings: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
         """Each pair's triangle clipped to the region between its face and the
         light and projected onto the face: (n, k, 2) counter-clockwise polygons
         in the face frames (padded by repeating the last corner), and (n,) faces,
-        sorted by face. With ``rings`` (the corner count of each of
-        ``caster_triangles``, then convex bodies' silhouette rings (t, k, 3),
-        padded, each pair's body wholly in front of its face): each ring cut
-        by the face's side planes only (a ring's corners need not be the
-        body's nearest to the light, nor lie ahead of the face)."""
+        sorted by face."""
         if len(receivers) == 0:
             return np.zeros((0, 3, 2)), np.zeros(0, np.int64)
         shadowed = unique_integers(receivers)
         slot = np.searchsorted(shadowed, receivers)
         planes = self._side_planes(shadowed, corners)
-        first = 0 if rings is None else 1
         pieces: list[np.ndarray] = []
         owners: list[np.ndarray] = []
         for start in range(0, len(receivers), _BATCH):
             part = slice(start, start + _BATCH)
             faces, pair_slot = receivers[part], slot[part]
-            chosen = caster_triangles[triangles[part]]
-            homogeneous = np.concatenate([chosen, np.ones((*chosen.shape[:2], 1))], axis=2)
-            sizes = np.full(len(faces), 3) if rings is None else rings[triangles[part]]
+            homogeneous = np.concatenate(
+                [caster_triangles[triangles[part]], np.ones((len(faces), 3, 1))], axis=2
+            )
             # A triangle within a length tolerance of outside one plane casts
             # nothing there (at most a sliver that thin): drop it unclipped.
-            sides = np.einsum("nkd,npd->nkp", homogeneous, planes[pair_slot, first:])
+            sides = np.einsum("nkd,npd->nkp", homogeneous, planes[pair_slot])
             keep = ~np.any(np.all(sides < self.tol.length, axis=1), axis=1)
             homogeneous, faces, pair_slot = homogeneous[keep], faces[keep], pair_slot[keep]
-            clipped, counts = clip_batch(homogeneous, sizes[keep], planes[pair_slot, first:])
+            clipped, counts = clip_batch(homogeneous, np.full(len(faces), 3), planes[pair_slot])
             keep = counts >= 3
             clipped, counts, faces, pair_slot = (
                 clipped[keep],

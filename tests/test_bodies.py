@@ -61,15 +61,17 @@ def test_a_city_of_boxes_is_its_boxes_and_an_ell_is_not_convex():
 
 
 def _frames(corners) -> np.ndarray:
-    """(f, 6, 3) frames of triangles (f, 3, 3), counter-clockwise seen from
-    their normals, as ring_pieces takes them."""
+    """(f, 7, 3) frames of triangles (f, 3, 3), counter-clockwise seen from
+    their normals, as ring_pieces takes them (the origin at the centroid)."""
     corners = np.asarray(corners, float)
     normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
     u = corners[:, 1] - corners[:, 0]
     u /= np.linalg.norm(u, axis=1, keepdims=True)
+    v = np.cross(normal, u)
+    origin = corners.mean(axis=1)
     return np.concatenate(
-        [corners, normal[:, None], u[:, None], np.cross(normal, u)[:, None]], axis=1
+        [corners, normal[:, None], u[:, None], v[:, None], origin[:, None]], axis=1
     )
 
 
@@ -195,6 +197,16 @@ def _scene(seed: int, ell: bool) -> list[trimesh.Trimesh]:
     return parts
 
 
+def _assert_shares_are_the_unions(mesh, directions) -> None:
+    """Every face's compiled share under each sun is shadow_on_surface's."""
+    for direction in directions:
+        light = sg.DirectionalLight(direction)
+        shadow = sg.shadow_on_surface(mesh, light, mesh)
+        with compiled_loops("always"):
+            fraction, _ = shadowed_fractions(mesh, light, mesh)
+        np.testing.assert_allclose(fraction, shadow.fraction, rtol=0, atol=1e-10)
+
+
 @pytest.mark.parametrize("ell", [False, True])
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_shares_of_crossing_bodies_are_the_unions_on_every_face(seed, ell, monkeypatch):
@@ -204,12 +216,7 @@ def test_shares_of_crossing_bodies_are_the_unions_on_every_face(seed, ell, monke
     mesh = (np.asarray(city.vertices), np.asarray(city.faces))
     rung = []
     monkeypatch.setattr(surface, "ring_pieces", lambda *a: rung.append(1) or ring_pieces(*a))
-    for direction in ([0.3, -1, 0.2], [-0.8, -0.3, 0.5]):
-        light = sg.DirectionalLight(direction)
-        shadow = sg.shadow_on_surface(mesh, light, mesh)
-        with compiled_loops("always"):
-            fraction, _ = shadowed_fractions(mesh, light, mesh)
-        np.testing.assert_allclose(fraction, shadow.fraction, rtol=0, atol=1e-10)
+    _assert_shares_are_the_unions(mesh, ([0.3, -1, 0.2], [-0.8, -0.3, 0.5]))
     assert rung  # the rings measured every face (the ell by its triangles)
 
 
@@ -244,9 +251,4 @@ def test_a_box_repeated_in_the_data_casts_once_and_an_open_one_keeps_its_faces()
     assert found.count == 4  # the two repeats left out, the open box not a body
     assert np.array_equal(found.rest, np.arange(72, 72 + len(open_box.faces)))
     mesh = (np.asarray(city.vertices), np.asarray(city.faces))
-    for direction in ([0.3, -1, 0.2], [-0.9, -0.4, 0.1]):
-        light = sg.DirectionalLight(direction)
-        shadow = sg.shadow_on_surface(mesh, light, mesh)
-        with compiled_loops("always"):
-            fraction, _ = shadowed_fractions(mesh, light, mesh)
-        np.testing.assert_allclose(fraction, shadow.fraction, rtol=0, atol=1e-10)
+    _assert_shares_are_the_unions(mesh, ([0.3, -1, 0.2], [-0.9, -0.4, 0.1]))

@@ -46,6 +46,7 @@ from ..scene.model import Scene
 from .city_crs import Georeference, city_scene, georeference, place
 from .city_surfaces import CityObject, Surfaces, city_shapes
 from .x3d import parse as x3d_parse
+from .x3d.json import json_kind
 
 __all__ = ["DEPTHS", "NO_FACES", "SOLIDS", "VERSIONS", "read"]
 
@@ -270,14 +271,6 @@ def _resolved(
     return found, placed
 
 
-def _json_kind(value: Any) -> str:
-    """What JSON calls ``value``'s type: "an object", "a number", ..."""
-    if isinstance(value, bool):
-        return "a boolean"
-    names = {dict: "an object", list: "an array", str: "a string", type(None): "null"}
-    return names.get(type(value), "a number")
-
-
 def _surface_kind(index: Any, surfaces: list[Any], where: str, error: _Error) -> str | None:
     if index is None:
         return None
@@ -446,7 +439,7 @@ def _with_faces(
     for geometry, points in resolved:
         kind = geometry.get("type")
         if not isinstance(kind, str):
-            raise error(f"a geometry's type must be a string, got {_json_kind(kind)}", where)
+            raise error(f"a geometry's type must be a string, got {json_kind(kind)}", where)
         if kind in DEPTHS:
             faces.append((geometry, points))
         elif kind in NO_FACES:

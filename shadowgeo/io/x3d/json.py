@@ -61,6 +61,7 @@ __all__ = [
     "XSD",
     "dumps",
     "is_x3d_json",
+    "json_kind",
     "parse",
     "typed",
 ]
@@ -232,7 +233,7 @@ class _Builder:
         if depth > MAX_DEPTH:
             raise self.error(body, where, f"nodes nested more than {MAX_DEPTH} deep; refused")
         if not isinstance(body, dict):
-            raise self.error(None, where, f"{tag} must be a JSON object, not {_kind(body)}")
+            raise self.error(None, where, f"{tag} must be a JSON object, not {json_kind(body)}")
         try:
             element = etree.Element(tag)
         except ValueError:
@@ -297,7 +298,7 @@ class _Builder:
             return value
         if isinstance(value, (int, Decimal)):
             return str(value).replace("E", "e")  # Decimal writes 1e-7 as 1E-7
-        raise self.error(body, where, f"a field value cannot be {_kind(value)}")
+        raise self.error(body, where, f"a field value cannot be {json_kind(value)}")
 
     def nodes(self, element: Element, field: str, value: Any, where: str, depth: int) -> None:
         if isinstance(value, dict):
@@ -305,11 +306,11 @@ class _Builder:
         elif isinstance(value, list):
             items = value
         else:
-            raise self.error(None, where, f"a node field holds objects, not {_kind(value)}")
+            raise self.error(None, where, f"a node field holds objects, not {json_kind(value)}")
         for index, item in enumerate(items):
             here = f"{where}[{index}]" if isinstance(value, list) else where
             if not isinstance(item, dict):
-                raise self.error(None, here, f"a node must be a JSON object, not {_kind(item)}")
+                raise self.error(None, here, f"a node must be a JSON object, not {json_kind(item)}")
             for tag, body in item.items():
                 if tag == "#comment":
                     element.append(self.comment(body, item, here))
@@ -322,7 +323,7 @@ class _Builder:
 
     def comment(self, text: Any, body: Any, where: str) -> Element:
         if not isinstance(text, str):
-            raise self.error(body, where, f"#comment must be a string, not {_kind(text)}")
+            raise self.error(body, where, f"#comment must be a string, not {json_kind(text)}")
         # XML comments cannot hold "--" or end in "-"
         text = re.sub("-(?=-)", "- ", text)
         return etree.Comment(text + " " if text.endswith("-") else text)
@@ -338,7 +339,8 @@ class _Builder:
             raise self.error(body, where, f"#sourceCode: {problem}") from None
 
 
-def _kind(value: object) -> str:
+def json_kind(value: object) -> str:
+    """What JSON calls ``value``'s type, for a message: "an object", "a number", ..."""
     names = {dict: "an object", list: "an array", str: "a string", bool: "a boolean"}
     if value is None:
         return "null"
